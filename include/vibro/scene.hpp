@@ -1,0 +1,92 @@
+// Scene: the plain description of one system, its initial state and how to run it
+// (CONTRACT §1). Parsing from TOML lives in io/scene_file; this header knows no file format.
+//
+// Validate() checks every physical constraint and returns *all* problems found, each tied to
+// the key path it concerns, so that the file layer can attach file:line:col to each.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace vibro {
+
+// One problem of a scene: the key it concerns (e.g. "stop.restitution", "structure.mass"),
+// the offending value as the user wrote it (may be empty) and the violated constraint.
+struct InputIssue {
+  std::string key;
+  std::string value;
+  std::string constraint;
+};
+
+// Modal form of the structure (the paper's eigenbase, MODEL §1.1).
+struct ModalStructureSpec {
+  Eigen::VectorXd frequencies;  // ω_i > 0 [rad/time], shape (n)
+  Eigen::VectorXd forcing;      // T_A,i, shape (n)
+  Eigen::VectorXd contact;      // T_B,i > 0, shape (n)
+};
+
+// Physical form: M q̈ + K q = e_A F sin ωt + e_B R (MODEL §1.3).
+struct PhysicalStructureSpec {
+  Eigen::MatrixXd mass;       // symmetric positive definite, (N, N)
+  Eigen::MatrixXd stiffness;  // symmetric positive definite, (N, N)
+  int forcing_dof = 0;        // index of A in [0, N)
+  int contact_dof = 0;        // index of B in [0, N)
+};
+
+enum class Engine { kExact, kCvode };
+enum class ChatterTreatment { kAccumulation, kThreshold, kNone };
+enum class CvodeMethod { kAdams, kBdf };
+
+struct RunSpec {
+  long long periods = 200;          // forcing periods to simulate (≥ 1)
+  Engine engine = Engine::kExact;
+  double rtol = 1e-10;              // CVODE relative tolerance
+  double atol = 1e-12;              // CVODE absolute tolerance
+  CvodeMethod method = CvodeMethod::kAdams;
+  double max_step = 0;              // CVODE maximum step (0 = no limit)
+  long max_steps = 100000;          // CVODE maximum internal steps per segment
+  ChatterTreatment chatter = ChatterTreatment::kAccumulation;
+  // Switch velocity of the chattering treatments, relative to the contact velocity of the first
+  // impact of the sequence (MODEL §5.4): accumulation is predicted (or, with "threshold", the
+  // impact made plastic) once |ẋ_B⁻| < chatter_switch · |ẋ_B⁻ of the first impact|.
+  double chatter_switch = 1e-6;
+  int samples_per_period = 64;      // dense samples per forcing period (0 = none)
+  int max_period = 32;              // largest period searched by the attractor classification
+  double period_tolerance = 1e-7;   // relative tolerance on section points for periodicity
+};
+
+struct Scene {
+  std::string title;
+  // Exactly one of the two structure forms is set.
+  std::optional<ModalStructureSpec> modal;
+  std::optional<PhysicalStructureSpec> physical;
+  Eigen::VectorXd damping_ratios;  // ζ_i, empty = undamped; one per mode (before truncation)
+  int modes = 0;                   // modes kept (0 = all)
+
+  double stop_position = 1.0;  // x0
+  double restitution = 0.75;   // r
+
+  double amplitude = 0.0;  // f
+  double frequency = 1.0;  // ω
+
+  double initial_time = 0.0;
+  // Initial displacement and velocity: modal coordinates (modal form) or physical DOFs (physical
+  // form). Empty = the default state (static preload equilibrium on the stop, or the origin).
+  Eigen::VectorXd initial_displacement;
+  Eigen::VectorXd initial_velocity;
+
+  RunSpec run;
+};
+
+// Every violated constraint of the scene (empty when valid). Includes the checks that need the
+// structural model (positive definiteness, T_B,i > 0, admissible initial state).
+std::vector<InputIssue> Validate(const Scene& scene);
+
+const char* ToString(Engine e);
+const char* ToString(ChatterTreatment c);
+const char* ToString(CvodeMethod m);
+
+}  // namespace vibro

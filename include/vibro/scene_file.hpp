@@ -1,0 +1,37 @@
+// Scene files (CONTRACT §1): TOML in, Scene out, with `--set KEY=VALUE` overrides and located
+// error messages. The only file that includes toml++ is src/io/scene_file.cpp.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "vibro/scene.hpp"
+
+namespace vibro {
+
+// Bad input: every problem found, each formatted as
+// `file:line:col: key.path = value: violated constraint ...` (or `--set K=V: ...` for overrides).
+class InputError : public std::runtime_error {
+ public:
+  explicit InputError(std::vector<std::string> messages);
+  const std::vector<std::string>& messages() const { return messages_; }
+
+ private:
+  std::vector<std::string> messages_;
+};
+
+struct LoadedScene {
+  Scene scene;
+  std::string source;       // file path (or the name given to ParseScene)
+  std::string text_as_run;  // the scene as TOML after the overrides: what gets stored in outputs
+};
+
+// Reads, overrides, parses and validates a scene. Throws InputError listing every problem.
+LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& overrides = {});
+// Same from text; `source` names it in messages.
+LoadedScene ParseScene(std::string_view text, const std::string& source,
+                       const std::vector<std::string>& overrides = {});
+
+}  // namespace vibro

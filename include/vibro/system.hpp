@@ -1,0 +1,117 @@
+// System: the immutable structural model of a scene in the paper's modal scaling (MODEL §1.3),
+// the stop, the excitation and the constrained (sticking) modes (MODEL §4.2). Built once, shared
+// by const& across engines and threads.
+//
+// Modal state: X, Ẋ ∈ ℝⁿ. The contact coordinate is x_B = cᵀX, where c_i = 1 for a mode seen by
+// the contact (ψ_i(B) = 1, T_B,i = 1/m_i > 0) and c_i = 0 for a mode with a node at B, which is
+// kept in the response but out of the contact model (MODEL §1.3 step 4; such a mode is mass
+// normalised and has T_B,i = 0). In the modal form every mode has c_i = 1, so x_B = 1ᵀX as in
+// MODEL.md; every formula of MODEL.md holds with 1 replaced by c.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "vibro/scene.hpp"
+
+namespace vibro {
+
+// Modes of the structure held at B (MODEL §4.2): A = Ω − T_B (c∘w2)ᵀ/s_B has the spectrum
+// {0} ∪ {ω'_k²}. X(t) = x0·static_shape + Σ_k vectors.col(k) ξ_k(t) while sticking, with
+// ξ̈_k + ω'_k² ξ_k = modal_forcing_k f sin ωt (undamped).
+struct ConstrainedModes {
+  Eigen::VectorXd frequencies;    // ω'_k, ascending, shape (n−1)
+  Eigen::MatrixXd vectors;        // right eigenvectors v_k of A (columns), shape (n, n−1)
+  Eigen::MatrixXd left;           // rows l_kᵀ with l_kᵀ v_j = δ_kj, l_kᵀ v_0 = 0, shape (n−1, n)
+  Eigen::VectorXd modal_forcing;  // l_kᵀ F_c, F_c = T_A − (s_A/s_B) T_B, shape (n−1)
+  Eigen::VectorXd reaction;       // ρ_k = (c∘w2)ᵀ v_k / s_B: R = R_static + ρᵀξ − (s_A/s_B) f sin ωt
+  // ξ̈ + damping ξ̇ + diag(ω'²) ξ = modal_forcing f sin ωt when modal damping is present
+  // (MODEL §7: Π D projected on the constrained modes), shape (n−1, n−1); zero when undamped.
+  Eigen::MatrixXd damping;
+};
+
+class System {
+ public:
+  // Builds the model of a scene. Precondition: Validate(scene) is empty (throws
+  // std::invalid_argument naming the first problem otherwise).
+  explicit System(const Scene& scene);
+
+  int dof() const { return static_cast<int>(omega_.size()); }  // n, modes in the model
+  bool physical() const { return physical_; }
+
+  const Eigen::VectorXd& omega() const { return omega_; }           // ω_i, (n)
+  const Eigen::VectorXd& forcing() const { return forcing_; }       // T_A,i, (n)
+  const Eigen::VectorXd& contact() const { return contact_; }       // T_B,i ≥ 0, (n)
+  const Eigen::VectorXd& contact_shape() const { return shape_; }   // c_i ∈ {0, 1}, (n)
+  const Eigen::VectorXd& damping() const { return zeta_; }          // ζ_i ∈ [0, 1), (n)
+  bool damped() const { return damped_; }
+  double s_A() const { return s_A_; }  // cᵀT_A
+  double s_B() const { return s_B_; }  // cᵀT_B = 1/(effective mass at B) > 0
+
+  double stop() const { return x0_; }              // x0
+  double restitution() const { return r_; }       // r ∈ [0, 1]
+  double amplitude() const { return f_; }          // f
+  double frequency() const { return w_; }          // ω
+  double period() const { return period_; }        // T = 2π/ω
+
+  // Static flexibility at B: Σ c_i T_B,i / ω_i² = (K⁻¹)_BB.
+  double flexibility() const { return flexibility_; }
+  // Reaction in the static pressed equilibrium x0/flexibility (x0 ≥ 0), nullopt for clearance.
+  std::optional<double> static_reaction() const;
+  // Static equilibrium on the stop: X = x0 · static_shape(), static_shape = v0/(cᵀv0), v0 = Ω⁻¹T_B.
+  const Eigen::VectorXd& static_shape() const { return static_shape_; }
+
+  const ConstrainedModes& constrained() const { return constrained_; }
+
+  // Physical form only: mode shapes ψ_i (columns, unit component at B for contact modes), (N, n).
+  const Eigen::MatrixXd& mode_shapes() const { return mode_shapes_; }
+  // Physical form only: modal masses m_i = ψ_iᵀ M ψ_i, (n).
+  const Eigen::VectorXd& modal_masses() const { return modal_masses_; }
+
+  double ContactDisplacement(const Eigen::VectorXd& X) const { return shape_.dot(X); }
+  double ContactVelocity(const Eigen::VectorXd& V) const { return shape_.dot(V); }
+  // Contact reaction (MODEL eq. 5 with the damping term of §7) for a state on the stop:
+  // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B, φ = ωt.
+  double Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
+  // Free acceleration of B: ẍ_B = −s_B R for the same state (MODEL §2).
+  double FreeContactAcceleration(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                                 double phase) const {
+    return -s_B_ * Reaction(X, V, phase);
+  }
+  // Restitution law (MODEL eq. 12): Ẋ⁺ = Ẋ⁻ + p T_B, p = −(1+r) ẋ_B⁻/s_B.
+  void ApplyImpact(Eigen::VectorXd& V, double restitution) const;
+  // Plastic projection onto the stop (MODEL §4.4): Ẋ ← Ẋ − T_B(cᵀẊ)/s_B and
+  // X ← X − T_B(cᵀX − x0)/s_B, so that x_B = x0 and ẋ_B = 0 hold to rounding.
+  void ProjectOntoStop(Eigen::VectorXd& X, Eigen::VectorXd& V) const;
+
+  // Modal coordinates of a physical state (physical form): X_i = ψ_iᵀ M q / m_i.
+  Eigen::VectorXd ModalFromPhysical(const Eigen::VectorXd& q) const;
+  // The scene's initial state in modal coordinates (default: static equilibrium for x0 > 0, else
+  // the origin); `sticking` is true when the state starts in contact with R > 0.
+  struct InitialState {
+    double time;
+    Eigen::VectorXd X, V;
+    bool sticking;
+  };
+  InitialState Initial(const Scene& scene) const;
+
+ private:
+  void BuildConstrained();
+
+  bool physical_ = false;
+  bool damped_ = false;
+  Eigen::VectorXd omega_, forcing_, contact_, shape_, zeta_;
+  double s_A_ = 0, s_B_ = 0;
+  double x0_ = 0, r_ = 0, f_ = 0, w_ = 1, period_ = 0;
+  double flexibility_ = 0;
+  Eigen::VectorXd static_shape_;
+  ConstrainedModes constrained_;
+  Eigen::MatrixXd mode_shapes_;
+  Eigen::VectorXd modal_masses_;
+  Eigen::MatrixXd mass_;    // physical M (physical form), for ModalFromPhysical
+  std::vector<int> kept_;   // modal form: indices of the kept modes in the scene's lists
+};
+
+}  // namespace vibro

@@ -1,0 +1,474 @@
+// TOML scene files (CONTRACT §1). The one file of vibro that includes toml++.
+//
+// Flow: parse the file → apply each `--set KEY=VALUE` (VALUE in TOML syntax) → check the key
+// schema (unknown keys, types, finiteness) → fill a Scene → Validate() the physics. Problems of
+// every stage are collected and reported together, each located at the node it concerns.
+#include "vibro/scene_file.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+namespace vibro {
+namespace {
+
+enum class Kind { kNumber, kInteger, kString, kNumberArray, kMatrix, kTable };
+
+// Every key a scene may hold (CONTRACT §1 plus vibro's additions, documented in the README).
+const std::map<std::string, Kind>& Schema() {
+  static const std::map<std::string, Kind> schema = {
+      {"title", Kind::kString},
+      {"structure", Kind::kTable},
+      {"structure.frequencies", Kind::kNumberArray},
+      {"structure.forcing", Kind::kNumberArray},
+      {"structure.contact", Kind::kNumberArray},
+      {"structure.damping_ratios", Kind::kNumberArray},
+      {"structure.mass", Kind::kMatrix},
+      {"structure.stiffness", Kind::kMatrix},
+      {"structure.forcing_dof", Kind::kInteger},
+      {"structure.contact_dof", Kind::kInteger},
+      {"structure.modes", Kind::kInteger},
+      {"stop", Kind::kTable},
+      {"stop.position", Kind::kNumber},
+      {"stop.restitution", Kind::kNumber},
+      {"excitation", Kind::kTable},
+      {"excitation.amplitude", Kind::kNumber},
+      {"excitation.frequency", Kind::kNumber},
+      {"initial", Kind::kTable},
+      {"initial.time", Kind::kNumber},
+      {"initial.displacement", Kind::kNumberArray},
+      {"initial.velocity", Kind::kNumberArray},
+      {"run", Kind::kTable},
+      {"run.periods", Kind::kInteger},
+      {"run.engine", Kind::kString},
+      {"run.rtol", Kind::kNumber},
+      {"run.atol", Kind::kNumber},
+      {"run.method", Kind::kString},
+      {"run.max_step", Kind::kNumber},
+      {"run.max_steps", Kind::kInteger},
+      {"run.chatter", Kind::kString},
+      {"run.chatter_switch", Kind::kNumber},
+      {"run.samples_per_period", Kind::kInteger},
+      {"run.max_period", Kind::kInteger},
+      {"run.period_tolerance", Kind::kNumber},
+  };
+  return schema;
+}
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> row(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    size_t diag = row[0];
+    row[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j) {
+      const size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diag + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diag = up;
+    }
+  }
+  return row[b.size()];
+}
+
+std::string LastComponent(const std::string& path) {
+  const auto dot = path.rfind('.');
+  return dot == std::string::npos ? path : path.substr(dot + 1);
+}
+
+// The closest known key: same table first, then any table (a key put in the wrong section).
+std::string Suggest(const std::string& path) {
+  const std::string leaf = LastComponent(path);
+  std::string best;
+  size_t best_d = std::max<size_t>(2, path.size() / 3) + 1;
+  for (const auto& [known, kind] : Schema()) {
+    (void)kind;
+    const size_t d = std::min(EditDistance(path, known), EditDistance(leaf, LastComponent(known)) + 1);
+    if (d < best_d) {
+      best_d = d;
+      best = known;
+    }
+  }
+  return best;
+}
+
+class Reader {
+ public:
+  Reader(toml::table root, std::string source) : root_(std::move(root)), source_(std::move(source)) {}
+
+  std::vector<std::string>& messages() { return messages_; }
+  const toml::table& root() const { return root_; }
+  toml::table& mutable_root() { return root_; }
+
+  std::string Where(const toml::node* n) const {
+    if (n == nullptr) return source_;
+    return Where(n->source(), n);
+  }
+  std::string Where(const toml::source_region& src, const toml::node* n) const {
+    if (src.begin.line == 0 && n != nullptr && &src != &n->source()) return Where(n);
+    const std::string path = src.path ? *src.path : source_;
+    if (path.rfind("--set", 0) == 0) return path;
+    if (src.begin.line == 0) return path;
+    return fmt::format("{}:{}:{}", path, src.begin.line, src.begin.column);
+  }
+  static std::string Show(const toml::node& n) {
+    std::ostringstream os;
+    n.visit([&os](const auto& concrete) {
+      if constexpr (toml::is_string<decltype(concrete)>)
+        os << '"' << concrete.get() << '"';
+      else
+        os << concrete;
+    });
+    return os.str();
+  }
+  void Report(const toml::node* n, const std::string& key, const std::string& what) {
+    reported_.push_back(key);
+    if (n)
+      messages_.push_back(fmt::format("{}: {} = {}: {}", Where(n), key, Show(*n), what));
+    else
+      messages_.push_back(fmt::format("{}: {}: {}", source_, key, what));
+  }
+
+  // Unknown keys and wrong kinds, for the whole tree.
+  void CheckKeys(const toml::table& t, const std::string& prefix) {
+    for (const auto& [k, node] : t) {
+      const std::string path = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+      const auto it = Schema().find(path);
+      if (it == Schema().end()) {
+        const std::string hint = Suggest(path);
+        messages_.push_back(fmt::format("{}: {}: unknown key{}", Where(k.source(), &node), path,
+                                        hint.empty() ? "" : "; did you mean " + hint + "?"));
+        continue;
+      }
+      if (it->second == Kind::kTable) {
+        if (const auto* sub = node.as_table())
+          CheckKeys(*sub, path);
+        else
+          Report(&node, path, "expected a table [" + path + "]");
+      }
+    }
+  }
+
+  const toml::node* Find(const std::string& path) const {
+    return root_.at_path(path).node();
+  }
+
+  std::optional<double> Number(const std::string& path) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    double v;
+    if (const auto* i = n->as_integer())
+      v = static_cast<double>(i->get());
+    else if (const auto* f = n->as_floating_point())
+      v = f->get();
+    else {
+      Report(n, path, "expected a number");
+      return std::nullopt;
+    }
+    if (!std::isfinite(v)) {
+      Report(n, path, "a finite number (no nan or inf)");
+      return std::nullopt;
+    }
+    return v;
+  }
+
+  std::optional<long long> Integer(const std::string& path) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    if (const auto* i = n->as_integer()) return i->get();
+    if (const auto* f = n->as_floating_point()) {
+      const double v = f->get();
+      if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<long long>(v);
+    }
+    Report(n, path, "expected a whole number");
+    return std::nullopt;
+  }
+
+  std::optional<std::string> String(const std::string& path,
+                                    const std::vector<std::string>& allowed = {}) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    const auto* s = n->as_string();
+    if (!s) {
+      Report(n, path, "expected a string");
+      return std::nullopt;
+    }
+    if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s->get()) == allowed.end()) {
+      std::string list;
+      for (const auto& a : allowed) list += (list.empty() ? "" : " | ") + ("\"" + a + "\"");
+      Report(n, path, "one of " + list);
+      return std::nullopt;
+    }
+    return s->get();
+  }
+
+  // Numbers of an array node; reports and returns nullopt on any bad element.
+  std::optional<Eigen::VectorXd> ArrayOf(const toml::node* n, const std::string& path) {
+    const auto* a = n->as_array();
+    if (!a) {
+      Report(n, path, "expected an array of numbers");
+      return std::nullopt;
+    }
+    Eigen::VectorXd v(static_cast<Eigen::Index>(a->size()));
+    for (size_t i = 0; i < a->size(); ++i) {
+      const toml::node& e = *a->get(i);
+      double x;
+      if (const auto* in = e.as_integer())
+        x = static_cast<double>(in->get());
+      else if (const auto* fl = e.as_floating_point())
+        x = fl->get();
+      else {
+        Report(n, path, fmt::format("expected an array of numbers (element {} is not)", i));
+        return std::nullopt;
+      }
+      if (!std::isfinite(x)) {
+        Report(n, path, fmt::format("finite numbers only (element {} is {})", i, x));
+        return std::nullopt;
+      }
+      v[static_cast<Eigen::Index>(i)] = x;
+    }
+    return v;
+  }
+
+  std::optional<Eigen::VectorXd> Vector(const std::string& path) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    return ArrayOf(n, path);
+  }
+
+  std::optional<Eigen::MatrixXd> Matrix(const std::string& path) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    const auto* a = n->as_array();
+    if (!a || a->empty()) {
+      Report(n, path, "expected a non-empty array of rows (arrays of numbers)");
+      return std::nullopt;
+    }
+    std::vector<Eigen::VectorXd> rows;
+    for (size_t i = 0; i < a->size(); ++i) {
+      const toml::node* row = a->get(i);
+      if (!row->as_array()) {
+        Report(n, path, fmt::format("expected an array of rows (row {} is not an array)", i));
+        return std::nullopt;
+      }
+      auto r = ArrayOf(row, path);
+      if (!r) return std::nullopt;
+      if (!rows.empty() && r->size() != rows.front().size()) {
+        Report(n, path, fmt::format("rows of equal length (row 0 has {}, row {} has {})",
+                                    rows.front().size(), i, r->size()));
+        return std::nullopt;
+      }
+      rows.push_back(*r);
+    }
+    Eigen::MatrixXd m(static_cast<Eigen::Index>(rows.size()), rows.front().size());
+    for (size_t i = 0; i < rows.size(); ++i) m.row(static_cast<Eigen::Index>(i)) = rows[i].transpose();
+    return m;
+  }
+
+  void Require(const std::string& path) {
+    if (!Find(path)) {
+      const auto dot = path.rfind('.');
+      const toml::node* table = dot == std::string::npos ? nullptr : Find(path.substr(0, dot));
+      messages_.push_back(fmt::format("{}: {}: missing required key", Where(table), path));
+    }
+  }
+
+ private:
+  toml::table root_;
+  std::string source_;
+  std::vector<std::string> messages_;
+  std::vector<std::string> reported_;  // keys with a message already
+
+ public:
+  bool Reported(const std::string& key) const {
+    return std::find(reported_.begin(), reported_.end(), key) != reported_.end();
+  }
+};
+
+// Applies one `KEY=VALUE` override to the table (VALUE in TOML syntax, e.g. 2.5, "exact", [1, 2]).
+void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::string>& messages) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    messages.push_back(fmt::format("--set {}: expected KEY=VALUE (e.g. excitation.amplitude=2.5)", text));
+    return;
+  }
+  std::string key = text.substr(0, eq);
+  std::string value = text.substr(eq + 1);
+  key.erase(key.find_last_not_of(" \t") + 1);
+  key.erase(0, key.find_first_not_of(" \t"));
+  const std::string where = "--set " + text;
+  toml::table parsed;
+  try {
+    parsed = toml::parse("value = " + value, where);
+  } catch (const toml::parse_error& e) {
+    messages.push_back(fmt::format("{}: {}: VALUE is not valid TOML ({}); strings need quotes, "
+                                   "e.g. run.engine='\"exact\"'",
+                                   where, key, e.description()));
+    return;
+  }
+  if (Schema().find(key) == Schema().end()) {
+    const std::string hint = Suggest(key);
+    messages.push_back(fmt::format("{}: {}: unknown key{}", where, key,
+                                   hint.empty() ? "" : "; did you mean " + hint + "?"));
+    return;
+  }
+  toml::table* table = &root;
+  size_t start = 0;
+  for (size_t dot = key.find('.'); dot != std::string::npos; dot = key.find('.', start)) {
+    const std::string part = key.substr(start, dot - start);
+    auto* sub = table->get(part);
+    if (!sub) sub = table->insert_or_assign(part, toml::table{}).first->second.as_table();
+    if (!sub || !sub->as_table()) {
+      messages.push_back(fmt::format("{}: {}: {} is not a table", where, key, part));
+      return;
+    }
+    table = sub->as_table();
+    start = dot + 1;
+  }
+  table->insert_or_assign(key.substr(start), std::move(*parsed.get("value")));
+}
+
+LoadedScene Build(toml::table root, const std::string& source,
+                  const std::vector<std::string>& overrides) {
+  std::vector<std::string> messages;
+  for (const auto& o : overrides) ApplyOverride(root, o, messages);
+
+  Reader rd(std::move(root), source);
+  for (auto& m : messages) rd.messages().push_back(m);
+  rd.CheckKeys(rd.root(), "");
+
+  Scene s;
+  if (auto t = rd.String("title")) s.title = *t;
+
+  // Structure: the form is decided by which keys are present.
+  const bool modal_keys = rd.Find("structure.frequencies") || rd.Find("structure.forcing") ||
+                          rd.Find("structure.contact");
+  const bool physical_keys = rd.Find("structure.mass") || rd.Find("structure.stiffness") ||
+                             rd.Find("structure.forcing_dof") || rd.Find("structure.contact_dof");
+  if (!rd.Find("structure")) {
+    rd.messages().push_back(fmt::format(
+        "{}: structure: missing required table [structure] (modal form: frequencies, forcing, "
+        "contact; or physical form: mass, stiffness, forcing_dof, contact_dof)",
+        source));
+  } else if (modal_keys && physical_keys) {
+    rd.Report(rd.Find("structure"), "structure",
+              "give either the modal form (frequencies, forcing, contact) or the physical form "
+              "(mass, stiffness, forcing_dof, contact_dof), not both");
+  } else if (physical_keys) {
+    for (const char* k : {"structure.mass", "structure.stiffness", "structure.forcing_dof",
+                          "structure.contact_dof"})
+      rd.Require(k);
+    PhysicalStructureSpec p;
+    auto M = rd.Matrix("structure.mass");
+    auto K = rd.Matrix("structure.stiffness");
+    auto a = rd.Integer("structure.forcing_dof");
+    auto b = rd.Integer("structure.contact_dof");
+    if (M && K && a && b) {
+      p.mass = *M;
+      p.stiffness = *K;
+      p.forcing_dof = static_cast<int>(*a);
+      p.contact_dof = static_cast<int>(*b);
+      s.physical = p;
+    }
+  } else {
+    for (const char* k : {"structure.frequencies", "structure.forcing", "structure.contact"})
+      rd.Require(k);
+    auto w = rd.Vector("structure.frequencies");
+    auto ta = rd.Vector("structure.forcing");
+    auto tb = rd.Vector("structure.contact");
+    if (w && ta && tb) s.modal = ModalStructureSpec{*w, *ta, *tb};
+  }
+  if (auto z = rd.Vector("structure.damping_ratios")) s.damping_ratios = *z;
+  if (auto m = rd.Integer("structure.modes")) {
+    if (*m < 1)
+      rd.Report(rd.Find("structure.modes"), "structure.modes", "modes ≥ 1 (omit it to keep all)");
+    else
+      s.modes = static_cast<int>(*m);
+  }
+
+  rd.Require("stop.position");
+  rd.Require("stop.restitution");
+  if (auto v = rd.Number("stop.position")) s.stop_position = *v;
+  if (auto v = rd.Number("stop.restitution")) s.restitution = *v;
+  rd.Require("excitation.amplitude");
+  rd.Require("excitation.frequency");
+  if (auto v = rd.Number("excitation.amplitude")) s.amplitude = *v;
+  if (auto v = rd.Number("excitation.frequency")) s.frequency = *v;
+
+  if (auto v = rd.Number("initial.time")) s.initial_time = *v;
+  if (auto v = rd.Vector("initial.displacement")) s.initial_displacement = *v;
+  if (auto v = rd.Vector("initial.velocity")) s.initial_velocity = *v;
+
+  auto& r = s.run;
+  if (auto v = rd.Integer("run.periods")) r.periods = *v;
+  if (auto v = rd.String("run.engine", {"exact", "cvode"}))
+    r.engine = *v == "exact" ? Engine::kExact : Engine::kCvode;
+  if (auto v = rd.Number("run.rtol")) r.rtol = *v;
+  if (auto v = rd.Number("run.atol")) r.atol = *v;
+  if (auto v = rd.String("run.method", {"adams", "bdf"}))
+    r.method = *v == "adams" ? CvodeMethod::kAdams : CvodeMethod::kBdf;
+  if (auto v = rd.Number("run.max_step")) r.max_step = *v;
+  if (auto v = rd.Integer("run.max_steps")) r.max_steps = static_cast<long>(*v);
+  if (auto v = rd.String("run.chatter", {"accumulation", "threshold", "none"}))
+    r.chatter = *v == "accumulation" ? ChatterTreatment::kAccumulation
+                : *v == "threshold"  ? ChatterTreatment::kThreshold
+                                     : ChatterTreatment::kNone;
+  if (auto v = rd.Number("run.chatter_switch")) r.chatter_switch = *v;
+  if (auto v = rd.Integer("run.samples_per_period"))
+    r.samples_per_period = static_cast<int>(std::clamp<long long>(*v, -1, 1 << 20));
+  if (auto v = rd.Integer("run.max_period"))
+    r.max_period = static_cast<int>(std::clamp<long long>(*v, -1, 1 << 20));
+  if (auto v = rd.Number("run.period_tolerance")) r.period_tolerance = *v;
+
+  // Physics, once the file gave a structure; keys already reported are not reported twice.
+  if (s.modal || s.physical) {
+    for (const auto& issue : Validate(s)) {
+      if (rd.Reported(issue.key)) continue;
+      const toml::node* n = rd.Find(issue.key);
+      if (n)
+        rd.Report(n, issue.key, "violated constraint " + issue.constraint);
+      else
+        rd.messages().push_back(fmt::format("{}: {}{}: violated constraint {}", source, issue.key,
+                                            issue.value.empty() ? "" : " = " + issue.value,
+                                            issue.constraint));
+    }
+  }
+  if (!rd.messages().empty()) throw InputError(rd.messages());
+
+  std::ostringstream text;
+  text << rd.root();
+  return LoadedScene{std::move(s), source, text.str() + "\n"};
+}
+
+}  // namespace
+
+InputError::InputError(std::vector<std::string> messages)
+    : std::runtime_error(messages.empty() ? "bad input" : messages.front()),
+      messages_(std::move(messages)) {}
+
+LoadedScene ParseScene(std::string_view text, const std::string& source,
+                       const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    throw InputError({fmt::format("{}:{}:{}: not valid TOML: {}", source, e.source().begin.line,
+                                  e.source().begin.column, e.description())});
+  }
+  return Build(std::move(root), source, overrides);
+}
+
+LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError({fmt::format("{}: cannot read the scene file", path)});
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return ParseScene(buffer.str(), path, overrides);
+}
+
+}  // namespace vibro

@@ -1,0 +1,47 @@
+// JSON summaries (CONTRACT §2).
+#include "vibro/summary_json.hpp"
+
+#include <nlohmann/json.hpp>
+
+namespace vibro {
+namespace {
+
+nlohmann::json Array(const Eigen::VectorXd& v) {
+  auto a = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+
+}  // namespace
+
+std::string ModelJson(const System& s) {
+  nlohmann::json j;
+  j["frequencies"] = Array(s.omega());
+  j["forcing"] = Array(s.forcing());
+  j["contact"] = Array(s.contact());
+  j["constrained_frequencies"] = Array(s.constrained().frequencies);
+  if (auto r = s.static_reaction())
+    j["static_reaction"] = *r;
+  else
+    j["static_reaction"] = nullptr;
+  j["modes_kept"] = s.dof();
+  j["damping_ratios"] = Array(s.damping());
+  j["s_A"] = s.s_A();
+  j["s_B"] = s.s_B();
+  j["static_flexibility"] = s.flexibility();
+  if (s.physical()) {
+    // mode_shapes[i] = ψ_i over the physical DOFs (unit component at B for contact modes).
+    auto shapes = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < s.mode_shapes().cols(); ++i)
+      shapes.push_back(Array(s.mode_shapes().col(i)));
+    j["mode_shapes"] = shapes;
+    j["modal_masses"] = Array(s.modal_masses());
+    auto seen = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < s.contact_shape().size(); ++i)
+      seen.push_back(s.contact_shape()[i] > 0);
+    j["contact_modes"] = seen;  // false: a node at B, out of the contact model
+  }
+  return j.dump();
+}
+
+}  // namespace vibro

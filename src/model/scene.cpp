@@ -1,0 +1,199 @@
+// Scene validation: every physical constraint of CONTRACT §1 / MODEL §1, §8, each problem
+// reported against its key.
+#include "vibro/scene.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include "vibro/system.hpp"
+
+namespace vibro {
+namespace {
+
+std::string Show(double v) { return fmt::format("{}", v); }
+std::string Show(const Eigen::VectorXd& v) {
+  return fmt::format("[{}]", fmt::join(v.data(), v.data() + v.size(), ", "));
+}
+std::string Show(const Eigen::MatrixXd& m) {
+  std::string s = "[";
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    Eigen::VectorXd row = m.row(i).transpose();
+    s += (i ? ", " : "") + Show(row);
+  }
+  return s + "]";
+}
+
+class Checker {
+ public:
+  void Require(bool ok, const std::string& key, const std::string& value, std::string constraint) {
+    if (!ok) issues_.push_back({key, value, std::move(constraint)});
+  }
+  std::vector<InputIssue> Take() { return std::move(issues_); }
+  bool empty() const { return issues_.empty(); }
+
+ private:
+  std::vector<InputIssue> issues_;
+};
+
+bool SymmetricPositiveDefinite(const Eigen::MatrixXd& m) {
+  if (m.rows() != m.cols() || m.rows() == 0) return false;
+  Eigen::LLT<Eigen::MatrixXd> llt(m);
+  return llt.info() == Eigen::Success;
+}
+
+bool Symmetric(const Eigen::MatrixXd& m) {
+  const double scale = m.cwiseAbs().maxCoeff();
+  return (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * scale;
+}
+
+void CheckModal(const ModalStructureSpec& m, Checker& c) {
+  const auto n = m.frequencies.size();
+  c.Require(n > 0, "structure.frequencies", Show(m.frequencies), "at least one mode is required");
+  for (Eigen::Index i = 0; i < n; ++i)
+    c.Require(m.frequencies[i] > 0, "structure.frequencies", Show(m.frequencies),
+              fmt::format("ω_i > 0 (element {} is {})", i, m.frequencies[i]));
+  c.Require(m.forcing.size() == n, "structure.forcing", Show(m.forcing),
+            fmt::format("one value per mode: length {} expected (structure.frequencies), got {}",
+                        n, m.forcing.size()));
+  c.Require(m.contact.size() == n, "structure.contact", Show(m.contact),
+            fmt::format("one value per mode: length {} expected (structure.frequencies), got {}",
+                        n, m.contact.size()));
+  for (Eigen::Index i = 0; i < m.contact.size(); ++i)
+    c.Require(m.contact[i] > 0, "structure.contact", Show(m.contact),
+              fmt::format("T_B,i > 0 (element {} is {}); a mode with a node at B is invisible to "
+                          "the contact: give the physical form (mass, stiffness, contact_dof) and "
+                          "vibro keeps such modes out of the contact model",
+                          i, m.contact[i]));
+}
+
+void CheckPhysical(const PhysicalStructureSpec& p, Checker& c) {
+  const auto N = p.mass.rows();
+  const bool square_m = p.mass.rows() == p.mass.cols() && N > 0;
+  const bool square_k = p.stiffness.rows() == p.stiffness.cols() && p.stiffness.rows() > 0;
+  c.Require(square_m, "structure.mass", Show(p.mass), "a square, non-empty matrix");
+  c.Require(square_k, "structure.stiffness", Show(p.stiffness), "a square, non-empty matrix");
+  if (square_m) {
+    c.Require(Symmetric(p.mass), "structure.mass", Show(p.mass), "symmetric (M = Mᵀ)");
+    c.Require(SymmetricPositiveDefinite(p.mass), "structure.mass", Show(p.mass),
+              "positive definite (every mass positive, no rigid constraint)");
+  }
+  if (square_k) {
+    c.Require(Symmetric(p.stiffness), "structure.stiffness", Show(p.stiffness),
+              "symmetric (K = Kᵀ)");
+    c.Require(SymmetricPositiveDefinite(p.stiffness), "structure.stiffness", Show(p.stiffness),
+              "positive definite (no rigid-body mode: the structure must be held)");
+  }
+  if (square_m && square_k)
+    c.Require(p.stiffness.rows() == N, "structure.stiffness", Show(p.stiffness),
+              fmt::format("same size as structure.mass ({0}×{0})", N));
+  c.Require(p.forcing_dof >= 0 && p.forcing_dof < N, "structure.forcing_dof",
+            std::to_string(p.forcing_dof), fmt::format("a DOF index in [0, {})", N));
+  c.Require(p.contact_dof >= 0 && p.contact_dof < N, "structure.contact_dof",
+            std::to_string(p.contact_dof), fmt::format("a DOF index in [0, {})", N));
+}
+
+}  // namespace
+
+std::vector<InputIssue> Validate(const Scene& s) {
+  Checker c;
+  Eigen::Index n_listed = 0;  // modes listed (modal form) or DOFs (physical form)
+  if (s.modal && s.physical) {
+    c.Require(false, "structure", "",
+              "give either the modal form (frequencies, forcing, contact) or the physical form "
+              "(mass, stiffness, forcing_dof, contact_dof), not both");
+  } else if (s.modal) {
+    CheckModal(*s.modal, c);
+    n_listed = s.modal->frequencies.size();
+  } else if (s.physical) {
+    CheckPhysical(*s.physical, c);
+    n_listed = s.physical->mass.rows();
+  } else {
+    c.Require(false, "structure", "",
+              "missing: give the modal form (frequencies, forcing, contact) or the physical form "
+              "(mass, stiffness, forcing_dof, contact_dof)");
+  }
+  if (s.damping_ratios.size() > 0) {
+    c.Require(s.damping_ratios.size() == n_listed, "structure.damping_ratios",
+              Show(s.damping_ratios),
+              fmt::format("one ratio per mode: length {} expected, got {}", n_listed,
+                          s.damping_ratios.size()));
+    for (Eigen::Index i = 0; i < s.damping_ratios.size(); ++i)
+      c.Require(s.damping_ratios[i] >= 0 && s.damping_ratios[i] < 1, "structure.damping_ratios",
+                Show(s.damping_ratios),
+                fmt::format("0 ≤ ζ_i < 1 (element {} is {}; over- and critically damped modes "
+                            "are not supported)",
+                            i, s.damping_ratios[i]));
+  }
+  c.Require(s.modes >= 0 && s.modes <= n_listed, "structure.modes", std::to_string(s.modes),
+            fmt::format("1 ≤ modes ≤ {} (the number of modes of the structure)", n_listed));
+
+  c.Require(s.restitution >= 0 && s.restitution <= 1, "stop.restitution", Show(s.restitution),
+            "0 ≤ r ≤ 1");
+  c.Require(s.amplitude >= 0, "excitation.amplitude", Show(s.amplitude), "f ≥ 0");
+  c.Require(s.frequency > 0, "excitation.frequency", Show(s.frequency), "ω > 0");
+
+  const auto& r = s.run;
+  c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");
+  c.Require(r.rtol > 0 && r.rtol < 1, "run.rtol", Show(r.rtol), "0 < rtol < 1");
+  c.Require(r.atol > 0, "run.atol", Show(r.atol), "atol > 0");
+  c.Require(r.max_step >= 0, "run.max_step", Show(r.max_step), "max_step ≥ 0 (0 = no limit)");
+  c.Require(r.max_steps >= 1, "run.max_steps", std::to_string(r.max_steps), "max_steps ≥ 1");
+  c.Require(r.chatter_switch > 0 && r.chatter_switch < 1, "run.chatter_switch",
+            Show(r.chatter_switch), "0 < chatter_switch < 1 (relative to the first impact)");
+  c.Require(r.samples_per_period >= 0, "run.samples_per_period",
+            std::to_string(r.samples_per_period), "samples_per_period ≥ 0");
+  c.Require(r.max_period >= 1, "run.max_period", std::to_string(r.max_period), "max_period ≥ 1");
+  c.Require(r.period_tolerance > 0 && r.period_tolerance < 1, "run.period_tolerance",
+            Show(r.period_tolerance), "0 < period_tolerance < 1");
+
+  const bool has_x = s.initial_displacement.size() > 0;
+  const bool has_v = s.initial_velocity.size() > 0;
+  if (has_x)
+    c.Require(s.initial_displacement.size() == n_listed, "initial.displacement",
+              Show(s.initial_displacement),
+              fmt::format("one value per {}: length {} expected, got {}",
+                          s.physical ? "DOF" : "mode", n_listed, s.initial_displacement.size()));
+  if (has_v)
+    c.Require(s.initial_velocity.size() == n_listed, "initial.velocity",
+              Show(s.initial_velocity),
+              fmt::format("one value per {}: length {} expected, got {}",
+                          s.physical ? "DOF" : "mode", n_listed, s.initial_velocity.size()));
+  if (has_x != has_v)
+    c.Require(false, has_x ? "initial.velocity" : "initial.displacement", "",
+              "give both initial.displacement and initial.velocity, or neither");
+
+  if (!c.empty()) return c.Take();
+
+  // The structure is consistent: check what needs the model.
+  const System sys(s);
+  if (has_x && has_v) {
+    const auto init = sys.Initial(s);
+    const double xB = sys.ContactDisplacement(init.X);
+    const double vB = sys.ContactVelocity(init.V);
+    const double x0 = s.stop_position;
+    const double tol = 1e-12 * std::max(1.0, std::abs(x0));
+    c.Require(xB >= x0 - tol, "initial.displacement", Show(s.initial_displacement),
+              fmt::format("admissible initial state x_B ≥ x0 (x_B = {}, x0 = {})", xB, x0));
+    if (std::abs(xB - x0) <= tol)
+      c.Require(vB >= 0, "initial.velocity", Show(s.initial_velocity),
+                fmt::format("admissible initial state: on the stop (x_B = x0) the contact "
+                            "velocity must not point into it (ẋ_B = {} < 0)",
+                            vB));
+  }
+  return c.Take();
+}
+
+const char* ToString(Engine e) { return e == Engine::kExact ? "exact" : "cvode"; }
+const char* ToString(ChatterTreatment c) {
+  switch (c) {
+    case ChatterTreatment::kAccumulation: return "accumulation";
+    case ChatterTreatment::kThreshold: return "threshold";
+    case ChatterTreatment::kNone: return "none";
+  }
+  return "?";
+}
+const char* ToString(CvodeMethod m) { return m == CvodeMethod::kAdams ? "adams" : "bdf"; }
+
+}  // namespace vibro

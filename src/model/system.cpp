@@ -1,0 +1,203 @@
+// Structural model: modal data in the paper's scaling (MODEL §1.3) and the constrained modes
+// (MODEL §4.2).
+#include "vibro/system.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace vibro {
+namespace {
+
+// A mode whose B component is below this fraction of its largest component has a node at B.
+constexpr double kNodeTolerance = 1e-10;
+
+// Indices of the `keep` lowest frequencies (all when keep <= 0), in ascending order of frequency.
+std::vector<int> LowestModes(const Eigen::VectorXd& omega, int keep) {
+  std::vector<int> order(static_cast<size_t>(omega.size()));
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return omega[a] < omega[b]; });
+  if (keep > 0 && keep < static_cast<int>(order.size())) order.resize(static_cast<size_t>(keep));
+  return order;
+}
+
+}  // namespace
+
+System::System(const Scene& scene) {
+  x0_ = scene.stop_position;
+  r_ = scene.restitution;
+  f_ = scene.amplitude;
+  w_ = scene.frequency;
+  period_ = 2.0 * M_PI / w_;
+
+  Eigen::VectorXd zeta_all;
+  if (scene.modal) {
+    const auto& m = *scene.modal;
+    const auto keep = LowestModes(m.frequencies, scene.modes);
+    kept_ = keep;
+    const auto n = static_cast<Eigen::Index>(keep.size());
+    omega_.resize(n);
+    forcing_.resize(n);
+    contact_.resize(n);
+    zeta_ = Eigen::VectorXd::Zero(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      omega_[i] = m.frequencies[keep[static_cast<size_t>(i)]];
+      forcing_[i] = m.forcing[keep[static_cast<size_t>(i)]];
+      contact_[i] = m.contact[keep[static_cast<size_t>(i)]];
+      if (scene.damping_ratios.size() > 0) zeta_[i] = scene.damping_ratios[keep[static_cast<size_t>(i)]];
+    }
+    shape_ = Eigen::VectorXd::Ones(n);
+  } else if (scene.physical) {
+    physical_ = true;
+    const auto& p = *scene.physical;
+    mass_ = p.mass;
+    // MODEL §1.3 step 1: K φ = λ M φ (φᵀMφ = 1).
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(p.stiffness, p.mass);
+    if (eig.info() != Eigen::Success) throw std::invalid_argument("eigenproblem K φ = λ M φ failed");
+    const Eigen::VectorXd lambda = eig.eigenvalues();
+    const Eigen::VectorXd all_omega = lambda.cwiseMax(0.0).cwiseSqrt();
+    const auto keep = LowestModes(all_omega, scene.modes);
+    const auto n = static_cast<Eigen::Index>(keep.size());
+    const auto N = p.mass.rows();
+    omega_.resize(n);
+    forcing_.resize(n);
+    contact_.resize(n);
+    shape_.resize(n);
+    zeta_ = Eigen::VectorXd::Zero(n);
+    mode_shapes_.resize(N, n);
+    modal_masses_.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const int k = keep[static_cast<size_t>(i)];
+      Eigen::VectorXd phi = eig.eigenvectors().col(k);
+      omega_[i] = all_omega[k];
+      if (scene.damping_ratios.size() > 0) zeta_[i] = scene.damping_ratios[k];
+      const double phiB = phi[p.contact_dof];
+      if (std::abs(phiB) > kNodeTolerance * phi.cwiseAbs().maxCoeff()) {
+        // Step 2-3: unit component at B, T_A = ψ(A)/m, T_B = 1/m.
+        const Eigen::VectorXd psi = phi / phiB;
+        const double m_i = psi.dot(p.mass * psi);
+        mode_shapes_.col(i) = psi;
+        modal_masses_[i] = m_i;
+        forcing_[i] = psi[p.forcing_dof] / m_i;
+        contact_[i] = 1.0 / m_i;
+        shape_[i] = 1.0;
+      } else {
+        // Step 4: node at B; mass-normalised, invisible to the contact.
+        mode_shapes_.col(i) = phi;
+        modal_masses_[i] = 1.0;
+        forcing_[i] = phi[p.forcing_dof];
+        contact_[i] = 0.0;
+        shape_[i] = 0.0;
+      }
+    }
+  } else {
+    throw std::invalid_argument("scene has no structure");
+  }
+  damped_ = zeta_.size() > 0 && zeta_.maxCoeff() > 0.0;
+  s_A_ = shape_.dot(forcing_);
+  s_B_ = shape_.dot(contact_);
+  if (!(s_B_ > 0.0)) throw std::invalid_argument("no mode is seen by the contact (s_B = 0)");
+  flexibility_ = shape_.dot(contact_.cwiseQuotient(omega_.cwiseAbs2()));
+  const Eigen::VectorXd v0 = contact_.cwiseQuotient(omega_.cwiseAbs2());
+  static_shape_ = v0 / flexibility_;
+  BuildConstrained();
+}
+
+void System::BuildConstrained() {
+  // MODEL §4.2 in mass-weighted form: the constrained modes solve (μΩ − λμ) v = c R̂, cᵀv = 0,
+  // μ_i = 1/T_B,i (contact modes) or 1 (modes with a node at B). With N an orthonormal basis of
+  // {cᵀX = 0}, v = N y and (NᵀμΩN) y = λ (NᵀμN) y is a symmetric-definite problem.
+  const auto n = omega_.size();
+  auto& cm = constrained_;
+  if (n < 2) {
+    cm.frequencies.resize(0);
+    cm.vectors.resize(n, 0);
+    cm.left.resize(0, n);
+    cm.modal_forcing.resize(0);
+    cm.reaction.resize(0);
+    cm.damping.resize(0, 0);
+    return;
+  }
+  Eigen::VectorXd mu(n);
+  for (Eigen::Index i = 0; i < n; ++i) mu[i] = shape_[i] > 0 ? 1.0 / contact_[i] : 1.0;
+  // Orthonormal basis of the null space of cᵀ: Householder reflection of c/|c| onto e_0.
+  const Eigen::MatrixXd ct = shape_.transpose();
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ct, Eigen::ComputeFullV);
+  const Eigen::MatrixXd N = svd.matrixV().rightCols(n - 1);
+  const Eigen::MatrixXd Kc = N.transpose() * mu.cwiseProduct(omega_.cwiseAbs2()).asDiagonal() * N;
+  const Eigen::MatrixXd Mc = N.transpose() * mu.asDiagonal() * N;
+  Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Kc, Mc);
+  cm.frequencies = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  cm.vectors = N * eig.eigenvectors();
+  // Left eigenvectors: rows of E⁻¹ with E = [v0, v_1..v_{n−1}].
+  Eigen::MatrixXd E(n, n);
+  E.col(0) = static_shape_;
+  E.rightCols(n - 1) = cm.vectors;
+  const Eigen::MatrixXd Einv = E.inverse();
+  cm.left = Einv.bottomRows(n - 1);
+  const Eigen::VectorXd Fc = forcing_ - (s_A_ / s_B_) * contact_;
+  cm.modal_forcing = cm.left * Fc;
+  const Eigen::VectorXd cw2 = shape_.cwiseProduct(omega_.cwiseAbs2());
+  cm.reaction = (cm.vectors.transpose() * cw2) / s_B_;
+  // §7: Ẍ + Π D Ẋ + A X = F_c f sin ωt; in ξ coordinates the damping is L Π D V = L D V
+  // (L Π = L since l_kᵀ T_B = 0 for k ≥ 1).
+  const Eigen::VectorXd D = 2.0 * zeta_.cwiseProduct(omega_);
+  cm.damping = cm.left * D.asDiagonal() * cm.vectors;
+}
+
+std::optional<double> System::static_reaction() const {
+  if (x0_ < 0) return std::nullopt;
+  return x0_ / flexibility_;
+}
+
+double System::Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const {
+  double elastic = 0.0;
+  for (Eigen::Index i = 0; i < X.size(); ++i) {
+    if (shape_[i] == 0.0) continue;
+    elastic += omega_[i] * omega_[i] * X[i] + 2.0 * zeta_[i] * omega_[i] * V[i];
+  }
+  return (elastic - s_A_ * f_ * std::sin(phase)) / s_B_;
+}
+
+void System::ApplyImpact(Eigen::VectorXd& V, double restitution) const {
+  const double p = -(1.0 + restitution) * ContactVelocity(V) / s_B_;
+  V += p * contact_;
+}
+
+void System::ProjectOntoStop(Eigen::VectorXd& X, Eigen::VectorXd& V) const {
+  V -= contact_ * (ContactVelocity(V) / s_B_);
+  X -= contact_ * ((ContactDisplacement(X) - x0_) / s_B_);
+}
+
+Eigen::VectorXd System::ModalFromPhysical(const Eigen::VectorXd& q) const {
+  const Eigen::VectorXd Mq = mass_ * q;
+  Eigen::VectorXd X(dof());
+  for (int i = 0; i < dof(); ++i) X[i] = mode_shapes_.col(i).dot(Mq) / modal_masses_[i];
+  return X;
+}
+
+System::InitialState System::Initial(const Scene& scene) const {
+  InitialState s{scene.initial_time, Eigen::VectorXd::Zero(dof()), Eigen::VectorXd::Zero(dof()),
+                 false};
+  if (scene.initial_displacement.size() == 0 && scene.initial_velocity.size() == 0) {
+    if (x0_ > 0) {
+      // Static pressed equilibrium (MODEL §4.2, constant term): at rest on the stop.
+      s.X = x0_ * static_shape_;
+      s.sticking = true;
+    }
+    return s;
+  }
+  // Modal form: the scene lists every mode; keep those of the model.
+  const auto select = [&](const Eigen::VectorXd& given) {
+    if (physical_) return ModalFromPhysical(given);
+    Eigen::VectorXd out(dof());
+    for (int i = 0; i < dof(); ++i) out[i] = given[kept_[static_cast<size_t>(i)]];
+    return out;
+  };
+  if (scene.initial_displacement.size() > 0) s.X = select(scene.initial_displacement);
+  if (scene.initial_velocity.size() > 0) s.V = select(scene.initial_velocity);
+  return s;
+}
+
+}  // namespace vibro

@@ -1,0 +1,67 @@
+#!/usr/bin/python3
+"""Command-line tests of `vibro model` on every shipped scene, and of bad input (exit 2)."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+vibro, scenes = sys.argv[1], sys.argv[2]
+failures = 0
+passed = 0
+
+
+def check(name, ok, detail=""):
+    global failures, passed
+    if ok:
+        passed += 1
+    else:
+        failures += 1
+        print(f"FAIL {name}: {detail}")
+
+
+def run(*args):
+    return subprocess.run([vibro, *args], capture_output=True, text=True, timeout=300)
+
+
+for f in sorted(os.listdir(scenes)):
+    if not f.endswith(".toml"):
+        continue
+    path = os.path.join(scenes, f)
+    p = run("model", path, "--json")
+    check(f"model {f}", p.returncode == 0, p.stderr)
+    if p.returncode == 0:
+        j = json.loads(p.stdout)
+        for key in ("frequencies", "forcing", "contact", "constrained_frequencies",
+                    "static_reaction", "modes_kept"):
+            check(f"model {f} has {key}", key in j, p.stdout)
+        check(f"model {f} constrained count",
+              len(j["constrained_frequencies"]) == j["modes_kept"] - 1, p.stdout)
+    p = run("model", path)
+    check(f"model {f} (text)", p.returncode == 0 and "frequencies" in p.stdout, p.stderr)
+
+# Three mistakes: three located messages, exit 2, nothing on stdout.
+with tempfile.TemporaryDirectory() as d:
+    bad = os.path.join(d, "bad.toml")
+    with open(bad, "w") as out:
+        out.write("[structure]\nfrequencies = [1.0]\nforcing = [1.0]\ncontact = [1.0]\n"
+                  "[stop]\nposition = 1.0\nrestitution = 1.5\n"
+                  "[excitation]\namplitude = -2.0\nfrequency = 2.8\n[run]\nchater = \"none\"\n")
+    p = run("model", bad, "--json")
+    check("bad scene exit 2", p.returncode == 2, p.returncode)
+    lines = [l for l in p.stderr.splitlines() if l.startswith(bad + ":")]
+    check("bad scene three messages", len(lines) == 3, p.stderr)
+    check("bad scene no stdout", p.stdout == "", p.stdout)
+    p = run("model", os.path.join(d, "missing.toml"))
+    check("missing file exit 2", p.returncode == 2, p.stderr)
+    p = run("model", os.path.join(scenes, "chain2.toml"), "--set", "stop.restitution=2",
+            "--set", "excitation.frequency=-1")
+    check("--set errors exit 2", p.returncode == 2 and p.stderr.count("--set") >= 2, p.stderr)
+    p = run("model", os.path.join(scenes, "chain2.toml"), "--json", "--set",
+            "structure.modes=1")
+    check("--set modes", p.returncode == 0 and json.loads(p.stdout)["modes_kept"] == 1, p.stderr)
+    p = run("frobnicate")
+    check("unknown command exit 2", p.returncode == 2, p.returncode)
+
+print(f"{passed} passed, {failures} failed")
+sys.exit(1 if failures else 0)

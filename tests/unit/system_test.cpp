@@ -1,0 +1,230 @@
+// Structural model (MODEL §1.3, §4.2): modal data against the physical matrices.
+#include "vibro/system.hpp"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "vibro/scene_file.hpp"
+
+namespace vibro {
+namespace {
+
+Scene PhysicalScene(const Eigen::MatrixXd& M, const Eigen::MatrixXd& K, int a, int b,
+                    double x0 = 1.0) {
+  Scene s;
+  s.physical = PhysicalStructureSpec{M, K, a, b};
+  s.stop_position = x0;
+  s.restitution = 0.5;
+  s.amplitude = 1.0;
+  s.frequency = 1.3;
+  return s;
+}
+
+// A random lumped chain ground -k0- m0 -k1- m1 ... with optional extra springs to ground.
+Scene RandomChain(std::mt19937& gen, int n, int a, int b) {
+  std::uniform_real_distribution<double> u(0.5, 2.0);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) {
+    M(i, i) = u(gen);
+    K(i, i) += 0.3 * u(gen);  // to ground
+  }
+  for (int i = 1; i < n; ++i) {
+    const double k = u(gen);
+    K(i - 1, i - 1) += k;
+    K(i, i) += k;
+    K(i - 1, i) -= k;
+    K(i, i - 1) -= k;
+  }
+  return PhysicalScene(M, K, a, b);
+}
+
+Eigen::MatrixXd Without(const Eigen::MatrixXd& m, int b) {
+  const auto n = m.rows();
+  Eigen::MatrixXd out(n - 1, n - 1);
+  for (Eigen::Index i = 0, r = 0; i < n; ++i) {
+    if (i == b) continue;
+    for (Eigen::Index j = 0, c = 0; j < n; ++j) {
+      if (j == b) continue;
+      out(r, c++) = m(i, j);
+    }
+    ++r;
+  }
+  return out;
+}
+
+TEST(System, TwoDofExampleOfModelSection13) {
+  // MODEL §1.3: m1 = m2 = 1, k1 = k2 = 1, stop on mass 2, force on mass 1.
+  Eigen::MatrixXd M = Eigen::MatrixXd::Identity(2, 2), K(2, 2);
+  K << 2, -1, -1, 1;
+  const System sys(PhysicalScene(M, K, 0, 1));
+  const double r5 = std::sqrt(5.0);
+  EXPECT_NEAR(sys.omega()[0], std::sqrt((3 - r5) / 2), 1e-12);
+  EXPECT_NEAR(sys.omega()[1], std::sqrt((3 + r5) / 2), 1e-12);
+  EXPECT_NEAR(sys.mode_shapes()(0, 0), (r5 - 1) / 2, 1e-12);   // ψ_1 = (0.618034, 1)
+  EXPECT_NEAR(sys.mode_shapes()(0, 1), -(r5 + 1) / 2, 1e-12);  // ψ_2 = (−1.618034, 1)
+  EXPECT_NEAR(sys.contact()[0], (5 + r5) / 10, 1e-12);         // 0.723607
+  EXPECT_NEAR(sys.contact()[1], (5 - r5) / 10, 1e-12);         // 0.276393
+  EXPECT_NEAR(sys.forcing()[0], 1 / r5, 1e-12);
+  EXPECT_NEAR(sys.forcing()[1], -1 / r5, 1e-12);
+  EXPECT_NEAR(sys.s_B(), 1.0, 1e-12);
+  EXPECT_NEAR(sys.s_A(), 0.0, 1e-12);
+  ASSERT_EQ(sys.constrained().frequencies.size(), 1);
+  EXPECT_NEAR(sys.constrained().frequencies[0], std::sqrt(2.0), 1e-12);
+  ASSERT_TRUE(sys.static_reaction().has_value());
+  EXPECT_NEAR(*sys.static_reaction(), 0.5, 1e-12);  // x0/2
+}
+
+TEST(System, ModalIdentitiesOnRandomChains) {
+  std::mt19937 gen(12345);
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 2 + trial % 5;
+    const int a = static_cast<int>(gen() % static_cast<unsigned>(n));
+    const int b = static_cast<int>(gen() % static_cast<unsigned>(n));
+    const Scene scene = RandomChain(gen, n, a, b);
+    const System sys(scene);
+    const auto& M = scene.physical->mass;
+    const auto& K = scene.physical->stiffness;
+    const Eigen::MatrixXd Minv = M.inverse(), Kinv = K.inverse();
+    SCOPED_TRACE(testing::Message() << "n=" << n << " A=" << a << " B=" << b);
+    ASSERT_EQ(sys.dof(), n);
+    EXPECT_NEAR(sys.s_B(), Minv(b, b), 1e-12 * Minv(b, b));
+    EXPECT_NEAR(sys.s_A(), Minv(a, b), 1e-12 * Minv(b, b));
+    const Eigen::VectorXd w2 = sys.omega().cwiseAbs2();
+    EXPECT_NEAR(sys.contact().cwiseQuotient(w2).sum(), Kinv(b, b), 1e-11 * Kinv(b, b));
+    EXPECT_NEAR(sys.forcing().cwiseQuotient(w2).sum(), Kinv(a, b), 1e-11 * Kinv(b, b));
+    EXPECT_NEAR(sys.flexibility(), Kinv(b, b), 1e-11 * Kinv(b, b));
+    for (int i = 0; i < n; ++i) {
+      EXPECT_GT(sys.contact()[i], 0.0);
+      EXPECT_NEAR(sys.mode_shapes()(b, i), 1.0, 1e-14);
+    }
+    if (a != b) {
+      EXPECT_NEAR(sys.s_A(), 0.0, 1e-12);  // lumped masses: s_A = (M⁻¹)_AB = 0
+    }
+
+    // Constrained pulsations = eigenfrequencies of the structure with DOF B clamped.
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> clamped(Without(K, b), Without(M, b));
+    const Eigen::VectorXd expected = clamped.eigenvalues().cwiseSqrt();
+    ASSERT_EQ(sys.constrained().frequencies.size(), n - 1);
+    for (int k = 0; k < n - 1; ++k)
+      EXPECT_NEAR(sys.constrained().frequencies[k], expected[k], 1e-11 * expected[k]);
+  }
+}
+
+TEST(System, ConstrainedModesDiagonaliseTheStickingOperator) {
+  // A = Ω − T_B (c∘w2)ᵀ/s_B (MODEL §4.2): A v_k = ω'_k² v_k, cᵀv_k = 0, L E = I, cᵀF_c = 0.
+  std::mt19937 gen(7);
+  for (int n = 2; n <= 6; ++n) {
+    const System sys(RandomChain(gen, n, 0, n - 1));
+    const auto& cm = sys.constrained();
+    const Eigen::VectorXd w2 = sys.omega().cwiseAbs2();
+    const Eigen::MatrixXd A =
+        Eigen::MatrixXd(w2.asDiagonal()) -
+        sys.contact() * sys.contact_shape().cwiseProduct(w2).transpose() / sys.s_B();
+    EXPECT_NEAR((A * sys.static_shape()).norm(), 0.0, 1e-12);
+    for (int k = 0; k < n - 1; ++k) {
+      const Eigen::VectorXd v = cm.vectors.col(k);
+      const double l2 = cm.frequencies[k] * cm.frequencies[k];
+      EXPECT_NEAR((A * v - l2 * v).norm(), 0.0, 1e-11 * (1 + l2) * v.norm());
+      EXPECT_NEAR(sys.contact_shape().dot(v), 0.0, 1e-12 * v.norm());
+      EXPECT_NEAR(cm.left.row(k).dot(sys.static_shape()), 0.0, 1e-12);
+      for (int j = 0; j < n - 1; ++j)
+        EXPECT_NEAR(cm.left.row(k).dot(cm.vectors.col(j)), k == j ? 1.0 : 0.0, 1e-12);
+    }
+    const Eigen::VectorXd Fc = sys.forcing() - sys.s_A() / sys.s_B() * sys.contact();
+    EXPECT_NEAR(sys.contact_shape().dot(Fc), 0.0, 1e-12);
+    // Reaction at the static equilibrium with f = 0 equals x0/flexibility.
+    const Eigen::VectorXd X = sys.stop() * sys.static_shape();
+    EXPECT_NEAR(sys.Reaction(X, Eigen::VectorXd::Zero(n), 0.0), *sys.static_reaction(), 1e-12);
+  }
+}
+
+TEST(System, ModeWithNodeAtBIsKeptOutOfTheContact) {
+  // Symmetric chain ground-k-m-k-m-k-m-k-ground with B at the middle mass: the antisymmetric
+  // mode has a node at B.
+  Eigen::MatrixXd M = Eigen::MatrixXd::Identity(3, 3), K(3, 3);
+  K << 2, -1, 0, -1, 2, -1, 0, -1, 2;
+  const System sys(PhysicalScene(M, K, 0, 1));
+  int invisible = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (sys.contact_shape()[i] == 0.0) {
+      ++invisible;
+      EXPECT_EQ(sys.contact()[i], 0.0);
+      EXPECT_NEAR(sys.omega()[i], std::sqrt(2.0), 1e-12);  // antisymmetric mode: ω² = 2
+      EXPECT_NEAR(std::abs(sys.forcing()[i]), 1 / std::sqrt(2.0), 1e-12);  // mass-normalised
+    }
+  }
+  EXPECT_EQ(invisible, 1);
+  EXPECT_NEAR(sys.s_B(), 1.0, 1e-12);  // (M⁻¹)_BB
+  EXPECT_NEAR(sys.flexibility(), K.inverse()(1, 1), 1e-12);
+  // Clamping B leaves two masses on springs 2 (each tied to ground and to the clamp): ω'² = 2, 2.
+  ASSERT_EQ(sys.constrained().frequencies.size(), 2);
+  EXPECT_NEAR(sys.constrained().frequencies[0], std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(sys.constrained().frequencies[1], std::sqrt(2.0), 1e-12);
+}
+
+TEST(System, ModalTruncationKeepsTheLowestModes) {
+  std::mt19937 gen(3);
+  Scene scene = RandomChain(gen, 5, 0, 4);
+  const System full(scene);
+  scene.modes = 2;
+  const System cut(scene);
+  ASSERT_EQ(cut.dof(), 2);
+  EXPECT_DOUBLE_EQ(cut.omega()[0], full.omega()[0]);
+  EXPECT_DOUBLE_EQ(cut.omega()[1], full.omega()[1]);
+  EXPECT_DOUBLE_EQ(cut.contact()[1], full.contact()[1]);
+}
+
+TEST(System, ModalFormTruncationSelectsLowestFrequencies) {
+  const auto loaded = ParseScene(R"(
+[structure]
+frequencies = [3.0, 1.0, 2.0]
+forcing = [0.3, 0.1, 0.2]
+contact = [3.5, 1.5, 2.5]
+modes = 2
+[stop]
+position = 1.0
+restitution = 0.5
+[excitation]
+amplitude = 1.0
+frequency = 2.0
+[initial]
+displacement = [30.0, 10.0, 20.0]
+velocity = [0.0, 0.0, 0.0]
+)",
+                                 "inline");
+  const System sys(loaded.scene);
+  ASSERT_EQ(sys.dof(), 2);
+  EXPECT_EQ(sys.omega()[0], 1.0);
+  EXPECT_EQ(sys.omega()[1], 2.0);
+  EXPECT_EQ(sys.forcing()[1], 0.2);
+  EXPECT_EQ(sys.contact()[0], 1.5);
+  const auto init = sys.Initial(loaded.scene);
+  EXPECT_EQ(init.X[0], 10.0);
+  EXPECT_EQ(init.X[1], 20.0);
+}
+
+TEST(System, DefaultInitialStateIsTheStaticPreloadEquilibrium) {
+  Eigen::MatrixXd M = Eigen::MatrixXd::Identity(2, 2), K(2, 2);
+  K << 2, -1, -1, 1;
+  Scene scene = PhysicalScene(M, K, 0, 1, 1.0);
+  const System sys(scene);
+  const auto init = sys.Initial(scene);
+  EXPECT_TRUE(init.sticking);
+  EXPECT_NEAR(sys.ContactDisplacement(init.X), 1.0, 1e-15);
+  // Physical displacement q = Ψ X: the static deflection under the preload reaction x0/2 at B
+  // is q = K⁻¹ e_B · 0.5 = (0.5, 1).
+  const Eigen::VectorXd q = sys.mode_shapes() * init.X;
+  EXPECT_NEAR(q[0], 0.5, 1e-12);
+  EXPECT_NEAR(q[1], 1.0, 1e-12);
+  scene.stop_position = -1.0;
+  const System clearance(scene);
+  const auto origin = clearance.Initial(scene);
+  EXPECT_FALSE(origin.sticking);
+  EXPECT_EQ(origin.X.norm(), 0.0);
+  EXPECT_FALSE(clearance.static_reaction().has_value());
+}
+
+}  // namespace
+}  // namespace vibro
