@@ -3,6 +3,9 @@
 
 #include <string>
 
+#include "vibro/attractor.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
 
 namespace vibro {
@@ -10,5 +13,8 @@ namespace vibro {
 // `vibro model --json`: frequencies, forcing, contact, constrained_frequencies, static_reaction,
 // modes_kept (+ mode_shapes, modal_masses and contact_modes for the physical form).
 std::string ModelJson(const System& system);
+
+// `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
+std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor);
 
 }  // namespace vibro

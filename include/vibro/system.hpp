@@ -75,6 +75,8 @@ class System {
   // Contact reaction (MODEL eq. 5 with the damping term of §7) for a state on the stop:
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B, φ = ωt.
   double Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
+  // Rate Ṙ along the sticking flow (MODEL §4.2, with the damped constrained acceleration of §7).
+  double ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
   // Free acceleration of B: ẍ_B = −s_B R for the same state (MODEL §2).
   double FreeContactAcceleration(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                                  double phase) const {

@@ -9,7 +9,9 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "vibro/attractor.hpp"
 #include "vibro/scene_file.hpp"
+#include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
 
@@ -17,6 +19,8 @@ namespace {
 
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
+constexpr int kExitNumerical = 3;
+constexpr int kExitInterrupted = 130;
 
 std::string Vec(const Eigen::VectorXd& v) {
   std::string s = "[";
@@ -58,6 +62,47 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
   return 0;
 }
 
+std::string Phases(const std::vector<std::pair<double, double>>& phases) {
+  std::string s;
+  for (const auto& [a, b] : phases) s += fmt::format("{}[{:.6f}, {:.6f}]", s.empty() ? "" : " ", a, b);
+  return s.empty() ? "none" : s;
+}
+
+int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  vibro::AttractorRecorder recorder(sys, loaded.scene);
+  vibro::SimulationOptions options;
+  options.observers.push_back(&recorder);
+  const auto result = vibro::Simulate(sys, loaded.scene, options);
+  const auto attractor = recorder.Classify();
+  if (json) {
+    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor));
+  } else {
+    fmt::print("scene        {}{}\n", path,
+               loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
+    fmt::print("engine       {}, chatter {}\n", vibro::ToString(loaded.scene.run.engine),
+               vibro::ToString(loaded.scene.run.chatter));
+    fmt::print("status       {}{}\n", vibro::ToString(result.status),
+               result.message.empty() ? "" : ": " + result.message);
+    fmt::print("t_end        {:.10g} ({} periods)\n", result.t_end, result.end.period);
+    fmt::print("events       {} impacts, {} accumulations, {} sticks, {} releases, {} grazings\n",
+               result.counts.impacts, result.counts.accumulations, result.counts.sticks,
+               result.counts.releases, result.counts.grazings);
+    fmt::print("attractor    {}", attractor.kind);
+    if (attractor.period) fmt::print(", period {}", *attractor.period);
+    if (attractor.impacts_per_period) fmt::print(", {} impacts/period", *attractor.impacts_per_period);
+    if (attractor.sticking_fraction) fmt::print(", sticking fraction {:.6f}", *attractor.sticking_fraction);
+    fmt::print("\nstick phases {}\n", Phases(attractor.stick_phases));
+  }
+  switch (result.status) {
+    case vibro::RunStatus::kOk: return 0;
+    case vibro::RunStatus::kNumericalFailure: return kExitNumerical;
+    case vibro::RunStatus::kInterrupted: return kExitInterrupted;
+  }
+  return kExitInternal;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -78,6 +123,8 @@ int main(int argc, char** argv) {
 
   CLI::App* model = app.add_subcommand("model", "print the structural model derived from a scene");
   add_scene_options(model);
+  CLI::App* simulate = app.add_subcommand("simulate", "simulate a scene and summarise its attractor");
+  add_scene_options(simulate);
 
   try {
     app.parse(argc, argv);
@@ -88,6 +135,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*model) return RunModel(scene_path, sets, json);
+    if (*simulate) return RunSimulate(scene_path, sets, json);
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",

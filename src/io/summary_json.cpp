@@ -12,7 +12,41 @@ nlohmann::json Array(const Eigen::VectorXd& v) {
   return a;
 }
 
+nlohmann::json AttractorObject(const Attractor& a) {
+  nlohmann::json j;
+  j["kind"] = a.kind;
+  j["period"] = a.period ? nlohmann::json(*a.period) : nlohmann::json(nullptr);
+  j["impacts_per_period"] =
+      a.impacts_per_period ? nlohmann::json(*a.impacts_per_period) : nlohmann::json(nullptr);
+  j["sticking_fraction"] =
+      a.sticking_fraction ? nlohmann::json(*a.sticking_fraction) : nlohmann::json(nullptr);
+  auto phases = nlohmann::json::array();
+  for (const auto& [s, e] : a.stick_phases) phases.push_back({s, e});
+  j["stick_phases"] = phases;
+  if (a.kind == "impact-periodic") {
+    j["impact_phases"] = a.impact_phases;
+    j["impact_velocities"] = a.impact_velocities;
+  }
+  return j;
+}
+
 }  // namespace
+
+std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a) {
+  nlohmann::json j;
+  j["status"] = ToString(r.status);
+  if (r.status != RunStatus::kOk) j["message"] = r.message;
+  j["engine"] = ToString(scene.run.engine);
+  j["t_end"] = r.t_end;
+  j["periods"] = r.end.period;
+  j["counts"] = {{"impacts", r.counts.impacts},
+                 {"accumulations", r.counts.accumulations},
+                 {"sticks", r.counts.sticks},
+                 {"releases", r.counts.releases},
+                 {"grazings", r.counts.grazings}};
+  j["attractor"] = AttractorObject(a);
+  return j.dump();
+}
 
 std::string ModelJson(const System& s) {
   nlohmann::json j;

@@ -160,6 +160,21 @@ double System::Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, doub
   return (elastic - s_A_ * f_ * std::sin(phase)) / s_B_;
 }
 
+double System::ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                            double phase) const {
+  const Eigen::VectorXd w2 = omega_.cwiseAbs2();
+  double rate = shape_.dot(w2.cwiseProduct(V)) - s_A_ * f_ * w_ * std::cos(phase);
+  if (damped_) {
+    // Ẍ = −A X − Π D Ẋ + F_c f sin φ on the stop.
+    const Eigen::VectorXd DV = 2.0 * zeta_.cwiseProduct(omega_).cwiseProduct(V);
+    const Eigen::VectorXd free_acc =
+        -w2.cwiseProduct(X) - DV + forcing_ * (f_ * std::sin(phase));
+    const Eigen::VectorXd acc = free_acc - contact_ * (shape_.dot(free_acc) / s_B_);
+    rate += shape_.dot(2.0 * zeta_.cwiseProduct(omega_).cwiseProduct(acc));
+  }
+  return rate / s_B_;
+}
+
 void System::ApplyImpact(Eigen::VectorXd& V, double restitution) const {
   const double p = -(1.0 + restitution) * ContactVelocity(V) / s_B_;
   V += p * contact_;

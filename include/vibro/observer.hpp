@@ -1,0 +1,74 @@
+// What a simulation reports as it goes: events, dense samples, stroboscopic section points and
+// checkpoints (states from which a run can be resumed bit for bit). Observers are called from the
+// simulating thread, in time order; they must not throw through the simulator unless they want
+// the run to end with that exception.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Dense>
+
+namespace vibro {
+
+enum class Mode : std::int8_t { kFree = 0, kSticking = 1 };
+
+// CONTRACT §3 enum values.
+enum class EventKind : std::int8_t {
+  kImpact = 1,        // x_B reaches x0 moving in; restitution (or plastic) reset
+  kAccumulation = 2,  // predicted accumulation point of a chattering sequence (MODEL §5.4)
+  kStick = 3,         // start of a sticking phase (after a plastic impact or an accumulation)
+  kRelease = 4,       // R crosses zero going negative: the body leaves the stop
+  kGrazing = 5,       // tangential touch of the stop (ẋ_B⁻ = 0): no impact
+};
+
+const char* ToString(EventKind kind);
+
+// Time is kept as whole forcing periods since the start plus the time within the period, so that
+// an event at period 10⁶ is located as accurately as one at period 1: t = t0 + period·T + offset.
+struct Clock {
+  long long period = 0;  // whole forcing periods since the start of the run
+  double offset = 0.0;   // time since the start of that period, in [0, T)
+};
+
+struct Event {
+  EventKind kind;
+  Clock clock;
+  double t;         // absolute time t0 + period·T + offset (for output; less accurate)
+  double x_B;       // contact displacement at the event
+  double v_before;  // ẋ_B just before
+  double v_after;   // ẋ_B just after
+};
+
+struct Sample {
+  Clock clock;
+  double t;
+  const Eigen::VectorXd& X;  // modal displacements, (n)
+  const Eigen::VectorXd& V;  // modal velocities, (n)
+  double x_B;
+  Mode mode;
+};
+
+// Everything the automaton needs to continue a run exactly where it was (taken at period
+// boundaries reached by the flow).
+struct Checkpoint {
+  Clock clock;
+  Eigen::VectorXd X, V;
+  Mode mode;
+  double gap;                  // x_B − x0 as carried by the automaton (0 on the stop)
+  int start_kind;              // how the next free flight starts (trivial roots to divide out)
+  double chatter_first_speed;  // |ẋ_B⁻| of the first impact of the current sequence (0: none)
+  double chatter_last_speed;   // |ẋ_B⁻| of the last impact
+  long long sample_index;      // next dense-sample index
+};
+
+class Observer {
+ public:
+  virtual ~Observer() = default;
+  virtual void OnEvent(const Event& /*event*/) {}
+  virtual void OnSample(const Sample& /*sample*/) {}
+  // Stroboscopic section: t = t0 + k T, k = 0, 1, ... (the initial state is row 0).
+  virtual void OnSection(const Sample& /*sample*/) {}
+  virtual void OnCheckpoint(const Checkpoint& /*checkpoint*/) {}
+};
+
+}  // namespace vibro

@@ -1,0 +1,77 @@
+// The hybrid automaton of an impact oscillator with sticking (MODEL §1-§5), written once and
+// driven by either engine (exact closed forms, or CVODE).
+//
+// State: time t = t0 + kT + s (whole periods k, offset s ∈ [0, T)), modal X, Ẋ, the mode
+// (free | sticking) and, during chattering, the speeds of the sequence's first and last impacts.
+// x⁻ / x⁺ denote the state just before / after a reset at the same t.
+//
+//   loop until k = periods, an interruption, or a failure:
+//     free flight:   advance the free flow (1) until the gap g = x_B − x0 reaches 0 or t hits the
+//                    period boundary (the engine never skips a root; trivial roots at the start of
+//                    a flight are divided out, MODEL §2.1)
+//       boundary     → section point, checkpoint, k ← k+1 (the flow restarts from the same state)
+//       g = 0, ẋ_B⁻ < 0 (impact):
+//           R⁻ = reaction of the state (MODEL eq. 5)
+//           r = 0, or "threshold" with |ẋ_B⁻| < v_switch:
+//               Ẋ⁺ = Π Ẋ⁻ (plastic projection, MODEL §4.4); emit impact
+//               R⁻ > 0, or R⁻ = 0 and Ṙ > 0 → emit stick, mode ← sticking
+//               otherwise                   → leave at zero velocity (g = g' = 0, g'' > 0)
+//           else Ẋ⁺ = Ẋ⁻ − (1+r) T_B ẋ_B⁻/s_B (eq. 12); emit impact
+//               "accumulation", r < 1, |ẋ_B⁻| < v_switch, R⁻ > 0 (MODEL §5.4):
+//                   Δ∞ = 2r|ẋ_B⁻| / ((1−r) s_B R⁻); flow freely over Δ∞ (no guards), project
+//                   onto the stop; if R(t∞) > 0 → emit accumulation and stick, mode ← sticking;
+//                   else the sequence is incomplete: undo the jump, keep following impacts
+//               "none": impacts are followed one by one; when the next flight is shorter than
+//                   the time resolution the run stops with status numerical-failure
+//       g = 0, ẋ_B⁻ ≥ 0 (tangential touch, MODEL §2.1): emit grazing; R > 0 → stick (MODEL
+//                    §4.4 iii), else keep flying (g = g' = 0, g'' > 0 divided out)
+//     sticking:      advance the constrained flow (6) until R reaches 0 or the period boundary
+//                    (one DOF: the body rests and the release phase is closed form, MODEL §4.4)
+//       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
+//       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, MODEL §5.7): stay stuck
+//
+// Simultaneous events: a guard met exactly at a period boundary is handled after the section
+// point is recorded (the section sees x⁻). Two guards at one instant are handled in the order
+// contact → reset → the new mode's guards evaluated at the reset state: an impact whose reset
+// state already satisfies the sticking condition goes straight to sticking, a release into a
+// state moving into the stop is an immediate touch. v_switch = run.chatter_switch × |ẋ_B⁻| of the
+// sequence's first impact, but never below 10³ ε max|Ẋ| (the rounding floor of ẋ_B, MODEL §5.4).
+#pragma once
+
+#include <atomic>
+#include <string>
+#include <vector>
+
+#include "vibro/observer.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+
+enum class RunStatus { kOk, kNumericalFailure, kInterrupted };
+const char* ToString(RunStatus s);  // "ok", "numerical-failure", "interrupted"
+
+struct EventCounts {
+  long long impacts = 0, accumulations = 0, sticks = 0, releases = 0, grazings = 0;
+};
+
+struct RunResult {
+  RunStatus status = RunStatus::kOk;
+  std::string message;  // why the run stopped early, and what to change
+  Clock end;            // time reached
+  double t_end = 0;
+  EventCounts counts;
+  Eigen::VectorXd X, V;  // final state
+  Mode mode = Mode::kFree;
+};
+
+struct SimulationOptions {
+  std::vector<Observer*> observers;
+  const std::atomic<bool>* stop_requested = nullptr;  // polled between events
+  const Checkpoint* resume_from = nullptr;            // continue a run from this checkpoint
+};
+
+// Runs the scene's initial state for scene.run.periods forcing periods with the scene's engine.
+RunResult Simulate(const System& system, const Scene& scene, const SimulationOptions& options);
+
+}  // namespace vibro

@@ -1,0 +1,127 @@
+// Attractor classification from the stroboscopic section and the event log.
+#include "vibro/attractor.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vibro {
+
+AttractorRecorder::AttractorRecorder(const System& system, const Scene& scene)
+    : sys_(system),
+      phase0_(std::fmod(system.frequency() * scene.initial_time, 2.0 * M_PI)),
+      max_period_(scene.run.max_period),
+      tolerance_(scene.run.period_tolerance) {}
+
+void AttractorRecorder::OnEvent(const Event& e) { events_.push_back(e); }
+
+void AttractorRecorder::OnSection(const Sample& s) {
+  Eigen::VectorXd z(2 * s.X.size());
+  z << s.X, s.V;
+  sections_.push_back({s.clock.period, std::move(z), s.mode});
+  const auto keep = static_cast<size_t>(2 * max_period_ + 2);
+  while (sections_.size() > keep) sections_.pop_front();
+  const long long oldest = sections_.front().k;
+  while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
+}
+
+double AttractorRecorder::Phase(const Clock& c, int p) const {
+  const double whole = 2.0 * M_PI * static_cast<double>(c.period % p);
+  double ph = std::fmod(phase0_ + sys_.frequency() * c.offset + whole, 2.0 * M_PI * p);
+  if (ph < 0) ph += 2.0 * M_PI * p;
+  return ph;
+}
+
+Attractor AttractorRecorder::Classify() const {
+  Attractor a;
+  if (sections_.size() < 2) return a;
+  const size_t n = sections_.size();
+  const long long K = sections_.back().k;
+  const double T = sys_.period(), w = sys_.frequency();
+  const auto close = [&](const Section& x, const Section& y) {
+    if (x.mode != y.mode) return false;
+    const double scale = 1.0 + std::max(x.z.cwiseAbs().maxCoeff(), y.z.cwiseAbs().maxCoeff());
+    return (x.z - y.z).cwiseAbs().maxCoeff() <= tolerance_ * scale;
+  };
+  const auto in_window = [&](const Event& e, long long from, long long to) {
+    // events with from·T < t ≤ to·T (period boundaries are section times)
+    if (e.clock.period < from || e.clock.period > to) return false;
+    if (e.clock.period == from && e.clock.offset == 0.0) return false;
+    if (e.clock.period == to && e.clock.offset > 0.0) return false;
+    return true;
+  };
+  const auto count = [&](EventKind kind, long long from, long long to) {
+    long long c = 0;
+    for (const auto& e : events_)
+      if (e.kind == kind && in_window(e, from, to)) ++c;
+    return c;
+  };
+
+  int period = 0;
+  for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
+    bool ok = true;
+    for (int j = 0; j < p && ok; ++j) ok = close(sections_[n - 1 - j], sections_[n - 1 - j - p]);
+    for (EventKind kind : {EventKind::kImpact, EventKind::kStick, EventKind::kRelease})
+      ok = ok && count(kind, K - p, K) == count(kind, K - 2 * p, K - p);
+    if (ok) {
+      period = p;
+      break;
+    }
+  }
+
+  // Sticking phases: each release in the window closes one phase; its start is the last stick
+  // before it.
+  const int p = period > 0 ? period : std::min<int>(max_period_, static_cast<int>(n) - 1);
+  const long long from = K - p;
+  double stuck = 0.0;
+  std::vector<std::pair<double, double>> phases;
+  const Event* last_stick = nullptr;
+  for (const auto& e : events_) {
+    if (e.kind == EventKind::kStick) last_stick = &e;
+    if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
+      const double duration = (static_cast<double>(e.clock.period - last_stick->clock.period) * T +
+                               e.clock.offset - last_stick->clock.offset);
+      const double start = Phase(last_stick->clock, p);
+      phases.emplace_back(start, start + w * duration);
+      stuck += duration;
+    }
+  }
+  std::sort(phases.begin(), phases.end());
+  const bool released = !phases.empty();
+  const bool always_stuck = !released && sections_.back().mode == Mode::kSticking &&
+                            count(EventKind::kImpact, from, K) == 0 &&
+                            std::all_of(sections_.end() - p - 1, sections_.end(),
+                                        [](const Section& s) { return s.mode == Mode::kSticking; });
+  if (period == 0) {
+    a.kind = "not-periodic";
+    a.sticking_fraction = always_stuck ? 1.0 : stuck / (p * T);
+    return a;
+  }
+  a.period = period;
+  const long long impacts = count(EventKind::kImpact, from, K);
+  const long long accumulations = count(EventKind::kAccumulation, from, K);
+  if (always_stuck) {
+    a.kind = "permanent-contact";
+    a.sticking_fraction = 1.0;
+    a.impacts_per_period = 0;
+    return a;
+  }
+  a.sticking_fraction = stuck / (period * T);
+  a.stick_phases = phases;
+  if (accumulations == 0) a.impacts_per_period = impacts;
+  if (released)
+    a.kind = "sticking-periodic";
+  else if (impacts > 0)
+    a.kind = "impact-periodic";
+  else
+    a.kind = "no-contact-periodic";
+  if (a.kind == "impact-periodic") {
+    for (const auto& e : events_) {
+      if (e.kind != EventKind::kImpact || !in_window(e, from, K)) continue;
+      a.impact_phases.push_back(Phase(e.clock, period));
+      a.impact_velocities.push_back(e.v_before);
+    }
+  }
+  return a;
+}
+
+}  // namespace vibro
