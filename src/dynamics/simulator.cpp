@@ -206,9 +206,10 @@ void Automaton::Depart(FlightStart how) {
 
 // A state on the stop at rest (or the start of a run): stick, leave, or decide with Ṙ.
 void Automaton::ClassifyInitialState() {
+  // Any positive gap is a free flight; a state at (or, by the rounding of a physical-to-modal
+  // conversion, within validation tolerance inside) the stop is on it.
   const double xB = sys_.ContactDisplacement(X_);
-  const double tol = 1e-12 * std::max(1.0, std::abs(sys_.stop()));
-  if (xB - sys_.stop() > tol) {
+  if (xB - sys_.stop() > 0) {
     gap_ = xB - sys_.stop();
     Depart(FlightStart::kGeneric);
     return;
