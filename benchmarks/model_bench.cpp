@@ -26,3 +26,5 @@ BENCHMARK(BM_BuildSystem10);
 }  // namespace
 
 BENCHMARK_MAIN();
+
+

@@ -32,6 +32,7 @@ ExactEngine::ExactEngine(const System& sys) : sys_(sys), omega_(sys.frequency())
 void ExactEngine::Begin(const SegmentStart& s) {
   mode_ = s.mode;
   phase_ = s.phase;
+  trig_ = PhaseTrig(s.phase);
   gap0_ = s.gap;
   flight_start_ = s.flight_start;
   stick_start_ = s.stick_start;
@@ -47,14 +48,14 @@ void ExactEngine::Begin(const SegmentStart& s) {
 
 Probe ExactEngine::GapProbe(double sigma, double H) const {
   const auto& c = sys_.contact_shape();
-  const double s_forcing = std::sin(phase_ + omega_ * sigma);
+  const double s_forcing = trig_.s * std::cos(omega_ * sigma) + trig_.c * std::sin(omega_ * sigma);
   Probe p{{gap0_, 0.0, 0.0}, 0.0};
   double dq_sum = 0.0;
   for (size_t i = 0; i < free_modes_.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     if (c[ii] == 0.0) continue;
     const Oscillator& o = free_modes_[i];
-    const auto st = Flow(o, omega_, phase_, X0_[ii], V0_[ii], sigma);
+    const auto st = Flow(o, omega_, trig_, X0_[ii], V0_[ii], sigma);
     const double x = X0_[ii] + st.dq;
     dq_sum += st.dq;
     p.jet.g1 += st.v;
@@ -75,7 +76,7 @@ Probe ExactEngine::ReactionProbe(double sigma, double H) const {
   for (size_t k = 0; k < stick_modes_.size(); ++k) {
     const auto kk = static_cast<Eigen::Index>(k);
     const Oscillator& o = stick_modes_[k];
-    const auto st = Flow(o, omega_, phase_, xi0_[kk], dxi0_[kk], sigma);
+    const auto st = Flow(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma);
     const double xi = xi0_[kk] + st.dq;
     p.jet.g += rho[kk] * xi;
     p.jet.g1 += rho[kk] * st.v;
@@ -182,7 +183,7 @@ void ExactEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
   V.resize(n);
   if (mode_ == Mode::kFree) {
     for (int i = 0; i < n; ++i) {
-      const auto st = Flow(free_modes_[static_cast<size_t>(i)], omega_, phase_, X0_[i], V0_[i], sigma);
+      const auto st = Flow(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma);
       X[i] = X0_[i] + st.dq;
       V[i] = st.v;
     }
@@ -191,7 +192,7 @@ void ExactEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
   const auto m = static_cast<Eigen::Index>(stick_modes_.size());
   Eigen::VectorXd xi(m), dxi(m);
   for (Eigen::Index k = 0; k < m; ++k) {
-    const auto st = Flow(stick_modes_[static_cast<size_t>(k)], omega_, phase_, xi0_[k], dxi0_[k], sigma);
+    const auto st = Flow(stick_modes_[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma);
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;
   }

@@ -43,6 +43,7 @@ class ExactEngine final : public Propagator {
   // Current segment.
   Mode mode_ = Mode::kFree;
   double phase_ = 0;
+  PhaseTrig trig_{0.0};
   Eigen::VectorXd X0_, V0_;    // free flight start
   Eigen::VectorXd xi0_, dxi0_; // sticking start, constrained modal coordinates
   double gap0_ = 0;

@@ -19,8 +19,8 @@ double Sinc(double x) {
 //   S = (sin ωσ − (ω/ν) sin νσ)/(ν² − ω²)    = [sin νσ − νσ cos(Σσ/2) sinc(δσ/2)] / (νΣ)
 //   E = (ν sin νσ − ω sin ωσ)/(ν² − ω²)      = [νσ cos(Σσ/2) sinc(δσ/2) + sin ωσ] / Σ
 // finite at ν = ω (MODEL §8.1: K → [sin ωσ cos φ − ωσ cos(φ + ωσ)]/(2ω²)).
-OscillatorState Undamped(const Oscillator& o, double omega, double phase, double q0, double v0,
-                         double sigma) {
+OscillatorState Undamped(const Oscillator& o, double omega, const PhaseTrig& ph, double q0,
+                         double v0, double sigma) {
   const double nu = o.nu;
   const double sn = std::sin(nu * sigma), half = std::sin(0.5 * nu * sigma);
   const double cn = 1.0 - 2.0 * half * half;
@@ -32,7 +32,7 @@ OscillatorState Undamped(const Oscillator& o, double omega, double phase, double
   const double C = sigma * s_half * sc / sum;
   const double S = (sn - nu * sigma * c_half * sc) / (nu * sum);
   const double E = (nu * sigma * c_half * sc + std::sin(omega * sigma)) / sum;
-  const double sp = std::sin(phase), cp = std::cos(phase);
+  const double sp = ph.s, cp = ph.c;
   out.dq += o.F * (sp * C + cp * S);
   out.v += o.F * (sp * E + cp * omega * C);
   return out;
@@ -40,15 +40,15 @@ OscillatorState Undamped(const Oscillator& o, double omega, double phase, double
 
 // Damped (MODEL §7): q = U(φ + ωσ) + h(σ), U = P sin + Q cos the steady forced response,
 // h the decaying homogeneous part; Δq = [U(φ+ωσ) − U(φ)] + [h(σ) − h(0)] written as increments.
-OscillatorState Damped(const Oscillator& o, double omega, double phase, double q0, double v0,
-                       double sigma) {
+OscillatorState Damped(const Oscillator& o, double omega, const PhaseTrig& ph, double q0,
+                       double v0, double sigma) {
   const double nu = o.nu, z = o.zeta;
   const double a = z * nu, nud = nu * std::sqrt(1.0 - z * z);
   const double den = (nu * nu - omega * omega) * (nu * nu - omega * omega) +
                      (2.0 * z * nu * omega) * (2.0 * z * nu * omega);
   const double P = o.F * (nu * nu - omega * omega) / den;
   const double Q = -o.F * 2.0 * z * nu * omega / den;
-  const double sp = std::sin(phase), cp = std::cos(phase);
+  const double sp = ph.s, cp = ph.c;
   const double U0 = P * sp + Q * cp, dU0 = omega * (P * cp - Q * sp);
   const double A = q0 - U0, B = v0 - dU0;
   const double Cc = (B + a * A) / nud;
@@ -68,8 +68,10 @@ OscillatorState Damped(const Oscillator& o, double omega, double phase, double q
 
 }  // namespace
 
-OscillatorState Flow(const Oscillator& o, double omega, double phase, double q0, double v0,
-                     double sigma) {
+PhaseTrig::PhaseTrig(double phase) : s(std::sin(phase)), c(std::cos(phase)) {}
+
+OscillatorState Flow(const Oscillator& o, double omega, const PhaseTrig& phase, double q0,
+                     double v0, double sigma) {
   return o.zeta > 0.0 ? Damped(o, omega, phase, q0, v0, sigma)
                       : Undamped(o, omega, phase, q0, v0, sigma);
 }

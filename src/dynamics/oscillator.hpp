@@ -20,9 +20,19 @@ struct OscillatorState {
   double v;   // q̇(σ)
 };
 
+// sin and cos of the forcing phase φ at σ = 0 (computed once per segment).
+struct PhaseTrig {
+  double s, c;
+  explicit PhaseTrig(double phase);
+};
+
 // Flow over σ ≥ 0; ω > 0 forcing pulsation, φ forcing phase at σ = 0.
-OscillatorState Flow(const Oscillator& o, double omega, double phase, double q0, double v0,
-                     double sigma);
+OscillatorState Flow(const Oscillator& o, double omega, const PhaseTrig& phase, double q0,
+                     double v0, double sigma);
+inline OscillatorState Flow(const Oscillator& o, double omega, double phase, double q0, double v0,
+                            double sigma) {
+  return Flow(o, omega, PhaseTrig(phase), q0, v0, sigma);
+}
 
 // Energy amplitude A = √(v² + ν² q²). Over a window of length h starting at a state of amplitude
 // A, A(σ) ≤ A + |F| h (damping only removes energy), which bounds every derivative:

@@ -49,13 +49,25 @@ inline double FirstCubicRoot(double g, double g1, double g2, double M, double H,
       lo = hi;
       continue;
     }
-    // Bisection on a monotone stretch: p(lo) > 0 ≥ p(hi); keep the safe end.
-    for (int it = 0; it < 200 && hi - lo > 2.0 * std::numeric_limits<double>::epsilon() * hi; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      if (p(mid) > 0)
-        lo = mid;
-      else
-        hi = mid;
+    // Safeguarded Newton on a monotone stretch, p(lo) > 0 ≥ p(hi).
+    constexpr double kEps = std::numeric_limits<double>::epsilon();
+    double x = lo;
+    for (int it = 0; it < 100 && hi - lo > 4.0 * kEps * hi; ++it) {
+      const double px = p(x);
+      (px > 0 ? lo : hi) = x;
+      const double dp = g1 + x * (g2 - 0.5 * M * x);
+      double next = dp != 0 ? x - px / dp : 0.5 * (lo + hi);
+      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+      if (next == x) break;
+      x = next;
+    }
+    // Newton may converge from the unsafe side: take the largest point found just below hi
+    // where p is still positive.
+    for (double d = 4.0 * kEps * hi; hi - d > lo; d *= 4.0) {
+      if (p(hi - d) > 0) {
+        lo = hi - d;
+        break;
+      }
     }
     none = false;
     return lo;
