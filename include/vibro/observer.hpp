@@ -30,6 +30,10 @@ struct Clock {
   double offset = 0.0;   // time since the start of that period, in [0, T)
 };
 
+struct EventCounts {
+  long long impacts = 0, accumulations = 0, sticks = 0, releases = 0, grazings = 0;
+};
+
 struct Event {
   EventKind kind;
   Clock clock;
@@ -59,6 +63,7 @@ struct Checkpoint {
   double chatter_first_speed;  // |ẋ_B⁻| of the first impact of the current sequence (0: none)
   double chatter_last_speed;   // |ẋ_B⁻| of the last impact
   long long sample_index;      // next dense-sample index
+  EventCounts counts;          // events so far
 };
 
 class Observer {

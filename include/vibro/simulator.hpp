@@ -51,10 +51,6 @@ namespace vibro {
 enum class RunStatus { kOk, kNumericalFailure, kInterrupted };
 const char* ToString(RunStatus s);  // "ok", "numerical-failure", "interrupted"
 
-struct EventCounts {
-  long long impacts = 0, accumulations = 0, sticks = 0, releases = 0, grazings = 0;
-};
-
 struct RunResult {
   RunStatus status = RunStatus::kOk;
   std::string message;  // why the run stopped early, and what to change

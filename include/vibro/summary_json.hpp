@@ -4,6 +4,7 @@
 #include <string>
 
 #include "vibro/attractor.hpp"
+#include "vibro/hdf5_store.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
@@ -16,5 +17,8 @@ std::string ModelJson(const System& system);
 
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor);
+
+// `vibro info --json`: what a stored run holds.
+std::string StoredRunJson(const StoredRun& run);
 
 }  // namespace vibro

@@ -1,8 +1,12 @@
 // The `vibro` command (CONTRACT §2, §4). The only file that includes CLI11.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 130 interrupted.
+#include <atomic>
+#include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "vibro/attractor.hpp"
+#include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
@@ -21,6 +26,9 @@ constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitNumerical = 3;
 constexpr int kExitInterrupted = 130;
+
+std::atomic<bool> g_stop_requested{false};
+extern "C" void OnSignal(int) { g_stop_requested.store(true); }
 
 std::string Vec(const Eigen::VectorXd& v) {
   std::string s = "[";
@@ -68,14 +76,91 @@ std::string Phases(const std::vector<std::pair<double, double>>& phases) {
   return s.empty() ? "none" : s;
 }
 
-int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json) {
+vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys) {
+  const auto& sc = loaded.scene;
+  vibro::StoreHeader h;
+  h.scene_text = loaded.text_as_run;
+  h.engine = vibro::ToString(sc.run.engine);
+  h.chatter = vibro::ToString(sc.run.chatter);
+  h.rtol = sc.run.rtol;
+  h.atol = sc.run.atol;
+  h.dof = sys.dof();
+  h.samples_per_period = sc.run.samples_per_period;
+  h.periods = sc.run.periods;
+  h.period = sys.period();
+  h.initial_time = sc.initial_time;
+  h.max_period = sc.run.max_period;
+  h.frequencies = sys.omega();
+  h.forcing = sys.forcing();
+  h.contact = sys.contact();
+  h.contact_shape = sys.contact_shape();
+  h.damping_ratios = sys.damping();
+  h.constrained_frequencies = sys.constrained().frequencies;
+  h.s_A = sys.s_A();
+  h.s_B = sys.s_B();
+  h.stop = sys.stop();
+  h.restitution = sys.restitution();
+  h.amplitude = sys.amplitude();
+  h.frequency = sys.frequency();
+  return h;
+}
+
+void PrintAttractor(const vibro::Attractor& a) {
+  fmt::print("attractor    {}", a.kind);
+  if (a.period) fmt::print(", period {}", *a.period);
+  if (a.impacts_per_period) fmt::print(", {} impacts/period", *a.impacts_per_period);
+  if (a.sticking_fraction) fmt::print(", sticking fraction {:.6f}", *a.sticking_fraction);
+  fmt::print("\nstick phases {}\n", Phases(a.stick_phases));
+}
+
+int ExitCode(vibro::RunStatus s) {
+  switch (s) {
+    case vibro::RunStatus::kOk: return 0;
+    case vibro::RunStatus::kNumericalFailure: return kExitNumerical;
+    case vibro::RunStatus::kInterrupted: return kExitInterrupted;
+  }
+  return kExitInternal;
+}
+
+int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
+                const std::string& out, bool resume) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
+  options.stop_requested = &g_stop_requested;
+
+  std::unique_ptr<vibro::Hdf5Store> store;
+  vibro::StoredRun stored;
+  if (resume && out.empty()) throw vibro::InputError({"--resume needs --out FILE.h5 (the file to continue)"});
+  if (!out.empty()) {
+    if (resume) {
+      store = vibro::Hdf5Store::Resume(out, HeaderOf(loaded, sys), stored);
+      options.resume_from = &*stored.checkpoint;
+      // Give the classification the history it would have had.
+      for (size_t i = 0; i < stored.tail_section_clocks.size(); ++i) {
+        const auto& c = stored.tail_section_clocks[i];
+        recorder.OnSection({c, loaded.scene.initial_time + static_cast<double>(c.period) * sys.period(),
+                            stored.tail_section_X[i], stored.tail_section_V[i],
+                            sys.ContactDisplacement(stored.tail_section_X[i]),
+                            stored.tail_section_modes[i]});
+      }
+      for (const auto& e : stored.tail_events) recorder.OnEvent(e);
+    } else {
+      store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
+    }
+    options.observers.push_back(store.get());
+  }
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
   const auto attractor = recorder.Classify();
+  if (store) store->Finish(result, attractor);
+
   if (json) {
     fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor));
   } else {
@@ -89,18 +174,49 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     fmt::print("events       {} impacts, {} accumulations, {} sticks, {} releases, {} grazings\n",
                result.counts.impacts, result.counts.accumulations, result.counts.sticks,
                result.counts.releases, result.counts.grazings);
-    fmt::print("attractor    {}", attractor.kind);
-    if (attractor.period) fmt::print(", period {}", *attractor.period);
-    if (attractor.impacts_per_period) fmt::print(", {} impacts/period", *attractor.impacts_per_period);
-    if (attractor.sticking_fraction) fmt::print(", sticking fraction {:.6f}", *attractor.sticking_fraction);
-    fmt::print("\nstick phases {}\n", Phases(attractor.stick_phases));
+    PrintAttractor(attractor);
+    if (store) fmt::print("output       {}{}\n", out, resume ? " (resumed)" : "");
   }
-  switch (result.status) {
-    case vibro::RunStatus::kOk: return 0;
-    case vibro::RunStatus::kNumericalFailure: return kExitNumerical;
-    case vibro::RunStatus::kInterrupted: return kExitInterrupted;
+  if (result.status != vibro::RunStatus::kOk)
+    fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);
+  return ExitCode(result.status);
+}
+
+int RunInfo(const std::string& path, bool json) {
+  const auto run = vibro::ReadStoredRun(path);
+  if (json) {
+    fmt::print("{}\n", vibro::StoredRunJson(run));
+    return 0;
   }
-  return kExitInternal;
+  fmt::print("file         {}\n", path);
+  fmt::print("created      {} by vibro {}\n", run.created, run.version);
+  fmt::print("engine       {}, chatter {}\n", run.engine, run.chatter);
+  fmt::print("status       {}{}\n", run.status, run.message.empty() ? "" : ": " + run.message);
+  fmt::print("rows         {} events, {} samples, {} section points\n", run.events, run.samples,
+             run.sections);
+  if (run.checkpoint)
+    fmt::print("checkpoint   period {} ({} impacts, {} accumulations, {} sticks, {} releases)\n",
+               run.checkpoint->clock.period, run.checkpoint->counts.impacts,
+               run.checkpoint->counts.accumulations, run.checkpoint->counts.sticks,
+               run.checkpoint->counts.releases);
+  if (!run.attractor.kind.empty())
+    PrintAttractor(run.attractor);
+  else
+    fmt::print("attractor    (not classified: the run did not finish)\n");
+  fmt::print("scene:\n{}", run.scene_text);
+  return 0;
+}
+
+int RunPlot(const std::string& path, const std::string& prefix) {
+  vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
+  std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
+  if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
+  const int rc = std::system(cmd.c_str());
+  if (rc != 0) {
+    fmt::print(stderr, "vibro: plotting failed (python exit status {})\n", rc);
+    return kExitInternal;
+  }
+  return 0;
 }
 
 }  // namespace
@@ -125,6 +241,18 @@ int main(int argc, char** argv) {
   add_scene_options(model);
   CLI::App* simulate = app.add_subcommand("simulate", "simulate a scene and summarise its attractor");
   add_scene_options(simulate);
+  std::string out_path;
+  bool resume = false;
+  simulate->add_option("--out", out_path, "write the run to this HDF5 file (CONTRACT §3)");
+  simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
+
+  std::string file_path, plot_prefix;
+  CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
+  info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
+  info->add_flag("--json", json, "print one JSON object on stdout");
+  CLI::App* plot = app.add_subcommand("plot", "render PNG plots of a vibro HDF5 file");
+  plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
+  plot->add_option("--out", plot_prefix, "prefix of the PNG files (default: FILE without .h5)");
 
   try {
     app.parse(argc, argv);
@@ -135,7 +263,9 @@ int main(int argc, char** argv) {
 
   try {
     if (*model) return RunModel(scene_path, sets, json);
-    if (*simulate) return RunSimulate(scene_path, sets, json);
+    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume);
+    if (*info) return RunInfo(file_path, json);
+    if (*plot) return RunPlot(file_path, plot_prefix);
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",

@@ -371,7 +371,8 @@ void Automaton::Checkpointed() {
                                                             : static_cast<int>(stick_start_)),
                       chatter_first_,
                       chatter_last_,
-                      sample_index_};
+                      sample_index_,
+                      result_.counts};
   for (auto* o : opt_.observers) o->OnCheckpoint(cp);
 }
 
@@ -390,6 +391,7 @@ RunResult Automaton::Run() {
     chatter_first_ = cp.chatter_first_speed;
     chatter_last_ = cp.chatter_last_speed;
     sample_index_ = cp.sample_index;
+    result_.counts = cp.counts;
   } else {
     ClassifyInitialState();
     const Sample s{clock_, t0_, X_, V_, sys_.ContactDisplacement(X_), mode_};
@@ -406,7 +408,10 @@ RunResult Automaton::Run() {
   while (clock_.period < run_.periods) {
     if (opt_.stop_requested && opt_.stop_requested->load(std::memory_order_relaxed)) {
       result_.status = RunStatus::kInterrupted;
-      result_.message = "interrupted";
+      result_.message = fmt::format(
+          "interrupted at t = {:.10g} (period {}); everything so far is kept, continue with "
+          "--resume",
+          AbsTime(clock_), clock_.period);
       break;
     }
     const double to_boundary = period_ - clock_.offset;

@@ -48,6 +48,27 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
   return j.dump();
 }
 
+std::string StoredRunJson(const StoredRun& run) {
+  nlohmann::json j;
+  j["status"] = run.status;
+  j["message"] = run.message;
+  j["engine"] = run.engine;
+  j["chatter"] = run.chatter;
+  j["created"] = run.created;
+  j["vibro_version"] = run.version;
+  j["rows"] = {{"events", run.events}, {"samples", run.samples}, {"sections", run.sections}};
+  if (run.checkpoint) {
+    const auto& c = run.checkpoint->counts;
+    j["checkpoint"] = {{"period", run.checkpoint->clock.period},
+                       {"counts", {{"impacts", c.impacts}, {"accumulations", c.accumulations},
+                                   {"sticks", c.sticks}, {"releases", c.releases},
+                                   {"grazings", c.grazings}}}};
+  }
+  j["attractor"] = run.attractor.kind.empty() ? nlohmann::json(nullptr) : AttractorObject(run.attractor);
+  j["scene"] = run.scene_text;
+  return j.dump();
+}
+
 std::string ModelJson(const System& s) {
   nlohmann::json j;
   j["frequencies"] = Array(s.omega());

@@ -1,0 +1,87 @@
+// HDF5 trajectory store (CONTRACT §3): an Observer that streams events, dense samples and the
+// stroboscopic section to a file as a run goes, crash-safe and resumable. The only file that
+// includes hdf5.h is src/io/hdf5_store.cpp.
+//
+// Crash safety: rows are buffered in memory and written, with the latest checkpoint, at flushes
+// (every `flush_interval` seconds of wall time and at the end). Between flushes nothing touches
+// the file's metadata (metadata-cache evictions are off) and freed file space is never reused
+// (file-space strategy NONE), so the file on disk is always the consistent state of the last
+// flush: after a kill -9 it opens as it is and holds everything up to the last flush.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vibro/attractor.hpp"
+#include "vibro/observer.hpp"
+#include "vibro/simulator.hpp"
+
+namespace vibro {
+
+struct StoreHeader {
+  std::string scene_text;  // the scene as run (TOML)
+  std::string engine, chatter;
+  double rtol = 0, atol = 0;
+  int dof = 0;
+  int samples_per_period = 0;
+  long long periods = 0;
+  double period = 0;        // T
+  double initial_time = 0;  // t0
+  int max_period = 32;      // run.max_period: how much history a resume reloads
+  // The model in the paper's scaling, written to /model for readers (plots, scripts).
+  Eigen::VectorXd frequencies, forcing, contact, contact_shape, damping_ratios,
+      constrained_frequencies;
+  double s_A = 0, s_B = 0, stop = 0, restitution = 0, amplitude = 0, frequency = 0;
+};
+
+// What a stored run holds, read back (for `vibro info`, resume and tests).
+struct StoredRun {
+  std::string scene_text, engine, chatter, status, message, created, version;
+  long long events = 0, samples = 0, sections = 0;
+  std::optional<Checkpoint> checkpoint;
+  std::vector<Event> tail_events;  // events of the last periods before the checkpoint
+  std::vector<Clock> tail_section_clocks;
+  std::vector<Eigen::VectorXd> tail_section_X, tail_section_V;
+  std::vector<Mode> tail_section_modes;
+  Attractor attractor;  // as written at the end (kind "" when the run did not finish)
+};
+
+class Hdf5Store final : public Observer {
+ public:
+  // Creates (truncates) `path` and writes the header. Throws InputError when the destination
+  // cannot be written (read-only, missing directory, full disk): nothing is computed then.
+  static std::unique_ptr<Hdf5Store> Create(const std::string& path, const StoreHeader& header,
+                                           double flush_interval = 1.0);
+  // Opens `path` to continue the run it holds from its last checkpoint (later rows are dropped).
+  // Throws InputError when the file holds another scene or no checkpoint.
+  static std::unique_ptr<Hdf5Store> Resume(const std::string& path, const StoreHeader& header,
+                                           StoredRun& stored, double flush_interval = 1.0);
+  ~Hdf5Store() override;
+
+  void OnEvent(const Event& e) override;
+  void OnSample(const Sample& s) override;
+  void OnSection(const Sample& s) override;
+  void OnCheckpoint(const Checkpoint& c) override;
+
+  // Writes the final status, message, counts and attractor, and closes the file.
+  void Finish(const RunResult& result, const Attractor& attractor);
+
+  struct Stats {
+    long long flushes = 0;
+    double flush_seconds = 0;  // wall time spent writing
+  };
+  Stats stats() const;
+
+ private:
+  struct Impl;
+  explicit Hdf5Store(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+// Reads a stored run; `tail_periods` > 0 also loads the events and section rows of the last
+// tail_periods periods before the checkpoint. Throws InputError when the file is not a vibro run.
+StoredRun ReadStoredRun(const std::string& path, int tail_periods = 0);
+
+}  // namespace vibro

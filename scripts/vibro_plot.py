@@ -1,0 +1,135 @@
+#!/usr/bin/python3
+"""Plots of a vibro HDF5 run (called by `vibro plot FILE.h5 [--out PREFIX]`).
+
+Writes PREFIX_xB.png (contact displacement, sticking shaded, impacts marked), PREFIX_reaction.png
+(contact reaction R), PREFIX_phase.png (phase portrait x_B, dx_B/dt) and PREFIX_section.png
+(stroboscopic section). The time plots show the last `--periods` forcing periods (default 5).
+"""
+import argparse
+import os
+import sys
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def reaction(model, X, V, t):
+    """MODEL eq. (5) with the damping term of §7: the reaction a state on the stop needs."""
+    w = model.attrs["frequencies"]
+    c = model.attrs["contact_shape"]
+    z = model.attrs["damping_ratios"]
+    elastic = (X * (c * w * w)).sum(axis=1) + (V * (c * 2 * z * w)).sum(axis=1)
+    forcing = model.attrs["s_A"] * model.attrs["amplitude"] * np.sin(model.attrs["frequency"] * t)
+    return (elastic - forcing) / model.attrs["s_B"]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("file")
+    ap.add_argument("--out", default=None, help="prefix of the PNG files")
+    ap.add_argument("--periods", type=float, default=5.0, help="forcing periods shown in time plots")
+    args = ap.parse_args()
+    prefix = args.out or os.path.splitext(args.file)[0]
+    written = []
+    with h5py.File(args.file, "r") as f:
+        title = f.attrs["scene"].splitlines()[0] if f.attrs["scene"].startswith("title") else args.file
+        title = title.replace("title = ", "").strip("'\"")
+        status = f.attrs["status"]
+        T = float(f.attrs["forcing_period"])
+        model = f["model"]
+        c = model.attrs["contact_shape"]
+        x0 = float(model.attrs["stop"])
+        t = f["samples/t"][:]
+        if len(t) == 0:
+            print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
+        t_end = t[-1] if len(t) else 0.0
+        t_from = t_end - args.periods * T
+        sel = t >= t_from
+        ts = t[sel]
+        X = f["samples/X"][:][sel]
+        V = f["samples/V"][:][sel]
+        xB = f["samples/x_B"][:][sel]
+        mode = f["samples/mode"][:][sel]
+        vB = (V * c).sum(axis=1)
+        ev_t = f["events/t"][:]
+        kinds = f["events/kind"][:]
+        ev_xB = f["events/x_B"][:]
+        kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+        in_view = (ev_t >= t_from) & (ev_t <= t_end)
+
+        def shade_sticking(ax):
+            sticks = ev_t[(kinds == kind_of["stick"])]
+            releases = ev_t[(kinds == kind_of["release"])]
+            for s in sticks:
+                later = releases[releases > s]
+                e = later[0] if len(later) else t_end
+                if e >= t_from and s <= t_end:
+                    ax.axvspan(max(s, t_from), min(e, t_end), color="tab:orange", alpha=0.25, lw=0)
+
+        fig, ax = plt.subplots(figsize=(9, 4))
+        ax.plot(ts, xB, lw=1, label="$x_B$")
+        ax.axhline(x0, color="k", lw=1.5, label="stop $x_0$")
+        shade_sticking(ax)
+        imp = in_view & (kinds == kind_of["impact"])
+        ax.plot(ev_t[imp], ev_xB[imp], "v", ms=3, color="tab:red", label=f"impacts ({imp.sum()})")
+        ax.set_xlabel("t")
+        ax.set_ylabel("$x_B$")
+        ax.set_title(f"{title}\ncontact displacement, sticking shaded ({status})")
+        ax.legend(loc="upper right", fontsize=8)
+        fig.tight_layout()
+        fig.savefig(prefix + "_xB.png", dpi=110)
+        written.append(prefix + "_xB.png")
+        plt.close(fig)
+
+        fig, ax = plt.subplots(figsize=(9, 4))
+        R = reaction(model, X, V, ts)
+        ax.plot(ts, np.where(mode == 1, R, np.nan), lw=1.5, label="R (on the stop)")
+        ax.plot(ts, np.where(mode == 0, R, np.nan), lw=0.8, ls="--", color="gray",
+                label="R* (reaction the free state would need)")
+        ax.axhline(0, color="k", lw=0.8)
+        shade_sticking(ax)
+        ax.set_xlabel("t")
+        ax.set_ylabel("R")
+        ax.set_title(f"{title}\ncontact reaction")
+        ax.legend(loc="upper right", fontsize=8)
+        fig.tight_layout()
+        fig.savefig(prefix + "_reaction.png", dpi=110)
+        written.append(prefix + "_reaction.png")
+        plt.close(fig)
+
+        fig, ax = plt.subplots(figsize=(6, 5))
+        ax.plot(xB, vB, lw=0.8)
+        ax.axvline(x0, color="k", lw=1.5)
+        ax.set_xlabel("$x_B$")
+        ax.set_ylabel("$\\dot x_B$")
+        ax.set_title(f"{title}\nphase portrait (last {args.periods:g} periods)")
+        fig.tight_layout()
+        fig.savefig(prefix + "_phase.png", dpi=110)
+        written.append(prefix + "_phase.png")
+        plt.close(fig)
+
+        sX = f["section/X"][:]
+        sV = f["section/V"][:]
+        sxB = (sX * c).sum(axis=1)
+        svB = (sV * c).sum(axis=1)
+        fig, ax = plt.subplots(figsize=(6, 5))
+        k = np.arange(len(sxB))
+        sc = ax.scatter(sxB, svB, c=k, s=8, cmap="viridis")
+        fig.colorbar(sc, ax=ax, label="period")
+        ax.set_xlabel("$x_B(t_0 + kT)$")
+        ax.set_ylabel("$\\dot x_B(t_0 + kT)$")
+        ax.set_title(f"{title}\nstroboscopic section ({len(sxB)} points)")
+        fig.tight_layout()
+        fig.savefig(prefix + "_section.png", dpi=110)
+        written.append(prefix + "_section.png")
+        plt.close(fig)
+    for w in written:
+        print(w)
+
+
+if __name__ == "__main__":
+    main()

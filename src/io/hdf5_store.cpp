@@ -1,0 +1,690 @@
+// HDF5 store (CONTRACT §3). The one file of vibro that includes hdf5.h.
+#include "vibro/hdf5_store.hpp"
+
+#include <sys/statvfs.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstdio>
+#include <ctime>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <hdf5.h>
+
+#include "vibro/scene_file.hpp"
+
+namespace vibro {
+namespace {
+
+constexpr hsize_t kChunkRows = 4096;
+constexpr int kDeflate = 4;
+
+// RAII for hid_t handles.
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+  Handle(Handle&& o) noexcept : id_(o.id_), closer_(o.closer_) { o.id_ = H5I_INVALID_HID; }
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      Reset();
+      id_ = o.id_;
+      closer_ = o.closer_;
+      o.id_ = H5I_INVALID_HID;
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() { Reset(); }
+  hid_t get() const { return id_; }
+  explicit operator bool() const { return id_ >= 0; }
+  void Reset() {
+    if (id_ >= 0 && closer_) closer_(id_);
+    id_ = H5I_INVALID_HID;
+  }
+
+ private:
+  hid_t id_ = H5I_INVALID_HID;
+  Closer closer_ = nullptr;
+};
+
+hid_t Check(hid_t id, const char* what) {
+  if (id < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+  return id;
+}
+void Check(herr_t status, const char* what, int) {
+  if (status < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+}
+
+void SilenceHdf5() {
+  static const bool once = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)once;
+}
+
+Handle StringType() {
+  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(t.get(), H5T_VARIABLE);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  return t;
+}
+
+Handle KindType() {
+  Handle t(H5Tenum_create(H5T_NATIVE_INT8), H5Tclose);
+  for (auto k : {EventKind::kImpact, EventKind::kAccumulation, EventKind::kStick,
+                 EventKind::kRelease, EventKind::kGrazing}) {
+    const auto v = static_cast<std::int8_t>(k);
+    H5Tenum_insert(t.get(), ToString(k), &v);
+  }
+  return t;
+}
+
+void DeleteAttr(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) > 0) H5Adelete(obj, name);
+}
+
+void WriteString(hid_t obj, const char* name, const std::string& value) {
+  DeleteAttr(obj, name);
+  Handle type = StringType();
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle a(Check(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), name),
+           H5Aclose);
+  const char* p = value.c_str();
+  Check(H5Awrite(a.get(), type.get(), &p), name, 0);
+}
+
+template <class T>
+void WriteScalar(hid_t obj, const char* name, T value, hid_t mem_type, hid_t file_type) {
+  DeleteAttr(obj, name);
+  Handle space(H5Screate(H5S_SCALAR), H5Sclose);
+  Handle a(Check(H5Acreate2(obj, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), name),
+           H5Aclose);
+  Check(H5Awrite(a.get(), mem_type, &value), name, 0);
+}
+void WriteDouble(hid_t obj, const char* name, double v) {
+  WriteScalar(obj, name, v, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
+}
+void WriteInt(hid_t obj, const char* name, long long v) {
+  WriteScalar(obj, name, static_cast<std::int64_t>(v), H5T_NATIVE_INT64, H5T_STD_I64LE);
+}
+void WriteDoubles(hid_t obj, const char* name, const std::vector<double>& v, hsize_t cols = 1) {
+  DeleteAttr(obj, name);
+  const hsize_t dims[2] = {cols > 1 ? v.size() / cols : v.size(), cols};
+  Handle space(H5Screate_simple(cols > 1 ? 2 : 1, dims, nullptr), H5Sclose);
+  Handle a(Check(H5Acreate2(obj, name, H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), name),
+           H5Aclose);
+  if (!v.empty()) Check(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), name, 0);
+}
+
+std::string ReadString(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return {};
+  Handle a(Check(H5Aopen(obj, name, H5P_DEFAULT), name), H5Aclose);
+  Handle type = StringType();
+  char* p = nullptr;
+  Check(H5Aread(a.get(), type.get(), &p), name, 0);
+  std::string s = p ? p : "";
+  H5free_memory(p);
+  return s;
+}
+template <class T>
+std::optional<T> ReadScalar(hid_t obj, const char* name, hid_t mem_type) {
+  if (H5Aexists(obj, name) <= 0) return std::nullopt;
+  Handle a(Check(H5Aopen(obj, name, H5P_DEFAULT), name), H5Aclose);
+  T v{};
+  Check(H5Aread(a.get(), mem_type, &v), name, 0);
+  return v;
+}
+std::vector<double> ReadDoubles(hid_t obj, const char* name) {
+  if (H5Aexists(obj, name) <= 0) return {};
+  Handle a(Check(H5Aopen(obj, name, H5P_DEFAULT), name), H5Aclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  std::vector<double> v(static_cast<size_t>(H5Sget_simple_extent_npoints(space.get())));
+  if (!v.empty()) Check(H5Aread(a.get(), H5T_NATIVE_DOUBLE, v.data()), name, 0);
+  return v;
+}
+
+// An extendible dataset of `cols` columns (cols = 0: one-dimensional), buffered in memory.
+class Column {
+ public:
+  Column() = default;
+  Column(hid_t group, const char* name, hid_t file_type, hid_t mem_type, size_t elem_size,
+         hsize_t cols)
+      : mem_type_(mem_type), elem_size_(elem_size), cols_(cols) {
+    const int rank = cols > 0 ? 2 : 1;
+    const hsize_t dims[2] = {0, cols}, maxdims[2] = {H5S_UNLIMITED, cols};
+    const hsize_t chunk[2] = {cols > 0 ? std::max<hsize_t>(64, kChunkRows / cols) : kChunkRows, cols};
+    Handle space(H5Screate_simple(rank, dims, maxdims), H5Sclose);
+    Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+    H5Pset_chunk(dcpl.get(), rank, chunk);
+    H5Pset_shuffle(dcpl.get());
+    H5Pset_deflate(dcpl.get(), kDeflate);
+    dset_ = Handle(Check(H5Dcreate2(group, name, file_type, space.get(), H5P_DEFAULT, dcpl.get(),
+                                    H5P_DEFAULT),
+                         name),
+                   H5Dclose);
+  }
+  Column(hid_t group, const char* name, hid_t mem_type, size_t elem_size)
+      : mem_type_(mem_type), elem_size_(elem_size) {
+    dset_ = Handle(Check(H5Dopen2(group, name, H5P_DEFAULT), name), H5Dclose);
+    Handle space(H5Dget_space(dset_.get()), H5Sclose);
+    hsize_t dims[2] = {0, 0};
+    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    rows_ = dims[0];
+    cols_ = rank == 2 ? dims[1] : 0;
+  }
+
+  template <class T>
+  void Push(const T& v) {
+    const auto* p = reinterpret_cast<const unsigned char*>(&v);
+    buf_.insert(buf_.end(), p, p + sizeof(T));
+  }
+  void PushRow(const Eigen::VectorXd& v) {
+    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
+    buf_.insert(buf_.end(), p, p + sizeof(double) * static_cast<size_t>(v.size()));
+  }
+  hsize_t rows() const { return rows_ + pending(); }
+  hsize_t pending() const { return buf_.size() / (elem_size_ * std::max<hsize_t>(cols_, 1)); }
+
+  void Flush() {
+    const hsize_t n = pending();
+    if (n == 0) return;
+    const int rank = cols_ > 0 ? 2 : 1;
+    const hsize_t dims[2] = {rows_ + n, cols_}, start[2] = {rows_, 0}, count[2] = {n, cols_};
+    Check(H5Dset_extent(dset_.get(), dims), "extend", 0);
+    Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+    H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+    Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
+    Check(H5Dwrite(dset_.get(), mem_type_, ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), "write", 0);
+    rows_ += n;
+    buf_.clear();
+  }
+  void Truncate(hsize_t rows) {
+    buf_.clear();
+    const hsize_t dims[2] = {rows, cols_};
+    Check(H5Dset_extent(dset_.get(), dims), "truncate", 0);
+    rows_ = rows;
+  }
+  // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
+  void Read(hsize_t first, hsize_t n, void* out) const {
+    if (n == 0) return;
+    const int rank = cols_ > 0 ? 2 : 1;
+    const hsize_t start[2] = {first, 0}, count[2] = {n, cols_};
+    Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+    H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+    Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
+    Check(H5Dread(dset_.get(), mem_type_, ms.get(), fs.get(), H5P_DEFAULT, out), "read", 0);
+  }
+
+ private:
+  Handle dset_;
+  hid_t mem_type_ = H5I_INVALID_HID;
+  size_t elem_size_ = 8;
+  hsize_t cols_ = 0;
+  hsize_t rows_ = 0;
+  std::vector<unsigned char> buf_;
+};
+
+Handle FileAccess() {
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  // No metadata reaches the disk between flushes (see the header).
+  H5AC_cache_config_t cfg;
+  cfg.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+  H5Pget_mdc_config(fapl.get(), &cfg);
+  cfg.incr_mode = H5C_incr__off;
+  cfg.flash_incr_mode = H5C_flash_incr__off;
+  cfg.decr_mode = H5C_decr__off;
+  cfg.evictions_enabled = 0;
+  cfg.max_size = 128 * 1024 * 1024;
+  cfg.min_size = 1024 * 1024;
+  cfg.set_initial_size = 1;
+  cfg.initial_size = 16 * 1024 * 1024;
+  Check(H5Pset_mdc_config(fapl.get(), &cfg), "metadata cache configuration", 0);
+  return fapl;
+}
+
+std::string NowIso8601() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
+  return buf;
+}
+
+}  // namespace
+
+struct Hdf5Store::Impl {
+  std::string path;
+  StoreHeader header;
+  Handle file, events, samples, section, checkpoint;
+  Column ev_t, ev_period, ev_offset, ev_kind, ev_xB, ev_vb, ev_va;
+  Column sa_t, sa_X, sa_V, sa_xB, sa_mode;
+  Column se_t, se_period, se_X, se_V, se_xB, se_mode;
+  Handle kind_type;
+  std::optional<Checkpoint> last_checkpoint;
+  hsize_t cp_events = 0, cp_samples = 0, cp_sections = 0;  // rows at the last checkpoint
+  double flush_interval = 1.0;
+  std::chrono::steady_clock::time_point last_flush;
+  unsigned calls = 0;
+  Stats stats;
+
+  void OpenGroups() {
+    events = Handle(Check(H5Gopen2(file.get(), "/events", H5P_DEFAULT), "/events"), H5Gclose);
+    samples = Handle(Check(H5Gopen2(file.get(), "/samples", H5P_DEFAULT), "/samples"), H5Gclose);
+    section = Handle(Check(H5Gopen2(file.get(), "/section", H5P_DEFAULT), "/section"), H5Gclose);
+    checkpoint = Handle(Check(H5Gopen2(file.get(), "/checkpoint", H5P_DEFAULT), "/checkpoint"), H5Gclose);
+  }
+
+  void MaybeFlush() {
+    if ((++calls & 1023u) != 0) return;
+    const auto now = std::chrono::steady_clock::now();
+    if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) Flush();
+  }
+
+  void WriteCheckpoint() {
+    if (!last_checkpoint) return;
+    const Checkpoint& c = *last_checkpoint;
+    const hid_t g = checkpoint.get();
+    WriteInt(g, "period", c.clock.period);
+    WriteDouble(g, "offset", c.clock.offset);
+    WriteDoubles(g, "X", std::vector<double>(c.X.data(), c.X.data() + c.X.size()));
+    WriteDoubles(g, "V", std::vector<double>(c.V.data(), c.V.data() + c.V.size()));
+    WriteInt(g, "mode", static_cast<int>(c.mode));
+    WriteDouble(g, "gap", c.gap);
+    WriteInt(g, "start_kind", c.start_kind);
+    WriteDouble(g, "chatter_first_speed", c.chatter_first_speed);
+    WriteDouble(g, "chatter_last_speed", c.chatter_last_speed);
+    WriteInt(g, "sample_index", c.sample_index);
+    WriteInt(g, "impacts", c.counts.impacts);
+    WriteInt(g, "accumulations", c.counts.accumulations);
+    WriteInt(g, "sticks", c.counts.sticks);
+    WriteInt(g, "releases", c.counts.releases);
+    WriteInt(g, "grazings", c.counts.grazings);
+    WriteInt(g, "events", static_cast<long long>(cp_events));
+    WriteInt(g, "samples", static_cast<long long>(cp_samples));
+    WriteInt(g, "sections", static_cast<long long>(cp_sections));
+  }
+
+  std::vector<Column*> Columns() {
+    return {&ev_t, &ev_period, &ev_offset, &ev_kind, &ev_xB, &ev_vb, &ev_va, &sa_t, &sa_X,
+            &sa_V, &sa_xB, &sa_mode, &se_t, &se_period, &se_X, &se_V, &se_xB, &se_mode};
+  }
+
+  void OpenColumns() {
+    const hid_t ev = events.get(), sa = samples.get(), se = section.get();
+    ev_t = Column(ev, "t", H5T_NATIVE_DOUBLE, 8);
+    ev_period = Column(ev, "period", H5T_NATIVE_INT64, 8);
+    ev_offset = Column(ev, "offset", H5T_NATIVE_DOUBLE, 8);
+    ev_kind = Column(ev, "kind", kind_type.get(), 1);
+    ev_xB = Column(ev, "x_B", H5T_NATIVE_DOUBLE, 8);
+    ev_vb = Column(ev, "v_before", H5T_NATIVE_DOUBLE, 8);
+    ev_va = Column(ev, "v_after", H5T_NATIVE_DOUBLE, 8);
+    sa_t = Column(sa, "t", H5T_NATIVE_DOUBLE, 8);
+    sa_X = Column(sa, "X", H5T_NATIVE_DOUBLE, 8);
+    sa_V = Column(sa, "V", H5T_NATIVE_DOUBLE, 8);
+    sa_xB = Column(sa, "x_B", H5T_NATIVE_DOUBLE, 8);
+    sa_mode = Column(sa, "mode", H5T_NATIVE_INT8, 1);
+    se_t = Column(se, "t", H5T_NATIVE_DOUBLE, 8);
+    se_period = Column(se, "period", H5T_NATIVE_INT64, 8);
+    se_X = Column(se, "X", H5T_NATIVE_DOUBLE, 8);
+    se_V = Column(se, "V", H5T_NATIVE_DOUBLE, 8);
+    se_xB = Column(se, "x_B", H5T_NATIVE_DOUBLE, 8);
+    se_mode = Column(se, "mode", H5T_NATIVE_INT8, 1);
+  }
+
+  void Close() {
+    for (Column* c : Columns()) *c = Column();
+    events.Reset();
+    samples.Reset();
+    section.Reset();
+    checkpoint.Reset();
+    file.Reset();
+  }
+
+  void Flush() {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (Column* c : Columns()) c->Flush();
+    WriteCheckpoint();
+    Check(H5Fflush(file.get(), H5F_SCOPE_LOCAL), "flush", 0);
+    last_flush = std::chrono::steady_clock::now();
+    ++stats.flushes;
+    stats.flush_seconds += std::chrono::duration<double>(last_flush - t0).count();
+  }
+};
+
+Hdf5Store::Hdf5Store(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Hdf5Store::~Hdf5Store() = default;
+
+std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const StoreHeader& h,
+                                             double flush_interval) {
+  SilenceHdf5();
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  impl->header = h;
+  impl->flush_interval = flush_interval;
+  try {
+    Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
+    // Freed space is never reused: a flushed file never points at overwritten bytes.
+    Check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "file space", 0);
+    Handle fapl = FileAccess();
+    impl->file = Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
+    if (!impl->file) throw std::runtime_error("cannot create the file (missing directory or no permission)");
+    const hid_t f = impl->file.get();
+    for (const char* g : {"/events", "/samples", "/section", "/attractor", "/checkpoint", "/model"})
+      Handle(Check(H5Gcreate2(f, g, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), g), H5Gclose);
+    impl->OpenGroups();
+    impl->kind_type = KindType();
+    const hsize_t n = static_cast<hsize_t>(h.dof);
+    const hid_t ev = impl->events.get(), sa = impl->samples.get(), se = impl->section.get();
+    impl->ev_t = Column(ev, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->ev_period = Column(ev, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    impl->ev_offset = Column(ev, "offset", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->ev_kind = Column(ev, "kind", impl->kind_type.get(), impl->kind_type.get(), 1, 0);
+    impl->ev_xB = Column(ev, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->ev_vb = Column(ev, "v_before", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->ev_va = Column(ev, "v_after", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->sa_t = Column(sa, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->sa_X = Column(sa, "X", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    impl->sa_V = Column(sa, "V", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    impl->sa_xB = Column(sa, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->sa_mode = Column(sa, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    impl->se_t = Column(se, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->se_period = Column(se, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    impl->se_X = Column(se, "X", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    impl->se_V = Column(se, "V", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    impl->se_xB = Column(se, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    impl->se_mode = Column(se, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    WriteString(f, "vibro_version", VIBRO_VERSION);
+    WriteString(f, "scene", h.scene_text);
+    WriteString(f, "engine", h.engine);
+    WriteDouble(f, "rtol", h.rtol);
+    WriteDouble(f, "atol", h.atol);
+    WriteString(f, "chatter", h.chatter);
+    WriteString(f, "status", "running");
+    WriteString(f, "message", "");
+    WriteString(f, "created", NowIso8601());
+    WriteInt(f, "periods", h.periods);
+    WriteInt(f, "samples_per_period", h.samples_per_period);
+    WriteDouble(f, "forcing_period", h.period);
+    WriteDouble(f, "initial_time", h.initial_time);
+    {
+      Handle mg(Check(H5Gopen2(f, "/model", H5P_DEFAULT), "/model"), H5Gclose);
+      const auto vec = [](const Eigen::VectorXd& v) {
+        return std::vector<double>(v.data(), v.data() + v.size());
+      };
+      WriteDoubles(mg.get(), "frequencies", vec(h.frequencies));
+      WriteDoubles(mg.get(), "forcing", vec(h.forcing));
+      WriteDoubles(mg.get(), "contact", vec(h.contact));
+      WriteDoubles(mg.get(), "contact_shape", vec(h.contact_shape));
+      WriteDoubles(mg.get(), "damping_ratios", vec(h.damping_ratios));
+      WriteDoubles(mg.get(), "constrained_frequencies", vec(h.constrained_frequencies));
+      WriteDouble(mg.get(), "s_A", h.s_A);
+      WriteDouble(mg.get(), "s_B", h.s_B);
+      WriteDouble(mg.get(), "stop", h.stop);
+      WriteDouble(mg.get(), "restitution", h.restitution);
+      WriteDouble(mg.get(), "amplitude", h.amplitude);
+      WriteDouble(mg.get(), "frequency", h.frequency);
+    }
+    impl->Flush();
+    // A destination that is (nearly) full fails now, before any computation.
+    struct statvfs vfs{};
+    if (statvfs(path.c_str(), &vfs) == 0 &&
+        static_cast<double>(vfs.f_bavail) * static_cast<double>(vfs.f_frsize) < 1024.0 * 1024.0)
+      throw std::runtime_error("less than 1 MiB free on the destination");
+  } catch (const std::exception& e) {
+    impl.reset();
+    std::remove(path.c_str());
+    throw InputError({fmt::format("{}: cannot write the output file: {}", path, e.what())});
+  }
+  impl->last_flush = std::chrono::steady_clock::now();
+  return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
+}
+
+void Hdf5Store::OnEvent(const Event& e) {
+  auto& m = *impl_;
+  m.ev_t.Push(e.t);
+  m.ev_period.Push(static_cast<std::int64_t>(e.clock.period));
+  m.ev_offset.Push(e.clock.offset);
+  m.ev_kind.Push(static_cast<std::int8_t>(e.kind));
+  m.ev_xB.Push(e.x_B);
+  m.ev_vb.Push(e.v_before);
+  m.ev_va.Push(e.v_after);
+  m.MaybeFlush();
+}
+
+void Hdf5Store::OnSample(const Sample& s) {
+  auto& m = *impl_;
+  m.sa_t.Push(s.t);
+  m.sa_X.PushRow(s.X);
+  m.sa_V.PushRow(s.V);
+  m.sa_xB.Push(s.x_B);
+  m.sa_mode.Push(static_cast<std::int8_t>(s.mode));
+  m.MaybeFlush();
+}
+
+void Hdf5Store::OnSection(const Sample& s) {
+  auto& m = *impl_;
+  m.se_t.Push(s.t);
+  m.se_period.Push(static_cast<std::int64_t>(s.clock.period));
+  m.se_X.PushRow(s.X);
+  m.se_V.PushRow(s.V);
+  m.se_xB.Push(s.x_B);
+  m.se_mode.Push(static_cast<std::int8_t>(s.mode));
+  m.MaybeFlush();
+}
+
+void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
+  auto& m = *impl_;
+  m.last_checkpoint = c;
+  m.cp_events = m.ev_t.rows();
+  m.cp_samples = m.sa_t.rows();
+  m.cp_sections = m.se_t.rows();
+}
+
+void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
+  auto& m = *impl_;
+  const hid_t f = m.file.get();
+  WriteString(f, "status", ToString(r.status));
+  WriteString(f, "message", r.message);
+  WriteDouble(f, "t_end", r.t_end);
+  WriteInt(f, "impacts", r.counts.impacts);
+  WriteInt(f, "accumulations", r.counts.accumulations);
+  WriteInt(f, "sticks", r.counts.sticks);
+  WriteInt(f, "releases", r.counts.releases);
+  WriteInt(f, "grazings", r.counts.grazings);
+  Handle g(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
+  WriteString(g.get(), "kind", a.kind);
+  // Null values of the JSON summary are absent attributes.
+  for (const char* k : {"period", "impacts_per_period", "sticking_fraction"}) DeleteAttr(g.get(), k);
+  if (a.period) WriteInt(g.get(), "period", *a.period);
+  if (a.impacts_per_period) WriteInt(g.get(), "impacts_per_period", *a.impacts_per_period);
+  if (a.sticking_fraction) WriteDouble(g.get(), "sticking_fraction", *a.sticking_fraction);
+  std::vector<double> phases;
+  for (const auto& [s, e] : a.stick_phases) {
+    phases.push_back(s);
+    phases.push_back(e);
+  }
+  WriteDoubles(g.get(), "stick_phases", phases, 2);
+  if (a.kind == "impact-periodic") {
+    WriteDoubles(g.get(), "impact_phases", a.impact_phases);
+    WriteDoubles(g.get(), "impact_velocities", a.impact_velocities);
+  }
+  m.Flush();
+  g.Reset();
+  m.Close();
+}
+
+std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
+                                             StoredRun& stored, double flush_interval) {
+  stored = ReadStoredRun(path, 2 * h.max_period + 2);
+  if (stored.scene_text != h.scene_text)
+    throw InputError({fmt::format(
+        "{}: cannot resume: the file holds a different scene (or different --set overrides) "
+        "than the one given; resume with exactly the scene of the interrupted run",
+        path)});
+  if (!stored.checkpoint)
+    throw InputError({fmt::format("{}: cannot resume: the file holds no checkpoint", path)});
+  if (stored.status == "ok")
+    throw InputError({fmt::format("{}: nothing to resume: the run finished (status ok)", path)});
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  impl->header = h;
+  impl->flush_interval = flush_interval;
+  try {
+    Handle fapl = FileAccess();
+    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    if (!impl->file) throw std::runtime_error("cannot open the file for writing");
+    impl->OpenGroups();
+    impl->kind_type = KindType();
+    impl->OpenColumns();
+    const Checkpoint& cp = *stored.checkpoint;
+    const hid_t g = impl->checkpoint.get();
+    impl->cp_events = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "events", H5T_NATIVE_INT64));
+    impl->cp_samples = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "samples", H5T_NATIVE_INT64));
+    impl->cp_sections = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "sections", H5T_NATIVE_INT64));
+    // Rows written after the checkpoint are dropped: the run continues from it.
+    for (Column* c : {&impl->ev_t, &impl->ev_period, &impl->ev_offset, &impl->ev_kind, &impl->ev_xB,
+                      &impl->ev_vb, &impl->ev_va})
+      c->Truncate(impl->cp_events);
+    for (Column* c : {&impl->sa_t, &impl->sa_X, &impl->sa_V, &impl->sa_xB, &impl->sa_mode})
+      c->Truncate(impl->cp_samples);
+    for (Column* c : {&impl->se_t, &impl->se_period, &impl->se_X, &impl->se_V, &impl->se_xB,
+                      &impl->se_mode})
+      c->Truncate(impl->cp_sections);
+    impl->last_checkpoint = cp;
+    WriteString(impl->file.get(), "status", "running");
+    impl->Flush();
+  } catch (const std::exception& e) {
+    throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
+  }
+  impl->last_flush = std::chrono::steady_clock::now();
+  return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
+}
+
+StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
+  SilenceHdf5();
+  StoredRun out;
+  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file) throw InputError({fmt::format("{}: cannot open as an HDF5 file", path)});
+  const hid_t f = file.get();
+  if (H5Aexists(f, "vibro_version") <= 0)
+    throw InputError({fmt::format("{}: not a vibro output file (no vibro_version attribute)", path)});
+  try {
+    out.version = ReadString(f, "vibro_version");
+    out.scene_text = ReadString(f, "scene");
+    out.engine = ReadString(f, "engine");
+    out.chatter = ReadString(f, "chatter");
+    out.status = ReadString(f, "status");
+    out.message = ReadString(f, "message");
+    out.created = ReadString(f, "created");
+    Handle ev(Check(H5Gopen2(f, "/events", H5P_DEFAULT), "/events"), H5Gclose);
+    Handle sa(Check(H5Gopen2(f, "/samples", H5P_DEFAULT), "/samples"), H5Gclose);
+    Handle se(Check(H5Gopen2(f, "/section", H5P_DEFAULT), "/section"), H5Gclose);
+    Handle kind_type = KindType();
+    Column ev_t(ev.get(), "t", H5T_NATIVE_DOUBLE, 8), sa_t(sa.get(), "t", H5T_NATIVE_DOUBLE, 8),
+        se_t(se.get(), "t", H5T_NATIVE_DOUBLE, 8);
+    out.events = static_cast<long long>(ev_t.rows());
+    out.samples = static_cast<long long>(sa_t.rows());
+    out.sections = static_cast<long long>(se_t.rows());
+
+    Handle cpg(Check(H5Gopen2(f, "/checkpoint", H5P_DEFAULT), "/checkpoint"), H5Gclose);
+    const hid_t g = cpg.get();
+    hsize_t cp_events = ev_t.rows(), cp_sections = se_t.rows();
+    if (auto period = ReadScalar<std::int64_t>(g, "period", H5T_NATIVE_INT64)) {
+      Checkpoint c{};
+      c.clock = {*period, *ReadScalar<double>(g, "offset", H5T_NATIVE_DOUBLE)};
+      const auto X = ReadDoubles(g, "X"), V = ReadDoubles(g, "V");
+      c.X = Eigen::Map<const Eigen::VectorXd>(X.data(), static_cast<Eigen::Index>(X.size()));
+      c.V = Eigen::Map<const Eigen::VectorXd>(V.data(), static_cast<Eigen::Index>(V.size()));
+      c.mode = static_cast<Mode>(*ReadScalar<std::int64_t>(g, "mode", H5T_NATIVE_INT64));
+      c.gap = *ReadScalar<double>(g, "gap", H5T_NATIVE_DOUBLE);
+      c.start_kind = static_cast<int>(*ReadScalar<std::int64_t>(g, "start_kind", H5T_NATIVE_INT64));
+      c.chatter_first_speed = *ReadScalar<double>(g, "chatter_first_speed", H5T_NATIVE_DOUBLE);
+      c.chatter_last_speed = *ReadScalar<double>(g, "chatter_last_speed", H5T_NATIVE_DOUBLE);
+      c.sample_index = *ReadScalar<std::int64_t>(g, "sample_index", H5T_NATIVE_INT64);
+      c.counts.impacts = *ReadScalar<std::int64_t>(g, "impacts", H5T_NATIVE_INT64);
+      c.counts.accumulations = *ReadScalar<std::int64_t>(g, "accumulations", H5T_NATIVE_INT64);
+      c.counts.sticks = *ReadScalar<std::int64_t>(g, "sticks", H5T_NATIVE_INT64);
+      c.counts.releases = *ReadScalar<std::int64_t>(g, "releases", H5T_NATIVE_INT64);
+      c.counts.grazings = *ReadScalar<std::int64_t>(g, "grazings", H5T_NATIVE_INT64);
+      cp_events = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "events", H5T_NATIVE_INT64));
+      cp_sections = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "sections", H5T_NATIVE_INT64));
+      out.checkpoint = c;
+    }
+
+    if (tail_periods > 0 && out.checkpoint) {
+      const long long from = out.checkpoint->clock.period - tail_periods;
+      // Sections: one row per period, the last tail_periods + 1 before the checkpoint.
+      Column se_period(se.get(), "period", H5T_NATIVE_INT64, 8);
+      Column se_X(se.get(), "X", H5T_NATIVE_DOUBLE, 8), se_V(se.get(), "V", H5T_NATIVE_DOUBLE, 8);
+      Column se_mode(se.get(), "mode", H5T_NATIVE_INT8, 1);
+      const hsize_t n_se = std::min<hsize_t>(cp_sections, static_cast<hsize_t>(tail_periods + 1));
+      const hsize_t first = cp_sections - n_se;
+      const auto dof = static_cast<size_t>(out.checkpoint->X.size());
+      std::vector<std::int64_t> per(n_se);
+      std::vector<double> X(n_se * dof), V(n_se * dof);
+      std::vector<std::int8_t> mode(n_se);
+      se_period.Read(first, n_se, per.data());
+      se_X.Read(first, n_se, X.data());
+      se_V.Read(first, n_se, V.data());
+      se_mode.Read(first, n_se, mode.data());
+      for (hsize_t i = 0; i < n_se; ++i) {
+        out.tail_section_clocks.push_back({per[i], 0.0});
+        out.tail_section_X.emplace_back(Eigen::Map<Eigen::VectorXd>(X.data() + i * dof, static_cast<Eigen::Index>(dof)));
+        out.tail_section_V.emplace_back(Eigen::Map<Eigen::VectorXd>(V.data() + i * dof, static_cast<Eigen::Index>(dof)));
+        out.tail_section_modes.push_back(static_cast<Mode>(mode[i]));
+      }
+      // Events: read backwards in blocks until before `from`.
+      Column ev_period(ev.get(), "period", H5T_NATIVE_INT64, 8);
+      hsize_t first_ev = cp_events;
+      std::vector<std::int64_t> block;
+      while (first_ev > 0) {
+        const hsize_t n = std::min<hsize_t>(first_ev, 65536);
+        block.resize(n);
+        ev_period.Read(first_ev - n, n, block.data());
+        first_ev -= n;
+        if (block.front() < from) {
+          hsize_t skip = 0;
+          while (skip < n && block[skip] < from) ++skip;
+          first_ev += skip;
+          break;
+        }
+      }
+      const hsize_t n_ev = cp_events - first_ev;
+      std::vector<double> t(n_ev), off(n_ev), xB(n_ev), vb(n_ev), va(n_ev);
+      std::vector<std::int64_t> ep(n_ev);
+      std::vector<std::int8_t> kind(n_ev);
+      Column(ev.get(), "offset", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, off.data());
+      ev_t.Read(first_ev, n_ev, t.data());
+      ev_period.Read(first_ev, n_ev, ep.data());
+      Column(ev.get(), "kind", kind_type.get(), 1).Read(first_ev, n_ev, kind.data());
+      Column(ev.get(), "x_B", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, xB.data());
+      Column(ev.get(), "v_before", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, vb.data());
+      Column(ev.get(), "v_after", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, va.data());
+      for (hsize_t i = 0; i < n_ev; ++i)
+        out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i]});
+    }
+
+    Handle ag(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
+    out.attractor.kind = ReadString(ag.get(), "kind");
+    if (auto p = ReadScalar<std::int64_t>(ag.get(), "period", H5T_NATIVE_INT64))
+      out.attractor.period = static_cast<int>(*p);
+    if (auto p = ReadScalar<std::int64_t>(ag.get(), "impacts_per_period", H5T_NATIVE_INT64))
+      out.attractor.impacts_per_period = *p;
+    out.attractor.sticking_fraction = ReadScalar<double>(ag.get(), "sticking_fraction", H5T_NATIVE_DOUBLE);
+    const auto ph = ReadDoubles(ag.get(), "stick_phases");
+    for (size_t i = 0; i + 1 < ph.size(); i += 2) out.attractor.stick_phases.emplace_back(ph[i], ph[i + 1]);
+  } catch (const std::runtime_error& e) {
+    throw InputError({fmt::format("{}: not a readable vibro output file: {}", path, e.what())});
+  }
+  return out;
+}
+
+Hdf5Store::Stats Hdf5Store::stats() const { return impl_->stats; }
+
+}  // namespace vibro
