@@ -1,9 +1,12 @@
 // HDF5 store (CONTRACT §3). The one file of vibro that includes hdf5.h.
 #include "vibro/hdf5_store.hpp"
 
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
@@ -244,6 +247,9 @@ Handle FileAccess() {
   cfg.set_initial_size = 1;
   cfg.initial_size = 16 * 1024 * 1024;
   Check(H5Pset_mdc_config(fapl.get(), &cfg), "metadata cache configuration", 0);
+  // No file lock: h5py users may watch a long run as it goes (the file is consistent as of the
+  // last flush; a read that meets a flush in progress may fail and should be retried).
+  H5Pset_file_locking(fapl.get(), 0, 1);
   return fapl;
 }
 
@@ -363,6 +369,20 @@ Hdf5Store::~Hdf5Store() = default;
 std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const StoreHeader& h,
                                              double flush_interval) {
   SilenceHdf5();
+  // Never clobber what is not ours: an existing path must be a regular file holding a vibro run.
+  struct stat st{};
+  const bool existed = stat(path.c_str(), &st) == 0;
+  if (existed && S_ISREG(st.st_mode)) {
+    bool ours = false;
+    if (H5Fis_hdf5(path.c_str()) > 0) {
+      Handle probe(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+      ours = probe && H5Aexists(probe.get(), "vibro_version") > 0;
+    }
+    if (!ours)
+      throw InputError({fmt::format("{}: exists and is not a vibro output file; refusing to "
+                                    "overwrite it (remove it or choose another --out)",
+                                    path)});
+  }
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->header = h;
@@ -372,8 +392,10 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     // Freed space is never reused: a flushed file never points at overwritten bytes.
     Check(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "file space", 0);
     Handle fapl = FileAccess();
+    errno = 0;
     impl->file = Handle(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
-    if (!impl->file) throw std::runtime_error("cannot create the file (missing directory or no permission)");
+    if (!impl->file)
+      throw std::runtime_error(errno != 0 ? std::strerror(errno) : "HDF5 could not create it");
     const hid_t f = impl->file.get();
     for (const char* g : {"/events", "/samples", "/section", "/attractor", "/checkpoint", "/model"})
       Handle(Check(H5Gcreate2(f, g, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), g), H5Gclose);
@@ -438,7 +460,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
       throw std::runtime_error("less than 1 MiB free on the destination");
   } catch (const std::exception& e) {
     impl.reset();
-    std::remove(path.c_str());
+    // Remove only a regular file this call created (never a device such as /dev/full).
+    struct stat now{};
+    if (!existed && stat(path.c_str(), &now) == 0 && S_ISREG(now.st_mode)) std::remove(path.c_str());
     throw InputError({fmt::format("{}: cannot write the output file: {}", path, e.what())});
   }
   impl->last_flush = std::chrono::steady_clock::now();
