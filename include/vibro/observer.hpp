@@ -34,6 +34,12 @@ struct EventCounts {
   long long impacts = 0, accumulations = 0, sticks = 0, releases = 0, grazings = 0;
 };
 
+// Work done by a numerical integrator (CVODE engine; zero for the exact engine).
+struct SolverStats {
+  long long steps = 0, rhs_evals = 0, root_evals = 0, jac_evals = 0, error_test_failures = 0,
+            reinits = 0;
+};
+
 struct Event {
   EventKind kind;
   Clock clock;

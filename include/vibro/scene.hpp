@@ -47,7 +47,7 @@ struct RunSpec {
   double atol = 1e-12;              // CVODE absolute tolerance
   CvodeMethod method = CvodeMethod::kAdams;
   double max_step = 0;              // CVODE maximum step (0 = no limit)
-  long max_steps = 100000;          // CVODE maximum internal steps per segment
+  long max_steps = 10000000;        // CVODE maximum internal steps per segment (one period at most)
   ChatterTreatment chatter = ChatterTreatment::kAccumulation;
   // Switch velocity of the chattering treatments, relative to the contact velocity of the first
   // impact of the sequence (MODEL §5.4): accumulation is predicted (or, with "threshold", the

@@ -59,6 +59,7 @@ struct RunResult {
   EventCounts counts;
   Eigen::VectorXd X, V;  // final state
   Mode mode = Mode::kFree;
+  SolverStats solver;  // CVODE work (engine "cvode")
 };
 
 struct SimulationOptions {

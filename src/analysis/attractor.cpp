@@ -60,8 +60,12 @@ Attractor AttractorRecorder::Classify() const {
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
     bool ok = true;
     for (int j = 0; j < p && ok; ++j) ok = close(sections_[n - 1 - j], sections_[n - 1 - j - p]);
-    for (EventKind kind : {EventKind::kImpact, EventKind::kStick, EventKind::kRelease})
+    for (EventKind kind : {EventKind::kStick, EventKind::kRelease, EventKind::kAccumulation})
       ok = ok && count(kind, K - p, K) == count(kind, K - 2 * p, K - p);
+    // Impacts are counted only without chattering: how many impacts of a sequence are followed
+    // before its accumulation point is predicted is a numerical choice, not part of the orbit.
+    if (count(EventKind::kAccumulation, K - p, K) == 0)
+      ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
     if (ok) {
       period = p;
       break;

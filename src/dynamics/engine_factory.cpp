@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "dynamics/cvode_engine.hpp"
 #include "dynamics/exact_engine.hpp"
 
 namespace vibro::detail {
@@ -11,9 +12,9 @@ std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run)
     case Engine::kExact:
       return std::make_unique<ExactEngine>(system);
     case Engine::kCvode:
-      break;
+      return std::make_unique<CvodeEngine>(system, run);
   }
-  throw std::invalid_argument("run.engine = \"cvode\": the CVODE engine is not part of this build yet");
+  throw std::invalid_argument("unknown engine");
 }
 
 }  // namespace vibro::detail

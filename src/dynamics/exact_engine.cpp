@@ -1,6 +1,8 @@
 // Exact engine (MODEL §2, §2.1, §4.2, §7, §8).
 #include "dynamics/exact_engine.hpp"
 
+#include "dynamics/flight_window.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -14,17 +16,12 @@ constexpr double kBoundMargin = 1.0 + 1e-9;
 
 ExactEngine::ExactEngine(const System& sys) : sys_(sys), omega_(sys.frequency()) {
   const double f = sys.amplitude();
-  double fastest = omega_;
-  for (int i = 0; i < sys.dof(); ++i) {
+  for (int i = 0; i < sys.dof(); ++i)
     free_modes_.push_back({sys.omega()[i], sys.damping()[i], sys.forcing()[i] * f});
-    fastest = std::max(fastest, sys.omega()[i]);
-  }
   const auto& cm = sys.constrained();
-  for (Eigen::Index k = 0; k < cm.frequencies.size(); ++k) {
+  for (Eigen::Index k = 0; k < cm.frequencies.size(); ++k)
     stick_modes_.push_back({cm.frequencies[k], 0.0, cm.modal_forcing[k] * f});
-    fastest = std::max(fastest, cm.frequencies[k]);
-  }
-  h_cap_ = 0.25 * 2.0 * M_PI / fastest;
+  h_cap_ = StepCap(sys);
   reaction_forcing_ = sys.s_A() / sys.s_B() * f;
   static_reaction_ = sys.stop() / sys.flexibility();
 }
@@ -88,49 +85,9 @@ Probe ExactEngine::ReactionProbe(double sigma, double H) const {
 }
 
 double ExactEngine::FlightWindow() const {
-  // MODEL §2.1: divide out the known zeros at σ = 0 and return the end of the certified
-  // root-free window (0, σ_w).
-  const auto& c = sys_.contact_shape();
-  switch (flight_start_) {
-    case FlightStart::kGeneric:
-      return 0.0;
-    case FlightStart::kAfterImpact: {
-      // g(σ)/σ ≥ g'(0) + g''(0)σ/2 − M σ²/6.
-      const Probe p = GapProbe(0.0, h_cap_);
-      const double v = p.jet.g1, a = p.jet.g2, M = p.M;
-      if (!(v > 0)) return 0.0;
-      double w;
-      if (M > 0)
-        w = (0.5 * a + std::sqrt(0.25 * a * a + 2.0 * M * v / 3.0)) / (M / 3.0);
-      else
-        w = a < 0 ? 2.0 * v / -a : h_cap_;
-      return std::min(w, h_cap_);
-    }
-    case FlightStart::kDeparture: {
-      // g(σ)/σ² ≥ g''(0)/2 − M σ/6.
-      const Probe p = GapProbe(0.0, h_cap_);
-      if (!(p.jet.g2 > 0)) return 0.0;
-      return p.M > 0 ? std::min(3.0 * p.jet.g2 / p.M, h_cap_) : h_cap_;
-    }
-    case FlightStart::kAfterRelease: {
-      // g(σ)/σ³ ≥ g'''(0)/6 − M₄ σ/24, g''' = Σ c_i X_i''' from the equations of motion.
-      const double sp = std::sin(phase_), cp = std::cos(phase_);
-      double g3 = 0.0, M4 = 0.0;
-      for (size_t i = 0; i < free_modes_.size(); ++i) {
-        const auto ii = static_cast<Eigen::Index>(i);
-        if (c[ii] == 0.0) continue;
-        const Oscillator& o = free_modes_[i];
-        const double x = X0_[ii], v = V0_[ii];
-        const double acc = -o.nu * o.nu * x - 2.0 * o.zeta * o.nu * v + o.F * sp;
-        g3 += -o.nu * o.nu * v - 2.0 * o.zeta * o.nu * acc + o.F * omega_ * cp;
-        M4 += Bounds(o, omega_, Amplitude(o, x, v) + std::abs(o.F) * h_cap_).d4;
-      }
-      M4 *= kBoundMargin;
-      if (!(g3 > 0)) return 0.0;
-      return M4 > 0 ? std::min(4.0 * g3 / M4, h_cap_) : h_cap_;
-    }
-  }
-  return 0.0;
+  // MODEL §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
+  if (flight_start_ == FlightStart::kGeneric) return 0.0;
+  return CertifiedWindow(flight_start_, StartJet(sys_, X0_, V0_, phase_, h_cap_), h_cap_);
 }
 
 SegmentResult ExactEngine::AdvanceFree(double sigma_max, bool detect_events) {

@@ -71,6 +71,8 @@ class Propagator {
   virtual void Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V) const = 0;
   // Free flight: x_B − x0 at sigma without cancellation (increments from the start).
   virtual double Gap(double sigma) const = 0;
+  // Integrator work so far (zero for closed forms).
+  virtual SolverStats stats() const { return {}; }
 };
 
 }  // namespace vibro::detail

@@ -136,8 +136,9 @@ std::vector<InputIssue> Validate(const Scene& s) {
 
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");
-  c.Require(r.rtol > 0 && r.rtol < 1, "run.rtol", Show(r.rtol), "0 < rtol < 1");
-  c.Require(r.atol > 0, "run.atol", Show(r.atol), "atol > 0");
+  c.Require(r.rtol >= 1e-14 && r.rtol < 1, "run.rtol", Show(r.rtol),
+            "1e-14 ≤ rtol < 1 (CVODE cannot honour a smaller relative tolerance in double precision)");
+  c.Require(r.atol > 0 && r.atol < 1, "run.atol", Show(r.atol), "0 < atol < 1");
   c.Require(r.max_step >= 0, "run.max_step", Show(r.max_step), "max_step ≥ 0 (0 = no limit)");
   c.Require(r.max_steps >= 1, "run.max_steps", std::to_string(r.max_steps), "max_steps ≥ 1");
   c.Require(r.chatter_switch > 0 && r.chatter_switch < 1, "run.chatter_switch",

@@ -83,7 +83,8 @@ TEST(SceneFile, EveryConstraintIsRejected) {
   ExpectRejected(kModal, "structure.modes=3", "structure.modes", "modes ≤ 2");
   ExpectRejected(kModal, "structure.frequencies=[1.0, nan]", "structure.frequencies", "finite");
   ExpectRejected(kModal, "run.periods=0", "run.periods", "periods ≥ 1");
-  ExpectRejected(kModal, "run.rtol=0", "run.rtol", "0 < rtol");
+  ExpectRejected(kModal, "run.rtol=0", "run.rtol", "1e-14 ≤ rtol");
+  ExpectRejected(kModal, "run.rtol=1e-300", "run.rtol", "1e-14 ≤ rtol");
   ExpectRejected(kModal, "run.engine=\"euler\"", "run.engine", "\"exact\" | \"cvode\"");
   ExpectRejected(kModal, "run.chatter=\"skip\"", "run.chatter", "\"accumulation\"");
   ExpectRejected(kModal, "run.chatter_switch=2", "run.chatter_switch", "chatter_switch < 1");
@@ -126,7 +127,7 @@ TEST(SceneFile, MessagesCarryFileLineAndColumn) {
   const std::string text = std::string(kModal) + "[run]\nrtol = -1.0\n";
   const auto p = Problems(text, {});
   ASSERT_EQ(p.size(), 1u);
-  EXPECT_THAT(p[0], HasSubstr("scene.toml:13:8: run.rtol = -1.0: violated constraint 0 < rtol < 1"));
+  EXPECT_THAT(p[0], HasSubstr("scene.toml:13:8: run.rtol = -1.0: violated constraint 1e-14 ≤ rtol < 1"));
 }
 
 TEST(SceneFile, ThreeMistakesGiveThreeLocatedMessages) {
