@@ -22,7 +22,7 @@ namespace vibro {
 
 struct StoreHeader {
   std::string scene_text;  // the scene as run (TOML)
-  std::string engine, chatter;
+  std::string engine, chatter, method;
   double rtol = 0, atol = 0;
   int dof = 0;
   int samples_per_period = 0;

@@ -82,6 +82,7 @@ vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::Syste
   h.scene_text = loaded.text_as_run;
   h.engine = vibro::ToString(sc.run.engine);
   h.chatter = vibro::ToString(sc.run.chatter);
+  h.method = vibro::ToString(sc.run.method);
   h.rtol = sc.run.rtol;
   h.atol = sc.run.atol;
   h.dof = sys.dof();
@@ -175,6 +176,12 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                result.counts.impacts, result.counts.accumulations, result.counts.sticks,
                result.counts.releases, result.counts.grazings);
     PrintAttractor(attractor);
+    if (loaded.scene.run.engine == vibro::Engine::kCvode)
+      fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "
+                 "{} re-initialisations\n",
+                 vibro::ToString(loaded.scene.run.method), "SUNDIALS 6.4", loaded.scene.run.rtol,
+                 loaded.scene.run.atol, result.solver.steps, result.solver.rhs_evals,
+                 result.solver.root_evals, result.solver.reinits);
     if (store) fmt::print("output       {}{}\n", out, resume ? " (resumed)" : "");
   }
   if (result.status != vibro::RunStatus::kOk)

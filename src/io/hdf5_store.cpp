@@ -521,6 +521,15 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   WriteInt(f, "sticks", r.counts.sticks);
   WriteInt(f, "releases", r.counts.releases);
   WriteInt(f, "grazings", r.counts.grazings);
+  if (m.header.engine == "cvode") {
+    WriteInt(f, "cvode_steps", r.solver.steps);
+    WriteInt(f, "cvode_rhs_evals", r.solver.rhs_evals);
+    WriteInt(f, "cvode_root_evals", r.solver.root_evals);
+    WriteInt(f, "cvode_jac_evals", r.solver.jac_evals);
+    WriteInt(f, "cvode_error_test_failures", r.solver.error_test_failures);
+    WriteInt(f, "cvode_reinits", r.solver.reinits);
+    WriteString(f, "cvode_method", m.header.method);
+  }
   Handle g(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
   WriteString(g.get(), "kind", a.kind);
   // Null values of the JSON summary are absent attributes.

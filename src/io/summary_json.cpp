@@ -45,6 +45,13 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                  {"releases", r.counts.releases},
                  {"grazings", r.counts.grazings}};
   j["attractor"] = AttractorObject(a);
+  if (scene.run.engine == Engine::kCvode)
+    j["solver"] = {{"steps", r.solver.steps},
+                   {"rhs_evals", r.solver.rhs_evals},
+                   {"root_evals", r.solver.root_evals},
+                   {"jac_evals", r.solver.jac_evals},
+                   {"error_test_failures", r.solver.error_test_failures},
+                   {"reinits", r.solver.reinits}};
   return j.dump();
 }
 

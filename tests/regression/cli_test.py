@@ -40,6 +40,23 @@ for f in sorted(os.listdir(scenes)):
     p = run("model", path)
     check(f"model {f} (text)", p.returncode == 0 and "frequencies" in p.stdout, p.stderr)
 
+# `vibro simulate` with both engines on every scene.
+for f in sorted(os.listdir(scenes)):
+    if not f.endswith(".toml"):
+        continue
+    path = os.path.join(scenes, f)
+    for engine in ("exact", "cvode"):
+        p = run("simulate", path, "--json", "--set", f'run.engine="{engine}"', "--set", "run.periods=20",
+                "--set", "run.samples_per_period=0")
+        check(f"simulate {f} {engine}", p.returncode == 0, p.stderr)
+        if p.returncode == 0:
+            j = json.loads(p.stdout)
+            check(f"simulate {f} {engine} summary", j["status"] == "ok" and j["engine"] == engine
+                  and set(j["counts"]) >= {"impacts", "accumulations", "sticks", "releases"}
+                  and set(j["attractor"]) >= {"kind", "period", "impacts_per_period",
+                                               "sticking_fraction", "stick_phases"}, p.stdout)
+            check(f"simulate {f} {engine} solver stats", ("solver" in j) == (engine == "cvode"), p.stdout)
+
 # Three mistakes: three located messages, exit 2, nothing on stdout.
 with tempfile.TemporaryDirectory() as d:
     bad = os.path.join(d, "bad.toml")
