@@ -14,7 +14,12 @@ constexpr double kBoundMargin = 1.0 + 1e-9;
 
 }  // namespace
 
-ExactEngine::ExactEngine(const System& sys) : sys_(sys), omega_(sys.frequency()) {
+ExactEngine::ExactEngine(const System& sys)
+    : sys_(sys),
+      omega_(sys.frequency()),
+      damped_sticking_(sys.constrained().damping.size() > 0 &&
+                       sys.constrained().damping.cwiseAbs().maxCoeff() > 0),
+      damped_(sys) {
   const double f = sys.amplitude();
   for (int i = 0; i < sys.dof(); ++i)
     free_modes_.push_back({sys.omega()[i], sys.damping()[i], sys.forcing()[i] * f});
@@ -40,6 +45,7 @@ void ExactEngine::Begin(const SegmentStart& s) {
     // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (MODEL §4.2).
     xi0_ = sys_.constrained().left * s.X;
     dxi0_ = sys_.constrained().left * s.V;
+    if (damped_sticking_) damped_.Begin(xi0_, dxi0_, phase_);
   }
 }
 
@@ -101,15 +107,18 @@ SegmentResult ExactEngine::AdvanceFree(double sigma_max, bool detect_events) {
 }
 
 SegmentResult ExactEngine::AdvanceSticking(double sigma_max, bool detect_events) {
-  if (sys_.constrained().damping.size() > 0 && sys_.constrained().damping.cwiseAbs().maxCoeff() > 0)
+  if (damped_sticking_ && !damped_.ok())
     return {SegmentEnd::kFailure, 0.0,
-            "the exact engine has no closed form for damped sticking of a multi-DOF structure "
-            "(non-proportional damping, MODEL §7); run it undamped, or with run.engine = "
+            "the damped constrained system is defective (critically damped constrained mode): "
+            "no closed form; change structure.damping_ratios slightly, or use run.engine = "
             "\"cvode\""};
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
+  const auto probe = [this](double u, double H) {
+    return damped_sticking_ ? damped_.ReactionProbe(u) : ReactionProbe(u, H);
+  };
   double w = 0.0;
   if (stick_start_ != StickStart::kGeneric) {
-    const Probe p = ReactionProbe(0.0, h_cap_);
+    const Probe p = probe(0.0, h_cap_);
     if (stick_start_ == StickStart::kRising) {
       const double v = p.jet.g1, a = p.jet.g2, M = p.M;
       if (v > 0)
@@ -120,7 +129,6 @@ SegmentResult ExactEngine::AdvanceSticking(double sigma_max, bool detect_events)
     }
   }
   if (w >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
-  const auto probe = [this](double u, double H) { return ReactionProbe(u, H); };
   const RootSearch rs = FirstRoot(probe, w, sigma_max, h_cap_);
   if (!rs.found) return {SegmentEnd::kLimit, sigma_max, {}};
   return {SegmentEnd::kRelease, rs.sigma, {}};
@@ -148,7 +156,8 @@ void ExactEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
   }
   const auto m = static_cast<Eigen::Index>(stick_modes_.size());
   Eigen::VectorXd xi(m), dxi(m);
-  for (Eigen::Index k = 0; k < m; ++k) {
+  if (damped_sticking_) damped_.Evaluate(sigma, xi, dxi);
+  for (Eigen::Index k = 0; k < m && !damped_sticking_; ++k) {
     const auto st = Flow(stick_modes_[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma);
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;

@@ -4,6 +4,7 @@
 
 #include <vector>
 
+#include "dynamics/damped_sticking.hpp"
 #include "dynamics/oscillator.hpp"
 #include "dynamics/propagator.hpp"
 #include "dynamics/root_finder.hpp"
@@ -39,6 +40,8 @@ class ExactEngine final : public Propagator {
   std::vector<Oscillator> free_modes_;   // ω_i, ζ_i, T_A,i f
   std::vector<Oscillator> stick_modes_;  // ω'_k, 0, l_kᵀF_c f
   double reaction_forcing_;              // (s_A/s_B) f
+  bool damped_sticking_ = false;         // non-proportional damping in the constrained modes
+  DampedSticking damped_;                // its closed form (MODEL §7)
 
   // Current segment.
   Mode mode_ = Mode::kFree;

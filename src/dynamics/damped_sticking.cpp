@@ -1,0 +1,97 @@
+// Damped sticking flow in closed form (MODEL §7).
+#include "dynamics/damped_sticking.hpp"
+
+#include <cmath>
+
+namespace vibro::detail {
+namespace {
+
+// e^{λσ} − 1 without cancellation at small σ.
+std::complex<double> Expm1(std::complex<double> z) {
+  const double a = z.real(), b = z.imag();
+  const double h = std::sin(0.5 * b);
+  return {std::expm1(a) * std::cos(b) - 2.0 * h * h, std::exp(a) * std::sin(b)};
+}
+
+}  // namespace
+
+DampedSticking::DampedSticking(const System& sys) : sys_(sys) {
+  const auto& cm = sys.constrained();
+  k_ = cm.frequencies.size();
+  if (k_ == 0) return;
+  omega_ = sys.frequency();
+  kappa_f_ = sys.s_A() / sys.s_B() * sys.amplitude();
+  R_static_ = sys.stop() / sys.flexibility();
+  G_ = Eigen::MatrixXd::Zero(2 * k_, 2 * k_);
+  G_.topRightCorner(k_, k_).setIdentity();
+  G_.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(cm.frequencies.cwiseAbs2().asDiagonal());
+  G_.bottomRightCorner(k_, k_) = -cm.damping;
+  Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(G_.cast<std::complex<double>>());
+  if (es.info() != Eigen::Success) return;
+  W_ = es.eigenvectors();
+  lambda_ = es.eigenvalues();
+  Eigen::FullPivLU<Eigen::MatrixXcd> lu(W_);
+  if (!lu.isInvertible() || lu.rcond() < 1e-10) return;  // defective (critical damping)
+  Winv_ = lu.inverse();
+  h_ = Eigen::VectorXd::Zero(2 * k_);
+  h_.tail(k_) = cm.modal_forcing * sys.amplitude();
+  const std::complex<double> iw(0.0, omega_);
+  const Eigen::MatrixXcd A =
+      iw * Eigen::MatrixXcd::Identity(2 * k_, 2 * k_) - G_.cast<std::complex<double>>();
+  q_ = A.fullPivLu().solve(h_.cast<std::complex<double>>());
+  rho_ = cm.reaction;
+  const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
+  rho_v_ = cm.vectors.transpose() * sys.contact_shape().cwiseProduct(D) / sys.s_B();
+  Eigen::VectorXd rt(2 * k_);
+  rt << rho_, rho_v_;
+  rq_ = rt.cast<std::complex<double>>().dot(q_);  // dot conjugates its first argument: rt is real
+  rw_ = (rt.transpose().cast<std::complex<double>>() * W_).transpose();
+  ok_ = true;
+}
+
+void DampedSticking::Begin(const Eigen::VectorXd& xi, const Eigen::VectorXd& dxi, double phase) {
+  phase_ = phase;
+  z0_.resize(2 * k_);
+  z0_ << xi, dxi;
+  const Eigen::VectorXd zp0 = q_.real() * std::sin(phase) + q_.imag() * std::cos(phase);
+  c0_ = Winv_ * (z0_ - zp0).cast<std::complex<double>>();
+}
+
+void DampedSticking::Evaluate(double sigma, Eigen::VectorXd& xi, Eigen::VectorXd& dxi) const {
+  const double sp = std::sin(phase_), cp = std::cos(phase_);
+  const double sw = std::sin(omega_ * sigma), hw = std::sin(0.5 * omega_ * sigma);
+  const double cwm1 = -2.0 * hw * hw;
+  const double dsin = sp * cwm1 + cp * sw, dcos = cp * cwm1 - sp * sw;
+  Eigen::VectorXcd e(2 * k_);
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) e[j] = Expm1(lambda_[j] * sigma) * c0_[j];
+  const Eigen::VectorXd dz = q_.real() * dsin + q_.imag() * dcos + (W_ * e).real();
+  xi = z0_.head(k_) + dz.head(k_);
+  dxi = z0_.tail(k_) + dz.tail(k_);
+}
+
+Probe DampedSticking::ReactionProbe(double sigma) const {
+  Eigen::VectorXd xi, eta;
+  Evaluate(sigma, xi, eta);
+  const auto& cm = sys_.constrained();
+  const double psi = phase_ + omega_ * sigma;
+  const double s = std::sin(psi), c = std::cos(psi);
+  const Eigen::VectorXd F = h_.tail(k_);
+  const Eigen::VectorXd w2 = cm.frequencies.cwiseAbs2();
+  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - cm.damping * eta + F * s;
+  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - cm.damping * acc + F * (omega_ * c);
+  Probe p{};
+  p.jet.g = R_static_ + rho_.dot(xi) + rho_v_.dot(eta) - kappa_f_ * s;
+  p.jet.g1 = rho_.dot(eta) + rho_v_.dot(acc) - kappa_f_ * omega_ * c;
+  p.jet.g2 = rho_.dot(acc) + rho_v_.dot(jerk) + kappa_f_ * omega_ * omega_ * s;
+  // |R'''| ≤ Σ_j |ρ̃ᵀw_j| |c_j e^{λ_j σ}| |λ_j|³ + (|ρ̃ᵀq| + |κ f|) ω³, and the homogeneous
+  // amplitudes only decay after σ.
+  double M = (std::abs(rq_) + std::abs(kappa_f_)) * omega_ * omega_ * omega_;
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) {
+    const double l = std::abs(lambda_[j]);
+    M += std::abs(rw_[j]) * std::abs(c0_[j] * std::exp(lambda_[j] * sigma)) * l * l * l;
+  }
+  p.M = M * (1.0 + 1e-9);
+  return p;
+}
+
+}  // namespace vibro::detail

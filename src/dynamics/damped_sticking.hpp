@@ -1,0 +1,53 @@
+// Closed-form sticking flow with modal damping (MODEL §7): in the constrained modes of §4.2,
+//   ξ̈ + D'ξ̇ + Ω'ξ = F sin(φ + ωσ)      (D' = L D V couples the modes: non-proportional damping)
+// written first order, ż = G z + h sin(φ + ωσ), z = (ξ, ξ̇), G = [[0, I], [−Ω', −D']], and solved with
+// the eigen-decomposition G = W Λ W⁻¹ (complex) and the forced response
+// z_p = Im[(iωI − G)⁻¹ h e^{i(φ+ωσ)}]:
+//   z(σ) = z_p(σ) + Re[W e^{Λσ} W⁻¹ (z(0) − z_p(0))].
+// Increments from σ = 0 are formed with expm1 so that they keep relative accuracy at small σ.
+#pragma once
+
+#include <complex>
+
+#include <Eigen/Dense>
+
+#include "dynamics/root_finder.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro::detail {
+
+class DampedSticking {
+ public:
+  explicit DampedSticking(const System& system);
+
+  // Whether G could be diagonalised (false for a defective G, e.g. exactly critical damping).
+  bool ok() const { return ok_; }
+
+  // Start from the constrained coordinates ξ, ξ̇ at forcing phase φ.
+  void Begin(const Eigen::VectorXd& xi, const Eigen::VectorXd& dxi, double phase);
+  // ξ(σ), ξ̇(σ).
+  void Evaluate(double sigma, Eigen::VectorXd& xi, Eigen::VectorXd& dxi) const;
+  // Reaction R = R_st + ρᵀξ + ρ_vᵀξ̇ − κ f sin and its two derivatives at σ, with a bound on
+  // |R'''| valid for every σ' ≥ σ (the homogeneous modes decay, Re λ ≤ 0).
+  Probe ReactionProbe(double sigma) const;
+
+ private:
+  const System& sys_;
+  bool ok_ = false;
+  Eigen::Index k_ = 0;
+  double omega_ = 0, kappa_f_ = 0, R_static_ = 0;
+  Eigen::MatrixXd G_;
+  Eigen::MatrixXcd W_, Winv_;
+  Eigen::VectorXcd lambda_, q_;  // eigenvalues; forced amplitude (iωI − G)⁻¹ h
+  Eigen::VectorXd rho_, rho_v_;  // R = R_st + rhoᵀξ + rho_vᵀξ̇ − κ f sin
+  std::complex<double> rq_;      // (ρ, ρ_v)ᵀ q
+  Eigen::VectorXcd rw_;          // (ρ, ρ_v)ᵀ W, per mode
+  Eigen::VectorXd h_;            // (0, F)
+
+  // Segment.
+  double phase_ = 0;
+  Eigen::VectorXd z0_;
+  Eigen::VectorXcd c0_;  // W⁻¹ (z(0) − z_p(0))
+};
+
+}  // namespace vibro::detail
