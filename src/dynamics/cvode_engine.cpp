@@ -135,19 +135,24 @@ struct CvodeEngine::Impl {
       gap += m->c[i] * Y[i];
       vB += m->c[i] * Y[n + i];
     }
-    if (m->order > 0 && t <= m->window) {
-      // Inside the certified window (MODEL §2.1) no root exists: the divided functions are
-      // their positive limits, free of the rounding of g/σᵐ at tiny σ.
-      g[0] = m->g_lim;
-      g[1] = m->order <= 1 ? vB : m->v_lim;
-    } else if (m->order == 0) {
-      g[0] = gap;
-      g[1] = vB;
-    } else {
-      g[0] = gap / std::pow(t, m->order);
-      g[1] = m->order <= 1 ? vB : vB / std::pow(t, m->order - 1);
-    }
+    m->DividedRoots(t, gap, vB, g);
     return 0;
+  }
+
+  // Guard value/σᵐ and rate/σ^(m−1), m = order of the known zero at σ = 0. Inside the certified
+  // window (MODEL §2.1) no root exists: the divided functions are their positive limits there,
+  // free of the rounding of value/σᵐ at tiny σ.
+  void DividedRoots(double t, double value, double rate, sunrealtype* g) const {
+    if (order > 0 && t <= window) {
+      g[0] = g_lim;
+      g[1] = order <= 1 ? rate : v_lim;
+    } else if (order == 0) {
+      g[0] = value;
+      g[1] = rate;
+    } else {
+      g[0] = value / std::pow(t, order);
+      g[1] = order <= 1 ? rate : rate / std::pow(t, order - 1);
+    }
   }
 
   static int FreeJac(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector,
@@ -222,16 +227,7 @@ struct CvodeEngine::Impl {
     auto* m = static_cast<Impl*>(user);
     double R, dR;
     m->Reaction(t, N_VGetArrayPointer(y), R, dR);
-    if (m->order > 0 && t <= m->window) {
-      g[0] = m->g_lim;
-      g[1] = m->order <= 1 ? dR : m->v_lim;
-    } else if (m->order == 0) {
-      g[0] = R;
-      g[1] = dR;
-    } else {
-      g[0] = R / std::pow(t, m->order);
-      g[1] = m->order <= 1 ? dR : dR / std::pow(t, m->order - 1);
-    }
+    m->DividedRoots(t, R, dR, g);
     return 0;
   }
 

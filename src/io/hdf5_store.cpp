@@ -232,6 +232,69 @@ class Column {
   std::vector<unsigned char> buf_;
 };
 
+// /events: one row per event.
+struct EventTable {
+  Column t, period, offset, kind, xB, v_before, v_after;
+  void Create(hid_t g, hid_t kind_type) {
+    t = Column(g, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    period = Column(g, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    offset = Column(g, "offset", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    kind = Column(g, "kind", kind_type, kind_type, 1, 0);
+    xB = Column(g, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    v_before = Column(g, "v_before", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    v_after = Column(g, "v_after", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+  }
+  void Open(hid_t g, hid_t kind_type) {
+    t = Column(g, "t", H5T_NATIVE_DOUBLE, 8);
+    period = Column(g, "period", H5T_NATIVE_INT64, 8);
+    offset = Column(g, "offset", H5T_NATIVE_DOUBLE, 8);
+    kind = Column(g, "kind", kind_type, 1);
+    xB = Column(g, "x_B", H5T_NATIVE_DOUBLE, 8);
+    v_before = Column(g, "v_before", H5T_NATIVE_DOUBLE, 8);
+    v_after = Column(g, "v_after", H5T_NATIVE_DOUBLE, 8);
+  }
+  void Push(const Event& e) {
+    t.Push(e.t);
+    period.Push(static_cast<std::int64_t>(e.clock.period));
+    offset.Push(e.clock.offset);
+    kind.Push(static_cast<std::int8_t>(e.kind));
+    xB.Push(e.x_B);
+    v_before.Push(e.v_before);
+    v_after.Push(e.v_after);
+  }
+  std::vector<Column*> All() { return {&t, &period, &offset, &kind, &xB, &v_before, &v_after}; }
+};
+
+// /samples and /section: one row per state.
+struct StateTable {
+  Column t, period, X, V, xB, mode;
+  void Create(hid_t g, hsize_t n) {
+    t = Column(g, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    period = Column(g, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    X = Column(g, "X", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    V = Column(g, "V", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
+    xB = Column(g, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    mode = Column(g, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+  }
+  void Open(hid_t g) {
+    t = Column(g, "t", H5T_NATIVE_DOUBLE, 8);
+    period = Column(g, "period", H5T_NATIVE_INT64, 8);
+    X = Column(g, "X", H5T_NATIVE_DOUBLE, 8);
+    V = Column(g, "V", H5T_NATIVE_DOUBLE, 8);
+    xB = Column(g, "x_B", H5T_NATIVE_DOUBLE, 8);
+    mode = Column(g, "mode", H5T_NATIVE_INT8, 1);
+  }
+  void Push(const Sample& s) {
+    t.Push(s.t);
+    period.Push(static_cast<std::int64_t>(s.clock.period));
+    X.PushRow(s.X);
+    V.PushRow(s.V);
+    xB.Push(s.x_B);
+    mode.Push(static_cast<std::int8_t>(s.mode));
+  }
+  std::vector<Column*> All() { return {&t, &period, &X, &V, &xB, &mode}; }
+};
+
 Handle FileAccess() {
   Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
   // No metadata reaches the disk between flushes (see the header).
@@ -268,9 +331,8 @@ struct Hdf5Store::Impl {
   std::string path;
   StoreHeader header;
   Handle file, events, samples, section, checkpoint;
-  Column ev_t, ev_period, ev_offset, ev_kind, ev_xB, ev_vb, ev_va;
-  Column sa_t, sa_X, sa_V, sa_xB, sa_mode;
-  Column se_t, se_period, se_X, se_V, se_xB, se_mode;
+  EventTable ev;
+  StateTable sa, se;
   Handle kind_type;
   std::optional<Checkpoint> last_checkpoint;
   hsize_t cp_events = 0, cp_samples = 0, cp_sections = 0;  // rows at the last checkpoint
@@ -317,30 +379,16 @@ struct Hdf5Store::Impl {
   }
 
   std::vector<Column*> Columns() {
-    return {&ev_t, &ev_period, &ev_offset, &ev_kind, &ev_xB, &ev_vb, &ev_va, &sa_t, &sa_X,
-            &sa_V, &sa_xB, &sa_mode, &se_t, &se_period, &se_X, &se_V, &se_xB, &se_mode};
+    std::vector<Column*> all = ev.All();
+    for (auto* t : {&sa, &se})
+      for (Column* c : t->All()) all.push_back(c);
+    return all;
   }
 
   void OpenColumns() {
-    const hid_t ev = events.get(), sa = samples.get(), se = section.get();
-    ev_t = Column(ev, "t", H5T_NATIVE_DOUBLE, 8);
-    ev_period = Column(ev, "period", H5T_NATIVE_INT64, 8);
-    ev_offset = Column(ev, "offset", H5T_NATIVE_DOUBLE, 8);
-    ev_kind = Column(ev, "kind", kind_type.get(), 1);
-    ev_xB = Column(ev, "x_B", H5T_NATIVE_DOUBLE, 8);
-    ev_vb = Column(ev, "v_before", H5T_NATIVE_DOUBLE, 8);
-    ev_va = Column(ev, "v_after", H5T_NATIVE_DOUBLE, 8);
-    sa_t = Column(sa, "t", H5T_NATIVE_DOUBLE, 8);
-    sa_X = Column(sa, "X", H5T_NATIVE_DOUBLE, 8);
-    sa_V = Column(sa, "V", H5T_NATIVE_DOUBLE, 8);
-    sa_xB = Column(sa, "x_B", H5T_NATIVE_DOUBLE, 8);
-    sa_mode = Column(sa, "mode", H5T_NATIVE_INT8, 1);
-    se_t = Column(se, "t", H5T_NATIVE_DOUBLE, 8);
-    se_period = Column(se, "period", H5T_NATIVE_INT64, 8);
-    se_X = Column(se, "X", H5T_NATIVE_DOUBLE, 8);
-    se_V = Column(se, "V", H5T_NATIVE_DOUBLE, 8);
-    se_xB = Column(se, "x_B", H5T_NATIVE_DOUBLE, 8);
-    se_mode = Column(se, "mode", H5T_NATIVE_INT8, 1);
+    ev.Open(events.get(), kind_type.get());
+    sa.Open(samples.get());
+    se.Open(section.get());
   }
 
   void Close() {
@@ -401,26 +449,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
       Handle(Check(H5Gcreate2(f, g, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), g), H5Gclose);
     impl->OpenGroups();
     impl->kind_type = KindType();
-    const hsize_t n = static_cast<hsize_t>(h.dof);
-    const hid_t ev = impl->events.get(), sa = impl->samples.get(), se = impl->section.get();
-    impl->ev_t = Column(ev, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->ev_period = Column(ev, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
-    impl->ev_offset = Column(ev, "offset", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->ev_kind = Column(ev, "kind", impl->kind_type.get(), impl->kind_type.get(), 1, 0);
-    impl->ev_xB = Column(ev, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->ev_vb = Column(ev, "v_before", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->ev_va = Column(ev, "v_after", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->sa_t = Column(sa, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->sa_X = Column(sa, "X", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
-    impl->sa_V = Column(sa, "V", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
-    impl->sa_xB = Column(sa, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->sa_mode = Column(sa, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
-    impl->se_t = Column(se, "t", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->se_period = Column(se, "period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
-    impl->se_X = Column(se, "X", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
-    impl->se_V = Column(se, "V", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, n);
-    impl->se_xB = Column(se, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
-    impl->se_mode = Column(se, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    impl->ev.Create(impl->events.get(), impl->kind_type.get());
+    impl->sa.Create(impl->samples.get(), static_cast<hsize_t>(h.dof));
+    impl->se.Create(impl->section.get(), static_cast<hsize_t>(h.dof));
     WriteString(f, "vibro_version", VIBRO_VERSION);
     WriteString(f, "scene", h.scene_text);
     WriteString(f, "engine", h.engine);
@@ -470,44 +501,26 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
 }
 
 void Hdf5Store::OnEvent(const Event& e) {
-  auto& m = *impl_;
-  m.ev_t.Push(e.t);
-  m.ev_period.Push(static_cast<std::int64_t>(e.clock.period));
-  m.ev_offset.Push(e.clock.offset);
-  m.ev_kind.Push(static_cast<std::int8_t>(e.kind));
-  m.ev_xB.Push(e.x_B);
-  m.ev_vb.Push(e.v_before);
-  m.ev_va.Push(e.v_after);
-  m.MaybeFlush();
+  impl_->ev.Push(e);
+  impl_->MaybeFlush();
 }
 
 void Hdf5Store::OnSample(const Sample& s) {
-  auto& m = *impl_;
-  m.sa_t.Push(s.t);
-  m.sa_X.PushRow(s.X);
-  m.sa_V.PushRow(s.V);
-  m.sa_xB.Push(s.x_B);
-  m.sa_mode.Push(static_cast<std::int8_t>(s.mode));
-  m.MaybeFlush();
+  impl_->sa.Push(s);
+  impl_->MaybeFlush();
 }
 
 void Hdf5Store::OnSection(const Sample& s) {
-  auto& m = *impl_;
-  m.se_t.Push(s.t);
-  m.se_period.Push(static_cast<std::int64_t>(s.clock.period));
-  m.se_X.PushRow(s.X);
-  m.se_V.PushRow(s.V);
-  m.se_xB.Push(s.x_B);
-  m.se_mode.Push(static_cast<std::int8_t>(s.mode));
-  m.MaybeFlush();
+  impl_->se.Push(s);
+  impl_->MaybeFlush();
 }
 
 void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
   auto& m = *impl_;
   m.last_checkpoint = c;
-  m.cp_events = m.ev_t.rows();
-  m.cp_samples = m.sa_t.rows();
-  m.cp_sections = m.se_t.rows();
+  m.cp_events = m.ev.t.rows();
+  m.cp_samples = m.sa.t.rows();
+  m.cp_sections = m.se.t.rows();
 }
 
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
@@ -581,14 +594,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
     impl->cp_samples = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "samples", H5T_NATIVE_INT64));
     impl->cp_sections = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "sections", H5T_NATIVE_INT64));
     // Rows written after the checkpoint are dropped: the run continues from it.
-    for (Column* c : {&impl->ev_t, &impl->ev_period, &impl->ev_offset, &impl->ev_kind, &impl->ev_xB,
-                      &impl->ev_vb, &impl->ev_va})
-      c->Truncate(impl->cp_events);
-    for (Column* c : {&impl->sa_t, &impl->sa_X, &impl->sa_V, &impl->sa_xB, &impl->sa_mode})
-      c->Truncate(impl->cp_samples);
-    for (Column* c : {&impl->se_t, &impl->se_period, &impl->se_X, &impl->se_V, &impl->se_xB,
-                      &impl->se_mode})
-      c->Truncate(impl->cp_sections);
+    for (Column* c : impl->ev.All()) c->Truncate(impl->cp_events);
+    for (Column* c : impl->sa.All()) c->Truncate(impl->cp_samples);
+    for (Column* c : impl->se.All()) c->Truncate(impl->cp_sections);
     impl->last_checkpoint = cp;
     WriteString(impl->file.get(), "status", "running");
     impl->Flush();
@@ -619,15 +627,18 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     Handle sa(Check(H5Gopen2(f, "/samples", H5P_DEFAULT), "/samples"), H5Gclose);
     Handle se(Check(H5Gopen2(f, "/section", H5P_DEFAULT), "/section"), H5Gclose);
     Handle kind_type = KindType();
-    Column ev_t(ev.get(), "t", H5T_NATIVE_DOUBLE, 8), sa_t(sa.get(), "t", H5T_NATIVE_DOUBLE, 8),
-        se_t(se.get(), "t", H5T_NATIVE_DOUBLE, 8);
-    out.events = static_cast<long long>(ev_t.rows());
-    out.samples = static_cast<long long>(sa_t.rows());
-    out.sections = static_cast<long long>(se_t.rows());
+    EventTable events;
+    StateTable samples, sections;
+    events.Open(ev.get(), kind_type.get());
+    samples.Open(sa.get());
+    sections.Open(se.get());
+    out.events = static_cast<long long>(events.t.rows());
+    out.samples = static_cast<long long>(samples.t.rows());
+    out.sections = static_cast<long long>(sections.t.rows());
 
     Handle cpg(Check(H5Gopen2(f, "/checkpoint", H5P_DEFAULT), "/checkpoint"), H5Gclose);
     const hid_t g = cpg.get();
-    hsize_t cp_events = ev_t.rows(), cp_sections = se_t.rows();
+    hsize_t cp_events = events.t.rows(), cp_sections = sections.t.rows();
     if (auto period = ReadScalar<std::int64_t>(g, "period", H5T_NATIVE_INT64)) {
       Checkpoint c{};
       c.clock = {*period, *ReadScalar<double>(g, "offset", H5T_NATIVE_DOUBLE)};
@@ -653,19 +664,16 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     if (tail_periods > 0 && out.checkpoint) {
       const long long from = out.checkpoint->clock.period - tail_periods;
       // Sections: one row per period, the last tail_periods + 1 before the checkpoint.
-      Column se_period(se.get(), "period", H5T_NATIVE_INT64, 8);
-      Column se_X(se.get(), "X", H5T_NATIVE_DOUBLE, 8), se_V(se.get(), "V", H5T_NATIVE_DOUBLE, 8);
-      Column se_mode(se.get(), "mode", H5T_NATIVE_INT8, 1);
       const hsize_t n_se = std::min<hsize_t>(cp_sections, static_cast<hsize_t>(tail_periods + 1));
       const hsize_t first = cp_sections - n_se;
       const auto dof = static_cast<size_t>(out.checkpoint->X.size());
       std::vector<std::int64_t> per(n_se);
       std::vector<double> X(n_se * dof), V(n_se * dof);
       std::vector<std::int8_t> mode(n_se);
-      se_period.Read(first, n_se, per.data());
-      se_X.Read(first, n_se, X.data());
-      se_V.Read(first, n_se, V.data());
-      se_mode.Read(first, n_se, mode.data());
+      sections.period.Read(first, n_se, per.data());
+      sections.X.Read(first, n_se, X.data());
+      sections.V.Read(first, n_se, V.data());
+      sections.mode.Read(first, n_se, mode.data());
       for (hsize_t i = 0; i < n_se; ++i) {
         out.tail_section_clocks.push_back({per[i], 0.0});
         out.tail_section_X.emplace_back(Eigen::Map<Eigen::VectorXd>(X.data() + i * dof, static_cast<Eigen::Index>(dof)));
@@ -673,13 +681,12 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
         out.tail_section_modes.push_back(static_cast<Mode>(mode[i]));
       }
       // Events: read backwards in blocks until before `from`.
-      Column ev_period(ev.get(), "period", H5T_NATIVE_INT64, 8);
       hsize_t first_ev = cp_events;
       std::vector<std::int64_t> block;
       while (first_ev > 0) {
         const hsize_t n = std::min<hsize_t>(first_ev, 65536);
         block.resize(n);
-        ev_period.Read(first_ev - n, n, block.data());
+        events.period.Read(first_ev - n, n, block.data());
         first_ev -= n;
         if (block.front() < from) {
           hsize_t skip = 0;
@@ -692,13 +699,13 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       std::vector<double> t(n_ev), off(n_ev), xB(n_ev), vb(n_ev), va(n_ev);
       std::vector<std::int64_t> ep(n_ev);
       std::vector<std::int8_t> kind(n_ev);
-      Column(ev.get(), "offset", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, off.data());
-      ev_t.Read(first_ev, n_ev, t.data());
-      ev_period.Read(first_ev, n_ev, ep.data());
-      Column(ev.get(), "kind", kind_type.get(), 1).Read(first_ev, n_ev, kind.data());
-      Column(ev.get(), "x_B", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, xB.data());
-      Column(ev.get(), "v_before", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, vb.data());
-      Column(ev.get(), "v_after", H5T_NATIVE_DOUBLE, 8).Read(first_ev, n_ev, va.data());
+      events.offset.Read(first_ev, n_ev, off.data());
+      events.t.Read(first_ev, n_ev, t.data());
+      events.period.Read(first_ev, n_ev, ep.data());
+      events.kind.Read(first_ev, n_ev, kind.data());
+      events.xB.Read(first_ev, n_ev, xB.data());
+      events.v_before.Read(first_ev, n_ev, vb.data());
+      events.v_after.Read(first_ev, n_ev, va.data());
       for (hsize_t i = 0; i < n_ev; ++i)
         out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i]});
     }
