@@ -72,6 +72,31 @@ struct Checkpoint {
   EventCounts counts;          // events so far
 };
 
+// For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and
+// every reset of the trajectory, in time order. States are modal (X, Ẋ); phase = ωt at the reset.
+struct Stretch {
+  Mode mode;
+  double duration;
+};
+enum class ResetKind {
+  kImpact,         // restitution law (12), free → free
+  kPlasticStick,   // plastic impact (or tangential arrival) into sticking: Ẋ ← ΠẊ
+  kPlasticLeave,   // r = 0 impact with R < 0: Ẋ ← ΠẊ, free → free (departure at zero velocity)
+  kRelease,        // sticking → free at R = 0 (no jump: the saltation is the identity)
+  kAccumulation,   // MODEL §5.4: free flight over `delta` from the post-impact state, projection
+  kGrazing,        // tangential touch that stays free (the maps are singular there)
+};
+struct Reset {
+  ResetKind kind;
+  double phase;
+  const Eigen::VectorXd& X_before;  // kAccumulation: the state just after the last impact
+  const Eigen::VectorXd& V_before;
+  const Eigen::VectorXd& X_after;
+  const Eigen::VectorXd& V_after;
+  double delta;                     // kAccumulation: Δ∞
+  double reaction;                  // kAccumulation: R used in Δ∞
+};
+
 class Observer {
  public:
   virtual ~Observer() = default;
@@ -80,6 +105,8 @@ class Observer {
   // Stroboscopic section: t = t0 + k T, k = 0, 1, ... (the initial state is row 0).
   virtual void OnSection(const Sample& /*sample*/) {}
   virtual void OnCheckpoint(const Checkpoint& /*checkpoint*/) {}
+  virtual void OnStretch(const Stretch& /*stretch*/) {}
+  virtual void OnReset(const Reset& /*reset*/) {}
 };
 
 }  // namespace vibro

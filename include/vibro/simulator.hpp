@@ -62,8 +62,15 @@ struct RunResult {
   SolverStats solver;  // CVODE work (engine "cvode")
 };
 
+// A start other than the scene's [initial] table: modal state at time t (the Poincaré solver).
+struct InitialOverride {
+  double time;
+  Eigen::VectorXd X, V;
+};
+
 struct SimulationOptions {
   std::vector<Observer*> observers;
+  const InitialOverride* initial = nullptr;
   const std::atomic<bool>* stop_requested = nullptr;  // polled between events
   const Checkpoint* resume_from = nullptr;            // continue a run from this checkpoint
 };

@@ -5,6 +5,7 @@
 
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
@@ -17,6 +18,9 @@ std::string ModelJson(const System& system);
 
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor);
+
+// `vibro orbit --json` (CONTRACT §2).
+std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
 
 // `vibro info --json`: what a stored run holds.
 std::string StoredRunJson(const StoredRun& run);

@@ -28,7 +28,8 @@ struct ConstrainedModes {
   Eigen::VectorXd modal_forcing;  // l_kᵀ F_c, F_c = T_A − (s_A/s_B) T_B, shape (n−1)
   Eigen::VectorXd reaction;       // ρ_k = (c∘w2)ᵀ v_k / s_B: R = R_static + ρᵀξ − (s_A/s_B) f sin ωt
   // ξ̈ + damping ξ̇ + diag(ω'²) ξ = modal_forcing f sin ωt when modal damping is present
-  // (MODEL §7: Π D projected on the constrained modes), shape (n−1, n−1); zero when undamped.
+  // (MODEL §7: damping = L Π D V, the projected damping in the constrained modes), shape
+  // (n−1, n−1); zero when undamped.
   Eigen::MatrixXd damping;
 };
 

@@ -15,6 +15,7 @@
 
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
@@ -189,6 +190,28 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   return ExitCode(result.status);
 }
 
+int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
+             const vibro::OrbitRequest& req) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  const auto orbit = vibro::FindOrbit(sys, loaded.scene, req);
+  if (json) {
+    fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
+  } else {
+    fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
+    fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
+               orbit.newton_iterations, orbit.residual);
+    PrintAttractor(orbit.summary);
+    std::string mu;
+    for (const auto& m : orbit.multipliers)
+      mu += fmt::format("{}{:.6g}{:+.6g}i (|·| = {:.6g})", mu.empty() ? "" : ", ", m.real(), m.imag(),
+                        std::abs(m));
+    fmt::print("multipliers  {}\n", mu.empty() ? "none (superstable: one DOF sticking)" : mu);
+    fmt::print("stable       {}\n", orbit.stable ? "yes" : "no");
+  }
+  return orbit.status == "converged" ? 0 : kExitNumerical;
+}
+
 int RunInfo(const std::string& path, bool json) {
   const auto run = vibro::ReadStoredRun(path);
   if (json) {
@@ -253,6 +276,15 @@ int main(int argc, char** argv) {
   simulate->add_option("--out", out_path, "write the run to this HDF5 file (CONTRACT §3)");
   simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
 
+  CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
+  add_scene_options(orbit);
+  vibro::OrbitRequest orbit_req;
+  std::string orbit_kind = "sticking", orbit_guess;
+  orbit->add_option("--kind", orbit_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
+  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)");
+  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit");
+  orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
+
   std::string file_path, plot_prefix;
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
   info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
@@ -272,6 +304,19 @@ int main(int argc, char** argv) {
     if (*model) return RunModel(scene_path, sets, json);
     if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume);
     if (*info) return RunInfo(file_path, json);
+    if (*orbit) {
+      orbit_req.kind = orbit_kind == "impact" ? vibro::OrbitKind::kImpact : vibro::OrbitKind::kSticking;
+      if (!orbit_guess.empty()) {
+        const auto comma = orbit_guess.find(',');
+        try {
+          orbit_req.guess_phase = std::stod(orbit_guess.substr(0, comma));
+          if (comma != std::string::npos) orbit_req.guess_velocity = std::stod(orbit_guess.substr(comma + 1));
+        } catch (const std::exception&) {
+          throw vibro::InputError({"--guess " + orbit_guess + ": expected PHASE or PHASE,VELOCITY (numbers)"});
+        }
+      }
+      return RunOrbit(scene_path, sets, json, orbit_req);
+    }
     if (*plot) return RunPlot(file_path, plot_prefix);
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);

@@ -88,9 +88,16 @@ class Automaton {
                           ? std::max(scene.run.chatter_switch, std::sqrt(scene.run.rtol))
                           : scene.run.chatter_switch) {
     if (sys.constrained().frequencies.size() == 0) resting_ = std::make_unique<RestingStick>(sys);
-    const auto init = sys.Initial(scene);
-    X_ = init.X;
-    V_ = init.V;
+    if (opt.initial) {
+      t0_ = opt.initial->time;
+      phase0_ = std::fmod(sys.frequency() * t0_, kTwoPi);
+      X_ = opt.initial->X;
+      V_ = opt.initial->V;
+    } else {
+      const auto init = sys.Initial(scene);
+      X_ = init.X;
+      V_ = init.V;
+    }
   }
 
   RunResult Run();
@@ -106,6 +113,11 @@ class Automaton {
   }
 
   void Emit(EventKind kind, double v_before, double v_after);
+  void NotifyReset(ResetKind kind, const Eigen::VectorXd& Xb, const Eigen::VectorXd& Vb,
+                   double delta = 0.0, double reaction = 0.0) {
+    const Reset r{kind, Phase(clock_), Xb, Vb, X_, V_, delta, reaction};
+    for (auto* o : opt_.observers) o->OnReset(r);
+  }
   void EmitStretch(const Clock& start, Propagator& p, double lo, double hi);
   void AdvanceClock(Clock& c, double sigma, double sigma_to_boundary,
                     double exact_offset = -1.0) const;
@@ -272,10 +284,15 @@ bool Automaton::TryAccumulation(double v_minus, double reaction) {
                   FlightStart::kAfterImpact, StickStart::kGeneric});
   const Clock from = clock_;
   engine_->Advance(delta, false, [&](double lo, double hi) { EmitStretch(from, *engine_, lo, hi); });
+  const double phase_k = Phase(clock_);
   clock_ = end;
   X_ = X;
   V_ = V;
   gap_ = 0.0;
+  {
+    const Reset jump{ResetKind::kAccumulation, phase_k, X_k, V_k, X_, V_, delta, reaction};
+    for (auto* o : opt_.observers) o->OnReset(jump);
+  }
   // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
   Emit(EventKind::kAccumulation, 0.0, 0.0);
   mode_ = Mode::kSticking;
@@ -298,19 +315,24 @@ bool Automaton::OnContact() {
   if (!(v_minus < -floor)) {
     // Tangential touch (MODEL §2.1): no impact.
     const double R = sys_.Reaction(X_, V_, phase);
+    const Eigen::VectorXd Xb = X_, Vb = V_;
     Emit(EventKind::kGrazing, v_minus, v_minus);
     if (R > 0) {
       EnterSticking(StickStart::kGeneric);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, 0.0, 0.0);
     } else {
       sys_.ProjectOntoStop(X_, V_);
       const double rate = sys_.ReactionRate(X_, V_, phase);
       if (R < 0) {
         Depart(FlightStart::kDeparture);
+        NotifyReset(ResetKind::kGrazing, Xb, Vb);
       } else if (rate < 0) {
         Depart(FlightStart::kAfterRelease);
+        NotifyReset(ResetKind::kGrazing, Xb, Vb);
       } else {
         EnterSticking(StickStart::kRising);
+        NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
         Emit(EventKind::kStick, 0.0, 0.0);
       }
     }
@@ -329,28 +351,36 @@ bool Automaton::OnContact() {
   if (plastic) {
     // MODEL §4.4: plastic impact; stick if R > 0, leave at zero velocity if R < 0, decide with Ṙ
     // if R = 0.
+    const Eigen::VectorXd Xb = X_, Vb = V_;
     sys_.ProjectOntoStop(X_, V_);
     Emit(EventKind::kImpact, v_minus, 0.0);
     const double R = sys_.Reaction(X_, V_, phase);
     if (R > 0) {
       EnterSticking(StickStart::kGeneric);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, 0.0, 0.0);
     } else if (R < 0) {
       chatter_first_ = chatter_last_ = 0.0;
       Depart(FlightStart::kDeparture);
+      NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
     } else if (sys_.ReactionRate(X_, V_, phase) > 0) {
       EnterSticking(StickStart::kRising);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, 0.0, 0.0);
     } else {
       chatter_first_ = chatter_last_ = 0.0;
       Depart(FlightStart::kAfterRelease);
+      NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
     }
     return true;
   }
 
-  // Restitution (MODEL eq. 12).
-  const double R = sys_.Reaction(X_, V_, phase);
+  // Restitution (MODEL eq. 12). R is that of the post-impact state (with damping it depends on
+  // Ẋ; the difference is O(v), within the O(v²) of the accumulation prediction).
+  const Eigen::VectorXd Vb = V_;
   sys_.ApplyImpact(V_, r);
+  const double R = sys_.Reaction(X_, V_, phase);
+  NotifyReset(ResetKind::kImpact, X_, Vb);
   Emit(EventKind::kImpact, v_minus, sys_.ContactVelocity(V_));
   if (run_.chatter == ChatterTreatment::kAccumulation && r < 1.0 && in_switch && R > 0) {
     if (TryAccumulation(v_minus, R)) return true;
@@ -435,6 +465,7 @@ RunResult Automaton::Run() {
     }
     p.Evaluate(seg.sigma, X_, V_);
     if (mode_ == Mode::kFree) gap_ = p.Gap(seg.sigma);
+    for (auto* o : opt_.observers) o->OnStretch({mode_, seg.sigma});
     AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
     stalled = seg.sigma <= 4.0 * kEps * period_ ? stalled + 1 : 0;
     if (stalled > 1000) {
@@ -464,6 +495,7 @@ RunResult Automaton::Run() {
     const double phase = Phase(clock_);
     if (sys_.ReactionRate(X_, V_, phase) < 0 || resting_) {
       sys_.ProjectOntoStop(X_, V_);
+      NotifyReset(ResetKind::kRelease, X_, V_);
       Emit(EventKind::kRelease, 0.0, 0.0);
       Depart(FlightStart::kAfterRelease);
       gap_ = 0.0;

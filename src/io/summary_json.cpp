@@ -55,6 +55,35 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
   return j.dump();
 }
 
+std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
+  nlohmann::json j;
+  j["status"] = o.status;
+  if (!o.message.empty()) j["message"] = o.message;
+  j["period"] = o.period;
+  if (kind == OrbitKind::kSticking) {
+    j["sticking_fraction"] = o.summary.sticking_fraction ? nlohmann::json(*o.summary.sticking_fraction)
+                                                         : nlohmann::json(nullptr);
+    auto phases = nlohmann::json::array();
+    for (const auto& [s, e] : o.summary.stick_phases) phases.push_back({s, e});
+    j["stick_phases"] = phases;
+    j["impacts_per_period"] = o.summary.impacts_per_period
+                                  ? nlohmann::json(*o.summary.impacts_per_period)
+                                  : nlohmann::json(nullptr);
+  } else {
+    j["impact_phases"] = o.summary.impact_phases;
+    j["impact_velocities"] = o.summary.impact_velocities;
+  }
+  auto mu = nlohmann::json::array();
+  for (const auto& m : o.multipliers) mu.push_back({m.real(), m.imag()});
+  j["floquet_multipliers"] = mu;
+  j["stable"] = o.stable;
+  j["newton_iterations"] = o.newton_iterations;
+  j["residual"] = o.residual;
+  j["section_time"] = o.section_time;
+  j["attractor_kind"] = o.summary.kind;
+  return j.dump();
+}
+
 std::string StoredRunJson(const StoredRun& run) {
   nlohmann::json j;
   j["status"] = run.status;

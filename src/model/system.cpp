@@ -140,10 +140,12 @@ void System::BuildConstrained() {
   cm.modal_forcing = cm.left * Fc;
   const Eigen::VectorXd cw2 = shape_.cwiseProduct(omega_.cwiseAbs2());
   cm.reaction = (cm.vectors.transpose() * cw2) / s_B_;
-  // §7: Ẍ + Π D Ẋ + A X = F_c f sin ωt; in ξ coordinates the damping is L Π D V = L D V
-  // (L Π = L since l_kᵀ T_B = 0 for k ≥ 1).
+  // §7: Ẍ + Π D Ẋ + A X = F_c f sin ωt; in ξ coordinates (X = x0 v0/(cᵀv0) + V ξ, ξ = L X) the
+  // damping is L Π D V. (L Π ≠ L: l_kᵀ T_B ≠ 0 in general.)
   const Eigen::VectorXd D = 2.0 * zeta_.cwiseProduct(omega_);
-  cm.damping = cm.left * D.asDiagonal() * cm.vectors;
+  const Eigen::MatrixXd Pi =
+      Eigen::MatrixXd::Identity(n, n) - contact_ * shape_.transpose() / s_B_;
+  cm.damping = cm.left * Pi * D.asDiagonal() * cm.vectors;
 }
 
 std::optional<double> System::static_reaction() const {

@@ -134,9 +134,28 @@ TEST(System, ConstrainedModesDiagonaliseTheStickingOperator) {
     }
     const Eigen::VectorXd Fc = sys.forcing() - sys.s_A() / sys.s_B() * sys.contact();
     EXPECT_NEAR(sys.contact_shape().dot(Fc), 0.0, 1e-12);
+    EXPECT_NEAR((cm.left * Fc - cm.modal_forcing).norm(), 0.0, 1e-12);
     // Reaction at the static equilibrium with f = 0 equals x0/flexibility.
     const Eigen::VectorXd X = sys.stop() * sys.static_shape();
     EXPECT_NEAR(sys.Reaction(X, Eigen::VectorXd::Zero(n), 0.0), *sys.static_reaction(), 1e-12);
+  }
+}
+
+TEST(System, ConstrainedDampingIsTheProjectedDamping) {
+  // MODEL §7: on the stop Ẍ = −AX − ΠDẊ + F_c f sin ωt. With Ẋ = V ξ̇ the damping force ΠDVξ̇ lies
+  // in span(V), and must equal V D' ξ̇ for the reduced matrix D' of the constrained modes.
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<double> u(0.0, 0.2);
+  for (int n = 2; n <= 5; ++n) {
+    Scene scene = RandomChain(gen, n, 0, n - 1);
+    scene.damping_ratios = Eigen::VectorXd::NullaryExpr(n, [&] { return u(gen); });
+    const System sys(scene);
+    const auto& cm = sys.constrained();
+    const Eigen::MatrixXd Pi =
+        Eigen::MatrixXd::Identity(n, n) - sys.contact() * sys.contact_shape().transpose() / sys.s_B();
+    const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
+    const Eigen::MatrixXd full = Pi * D.asDiagonal() * cm.vectors;
+    EXPECT_NEAR((cm.vectors * cm.damping - full).norm(), 0.0, 1e-12 * (1 + full.norm())) << n;
   }
 }
 

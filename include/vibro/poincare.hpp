@@ -1,0 +1,87 @@
+// Periodic orbits and their stability (MODEL §5): fixed points of the stroboscopic map
+// F: z(t0) ↦ z(t0 + qT) of the hybrid flow, found by Newton with the analytic Jacobian DF.
+//
+// DF is the product, along the orbit, of the closed-form flow Jacobians exp(G s) (free flight:
+// G = [[0, I], [−Ω, −D]]; sticking: G = [[0, I], [−A, −ΠD]], MODEL §4.2, §7) and the saltation
+// matrices of the resets (MODEL §5.6): impacts, plastic entries and departures, releases
+// (identity), and the accumulation map L of a chattering tail (MODEL §5.4, differentiated through
+// Δ∞). Its non-zero spectrum is that of DP, the paper's Poincaré map P = G∘H2∘F^∞∘H1 (MODEL §5.6:
+// sticking collapses x_B and ẋ_B, so DF has two zero eigenvalues on a sticking orbit): the Floquet
+// multipliers. The section phase is taken inside a free flight of the orbit, so the unknowns are
+// the 2n components of a free state and every Newton iterate stays admissible.
+#pragma once
+
+#include <complex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "vibro/attractor.hpp"
+#include "vibro/observer.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/simulator.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+
+// Accumulates DF along a simulated trajectory (an Observer of Simulate).
+class TangentTracker final : public Observer {
+ public:
+  explicit TangentTracker(const System& system);
+  void OnStretch(const Stretch& s) override;
+  void OnReset(const Reset& r) override;
+  const Eigen::MatrixXd& jacobian() const { return phi_; }  // ∂z(t)/∂z(t0), (2n, 2n)
+  bool singular() const { return singular_; }               // a grazing on the way
+  int resets() const { return resets_; }
+
+ private:
+  Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                        double phase) const;
+  const System& sys_;
+  Eigen::MatrixXd G_free_, G_stick_, Pi_, phi_;
+  bool singular_ = false;
+  int resets_ = 0;
+};
+
+enum class OrbitKind { kSticking, kImpact };
+
+struct OrbitRequest {
+  OrbitKind kind = OrbitKind::kSticking;
+  int period = 0;                 // forcing periods q; 0 = from the transient's attractor
+  int impacts = 0;                // impact orbits: impacts per period (0 = any)
+  std::optional<double> guess_phase;     // ωt of the release (sticking) or first impact
+  std::optional<double> guess_velocity;  // contact velocity just after it
+  int transient_periods = 200;
+  int max_iterations = 40;
+  double tolerance = 1e-12;       // on |F(z) − z|∞ relative to 1 + |z|∞
+};
+
+struct OrbitResult {
+  std::string status = "not-converged";  // "converged" | "not-converged" | "no-orbit"
+  std::string message;
+  int period = 0;
+  int newton_iterations = 0;
+  double residual = 0;
+  double section_time = 0;  // t0 of the section point below
+  Eigen::VectorXd X, V;     // a point of the orbit (modal), in free flight
+  Eigen::MatrixXd monodromy;                          // DF, (2n, 2n)
+  std::vector<std::complex<double>> multipliers;      // eigenvalues of DP
+  bool stable = false;
+  Attractor summary;  // kind, sticking fraction, phases, impacts over one period of the orbit
+};
+
+OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);
+
+// One evaluation of the stroboscopic map: z(t0) ↦ z(t0 + q T) and DF.
+struct MapValue {
+  Eigen::VectorXd X, V;
+  Eigen::MatrixXd jacobian;
+  bool singular = false;
+  RunStatus status = RunStatus::kOk;
+};
+MapValue StroboscopicMap(const System& system, const Scene& scene, double t0,
+                         const Eigen::VectorXd& X, const Eigen::VectorXd& V, int q);
+
+}  // namespace vibro

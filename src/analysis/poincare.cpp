@@ -1,0 +1,354 @@
+// Periodic orbits by Newton on the stroboscopic map with the analytic Jacobian (MODEL §5).
+#include "vibro/poincare.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <unsupported/Eigen/MatrixFunctions>
+
+namespace vibro {
+namespace {
+
+Eigen::MatrixXd BlockDiag(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(a.rows() + b.rows(), a.cols() + b.cols());
+  m.topLeftCorner(a.rows(), a.cols()) = a;
+  m.bottomRightCorner(b.rows(), b.cols()) = b;
+  return m;
+}
+
+Eigen::VectorXd Stack(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  Eigen::VectorXd z(a.size() + b.size());
+  z << a, b;
+  return z;
+}
+
+// Observer keeping what the orbit search needs from a transient.
+struct TransientLog final : Observer {
+  long long keep_from = 0;
+  std::vector<Event> events;
+  void OnEvent(const Event& e) override {
+    if (e.clock.period >= keep_from) events.push_back(e);
+  }
+};
+
+// Observer catching the dense sample with a given index.
+struct SampleCatcher final : Observer {
+  long long target = 0, seen = 0;
+  bool caught = false;
+  double t = 0;
+  Eigen::VectorXd X, V;
+  Mode mode = Mode::kFree;
+  void OnSample(const Sample& s) override {
+    if (seen++ == target) {
+      caught = true;
+      t = s.t;
+      X = s.X;
+      V = s.V;
+      mode = s.mode;
+    }
+  }
+};
+
+}  // namespace
+
+TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
+  const auto n = sys.dof();
+  const Eigen::VectorXd w2 = sys.omega().cwiseAbs2();
+  const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
+  const Eigen::VectorXd& c = sys.contact_shape();
+  Pi_ = Eigen::MatrixXd::Identity(n, n) - sys.contact() * c.transpose() / sys.s_B();
+  const Eigen::MatrixXd Omega = w2.asDiagonal();
+  const Eigen::MatrixXd A = Omega - sys.contact() * c.cwiseProduct(w2).transpose() / sys.s_B();
+  G_free_ = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  G_free_.topRightCorner(n, n).setIdentity();
+  G_free_.bottomLeftCorner(n, n) = -Omega;
+  G_free_.bottomRightCorner(n, n) = -Eigen::MatrixXd(D.asDiagonal());
+  G_stick_ = G_free_;
+  G_stick_.bottomLeftCorner(n, n) = -A;
+  G_stick_.bottomRightCorner(n, n) = -Pi_ * D.asDiagonal();
+  phi_ = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+}
+
+Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
+                                      const Eigen::VectorXd& V, double phase) const {
+  const Eigen::VectorXd w2 = sys_.omega().cwiseAbs2();
+  const Eigen::VectorXd D = 2.0 * sys_.damping().cwiseProduct(sys_.omega());
+  Eigen::VectorXd acc = -w2.cwiseProduct(X) - D.cwiseProduct(V) +
+                        sys_.forcing() * (sys_.amplitude() * std::sin(phase));
+  if (mode == Mode::kSticking) acc = Pi_ * acc;  // Ẍ = free acceleration + T_B R with cᵀẌ = 0
+  return Stack(V, acc);
+}
+
+void TangentTracker::OnStretch(const Stretch& s) {
+  phi_ = ((s.mode == Mode::kFree ? G_free_ : G_stick_) * s.duration).exp() * phi_;
+}
+
+void TangentTracker::OnReset(const Reset& r) {
+  ++resets_;
+  const auto n = sys_.dof();
+  const Eigen::VectorXd& c = sys_.contact_shape();
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = cᵀX − x0 (MODEL §5.6).
+  const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
+    const double denom = c.dot(r.V_before);
+    if (!(std::abs(denom) > 1e-300)) {
+      singular_ = true;
+      return;
+    }
+    const Eigen::MatrixXd dg = BlockDiag(I, dV);
+    const Eigen::VectorXd fm = Field(Mode::kFree, r.X_before, r.V_before, r.phase);
+    const Eigen::VectorXd fp = Field(after, r.X_after, r.V_after, r.phase);
+    const Eigen::VectorXd grad = Stack(c, Eigen::VectorXd::Zero(n));
+    phi_ = (dg + (fp - dg * fm) * grad.transpose() / denom) * phi_;
+  };
+  switch (r.kind) {
+    case ResetKind::kImpact:
+      salt(I - (1.0 + sys_.restitution()) * sys_.contact() * c.transpose() / sys_.s_B(), Mode::kFree);
+      break;
+    case ResetKind::kPlasticStick:
+      salt(Pi_, Mode::kSticking);
+      break;
+    case ResetKind::kPlasticLeave:
+      salt(Pi_, Mode::kFree);
+      break;
+    case ResetKind::kRelease:
+      break;  // free and constrained fields coincide at R = 0: S = I
+    case ResetKind::kGrazing:
+      singular_ = true;  // square-root singularity of the maps (MODEL §5.7)
+      break;
+    case ResetKind::kAccumulation: {
+      // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop.
+      // D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ.
+      const double delta = r.delta, R = r.reaction, rr = sys_.restitution(), sB = sys_.s_B();
+      const double phase_inf = r.phase + sys_.frequency() * delta;
+      const Eigen::VectorXd w2 = sys_.omega().cwiseAbs2();
+      const Eigen::VectorXd D = 2.0 * sys_.damping().cwiseProduct(sys_.omega());
+      const double v_inf = c.dot(r.V_before) - sB * R * delta;  // ẋ_B(t∞⁻), to O(v²)
+      const Eigen::VectorXd V_un = r.V_after + sys_.contact() * (v_inf / sB);
+      const Eigen::VectorXd grad =
+          Stack(-(delta / R) * c.cwiseProduct(w2) / sB,
+                2.0 * c / ((1.0 - rr) * sB * R) - (delta / R) * c.cwiseProduct(D) / sB);
+      const Eigen::MatrixXd P = BlockDiag(Pi_, Pi_);
+      const Eigen::VectorXd f_free = Field(Mode::kFree, r.X_after, V_un, phase_inf);
+      const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf);
+      const Eigen::MatrixXd flow = (G_free_ * delta).exp();
+      phi_ = (P * flow + (P * f_free - f_stick) * grad.transpose()) * phi_;
+      break;
+    }
+  }
+}
+
+MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const Eigen::VectorXd& X,
+                         const Eigen::VectorXd& V, int q) {
+  Scene sc = scene;
+  sc.run.periods = q;
+  sc.run.samples_per_period = 0;
+  const InitialOverride init{t0, X, V};
+  TangentTracker tracker(sys);
+  SimulationOptions opt;
+  opt.initial = &init;
+  opt.observers = {&tracker};
+  const RunResult r = Simulate(sys, sc, opt);
+  return {r.X, r.V, tracker.jacobian(), tracker.singular(), r.status};
+}
+
+OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest& req) {
+  OrbitResult out;
+  const double T = sys.period(), w = sys.frequency();
+  const auto n = sys.dof();
+
+  // 1. A transient from the scene's state (or the guess) to the attractor.
+  const auto transient = [&](const InitialOverride* init, Attractor& a, TransientLog& log,
+                             RunResult& end) {
+    Scene sc = scene;
+    sc.run.periods = req.transient_periods;
+    sc.run.samples_per_period = 0;
+    if (req.period > 0) sc.run.max_period = std::max(sc.run.max_period, req.period);
+    if (init) sc.initial_time = init->time;
+    AttractorRecorder rec(sys, sc);
+    log.keep_from = req.transient_periods - 2LL * sc.run.max_period - 2;
+    SimulationOptions opt;
+    opt.initial = init;
+    opt.observers = {&rec, &log};
+    end = Simulate(sys, sc, opt);
+    a = rec.Classify();
+  };
+  const auto matches = [&](const Attractor& a) {
+    if (req.kind == OrbitKind::kSticking) return a.kind == "sticking-periodic";
+    return a.kind == "impact-periodic" &&
+           (req.impacts == 0 || a.impacts_per_period == req.impacts);
+  };
+  const auto start_at = [&](double phase, double velocity) {
+    InitialOverride init{phase / w, sys.stop() * sys.static_shape(),
+                         sys.contact() * (velocity / sys.s_B())};
+    if (sys.stop() < 0) init.X = Eigen::VectorXd::Zero(n);  // clearance: from the origin
+    return init;
+  };
+  Attractor a;
+  TransientLog log;
+  RunResult end;
+  double t_start = scene.initial_time;
+  std::optional<InitialOverride> init;
+  if (req.guess_phase) init = start_at(*req.guess_phase, req.guess_velocity.value_or(0.0));
+  transient(init ? &*init : nullptr, a, log, end);
+  if (init) t_start = init->time;
+  if (!matches(a) && req.kind == OrbitKind::kImpact && !req.guess_phase) {
+    // Impact orbits often coexist with the sticking one: look from departures of several
+    // phases and speeds.
+    const double scale = std::max(1.0, std::abs(sys.stop())) * w;
+    for (int i = 0; i < 16 && !matches(a); ++i) {
+      for (double v : {0.5 * scale, 2.0 * scale, 4.0 * scale}) {
+        init = start_at(2.0 * M_PI * i / 16.0, v);
+        log = TransientLog();
+        transient(&*init, a, log, end);
+        t_start = init->time;
+        if (matches(a)) break;
+      }
+    }
+  }
+  // Newton also starts from a transient that did not settle (a slow transient, or an unstable
+  // orbit surrounded by a torus or a chaotic set).
+  if (!matches(a) && a.kind != "not-periodic") {
+    out.status = "no-orbit";
+    out.message = "the transient reached a " + a.kind + " attractor, not the requested kind; give "
+                  "--guess PHASE[,VELOCITY] or --period";
+    return out;
+  }
+  // A transient that has not settled yet gives its state as the guess (period 1 unless given).
+  const int q = req.period > 0 ? req.period : a.period.value_or(1);
+  out.period = q;
+
+  // 2. The section: the middle of the longest free flight of the last q periods.
+  const long long K = req.transient_periods;
+  const double tK = t_start + static_cast<double>(K) * T, from = tK - q * T;
+  std::vector<Event> ev;
+  for (const auto& e : log.events)
+    if (e.t > from - 1e-12 && e.t <= tK) ev.push_back(e);
+  double best = 0, t_mid = 0;
+  // Free after an impact or a release (a plastic impact that sticks is followed by a stick at
+  // the same time), on the stop after a stick or an accumulation.
+  const auto update = [](bool is_free, const Event& e) {
+    if (e.kind == EventKind::kStick || e.kind == EventKind::kAccumulation) return false;
+    if (e.kind == EventKind::kRelease || e.kind == EventKind::kImpact) return true;
+    return is_free;
+  };
+  bool free = true;  // mode at `from`
+  for (const auto& e : log.events) {
+    if (e.t > from) break;
+    free = update(free, e);
+  }
+  double last = from;
+  for (const auto& e : ev) {
+    if (free && e.t - last > best) {
+      best = e.t - last;
+      t_mid = 0.5 * (e.t + last);
+    }
+    free = update(free, e);
+    last = e.t;
+  }
+  if (free && tK - last > best) {
+    best = tK - last;
+    t_mid = 0.5 * (tK + last);
+  }
+  if (best <= 0) {
+    out.status = "no-orbit";
+    out.message = "the orbit has no free flight (permanent contact)";
+    return out;
+  }
+  // The state at t_mid + qT, from the end of the transient (one orbit period later).
+  constexpr int kSamples = 1024;
+  SampleCatcher catcher;
+  catcher.target = std::llround((t_mid + q * T - tK) / (T / kSamples));
+  {
+    Scene sc = scene;
+    sc.run.periods = q;
+    sc.run.samples_per_period = kSamples;
+    const InitialOverride here{tK, end.X, end.V};
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.observers = {&catcher};
+    Simulate(sys, sc, opt);
+  }
+  if (!catcher.caught || catcher.mode != Mode::kFree) {
+    out.status = "no-orbit";
+    out.message = "could not place the section in a free flight";
+    return out;
+  }
+  const double t0 = catcher.t;
+  Eigen::VectorXd z = Stack(catcher.X, catcher.V);
+
+  // 3. Newton on F(z) − z with the analytic DF.
+  const auto admissible = [&](const Eigen::VectorXd& zz) {
+    return sys.ContactDisplacement(zz.head(n)) > sys.stop();
+  };
+  MapValue m;
+  for (int it = 0; it <= req.max_iterations; ++it) {
+    m = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q);
+    if (m.status != RunStatus::kOk) {
+      out.message = "the map evaluation failed (numerical failure of the simulation)";
+      break;
+    }
+    const Eigen::VectorXd r = Stack(m.X, m.V) - z;
+    out.residual = r.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
+    out.newton_iterations = it;
+    if (out.residual < req.tolerance) {
+      out.status = "converged";
+      break;
+    }
+    if (m.singular) {
+      out.message = "a grazing contact on the orbit makes the map singular";
+      break;
+    }
+    const Eigen::MatrixXd J = m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n);
+    const Eigen::VectorXd step = -J.fullPivLu().solve(r);
+    double lambda = 1.0;
+    Eigen::VectorXd next = z + step;
+    for (int h = 0; h < 30 && !admissible(next); ++h) {
+      lambda *= 0.5;
+      next = z + lambda * step;
+    }
+    z = next;
+  }
+  out.section_time = t0;
+  out.X = z.head(n);
+  out.V = z.tail(n);
+  out.monodromy = m.jacobian;
+  if (out.status != "converged") {
+    if (out.message.empty()) out.message = "Newton did not converge";
+    return out;
+  }
+
+  // 4. Summary over the converged orbit, and the multipliers.
+  {
+    Scene sc = scene;
+    sc.initial_time = t0;
+    sc.run.periods = 3 * q;
+    sc.run.samples_per_period = 0;
+    sc.run.max_period = q;
+    AttractorRecorder rec(sys, sc);
+    const InitialOverride here{t0, out.X, out.V};
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.observers = {&rec};
+    Simulate(sys, sc, opt);
+    out.summary = rec.Classify();
+  }
+  const bool kind_ok = req.kind == OrbitKind::kSticking ? out.summary.kind == "sticking-periodic"
+                                                         : out.summary.kind == "impact-periodic";
+  if (!kind_ok) {
+    out.status = "no-orbit";
+    out.message = "Newton converged to a " + out.summary.kind + " orbit, not the requested kind";
+  }
+  Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(m.jacobian.cast<std::complex<double>>());
+  std::vector<std::complex<double>> mu(es.eigenvalues().data(),
+                                       es.eigenvalues().data() + es.eigenvalues().size());
+  std::sort(mu.begin(), mu.end(), [](auto x, auto y) { return std::abs(x) > std::abs(y); });
+  // Sticking collapses x_B and ẋ_B: DF has two zero eigenvalues that are not multipliers of DP.
+  if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
+    mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
+  out.multipliers = mu;
+  out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
+  return out;
+}
+
+}  // namespace vibro
