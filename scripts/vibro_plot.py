@@ -127,6 +127,26 @@ def main():
         fig.savefig(prefix + "_section.png", dpi=110)
         written.append(prefix + "_section.png")
         plt.close(fig)
+        if "orbit" in f:
+            o = f["orbit"].attrs
+            re, im = o["multipliers_re"], o["multipliers_im"]
+            fig, ax = plt.subplots(figsize=(5, 5))
+            th = np.linspace(0, 2 * np.pi, 400)
+            ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
+            ax.plot(re, im, "o", color="tab:red" if o["stable"][0] < 0.5 else "tab:green",
+                    label=f"Floquet multipliers ({'stable' if o['stable'][0] > 0.5 else 'unstable'})")
+            lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re, im))))
+            ax.set_xlim(-lim, lim)
+            ax.set_ylim(-lim, lim)
+            ax.set_aspect("equal")
+            ax.axhline(0, color="gray", lw=0.5)
+            ax.axvline(0, color="gray", lw=0.5)
+            ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: multipliers")
+            ax.legend(loc="upper right", fontsize=8)
+            fig.tight_layout()
+            fig.savefig(prefix + "_multipliers.png", dpi=110)
+            written.append(prefix + "_multipliers.png")
+            plt.close(fig)
     for w in written:
         print(w)
 

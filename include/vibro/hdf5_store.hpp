@@ -65,6 +65,11 @@ class Hdf5Store final : public Observer {
   void OnSection(const Sample& s) override;
   void OnCheckpoint(const Checkpoint& c) override;
 
+  // Writes numeric attributes into group `group` (created if needed), e.g. /orbit. Call before
+  // Finish.
+  void WriteGroup(const std::string& group,
+                  const std::vector<std::pair<std::string, std::vector<double>>>& values);
+
   // Writes the final status, message, counts and attractor, and closes the file.
   void Finish(const RunResult& result, const Attractor& attractor);
 

@@ -4,6 +4,7 @@
 #include <string>
 
 #include "vibro/attractor.hpp"
+#include "vibro/check.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
@@ -21,6 +22,9 @@ std::string SimulationJson(const Scene& scene, const RunResult& result, const At
 
 // `vibro orbit --json` (CONTRACT §2).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+
+// `vibro check --json`.
+std::string CheckJson(const CheckReport& report);
 
 // `vibro info --json`: what a stored run holds.
 std::string StoredRunJson(const StoredRun& run);

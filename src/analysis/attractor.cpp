@@ -56,6 +56,25 @@ Attractor AttractorRecorder::Classify() const {
     return c;
   };
 
+  // The stick and release times of two consecutive windows of p periods must repeat too: during
+  // a sticking phase that erases the memory of the flight, the section points of a period-2
+  // motion can coincide.
+  const auto same_timing = [&](int p) {
+    for (EventKind kind : {EventKind::kStick, EventKind::kRelease}) {
+      std::vector<double> last, before;
+      for (const auto& e : events_) {
+        if (e.kind != kind) continue;
+        if (in_window(e, K - p, K))
+          last.push_back(static_cast<double>(e.clock.period - (K - p)) * T + e.clock.offset);
+        else if (in_window(e, K - 2 * p, K - p))
+          before.push_back(static_cast<double>(e.clock.period - (K - 2 * p)) * T + e.clock.offset);
+      }
+      if (last.size() != before.size()) return false;
+      for (size_t i = 0; i < last.size(); ++i)
+        if (std::abs(last[i] - before[i]) > 10.0 * tolerance_ * T) return false;
+    }
+    return true;
+  };
   int period = 0;
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
     bool ok = true;
@@ -66,6 +85,7 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
+    ok = ok && same_timing(p);
     if (ok) {
       period = p;
       break;

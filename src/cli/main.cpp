@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "vibro/attractor.hpp"
+#include "vibro/check.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
@@ -27,6 +28,7 @@ constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitNumerical = 3;
 constexpr int kExitInterrupted = 130;
+constexpr int kExitDisagree = 4;  // vibro check: the methods disagree beyond tolerance
 
 std::atomic<bool> g_stop_requested{false};
 extern "C" void OnSignal(int) { g_stop_requested.store(true); }
@@ -190,11 +192,43 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   return ExitCode(result.status);
 }
 
+// Writes one period of the orbit, densely sampled, with its multipliers (/orbit).
+void WriteOrbit(const std::string& out, const vibro::LoadedScene& loaded, const vibro::System& sys,
+                const vibro::OrbitResult& orbit) {
+  vibro::Scene sc = loaded.scene;
+  sc.initial_time = orbit.section_time;
+  sc.run.periods = orbit.period;
+  sc.run.samples_per_period = std::max(sc.run.samples_per_period, 256);
+  auto store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  const vibro::InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+  vibro::SimulationOptions opt;
+  opt.initial = &start;
+  opt.observers = {store.get()};
+  const auto result = vibro::Simulate(sys, sc, opt);
+  std::vector<double> re, im;
+  for (const auto& m : orbit.multipliers) {
+    re.push_back(m.real());
+    im.push_back(m.imag());
+  }
+  store->WriteGroup("/orbit", {{"multipliers_re", re},
+                               {"multipliers_im", im},
+                               {"stable", {orbit.stable ? 1.0 : 0.0}},
+                               {"period", {static_cast<double>(orbit.period)}},
+                               {"newton_iterations", {static_cast<double>(orbit.newton_iterations)}},
+                               {"residual", {orbit.residual}},
+                               {"section_time", {orbit.section_time}},
+                               {"X", {orbit.X.data(), orbit.X.data() + orbit.X.size()}},
+                               {"V", {orbit.V.data(), orbit.V.data() + orbit.V.size()}}});
+  store->Finish(result, orbit.summary);
+}
+
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
-             const vibro::OrbitRequest& req) {
+             const vibro::OrbitRequest& req, const std::string& out) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
+  if (!out.empty()) vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys)).reset();  // fail early
   const auto orbit = vibro::FindOrbit(sys, loaded.scene, req);
+  if (!out.empty() && orbit.status == "converged") WriteOrbit(out, loaded, sys, orbit);
   if (json) {
     fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
   } else {
@@ -206,10 +240,34 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     for (const auto& m : orbit.multipliers)
       mu += fmt::format("{}{:.6g}{:+.6g}i (|·| = {:.6g})", mu.empty() ? "" : ", ", m.real(), m.imag(),
                         std::abs(m));
-    fmt::print("multipliers  {}\n", mu.empty() ? "none (superstable: one DOF sticking)" : mu);
+    fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
+                                     : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
+                                                                   : "-");
     fmt::print("stable       {}\n", orbit.stable ? "yes" : "no");
   }
   return orbit.status == "converged" ? 0 : kExitNumerical;
+}
+
+int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  const auto report = vibro::CrossCheck(sys, loaded.scene);
+  if (json) {
+    fmt::print("{}\n", vibro::CheckJson(report));
+  } else {
+    const auto cell = [](const std::optional<double>& v) {
+      return v ? fmt::format("{:>18.12g}", *v) : fmt::format("{:>18}", "-");
+    };
+    fmt::print("{:<40} {:>18} {:>18} {:>18} {:>10} {:>10}  {}\n", "quantity", "exact", "cvode",
+               "poincare", "max diff", "tolerance", "");
+    for (const auto& r : report.rows) {
+      fmt::print("{:<40} {} {} {} {:>10.2e} {:>10.2e}  {}{}\n", r.quantity, cell(r.exact),
+                 cell(r.cvode), cell(r.orbit), r.difference, r.tolerance, r.ok ? "ok" : "FAIL",
+                 r.note.empty() ? "" : "  " + r.note);
+    }
+    fmt::print("{}\n", report.ok ? "agreement: ok" : "agreement: FAILED (beyond tolerance)");
+  }
+  return report.ok ? 0 : kExitDisagree;
 }
 
 int RunInfo(const std::string& path, bool json) {
@@ -284,6 +342,11 @@ int main(int argc, char** argv) {
   orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)");
   orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit");
   orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
+  std::string orbit_out;
+  orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
+
+  CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
+  add_scene_options(check);
 
   std::string file_path, plot_prefix;
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
@@ -315,9 +378,10 @@ int main(int argc, char** argv) {
           throw vibro::InputError({"--guess " + orbit_guess + ": expected PHASE or PHASE,VELOCITY (numbers)"});
         }
       }
-      return RunOrbit(scene_path, sets, json, orbit_req);
+      return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }
     if (*plot) return RunPlot(file_path, plot_prefix);
+    if (*check) return RunCheck(scene_path, sets, json);
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",

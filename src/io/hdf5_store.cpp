@@ -727,4 +727,15 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
 
 Hdf5Store::Stats Hdf5Store::stats() const { return impl_->stats; }
 
+void Hdf5Store::WriteGroup(const std::string& group,
+                           const std::vector<std::pair<std::string, std::vector<double>>>& values) {
+  const hid_t f = impl_->file.get();
+  Handle g(H5Lexists(f, group.c_str(), H5P_DEFAULT) > 0
+               ? H5Gopen2(f, group.c_str(), H5P_DEFAULT)
+               : H5Gcreate2(f, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+           H5Gclose);
+  Check(g.get(), group.c_str());
+  for (const auto& [name, v] : values) WriteDoubles(g.get(), name.c_str(), v);
+}
+
 }  // namespace vibro

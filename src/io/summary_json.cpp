@@ -84,6 +84,22 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   return j.dump();
 }
 
+std::string CheckJson(const CheckReport& r) {
+  nlohmann::json j;
+  j["ok"] = r.ok;
+  j["exact_kind"] = r.exact_kind;
+  j["cvode_kind"] = r.cvode_kind;
+  j["orbit_status"] = r.orbit_status;
+  auto rows = nlohmann::json::array();
+  const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
+  for (const auto& row : r.rows)
+    rows.push_back({{"quantity", row.quantity}, {"exact", opt(row.exact)}, {"cvode", opt(row.cvode)},
+                    {"orbit", opt(row.orbit)}, {"difference", row.difference},
+                    {"tolerance", row.tolerance}, {"ok", row.ok}, {"note", row.note}});
+  j["rows"] = rows;
+  return j.dump();
+}
+
 std::string StoredRunJson(const StoredRun& run) {
   nlohmann::json j;
   j["status"] = run.status;

@@ -69,6 +69,12 @@ TEST(Poincare, AnalyticJacobianMatchesFiniteDifferences) {
     CheckJacobian(Shipped("chain2_damped.toml"), OrbitKind::kSticking);
   }
   {
+    SCOPED_TRACE("10-DOF stiff chain, 5 % damping");
+    CheckJacobian(Shipped("chain10_stiff.toml", {"structure.damping_ratios=[0.05, 0.05, 0.05, 0.05, "
+                                                 "0.05, 0.05, 0.05, 0.05, 0.05, 0.05]"}),
+                  OrbitKind::kSticking);
+  }
+  {
     SCOPED_TRACE("3-DOF impact orbit, r = 0.5");
     CheckJacobian(Shipped("chain3.toml", {"stop.restitution=0.5", "excitation.frequency=2.0",
                                           "excitation.amplitude=2.0"}),

@@ -57,6 +57,43 @@ for f in sorted(os.listdir(scenes)):
                                                "sticking_fraction", "stick_phases"}, p.stdout)
             check(f"simulate {f} {engine} solver stats", ("solver" in j) == (engine == "cvode"), p.stdout)
 
+# `vibro check` passes on every scene; `vibro orbit` on every periodic one (CONTRACT §2 fields).
+for f in sorted(os.listdir(scenes)):
+    if not f.endswith(".toml") or os.path.islink(os.path.join(scenes, f)):
+        continue
+    path = os.path.join(scenes, f)
+    p = run("check", path, "--json")
+    check(f"check {f} exit 0", p.returncode == 0, p.stdout + p.stderr)
+    if p.returncode not in (0, 4):
+        continue
+    report = json.loads(p.stdout)
+    check(f"check {f} ok", report["ok"], [r for r in report["rows"] if not r["ok"]])
+    if report["exact_kind"] != "sticking-periodic":
+        continue
+    p = run("orbit", path, "--json")
+    check(f"orbit {f} exit 0", p.returncode == 0, p.stderr)
+    if p.returncode == 0:
+        j = json.loads(p.stdout)
+        check(f"orbit {f} fields", {"status", "period", "sticking_fraction", "stick_phases",
+                                    "impacts_per_period", "floquet_multipliers", "stable",
+                                    "newton_iterations", "residual"} <= set(j), j)
+        check(f"orbit {f} converged and stable", j["status"] == "converged" and j["stable"], j)
+
+with tempfile.TemporaryDirectory() as d:
+    h5 = os.path.join(d, "orbit.h5")
+    p = run("orbit", os.path.join(scenes, "chain2.toml"), "--out", h5)
+    check("orbit --out", p.returncode == 0 and os.path.exists(h5), p.stderr)
+    p = run("plot", h5, "--out", os.path.join(d, "orbit"))
+    check("plot of an orbit draws its multipliers",
+          p.returncode == 0 and os.path.getsize(os.path.join(d, "orbit_multipliers.png")) > 5000, p.stderr)
+    p = run("orbit", os.path.join(scenes, "chain3.toml"), "--json", "--kind", "impact", "--period", "1",
+            "--set", "stop.restitution=0.5", "--set", "excitation.frequency=2.0", "--set",
+            "excitation.amplitude=2.0")
+    j = json.loads(p.stdout) if p.returncode == 0 else {}
+    check("unstable impact orbit reported unstable", j.get("status") == "converged"
+          and j.get("stable") is False and "impact_phases" in j
+          and max(abs(complex(*m)) for m in j["floquet_multipliers"]) > 1, p.stdout + p.stderr)
+
 # Three mistakes: three located messages, exit 2, nothing on stdout.
 with tempfile.TemporaryDirectory() as d:
     bad = os.path.join(d, "bad.toml")

@@ -1,0 +1,165 @@
+// Cross-check of the two engines and the Poincaré solver.
+#include "vibro/check.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace vibro {
+namespace {
+
+struct SectionLog final : Observer {
+  std::vector<Eigen::VectorXd> z;
+  void OnSection(const Sample& s) override {
+    Eigen::VectorXd v(2 * s.X.size());
+    v << s.X, s.V;
+    z.push_back(std::move(v));
+  }
+};
+
+struct Run {
+  Attractor attractor;
+  RunResult result;
+  std::vector<Eigen::VectorXd> sections;
+};
+
+Run SimulateWith(const System& sys, Scene scene, Engine engine) {
+  scene.run.engine = engine;
+  scene.run.samples_per_period = 0;
+  AttractorRecorder rec(sys, scene);
+  SectionLog log;
+  SimulationOptions opt;
+  opt.observers = {&rec, &log};
+  Run r;
+  r.result = Simulate(sys, scene, opt);
+  r.attractor = rec.Classify();
+  r.sections = std::move(log.z);
+  return r;
+}
+
+// Decay rate of the transient: slope of log |z_{k+1} − z_k| where it is between rounding and
+// the nonlinear regime. Returns 0 when the differences vanish (superstable), nullopt when too
+// few points are usable.
+std::optional<double> ObservedDecay(const std::vector<Eigen::VectorXd>& z) {
+  if (z.size() < 4) return std::nullopt;
+  double scale = 1.0;
+  for (const auto& v : z) scale = std::max(scale, v.cwiseAbs().maxCoeff());
+  std::vector<double> d;
+  for (size_t k = 0; k + 1 < z.size(); ++k) d.push_back((z[k + 1] - z[k]).cwiseAbs().maxCoeff());
+  if (d.back() == 0.0 && d[d.size() - 2] == 0.0) return 0.0;
+  std::vector<std::pair<double, double>> pts;
+  for (size_t k = 0; k < d.size(); ++k)
+    if (d[k] > 1e-11 * scale && d[k] < 1e-3 * scale) pts.emplace_back(static_cast<double>(k), std::log(d[k]));
+  if (pts.size() < 6) return std::nullopt;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (const auto& [x, y] : pts) {
+    sx += x;
+    sy += y;
+    sxx += x * x;
+    sxy += x * y;
+  }
+  const double m = static_cast<double>(pts.size());
+  return std::exp((m * sxy - sx * sy) / (m * sxx - sx * sx));
+}
+
+}  // namespace
+
+CheckReport CrossCheck(const System& sys, const Scene& scene) {
+  CheckReport rep;
+  const Run ex = SimulateWith(sys, scene, Engine::kExact);
+  const Run cv = SimulateWith(sys, scene, Engine::kCvode);
+  rep.exact_kind = ex.attractor.kind;
+  rep.cvode_kind = cv.attractor.kind;
+  const double tol_cvode = std::max(1e-6, 100.0 * std::pow(scene.run.rtol, 2.0 / 3.0));
+  constexpr double kTolOrbit = 1e-9;
+
+  const auto add = [&](CheckRow row) {
+    rep.ok = rep.ok && row.ok;
+    rep.rows.push_back(std::move(row));
+  };
+  add({"attractor kind", {}, {}, {}, 0, 0, ex.attractor.kind == cv.attractor.kind,
+       fmt::format("exact {}, cvode {}", ex.attractor.kind, cv.attractor.kind)});
+  add({"status", {}, {}, {}, 0, 0,
+       ex.result.status == RunStatus::kOk && cv.result.status == RunStatus::kOk,
+       fmt::format("exact {}, cvode {}{}", ToString(ex.result.status), ToString(cv.result.status),
+                   cv.result.message.empty() ? "" : " (" + cv.result.message + ")")});
+
+  const bool periodic = ex.attractor.kind == "sticking-periodic" || ex.attractor.kind == "impact-periodic";
+  OrbitResult orbit;
+  if (periodic) {
+    OrbitRequest req;
+    req.kind = ex.attractor.kind == "sticking-periodic" ? OrbitKind::kSticking : OrbitKind::kImpact;
+    req.period = *ex.attractor.period;
+    orbit = FindOrbit(sys, scene, req);
+  } else {
+    orbit.status = "not attempted";
+    orbit.message = "the motion is " + ex.attractor.kind + ": no periodic orbit to solve for";
+  }
+  rep.orbit_status = orbit.status;
+  const bool have_orbit = orbit.status == "converged";
+  add({"poincare solver", {}, {}, {}, orbit.residual, 0, !periodic || have_orbit,
+       have_orbit ? fmt::format("converged in {} Newton iterations, residual {:.1e}",
+                                orbit.newton_iterations, orbit.residual)
+                  : orbit.status + ": " + orbit.message});
+  if (!periodic) return rep;
+
+  const auto compare = [&](const std::string& name, std::optional<double> e, std::optional<double> c,
+                           std::optional<double> o) {
+    CheckRow row{name, e, c, have_orbit ? o : std::nullopt, 0, tol_cvode, true, ""};
+    if (!e || !c) {
+      row.ok = e.has_value() == c.has_value();
+      row.note = "missing in one engine";
+      add(row);
+      return;
+    }
+    const double dc = std::abs(*c - *e);
+    const double dorb = row.orbit ? std::abs(*row.orbit - *e) : 0.0;
+    row.difference = std::max(dc, dorb);
+    row.ok = dc <= tol_cvode && dorb <= kTolOrbit;
+    if (dorb > kTolOrbit) row.note = fmt::format("orbit differs by {:.1e} > {:.0e}", dorb, kTolOrbit);
+    add(row);
+  };
+  const auto per = [](const Attractor& a) {
+    return a.period ? std::optional<double>(*a.period) : std::nullopt;
+  };
+  compare("period", per(ex.attractor), per(cv.attractor), per(orbit.summary));
+  compare("sticking fraction", ex.attractor.sticking_fraction, cv.attractor.sticking_fraction,
+          orbit.summary.sticking_fraction);
+  const auto ipp = [](const Attractor& a) {
+    return a.impacts_per_period ? std::optional<double>(static_cast<double>(*a.impacts_per_period))
+                                : std::nullopt;
+  };
+  if (ex.attractor.kind == "impact-periodic")
+    compare("impacts per period", ipp(ex.attractor), ipp(cv.attractor), ipp(orbit.summary));
+  const auto& pe = ex.attractor.stick_phases;
+  for (size_t i = 0; i < pe.size(); ++i) {
+    const auto at = [&](const Attractor& a, bool start) -> std::optional<double> {
+      if (i >= a.stick_phases.size()) return std::nullopt;
+      return start ? a.stick_phases[i].first : a.stick_phases[i].second;
+    };
+    compare(fmt::format("stick phase {} start", i + 1), at(ex.attractor, true), at(cv.attractor, true),
+            at(orbit.summary, true));
+    compare(fmt::format("stick phase {} end (release)", i + 1), at(ex.attractor, false),
+            at(cv.attractor, false), at(orbit.summary, false));
+  }
+  if (have_orbit) {
+    double lead = 0;
+    for (const auto& m : orbit.multipliers) lead = std::max(lead, std::abs(m));
+    const auto decay = ObservedDecay(ex.sections);
+    CheckRow row{"leading |multiplier| vs transient decay", decay, {}, lead, 0, 0, true, ""};
+    if (!decay) {
+      row.note = "the transient converged too fast to measure its decay";
+    } else {
+      row.difference = std::abs(lead - *decay);
+      row.tolerance = 0.1 * lead + 0.02;
+      row.ok = row.difference <= row.tolerance;
+      row.note = orbit.multipliers.empty() ? "superstable (one DOF): the transient stops at once"
+                                           : (orbit.stable ? "stable" : "unstable");
+    }
+    add(row);
+  }
+  return rep;
+}
+
+}  // namespace vibro
