@@ -35,6 +35,12 @@ def main():
     args = ap.parse_args()
     prefix = args.out or os.path.splitext(args.file)[0]
     written = []
+
+    def save(fig, suffix):
+        fig.tight_layout()
+        fig.savefig(f"{prefix}_{suffix}.png", dpi=110)
+        written.append(f"{prefix}_{suffix}.png")
+        plt.close(fig)
     with h5py.File(args.file, "r") as f:
         title = f.attrs["scene"].splitlines()[0] if f.attrs["scene"].startswith("title") else args.file
         title = title.replace("title = ", "").strip("'\"")
@@ -80,10 +86,7 @@ def main():
         ax.set_ylabel("$x_B$")
         ax.set_title(f"{title}\ncontact displacement, sticking shaded ({status})")
         ax.legend(loc="upper right", fontsize=8)
-        fig.tight_layout()
-        fig.savefig(prefix + "_xB.png", dpi=110)
-        written.append(prefix + "_xB.png")
-        plt.close(fig)
+        save(fig, "xB")
 
         fig, ax = plt.subplots(figsize=(9, 4))
         R = reaction(model, X, V, ts)
@@ -96,10 +99,7 @@ def main():
         ax.set_ylabel("R")
         ax.set_title(f"{title}\ncontact reaction")
         ax.legend(loc="upper right", fontsize=8)
-        fig.tight_layout()
-        fig.savefig(prefix + "_reaction.png", dpi=110)
-        written.append(prefix + "_reaction.png")
-        plt.close(fig)
+        save(fig, "reaction")
 
         fig, ax = plt.subplots(figsize=(6, 5))
         ax.plot(xB, vB, lw=0.8)
@@ -107,10 +107,7 @@ def main():
         ax.set_xlabel("$x_B$")
         ax.set_ylabel("$\\dot x_B$")
         ax.set_title(f"{title}\nphase portrait (last {args.periods:g} periods)")
-        fig.tight_layout()
-        fig.savefig(prefix + "_phase.png", dpi=110)
-        written.append(prefix + "_phase.png")
-        plt.close(fig)
+        save(fig, "phase")
 
         sX = f["section/X"][:]
         sV = f["section/V"][:]
@@ -123,10 +120,7 @@ def main():
         ax.set_xlabel("$x_B(t_0 + kT)$")
         ax.set_ylabel("$\\dot x_B(t_0 + kT)$")
         ax.set_title(f"{title}\nstroboscopic section ({len(sxB)} points)")
-        fig.tight_layout()
-        fig.savefig(prefix + "_section.png", dpi=110)
-        written.append(prefix + "_section.png")
-        plt.close(fig)
+        save(fig, "section")
         if "orbit" in f:
             o = f["orbit"].attrs
             re, im = o["multipliers_re"], o["multipliers_im"]
@@ -143,10 +137,7 @@ def main():
             ax.axvline(0, color="gray", lw=0.5)
             ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: multipliers")
             ax.legend(loc="upper right", fontsize=8)
-            fig.tight_layout()
-            fig.savefig(prefix + "_multipliers.png", dpi=110)
-            written.append(prefix + "_multipliers.png")
-            plt.close(fig)
+            save(fig, "multipliers")
     for w in written:
         print(w)
 

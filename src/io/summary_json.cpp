@@ -1,6 +1,8 @@
 // JSON summaries (CONTRACT §2).
 #include "vibro/summary_json.hpp"
 
+#include <optional>
+
 #include <nlohmann/json.hpp>
 
 namespace vibro {
@@ -12,14 +14,18 @@ nlohmann::json Array(const Eigen::VectorXd& v) {
   return a;
 }
 
+// An optional value, or JSON null.
+template <class T>
+nlohmann::json OrNull(const std::optional<T>& v) {
+  return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
+}
+
 nlohmann::json AttractorObject(const Attractor& a) {
   nlohmann::json j;
   j["kind"] = a.kind;
-  j["period"] = a.period ? nlohmann::json(*a.period) : nlohmann::json(nullptr);
-  j["impacts_per_period"] =
-      a.impacts_per_period ? nlohmann::json(*a.impacts_per_period) : nlohmann::json(nullptr);
-  j["sticking_fraction"] =
-      a.sticking_fraction ? nlohmann::json(*a.sticking_fraction) : nlohmann::json(nullptr);
+  j["period"] = OrNull(a.period);
+  j["impacts_per_period"] = OrNull(a.impacts_per_period);
+  j["sticking_fraction"] = OrNull(a.sticking_fraction);
   auto phases = nlohmann::json::array();
   for (const auto& [s, e] : a.stick_phases) phases.push_back({s, e});
   j["stick_phases"] = phases;
@@ -61,14 +67,11 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   if (!o.message.empty()) j["message"] = o.message;
   j["period"] = o.period;
   if (kind == OrbitKind::kSticking) {
-    j["sticking_fraction"] = o.summary.sticking_fraction ? nlohmann::json(*o.summary.sticking_fraction)
-                                                         : nlohmann::json(nullptr);
+    j["sticking_fraction"] = OrNull(o.summary.sticking_fraction);
     auto phases = nlohmann::json::array();
     for (const auto& [s, e] : o.summary.stick_phases) phases.push_back({s, e});
     j["stick_phases"] = phases;
-    j["impacts_per_period"] = o.summary.impacts_per_period
-                                  ? nlohmann::json(*o.summary.impacts_per_period)
-                                  : nlohmann::json(nullptr);
+    j["impacts_per_period"] = OrNull(o.summary.impacts_per_period);
   } else {
     j["impact_phases"] = o.summary.impact_phases;
     j["impact_velocities"] = o.summary.impact_velocities;
@@ -91,10 +94,9 @@ std::string CheckJson(const CheckReport& r) {
   j["cvode_kind"] = r.cvode_kind;
   j["orbit_status"] = r.orbit_status;
   auto rows = nlohmann::json::array();
-  const auto opt = [](const std::optional<double>& v) { return v ? nlohmann::json(*v) : nlohmann::json(nullptr); };
   for (const auto& row : r.rows)
-    rows.push_back({{"quantity", row.quantity}, {"exact", opt(row.exact)}, {"cvode", opt(row.cvode)},
-                    {"orbit", opt(row.orbit)}, {"difference", row.difference},
+    rows.push_back({{"quantity", row.quantity}, {"exact", OrNull(row.exact)}, {"cvode", OrNull(row.cvode)},
+                    {"orbit", OrNull(row.orbit)}, {"difference", row.difference},
                     {"tolerance", row.tolerance}, {"ok", row.ok}, {"note", row.note}});
   j["rows"] = rows;
   return j.dump();
