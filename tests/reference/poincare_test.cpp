@@ -103,6 +103,32 @@ TEST(Poincare, OneDofOrbitsMatchTheClosedForms) {
   }
 }
 
+TEST(Poincare, Fig5CoexistingSingleImpactOrbitHasMultipliersOfModulusR) {
+  // MODEL §5.6: Fig. 5, (r, ω, f, x0) = (0.75, 10, 1.1, 1): a stable single-impact period-1 orbit
+  // coexists with the sticking one; its impact map has det = r², so a complex pair of multipliers
+  // has modulus exactly r.
+  const Scene s = Shipped("fig05_coexistence.toml");
+  const System sys(s);
+  OrbitRequest req;
+  req.kind = OrbitKind::kImpact;
+  const OrbitResult o = FindOrbit(sys, s, req);
+  ASSERT_EQ(o.status, "converged") << o.message;
+  EXPECT_EQ(o.summary.kind, "impact-periodic");
+  EXPECT_EQ(o.period, 1);
+  EXPECT_EQ(o.summary.impacts_per_period, 1);
+  ASSERT_EQ(o.multipliers.size(), 2u);
+  for (const auto& m : o.multipliers) {
+    EXPECT_NEAR(std::abs(m), 0.75, 1e-10);
+    EXPECT_GT(std::abs(m.imag()), 0.1);  // a complex pair
+  }
+  EXPECT_NEAR(std::abs(o.multipliers[0] * o.multipliers[1]), 0.75 * 0.75, 1e-10);
+  EXPECT_TRUE(o.stable);
+  // And the sticking orbit of the same scene.
+  const OrbitResult st = FindOrbit(sys, s, {});
+  ASSERT_EQ(st.status, "converged");
+  EXPECT_EQ(st.summary.kind, "sticking-periodic");
+}
+
 TEST(Poincare, ConvergesFromAShortTransientInAHandfulOfIterations) {
   const Scene s = Shipped("chain2.toml");
   const System sys(s);
