@@ -74,6 +74,10 @@ struct OrbitResult {
 
 OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);
 
+// Fills summary, multipliers and stability of `orbit` from its section point, period and
+// monodromy matrix (simulates three periods of the orbit).
+void Characterize(const System& system, const Scene& scene, OrbitResult& orbit);
+
 // One evaluation of the stroboscopic map: z(t0) ↦ z(t0 + q T) and DF.
 struct MapValue {
   Eigen::VectorXd X, V;

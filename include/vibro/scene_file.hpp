@@ -2,6 +2,7 @@
 // error messages. The only file that includes toml++ is src/io/scene_file.cpp.
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -33,5 +34,8 @@ LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& o
 // Same from text; `source` names it in messages.
 LoadedScene ParseScene(std::string_view text, const std::string& source,
                        const std::vector<std::string>& overrides = {});
+
+// The number at `key` (e.g. "excitation.amplitude") in a scene's TOML text, if any.
+std::optional<double> SceneNumber(const std::string& text, const std::string& key);
 
 }  // namespace vibro

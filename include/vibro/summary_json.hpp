@@ -5,6 +5,7 @@
 
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
+#include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
@@ -22,6 +23,9 @@ std::string SimulationJson(const Scene& scene, const RunResult& result, const At
 
 // `vibro orbit --json` (CONTRACT §2).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+
+// `vibro continue --json` (CONTRACT §2).
+std::string BranchJson(const Branch& branch);
 
 // `vibro check --json`.
 std::string CheckJson(const CheckReport& report);

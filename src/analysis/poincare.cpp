@@ -152,6 +152,31 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   return {r.X, r.V, tracker.jacobian(), tracker.singular(), r.status};
 }
 
+void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
+  const int q = out.period;
+  Scene sc = scene;
+  sc.initial_time = out.section_time;
+  sc.run.periods = 3 * q;
+  sc.run.samples_per_period = 0;
+  sc.run.max_period = q;
+  AttractorRecorder rec(sys, sc);
+  const InitialOverride here{out.section_time, out.X, out.V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.observers = {&rec};
+  Simulate(sys, sc, opt);
+  out.summary = rec.Classify();
+  Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(out.monodromy.cast<std::complex<double>>());
+  std::vector<std::complex<double>> mu(es.eigenvalues().data(),
+                                       es.eigenvalues().data() + es.eigenvalues().size());
+  std::sort(mu.begin(), mu.end(), [](auto x, auto y) { return std::abs(x) > std::abs(y); });
+  // Sticking collapses x_B and ẋ_B: DF has two zero eigenvalues that are not multipliers of DP.
+  if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
+    mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
+  out.multipliers = mu;
+  out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
+}
+
 OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest& req) {
   OrbitResult out;
   const double T = sys.period(), w = sys.frequency();
@@ -319,35 +344,13 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   }
 
   // 4. Summary over the converged orbit, and the multipliers.
-  {
-    Scene sc = scene;
-    sc.initial_time = t0;
-    sc.run.periods = 3 * q;
-    sc.run.samples_per_period = 0;
-    sc.run.max_period = q;
-    AttractorRecorder rec(sys, sc);
-    const InitialOverride here{t0, out.X, out.V};
-    SimulationOptions opt;
-    opt.initial = &here;
-    opt.observers = {&rec};
-    Simulate(sys, sc, opt);
-    out.summary = rec.Classify();
-  }
+  Characterize(sys, scene, out);
   const bool kind_ok = req.kind == OrbitKind::kSticking ? out.summary.kind == "sticking-periodic"
                                                          : out.summary.kind == "impact-periodic";
   if (!kind_ok) {
     out.status = "no-orbit";
     out.message = "Newton converged to a " + out.summary.kind + " orbit, not the requested kind";
   }
-  Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(m.jacobian.cast<std::complex<double>>());
-  std::vector<std::complex<double>> mu(es.eigenvalues().data(),
-                                       es.eigenvalues().data() + es.eigenvalues().size());
-  std::sort(mu.begin(), mu.end(), [](auto x, auto y) { return std::abs(x) > std::abs(y); });
-  // Sticking collapses x_B and ẋ_B: DF has two zero eigenvalues that are not multipliers of DP.
-  if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
-    mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
-  out.multipliers = mu;
-  out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
   return out;
 }
 

@@ -15,6 +15,7 @@
 
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
+#include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
@@ -270,6 +271,44 @@ int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool
   return report.ok ? 0 : kExitDisagree;
 }
 
+int RunContinue(const std::string& path, const std::vector<std::string>& sets, bool json,
+                const std::string& key, double to, double step, int max_points,
+                const vibro::OrbitRequest& orbit) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const auto from = vibro::SceneNumber(loaded.text_as_run, key);
+  if (!from)
+    throw vibro::InputError({fmt::format("--param {}: not a numeric key of the scene (give it in the "
+                                         "scene or with --set {}=VALUE)",
+                                         key, key)});
+  vibro::ContinuationRequest req;
+  req.scene_at = [&](double v) {
+    auto with = sets;
+    with.push_back(fmt::format("{}={:.17g}", key, v));
+    return vibro::LoadScene(path, with).scene;
+  };
+  req.from = *from;
+  req.to = to;
+  req.step = step;
+  req.max_points = max_points;
+  req.orbit = orbit;
+  const auto branch = vibro::Continue(req);
+  if (json) {
+    fmt::print("{}\n", vibro::BranchJson(branch));
+  } else {
+    fmt::print("{:>16} {:>12} {:>8} {:>12}\n", key, "SP", "stable", "max|mu|");
+    for (const auto& p : branch.points) {
+      double lead = 0;
+      for (const auto& m : p.multipliers) lead = std::max(lead, std::abs(m));
+      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}\n", p.value,
+                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead);
+    }
+    for (const auto& b : branch.bifurcations)
+      fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
+    fmt::print("end          {}\n", branch.end);
+  }
+  return branch.status == "ok" ? 0 : kExitNumerical;
+}
+
 int RunInfo(const std::string& path, bool json) {
   const auto run = vibro::ReadStoredRun(path);
   if (json) {
@@ -345,6 +384,18 @@ int main(int argc, char** argv) {
   std::string orbit_out;
   orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
 
+  CLI::App* cont = app.add_subcommand("continue", "continue a periodic orbit in one parameter");
+  add_scene_options(cont);
+  std::string cont_param;
+  double cont_to = 0, cont_step = 0;
+  int cont_points = 1000, cont_period = 0;
+  cont->add_option("--param", cont_param, "the numeric scene key to vary, e.g. excitation.amplitude")->required();
+  cont->add_option("--to", cont_to, "end value of the parameter")->required();
+  cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)");
+  cont->add_option("--max-points", cont_points, "most points on the branch");
+  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)");
+  std::string cont_kind = "sticking";
+  cont->add_option("--kind", cont_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
 
@@ -382,6 +433,12 @@ int main(int argc, char** argv) {
     }
     if (*plot) return RunPlot(file_path, plot_prefix);
     if (*check) return RunCheck(scene_path, sets, json);
+    if (*cont) {
+      vibro::OrbitRequest req;
+      req.period = cont_period;
+      req.kind = cont_kind == "impact" ? vibro::OrbitKind::kImpact : vibro::OrbitKind::kSticking;
+      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req);
+    }
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",

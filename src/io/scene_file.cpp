@@ -463,6 +463,15 @@ LoadedScene ParseScene(std::string_view text, const std::string& source,
   return Build(std::move(root), source, overrides);
 }
 
+std::optional<double> SceneNumber(const std::string& text, const std::string& key) {
+  try {
+    const toml::table t = toml::parse(text);
+    return t.at_path(key).value<double>();
+  } catch (const toml::parse_error&) {
+    return std::nullopt;
+  }
+}
+
 LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError({fmt::format("{}: cannot read the scene file", path)});

@@ -87,6 +87,31 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   return j.dump();
 }
 
+std::string BranchJson(const Branch& b) {
+  nlohmann::json j;
+  j["status"] = b.status;
+  auto points = nlohmann::json::array();
+  for (const auto& pt : b.points) {
+    auto phases = nlohmann::json::array();
+    for (const auto& [s, e] : pt.summary.stick_phases) phases.push_back({s, e});
+    auto mu = nlohmann::json::array();
+    for (const auto& m : pt.multipliers) mu.push_back({m.real(), m.imag()});
+    points.push_back({{"value", pt.value},
+                      {"sticking_fraction", OrNull(pt.summary.sticking_fraction)},
+                      {"stick_phases", phases},
+                      {"impacts_per_period", OrNull(pt.summary.impacts_per_period)},
+                      {"stable", pt.stable},
+                      {"floquet_multipliers", mu}});
+  }
+  j["points"] = points;
+  auto bif = nlohmann::json::array();
+  for (const auto& x : b.bifurcations)
+    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}});
+  j["bifurcations"] = bif;
+  j["end"] = b.end;
+  return j.dump();
+}
+
 std::string CheckJson(const CheckReport& r) {
   nlohmann::json j;
   j["ok"] = r.ok;
