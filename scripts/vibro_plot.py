@@ -27,6 +27,39 @@ def reaction(model, X, V, t):
     return (elastic - forcing) / model.attrs["s_B"]
 
 
+def plot_basin(f, title, save):
+    """Label map of a basin study, one colour per attractor (grey: unresolved)."""
+    b = f["basin"]
+    labels = b["labels"][:]
+    a = f["attractors"].attrs
+    kinds = a["kind"].split(",") if a["kind"] else []
+    n = len(kinds)
+    colors = plt.get_cmap("tab10")
+    rgb = np.ones(labels.shape + (3,)) * 0.85
+    rgb[labels == -2] = (1, 1, 1)
+    for k in range(n):
+        rgb[labels == k] = colors(k % 10)[:3]
+    fig, ax = plt.subplots(figsize=(7, 6))
+    xr, yr = b.attrs["x_range"], b.attrs["y_range"]
+    ax.imshow(rgb, origin="lower", extent=(xr[0], xr[1], yr[0], yr[1]), aspect="auto",
+              interpolation="nearest")
+    from matplotlib.patches import Patch
+    handles = []
+    for k in range(n):
+        per = int(a["period"][k])
+        sp = a["sticking_fraction"][k]
+        label = f"{k}: {kinds[k]}, period {per}" + (f", SP {sp:.3f}" if sp > 0 else "")
+        label += f" ({100 * a['basin_fraction'][k]:.1f} %)"
+        handles.append(Patch(color=colors(k % 10), label=label))
+    handles.append(Patch(color=(0.85, 0.85, 0.85),
+                         label=f"unresolved ({100 * b.attrs['unresolved_fraction']:.1f} %)"))
+    ax.legend(handles=handles, loc="upper right", fontsize=7)
+    ax.set_xlabel(b.attrs["x"])
+    ax.set_ylabel(b.attrs["y"])
+    ax.set_title(f"{title}\nbasins of attraction ({labels.shape[1]} x {labels.shape[0]})")
+    save(fig, "basin")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("file")
@@ -49,9 +82,16 @@ def main():
         model = f["model"]
         c = model.attrs["contact_shape"]
         x0 = float(model.attrs["stop"])
+        if "basin" in f:
+            plot_basin(f, title, save)
         t = f["samples/t"][:]
         if len(t) == 0:
-            print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
+            if "basin" not in f:
+                print("vibro plot: the file has no dense samples (run.samples_per_period = 0)",
+                      file=sys.stderr)
+            for w in written:
+                print(w)
+            return
         t_end = t[-1] if len(t) else 0.0
         t_from = t_end - args.periods * T
         sel = t >= t_from

@@ -17,6 +17,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/studies.hpp"
 
 namespace vibro {
 
@@ -69,6 +70,11 @@ class Hdf5Store final : public Observer {
   // Finish.
   void WriteGroup(const std::string& group,
                   const std::vector<std::pair<std::string, std::vector<double>>>& values);
+
+  // Writes a basin study: /basin/labels (ny, nx) int32 (−1 unresolved, −2 inadmissible) with the
+  // axes as attributes, and the attractor table /attractors/* (one row per label). Call before
+  // Finish.
+  void WriteStudy(const StudyResult& study, const Coordinate& x, const Coordinate& y, int nx, int ny);
 
   // Writes the final status, message, counts and attractor, and closes the file.
   void Finish(const RunResult& result, const Attractor& attractor);

@@ -8,6 +8,7 @@
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
+#include "vibro/studies.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
@@ -26,6 +27,9 @@ std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
 
 // `vibro continue --json` (CONTRACT §2).
 std::string BranchJson(const Branch& branch);
+
+// `vibro attractors --json` and `vibro basin --json`.
+std::string StudyJson(const StudyResult& study, const Coordinate& x, const Coordinate& y);
 
 // `vibro check --json`.
 std::string CheckJson(const CheckReport& report);

@@ -1,12 +1,15 @@
 // The `vibro` command (CONTRACT §2, §4). The only file that includes CLI11.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 130 interrupted.
+#include <unistd.h>
+
 #include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -16,6 +19,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/studies.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
@@ -309,6 +313,89 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
   return branch.status == "ok" ? 0 : kExitNumerical;
 }
 
+struct StudyArgs {
+  std::string x = "x_B", y = "v_B";
+  std::vector<double> x_range, y_range;
+  std::vector<int> grid{64, 64};
+  long long samples = 200;
+  unsigned long long seed = 1;
+  int threads = 0;
+  std::string out;
+};
+
+int RunStudyCommand(const std::string& path, const std::vector<std::string>& sets, bool json,
+                    const StudyArgs& args, bool basin) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  std::vector<std::string> problems;
+  for (const auto& [opt, name] : {std::pair{"--x", args.x}, std::pair{"--y", args.y}})
+    if (auto p = vibro::CheckCoordinate(sys, name); !p.empty())
+      problems.push_back(fmt::format("{} {}: {}", opt, name, p));
+  const auto range = [&](const std::vector<double>& r, const std::string& name, const char* opt) {
+    if (r.size() == 2) {
+      if (!(r[1] > r[0])) problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", opt, r[0], r[1]));
+      return vibro::Coordinate{name, r[0], r[1]};
+    }
+    if (!r.empty()) problems.push_back(fmt::format("{}: expected two numbers A,B", opt));
+    // Defaults: x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|).
+    const double scale = std::max(1.0, std::abs(sys.stop()));
+    if (name == "x_B") return vibro::Coordinate{name, sys.stop(), sys.stop() + 2 * scale};
+    return vibro::Coordinate{name, -2 * scale * sys.omega()[0], 2 * scale * sys.omega()[0]};
+  };
+  const auto cx = range(args.x_range, args.x, "--x-range");
+  const auto cy = range(args.y_range, args.y, "--y-range");
+  if (basin && (args.grid.size() != 2 || args.grid[0] < 1 || args.grid[1] < 1))
+    problems.push_back("--grid: expected NX,NY with NX, NY ≥ 1");
+  if (!basin && args.samples < 1) problems.push_back("--samples: expected N ≥ 1");
+  if (!problems.empty()) throw vibro::InputError(problems);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!args.out.empty()) store = vibro::Hdf5Store::Create(args.out, HeaderOf(loaded, sys));
+  const auto points = basin ? vibro::GridPoints(cx, cy, args.grid[0], args.grid[1])
+                            : vibro::RandomPoints(cx, cy, args.samples, args.seed);
+  vibro::StudyOptions opt;
+  opt.threads = args.threads;
+  opt.stop_requested = &g_stop_requested;
+  std::mutex mutex;
+  int shown = -1;
+  // A progress bar on stderr when it is a terminal.
+  if (isatty(STDERR_FILENO)) opt.progress = [&](long long done, long long total) {
+    const int pct = static_cast<int>(100 * done / std::max(total, 1LL));
+    std::lock_guard<std::mutex> lock(mutex);
+    if (pct == shown) return;
+    shown = pct;
+    fmt::print(stderr, "\r[{:<50}] {:3d}% ({} / {})", std::string(static_cast<size_t>(pct / 2), '#'), pct,
+               done, total);
+    if (done == total) fmt::print(stderr, "\n");
+  };
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const auto study = vibro::RunStudy(sys, loaded.scene, cx, cy, points, opt);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  const bool interrupted = g_stop_requested.load();
+  if (store) {
+    store->WriteStudy(study, cx, cy, basin ? args.grid[0] : static_cast<int>(points.size()), basin ? args.grid[1] : 1);
+    vibro::RunResult r;
+    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
+  }
+  if (json) {
+    fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
+  } else {
+    fmt::print("{} cells over {} ∈ [{}, {}] × {} ∈ [{}, {}]\n", study.cells, cx.name, cx.from, cx.to,
+               cy.name, cy.from, cy.to);
+    for (size_t k = 0; k < study.attractors.size(); ++k) {
+      const auto& a = study.attractors[k];
+      fmt::print("attractor {}: basin fraction {:.4f} ± {:.4f}, example ({}, {}) = ({:.6g}, {:.6g})\n  ",
+                 k, a.basin_fraction, a.basin_fraction_error, cx.name, cy.name, a.example[0], a.example[1]);
+      PrintAttractor(a.attractor);
+    }
+    fmt::print("unresolved fraction {:.4f}, inadmissible fraction {:.4f}\n", study.unresolved_fraction,
+               study.inadmissible_fraction);
+  }
+  return interrupted ? kExitInterrupted : 0;
+}
+
 int RunInfo(const std::string& path, bool json) {
   const auto run = vibro::ReadStoredRun(path);
   if (json) {
@@ -396,6 +483,21 @@ int main(int argc, char** argv) {
   cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)");
   std::string cont_kind = "sticking";
   cont->add_option("--kind", cont_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
+  StudyArgs study_args;
+  CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
+  CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
+  for (CLI::App* cmd : {attractors, basin}) {
+    add_scene_options(cmd);
+    cmd->add_option("--x", study_args.x, "first coordinate: x_B, v_B, X<i>, V<i> (default x_B)");
+    cmd->add_option("--y", study_args.y, "second coordinate (default v_B)");
+    cmd->add_option("--x-range", study_args.x_range, "A,B")->delimiter(',')->expected(2);
+    cmd->add_option("--y-range", study_args.y_range, "C,D")->delimiter(',')->expected(2);
+    cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)");
+  }
+  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)");
+  attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
+  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->delimiter(',')->expected(2);
+  basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
 
@@ -433,6 +535,8 @@ int main(int argc, char** argv) {
     }
     if (*plot) return RunPlot(file_path, plot_prefix);
     if (*check) return RunCheck(scene_path, sets, json);
+    if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
+    if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
     if (*cont) {
       vibro::OrbitRequest req;
       req.period = cont_period;

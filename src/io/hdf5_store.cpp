@@ -727,6 +727,45 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
 
 Hdf5Store::Stats Hdf5Store::stats() const { return impl_->stats; }
 
+void Hdf5Store::WriteStudy(const StudyResult& st, const Coordinate& x, const Coordinate& y, int nx,
+                           int ny) {
+  const hid_t f = impl_->file.get();
+  Handle basin(Check(H5Gcreate2(f, "/basin", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/basin"), H5Gclose);
+  const hsize_t dims[2] = {static_cast<hsize_t>(ny), static_cast<hsize_t>(nx)};
+  Handle space(H5Screate_simple(2, dims, nullptr), H5Sclose);
+  Handle labels(Check(H5Dcreate2(basin.get(), "labels", H5T_STD_I32LE, space.get(), H5P_DEFAULT,
+                                 H5P_DEFAULT, H5P_DEFAULT),
+                      "labels"),
+                H5Dclose);
+  Check(H5Dwrite(labels.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, st.labels.data()),
+        "labels", 0);
+  WriteString(basin.get(), "x", x.name);
+  WriteString(basin.get(), "y", y.name);
+  WriteDoubles(basin.get(), "x_range", {x.from, x.to});
+  WriteDoubles(basin.get(), "y_range", {y.from, y.to});
+  WriteDouble(basin.get(), "unresolved_fraction", st.unresolved_fraction);
+  WriteDouble(basin.get(), "inadmissible_fraction", st.inadmissible_fraction);
+  Handle table(Check(H5Gcreate2(f, "/attractors", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/attractors"),
+               H5Gclose);
+  std::vector<double> period, impacts, sp, frac, err;
+  std::string kinds;
+  for (const auto& a : st.attractors) {
+    period.push_back(a.attractor.period ? *a.attractor.period : -1);
+    impacts.push_back(a.attractor.impacts_per_period ? static_cast<double>(*a.attractor.impacts_per_period) : -1);
+    sp.push_back(a.attractor.sticking_fraction.value_or(-1));
+    frac.push_back(a.basin_fraction);
+    err.push_back(a.basin_fraction_error);
+    kinds += (kinds.empty() ? "" : ",") + a.attractor.kind;
+  }
+  // One attribute per column (label k is row k); null values are −1.
+  WriteString(table.get(), "kind", kinds);
+  WriteDoubles(table.get(), "period", period);
+  WriteDoubles(table.get(), "impacts_per_period", impacts);
+  WriteDoubles(table.get(), "sticking_fraction", sp);
+  WriteDoubles(table.get(), "basin_fraction", frac);
+  WriteDoubles(table.get(), "basin_fraction_error", err);
+}
+
 void Hdf5Store::WriteGroup(const std::string& group,
                            const std::vector<std::pair<std::string, std::vector<double>>>& values) {
   const hid_t f = impl_->file.get();

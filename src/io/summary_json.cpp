@@ -112,6 +112,23 @@ std::string BranchJson(const Branch& b) {
   return j.dump();
 }
 
+std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordinate& y) {
+  nlohmann::json j;
+  auto list = nlohmann::json::array();
+  for (const auto& a : st.attractors) {
+    nlohmann::json o = AttractorObject(a.attractor);
+    o["basin_fraction"] = a.basin_fraction;
+    o["basin_fraction_error"] = a.basin_fraction_error;
+    o["example_initial_state"] = {{x.name, a.example.at(0)}, {y.name, a.example.at(1)}};
+    list.push_back(o);
+  }
+  j["attractors"] = list;
+  j["unresolved_fraction"] = st.unresolved_fraction;
+  j["inadmissible_fraction"] = st.inadmissible_fraction;
+  j["cells"] = st.cells;
+  return j.dump();
+}
+
 std::string CheckJson(const CheckReport& r) {
   nlohmann::json j;
   j["ok"] = r.ok;

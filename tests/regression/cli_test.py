@@ -94,6 +94,30 @@ with tempfile.TemporaryDirectory() as d:
           and j.get("stable") is False and "impact_phases" in j
           and max(abs(complex(*m)) for m in j["floquet_multipliers"]) > 1, p.stdout + p.stderr)
 
+# Studies: coexisting attractors of Fig. 5, the same for one and two threads; a basin map and its plot.
+fig5 = os.path.join(scenes, "fig05_coexistence.toml")
+outs = []
+for threads in ("1", "2"):
+    p = run("attractors", fig5, "--samples", "60", "--threads", threads, "--json", "--set", "run.periods=100")
+    check(f"attractors --threads {threads}", p.returncode == 0, p.stderr)
+    outs.append(p.stdout)
+check("attractors: same answer for 1 and 2 threads", outs[0] == outs[1], outs)
+j = json.loads(outs[0]) if outs[0] else {"attractors": []}
+kinds = {(a["kind"], a["period"]) for a in j["attractors"]}
+check("attractors: Fig. 5 sticking and single-impact orbits",
+      ("sticking-periodic", 1) in kinds and ("impact-periodic", 1) in kinds, kinds)
+check("attractors: fields", all({"kind", "period", "impacts_per_period", "sticking_fraction", "stick_phases",
+                                 "basin_fraction", "basin_fraction_error", "example_initial_state"} <= set(a)
+                                for a in j["attractors"]) and "unresolved_fraction" in j, j)
+with tempfile.TemporaryDirectory() as d:
+    h5 = os.path.join(d, "basin.h5")
+    p = run("basin", fig5, "--grid", "12,10", "--out", h5, "--set", "run.periods=60")
+    check("basin --out", p.returncode == 0 and os.path.exists(h5), p.stderr)
+    p = run("plot", h5, "--out", os.path.join(d, "b"))
+    check("basin plot", p.returncode == 0 and os.path.getsize(os.path.join(d, "b_basin.png")) > 5000, p.stderr)
+    p = run("basin", fig5, "--x", "X7", "--grid", "2,2")
+    check("basin: bad coordinate exit 2", p.returncode == 2 and "X7" in p.stderr, p.stderr)
+
 # Three mistakes: three located messages, exit 2, nothing on stdout.
 with tempfile.TemporaryDirectory() as d:
     bad = os.path.join(d, "bad.toml")
