@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,24 @@ std::vector<std::pair<double, double>> GridPoints(const Coordinate& a, const Coo
 // N points drawn uniformly over the two ranges from a fixed seed (reproducible).
 std::vector<std::pair<double, double>> RandomPoints(const Coordinate& a, const Coordinate& b,
                                                     long long n, unsigned long long seed);
+
+// Brute-force bifurcation diagram: the parameter is stepped up from `from` to `to` and back down,
+// each run starting from the final state of the previous one (so hysteresis shows), and the last
+// `record` stroboscopic points and the attractor of each run are kept.
+struct SweepPoint {
+  double value;
+  bool upward;
+  Attractor attractor;
+  std::vector<double> x_B, v_B;  // contact displacement and velocity at the last section points
+};
+struct SweepRequest {
+  std::function<Scene(double)> scene_at;
+  double from = 0, to = 1;
+  int steps = 50;
+  int record = 16;
+  bool both_ways = true;
+};
+std::vector<SweepPoint> Sweep(const SweepRequest& request, const std::atomic<bool>* stop = nullptr);
 
 // Checks a coordinate name against the system ("" when valid, else the problem).
 std::string CheckCoordinate(const System& system, const std::string& name);

@@ -31,6 +31,9 @@ std::string BranchJson(const Branch& branch);
 // `vibro attractors --json` and `vibro basin --json`.
 std::string StudyJson(const StudyResult& study, const Coordinate& x, const Coordinate& y);
 
+// `vibro sweep --json`.
+std::string SweepJson(const std::vector<SweepPoint>& sweep);
+
 // `vibro check --json`.
 std::string CheckJson(const CheckReport& report);
 

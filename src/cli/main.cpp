@@ -396,6 +396,44 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   return interrupted ? kExitInterrupted : 0;
 }
 
+int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool json,
+             const std::string& key, double from, double to, int steps, int record, bool one_way) {
+  vibro::LoadScene(path, sets);
+  if (steps < 1 || record < 1) throw vibro::InputError({"--steps and --record must be ≥ 1"});
+  // Both ends must be valid values of the key (bad input before any computation).
+  for (double v : {from, to}) {
+    auto with = sets;
+    with.push_back(fmt::format("{}={:.17g}", key, v));
+    vibro::LoadScene(path, with);
+  }
+  vibro::SweepRequest req;
+  req.scene_at = [&](double v) {
+    auto with = sets;
+    with.push_back(fmt::format("{}={:.17g}", key, v));
+    return vibro::LoadScene(path, with).scene;
+  };
+  req.from = from;
+  req.to = to;
+  req.steps = steps;
+  req.record = record;
+  req.both_ways = !one_way;
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const auto sweep = vibro::Sweep(req, &g_stop_requested);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (json) {
+    fmt::print("{}\n", vibro::SweepJson(sweep));
+  } else {
+    fmt::print("{:>16} {:>5} {:>20} {:>7} {:>12}\n", key, "dir", "attractor", "period", "SP");
+    for (const auto& p : sweep)
+      fmt::print("{:>16.10g} {:>5} {:>20} {:>7} {:>12.8f}\n", p.value, p.upward ? "up" : "down",
+                 p.attractor.kind, p.attractor.period ? std::to_string(*p.attractor.period) : "-",
+                 p.attractor.sticking_fraction.value_or(0.0));
+  }
+  return g_stop_requested.load() ? kExitInterrupted : 0;
+}
+
 int RunInfo(const std::string& path, bool json) {
   const auto run = vibro::ReadStoredRun(path);
   if (json) {
@@ -498,6 +536,18 @@ int main(int argc, char** argv) {
   attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
   basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->delimiter(',')->expected(2);
   basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
+  CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
+  add_scene_options(sweep);
+  std::string sweep_param;
+  double sweep_from = 0, sweep_to = 0;
+  int sweep_steps = 50, sweep_record = 16;
+  bool sweep_one_way = false;
+  sweep->add_option("--param", sweep_param, "numeric scene key to vary")->required();
+  sweep->add_option("--from", sweep_from, "first value")->required();
+  sweep->add_option("--to", sweep_to, "last value")->required();
+  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)");
+  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)");
+  sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
 
@@ -535,6 +585,9 @@ int main(int argc, char** argv) {
     }
     if (*plot) return RunPlot(file_path, plot_prefix);
     if (*check) return RunCheck(scene_path, sets, json);
+    if (*sweep)
+      return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
+                      sweep_record, sweep_one_way);
     if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
     if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
     if (*cont) {

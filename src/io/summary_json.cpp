@@ -129,6 +129,21 @@ std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordina
   return j.dump();
 }
 
+std::string SweepJson(const std::vector<SweepPoint>& sweep) {
+  nlohmann::json j;
+  auto pts = nlohmann::json::array();
+  for (const auto& p : sweep) {
+    nlohmann::json o = AttractorObject(p.attractor);
+    o["value"] = p.value;
+    o["direction"] = p.upward ? "up" : "down";
+    o["x_B"] = p.x_B;
+    o["v_B"] = p.v_B;
+    pts.push_back(o);
+  }
+  j["points"] = pts;
+  return j.dump();
+}
+
 std::string CheckJson(const CheckReport& r) {
   nlohmann::json j;
   j["ok"] = r.ok;

@@ -173,4 +173,60 @@ StudyResult RunStudy(const System& sys, const Scene& scene, const Coordinate& a,
   return out;
 }
 
+namespace {
+
+// Keeps the last `keep` section points.
+struct SectionTail final : Observer {
+  size_t keep;
+  const System& sys;
+  std::vector<double> x, v;
+  Eigen::VectorXd X, V;
+  SectionTail(size_t k, const System& s) : keep(k), sys(s) {}
+  void OnSection(const Sample& s) override {
+    x.push_back(s.x_B);
+    v.push_back(sys.ContactVelocity(s.V));
+    if (x.size() > keep) {
+      x.erase(x.begin());
+      v.erase(v.begin());
+    }
+  }
+};
+
+}  // namespace
+
+std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* stop) {
+  std::vector<SweepPoint> out;
+  std::vector<double> values;
+  for (int i = 0; i <= req.steps; ++i)
+    values.push_back(req.from + (req.to - req.from) * i / std::max(req.steps, 1));
+  const size_t up = values.size();
+  if (req.both_ways)
+    for (int i = req.steps - 1; i >= 0; --i) values.push_back(values[static_cast<size_t>(i)]);
+  std::optional<InitialOverride> state;
+  for (size_t i = 0; i < values.size(); ++i) {
+    if (stop && stop->load()) break;
+    Scene sc = req.scene_at(values[i]);
+    sc.run.samples_per_period = 0;
+    const System sys(sc);
+    AttractorRecorder rec(sys, sc);
+    SectionTail tail(static_cast<size_t>(req.record), sys);
+    SimulationOptions opt;
+    if (state) {
+      state->time = sc.initial_time;  // phase kept: every run starts at the same forcing phase
+      opt.initial = &*state;
+    }
+    opt.observers = {&rec, &tail};
+    const RunResult r = Simulate(sys, sc, opt);
+    out.push_back({values[i], i < up, rec.Classify(), tail.x, tail.v});
+    if (r.status != RunStatus::kOk) break;
+    // The next run continues from this one's final state, at a whole number of periods later.
+    state = InitialOverride{sc.initial_time, r.X, r.V};
+    if (r.mode == Mode::kSticking || sys.ContactDisplacement(r.X) <= sys.stop()) {
+      // On the stop: re-enter through the automaton's classification of a state on the stop.
+      state->X -= sys.contact() * ((sys.ContactDisplacement(r.X) - sys.stop()) / sys.s_B());
+    }
+  }
+  return out;
+}
+
 }  // namespace vibro

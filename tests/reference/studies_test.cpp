@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "support.hpp"
+#include "vibro/continuation.hpp"
 #include "vibro/studies.hpp"
 
 namespace vibro::test {
@@ -62,6 +63,31 @@ TEST(Studies, SameLabelsForOneAndTwoThreads) {
   for (size_t k = 0; k < a.attractors.size(); ++k) {
     EXPECT_EQ(a.attractors[k].cells, b.attractors[k].cells);
     EXPECT_EQ(a.attractors[k].example, b.attractors[k].example);
+  }
+}
+
+TEST(Studies, SweepAcrossTheFreeFlightLimitLosesStickingWhereContinuationSays) {
+  // 1-DOF, r = 0, ω = 2.8: sticking ends at f_ff (MODEL §6.3); the brute-force sweep, up and down,
+  // switches between the two steps that bracket the continuation's sticking-lost point.
+  const auto at = [](double f) { return OneDof(0.0, 2.8, f, 1.0, 30); };
+  SweepRequest req;
+  req.scene_at = at;
+  req.from = 5.85;
+  req.to = 5.95;
+  req.steps = 10;
+  const auto sweep = Sweep(req);
+  ASSERT_EQ(sweep.size(), 21u);
+  ContinuationRequest cont;
+  cont.scene_at = at;
+  cont.from = 5.5;
+  cont.to = 6.5;
+  const Branch b = Continue(cont);
+  ASSERT_EQ(b.end, "sticking-lost");
+  const double lost = b.bifurcations.back().value;
+  for (const auto& p : sweep) {
+    const bool sticks = p.attractor.kind == "sticking-periodic";
+    EXPECT_EQ(sticks, p.value < lost) << p.value << (p.upward ? " up" : " down");
+    EXPECT_EQ(p.x_B.size(), 16u);
   }
 }
 
