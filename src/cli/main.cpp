@@ -84,6 +84,13 @@ std::string Phases(const std::vector<std::pair<double, double>>& phases) {
   return s.empty() ? "none" : s;
 }
 
+// The scene of `path` with the overrides and KEY=VALUE on top (continuation and sweeps).
+vibro::Scene SceneWith(const std::string& path, std::vector<std::string> sets, const std::string& key,
+                       double value) {
+  sets.push_back(fmt::format("{}={:.17g}", key, value));
+  return vibro::LoadScene(path, sets).scene;
+}
+
 vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys) {
   const auto& sc = loaded.scene;
   vibro::StoreHeader h;
@@ -285,11 +292,7 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
                                          "scene or with --set {}=VALUE)",
                                          key, key)});
   vibro::ContinuationRequest req;
-  req.scene_at = [&](double v) {
-    auto with = sets;
-    with.push_back(fmt::format("{}={:.17g}", key, v));
-    return vibro::LoadScene(path, with).scene;
-  };
+  req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = *from;
   req.to = to;
   req.step = step;
@@ -401,17 +404,9 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::LoadScene(path, sets);
   if (steps < 1 || record < 1) throw vibro::InputError({"--steps and --record must be ≥ 1"});
   // Both ends must be valid values of the key (bad input before any computation).
-  for (double v : {from, to}) {
-    auto with = sets;
-    with.push_back(fmt::format("{}={:.17g}", key, v));
-    vibro::LoadScene(path, with);
-  }
+  for (double v : {from, to}) SceneWith(path, sets, key, v);
   vibro::SweepRequest req;
-  req.scene_at = [&](double v) {
-    auto with = sets;
-    with.push_back(fmt::format("{}={:.17g}", key, v));
-    return vibro::LoadScene(path, with).scene;
-  };
+  req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = from;
   req.to = to;
   req.steps = steps;
@@ -460,6 +455,8 @@ int RunInfo(const std::string& path, bool json) {
 }
 
 int RunPlot(const std::string& path, const std::string& prefix) {
+  if (path.find('\'') != std::string::npos || prefix.find('\'') != std::string::npos)
+    throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
   std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
   if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
