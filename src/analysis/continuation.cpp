@@ -233,20 +233,50 @@ Branch Continue(const ContinuationRequest& req) {
       return br;
     }
     const Eigen::VectorXd t_new = Tangent(en, t);
-    // Bifurcations between the last point and this one.
+    // Bifurcations between the last point and this one, located by bisection of the arclength
+    // (each trial point corrected onto the branch) on the sign of a test function.
     const double l_old = y[n2], l_new = y_new[n2];
-    if (t[n2] * t_new[n2] < 0)
-      br.bifurcations.push_back({"fold", 0.5 * (l_old + l_new), "the branch turns back (λ-tangent changes sign)"});
+    const auto locate = [&](const std::function<double(const Eigen::VectorXd&, const Eigen::VectorXd&)>& test,
+                            double fallback) {
+      double lo = 0.0, hi = ds, value = fallback;
+      const double sign_lo = test(y, t);
+      for (int it = 0; it < 80; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        int iters = 0;
+        const auto yc = Correct(p, y + mid * t, t, iters);
+        if (!yc) break;
+        const Evaluation ec = p.Evaluate(yc->head(n2), (*yc)[n2]);
+        if (!ec.ok) break;
+        const double v = test(*yc, Tangent(ec, t));
+        value = (*yc)[n2];
+        ((v > 0) == (sign_lo > 0) ? lo : hi) = mid;
+        if ((hi - lo) * std::abs(t[n2]) < 1e-12 * std::max(1.0, std::abs(value)) && it > 10) break;
+      }
+      return value;
+    };
+    if (t[n2] * t_new[n2] < 0) {
+      const double at = locate([&](const Eigen::VectorXd&, const Eigen::VectorXd& tc) { return tc[n2]; },
+                               0.5 * (l_old + l_new));
+      br.bifurcations.push_back({"fold", at, "the branch turns back (λ-tangent changes sign)"});
+    }
+    const auto multiplier_test = [&](auto score) {
+      return [&, score](const Eigen::VectorXd& yc, const Eigen::VectorXd&) {
+        return score(p.Characterized(yc.head(n2), yc[n2]).multipliers);
+      };
+    };
     const double flip_old = LeadingReal(prev.multipliers, true), flip_new = LeadingReal(orbit->multipliers, true);
     if ((flip_old + 1) * (flip_new + 1) < 0 && (flip_old < 0 || flip_new < 0)) {
       const double w = (flip_old + 1) / (flip_old - flip_new);
-      br.bifurcations.push_back({"flip", l_old + w * (l_new - l_old), "a real multiplier crosses −1"});
+      const double at = locate(multiplier_test([](const auto& mu) { return LeadingReal(mu, true) + 1; }),
+                               l_old + w * (l_new - l_old));
+      br.bifurcations.push_back({"flip", at, "a real multiplier crosses −1"});
     }
     const double ns_old = LeadingComplex(prev.multipliers), ns_new = LeadingComplex(orbit->multipliers);
     if (ns_old > 0 && ns_new > 0 && (ns_old - 1) * (ns_new - 1) < 0) {
       const double w = (ns_old - 1) / (ns_old - ns_new);
-      br.bifurcations.push_back({"neimark-sacker", l_old + w * (l_new - l_old),
-                                 "a complex pair of multipliers crosses the unit circle"});
+      const double at = locate(multiplier_test([](const auto& mu) { return LeadingComplex(mu) - 1; }),
+                               l_old + w * (l_new - l_old));
+      br.bifurcations.push_back({"neimark-sacker", at, "a complex pair of multipliers crosses the unit circle"});
     }
     y = y_new;
     t = t_new;
