@@ -34,7 +34,6 @@ class TangentTracker final : public Observer {
   void OnReset(const Reset& r) override;
   const Eigen::MatrixXd& jacobian() const { return phi_; }  // ∂z(t)/∂z(t0), (2n, 2n)
   bool singular() const { return singular_; }               // a grazing on the way
-  int resets() const { return resets_; }
 
  private:
   Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
@@ -42,7 +41,6 @@ class TangentTracker final : public Observer {
   const System& sys_;
   Eigen::MatrixXd G_free_, G_stick_, Pi_, phi_;
   bool singular_ = false;
-  int resets_ = 0;
 };
 
 enum class OrbitKind { kSticking, kImpact };

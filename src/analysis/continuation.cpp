@@ -113,11 +113,11 @@ std::optional<Eigen::VectorXd> Correct(const Problem& p, Eigen::VectorXd y, cons
 
 bool Sticks(const OrbitResult& o) { return !o.summary.stick_phases.empty(); }
 
-double LeadingReal(const std::vector<std::complex<double>>& mu, bool negative) {
-  // The most negative real multiplier (flip) or nothing.
+// The most negative real multiplier (the flip test), or 0 when there is none.
+double MostNegativeReal(const std::vector<std::complex<double>>& mu) {
   double best = 0;
   for (const auto& m : mu)
-    if (std::abs(m.imag()) < 1e-9 && (negative ? m.real() < best : false)) best = m.real();
+    if (std::abs(m.imag()) < 1e-9 && m.real() < best) best = m.real();
   return best;
 }
 
@@ -264,10 +264,10 @@ Branch Continue(const ContinuationRequest& req) {
         return score(p.Characterized(yc.head(n2), yc[n2]).multipliers);
       };
     };
-    const double flip_old = LeadingReal(prev.multipliers, true), flip_new = LeadingReal(orbit->multipliers, true);
+    const double flip_old = MostNegativeReal(prev.multipliers), flip_new = MostNegativeReal(orbit->multipliers);
     if ((flip_old + 1) * (flip_new + 1) < 0 && (flip_old < 0 || flip_new < 0)) {
       const double w = (flip_old + 1) / (flip_old - flip_new);
-      const double at = locate(multiplier_test([](const auto& mu) { return LeadingReal(mu, true) + 1; }),
+      const double at = locate(multiplier_test([](const auto& mu) { return MostNegativeReal(mu) + 1; }),
                                l_old + w * (l_new - l_old));
       br.bifurcations.push_back({"flip", at, "a real multiplier crosses −1"});
     }

@@ -84,7 +84,6 @@ void TangentTracker::OnStretch(const Stretch& s) {
 }
 
 void TangentTracker::OnReset(const Reset& r) {
-  ++resets_;
   const auto n = sys_.dof();
   const Eigen::VectorXd& c = sys_.contact_shape();
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);

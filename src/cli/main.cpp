@@ -197,7 +197,9 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  vibro::ToString(loaded.scene.run.method), "SUNDIALS 6.4", loaded.scene.run.rtol,
                  loaded.scene.run.atol, result.solver.steps, result.solver.rhs_evals,
                  result.solver.root_evals, result.solver.reinits);
-    if (store) fmt::print("output       {}{}\n", out, resume ? " (resumed)" : "");
+    if (store)
+      fmt::print("output       {}{} ({} flushes, {:.3f} s writing)\n", out, resume ? " (resumed)" : "",
+                 store->stats().flushes, store->stats().flush_seconds);
   }
   if (result.status != vibro::RunStatus::kOk)
     fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);
