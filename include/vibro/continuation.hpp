@@ -1,12 +1,22 @@
 // One-parameter continuation of periodic orbits (paper §5, MODEL §5.6–§5.7): pseudo-arclength
 // predictor–corrector on G(z, λ) = F(z; λ) − z, F the stroboscopic map of the Poincaré solver
 // (analytic ∂F/∂z, central differences in λ since λ is any numeric scene key), with step-size
-// control, so that folds are passed. Along the branch: stability, folds (the λ-component of the
-// tangent changes sign), flips and Neimark–Sacker points (a multiplier leaves the unit circle at
-// −1, or as a complex pair), and the end of sticking (the sticking fraction reaches 0: located
-// by secant iterations on SP(λ) = 0, which vanishes linearly, MODEL §6.3).
+// control, so that folds are passed. The section sits at a fixed forcing phase inside a free
+// flight and is moved to the middle of the longest flight when an event comes near it.
+//
+// Smooth bifurcations, located by bisection of the arclength on a test function (every trial
+// point corrected onto the branch): fold (the λ-component of the tangent changes sign), flip (a
+// real multiplier crosses −1), Neimark–Sacker (a complex pair crosses the unit circle).
+// Non-smooth bifurcations (MODEL §5.7): the event sequence of the orbit over a period changes, or
+// the orbit ceases to exist; the boundary is located by bisection of the arclength on "the
+// corrected orbit has the same event sequence", and named by the quantity that vanishes there
+// (orbit_probe.hpp): sticking-lost (a sticking phase shrinks to zero: the branch ends), rising
+// (R gains a zero inside a sticking phase), sticking-entry (R vanishes at the landing), grazing
+// (a free flight touches the stop tangentially), or "non-smooth" when none of them does. The
+// branch goes on through the point when the orbit exists on the other side.
 #pragma once
 
+#include <atomic>
 #include <complex>
 #include <functional>
 #include <string>
@@ -25,6 +35,8 @@ struct ContinuationRequest {
   double max_step = 0;       // (0: |to − from|/10)
   int max_points = 1000;
   OrbitRequest orbit;        // how the first orbit is found
+  const std::atomic<bool>* stop_requested = nullptr;  // polled between points
+  std::function<void(size_t points, double value)> progress;
 };
 
 struct BranchPoint {
@@ -32,16 +44,24 @@ struct BranchPoint {
   Attractor summary;  // sticking fraction, stick phases, impacts per period
   std::vector<std::complex<double>> multipliers;
   bool stable;
+  std::string signature;  // events over a period (orbit_probe.hpp: C, P, I, G, S, R)
+  double x_B = 0;         // contact displacement at the section point
+  double section_phase = 0;  // ωt0 of the section, mod 2π·period
 };
 
 struct Bifurcation {
-  std::string kind;  // "fold" | "flip" | "neimark-sacker" | "sticking-lost"
+  // "fold" | "flip" | "neimark-sacker" | "rising" | "grazing" | "sticking-entry" |
+  // "sticking-lost" | "non-smooth"
+  std::string kind;
   double value;
   std::string detail;
+  double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
 };
 
 struct Branch {
-  std::string status = "ok";  // "ok" | "no-orbit"
+  std::string status = "ok";  // "ok" | "no-orbit" | "interrupted"
+  std::string param;          // the continued key (set by the caller, for output)
+  int period = 0;
   std::vector<BranchPoint> points;
   std::vector<Bifurcation> bifurcations;
   std::string end;  // why the branch stopped

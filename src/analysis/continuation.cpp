@@ -7,6 +7,8 @@
 
 #include <fmt/format.h>
 
+#include "analysis/orbit_probe.hpp"
+
 namespace vibro {
 namespace {
 
@@ -17,9 +19,17 @@ struct Evaluation {
   bool ok = false;
 };
 
+// A corrected point of the branch with what is known about its orbit.
+struct Point {
+  Eigen::VectorXd y;  // (z, λ)
+  OrbitResult orbit;
+  OrbitProbe probe;
+};
+
+// The map F(z; λ) on the section ωt0 = phase (so a change of ω keeps the section's forcing phase).
 class Problem {
  public:
-  Problem(const ContinuationRequest& req, double t0, int q) : req_(req), t0_(t0), q_(q) {}
+  Problem(const ContinuationRequest& req, double phase, int q) : req_(req), phase_(phase), q_(q) {}
 
   std::optional<Scene> SceneAt(double lambda) const {
     try {
@@ -28,6 +38,10 @@ class Problem {
       return std::nullopt;  // λ left the valid range of the key
     }
   }
+  double SectionTime(const Scene& s) const { return phase_ / s.frequency; }
+  double phase() const { return phase_; }
+  int period() const { return q_; }
+  void MoveSection(double phase) { phase_ = phase; }
 
   std::optional<Eigen::VectorXd> Map(const Eigen::VectorXd& z, double lambda,
                                      Eigen::MatrixXd* jac) const {
@@ -35,7 +49,7 @@ class Problem {
     if (!scene) return std::nullopt;
     const System sys(*scene);
     const auto n = sys.dof();
-    const MapValue m = StroboscopicMap(sys, *scene, t0_, z.head(n), z.tail(n), q_);
+    const MapValue m = StroboscopicMap(sys, *scene, SectionTime(*scene), z.head(n), z.tail(n), q_);
     if (m.status != RunStatus::kOk || m.singular) return std::nullopt;
     if (jac) *jac = m.jacobian;
     Eigen::VectorXd out(2 * n);
@@ -57,26 +71,34 @@ class Problem {
     return e;
   }
 
-  // The orbit at (z, λ): summary and multipliers.
-  OrbitResult Characterized(const Eigen::VectorXd& z, double lambda) const {
-    OrbitResult o;
+  // The orbit at y = (z, λ): summary, multipliers and event probe.
+  std::optional<Point> Examine(const Eigen::VectorXd& y) const {
+    const auto N = y.size() - 1;
+    const double lambda = y[N];
     const auto scene = SceneAt(lambda);
-    if (!scene) return o;
+    if (!scene) return std::nullopt;
     const System sys(*scene);
     const auto n = sys.dof();
+    Point pt;
+    pt.y = y;
+    OrbitResult& o = pt.orbit;
     o.status = "converged";
     o.period = q_;
-    o.section_time = t0_;
-    o.X = z.head(n);
-    o.V = z.tail(n);
-    o.monodromy = StroboscopicMap(sys, *scene, t0_, o.X, o.V, q_).jacobian;
+    o.section_time = SectionTime(*scene);
+    o.X = y.head(n);
+    o.V = y.segment(n, n);
+    const MapValue m = StroboscopicMap(sys, *scene, o.section_time, o.X, o.V, q_);
+    if (m.status != RunStatus::kOk || m.singular) return std::nullopt;
+    o.monodromy = m.jacobian;
     Characterize(sys, *scene, o);
-    return o;
+    pt.probe = ProbeOrbit(sys, *scene, o.section_time, o.X, o.V, q_);
+    if (!pt.probe.ok) return std::nullopt;
+    return pt;
   }
 
  private:
   const ContinuationRequest& req_;
-  double t0_;
+  double phase_;
   int q_;
 };
 
@@ -95,11 +117,14 @@ std::optional<Eigen::VectorXd> Correct(const Problem& p, Eigen::VectorXd y, cons
                                        int& iterations) {
   const auto N = y.size();
   const Eigen::VectorXd pred = y;
-  for (iterations = 0; iterations < 10; ++iterations) {
+  double last = 0;
+  for (iterations = 0; iterations < 12; ++iterations) {
     const Evaluation e = p.Evaluate(y.head(N - 1), y[N - 1]);
     if (!e.ok) return std::nullopt;
     const double res = e.G.cwiseAbs().maxCoeff() / (1.0 + y.head(N - 1).cwiseAbs().maxCoeff());
-    if (res < 1e-11) return y;
+    // Converged at 1e-13, or at 1e-11 once Newton stops gaining (rounding of the map).
+    if (res < 1e-13 || (res < 1e-11 && iterations > 0 && res > 0.1 * last)) return y;
+    last = res;
     Eigen::MatrixXd J(N, N);
     J.topLeftCorner(N - 1, N - 1) = e.Jz;
     J.topRightCorner(N - 1, 1) = e.Jl;
@@ -110,8 +135,6 @@ std::optional<Eigen::VectorXd> Correct(const Problem& p, Eigen::VectorXd y, cons
   }
   return std::nullopt;
 }
-
-bool Sticks(const OrbitResult& o) { return !o.summary.stick_phases.empty(); }
 
 // The most negative real multiplier (the flip test), or 0 when there is none.
 double MostNegativeReal(const std::vector<std::complex<double>>& mu) {
@@ -128,6 +151,55 @@ double LeadingComplex(const std::vector<std::complex<double>>& mu) {
   return best;
 }
 
+// Whether the orbit has a sticking phase (from its events: the attractor summary of an orbit
+// next to a non-smooth point may fail to see its period within tolerance).
+bool Sticks(const Point& a) { return a.probe.signature.find_first_of("CPS") != std::string::npos; }
+
+bool SameFamily(const Point& a, const Point& b) { return a.probe.signature == b.probe.signature; }
+
+// The non-smooth bifurcation between `lo` (on the branch) and `hi` (past it, if the orbit goes
+// on): named by the probe quantity that vanishes there (MODEL §5.7, orbit_probe.hpp).
+std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* hi) {
+  const auto both = [&](double OrbitProbe::*q) {
+    return std::min(lo.probe.*q, hi ? hi->probe.*q : OrbitProbe::kNone);
+  };
+  const std::string change =
+      hi ? fmt::format("events per period {} → {}", lo.probe.signature, hi->probe.signature)
+         : fmt::format("events per period {}; the orbit does not go on", lo.probe.signature);
+  if (lo.probe.shortest_stick < 1e-6)
+    return {"sticking-lost",
+            fmt::format("a sticking phase shrinks to zero ({:.1e} of the period); {}", lo.probe.shortest_stick, change)};
+  // A sticking phase that splits in two (or two that merge) across the point, by a release
+  // followed, after a vanishing time, by a landing: the rising bifurcation seen from either side.
+  if (hi && std::abs(hi->probe.sticking_phases - lo.probe.sticking_phases) == 1) {
+    const Point& more = hi->probe.sticking_phases > lo.probe.sticking_phases ? *hi : lo;
+    const Point& fewer = &more == &lo ? *hi : lo;
+    if (std::min(more.probe.release_to_stick, fewer.probe.interior_reaction) < 1e-3 &&
+        fewer.probe.sticking_phases > 0)
+      return {"rising", fmt::format("R touches zero inside a sticking phase, which splits in two "
+                                    "(flight {:.1e} of the period); {}",
+                                    more.probe.release_to_stick, change)};
+  }
+  struct Candidate {
+    const char* kind;
+    double value;
+    const char* what;
+  };
+  const Candidate c[] = {
+      {"rising", std::min(both(&OrbitProbe::interior_reaction), both(&OrbitProbe::release_to_stick)),
+       "R touches zero inside a sticking phase"},
+      {"sticking-entry", both(&OrbitProbe::entry_reaction), "R vanishes at the landing"},
+      {"grazing", std::min(both(&OrbitProbe::flight_gap), both(&OrbitProbe::impact_speed)),
+       "a free flight touches the stop tangentially"},
+  };
+  const auto best = std::min_element(std::begin(c), std::end(c),
+                                     [](const auto& a, const auto& b) { return a.value < b.value; });
+  if (best->value < 1e-3)
+    return {best->kind, fmt::format("{} (test quantity {:.1e}); {}", best->what, best->value, change)};
+  return {"non-smooth", fmt::format("the event sequence changes and no test quantity vanishes "
+                                    "(smallest: {} {:.1e}); {}", best->kind, best->value, change)};
+}
+
 }  // namespace
 
 Branch Continue(const ContinuationRequest& req) {
@@ -140,153 +212,235 @@ Branch Continue(const ContinuationRequest& req) {
     br.end = "no orbit at the start: " + start.message;
     return br;
   }
-  const Problem p(req, start.section_time, start.period);
+  br.period = start.period;
+  const double cycle = 2.0 * M_PI * start.period;
+  Problem p(req, std::fmod(first_scene.frequency * start.section_time, cycle), start.period);
   const auto n2 = start.X.size() * 2;
-  Eigen::VectorXd y(n2 + 1);
-  y << start.X, start.V, req.from;
+  const auto n = n2 / 2;
   const double span = req.to - req.from;
   double ds = req.step > 0 ? req.step : std::abs(span) / 50.0;
   const double ds_max = req.max_step > 0 ? req.max_step : std::abs(span) / 10.0;
-  const double ds_min = 1e-10 * std::max(1.0, std::abs(span));
-  const auto record = [&](const OrbitResult& o, double value) {
-    br.points.push_back({value, o.summary, o.multipliers, o.stable});
+  const double ds_retry = 1e-4 * std::abs(span);  // below this a failed step means a boundary
+
+  const auto record = [&](const Point& pt) {
+    const auto scene = p.SceneAt(pt.y[n2]);
+    const System sys(*scene);
+    br.points.push_back({pt.y[n2], pt.orbit.summary, pt.orbit.multipliers, pt.orbit.stable,
+                         pt.probe.signature, sys.ContactDisplacement(pt.y.head(n)), p.phase()});
+    if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };
-  record(start, req.from);
-  Evaluation e = p.Evaluate(y.head(n2), y[n2]);
+  Eigen::VectorXd y0(n2 + 1);
+  y0 << start.X, start.V, req.from;
+  auto first = p.Examine(y0);
+  if (!first) {
+    br.end = "the map could not be evaluated at the start";
+    return br;
+  }
+  Point cur = *first;
+  record(cur);
+  Evaluation e = p.Evaluate(cur.y.head(n2), cur.y[n2]);
   if (!e.ok) {
     br.end = "the map could not be evaluated at the start";
     return br;
   }
-  // Initial tangent towards `to`.
   Eigen::VectorXd t = Tangent(e, Eigen::VectorXd());
   if (t[n2] * span < 0) t = -t;
-  OrbitResult prev = start;
+
+  // Corrects the predictor at arclength s from `cur` along `t`.
+  const auto trial = [&](double s) -> std::optional<Point> {
+    int iters = 0;
+    const auto yc = Correct(p, cur.y + s * t, t, iters);
+    if (!yc) return std::nullopt;
+    return p.Examine(*yc);
+  };
+  // Bisection of the arclength on a sign change of `test` between cur (s = 0) and s = hi.
+  const auto locate = [&](const std::function<double(const Point&, const Eigen::VectorXd&)>& test,
+                          double hi, double fallback, double& bracket) {
+    double lo = 0.0, value = fallback;
+    const double sign_lo = test(cur, t);
+    double l_lo = cur.y[n2], l_hi = fallback;
+    for (int it = 0; it < 80; ++it) {
+      const double mid = 0.5 * (lo + hi);
+      int iters = 0;
+      const auto yc = Correct(p, cur.y + mid * t, t, iters);
+      if (!yc) break;
+      const auto pc = p.Examine(*yc);
+      if (!pc) break;
+      const Evaluation ec = p.Evaluate(yc->head(n2), (*yc)[n2]);
+      if (!ec.ok) break;
+      const double v = test(*pc, Tangent(ec, t));
+      value = (*yc)[n2];
+      if ((v > 0) == (sign_lo > 0)) {
+        lo = mid;
+        l_lo = value;
+      } else {
+        hi = mid;
+        l_hi = value;
+      }
+      if (std::abs(l_hi - l_lo) < 1e-13 * std::max(1.0, std::abs(value)) && it > 10) break;
+    }
+    bracket = std::abs(l_hi - l_lo);
+    return value;
+  };
+
+  // Moves the section to the middle of the longest free flight of `cur` (when an event comes near
+  // it, the map loses its smoothness there and the corrector fails for no reason of the orbit's).
+  const auto move_section = [&]() {
+    if (cur.probe.best_X.size() != static_cast<long>(n)) return false;
+    const auto scene = p.SceneAt(cur.y[n2]);
+    const double old_phase = p.phase(), t_lambda = t[n2];
+    p.MoveSection(std::fmod(old_phase + scene->frequency * cur.probe.best_offset, cycle));
+    Eigen::VectorXd y(n2 + 1);
+    y << cur.probe.best_X, cur.probe.best_V, cur.y[n2];
+    int iters = 0;
+    const Evaluation es = p.Evaluate(y.head(n2), y[n2]);
+    const auto moved = es.ok ? Correct(p, y, Tangent(es, Eigen::VectorXd()), iters) : std::nullopt;
+    const auto pm = moved ? p.Examine(*moved) : std::nullopt;
+    const Evaluation em = pm ? p.Evaluate(pm->y.head(n2), pm->y[n2]) : Evaluation{};
+    if (!em.ok || !SameFamily(cur, *pm)) {
+      p.MoveSection(old_phase);
+      return false;
+    }
+    cur = *pm;
+    t = Tangent(em, Eigen::VectorXd());
+    if (t[n2] * t_lambda < 0) t = -t;
+    return true;
+  };
+  bool section_fresh = false;  // the section was just moved to the middle of a flight of cur
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
-    int iterations = 0;
-    std::optional<Eigen::VectorXd> next = Correct(p, y + ds * t, t, iterations);
-    std::optional<OrbitResult> orbit;
-    if (next) orbit = p.Characterized(next->head(n2), (*next)[n2]);
-    const bool same_kind = orbit && orbit->summary.kind == prev.summary.kind && Sticks(*orbit) == Sticks(prev);
-    if (!next || !same_kind) {
-      if (ds > ds_min * 1e3) {
-        ds *= 0.5;
-        continue;
-      }
-      // The orbit cannot be continued: sticking lost if the sticking fraction was vanishing.
-      if (Sticks(prev)) {
-        // SP vanishes linearly (MODEL §6.3): secant iterations on SP(λ) = 0 from the last points.
-        const auto& pts = br.points;
-        double l1 = pts[pts.size() - 2].value, s1 = *pts[pts.size() - 2].summary.sticking_fraction;
-        double l2 = pts.back().value, s2 = *pts.back().summary.sticking_fraction;
-        Eigen::VectorXd z = y.head(n2);
-        for (int it = 0; it < 30 && std::abs(s2) > 1e-14 && s2 != s1; ++it) {
-          double l3 = l2 - s2 * (l2 - l1) / (s2 - s1);
-          if (!std::isfinite(l3)) break;
-          // Stay on the sticking side: approach the root from inside.
-          const double guard = 1e-13 * std::max(1.0, std::abs(l3));
-          l3 = l3 - std::copysign(guard, l3 - l2);
-          const auto scene = p.SceneAt(l3);
-          if (!scene) break;
-          const System sys(*scene);
-          // Natural-parameter Newton at λ = l3 from the last orbit.
-          Eigen::VectorXd zz = z;
-          bool ok = false;
-          for (int k = 0; k < 12; ++k) {
-            const MapValue m = StroboscopicMap(sys, *scene, start.section_time, zz.head(n2 / 2),
-                                               zz.tail(n2 / 2), start.period);
-            if (m.status != RunStatus::kOk) break;
-            Eigen::VectorXd F(n2);
-            F << m.X, m.V;
-            const Eigen::VectorXd r = F - zz;
-            if (r.cwiseAbs().maxCoeff() < 1e-13 * (1 + zz.cwiseAbs().maxCoeff())) {
-              ok = true;
-              break;
-            }
-            zz -= (m.jacobian - Eigen::MatrixXd::Identity(n2, n2)).fullPivLu().solve(r);
-          }
-          if (!ok) break;
-          const OrbitResult o = p.Characterized(zz, l3);
-          if (!Sticks(o)) break;
-          l1 = l2;
-          s1 = s2;
-          l2 = l3;
-          s2 = *o.summary.sticking_fraction;
-          z = zz;
-        }
-        const double at = (s2 != s1 && std::isfinite(s1)) ? l2 - s2 * (l2 - l1) / (s2 - s1) : l2;
-        br.bifurcations.push_back({"sticking-lost", at,
-                                   fmt::format("the sticking phase shrinks to zero (SP = {:.1e} at "
-                                               "the last orbit)", s2)});
-        br.end = "sticking-lost";
-      } else {
-        br.end = !next ? "the corrector failed (the orbit ends or becomes non-smooth)"
-                       : "the orbit changed kind to " + orbit->summary.kind;
-      }
+    if (req.stop_requested && req.stop_requested->load()) {
+      br.status = "interrupted";
+      br.end = "interrupted";
       return br;
     }
-    // Accept the point.
-    const Eigen::VectorXd y_new = *next;
-    const Evaluation en = p.Evaluate(y_new.head(n2), y_new[n2]);
-    if (!en.ok) {
-      br.end = "the map could not be evaluated";
-      return br;
+    const auto next = trial(ds);
+    // Step control (Allgower & Georg): a step whose corrected point strays far from the predictor
+    // or changes the sticking fraction a lot may have jumped over part of the branch.
+    const auto sp = [](const Point& x) { return x.orbit.summary.sticking_fraction.value_or(0.0); };
+    const bool too_far = next && ds > ds_retry &&
+                         ((next->y - (cur.y + ds * t)).norm() > 0.2 * ds || std::abs(sp(*next) - sp(cur)) > 0.02);
+    if (too_far) {
+      ds *= 0.5;
+      continue;
     }
-    const Eigen::VectorXd t_new = Tangent(en, t);
-    // Bifurcations between the last point and this one, located by bisection of the arclength
-    // (each trial point corrected onto the branch) on the sign of a test function.
-    const double l_old = y[n2], l_new = y_new[n2];
-    const auto locate = [&](const std::function<double(const Eigen::VectorXd&, const Eigen::VectorXd&)>& test,
-                            double fallback) {
-      double lo = 0.0, hi = ds, value = fallback;
-      const double sign_lo = test(y, t);
-      for (int it = 0; it < 80; ++it) {
-        const double mid = 0.5 * (lo + hi);
-        int iters = 0;
-        const auto yc = Correct(p, y + mid * t, t, iters);
-        if (!yc) break;
-        const Evaluation ec = p.Evaluate(yc->head(n2), (*yc)[n2]);
-        if (!ec.ok) break;
-        const double v = test(*yc, Tangent(ec, t));
-        value = (*yc)[n2];
-        ((v > 0) == (sign_lo > 0) ? lo : hi) = mid;
-        if ((hi - lo) * std::abs(t[n2]) < 1e-12 * std::max(1.0, std::abs(value)) && it > 10) break;
+    if (next && SameFamily(cur, *next)) {
+      // Smooth bifurcations between cur and next.
+      const Evaluation en = p.Evaluate(next->y.head(n2), next->y[n2]);
+      if (!en.ok) {
+        br.end = "the map could not be evaluated";
+        return br;
       }
-      return value;
-    };
-    if (t[n2] * t_new[n2] < 0) {
-      const double at = locate([&](const Eigen::VectorXd&, const Eigen::VectorXd& tc) { return tc[n2]; },
-                               0.5 * (l_old + l_new));
-      br.bifurcations.push_back({"fold", at, "the branch turns back (λ-tangent changes sign)"});
-    }
-    const auto multiplier_test = [&](auto score) {
-      return [&, score](const Eigen::VectorXd& yc, const Eigen::VectorXd&) {
-        return score(p.Characterized(yc.head(n2), yc[n2]).multipliers);
+      const Eigen::VectorXd t_new = Tangent(en, t);
+      const double l_old = cur.y[n2], l_new = next->y[n2];
+      double bracket = 0;
+      if (t[n2] * t_new[n2] < 0) {
+        const double at = locate([&](const Point&, const Eigen::VectorXd& tc) { return tc[n2]; }, ds,
+                                 0.5 * (l_old + l_new), bracket);
+        br.bifurcations.push_back({"fold", at, "the branch turns back (λ-tangent changes sign)", bracket});
+      }
+      const auto by_multipliers = [](auto score) {
+        return [score](const Point& pc, const Eigen::VectorXd&) { return score(pc.orbit.multipliers); };
       };
-    };
-    const double flip_old = MostNegativeReal(prev.multipliers), flip_new = MostNegativeReal(orbit->multipliers);
-    if ((flip_old + 1) * (flip_new + 1) < 0 && (flip_old < 0 || flip_new < 0)) {
-      const double w = (flip_old + 1) / (flip_old - flip_new);
-      const double at = locate(multiplier_test([](const auto& mu) { return MostNegativeReal(mu) + 1; }),
-                               l_old + w * (l_new - l_old));
-      br.bifurcations.push_back({"flip", at, "a real multiplier crosses −1"});
+      const double flip_old = MostNegativeReal(cur.orbit.multipliers);
+      const double flip_new = MostNegativeReal(next->orbit.multipliers);
+      if ((flip_old + 1) * (flip_new + 1) < 0 && (flip_old < 0 || flip_new < 0)) {
+        const double w = (flip_old + 1) / (flip_old - flip_new);
+        const double at = locate(by_multipliers([](const auto& mu) { return MostNegativeReal(mu) + 1; }),
+                                 ds, l_old + w * (l_new - l_old), bracket);
+        br.bifurcations.push_back({"flip", at, "a real multiplier crosses −1", bracket});
+      }
+      const double ns_old = LeadingComplex(cur.orbit.multipliers);
+      const double ns_new = LeadingComplex(next->orbit.multipliers);
+      if (ns_old > 0 && ns_new > 0 && (ns_old - 1) * (ns_new - 1) < 0) {
+        const double w = (ns_old - 1) / (ns_old - ns_new);
+        const double at = locate(by_multipliers([](const auto& mu) { return LeadingComplex(mu) - 1; }),
+                                 ds, l_old + w * (l_new - l_old), bracket);
+        br.bifurcations.push_back({"neimark-sacker", at, "a complex pair of multipliers crosses the unit circle", bracket});
+      }
+      cur = *next;
+      t = t_new;
+      section_fresh = false;
+      record(cur);
+      if ((l_new - req.to) * span >= 0) {
+        br.end = "reached the end value";
+        return br;
+      }
+      ds = std::min(ds * 1.5, ds_max);
+    } else if (ds > ds_retry) {
+      ds *= 0.5;  // the corrector may just need a shorter step, or jumped to another orbit
+      continue;
+    } else if (!section_fresh && cur.probe.section_margin < 0.45 && move_section()) {
+      section_fresh = true;  // retry from a section in the middle of a flight
+      continue;
+    } else {
+      // A non-smooth point lies in (0, ds], or the orbit ends there: bisection of the arclength
+      // on "corrected, same kind and same events" (MODEL §5.7).
+      double lo = 0.0, hi = ds;
+      bool moved = false;
+      std::optional<Point> past = next;
+      for (int it = 0; it < 100; ++it) {
+        const double mid = 0.5 * (lo + hi);
+        auto pm = trial(mid);
+        if (pm && SameFamily(cur, *pm)) {
+          cur = *pm;  // the branch point nearest to the boundary so far
+          moved = true;
+          hi -= mid;
+          lo = 0.0;
+        } else {
+          hi = mid;
+          if (pm) past = pm;
+          else if (past && (past->y - cur.y).norm() > 2.0 * hi) past.reset();
+        }
+        const double l_hi = past ? past->y[n2] : cur.y[n2] + hi * t[n2];
+        if (std::abs(l_hi - cur.y[n2]) < 1e-13 * std::max(1.0, std::abs(cur.y[n2])) && it > 5) break;
+        if (hi < 1e-15 * std::max(1.0, cur.y.norm())) break;
+      }
+      // A point of another orbit met on the same corrector hyperplane is not "past" anything:
+      // along one branch, corrected points an arclength h apart are O(h) apart.
+      if (past && (past->y - cur.y).norm() > 1e3 * hi + 1e-7) {
+        past.reset();
+        if (moved) {
+          record(cur);
+          ds = ds_retry;
+          continue;
+        }
+      }
+      // Just past a non-smooth point the new orbit may be too degenerate to correct (a flight of
+      // zero length, a grazing landing): try to step over it.
+      for (int k = 0; !past && k < 12; ++k) {
+        const double s_over = hi + ds_retry * std::pow(2.0, k - 4);
+        if (s_over > std::max(ds, 16.0 * ds_retry)) break;
+        auto po = trial(s_over);
+        if (po && !SameFamily(cur, *po) && (po->y - cur.y).norm() < 1e3 * s_over) past = po;
+      }
+      const auto [kind, detail] = NameNonSmooth(cur, past ? &*past : nullptr);
+      // The boundary lies between cur and its predictor at arclength hi.
+      const double at = cur.y[n2] + 0.5 * hi * t[n2], bracket = hi * std::abs(t[n2]);
+      if (moved) record(cur);
+      br.bifurcations.push_back({kind, at, detail, bracket});
+      // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
+      // that lost one of its sticking phases still sticks).
+      const bool goes_on = past && Sticks(*past) == Sticks(cur);
+      if (!goes_on) {
+        br.end = kind == "sticking-lost" ? kind : kind + " (the orbit does not go on)";
+        return br;
+      }
+      const Evaluation ep = p.Evaluate(past->y.head(n2), past->y[n2]);
+      if (!ep.ok) {
+        br.end = kind + " (the map cannot be evaluated past it)";
+        return br;
+      }
+      t = Tangent(ep, t);
+      cur = *past;
+      section_fresh = false;
+      record(cur);
+      ds = std::max(ds, 1e-3 * std::abs(span));
     }
-    const double ns_old = LeadingComplex(prev.multipliers), ns_new = LeadingComplex(orbit->multipliers);
-    if (ns_old > 0 && ns_new > 0 && (ns_old - 1) * (ns_new - 1) < 0) {
-      const double w = (ns_old - 1) / (ns_old - ns_new);
-      const double at = locate(multiplier_test([](const auto& mu) { return LeadingComplex(mu) - 1; }),
-                               l_old + w * (l_new - l_old));
-      br.bifurcations.push_back({"neimark-sacker", at, "a complex pair of multipliers crosses the unit circle"});
-    }
-    y = y_new;
-    t = t_new;
-    prev = *orbit;
-    record(*orbit, l_new);
-    if ((l_new - req.to) * span >= 0) {
-      br.end = "reached the end value";
+    if (cur.probe.section_margin < 0.3 && !move_section()) {
+      br.end = "could not move the section away from an event";
       return br;
     }
-    if (iterations <= 3) ds = std::min(ds * 1.5, ds_max);
   }
   br.end = "max points";
   return br;

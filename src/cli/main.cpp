@@ -300,16 +300,17 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
   req.step = step;
   req.max_points = max_points;
   req.orbit = orbit;
-  const auto branch = vibro::Continue(req);
+  auto branch = vibro::Continue(req);
+  branch.param = key;
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
-    fmt::print("{:>16} {:>12} {:>8} {:>12}\n", key, "SP", "stable", "max|mu|");
+    fmt::print("{:>16} {:>12} {:>8} {:>12}  {}\n", key, "SP", "stable", "max|mu|", "events");
     for (const auto& p : branch.points) {
       double lead = 0;
       for (const auto& m : p.multipliers) lead = std::max(lead, std::abs(m));
-      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}\n", p.value,
-                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead);
+      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}  {}\n", p.value,
+                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, p.signature);
     }
     for (const auto& b : branch.bifurcations)
       fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);

@@ -90,6 +90,8 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
 std::string BranchJson(const Branch& b) {
   nlohmann::json j;
   j["status"] = b.status;
+  j["param"] = b.param;
+  j["period"] = b.period;
   auto points = nlohmann::json::array();
   for (const auto& pt : b.points) {
     auto phases = nlohmann::json::array();
@@ -101,12 +103,15 @@ std::string BranchJson(const Branch& b) {
                       {"stick_phases", phases},
                       {"impacts_per_period", OrNull(pt.summary.impacts_per_period)},
                       {"stable", pt.stable},
-                      {"floquet_multipliers", mu}});
+                      {"floquet_multipliers", mu},
+                      {"events", pt.signature},
+                      {"x_B", pt.x_B},
+                      {"section_phase", pt.section_phase}});
   }
   j["points"] = points;
   auto bif = nlohmann::json::array();
   for (const auto& x : b.bifurcations)
-    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}});
+    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["bifurcations"] = bif;
   j["end"] = b.end;
   return j.dump();

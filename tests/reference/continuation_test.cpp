@@ -81,6 +81,14 @@ TEST(Continuation, FoldOfTheFig5ImpactOrbitIsPassedLocatedAndConfirmedBySimulati
   for (const auto& x : b.bifurcations)
     if (x.kind == "fold") fold = &x;
   ASSERT_NE(fold, nullptr);
+  // The closed form of the 1-DOF one-impact period-1 orbits (ẍ + x = f sin ωt, x ≥ x0 = 1,
+  // τ = tan(π/ω)): (1−r)τx0 = P[(1−r)τ sin θ − (1+r)ω cos θ], P = f/(1−ω²); they exist while
+  // |(1−r)τx0| ≤ |P|·√((1−r)²τ² + (1+r)²ω²), and the two meet at the equality: the fold.
+  {
+    const double w = 10.0, r = 0.75, tau = std::tan(M_PI / w);
+    const double f_fold = std::abs(1 - w * w) * (1 - r) * tau / std::hypot((1 - r) * tau, (1 + r) * w);
+    EXPECT_NEAR(fold->value, f_fold, 1e-10);
+  }
   // Every point of the branch lies on the side f ≥ fold.
   for (const auto& pt : b.points) EXPECT_GE(pt.value, fold->value - 1e-9);
   // The branch's unstable side: a multiplier above 1 after the fold.
@@ -113,6 +121,113 @@ TEST(Continuation, FoldOfTheFig5ImpactOrbitIsPassedLocatedAndConfirmedBySimulati
     const Attractor a = rec.Classify();
     const bool one_impact = a.kind == "impact-periodic" && a.period == 1 && a.impacts_per_period == 1;
     EXPECT_EQ(one_impact, df > 0) << "f = fold " << df << ": " << a.kind;
+  }
+}
+
+// Trace of DP of the 1-DOF one-impact period-1 orbit (impact phase θ, post-impact speed w+,
+// acceleration a at the impact): tr = −2r cos T − r(1+r) a sin T / w+, det = r² (MODEL §5.6 by
+// hand for the impact map; checked against vibro's multipliers below). Long double throughout.
+long double OneImpactTrace(long double w, long double r, long double x0, long double f) {
+  const long double T = 2 * M_PIl / w, tau = std::tan(T / 2), P = f / (1 - w * w);
+  const long double a = (1 - r) * tau, b = (1 + r) * w;
+  const long double th = std::atan2(b, a) + std::asin((1 - r) * tau * x0 / (P * std::hypot(a, b)));
+  const long double wp = (x0 - P * std::sin(th)) * tau + P * w * std::cos(th);
+  const long double acc = f * std::sin(th) - x0;
+  return -2 * r * std::cos(T) - r * (1 + r) * acc * std::sin(T) / wp;
+}
+
+TEST(Continuation, FlipOfAOneImpactOrbitIsLocatedAtTheClosedFormAndConfirmedBySimulation) {
+  // ω = 3, r = 0.5, x0 = 1: the one-impact period-1 orbit loses stability through μ = −1 where
+  // tr DP = −(1 + r²) (det = r²); the closed form's root by bisection in long double.
+  const double w = 3.0, r = 0.5;
+  long double lo = 6.0L, hi = 7.6L;
+  for (int i = 0; i < 200; ++i) {
+    const long double mid = 0.5L * (lo + hi);
+    (OneImpactTrace(w, r, 1.0L, mid) + 1 + r * r > 0 ? lo : hi) = mid;
+  }
+  const double f_flip = static_cast<double>(0.5L * (lo + hi));
+  const auto at = [&](double f) { return OneDof(r, w, f, 1.0, 400); };
+  ContinuationRequest req;
+  req.scene_at = at;
+  req.from = 7.0;
+  req.to = 7.6;
+  req.orbit.kind = OrbitKind::kImpact;
+  req.orbit.period = 1;
+  const Branch b = Continue(req);
+  ASSERT_EQ(b.status, "ok") << b.end;
+  // The multipliers of vibro's orbit at the start: sum and product as the closed form says.
+  const auto& mu = b.points.front().multipliers;
+  ASSERT_EQ(mu.size(), 2u);
+  EXPECT_NEAR((mu[0] + mu[1]).real(), static_cast<double>(OneImpactTrace(w, r, 1.0L, 7.0L)), 1e-9);
+  EXPECT_NEAR((mu[0] * mu[1]).real(), r * r, 1e-9);
+  const Bifurcation* flip = nullptr;
+  for (const auto& x : b.bifurcations)
+    if (x.kind == "flip") flip = &x;
+  ASSERT_NE(flip, nullptr);
+  EXPECT_NEAR(flip->value, f_flip, 1e-10);
+  EXPECT_LT(flip->bracket, 1e-10);
+  // Simulation on each side from the period-1 orbit, slightly perturbed: below the flip the
+  // motion returns to it, above it the motion leaves for a period-2 orbit.
+  for (double df : {-0.02, 0.02}) {
+    const Scene s0 = at(f_flip + df);
+    const System sys(s0);
+    OrbitRequest o;
+    o.kind = OrbitKind::kImpact;
+    o.period = 1;
+    const OrbitResult orbit = FindOrbit(sys, s0, o);
+    ASSERT_EQ(orbit.status, "converged") << orbit.message;
+    EXPECT_EQ(orbit.stable, df < 0);
+    Scene s = s0;
+    s.initial_time = orbit.section_time;
+    s.run.periods = 4000;
+    AttractorRecorder rec(sys, s);
+    const InitialOverride start{orbit.section_time, orbit.X, orbit.V.array() + 1e-6};
+    SimulationOptions opt;
+    opt.initial = &start;
+    opt.observers = {&rec};
+    vibro::Simulate(sys, s, opt);
+    const Attractor a = rec.Classify();
+    EXPECT_EQ(a.kind, "impact-periodic");
+    EXPECT_EQ(a.period.value_or(0), df < 0 ? 1 : 2) << "f = flip " << df;
+  }
+}
+
+TEST(Continuation, RisingBifurcationOfATwoDofBranchIsLocatedFromBothSidesAndConfirmedBySimulation) {
+  // 2-DOF chain, r = 0, ω = 0.4: along the period-1 sticking branch in f the reaction dips to zero
+  // inside the sticking phase (MODEL §5.7), which splits in two.
+  const std::string path = std::string(VIBRO_SCENES_DIR) + "/chain2.toml";
+  const auto at = [&](double f) {
+    return LoadScene(path, {"run.samples_per_period=0", "stop.restitution=0.0", "excitation.frequency=0.4",
+                            "run.periods=400", fmt::format("excitation.amplitude={:.17g}", f)})
+        .scene;
+  };
+  const auto rising = [&](double from, double to) {
+    ContinuationRequest req;
+    req.scene_at = at;
+    req.from = from;
+    req.to = to;
+    req.step = 0.01;
+    const Branch b = Continue(req);
+    EXPECT_EQ(b.status, "ok") << b.end;
+    for (const auto& x : b.bifurcations)
+      if (x.kind == "rising") return x.value;
+    ADD_FAILURE() << "no rising bifurcation between " << from << " and " << to;
+    return 0.0;
+  };
+  const double up = rising(1.0, 1.26), down = rising(1.26, 1.2);
+  EXPECT_NEAR(up, down, 1e-9);  // one sticking phase below it, two above: two different branches
+  // Simulated from the scene's state just below and just above: one sticking phase, then two.
+  for (double df : {-1e-7, 1e-7}) {
+    const Scene s = at(up + df);
+    const System sys(s);
+    AttractorRecorder rec(sys, s);
+    SimulationOptions opt;
+    opt.observers = {&rec};
+    const RunResult run = vibro::Simulate(sys, s, opt);
+    ASSERT_EQ(run.status, RunStatus::kOk) << run.message;
+    const Attractor a = rec.Classify();
+    EXPECT_EQ(a.kind, "sticking-periodic");
+    EXPECT_EQ(a.stick_phases.size(), df < 0 ? 1u : 2u) << "f = rising " << df;
   }
 }
 
@@ -153,16 +268,20 @@ TEST(Continuation, NeimarkSackerPointIsBracketedByDirectSolves) {
   ASSERT_NE(before, nullptr);
   ASSERT_NE(after, nullptr);
   EXPECT_LT((pair(*before) - 1) * (pair(*after) - 1), 0.0);
-  // ... and so do direct solves just beside it, started from the scene's transient (when that
-  // transient lands on this family; a coexisting sticking orbit may attract it instead).
+  // ... and so do direct solves just beside it, started from the impact of the nearest branch
+  // point (other one-impact orbits coexist: the scene's own transient lands on one of them).
   int checked = 0;
   double product = 1;
-  for (double df : {0.01, -0.01}) {
+  for (const BranchPoint* side : {before, after}) {
+    const double df = side == before ? 0.01 : -0.01;
     const Scene s = at(ns->value + df);
     const System sys(s);
     OrbitRequest r;
     r.kind = OrbitKind::kImpact;
     r.period = 1;
+    ASSERT_EQ(side->summary.impact_phases.size(), 1u);
+    r.guess_phase = side->summary.impact_phases[0];
+    r.guess_velocity = -0.5 * side->summary.impact_velocities[0];
     const OrbitResult o = FindOrbit(sys, s, r);
     if (o.status != "converged") continue;
     double m = 0;
@@ -171,9 +290,8 @@ TEST(Continuation, NeimarkSackerPointIsBracketedByDirectSolves) {
     product *= (m - 1);
     ++checked;
   }
-  if (checked == 2) {
-    EXPECT_LT(product, 0.0);
-  }
+  EXPECT_EQ(checked, 2);
+  EXPECT_LT(product, 0.0);
   // The located value sits where the complex pair has modulus 1 (to the accuracy of the bisection).
   const Branch close = [&] {
     ContinuationRequest c = req;
