@@ -60,6 +60,54 @@ def plot_basin(f, title, save):
     save(fig, "basin")
 
 
+BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising": "^",
+                       "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o"}
+
+
+def draw_branch(ax, f, quantity="sticking_fraction", label_prefix=""):
+    """A continuation branch: solid where stable, dashed where unstable; bifurcations marked."""
+    b = f["branch"]
+    value = b["value"][:]
+    y = b[quantity][:]
+    stable = b["stable"][:].astype(bool)
+    # Split into runs of equal stability (each run drawn with the neighbouring point included).
+    start = 0
+    for i in range(1, len(value) + 1):
+        if i == len(value) or stable[i] != stable[start]:
+            j = min(i + 1, len(value))
+            ax.plot(value[start:j], y[start:j], "-" if stable[start] else "--", color="C0", lw=1.5,
+                    label=None)
+            start = i
+    ax.plot([], [], "-", color="C0", label=f"{label_prefix}stable")
+    ax.plot([], [], "--", color="C0", label=f"{label_prefix}unstable")
+    bif = f["bifurcations"]
+    kinds = [k.decode() if isinstance(k, bytes) else k for k in bif["kind"][:]]
+    seen = set()
+    for v, k in zip(bif["value"][:], kinds):
+        yv = np.interp(v, value, y) if np.all(np.diff(value) > 0) else y[np.argmin(np.abs(value - v))]
+        ax.plot([v], [yv], BIFURCATION_MARKERS.get(k, "o"), color="C3", ms=8,
+                label=k if k not in seen else None)
+        seen.add(k)
+
+
+def plot_branch(f, title, save):
+    """Bifurcation diagram of a continuation (sticking fraction and largest |multiplier|)."""
+    b = f["branch"]
+    param = b.attrs["param"]
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
+    draw_branch(ax1, f)
+    ax1.set_ylabel("sticking fraction")
+    ax1.legend(fontsize=8, loc="best")
+    ax1.set_title(f"{title}\ncontinuation, period {b.attrs['period']}: {b.attrs['end']}")
+    draw_branch(ax2, f, "max_multiplier")
+    ax2.axhline(1.0, color="0.6", lw=0.8)
+    if np.nanmax(b["max_multiplier"][:]) > 10:
+        ax2.set_yscale("log")
+    ax2.set_ylabel("largest |multiplier|")
+    ax2.set_xlabel(param)
+    save(fig, "branch")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("file")
@@ -84,9 +132,11 @@ def main():
         x0 = float(model.attrs["stop"])
         if "basin" in f:
             plot_basin(f, title, save)
+        if "branch" in f:
+            plot_branch(f, title, save)
         t = f["samples/t"][:]
         if len(t) == 0:
-            if "basin" not in f:
+            if "basin" not in f and "branch" not in f:
                 print("vibro plot: the file has no dense samples (run.samples_per_period = 0)",
                       file=sys.stderr)
             for w in written:

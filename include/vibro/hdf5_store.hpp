@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "vibro/attractor.hpp"
+#include "vibro/continuation.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/studies.hpp"
@@ -75,6 +76,12 @@ class Hdf5Store final : public Observer {
   // axes as attributes, and the attractor table /attractors/* (one row per label). Call before
   // Finish.
   void WriteStudy(const StudyResult& study, const Coordinate& x, const Coordinate& y, int nx, int ny);
+
+  // Writes a continuation branch: /branch (one row per point: value, sticking_fraction (NaN for
+  // none), stable (uint8), x_B, section_phase, max_multiplier, stick_phases count, events
+  // (strings), multipliers (N, m, 2) as [re, im] padded with NaN; attributes param, period, end,
+  // status) and /bifurcations (value, kind, detail, bracket). Call before Finish.
+  void WriteBranch(const Branch& branch);
 
   // Writes the final status, message, counts and attractor, and closes the file.
   void Finish(const RunResult& result, const Attractor& attractor);

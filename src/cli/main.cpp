@@ -286,7 +286,7 @@ int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool
 
 int RunContinue(const std::string& path, const std::vector<std::string>& sets, bool json,
                 const std::string& key, double to, double step, int max_points,
-                const vibro::OrbitRequest& orbit) {
+                const vibro::OrbitRequest& orbit, const std::string& out) {
   const auto loaded = vibro::LoadScene(path, sets);
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
@@ -300,8 +300,26 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
   req.step = step;
   req.max_points = max_points;
   req.orbit = orbit;
+  req.stop_requested = &g_stop_requested;
+  if (!json)
+    req.progress = [&](size_t points, double value) {
+      if (points % 25 == 0) fmt::print(stderr, "\r{} points, {} = {:.10g}   ", points, key, value);
+    };
+  const vibro::System sys(loaded.scene);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));  // fails early
   auto branch = vibro::Continue(req);
   branch.param = key;
+  if (!json && branch.points.size() >= 25) fmt::print(stderr, "\n");
+  if (store) {
+    store->WriteBranch(branch);
+    vibro::RunResult r;
+    r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    r.message = branch.end;
+    vibro::Attractor last;
+    if (!branch.points.empty()) last = branch.points.back().summary;
+    store->Finish(r, last);
+  }
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
@@ -316,6 +334,7 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
       fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
     fmt::print("end          {}\n", branch.end);
   }
+  if (branch.status == "interrupted") return kExitInterrupted;
   return branch.status == "ok" ? 0 : kExitNumerical;
 }
 
@@ -519,7 +538,8 @@ int main(int argc, char** argv) {
   cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)");
   cont->add_option("--max-points", cont_points, "most points on the branch");
   cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)");
-  std::string cont_kind = "sticking";
+  std::string cont_kind = "sticking", cont_out;
+  cont->add_option("--out", cont_out, "write the branch and its bifurcations to HDF5");
   cont->add_option("--kind", cont_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
   StudyArgs study_args;
   CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
@@ -594,7 +614,7 @@ int main(int argc, char** argv) {
       vibro::OrbitRequest req;
       req.period = cont_period;
       req.kind = cont_kind == "impact" ? vibro::OrbitKind::kImpact : vibro::OrbitKind::kSticking;
-      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req);
+      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out);
     }
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);

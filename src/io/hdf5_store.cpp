@@ -4,7 +4,9 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstring>
 #include <cstdint>
@@ -775,6 +777,85 @@ void Hdf5Store::WriteGroup(const std::string& group,
            H5Gclose);
   Check(g.get(), group.c_str());
   for (const auto& [name, v] : values) WriteDoubles(g.get(), name.c_str(), v);
+}
+
+namespace {
+
+// A fixed-size 1-D or 2-D dataset written at once (continuation output is small).
+void WriteDataset(hid_t g, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+                  std::vector<hsize_t> dims) {
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
+  Handle d(Check(H5Dcreate2(g, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name),
+           H5Dclose);
+  if (dims[0] > 0) Check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name, 0);
+}
+void WriteColumn(hid_t g, const char* name, const std::vector<double>& v) {
+  WriteDataset(g, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), {v.size()});
+}
+void WriteStrings(hid_t g, const char* name, const std::vector<std::string>& v) {
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  Handle type = StringType();
+  WriteDataset(g, name, type.get(), type.get(), p.data(), {v.size()});
+}
+Handle NewGroup(hid_t f, const char* name) {
+  return Handle(Check(H5Gcreate2(f, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Gclose);
+}
+
+}  // namespace
+
+void Hdf5Store::WriteBranch(const Branch& b) {
+  const hid_t f = impl_->file.get();
+  const Handle g = NewGroup(f, "/branch");
+  const size_t N = b.points.size();
+  size_t m = 0;
+  for (const auto& pt : b.points) m = std::max(m, pt.multipliers.size());
+  std::vector<double> value, sp, xb, phase, lead, phases, mu(N * std::max<size_t>(m, 1) * 2, NAN);
+  std::vector<std::uint8_t> stable;
+  std::vector<std::string> events;
+  for (size_t i = 0; i < N; ++i) {
+    const auto& pt = b.points[i];
+    value.push_back(pt.value);
+    sp.push_back(pt.summary.sticking_fraction.value_or(NAN));
+    xb.push_back(pt.x_B);
+    phase.push_back(pt.section_phase);
+    phases.push_back(static_cast<double>(pt.summary.stick_phases.size()));
+    stable.push_back(pt.stable ? 1 : 0);
+    events.push_back(pt.signature);
+    double l = 0;
+    for (size_t k = 0; k < pt.multipliers.size(); ++k) {
+      l = std::max(l, std::abs(pt.multipliers[k]));
+      mu[(i * m + k) * 2] = pt.multipliers[k].real();
+      mu[(i * m + k) * 2 + 1] = pt.multipliers[k].imag();
+    }
+    lead.push_back(l);
+  }
+  WriteColumn(g.get(), "value", value);
+  WriteColumn(g.get(), "sticking_fraction", sp);
+  WriteColumn(g.get(), "x_B", xb);
+  WriteColumn(g.get(), "section_phase", phase);
+  WriteColumn(g.get(), "max_multiplier", lead);
+  WriteColumn(g.get(), "stick_phases", phases);
+  WriteDataset(g.get(), "stable", H5T_STD_U8LE, H5T_NATIVE_UINT8, stable.data(), {N});
+  WriteStrings(g.get(), "events", events);
+  WriteDataset(g.get(), "multipliers", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, mu.data(), {N, m, 2});
+  WriteString(g.get(), "param", b.param);
+  WriteInt(g.get(), "period", b.period);
+  WriteString(g.get(), "end", b.end);
+  WriteString(g.get(), "status", b.status);
+  const Handle bg = NewGroup(f, "/bifurcations");
+  std::vector<double> bv, bb;
+  std::vector<std::string> kind, detail;
+  for (const auto& x : b.bifurcations) {
+    bv.push_back(x.value);
+    bb.push_back(x.bracket);
+    kind.push_back(x.kind);
+    detail.push_back(x.detail);
+  }
+  WriteColumn(bg.get(), "value", bv);
+  WriteColumn(bg.get(), "bracket", bb);
+  WriteStrings(bg.get(), "kind", kind);
+  WriteStrings(bg.get(), "detail", detail);
 }
 
 }  // namespace vibro
