@@ -108,6 +108,49 @@ def plot_branch(f, title, save):
     save(fig, "branch")
 
 
+def plot_partition(f, title, save):
+    """Curves of constant sticking fraction and existence boundaries in a parameter plane."""
+    p = f["partition"]
+    p1, p2 = p.attrs["param1"], p.attrs["param2"]
+    xv1, xl, xv2 = p["crossing_value1"][:], p["crossing_level"][:], p["crossing_value2"][:]
+    bv1, bv2 = p["boundary_value1"][:], p["boundary_value2"][:]
+    bk = np.array([k.decode() if isinstance(k, bytes) else k for k in p["boundary_kind"][:]])
+    fig, ax = plt.subplots(figsize=(7, 5.5))
+    cmap = plt.get_cmap("viridis")
+    levels = list(p.attrs["levels"])
+
+    def curves(v1, v2):
+        """Points of one level (or boundary kind) joined column to column by rank within a column."""
+        cols = sorted(set(v1))
+        by_rank = {}
+        for c in cols:
+            ys = sorted(v2[v1 == c])
+            for r, y in enumerate(ys):
+                by_rank.setdefault(r, []).append((c, y))
+        return by_rank.values()
+    for i, s in enumerate(levels):
+        sel = xl == s
+        for pts in curves(xv1[sel], xv2[sel]):
+            pts = np.array(pts)
+            ax.plot(pts[:, 0], pts[:, 1], "-", color=cmap(i / max(1, len(levels) - 1)), lw=1.4,
+                    label=f"SP = {s:g}" if pts is not None else None)
+    seen = set()
+    for k in sorted(set(bk)):
+        sel = bk == k
+        for pts in curves(bv1[sel], bv2[sel]):
+            pts = np.array(pts)
+            ax.plot(pts[:, 0], pts[:, 1], ":", marker=BIFURCATION_MARKERS.get(k, "o"), color="C3",
+                    ms=4, lw=1.0, label=k if k not in seen else None)
+            seen.add(k)
+    handles, names = ax.get_legend_handles_labels()
+    unique = dict(zip(names, handles))
+    ax.legend(unique.values(), unique.keys(), fontsize=8, loc="best")
+    ax.set_xlabel(p1)
+    ax.set_ylabel(p2)
+    ax.set_title(f"{title}\nparameter-plane partition: constant sticking fraction")
+    save(fig, "partition")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("file")
@@ -134,9 +177,11 @@ def main():
             plot_basin(f, title, save)
         if "branch" in f:
             plot_branch(f, title, save)
+        if "partition" in f:
+            plot_partition(f, title, save)
         t = f["samples/t"][:]
         if len(t) == 0:
-            if "basin" not in f and "branch" not in f:
+            if not any(g in f for g in ("basin", "branch", "partition")):
                 print("vibro plot: the file has no dense samples (run.samples_per_period = 0)",
                       file=sys.stderr)
             for w in written:

@@ -35,6 +35,8 @@ struct ContinuationRequest {
   double max_step = 0;       // (0: |to − from|/10)
   int max_points = 1000;
   OrbitRequest orbit;        // how the first orbit is found
+  // Sticking fractions whose crossings along the branch are located (partitions, paper §5.4).
+  std::vector<double> levels;
   const std::atomic<bool>* stop_requested = nullptr;  // polled between points
   std::function<void(size_t points, double value)> progress;
 };
@@ -58,15 +60,48 @@ struct Bifurcation {
   double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
 };
 
+// Where the sticking fraction crosses a requested level (located by bisection like the
+// smooth bifurcations).
+struct LevelCrossing {
+  double level, value, bracket;
+};
+
 struct Branch {
   std::string status = "ok";  // "ok" | "no-orbit" | "interrupted"
   std::string param;          // the continued key (set by the caller, for output)
   int period = 0;
   std::vector<BranchPoint> points;
   std::vector<Bifurcation> bifurcations;
+  std::vector<LevelCrossing> crossings;
   std::string end;  // why the branch stopped
 };
 
 Branch Continue(const ContinuationRequest& request);
+
+
+// Two-parameter partition (paper §5.4, Figs. 9, 13, 17): for each value of the first parameter, the
+// sticking branch is continued in the second, both ways from `start2`, over [lo2, hi2]; the
+// crossings of the requested sticking-fraction levels and the bifurcations (its ends: the
+// existence boundaries f_free-flight, f_sticking and their r > 0 counterparts, MODEL §6.3) are
+// reported per column. Columns are independent and computed in parallel.
+struct PartitionRequest {
+  std::function<Scene(double, double)> scene_at;
+  std::vector<double> values1;
+  double start2 = 0, lo2 = 0, hi2 = 1;
+  std::vector<double> levels;
+  OrbitRequest orbit;
+  double step = 0;
+  int max_points = 2000;
+  int threads = 0;
+  const std::atomic<bool>* stop_requested = nullptr;
+};
+struct PartitionColumn {
+  double value1;
+  std::string status = "ok";  // "ok" | "no-orbit" (no orbit of the kind at start2) | "interrupted"
+  std::vector<LevelCrossing> crossings;
+  std::vector<Bifurcation> bifurcations;
+  std::string end_down, end_up;  // why each half of the branch stopped
+};
+std::vector<PartitionColumn> Partition(const PartitionRequest& request);
 
 }  // namespace vibro

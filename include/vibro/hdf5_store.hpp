@@ -83,6 +83,12 @@ class Hdf5Store final : public Observer {
   // status) and /bifurcations (value, kind, detail, bracket). Call before Finish.
   void WriteBranch(const Branch& branch);
 
+  // Writes a partition: /partition with attributes param1, param2, levels and the tables
+  // columns (value1, status), crossings (value1, level, value2) and boundaries (value1, value2,
+  // kind) as datasets. Call before Finish.
+  void WritePartition(const std::string& param1, const std::string& param2,
+                      const std::vector<double>& levels, const std::vector<PartitionColumn>& columns);
+
   // Writes the final status, message, counts and attractor, and closes the file.
   void Finish(const RunResult& result, const Attractor& attractor);
 

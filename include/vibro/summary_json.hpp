@@ -27,6 +27,10 @@ std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
 
 // `vibro continue --json` (CONTRACT §2).
 std::string BranchJson(const Branch& branch);
+// `vibro partition --json`: {"params", "levels", "columns": [{"value1", "status", "crossings":
+// [{"level", "value"}], "bifurcations": [{"kind", "value"}], "end_down", "end_up"}]}.
+std::string PartitionJson(const std::string& param1, const std::string& param2,
+                          const std::vector<double>& levels, const std::vector<PartitionColumn>& columns);
 
 // `vibro attractors --json` and `vibro basin --json`.
 std::string StudyJson(const StudyResult& study, const Coordinate& x, const Coordinate& y);

@@ -22,8 +22,15 @@ struct Evaluation {
 // A corrected point of the branch with what is known about its orbit.
 struct Point {
   Eigen::VectorXd y;  // (z, λ)
+  Evaluation eval;    // G, DF − I and ∂F/∂λ at y
   OrbitResult orbit;
   OrbitProbe probe;
+};
+
+// A corrected point and the evaluation of the map there.
+struct Corrected {
+  Eigen::VectorXd y;
+  Evaluation eval;
 };
 
 // The map F(z; λ) on the section ωt0 = phase (so a change of ω keeps the section's forcing phase).
@@ -72,7 +79,8 @@ class Problem {
   }
 
   // The orbit at y = (z, λ): summary, multipliers and event probe.
-  std::optional<Point> Examine(const Eigen::VectorXd& y) const {
+  std::optional<Point> Examine(const Corrected& c) const {
+    const Eigen::VectorXd& y = c.y;
     const auto N = y.size() - 1;
     const double lambda = y[N];
     const auto scene = SceneAt(lambda);
@@ -81,17 +89,16 @@ class Problem {
     const auto n = sys.dof();
     Point pt;
     pt.y = y;
+    pt.eval = c.eval;
     OrbitResult& o = pt.orbit;
     o.status = "converged";
     o.period = q_;
     o.section_time = SectionTime(*scene);
     o.X = y.head(n);
     o.V = y.segment(n, n);
-    const MapValue m = StroboscopicMap(sys, *scene, o.section_time, o.X, o.V, q_);
-    if (m.status != RunStatus::kOk || m.singular) return std::nullopt;
-    o.monodromy = m.jacobian;
+    o.monodromy = c.eval.Jz + Eigen::MatrixXd::Identity(2 * n, 2 * n);
     Characterize(sys, *scene, o);
-    pt.probe = ProbeOrbit(sys, *scene, o.section_time, o.X, o.V, q_);
+    pt.probe = ProbeOrbit(sys, *scene, o.section_time, o.X, o.V, q_, 256);
     if (!pt.probe.ok) return std::nullopt;
     return pt;
   }
@@ -113,8 +120,8 @@ Eigen::VectorXd Tangent(const Evaluation& e, const Eigen::VectorXd& previous) {
 }
 
 // Newton on {G(y) = 0, tᵀ(y − y_pred) = 0}.
-std::optional<Eigen::VectorXd> Correct(const Problem& p, Eigen::VectorXd y, const Eigen::VectorXd& t,
-                                       int& iterations) {
+std::optional<Corrected> Correct(const Problem& p, Eigen::VectorXd y, const Eigen::VectorXd& t,
+                                 int& iterations) {
   const auto N = y.size();
   const Eigen::VectorXd pred = y;
   double last = 0;
@@ -123,7 +130,7 @@ std::optional<Eigen::VectorXd> Correct(const Problem& p, Eigen::VectorXd y, cons
     if (!e.ok) return std::nullopt;
     const double res = e.G.cwiseAbs().maxCoeff() / (1.0 + y.head(N - 1).cwiseAbs().maxCoeff());
     // Converged at 1e-13, or at 1e-11 once Newton stops gaining (rounding of the map).
-    if (res < 1e-13 || (res < 1e-11 && iterations > 0 && res > 0.1 * last)) return y;
+    if (res < 1e-13 || (res < 1e-11 && iterations > 0 && res > 0.1 * last)) return Corrected{y, e};
     last = res;
     Eigen::MatrixXd J(N, N);
     J.topLeftCorner(N - 1, N - 1) = e.Jz;
@@ -185,6 +192,12 @@ std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* 
     double value;
     const char* what;
   };
+  if (both(&OrbitProbe::entry_reaction) < 1e-3)  // also a degenerate grazing at f_sticking (§6.3)
+    return {"sticking-entry", fmt::format("R vanishes at the landing (test quantity {:.1e}; grazing "
+                                          "quantity {:.1e}); {}",
+                                          both(&OrbitProbe::entry_reaction),
+                                          std::min(both(&OrbitProbe::flight_gap), both(&OrbitProbe::impact_speed)),
+                                          change)};
   const Candidate c[] = {
       {"rising", std::min(both(&OrbitProbe::interior_reaction), both(&OrbitProbe::release_to_stick)),
        "R touches zero inside a sticking phase"},
@@ -231,19 +244,15 @@ Branch Continue(const ContinuationRequest& req) {
   };
   Eigen::VectorXd y0(n2 + 1);
   y0 << start.X, start.V, req.from;
-  auto first = p.Examine(y0);
+  Evaluation e = p.Evaluate(y0.head(n2), y0[n2]);
+  auto first = e.ok ? p.Examine({y0, e}) : std::nullopt;
   if (!first) {
     br.end = "the map could not be evaluated at the start";
     return br;
   }
   Point cur = *first;
   record(cur);
-  Evaluation e = p.Evaluate(cur.y.head(n2), cur.y[n2]);
-  if (!e.ok) {
-    br.end = "the map could not be evaluated at the start";
-    return br;
-  }
-  Eigen::VectorXd t = Tangent(e, Eigen::VectorXd());
+  Eigen::VectorXd t = Tangent(cur.eval, Eigen::VectorXd());
   if (t[n2] * span < 0) t = -t;
 
   // Corrects the predictor at arclength s from `cur` along `t`.
@@ -266,10 +275,8 @@ Branch Continue(const ContinuationRequest& req) {
       if (!yc) break;
       const auto pc = p.Examine(*yc);
       if (!pc) break;
-      const Evaluation ec = p.Evaluate(yc->head(n2), (*yc)[n2]);
-      if (!ec.ok) break;
-      const double v = test(*pc, Tangent(ec, t));
-      value = (*yc)[n2];
+      const double v = test(*pc, Tangent(pc->eval, t));
+      value = pc->y[n2];
       if ((v > 0) == (sign_lo > 0)) {
         lo = mid;
         l_lo = value;
@@ -296,13 +303,12 @@ Branch Continue(const ContinuationRequest& req) {
     const Evaluation es = p.Evaluate(y.head(n2), y[n2]);
     const auto moved = es.ok ? Correct(p, y, Tangent(es, Eigen::VectorXd()), iters) : std::nullopt;
     const auto pm = moved ? p.Examine(*moved) : std::nullopt;
-    const Evaluation em = pm ? p.Evaluate(pm->y.head(n2), pm->y[n2]) : Evaluation{};
-    if (!em.ok || !SameFamily(cur, *pm)) {
+    if (!pm || !SameFamily(cur, *pm)) {
       p.MoveSection(old_phase);
       return false;
     }
     cur = *pm;
-    t = Tangent(em, Eigen::VectorXd());
+    t = Tangent(cur.eval, Eigen::VectorXd());
     if (t[n2] * t_lambda < 0) t = -t;
     return true;
   };
@@ -326,12 +332,7 @@ Branch Continue(const ContinuationRequest& req) {
     }
     if (next && SameFamily(cur, *next)) {
       // Smooth bifurcations between cur and next.
-      const Evaluation en = p.Evaluate(next->y.head(n2), next->y[n2]);
-      if (!en.ok) {
-        br.end = "the map could not be evaluated";
-        return br;
-      }
-      const Eigen::VectorXd t_new = Tangent(en, t);
+      const Eigen::VectorXd t_new = Tangent(next->eval, t);
       const double l_old = cur.y[n2], l_new = next->y[n2];
       double bracket = 0;
       if (t[n2] * t_new[n2] < 0) {
@@ -357,6 +358,15 @@ Branch Continue(const ContinuationRequest& req) {
         const double at = locate(by_multipliers([](const auto& mu) { return LeadingComplex(mu) - 1; }),
                                  ds, l_old + w * (l_new - l_old), bracket);
         br.bifurcations.push_back({"neimark-sacker", at, "a complex pair of multipliers crosses the unit circle", bracket});
+      }
+      for (double level : req.levels) {
+        const double a = sp(cur) - level, b2 = sp(*next) - level;
+        if (a * b2 < 0) {
+          const double w = a / (a - b2);
+          const double at = locate([&](const Point& pc, const Eigen::VectorXd&) { return sp(pc) - level; }, ds,
+                                   l_old + w * (l_new - l_old), bracket);
+          br.crossings.push_back({level, at, bracket});
+        }
       }
       cur = *next;
       t = t_new;
@@ -421,24 +431,25 @@ Branch Continue(const ContinuationRequest& req) {
       br.bifurcations.push_back({kind, at, detail, bracket});
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
-      const bool goes_on = past && Sticks(*past) == Sticks(cur);
+      const bool goes_on = past && Sticks(*past) == Sticks(cur) &&
+                           past->probe.signature.find_first_of("RI") != std::string::npos;
       if (!goes_on) {
-        br.end = kind == "sticking-lost" ? kind : kind + " (the orbit does not go on)";
+        br.end = kind == "sticking-lost" ? kind
+                 : past && past->probe.signature.find_first_of("RI") == std::string::npos
+                     ? kind + " (permanent contact beyond)"
+                     : kind + " (the orbit does not go on)";
         return br;
       }
-      const Evaluation ep = p.Evaluate(past->y.head(n2), past->y[n2]);
-      if (!ep.ok) {
-        br.end = kind + " (the map cannot be evaluated past it)";
-        return br;
-      }
-      t = Tangent(ep, t);
+      t = Tangent(past->eval, t);
       cur = *past;
       section_fresh = false;
       record(cur);
       ds = std::max(ds, 1e-3 * std::abs(span));
     }
     if (cur.probe.section_margin < 0.3 && !move_section()) {
-      br.end = "could not move the section away from an event";
+      br.end = section_fresh || br.bifurcations.empty()
+                   ? "could not move the section away from an event"
+                   : br.bifurcations.back().kind + " (the orbit past it is too degenerate to continue)";
       return br;
     }
   }

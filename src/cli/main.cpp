@@ -10,6 +10,7 @@
 #include <exception>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,8 +86,32 @@ std::string Phases(const std::vector<std::pair<double, double>>& phases) {
 }
 
 // The scene of `path` with the overrides and KEY=VALUE on top (continuation and sweeps).
+// The scene of `path` with the overrides and KEY=VALUE on top (continuation, partitions and
+// sweeps). The scalar keys of the excitation and the stop are set in a copy of the scene parsed
+// once, and validated (a value outside a key's range throws as a parse would); other keys re-parse
+// the scene with the override.
 vibro::Scene SceneWith(const std::string& path, std::vector<std::string> sets, const std::string& key,
                        double value) {
+  static thread_local std::string cached_path, cached_sets;
+  static thread_local vibro::Scene cached;
+  double vibro::Scene::*field = key == "excitation.amplitude"   ? &vibro::Scene::amplitude
+                                : key == "excitation.frequency" ? &vibro::Scene::frequency
+                                : key == "stop.position"        ? &vibro::Scene::stop_position
+                                : key == "stop.restitution"     ? &vibro::Scene::restitution
+                                                                : nullptr;
+  if (field) {
+    std::string joined;
+    for (const auto& x : sets) joined += x + '\n';
+    if (cached_path != path || cached_sets != joined) {
+      cached = vibro::LoadScene(path, sets).scene;
+      cached_path = path;
+      cached_sets = joined;
+    }
+    vibro::Scene s = cached;
+    s.*field = value;
+    const auto issues = vibro::Validate(s);
+    if (issues.empty()) return s;
+  }
   sets.push_back(fmt::format("{}={:.17g}", key, value));
   return vibro::LoadScene(path, sets).scene;
 }
@@ -338,6 +363,78 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
   return branch.status == "ok" ? 0 : kExitNumerical;
 }
 
+struct PartitionArgs {
+  std::vector<std::string> params;
+  std::vector<double> range1, range2, levels;
+  int steps1 = 20, period = 0, threads = 0;
+  std::optional<double> from2;
+  std::string out;
+};
+
+int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
+                 const PartitionArgs& a) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  std::vector<std::string> problems;
+  if (a.params.size() != 2) problems.push_back("--params: expected KEY1,KEY2");
+  if (a.range1.size() != 2 || !(a.range1[0] < a.range1[1]))
+    problems.push_back("--range1: expected A,B with A < B");
+  if (a.range2.size() != 2 || !(a.range2[0] < a.range2[1]))
+    problems.push_back("--range2: expected C,D with C < D");
+  if (a.steps1 < 1) problems.push_back("--steps1: expected N ≥ 1");
+  if (a.levels.empty()) problems.push_back("--sticking-fraction: expected S1,S2,... in (0, 1)");
+  for (double s : a.levels)
+    if (!(s > 0 && s < 1)) problems.push_back(fmt::format("--sticking-fraction {}: not in (0, 1)", s));
+  std::optional<double> start2 = a.from2;
+  if (a.params.size() == 2) {
+    for (const auto& k : a.params)
+      if (!vibro::SceneNumber(loaded.text_as_run, k))
+        problems.push_back(fmt::format("--params {}: not a numeric key of the scene (give it in the "
+                                       "scene or with --set {}=VALUE)", k, k));
+    if (!start2) start2 = vibro::SceneNumber(loaded.text_as_run, a.params[1]);
+  }
+  if (start2 && a.range2.size() == 2 && !(*start2 >= a.range2[0] && *start2 <= a.range2[1]))
+    problems.push_back(fmt::format("--from2 {}: outside --range2", *start2));
+  if (!problems.empty()) throw vibro::InputError(problems);
+  vibro::PartitionRequest req;
+  req.scene_at = [&](double v1, double v2) {
+    std::vector<std::string> s = sets;
+    s.push_back(fmt::format("{}={:.17g}", a.params[0], v1));
+    return SceneWith(path, s, a.params[1], v2);
+  };
+  for (int i = 0; i <= a.steps1; ++i)
+    req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * i / a.steps1);
+  req.start2 = *start2;
+  req.lo2 = a.range2[0];
+  req.hi2 = a.range2[1];
+  req.levels = a.levels;
+  req.orbit.period = a.period;
+  req.threads = a.threads;
+  req.stop_requested = &g_stop_requested;
+  const vibro::System sys(loaded.scene);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!a.out.empty()) store = vibro::Hdf5Store::Create(a.out, HeaderOf(loaded, sys));  // fails early
+  const auto columns = vibro::Partition(req);
+  const bool interrupted = g_stop_requested.load();
+  if (store) {
+    store->WritePartition(a.params[0], a.params[1], a.levels, columns);
+    vibro::RunResult r;
+    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    store->Finish(r, {});
+  }
+  if (json) {
+    fmt::print("{}\n", vibro::PartitionJson(a.params[0], a.params[1], a.levels, columns));
+  } else {
+    for (const auto& c : columns) {
+      fmt::print("{} = {:.10g}: {}\n", a.params[0], c.value1, c.status);
+      for (const auto& x : c.crossings)
+        fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, a.params[1], x.value);
+      for (const auto& b : c.bifurcations)
+        fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, a.params[1], b.value);
+    }
+  }
+  return interrupted ? kExitInterrupted : 0;
+}
+
 struct StudyArgs {
   std::string x = "x_B", y = "v_B";
   std::vector<double> x_range, y_range;
@@ -556,6 +653,21 @@ int main(int argc, char** argv) {
   attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
   basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->delimiter(',')->expected(2);
   basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
+  CLI::App* partition = app.add_subcommand(
+      "partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries");
+  add_scene_options(partition);
+  PartitionArgs part;
+  double part_from2 = 0;
+  partition->add_option("--params", part.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
+  partition->add_option("--range1", part.range1, "A,B: range of KEY1")->delimiter(',')->required();
+  partition->add_option("--steps1", part.steps1, "steps of KEY1 (default 20: 21 columns)");
+  partition->add_option("--range2", part.range2, "C,D: range of KEY2 (each column is continued in it)")
+      ->delimiter(',')->required();
+  auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)");
+  partition->add_option("--sticking-fraction", part.levels, "S1,S2,...: levels to trace")->delimiter(',')->required();
+  partition->add_option("--period", part.period, "period of the sticking orbits (default: from a transient)");
+  partition->add_option("--threads", part.threads, "threads (default: all cores)");
+  partition->add_option("--out", part.out, "write the partition to HDF5");
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
   add_scene_options(sweep);
   std::string sweep_param;
@@ -610,6 +722,10 @@ int main(int argc, char** argv) {
                       sweep_record, sweep_one_way);
     if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
     if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
+    if (*partition) {
+      if (*from2_opt) part.from2 = part_from2;
+      return RunPartition(scene_path, sets, json, part);
+    }
     if (*cont) {
       vibro::OrbitRequest req;
       req.period = cont_period;

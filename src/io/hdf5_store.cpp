@@ -858,4 +858,37 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   WriteStrings(bg.get(), "detail", detail);
 }
 
+void Hdf5Store::WritePartition(const std::string& param1, const std::string& param2,
+                               const std::vector<double>& levels,
+                               const std::vector<PartitionColumn>& columns) {
+  const Handle g = NewGroup(impl_->file.get(), "/partition");
+  WriteString(g.get(), "param1", param1);
+  WriteString(g.get(), "param2", param2);
+  WriteDoubles(g.get(), "levels", levels);
+  std::vector<double> cv, xv1, xl, xv2, bv1, bv2;
+  std::vector<std::string> cs, bk;
+  for (const auto& c : columns) {
+    cv.push_back(c.value1);
+    cs.push_back(c.status);
+    for (const auto& x : c.crossings) {
+      xv1.push_back(c.value1);
+      xl.push_back(x.level);
+      xv2.push_back(x.value);
+    }
+    for (const auto& b : c.bifurcations) {
+      bv1.push_back(c.value1);
+      bv2.push_back(b.value);
+      bk.push_back(b.kind);
+    }
+  }
+  WriteColumn(g.get(), "column_value1", cv);
+  WriteStrings(g.get(), "column_status", cs);
+  WriteColumn(g.get(), "crossing_value1", xv1);
+  WriteColumn(g.get(), "crossing_level", xl);
+  WriteColumn(g.get(), "crossing_value2", xv2);
+  WriteColumn(g.get(), "boundary_value1", bv1);
+  WriteColumn(g.get(), "boundary_value2", bv2);
+  WriteStrings(g.get(), "boundary_kind", bk);
+}
+
 }  // namespace vibro

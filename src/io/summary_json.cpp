@@ -117,6 +117,24 @@ std::string BranchJson(const Branch& b) {
   return j.dump();
 }
 
+std::string PartitionJson(const std::string& param1, const std::string& param2,
+                          const std::vector<double>& levels, const std::vector<PartitionColumn>& columns) {
+  nlohmann::json j;
+  j["params"] = {param1, param2};
+  j["levels"] = levels;
+  auto cols = nlohmann::json::array();
+  for (const auto& c : columns) {
+    auto xs = nlohmann::json::array();
+    for (const auto& x : c.crossings) xs.push_back({{"level", x.level}, {"value", x.value}});
+    auto bs = nlohmann::json::array();
+    for (const auto& b : c.bifurcations) bs.push_back({{"kind", b.kind}, {"value", b.value}});
+    cols.push_back({{"value1", c.value1}, {"status", c.status}, {"crossings", xs},
+                    {"bifurcations", bs}, {"end_down", c.end_down}, {"end_up", c.end_up}});
+  }
+  j["columns"] = cols;
+  return j.dump();
+}
+
 std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordinate& y) {
   nlohmann::json j;
   auto list = nlohmann::json::array();

@@ -1,0 +1,51 @@
+// Two-parameter partitions by families of one-parameter branches (include/vibro/continuation.hpp).
+#include <algorithm>
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include "vibro/continuation.hpp"
+
+namespace vibro {
+
+std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
+  std::vector<PartitionColumn> columns(req.values1.size());
+  const auto one = [&](size_t i) {
+    PartitionColumn& col = columns[i];
+    col.value1 = req.values1[i];
+    for (double to : {req.lo2, req.hi2}) {
+      if (req.stop_requested && req.stop_requested->load()) {
+        col.status = "interrupted";
+        return;
+      }
+      ContinuationRequest c;
+      c.scene_at = [&, v1 = col.value1](double v2) { return req.scene_at(v1, v2); };
+      c.from = req.start2;
+      c.to = to;
+      c.step = req.step;
+      c.max_points = req.max_points;
+      c.orbit = req.orbit;
+      c.levels = req.levels;
+      c.stop_requested = req.stop_requested;
+      const Branch b = Continue(c);
+      (to == req.lo2 ? col.end_down : col.end_up) = b.end;
+      if (b.status == "no-orbit") {
+        col.status = "no-orbit";
+        return;
+      }
+      if (b.status == "interrupted") col.status = "interrupted";
+      col.crossings.insert(col.crossings.end(), b.crossings.begin(), b.crossings.end());
+      col.bifurcations.insert(col.bifurcations.end(), b.bifurcations.begin(), b.bifurcations.end());
+    }
+    std::sort(col.crossings.begin(), col.crossings.end(),
+              [](const auto& a, const auto& b) { return a.value < b.value; });
+    std::sort(col.bifurcations.begin(), col.bifurcations.end(),
+              [](const auto& a, const auto& b) { return a.value < b.value; });
+  };
+  const int threads = req.threads > 0 ? req.threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
+  tbb::parallel_for(size_t{0}, columns.size(), one);
+  return columns;
+}
+
+}  // namespace vibro
