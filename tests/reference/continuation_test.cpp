@@ -304,3 +304,79 @@ TEST(Continuation, NeimarkSackerPointIsBracketedByDirectSolves) {
 
 }  // namespace
 }  // namespace vibro::test
+
+namespace vibro::test {
+namespace {
+
+// SP of the 1-DOF, r = 0 period-q sticking orbit with one flight (MODEL §6.2), long double.
+LD ClosedFormSp(LD w, LD f) {
+  const LD t1 = ReleaseTime(w, f);
+  const Flight1 fl{w, f, t1, 1, 0};
+  const LD t0 = fl.Landing(1);  // skips the release: x − x0 ~ s³ there
+  const LD theta = w * (t0 - t1) / (2 * M_PIl);
+  return 1 - theta / std::ceil(theta);
+}
+
+TEST(Partition, OneDofPeriodTwoColumnsEndAtTheClosedFormBoundariesAndCrossLevelsWhereSpSays) {
+  // ω = 5 and 10, q = 2: the one-flight sticking orbits live on (f_sticking, f_free-flight)
+  // (MODEL §6.3, eqs. (36) and (38)); the partition's columns must end there and cross the
+  // levels where the closed form's SP equals them.
+  PartitionRequest req;
+  req.scene_at = [](double w, double f) { return OneDof(0.0, w, f, 1.0, 50); };
+  req.values1 = {5.0, 10.0};
+  req.levels = {0.05, 0.1};
+  req.orbit.period = 2;
+  req.lo2 = 1.5;
+  req.hi2 = 20.0;
+  req.threads = 2;
+  for (const auto& col : [&] {
+         std::vector<PartitionColumn> cols;
+         for (double w : req.values1) {
+           PartitionRequest one = req;
+           one.values1 = {w};
+           // Start inside the band: between f_st and f_ff.
+           one.start2 = w == 5.0 ? 10.0 : 6.0;
+           const auto c = Partition(one);
+           cols.insert(cols.end(), c.begin(), c.end());
+         }
+         return cols;
+       }()) {
+    const double w = col.value1;
+    SCOPED_TRACE(w);
+    ASSERT_EQ(col.status, "ok");
+    const double f_ff = std::sqrt(1.0 + w * w * std::pow(std::tan(2 * M_PI / w), 2));
+    long double lo = 1.0001L, hi = f_ff;  // (36): √(f²−1)/ω − tan(((2q−1)π/2 − asin(1/f))/ω) = 0
+    const auto g = [w](long double f) {
+      return std::sqrt(f * f - 1) / w - std::tan((1.5L * M_PIl - std::asin(1 / f)) / w);
+    };
+    for (int i = 0; i < 200; ++i) {
+      const long double mid = 0.5L * (lo + hi);
+      ((g(mid) > 0) == (g(lo) > 0) ? lo : hi) = mid;
+    }
+    const double f_st = static_cast<double>(lo);
+    const auto find = [&](const std::string& kind, double near) {
+      const Bifurcation* best = nullptr;
+      for (const auto& b : col.bifurcations)
+        if (b.kind == kind && (!best || std::abs(b.value - near) < std::abs(best->value - near))) best = &b;
+      return best;
+    };
+    const auto* top = find("sticking-lost", f_ff);
+    const auto* bottom = find("sticking-entry", f_st);
+    ASSERT_NE(top, nullptr);
+    ASSERT_NE(bottom, nullptr);
+    EXPECT_NEAR(top->value, f_ff, 1e-10);
+    EXPECT_NEAR(bottom->value, f_st, 1e-9);  // SP ~ |f − f_st|^(1/3) there (MODEL §6.3)
+    // Crossings on the one-flight part (f_st, f_ff); below f_st the column goes on along orbits
+    // with two flights per period (landing with R < 0 first), where the closed form does not apply.
+    int checked = 0;
+    for (const auto& x : col.crossings) {
+      if (x.value <= f_st || x.value >= f_ff) continue;
+      EXPECT_NEAR(static_cast<double>(ClosedFormSp(w, x.value)), x.level, 1e-9) << "f = " << x.value;
+      ++checked;
+    }
+    EXPECT_EQ(checked, 2);
+  }
+}
+
+}  // namespace
+}  // namespace vibro::test
