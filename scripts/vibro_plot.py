@@ -98,7 +98,9 @@ def plot_branch(f, title, save):
     draw_branch(ax1, f)
     ax1.set_ylabel("sticking fraction")
     ax1.legend(fontsize=8, loc="best")
-    ax1.set_title(f"{title}\ncontinuation, period {b.attrs['period']}: {b.attrs['end']}")
+    m = f["model"].attrs
+    ax1.set_title(f"{title}\ncontinued from f = {m['amplitude']:g}; period {b.attrs['period']}; "
+                  f"end: {b.attrs['end']}", fontsize=9)
     draw_branch(ax2, f, "max_multiplier")
     ax2.axhline(1.0, color="0.6", lw=0.8)
     if np.nanmax(b["max_multiplier"][:]) > 10:
@@ -119,35 +121,39 @@ def plot_partition(f, title, save):
     cmap = plt.get_cmap("viridis")
     levels = list(p.attrs["levels"])
 
-    def curves(v1, v2):
-        """Points of one level (or boundary kind) joined column to column by rank within a column."""
+    span2 = max(1e-300, np.ptp(np.concatenate([xv2, bv2])) if len(xv2) + len(bv2) else 1.0)
+
+    def segments(v1, v2):
+        """Points of one level joined column to column by rank, only where both columns have the
+        same number of crossings and the curve does not jump (otherwise it is broken there)."""
         cols = sorted(set(v1))
-        by_rank = {}
-        for c in cols:
-            ys = sorted(v2[v1 == c])
-            for r, y in enumerate(ys):
-                by_rank.setdefault(r, []).append((c, y))
-        return by_rank.values()
+        per_col = [sorted(v2[v1 == c]) for c in cols]
+        segs = []
+        for k in range(len(cols)):
+            ys = per_col[k]
+            if not ys:
+                continue
+            segs.append(([cols[k]] * len(ys), ys, "."))
+            if k + 1 < len(cols) and len(per_col[k + 1]) == len(ys):
+                for y0, y1 in zip(ys, per_col[k + 1]):
+                    if abs(y1 - y0) < 0.1 * span2:
+                        segs.append(([cols[k], cols[k + 1]], [y0, y1], "-"))
+        return segs
     for i, s in enumerate(levels):
         sel = xl == s
-        for pts in curves(xv1[sel], xv2[sel]):
-            pts = np.array(pts)
-            ax.plot(pts[:, 0], pts[:, 1], "-", color=cmap(i / max(1, len(levels) - 1)), lw=1.4,
-                    label=f"SP = {s:g}" if pts is not None else None)
-    seen = set()
-    for k in sorted(set(bk)):
+        colour = cmap(i / max(1, len(levels) - 1))
+        for n, (xs, ys, style) in enumerate(segments(xv1[sel], xv2[sel])):
+            ax.plot(xs, ys, style, color=colour, lw=1.4, ms=3, label=f"SP = {s:g}" if n == 0 else None)
+    for j, k in enumerate(sorted(set(bk))):
         sel = bk == k
-        for pts in curves(bv1[sel], bv2[sel]):
-            pts = np.array(pts)
-            ax.plot(pts[:, 0], pts[:, 1], ":", marker=BIFURCATION_MARKERS.get(k, "o"), color="C3",
-                    ms=4, lw=1.0, label=k if k not in seen else None)
-            seen.add(k)
+        ax.plot(bv1[sel], bv2[sel], BIFURCATION_MARKERS.get(k, "o"), color=f"C{3 + j % 7}", ms=5,
+                ls="none", label=k)
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
     ax.legend(unique.values(), unique.keys(), fontsize=8, loc="best")
     ax.set_xlabel(p1)
     ax.set_ylabel(p2)
-    ax.set_title(f"{title}\nparameter-plane partition: constant sticking fraction")
+    ax.set_title(f"{title}\npartition: curves of constant sticking fraction", fontsize=9)
     save(fig, "partition")
 
 
@@ -168,6 +174,8 @@ def main():
     with h5py.File(args.file, "r") as f:
         title = f.attrs["scene"].splitlines()[0] if f.attrs["scene"].startswith("title") else args.file
         title = title.replace("title = ", "").strip("'\"")
+        ma = f["model"].attrs
+        title += f" (run as r = {ma['restitution']:g}, ω = {ma['frequency']:g}, f = {ma['amplitude']:g})"
         status = f.attrs["status"]
         T = float(f.attrs["forcing_period"])
         model = f["model"]

@@ -484,9 +484,11 @@ RunResult Automaton::Run() {
       if (!OnContact()) break;
       if (grazing_streak_ > 1000) {
         Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}: the contact is "
-                         "degenerate (R ≈ 0 with the body at rest on the stop); tighten "
-                         "run.rtol or use run.engine = \"exact\"",
-                         AbsTime(clock_)));
+                         "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
+                         AbsTime(clock_),
+                         run_.engine == Engine::kCvode
+                             ? "; tighten run.rtol or use run.engine = \"exact\""
+                             : " (e.g. next to a rising bifurcation); move the parameter slightly"));
         break;
       }
       continue;

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Command-line tests of `vibro model` on every shipped scene, and of bad input (exit 2)."""
+"""Command-line tests: every command on the shipped scenes, their JSON and HDF5 output, and bad input (exit 2)."""
 import json
 import os
 import subprocess
@@ -117,6 +117,58 @@ with tempfile.TemporaryDirectory() as d:
     check("basin plot", p.returncode == 0 and os.path.getsize(os.path.join(d, "b_basin.png")) > 5000, p.stderr)
     p = run("basin", fig5, "--x", "X7", "--grid", "2,2")
     check("basin: bad coordinate exit 2", p.returncode == 2 and "X7" in p.stderr, p.stderr)
+
+# Continuation and partitions: JSON fields (CONTRACT §2 and the extensions), the HDF5 file and
+# its plot, the 1-DOF existence boundary f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3), bad input.
+fig8 = os.path.join(scenes, "fig08_preload.toml")
+p = run("continue", fig8, "--set", "stop.restitution=0.0", "--param", "excitation.amplitude",
+        "--to", "8", "--json")
+check("continue exit 0", p.returncode == 0, p.stderr)
+br = json.loads(p.stdout) if p.returncode == 0 else {}
+check("continue fields", {"status", "points", "bifurcations", "end"} <= set(br)
+      and all({"value", "sticking_fraction", "stick_phases", "stable", "floquet_multipliers", "events"}
+              <= set(pt) for pt in br.get("points", []))
+      and all({"kind", "value", "detail", "bracket"} <= set(b) for b in br.get("bifurcations", [])), br)
+fff = (1 + 2.8 ** 2 * __import__("math").tan(__import__("math").pi / 2.8) ** 2) ** 0.5
+check("continue ends at f_ff(2.8, 1)", br.get("end") == "sticking-lost"
+      and abs(br["bifurcations"][-1]["value"] - fff) < 1e-9, br.get("bifurcations"))
+with tempfile.TemporaryDirectory() as d:
+    h5 = os.path.join(d, "branch.h5")
+    p = run("continue", fig8, "--set", "stop.restitution=0.0", "--param", "excitation.amplitude",
+            "--to", "8", "--out", h5)
+    check("continue --out", p.returncode == 0 and os.path.exists(h5), p.stderr)
+    import h5py
+    with h5py.File(h5, "r") as f:
+        b = f["branch"]
+        check("branch file matches the JSON", len(b["value"]) == len(br.get("points", []))
+              and b.attrs["param"] == "excitation.amplitude" and b.attrs["end"] == "sticking-lost"
+              and abs(f["bifurcations/value"][-1] - fff) < 1e-9
+              and f["bifurcations/kind"][-1].decode() == "sticking-lost"
+              and f.attrs["status"] == "ok", dict(b.attrs))
+    p = run("plot", h5, "--out", os.path.join(d, "c"))
+    check("branch plot", p.returncode == 0 and os.path.getsize(os.path.join(d, "c_branch.png")) > 5000, p.stderr)
+    p = run("continue", fig8, "--param", "excitation.amplitude", "--to", "2", "--out", "/proc/nope.h5")
+    check("continue: unwritable --out exit 2", p.returncode == 2 and "nope.h5" in p.stderr, p.stderr)
+    h5 = os.path.join(d, "part.h5")
+    p = run("partition", fig8, "--set", "stop.restitution=0.0", "--params",
+            "excitation.frequency,excitation.amplitude", "--range1", "2.8,5", "--steps1", "1",
+            "--range2", "1.05,12", "--from2", "1.5", "--sticking-fraction", "0.5", "--json", "--out", h5)
+    check("partition exit 0", p.returncode == 0, p.stderr)
+    part = json.loads(p.stdout) if p.returncode == 0 else {"columns": []}
+    for col in part["columns"]:
+        w = col["value1"]
+        top = (1 + w * w * __import__("math").tan(__import__("math").pi / w) ** 2) ** 0.5
+        lost = [b["value"] for b in col["bifurcations"] if b["kind"] == "sticking-lost"]
+        check(f"partition column {w}: f_ff", col["status"] == "ok" and lost
+              and abs(max(lost) - top) < 1e-9 and len(col["crossings"]) >= 1, col)
+    check("partition: two columns", len(part["columns"]) == 2, part)
+    p = run("plot", h5, "--out", os.path.join(d, "p"))
+    check("partition plot", p.returncode == 0 and os.path.getsize(os.path.join(d, "p_partition.png")) > 5000, p.stderr)
+    p = run("partition", fig8, "--params", "excitation.frequency,excitation.amplitude", "--range1", "5,2",
+            "--range2", "1,3", "--sticking-fraction", "1.5", "--out", os.path.join(d, "bad.h5"))
+    check("partition: bad input exit 2, both problems, nothing written",
+          p.returncode == 2 and "--range1" in p.stderr and "1.5" in p.stderr
+          and not os.path.exists(os.path.join(d, "bad.h5")), p.stderr)
 
 # Three mistakes: three located messages, exit 2, nothing on stdout.
 with tempfile.TemporaryDirectory() as d:
