@@ -8,66 +8,45 @@ with the full model. Writes PREFIX.csv and PREFIX.png.
 Usage: benchmarks/modal_truncation.py [--vibro build/vibro] [--out docs/modal_truncation]
 """
 import argparse
-import csv
-import json
 import os
-import resource
-import subprocess
-import tempfile
+import sys
 
-import h5py
-import matplotlib
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import DEFAULT_VIBRO, ROOT, milestone_error, pyplot, run_vibro, save_figure, write_csv  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CASES = [("3-DOF chain (r = 0)", "chain3.toml", 3, 100, []),
          ("10-DOF stiff chain, 5 % damping", "chain10_stiff.toml", 10, 20,
           ["structure.damping_ratios=[0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.05]"])]
 
 
-def run(vibro, scene, periods, sets, h5):
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cmd = [vibro, "simulate", os.path.join(ROOT, "data", "scenes", scene), "--out", h5, "--json",
-           "--set", f"run.periods={periods}", "--set", "run.samples_per_period=0"]
-    for s in sets:
-        cmd += ["--set", s]
-    p = subprocess.run(cmd, capture_output=True, text=True, check=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    with h5py.File(h5, "r") as f:
-        k, t = f["events/kind"][:], f["events/t"][:]
-        T = float(f.attrs["forcing_period"])
-    return ([x for x, kk in zip(t, k) if kk in (3, 4)][:12], T, json.loads(p.stdout),
-            (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime))
+def run(vibro, scene, periods, sets):
+    r = run_vibro(vibro, scene, periods, sets)
+    if not r.ok:
+        raise SystemExit(f"vibro simulate {scene} failed: {r.stderr}")
+    return r.milestones(12), r.T, r.summary, r.cpu
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--vibro", default=os.path.join(ROOT, "build", "vibro"))
+    ap.add_argument("--vibro", default=DEFAULT_VIBRO)
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "modal_truncation"))
     args = ap.parse_args()
     rows = []
-    with tempfile.TemporaryDirectory() as d:
-        h5 = os.path.join(d, "run.h5")
-        for label, scene, n, periods, sets in CASES:
-            ref, T, jref, cref = run(args.vibro, scene, periods, sets, h5)
-            for m in range(1, n + 1):
-                ms, _, j, cpu = run(args.vibro, scene, periods, sets + [f"structure.modes={m}"], h5)
-                k = min(len(ms), len(ref))
-                err = max((abs(a - b) for a, b in zip(ms[:k], ref[:k])), default=float("nan")) / T
-                sp, spr = j["attractor"]["sticking_fraction"], jref["attractor"]["sticking_fraction"]
-                sp_err = abs(sp - spr) if sp is not None and spr is not None else float("nan")
-                rows.append({"case": label, "modes": m, "event_error": f"{err:.3e}",
-                             "sp_error": f"{sp_err:.3e}", "cpu_seconds": f"{cpu:.4f}",
-                             "cpu_full": f"{cref:.4f}"})
-                print(f"{label:34s} modes {m:2d}: event error/T {err:.2e}, SP error {sp_err:.2e}, "
-                      f"cpu {cpu:.3f} s (full {cref:.3f} s)", flush=True)
-    os.makedirs(os.path.dirname(args.out), exist_ok=True)
-    with open(args.out + ".csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    for label, scene, n, periods, sets in CASES:
+        ref, T, jref, cref = run(args.vibro, scene, periods, sets)
+        for m in range(1, n + 1):
+            ms, _, j, cpu = run(args.vibro, scene, periods, sets + [f"structure.modes={m}"])
+            err = milestone_error(ms, ref, T)
+            sp, spr = j["attractor"]["sticking_fraction"], jref["attractor"]["sticking_fraction"]
+            sp_err = abs(sp - spr) if sp is not None and spr is not None else float("nan")
+            rows.append({"case": label, "modes": m, "event_error": f"{err:.3e}",
+                         "sp_error": f"{sp_err:.3e}", "cpu_seconds": f"{cpu:.4f}",
+                         "cpu_full": f"{cref:.4f}"})
+            print(f"{label:34s} modes {m:2d}: event error/T {err:.2e}, SP error {sp_err:.2e}, "
+                  f"cpu {cpu:.3f} s (full {cref:.3f} s)", flush=True)
+    write_csv(rows, args.out + ".csv")
+    print(args.out + ".csv")
+    plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
     for ax, (label, *_rest) in zip(axes, CASES):
         r = [x for x in rows if x["case"] == label]
@@ -81,10 +60,7 @@ def main():
         ax.set_title(label)
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(args.out + ".png", dpi=100)
-    print(args.out + ".csv")
-    print(args.out + ".png")
+    save_figure(fig, args.out + ".png")
 
 
 if __name__ == "__main__":

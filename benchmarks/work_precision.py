@@ -11,21 +11,13 @@ Usage: benchmarks/work_precision.py [--vibro build/vibro] [--out docs/work_preci
 Writes PREFIX.csv (one row per run) and PREFIX.png (one panel per scene).
 """
 import argparse
-import csv
 import math
 import os
-import resource
-import subprocess
 import sys
-import tempfile
 
-import h5py
-import matplotlib
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_common import DEFAULT_VIBRO, ROOT, milestone_error, pyplot, run_vibro, save_figure, write_csv  # noqa: E402
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = [
     ("Fig. 5 (1-DOF, r = 0.75)", "fig05_coexistence.toml", 50),
     ("Fig. 8 (1-DOF, r = 0.75)", "fig08_preload.toml", 50),
@@ -36,36 +28,20 @@ SCENES = [
 ]
 
 
-def run(vibro, scene, periods, sets, h5):
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cmd = [vibro, "simulate", os.path.join(ROOT, "data", "scenes", scene), "--out", h5, "--json",
-           "--set", f"run.periods={periods}", "--set", "run.samples_per_period=0"]
-    for s in sets:
-        cmd += ["--set", s]
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    if p.returncode != 0:
-        return None, cpu
-    with h5py.File(h5, "r") as f:
-        kinds = f["events/kind"][:]
-        t = f["events/t"][:]
-        T = float(f.attrs["forcing_period"])
-    milestones = [x for x, k in zip(t, kinds) if k in (3, 4)][:12]  # sticks and releases
-    return (milestones, T), cpu
+def run(vibro, scene, periods, sets):
+    """(milestones, T) or None when the run failed, and the CPU time."""
+    r = run_vibro(vibro, scene, periods, sets)
+    return ((r.milestones(12), r.T) if r.ok else None), r.cpu
 
 
 def error(ms, ref):
     (a, T), (b, _) = ms, ref
-    n = min(len(a), len(b))
-    if n == 0:
-        return float("nan")
-    return max(abs(x - y) for x, y in zip(a[:n], b[:n])) / T
+    return milestone_error(a, b, T)
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--vibro", default=os.path.join(ROOT, "build", "vibro"))
+    ap.add_argument("--vibro", default=DEFAULT_VIBRO)
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "work_precision"))
     ap.add_argument("--quick", action="store_true", help="fewer settings (a smoke test)")
     args = ap.parse_args()
@@ -73,33 +49,30 @@ def main():
     rtols = [1e-4, 1e-6, 1e-8, 1e-10, 1e-12] if not args.quick else [1e-6, 1e-10]
     switches = [1e-2, 1e-3, 1e-4, 1e-6] if not args.quick else [1e-3, 1e-6]
     rows = []
-    with tempfile.TemporaryDirectory() as d:
-        h5 = os.path.join(d, "run.h5")
-        for label, scene, periods in SCENES:
-            ref, _ = run(args.vibro, scene, periods, ['run.engine="exact"', "run.chatter_switch=1e-9"], h5)
-            if ref is None:
-                print(f"{label}: the reference run failed", file=sys.stderr)
-                continue
-            settings = [("exact", "exact", None, ['run.engine="exact"'])]
-            for method in ("adams", "bdf"):
-                for rtol in rtols:
-                    settings.append((f"cvode {method}", method, rtol,
-                                     ['run.engine="cvode"', f'run.method="{method}"', f"run.rtol={rtol:g}",
-                                      f"run.atol={rtol * 1e-2:g}"]))
-            for chatter in ("accumulation", "threshold"):
-                for sw in switches:
-                    settings.append((f"exact {chatter}", chatter, sw,
-                                     ['run.engine="exact"', f'run.chatter="{chatter}"', f"run.chatter_switch={sw:g}"]))
-            for name, variant, knob, sets in settings:
-                ms, cpu = run(args.vibro, scene, periods, sets, h5)
-                err = error(ms, ref) if ms else float("nan")
-                rows.append({"scene": label, "setting": name, "knob": "" if knob is None else f"{knob:g}",
-                             "cpu_seconds": f"{cpu:.4f}", "error": f"{err:.3e}", "status": "ok" if ms else "failed"})
-                print(f"{label:30s} {name:22s} {rows[-1]['knob']:>8s} cpu {cpu:8.3f} s  error {err:.2e}", flush=True)
-    with open(args.out + ".csv", "w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+    for label, scene, periods in SCENES:
+        ref, _ = run(args.vibro, scene, periods, ['run.engine="exact"', "run.chatter_switch=1e-9"])
+        if ref is None:
+            print(f"{label}: the reference run failed", file=sys.stderr)
+            continue
+        settings = [("exact", "exact", None, ['run.engine="exact"'])]
+        for method in ("adams", "bdf"):
+            for rtol in rtols:
+                settings.append((f"cvode {method}", method, rtol,
+                                 ['run.engine="cvode"', f'run.method="{method}"', f"run.rtol={rtol:g}",
+                                  f"run.atol={rtol * 1e-2:g}"]))
+        for chatter in ("accumulation", "threshold"):
+            for sw in switches:
+                settings.append((f"exact {chatter}", chatter, sw,
+                                 ['run.engine="exact"', f'run.chatter="{chatter}"', f"run.chatter_switch={sw:g}"]))
+        for name, variant, knob, sets in settings:
+            ms, cpu = run(args.vibro, scene, periods, sets)
+            err = error(ms, ref) if ms else float("nan")
+            rows.append({"scene": label, "setting": name, "knob": "" if knob is None else f"{knob:g}",
+                         "cpu_seconds": f"{cpu:.4f}", "error": f"{err:.3e}", "status": "ok" if ms else "failed"})
+            print(f"{label:30s} {name:22s} {rows[-1]['knob']:>8s} cpu {cpu:8.3f} s  error {err:.2e}", flush=True)
+    write_csv(rows, args.out + ".csv")
+    print(args.out + ".csv")
+    plt = pyplot()
     scenes = [s[0] for s in SCENES]
     fig, axes = plt.subplots(2, 3, figsize=(15, 9))
     for ax, label in zip(axes.flat, scenes):
@@ -116,10 +89,7 @@ def main():
         ax.grid(True, which="both", alpha=0.3)
     axes.flat[0].legend(fontsize=8)
     fig.suptitle("vibro work–precision: error against the exact engine (switch 1e-9) vs CPU time")
-    fig.tight_layout()
-    fig.savefig(args.out + ".png", dpi=100)
-    print(args.out + ".csv")
-    print(args.out + ".png")
+    save_figure(fig, args.out + ".png")
 
 
 if __name__ == "__main__":
