@@ -1,87 +1,207 @@
 #!/usr/bin/python3
-"""The 1-DOF scenes with Siconos (Debian python3-siconos 4.4): Moreau–Jean time-stepping.
+"""The scenes with Siconos (Debian python3-siconos 4.4): Moreau–Jean time-stepping and the
+event-driven scheme (EventDriven + LsodarOSI), against vibro.
 
-Model: ẍ + x = f sin ωt, y = x − x0 ≥ 0, Newton impact law with restitution r (the paper's
-non-dimensional oscillator, MODEL §1.2). Time-stepping has no events: the sticking fraction is
-measured as the fraction of the steps of the last 5 periods with a positive contact impulse
-(λ of the LCP), and compared with vibro's exact engine. The external
-force is a Python override of computeFExt (SWIG director).
+The model is the modal system of problem.py written as a LagrangianLinearTIDS with the modal
+masses (M = diag(1/T_B), K = diag(ω²/T_B), C = diag(2ζω/T_B)), the force (T_A/T_B) f sin ωt
+(a Python override of computeFExt, SWIG director) and one Interaction: LagrangianLinearTIR with
+y = 1ᵀX − x0 ≥ 0 and a NewtonImpactNSL with the scene's restitution r.
 
-Usage: benchmarks/peers/siconos_peer.py [--vibro build/vibro]   (about a minute)
+Moreau–Jean (θ = 0.5, LCP at velocity level, fixed step h = T/steps): no events; the contact
+is "on" in the steps where the LCP impulse λ is positive. Stick/release milestones are the
+changes of this state that last at least 3 steps (a chattering impact is one "on" step), dated at
+the first step of the change; the sticking fraction is the share of "on" steps of the last periods.
+
+Event-driven (LSODAR with root finding, an impact LCP and an acceleration-level LCP): the
+contact sticks when the post-impact velocity is below the simulation's TOL_ED and leaves when
+the acceleration-level contact force λ₂ vanishes. Milestones are the changes of index set 2
+(the "sticking" set). Two measures are needed to get it running at all on this model:
+  * LsodarOSI.computeRhs(t_event) before processEvents: without it EventDriven 4.4 throws in
+    updateIndexSetsWithDoubleCondition at the first sticking entry of any system with a
+    stiffness (it works for the bouncing ball under gravity, which has none; see README);
+  * setMaxNstep(1e5): sticking phases need many LSODAR steps per call.
+LsodarOSI.setTol(itol, rtol, atol) of 4.4 sets atol = rtol (its atol argument is ignored);
+TOL_ED is a static member of EventDriven, so it is set before every run.
+
+Standalone: benchmarks/peers/siconos_peer.py [--vibro build/vibro] [--scenes a.toml,b.toml]
+(benchmarks/peers/run_all.py runs it beside vibro and SciPy and writes the table.)
 """
 import argparse
-import json
 import math
 import os
-import resource
-import subprocess
+import re
+import sys
+import tempfile
+import time
 
 import numpy as np
 import siconos.kernel as sk
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-SCENES = [("Fig. 8", 0.75, 2.8, 1.2, 1.0), ("Fig. 5", 0.75, 10.0, 1.1, 1.0), ("Fig. 11", 0.0, 1.4, 10.0, -1.0)]
-PERIODS = 20
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from bench_common import DEFAULT_VIBRO, cpu_self, milestone_error, run_vibro  # noqa: E402
+from problem import PeerResult, Problem  # noqa: E402
 
 
-def cpu():
-    r = resource.getrusage(resource.RUSAGE_SELF)
-    return r.ru_utime + r.ru_stime
+class _CaptureStdout:
+    """Captures what the C++ side prints on file descriptor 1 (LSODAR's failure messages)."""
+
+    def __enter__(self):
+        sys.stdout.flush()
+        self.file = tempfile.TemporaryFile(mode="w+b")
+        self.saved = os.dup(1)
+        os.dup2(self.file.fileno(), 1)
+        return self
+
+    def __exit__(self, *exc):
+        sys.stdout.flush()
+        os.dup2(self.saved, 1)
+        os.close(self.saved)
+        self.file.seek(0)
+        self.text = self.file.read().decode(errors="replace")
+        self.file.close()
+        return False
 
 
-def moreau_jean(r, w, f, x0, steps_per_period):
+def _system(p):
+    M, K, C, force_vec = p.lagrangian()
+    f, omega = p.f, p.omega
+
     class Forced(sk.LagrangianLinearTIDS):
-        def computeFExt(self, time, fExt=None):
-            value = f * math.sin(w * time)
-            if fExt is not None:
-                fExt[0] = value
-            else:
-                self.fExt()[0] = value
+        def computeFExt(self, t, fExt=None):
+            value = force_vec * (f * math.sin(omega * t))
+            target = fExt if fExt is not None else self.fExt()
+            for i, v in enumerate(value):
+                target[i] = v
 
-    start = np.array([x0 if x0 > 0 else 0.0])
-    ds = Forced(start, np.array([0.0]), np.eye(1), np.eye(1), np.zeros((1, 1)))
-    ds.setFExtPtr(np.zeros(1))
-    inter = sk.Interaction(sk.NewtonImpactNSL(r), sk.LagrangianLinearTIR(np.eye(1), np.array([-x0])))
-    T = 2 * math.pi / w
-    nsds = sk.NonSmoothDynamicalSystem(0.0, PERIODS * T)
+    ds = Forced(p.X0.copy(), p.V0.copy(), M, K, C)
+    ds.setFExtPtr(np.zeros(p.n))
+    inter = sk.Interaction(sk.NewtonImpactNSL(p.r),
+                           sk.LagrangianLinearTIR(np.ones((1, p.n)), np.array([-p.x0])))
+    nsds = sk.NonSmoothDynamicalSystem(0.0, p.t_end)
     nsds.insertDynamicalSystem(ds)
     nsds.link(inter, ds)
-    s = sk.TimeStepping(nsds, sk.TimeDiscretisation(0.0, T / steps_per_period), sk.MoreauJeanOSI(0.5),
-                        sk.LCP())
-    on, total = 0, 0
-    t_last = (PERIODS - 5) * T
-    while s.hasNextEvent():
-        s.computeOneStep()
-        t = s.nextTime()
-        if t > t_last:
-            total += 1
-            if inter.lambda_(1)[0] > 0:  # the contact impulse of the step: on the stop
-                on += 1
-        s.nextStep()
-    return on / max(total, 1)
+    return ds, inter, nsds
 
 
-def vibro_sp(vibro, r, w, f, x0):
-    out = subprocess.run([vibro, "simulate", os.path.join(ROOT, "data", "scenes", "fig08_preload.toml"),
-                          "--json", "--set", f"stop.restitution={r}", "--set", f"excitation.frequency={w}",
-                          "--set", f"excitation.amplitude={f}", "--set", f"stop.position={x0}",
-                          "--set", f"run.periods={PERIODS}", "--set", "run.samples_per_period=0"],
-                         check=True, capture_output=True, text=True)
-    return json.loads(out.stdout)["attractor"]["sticking_fraction"]
+def moreau_jean(p, steps_per_period, last_periods=5, min_run=3):
+    res = PeerResult()
+    c0 = cpu_self()
+    ds, inter, nsds = _system(p)
+    h = p.T / steps_per_period
+    s = sk.TimeStepping(nsds, sk.TimeDiscretisation(0.0, h), sk.MoreauJeanOSI(0.5), sk.LCP())
+    state, run_start, run_len = False, 0.0, 0  # debounced contact state, run of the other value
+    on_steps = total = 0
+    t_last = p.t_end - last_periods * p.T
+    t = 0.0
+    try:
+        while s.hasNextEvent():
+            s.computeOneStep()
+            t = s.nextTime()
+            on = inter.lambda_(1)[0] > 0
+            if t > t_last + 0.5 * h:
+                total += 1
+                on_steps += on
+            if on != state:
+                if run_len == 0:
+                    run_start = t - h
+                run_len += 1
+                if run_len == min_run:
+                    (res.stick if on else res.release)(run_start)
+                    state, run_len = on, 0
+            else:
+                run_len = 0
+            s.nextStep()
+        res.end = (np.array(ds.q()).copy(), np.array(ds.velocity()).copy())
+    except Exception as e:  # noqa: BLE001 (SWIG raises a bare std::exception)
+        res.status = f"exception at t = {t:.6g}: {e}"
+    res.t_reached = t
+    res.sp_steps = on_steps / max(total, 1)
+    res.cpu = cpu_self() - c0
+    return res
+
+
+def event_driven(p, rtol=None, tol_ed=1e-6, td_steps=16, max_steps=100000, wall_limit=60.0,
+                 fix_free_acceleration=True):
+    """rtol None keeps LsodarOSI's default tolerances (rtol 10ε, atol 100ε)."""
+    res = PeerResult()
+    c0, w0 = cpu_self(), time.time()
+    ds, inter, nsds = _system(p)
+    s = sk.EventDriven(nsds, sk.TimeDiscretisation(0.0, p.T / td_steps))
+    osi = sk.LsodarOSI()
+    s.insertIntegrator(osi)
+    s.insertNonSmoothProblem(sk.LCP(), sk.SICONOS_OSNSP_ED_IMPACT)
+    s.insertNonSmoothProblem(sk.LCP(), sk.SICONOS_OSNSP_ED_SMOOTH_ACC)
+    s.setToleranceED(tol_ed if tol_ed else 1000 * 10 * np.finfo(float).eps)
+    s.initialize()
+    if rtol:
+        osi.setTol(1, rtol, rtol)
+    if max_steps:
+        osi.setMaxNstep(max_steps)
+    topo = nsds.topology()
+    em = s.eventsManager()
+    stuck_prev = False
+    t = 0.0
+    where = ""
+    with _CaptureStdout() as out:
+        try:
+            while s.hasNextEvent():
+                if time.time() - w0 > wall_limit:
+                    res.status = f"gave up after {wall_limit:.0f} s (t = {t:.6g})"
+                    break
+                where = "integration (LSODAR)"
+                v_before = float(np.sum(ds.velocity()))
+                s.advanceToEvent()
+                if fix_free_acceleration:
+                    osi.computeRhs(em.nextTime())
+                where = "event processing"
+                s.processEvents()
+                t = s.startingTime()
+                if float(np.sum(ds.velocity())) != v_before and v_before < 0:
+                    res.impacts += 1
+                stuck = topo.indexSetsSize() > 2 and topo.indexSetSize(2) > 0
+                if stuck != stuck_prev:
+                    (res.stick if stuck else res.release)(t)
+                    stuck_prev = stuck
+            else:
+                res.end = (np.array(ds.q()).copy(), np.array(ds.velocity()).copy())
+        except Exception:  # noqa: BLE001 (SWIG raises a bare std::exception without its message)
+            res.status = f"failed at t = {t:.6g} in {where}"
+    m = re.search(r"Istate = (-?\d+)", out.text)
+    if res.status.startswith("failed"):
+        if m:
+            res.status += f" (LSODAR istate {m.group(1)}: excess work)" if m.group(1) == "-1" else \
+                f" (LSODAR istate {m.group(1)})"
+        elif "TOL_ED" in out.text:
+            g = re.search(r"y = (\S+) < -_TOL_ED", out.text)
+            res.status += f" (gap {g.group(1) if g else '?'} below -TOL_ED)"
+        elif where == "event processing":
+            res.status += " (EventDriven::updateIndexSetsWithDoubleCondition)"
+    res.t_reached = t
+    res.cpu = cpu_self() - c0
+    return res
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__)
-    ap.add_argument("--vibro", default=os.path.join(ROOT, "build", "vibro"))
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--vibro", default=DEFAULT_VIBRO)
+    ap.add_argument("--scenes", default="fig08_preload.toml,fig05_coexistence.toml,fig11_clearance.toml")
+    ap.add_argument("--periods", type=int, default=20)
     args = ap.parse_args()
-    print(f"{'scene':8s} {'steps/T':>8s} {'CPU [s]':>8s} {'SP':>10s} {'SP error':>9s}")
-    for name, r, w, f, x0 in SCENES:
-        ref = vibro_sp(args.vibro, r, w, f, x0)
-        print(f"{name:8s} {'vibro':>8s} {'':>8s} {ref:10.6f} {'exact':>9s}")
-        for n in (100, 1000, 10000):
-            c0 = cpu()
-            sp = moreau_jean(r, w, f, x0, n)
-            print(f"{name:8s} {n:8d} {cpu() - c0:8.2f} {sp:10.6f} {abs(sp - ref):9.1e}", flush=True)
+    print(f"{'scene':24s} {'scheme':14s} {'CPU [s]':>8s} {'error/T':>9s}  status")
+    for scene in args.scenes.split(","):
+        p = Problem(args.vibro, scene, periods=args.periods)
+        ref = run_vibro(args.vibro, scene, p.periods, ['run.engine="exact"', "run.chatter_switch=1e-9"])
+        print(f"{scene:24s} {'vibro exact':14s} {ref.cpu:8.3f} {0.0:9.1e}  (whole process)")
+        for steps in (100, 1000, 10000):
+            res = moreau_jean(p, steps)
+            err = milestone_error(res.times[:12], ref.milestones(12), p.T)
+            print(f"{scene:24s} {'MJ T/' + str(steps):14s} {res.cpu:8.3f} {err:9.1e}  {res.status}", flush=True)
+        for rtol in (None, 1e-6, 1e-8, 1e-10):
+            res = event_driven(p, rtol)
+            err = milestone_error(res.times[:12], ref.milestones(12), p.T)
+            print(f"{scene:24s} {'ED ' + (f'{rtol:g}' if rtol else 'default'):14s} {res.cpu:8.3f} {err:9.1e}  "
+                  f"{res.status}", flush=True)
 
 
 if __name__ == "__main__":
