@@ -88,6 +88,32 @@ TEST(Extremes, ForcingJustAbovePreload) {
   EXPECT_EQ(o.attractor.period, 1);
 }
 
+TEST(Extremes, ForcingOneBillionthAroundTheFreeFlightLimit) {
+  // r = 0, ω = 2.8: f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3). 1e-9 below it the period-1
+  // sticking orbit sticks for a fraction 3e-11 of the period, as the closed form of §6.2 says;
+  // 1e-9 above it the landing comes after the release phase, R < 0 there, and the motion is the
+  // one-impact orbit without sticking.
+  const double w = 2.8, fff = std::sqrt(1.0 + w * w * std::pow(std::tan(M_PI / w), 2));
+  {
+    const double f = fff - 1e-9;
+    const Outcome o = Simulate(OneDof(0.0, w, f, 1.0, 300));
+    ASSERT_EQ(o.result.status, RunStatus::kOk);
+    ASSERT_EQ(o.attractor.kind, "sticking-periodic");
+    const LD t1 = ReleaseTime(w, f);
+    const LD t0 = Flight1{w, f, t1, 1, 0}.Landing(1);
+    const double sp = static_cast<double>(1 - w * (t0 - t1) / (2 * M_PIl));
+    ASSERT_GT(sp, 0);
+    EXPECT_NEAR(*o.attractor.sticking_fraction, sp, 1e-13) << "closed form " << sp;
+  }
+  {
+    const Outcome o = Simulate(OneDof(0.0, w, fff + 1e-9, 1.0, 300));
+    ASSERT_EQ(o.result.status, RunStatus::kOk);
+    EXPECT_EQ(o.attractor.kind, "impact-periodic");
+    EXPECT_EQ(o.attractor.period, 1);
+    EXPECT_EQ(o.attractor.impacts_per_period, 1);
+  }
+}
+
 TEST(Extremes, ImpactAtTenToTheMinusTenIsAnImpact) {
   // Unforced 1-DOF oscillator, stop at x0 = 0: from X0 = 6e-11, v0 = −8e-11 it reaches the stop
   // with speed √(X0² + v0²) = 1e-10 (exact energy: the data are exact to 1e-16 relative).
