@@ -78,11 +78,13 @@ struct Outcome {
   Log log;
 };
 
-inline Outcome Simulate(const Scene& scene) {
+// Runs the scene (from `from` when given, e.g. a point of an orbit) and classifies its end.
+inline Outcome Simulate(const Scene& scene, const InitialOverride* from = nullptr) {
   const System sys(scene);
   Outcome run;
   AttractorRecorder rec(sys, scene);
   SimulationOptions opt;
+  opt.initial = from;
   opt.observers = {&rec, &run.log};
   run.result = vibro::Simulate(sys, scene, opt);
   run.attractor = rec.Classify();

@@ -12,6 +12,18 @@
 namespace vibro::test {
 namespace {
 
+// The continuation of the period-1 one-impact orbit of `at` from `from` to `to`.
+Branch ImpactBranch(std::function<Scene(double)> at, double from, double to, int max_points = 1000) {
+  ContinuationRequest req;
+  req.scene_at = std::move(at);
+  req.from = from;
+  req.to = to;
+  req.max_points = max_points;
+  req.orbit.kind = OrbitKind::kImpact;
+  req.orbit.period = 1;
+  return Continue(req);
+}
+
 TEST(Continuation, StickingBranchInAmplitudeEndsAtTheFreeFlightLimit) {
   // 1-DOF, r = 0: the period-1 sticking branch in f ends (sticking-lost) at
   // f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3, valid where tan(π/ω) > 0).
@@ -68,14 +80,7 @@ TEST(Continuation, FoldOfTheFig5ImpactOrbitIsPassedLocatedAndConfirmedBySimulati
   // Fig. 5: the stable single-impact period-1 orbit, continued down in f, meets its unstable
   // partner at a fold; the branch passes it and comes back on the unstable side.
   const auto at = [](double f) { return OneDof(0.75, 10.0, f, 1.0, 200); };
-  ContinuationRequest req;
-  req.scene_at = at;
-  req.from = 1.1;
-  req.to = 0.3;
-  req.max_points = 20;
-  req.orbit.kind = OrbitKind::kImpact;
-  req.orbit.period = 1;
-  const Branch b = Continue(req);
+  const Branch b = ImpactBranch(at, 1.1, 0.3, 20);
   ASSERT_EQ(b.status, "ok") << b.end;
   const Bifurcation* fold = nullptr;
   for (const auto& x : b.bifurcations)
@@ -111,14 +116,8 @@ TEST(Continuation, FoldOfTheFig5ImpactOrbitIsPassedLocatedAndConfirmedBySimulati
     Scene s = at(fold->value + df);
     s.initial_time = above.section_time;
     s.run.periods = 600;
-    const System sys(s);
-    AttractorRecorder rec(sys, s);
     const InitialOverride start{above.section_time, above.X, above.V};
-    SimulationOptions opt;
-    opt.initial = &start;
-    opt.observers = {&rec};
-    vibro::Simulate(sys, s, opt);
-    const Attractor a = rec.Classify();
+    const Attractor a = Simulate(s, &start).attractor;
     const bool one_impact = a.kind == "impact-periodic" && a.period == 1 && a.impacts_per_period == 1;
     EXPECT_EQ(one_impact, df > 0) << "f = fold " << df << ": " << a.kind;
   }
@@ -147,13 +146,7 @@ TEST(Continuation, FlipOfAOneImpactOrbitIsLocatedAtTheClosedFormAndConfirmedBySi
   }
   const double f_flip = static_cast<double>(0.5L * (lo + hi));
   const auto at = [&](double f) { return OneDof(r, w, f, 1.0, 400); };
-  ContinuationRequest req;
-  req.scene_at = at;
-  req.from = 7.0;
-  req.to = 7.6;
-  req.orbit.kind = OrbitKind::kImpact;
-  req.orbit.period = 1;
-  const Branch b = Continue(req);
+  const Branch b = ImpactBranch(at, 7.0, 7.6);
   ASSERT_EQ(b.status, "ok") << b.end;
   // The multipliers of vibro's orbit at the start: sum and product as the closed form says.
   const auto& mu = b.points.front().multipliers;
@@ -180,13 +173,8 @@ TEST(Continuation, FlipOfAOneImpactOrbitIsLocatedAtTheClosedFormAndConfirmedBySi
     Scene s = s0;
     s.initial_time = orbit.section_time;
     s.run.periods = 4000;
-    AttractorRecorder rec(sys, s);
     const InitialOverride start{orbit.section_time, orbit.X, orbit.V.array() + 1e-6};
-    SimulationOptions opt;
-    opt.initial = &start;
-    opt.observers = {&rec};
-    vibro::Simulate(sys, s, opt);
-    const Attractor a = rec.Classify();
+    const Attractor a = Simulate(s, &start).attractor;
     EXPECT_EQ(a.kind, "impact-periodic");
     EXPECT_EQ(a.period.value_or(0), df < 0 ? 1 : 2) << "f = flip " << df;
   }
@@ -218,14 +206,9 @@ TEST(Continuation, RisingBifurcationOfATwoDofBranchIsLocatedFromBothSidesAndConf
   EXPECT_NEAR(up, down, 1e-9);  // one sticking phase below it, two above: two different branches
   // Simulated from the scene's state just below and just above: one sticking phase, then two.
   for (double df : {-1e-7, 1e-7}) {
-    const Scene s = at(up + df);
-    const System sys(s);
-    AttractorRecorder rec(sys, s);
-    SimulationOptions opt;
-    opt.observers = {&rec};
-    const RunResult run = vibro::Simulate(sys, s, opt);
-    ASSERT_EQ(run.status, RunStatus::kOk) << run.message;
-    const Attractor a = rec.Classify();
+    const Outcome o = Simulate(at(up + df));
+    ASSERT_EQ(o.result.status, RunStatus::kOk) << o.result.message;
+    const Attractor& a = o.attractor;
     EXPECT_EQ(a.kind, "sticking-periodic");
     EXPECT_EQ(a.stick_phases.size(), df < 0 ? 1u : 2u) << "f = rising " << df;
   }
