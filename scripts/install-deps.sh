@@ -6,6 +6,7 @@ packages=(
   libsundials-dev libeigen3-dev libhdf5-dev hdf5-tools
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libtomlplusplus-dev
   libfmt-dev libtbb-dev nlohmann-json3-dev python3-h5py python3-matplotlib
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

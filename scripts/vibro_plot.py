@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Plots of a vibro HDF5 run (called by `vibro plot FILE.h5 [--out PREFIX]`).
 
-Writes PREFIX_xB.png (contact displacement, sticking shaded, impacts marked), PREFIX_reaction.png
-(contact reaction R), PREFIX_phase.png (phase portrait x_B, dx_B/dt) and PREFIX_section.png
+Writes PREFIX_basin.png for a basin study, PREFIX_sweep.png for a sweep (with a continuation
+branch overlaid by --overlay BRANCH.h5), and for a run with samples PREFIX_xB.png (contact
+displacement, sticking shaded, impacts marked), PREFIX_reaction.png (contact reaction R), PREFIX_phase.png (phase portrait x_B, dx_B/dt) and PREFIX_section.png
 (stroboscopic section). The time plots show the last `--periods` forcing periods (default 5).
 """
 import argparse
@@ -157,11 +158,72 @@ def plot_partition(f, title, save):
     save(fig, "partition")
 
 
+def read_branch(path, param):
+    """A continuation branch file (`vibro continue --out`): /branch and /bifurcations."""
+    try:
+        with h5py.File(path, "r") as f:
+            b = f["branch"]
+            br = {k: b[k][()] for k in ("value", "sticking_fraction", "stable")}
+            br["param"] = b.attrs["param"]
+            bif = f["bifurcations"] if "bifurcations" in f else None
+            br["bif_value"] = bif["value"][()] if bif is not None else np.array([])
+            kinds = bif["kind"][()] if bif is not None else []
+            br["bif_kind"] = [k.decode() if isinstance(k, bytes) else str(k) for k in kinds]
+    except (OSError, KeyError) as e:
+        print(f"--overlay {path}: not a continuation branch file (needs /branch with value, "
+              f"sticking_fraction, stable and the attribute param): {e}", file=sys.stderr)
+        sys.exit(2)
+    if br["param"] != param:
+        print(f"--overlay {path}: the branch varies {br['param']}, the sweep {param}", file=sys.stderr)
+        sys.exit(2)
+    return br
+
+
+def plot_sweep(f, title, save, overlay):
+    """Brute-force bifurcation diagram: x_B at the section and the sticking fraction against the
+    parameter, upward and downward runs marked; optionally a continuation branch overlaid."""
+    s = f["sweep"]
+    param = s.attrs["param"]
+    value, up = s["value"][()], s["upward"][()].astype(bool)
+    xB, sp = s["x_B"][()], s["sticking_fraction"][()]
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
+    for sel, marker, color, name in ((up, "o", "tab:blue", "upward"), (~up, "x", "tab:red", "downward")):
+        if not sel.any():
+            continue
+        v = np.repeat(value[sel], xB.shape[1])
+        ax1.plot(v, xB[sel].ravel(), marker, ms=2.5 if marker == "o" else 3.5, color=color,
+                 mfc="none" if marker == "o" else color, lw=0, label=f"{name} sweep")
+        ax2.plot(value[sel], sp[sel], marker, ms=4, color=color, mfc="none" if marker == "o" else color,
+                 lw=0, label=f"{name} sweep")
+    if overlay:
+        br = read_branch(overlay, param)
+        v, b_sp, stable = br["value"], br["sticking_fraction"], br["stable"].astype(bool)
+        # Solid where stable, dashed where unstable (each segment takes the stability of its start).
+        for i in range(len(v) - 1):
+            ax2.plot(v[i:i + 2], b_sp[i:i + 2], "-" if stable[i] else "--", color="k", lw=1.2)
+        ax2.plot([], [], "-", color="k", label="continuation, stable")
+        ax2.plot([], [], "--", color="k", label="continuation, unstable")
+        for bv, bk in zip(br["bif_value"], br["bif_kind"]):
+            for ax in (ax1, ax2):
+                ax.axvline(bv, color="tab:green", lw=0.8, ls=":")
+            y = np.interp(bv, v, b_sp) if len(v) and v.min() <= bv <= v.max() else 0.0
+            ax2.plot([bv], [y], "D", color="tab:green", ms=6)
+            ax2.annotate(bk, (bv, y), textcoords="offset points", xytext=(4, 6), fontsize=8, color="tab:green")
+    ax1.set_ylabel("$x_B$ at the section $t_0 + kT$")
+    ax1.set_title(f"{title}\nbrute-force sweep of {param}, up and down")
+    ax1.legend(loc="best", fontsize=8)
+    ax2.set_xlabel(param)
+    ax2.set_ylabel("sticking fraction")
+    ax2.legend(loc="best", fontsize=8)
+    save(fig, "sweep")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("file")
     ap.add_argument("--out", default=None, help="prefix of the PNG files")
     ap.add_argument("--periods", type=float, default=5.0, help="forcing periods shown in time plots")
+    ap.add_argument("--overlay", default=None, help="continuation branch (HDF5) drawn over a sweep")
     args = ap.parse_args()
     prefix = args.out or os.path.splitext(args.file)[0]
     written = []
@@ -187,9 +249,14 @@ def main():
             plot_branch(f, title, save)
         if "partition" in f:
             plot_partition(f, title, save)
+        if "sweep" in f:
+            plot_sweep(f, title, save, args.overlay)
+        elif args.overlay:
+            print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
+            sys.exit(2)
         t = f["samples/t"][:]
         if len(t) == 0:
-            if not any(g in f for g in ("basin", "branch", "partition")):
+            if not any(g in f for g in ("basin", "branch", "partition", "sweep")):
                 print("vibro plot: the file has no dense samples (run.samples_per_period = 0)",
                       file=sys.stderr)
             for w in written:

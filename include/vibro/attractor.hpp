@@ -42,6 +42,14 @@ class AttractorRecorder final : public Observer {
   // Classification of the motion over the final periods recorded.
   Attractor Classify() const;
 
+  // Whether the motion has settled on the periodic attractor Classify() finds, so that a run can
+  // stop here without changing its classification: Classify() finds a period p, and the
+  // differences δ1, δ2 of the last two windows of p section points (relative, as in Classify)
+  // either vanish or fall geometrically (λ = δ1/δ2 < 0.95) with a remaining distance to the
+  // orbit, estimated as δ1·λ/(1 − λ), below `remainder`. Cheap when the last section point
+  // repeats no earlier one within run.period_tolerance (most calls during a transient).
+  bool Settled(double remainder) const;
+
  private:
   struct Section {
     long long k;
@@ -49,6 +57,7 @@ class AttractorRecorder final : public Observer {
     Mode mode;
   };
   double Phase(const Clock& c, int p) const;  // ωt mod 2π p
+  double Difference(size_t i, size_t j) const;  // |z_i − z_j|∞ / (1 + max |z|∞); ∞ if modes differ
 
   const System& sys_;
   double phase0_;

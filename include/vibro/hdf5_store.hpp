@@ -72,10 +72,35 @@ class Hdf5Store final : public Observer {
   void WriteGroup(const std::string& group,
                   const std::vector<std::pair<std::string, std::vector<double>>>& values);
 
-  // Writes a basin study: /basin/labels (ny, nx) int32 (−1 unresolved, −2 inadmissible) with the
-  // axes as attributes, and the attractor table /attractors/* (one row per label). Call before
-  // Finish.
-  void WriteStudy(const StudyResult& study, const Coordinate& x, const Coordinate& y, int nx, int ny);
+  // Basin studies. The grid of a study (what a resume must match).
+  struct StudyGrid {
+    Coordinate x, y;
+    int nx = 0, ny = 0;
+    bool early_stop = true;  // cells stop once settled (vibro basin without --full-periods)
+  };
+  // Creates /basin (axes and grid as attributes) and the cell table /basin/cells, to which
+  // WriteCells appends the finished cells (flushed with the store's flush interval, so that an
+  // interrupted or killed study keeps them).
+  void BeginStudy(const StudyGrid& grid);
+  void WriteCells(const std::vector<size_t>& indices, const std::vector<CellResult>& cells);
+  // Opens an interrupted study to continue it: checks the scene and the grid (InputError naming
+  // the option that differs), loads the finished cells into `cells` (sized nx·ny by the caller)
+  // and drops an earlier label map and table.
+  static std::unique_ptr<Hdf5Store> ResumeStudy(const std::string& path, const StoreHeader& header,
+                                                const StudyGrid& grid, std::vector<CellResult>& cells,
+                                                double flush_interval = 1.0);
+  // Writes the labels /basin/labels (ny, nx) int32 (−1 unresolved, −2 inadmissible, −3 not
+  // computed) and the attractor table /attractors/* (one row per label). Call before Finish.
+  void WriteStudy(const StudyResult& study, const StudyGrid& grid);
+
+  // A sweep (vibro sweep --out): /sweep with one row per run, in the order run (up, then down).
+  struct SweepSpec {
+    std::string param;
+    double from = 0, to = 0;
+    int steps = 0, record = 0;
+    bool both_ways = true;
+  };
+  void WriteSweep(const std::vector<SweepPoint>& sweep, const SweepSpec& spec);
 
   // Writes a continuation branch: /branch (one row per point: value, sticking_fraction (NaN for
   // none), stable (uint8), x_B, section_phase, max_multiplier, stick_phases count, events

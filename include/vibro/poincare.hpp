@@ -51,6 +51,7 @@ struct OrbitRequest {
   int impacts = 0;                // impact orbits: impacts per period (0 = any)
   std::optional<double> guess_phase;     // ωt of the release (sticking) or first impact
   std::optional<double> guess_velocity;  // contact velocity just after it
+  std::optional<InitialOverride> start;  // or: the transient starts from this state (studies)
   int transient_periods = 200;
   int max_iterations = 40;
   double tolerance = 1e-12;       // on |F(z) − z|∞ relative to 1 + |z|∞

@@ -4,8 +4,11 @@
 #pragma once
 
 #include <atomic>
+#include <complex>
+#include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +26,41 @@ struct Coordinate {
   double from = 0, to = 1;
 };
 
+// What one cell of a study gave (independent of the thread count and of the process that
+// computed it).
+struct CellResult {
+  enum class State : std::int8_t {
+    kPending = 0,       // not computed (yet): an interrupted study
+    kInadmissible = 1,  // the initial state is inside the stop, or on it moving in
+    kFailed = 2,        // the simulation ended with a numerical failure
+    kClassified = 3,    // `attractor` holds the classification (kind may be "not-periodic")
+  };
+  State state = State::kPending;
+  Attractor attractor;
+  long long periods = 0;  // periods simulated (fewer than run.periods when the cell settled)
+  // Why the run ended: 0 after run.periods periods, 1 settled on a periodic attractor
+  // (AttractorRecorder::Settled), 2 reached a known stable orbit (StudyOptions::known).
+  std::int8_t stop = 0;
+  Eigen::VectorXd z;      // final section point (X, Ẋ) at t0 + periods·T, (2n)
+};
+
+// Serialisation of cell results as doubles (bit exact; for MPI and the HDF5 cell table).
+void PackCell(const CellResult& cell, std::vector<double>& out);
+CellResult UnpackCell(const double*& p);
+// Attractor kinds as small codes (0 not-periodic, 1 sticking-periodic, 2 impact-periodic,
+// 3 no-contact-periodic, 4 permanent-contact) and back.
+int KindCode(const std::string& kind);
+std::string KindName(int code);
+
+// The periodic orbit the Poincaré solver finds from a section point of an attractor class.
+struct ClassOrbit {
+  std::string status = "not-solved";  // FindOrbit's status, or "not-solved" (kind without a solver)
+  std::vector<std::complex<double>> multipliers;  // Floquet multipliers (eigenvalues of DP)
+  std::optional<bool> stable;                     // none when not converged
+  double residual = 0;
+  int merged = 1;  // classes of the cell classification that share this orbit
+};
+
 // A distinct attractor found by a study.
 struct FoundAttractor {
   Attractor attractor;
@@ -30,25 +68,70 @@ struct FoundAttractor {
   double basin_fraction = 0;        // cells / all resolved-or-not cells
   double basin_fraction_error = 0;  // binomial standard error √(p(1−p)/N)
   std::vector<double> example;      // the first initial state (coordinate values) that reached it
+  ClassOrbit orbit;                 // the solved orbit (when StudyOptions::solve_orbits)
 };
 
 struct StudyResult {
   std::vector<FoundAttractor> attractors;  // label k ↔ attractors[k]
-  std::vector<int> labels;                 // per cell; −1 unresolved (not periodic), −2 inadmissible
+  // Per cell: −1 unresolved (not periodic, or a numerical failure), −2 inadmissible, −3 not
+  // computed (interrupted study).
+  std::vector<int> labels;
   double unresolved_fraction = 0;
   double inadmissible_fraction = 0;
+  double pending_fraction = 0;
   long long cells = 0;
+};
+
+// A stable periodic orbit known before a study starts: a cell whose section point comes within
+// `radius` (relative, as AttractorRecorder) of one of its section points at two consecutive
+// periods is taken to have reached it and stops, with `attractor` as its classification.
+struct KnownOrbit {
+  Attractor attractor;
+  std::vector<Eigen::VectorXd> points;  // the orbit's section points (X, Ẋ) at t0 + kT, (2n) each
+  std::vector<Mode> modes;
+  double radius = 1e-4;
 };
 
 struct StudyOptions {
   int threads = 0;                                  // 0: all cores
   std::function<void(long long done, long long total)> progress;  // called from worker threads
   const std::atomic<bool>* stop_requested = nullptr;
+  // Each cell stops as soon as its motion has settled on a periodic attractor
+  // (AttractorRecorder::Settled with this remaining distance, relative); 0: always run
+  // run.periods periods.
+  double settle_remainder = 1e-9;
+  // Labelling: solve each class's periodic orbit with the Poincaré solver, report its
+  // multipliers and merge classes whose solved orbits coincide.
+  bool solve_orbits = true;
+  // Stable orbits a cell may stop at (see KnownOrbit); empty: none. Must be the same for every
+  // cell, thread and process (e.g. from KnownOrbits below), so that the answer is too.
+  std::vector<KnownOrbit> known;
 };
 
-// Simulates the scene from each initial state (values of the two coordinates), classifies the
-// final periods and groups equal attractors (same kind and period, sticking fraction and stick
-// phases within 1e-6).
+// The stable orbits found by a pilot study on an 8 × 8 grid over the two coordinates (cells run
+// until they settle; classes solved with the Poincaré solver): those whose solved orbit
+// converged with all multipliers of modulus < 0.9, with the section points of their first cell's
+// class over one period. Deterministic.
+std::vector<KnownOrbit> KnownOrbits(const System& system, const Scene& scene, const Coordinate& a,
+                                    const Coordinate& b, const StudyOptions& options);
+
+// Simulates cells[i] for each i of `indices` (parallel over the indices; other cells untouched).
+// A stop request leaves the cells not finished pending.
+void RunCells(const System& system, const Scene& scene, const Coordinate& a, const Coordinate& b,
+              const std::vector<std::pair<double, double>>& points,
+              const std::vector<size_t>& indices, std::vector<CellResult>& cells,
+              const StudyOptions& options);
+
+// Groups the cells' attractors in cell order (equal attractors: same kind and period, sticking
+// fraction and stick or impact phases within 1e-6), then (options.solve_orbits) solves each
+// class's orbit from its first cell's final section point and merges classes whose solved
+// orbits are equal attractors. Deterministic: depends only on `cells`.
+StudyResult LabelCells(const System& system, const Scene& scene,
+                       const std::vector<std::pair<double, double>>& points,
+                       const std::vector<CellResult>& cells, const StudyOptions& options);
+
+// KnownOrbits (unless options.known is given or settle_remainder is 0), RunCells over every
+// point, then LabelCells.
 StudyResult RunStudy(const System& system, const Scene& scene, const Coordinate& a,
                      const Coordinate& b, const std::vector<std::pair<double, double>>& points,
                      const StudyOptions& options);

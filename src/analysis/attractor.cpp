@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace vibro {
 
@@ -29,6 +30,36 @@ double AttractorRecorder::Phase(const Clock& c, int p) const {
   double ph = std::fmod(phase0_ + sys_.frequency() * c.offset + whole, 2.0 * M_PI * p);
   if (ph < 0) ph += 2.0 * M_PI * p;
   return ph;
+}
+
+double AttractorRecorder::Difference(size_t i, size_t j) const {
+  const Section& x = sections_[i];
+  const Section& y = sections_[j];
+  if (x.mode != y.mode) return std::numeric_limits<double>::infinity();
+  const double scale = 1.0 + std::max(x.z.cwiseAbs().maxCoeff(), y.z.cwiseAbs().maxCoeff());
+  return (x.z - y.z).cwiseAbs().maxCoeff() / scale;
+}
+
+bool AttractorRecorder::Settled(double remainder) const {
+  const size_t n = sections_.size();
+  // Cheap test first: the last section point repeats one of the max_period before it.
+  bool repeats = false;
+  for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n && !repeats; ++p)
+    repeats = Difference(n - 1, n - 1 - static_cast<size_t>(p)) <= tolerance_;
+  if (!repeats) return false;
+  const Attractor a = Classify();
+  if (!a.period) return false;
+  const auto p = static_cast<size_t>(*a.period);
+  if (3 * p >= n) return false;  // two windows of differences needed
+  double d1 = 0, d2 = 0;
+  for (size_t j = 0; j < p; ++j) {
+    d1 = std::max(d1, Difference(n - 1 - j, n - 1 - j - p));
+    d2 = std::max(d2, Difference(n - 1 - j - p, n - 1 - j - 2 * p));
+  }
+  if (d1 == 0) return true;  // repeats to the bit (1-DOF sticking orbits)
+  if (!(d2 > 0)) return false;
+  const double lambda = d1 / d2;
+  return lambda < 0.95 && d1 * lambda / (1 - lambda) <= remainder;
 }
 
 Attractor AttractorRecorder::Classify() const {

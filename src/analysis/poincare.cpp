@@ -213,10 +213,13 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   RunResult end;
   double t_start = scene.initial_time;
   std::optional<InitialOverride> init;
-  if (req.guess_phase) init = start_at(*req.guess_phase, req.guess_velocity.value_or(0.0));
+  if (req.guess_phase)
+    init = start_at(*req.guess_phase, req.guess_velocity.value_or(0.0));
+  else if (req.start)
+    init = *req.start;
   transient(init ? &*init : nullptr, a, log, end);
   if (init) t_start = init->time;
-  if (!matches(a) && req.kind == OrbitKind::kImpact && !req.guess_phase) {
+  if (!matches(a) && req.kind == OrbitKind::kImpact && !req.guess_phase && !req.start) {
     // Impact orbits often coexist with the sticking one: look from departures of several
     // phases and speeds.
     const double scale = std::max(1.0, std::abs(sys.stop())) * w;

@@ -1,6 +1,7 @@
 // The `vibro` command (CONTRACT §2, §4). The only file that includes CLI11.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 130 interrupted.
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -20,6 +21,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/distribute.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
@@ -443,6 +445,8 @@ struct StudyArgs {
   unsigned long long seed = 1;
   int threads = 0;
   std::string out;
+  bool resume = false;
+  bool full_periods = false;
 };
 
 int RunStudyCommand(const std::string& path, const std::vector<std::string>& sets, bool json,
@@ -469,61 +473,113 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   if (basin && (args.grid.size() != 2 || args.grid[0] < 1 || args.grid[1] < 1))
     problems.push_back("--grid: expected NX,NY with NX, NY ≥ 1");
   if (!basin && args.samples < 1) problems.push_back("--samples: expected N ≥ 1");
+  if (args.resume && args.out.empty()) problems.push_back("--resume needs --out FILE.h5 (the study to continue)");
   if (!problems.empty()) throw vibro::InputError(problems);
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!args.out.empty()) store = vibro::Hdf5Store::Create(args.out, HeaderOf(loaded, sys));
   const auto points = basin ? vibro::GridPoints(cx, cy, args.grid[0], args.grid[1])
                             : vibro::RandomPoints(cx, cy, args.samples, args.seed);
+  const vibro::Hdf5Store::StudyGrid grid{cx, cy, basin ? args.grid[0] : static_cast<int>(points.size()),
+                                         basin ? args.grid[1] : 1, !args.full_periods};
+
+  // Every process of an MPI job gets here; rank 0 alone reads and writes the file and prints.
+  const vibro::Distribution dist;
+  std::vector<vibro::CellResult> cells(points.size());
+  std::unique_ptr<vibro::Hdf5Store> store;
+  std::optional<vibro::InputError> file_problem;
+  if (dist.root() && !args.out.empty()) {
+    try {
+      if (args.resume) {
+        store = vibro::Hdf5Store::ResumeStudy(args.out, HeaderOf(loaded, sys), grid, cells);
+      } else {
+        store = vibro::Hdf5Store::Create(args.out, HeaderOf(loaded, sys));
+        store->BeginStudy(grid);
+      }
+    } catch (const vibro::InputError& e) {
+      file_problem = e;
+    }
+  }
+  if (dist.Any(file_problem.has_value())) {
+    if (file_problem) throw *file_problem;
+    return kExitBadInput;  // reported by rank 0
+  }
+
   vibro::StudyOptions opt;
   opt.threads = args.threads;
   opt.stop_requested = &g_stop_requested;
+  if (args.full_periods) opt.settle_remainder = 0;
   std::mutex mutex;
   int shown = -1;
   // A progress bar on stderr when it is a terminal.
-  if (isatty(STDERR_FILENO)) opt.progress = [&](long long done, long long total) {
-    const int pct = static_cast<int>(100 * done / std::max(total, 1LL));
+  if (dist.root() && isatty(STDERR_FILENO)) opt.progress = [&](long long done, long long total) {
+    const int pct = static_cast<int>(100 * std::min(done, total) / std::max(total, 1LL));
     std::lock_guard<std::mutex> lock(mutex);
     if (pct == shown) return;
     shown = pct;
     fmt::print(stderr, "\r[{:<50}] {:3d}% ({} / {})", std::string(static_cast<size_t>(pct / 2), '#'), pct,
-               done, total);
-    if (done == total) fmt::print(stderr, "\n");
+               std::min(done, total), total);
+    if (done >= total) fmt::print(stderr, "\n");
   };
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  const auto study = vibro::RunStudy(sys, loaded.scene, cx, cy, points, opt);
+  // Stable orbits known before the cells run (a pilot grid, the same on every rank).
+  if (!args.full_periods) opt.known = vibro::KnownOrbits(sys, loaded.scene, cx, cy, opt);
+  vibro::RunPendingCells(sys, loaded.scene, cx, cy, points, cells, opt, dist,
+                         [&](const std::vector<size_t>& batch) {
+                           if (store) store->WriteCells(batch, cells);
+                         });
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
-  const bool interrupted = g_stop_requested.load();
+  const bool interrupted = dist.Any(g_stop_requested.load());
+  if (!dist.root()) return interrupted ? kExitInterrupted : 0;
+  const auto study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
   if (store) {
-    store->WriteStudy(study, cx, cy, basin ? args.grid[0] : static_cast<int>(points.size()), basin ? args.grid[1] : 1);
+    store->WriteStudy(study, grid);
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    if (interrupted)
+      r.message = fmt::format("interrupted with {} of {} cells done; everything so far is kept, "
+                              "continue with --resume",
+                              study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
+                              study.cells);
     store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
   }
   if (json) {
     fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
   } else {
-    fmt::print("{} cells over {} ∈ [{}, {}] × {} ∈ [{}, {}]\n", study.cells, cx.name, cx.from, cx.to,
-               cy.name, cy.from, cy.to);
+    fmt::print("{} cells over {} ∈ [{}, {}] × {} ∈ [{}, {}]{}\n", study.cells, cx.name, cx.from, cx.to,
+               cy.name, cy.from, cy.to, dist.size() > 1 ? fmt::format(" ({} MPI ranks)", dist.size()) : "");
     for (size_t k = 0; k < study.attractors.size(); ++k) {
       const auto& a = study.attractors[k];
       fmt::print("attractor {}: basin fraction {:.4f} ± {:.4f}, example ({}, {}) = ({:.6g}, {:.6g})\n  ",
                  k, a.basin_fraction, a.basin_fraction_error, cx.name, cy.name, a.example[0], a.example[1]);
       PrintAttractor(a.attractor);
+      std::string mu;
+      for (const auto& m : a.orbit.multipliers)
+        mu += fmt::format("{}{:.4g}{:+.4g}i", mu.empty() ? "" : ", ", m.real(), m.imag());
+      fmt::print("  orbit        {}{}{}{}\n", a.orbit.status,
+                 a.orbit.stable ? (*a.orbit.stable ? ", stable" : ", unstable") : "",
+                 mu.empty() ? "" : ", multipliers " + mu,
+                 a.orbit.merged > 1 ? fmt::format(" ({} cell classes merged)", a.orbit.merged) : "");
     }
-    fmt::print("unresolved fraction {:.4f}, inadmissible fraction {:.4f}\n", study.unresolved_fraction,
-               study.inadmissible_fraction);
+    fmt::print("unresolved fraction {:.4f}, inadmissible fraction {:.4f}{}\n", study.unresolved_fraction,
+               study.inadmissible_fraction,
+               study.pending_fraction > 0 ? fmt::format(", not computed {:.4f}", study.pending_fraction) : "");
   }
+  if (interrupted) fmt::print(stderr, "vibro: interrupted; {}\n", args.out.empty() ? "results so far printed" : "continue with --resume");
   return interrupted ? kExitInterrupted : 0;
 }
 
 int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool json,
-             const std::string& key, double from, double to, int steps, int record, bool one_way) {
-  vibro::LoadScene(path, sets);
-  if (steps < 1 || record < 1) throw vibro::InputError({"--steps and --record must be ≥ 1"});
+             const std::string& key, double from, double to, int steps, int record, bool one_way,
+             const std::string& out) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  std::vector<std::string> problems;
+  if (steps < 1) problems.push_back(fmt::format("--steps {}: expected N ≥ 1", steps));
+  if (record < 1) problems.push_back(fmt::format("--record {}: expected K ≥ 1", record));
+  if (!problems.empty()) throw vibro::InputError(problems);
   // Both ends must be valid values of the key (bad input before any computation).
   for (double v : {from, to}) SceneWith(path, sets, key, v);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, vibro::System(loaded.scene)));
   vibro::SweepRequest req;
   req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = from;
@@ -536,6 +592,14 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   const auto sweep = vibro::Sweep(req, &g_stop_requested);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  const bool interrupted = g_stop_requested.load();
+  if (store) {
+    store->WriteSweep(sweep, {key, from, to, steps, record, !one_way});
+    vibro::RunResult r;
+    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    if (interrupted) r.message = fmt::format("interrupted after {} of the sweep's runs", sweep.size());
+    store->Finish(r, sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+  }
   if (json) {
     fmt::print("{}\n", vibro::SweepJson(sweep));
   } else {
@@ -545,7 +609,7 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
                  p.attractor.kind, p.attractor.period ? std::to_string(*p.attractor.period) : "-",
                  p.attractor.sticking_fraction.value_or(0.0));
   }
-  return g_stop_requested.load() ? kExitInterrupted : 0;
+  return interrupted ? kExitInterrupted : 0;
 }
 
 int RunInfo(const std::string& path, bool json) {
@@ -573,13 +637,17 @@ int RunInfo(const std::string& path, bool json) {
   return 0;
 }
 
-int RunPlot(const std::string& path, const std::string& prefix) {
-  if (path.find('\'') != std::string::npos || prefix.find('\'') != std::string::npos)
-    throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
+int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay) {
+  for (const auto* name : {&path, &prefix, &overlay})
+    if (name->find('\'') != std::string::npos)
+      throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
   std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
   if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
+  if (!overlay.empty()) cmd += fmt::format(" --overlay '{}'", overlay);
   const int rc = std::system(cmd.c_str());
+  // The script exits with 2 for bad input (an overlay that is not a continuation branch).
+  if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) return kExitBadInput;
   if (rc != 0) {
     fmt::print(stderr, "vibro: plotting failed (python exit status {})\n", rc);
     return kExitInternal;
@@ -648,11 +716,14 @@ int main(int argc, char** argv) {
     cmd->add_option("--x-range", study_args.x_range, "A,B")->delimiter(',')->expected(2);
     cmd->add_option("--y-range", study_args.y_range, "C,D")->delimiter(',')->expected(2);
     cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)");
+    cmd->add_flag("--full-periods", study_args.full_periods,
+                  "run every cell for run.periods periods (no early stop when it settles)");
   }
   attractors->add_option("--samples", study_args.samples, "random initial states (default 200)");
   attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
   basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->delimiter(',')->expected(2);
   basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
+  basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
   CLI::App* partition = app.add_subcommand(
       "partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries");
   add_scene_options(partition);
@@ -680,6 +751,8 @@ int main(int argc, char** argv) {
   sweep->add_option("--steps", sweep_steps, "steps between them (default 50)");
   sweep->add_option("--record", sweep_record, "section points kept per value (default 16)");
   sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
+  std::string sweep_out;
+  sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
 
@@ -690,6 +763,9 @@ int main(int argc, char** argv) {
   CLI::App* plot = app.add_subcommand("plot", "render PNG plots of a vibro HDF5 file");
   plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
   plot->add_option("--out", plot_prefix, "prefix of the PNG files (default: FILE without .h5)");
+  std::string plot_overlay;
+  plot->add_option("--overlay", plot_overlay,
+                   "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
 
   try {
     app.parse(argc, argv);
@@ -715,11 +791,11 @@ int main(int argc, char** argv) {
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }
-    if (*plot) return RunPlot(file_path, plot_prefix);
+    if (*plot) return RunPlot(file_path, plot_prefix, plot_overlay);
     if (*check) return RunCheck(scene_path, sets, json);
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
-                      sweep_record, sweep_one_way);
+                      sweep_record, sweep_one_way, sweep_out);
     if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
     if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
     if (*partition) {

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -329,6 +330,70 @@ std::string NowIso8601() {
 
 }  // namespace
 
+namespace {
+
+// /basin/cells: one row per finished cell of a study, appended as batches finish (resume).
+struct CellTable {
+  Column index, state, kind, period, impacts, sticking_fraction, periods, stop, stick_count,
+      impact_count, z, phases;
+  std::vector<Column*> All() {
+    return {&index, &state, &kind, &period, &impacts, &sticking_fraction, &periods, &stop,
+            &stick_count, &impact_count, &z, &phases};
+  }
+  void Create(hid_t g, hsize_t zcols) {
+    index = Column(g, "index", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    state = Column(g, "state", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    kind = Column(g, "kind", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    period = Column(g, "period", H5T_STD_I32LE, H5T_NATIVE_INT32, 4, 0);
+    impacts = Column(g, "impacts_per_period", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    sticking_fraction = Column(g, "sticking_fraction", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+    periods = Column(g, "periods", H5T_STD_I64LE, H5T_NATIVE_INT64, 8, 0);
+    stop = Column(g, "stop", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
+    stick_count = Column(g, "stick_phase_count", H5T_STD_I32LE, H5T_NATIVE_INT32, 4, 0);
+    impact_count = Column(g, "impact_count", H5T_STD_I32LE, H5T_NATIVE_INT32, 4, 0);
+    z = Column(g, "z", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, zcols);
+    phases = Column(g, "phases", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
+  }
+  void Open(hid_t g) {
+    index = Column(g, "index", H5T_NATIVE_INT64, 8);
+    state = Column(g, "state", H5T_NATIVE_INT8, 1);
+    kind = Column(g, "kind", H5T_NATIVE_INT8, 1);
+    period = Column(g, "period", H5T_NATIVE_INT32, 4);
+    impacts = Column(g, "impacts_per_period", H5T_NATIVE_INT64, 8);
+    sticking_fraction = Column(g, "sticking_fraction", H5T_NATIVE_DOUBLE, 8);
+    periods = Column(g, "periods", H5T_NATIVE_INT64, 8);
+    stop = Column(g, "stop", H5T_NATIVE_INT8, 1);
+    stick_count = Column(g, "stick_phase_count", H5T_NATIVE_INT32, 4);
+    impact_count = Column(g, "impact_count", H5T_NATIVE_INT32, 4);
+    z = Column(g, "z", H5T_NATIVE_DOUBLE, 8);
+    phases = Column(g, "phases", H5T_NATIVE_DOUBLE, 8);
+  }
+  void Push(size_t i, const CellResult& c, hsize_t zcols) {
+    const Attractor& a = c.attractor;
+    index.Push(static_cast<std::int64_t>(i));
+    state.Push(static_cast<std::int8_t>(c.state));
+    kind.Push(static_cast<std::int8_t>(KindCode(a.kind)));
+    period.Push(static_cast<std::int32_t>(a.period.value_or(0)));
+    impacts.Push(static_cast<std::int64_t>(a.impacts_per_period.value_or(-1)));
+    sticking_fraction.Push(a.sticking_fraction.value_or(std::numeric_limits<double>::quiet_NaN()));
+    periods.Push(static_cast<std::int64_t>(c.periods));
+    stop.Push(c.stop);
+    stick_count.Push(static_cast<std::int32_t>(a.stick_phases.size()));
+    impact_count.Push(static_cast<std::int32_t>(a.impact_phases.size()));
+    Eigen::VectorXd zz = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(zcols));
+    if (c.z.size() == zz.size()) zz = c.z;
+    z.PushRow(zz);
+    for (const auto& [b, e] : a.stick_phases) {
+      phases.Push(b);
+      phases.Push(e);
+    }
+    for (double v : a.impact_phases) phases.Push(v);
+    for (double v : a.impact_velocities) phases.Push(v);
+  }
+};
+
+}  // namespace
+
 struct Hdf5Store::Impl {
   std::string path;
   StoreHeader header;
@@ -342,6 +407,9 @@ struct Hdf5Store::Impl {
   std::chrono::steady_clock::time_point last_flush;
   unsigned calls = 0;
   Stats stats;
+  Handle basin, cells_group;
+  std::optional<CellTable> cells;
+  hsize_t zcols = 0;
 
   void OpenGroups() {
     events = Handle(Check(H5Gopen2(file.get(), "/events", H5P_DEFAULT), "/events"), H5Gclose);
@@ -384,6 +452,8 @@ struct Hdf5Store::Impl {
     std::vector<Column*> all = ev.All();
     for (auto* t : {&sa, &se})
       for (Column* c : t->All()) all.push_back(c);
+    if (cells)
+      for (Column* c : cells->All()) all.push_back(c);
     return all;
   }
 
@@ -395,6 +465,9 @@ struct Hdf5Store::Impl {
 
   void Close() {
     for (Column* c : Columns()) *c = Column();
+    cells.reset();
+    cells_group.Reset();
+    basin.Reset();
     events.Reset();
     samples.Reset();
     section.Reset();
@@ -729,28 +802,192 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
 
 Hdf5Store::Stats Hdf5Store::stats() const { return impl_->stats; }
 
-void Hdf5Store::WriteStudy(const StudyResult& st, const Coordinate& x, const Coordinate& y, int nx,
-                           int ny) {
-  const hid_t f = impl_->file.get();
-  Handle basin(Check(H5Gcreate2(f, "/basin", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/basin"), H5Gclose);
-  const hsize_t dims[2] = {static_cast<hsize_t>(ny), static_cast<hsize_t>(nx)};
+namespace {
+
+void DeleteLink(hid_t loc, const char* name) {
+  if (H5Lexists(loc, name, H5P_DEFAULT) > 0) H5Ldelete(loc, name, H5P_DEFAULT);
+}
+
+}  // namespace
+
+void Hdf5Store::BeginStudy(const StudyGrid& grid) {
+  auto& m = *impl_;
+  const hid_t f = m.file.get();
+  m.basin = Handle(Check(H5Gcreate2(f, "/basin", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/basin"), H5Gclose);
+  const hid_t b = m.basin.get();
+  WriteString(b, "x", grid.x.name);
+  WriteString(b, "y", grid.y.name);
+  WriteDoubles(b, "x_range", {grid.x.from, grid.x.to});
+  WriteDoubles(b, "y_range", {grid.y.from, grid.y.to});
+  WriteInt(b, "nx", grid.nx);
+  WriteInt(b, "ny", grid.ny);
+  WriteInt(b, "early_stop", grid.early_stop ? 1 : 0);
+  m.cells_group = Handle(Check(H5Gcreate2(b, "cells", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "cells"), H5Gclose);
+  m.zcols = static_cast<hsize_t>(2 * m.header.dof);
+  m.cells.emplace();
+  m.cells->Create(m.cells_group.get(), m.zcols);
+  m.Flush();
+}
+
+void Hdf5Store::WriteCells(const std::vector<size_t>& indices, const std::vector<CellResult>& cells) {
+  auto& m = *impl_;
+  for (size_t i : indices)
+    if (cells[i].state != CellResult::State::kPending) m.cells->Push(i, cells[i], m.zcols);
+  const auto now = std::chrono::steady_clock::now();
+  if (std::chrono::duration<double>(now - m.last_flush).count() >= m.flush_interval) m.Flush();
+}
+
+std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const StoreHeader& h,
+                                                  const StudyGrid& grid, std::vector<CellResult>& cells,
+                                                  double flush_interval) {
+  SilenceHdf5();
+  const StoredRun stored = ReadStoredRun(path);
+  if (stored.scene_text != h.scene_text)
+    throw InputError({fmt::format(
+        "{}: cannot resume: the file holds a different scene (or different --set overrides) "
+        "than the one given; resume with exactly the scene of the interrupted study",
+        path)});
+  if (stored.status == "ok")
+    throw InputError({fmt::format("{}: nothing to resume: the study finished (status ok)", path)});
+  auto impl = std::make_unique<Impl>();
+  impl->path = path;
+  impl->header = h;
+  impl->flush_interval = flush_interval;
+  impl->zcols = static_cast<hsize_t>(2 * h.dof);
+  std::vector<std::string> problems;
+  try {
+    Handle fapl = FileAccess();
+    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    if (!impl->file) throw std::runtime_error("cannot open the file for writing");
+    const hid_t f = impl->file.get();
+    if (H5Lexists(f, "/basin", H5P_DEFAULT) <= 0 || H5Lexists(f, "/basin/cells", H5P_DEFAULT) <= 0)
+      throw InputError({fmt::format("{}: cannot resume: the file holds no basin study", path)});
+    impl->basin = Handle(Check(H5Gopen2(f, "/basin", H5P_DEFAULT), "/basin"), H5Gclose);
+    const hid_t b = impl->basin.get();
+    // The same grid, or nothing.
+    const auto same = [&](const std::string& what, const std::string& stored_value,
+                          const std::string& given) {
+      if (stored_value != given)
+        problems.push_back(fmt::format("{}: cannot resume: {} is {} in the file but {} here", path, what,
+                                       stored_value, given));
+    };
+    same("--x", ReadString(b, "x"), grid.x.name);
+    same("--y", ReadString(b, "y"), grid.y.name);
+    const auto range = [](const std::vector<double>& r) {
+      return r.size() == 2 ? fmt::format("{},{}", r[0], r[1]) : std::string("?");
+    };
+    same("--x-range", range(ReadDoubles(b, "x_range")), range({grid.x.from, grid.x.to}));
+    same("--y-range", range(ReadDoubles(b, "y_range")), range({grid.y.from, grid.y.to}));
+    same("--grid",
+         fmt::format("{},{}", ReadScalar<std::int64_t>(b, "nx", H5T_NATIVE_INT64).value_or(-1),
+                     ReadScalar<std::int64_t>(b, "ny", H5T_NATIVE_INT64).value_or(-1)),
+         fmt::format("{},{}", grid.nx, grid.ny));
+    same("--full-periods",
+         ReadScalar<std::int64_t>(b, "early_stop", H5T_NATIVE_INT64).value_or(1) ? "off" : "on",
+         grid.early_stop ? "off" : "on");
+    if (!problems.empty()) throw InputError(problems);
+    // A label map and table of an interrupted run are written again at the end.
+    DeleteLink(b, "labels");
+    DeleteLink(f, "/attractors");
+    impl->cells_group = Handle(Check(H5Gopen2(b, "cells", H5P_DEFAULT), "cells"), H5Gclose);
+    impl->cells.emplace();
+    CellTable& t = *impl->cells;
+    t.Open(impl->cells_group.get());
+    hsize_t rows = t.index.rows();
+    for (Column* c : t.All())
+      if (c != &t.phases) rows = std::min(rows, c->rows());
+    const auto n = static_cast<size_t>(rows);
+    std::vector<std::int64_t> index(n), impacts(n), periods(n);
+    std::vector<std::int8_t> state(n), kind(n), stop(n);
+    std::vector<std::int32_t> period(n), ns(n), ni(n);
+    std::vector<double> sp(n), z(n * impl->zcols);
+    t.index.Read(0, rows, index.data());
+    t.state.Read(0, rows, state.data());
+    t.kind.Read(0, rows, kind.data());
+    t.period.Read(0, rows, period.data());
+    t.impacts.Read(0, rows, impacts.data());
+    t.sticking_fraction.Read(0, rows, sp.data());
+    t.periods.Read(0, rows, periods.data());
+    t.stop.Read(0, rows, stop.data());
+    t.stick_count.Read(0, rows, ns.data());
+    t.impact_count.Read(0, rows, ni.data());
+    t.z.Read(0, rows, z.data());
+    hsize_t values = 0;
+    for (size_t i = 0; i < n; ++i) values += static_cast<hsize_t>(2 * ns[i] + 2 * ni[i]);
+    if (values > t.phases.rows()) throw std::runtime_error("the cell table is incomplete");
+    std::vector<double> ph(static_cast<size_t>(values));
+    t.phases.Read(0, values, ph.data());
+    for (Column* c : t.All()) c->Truncate(c == &t.phases ? values : rows);
+    const double* p = ph.data();
+    const auto dof = static_cast<Eigen::Index>(h.dof);
+    for (size_t i = 0; i < n; ++i) {
+      if (index[i] < 0 || static_cast<size_t>(index[i]) >= cells.size())
+        throw std::runtime_error("a cell index beyond the grid");
+      CellResult c;
+      c.state = static_cast<CellResult::State>(state[i]);
+      c.attractor.kind = KindName(kind[i]);
+      if (period[i] > 0) c.attractor.period = period[i];
+      if (impacts[i] >= 0) c.attractor.impacts_per_period = impacts[i];
+      if (!std::isnan(sp[i])) c.attractor.sticking_fraction = sp[i];
+      c.periods = periods[i];
+      c.stop = stop[i];
+      for (int k = 0; k < ns[i]; ++k, p += 2) c.attractor.stick_phases.emplace_back(p[0], p[1]);
+      c.attractor.impact_phases.assign(p, p + ni[i]);
+      c.attractor.impact_velocities.assign(p + ni[i], p + 2 * ni[i]);
+      p += 2 * ni[i];
+      c.z = Eigen::Map<const Eigen::VectorXd>(z.data() + i * impl->zcols, 2 * dof);
+      cells[static_cast<size_t>(index[i])] = std::move(c);
+    }
+    impl->OpenGroups();
+    impl->kind_type = KindType();
+    impl->OpenColumns();
+    WriteString(f, "status", "running");
+    WriteString(f, "message", "");
+    impl->Flush();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
+  }
+  impl->last_flush = std::chrono::steady_clock::now();
+  return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
+}
+
+void Hdf5Store::WriteStudy(const StudyResult& st, const StudyGrid& grid) {
+  auto& m = *impl_;
+  const hid_t f = m.file.get();
+  if (!m.basin) {
+    m.basin = Handle(Check(H5Gcreate2(f, "/basin", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/basin"), H5Gclose);
+    WriteString(m.basin.get(), "x", grid.x.name);
+    WriteString(m.basin.get(), "y", grid.y.name);
+    WriteDoubles(m.basin.get(), "x_range", {grid.x.from, grid.x.to});
+    WriteDoubles(m.basin.get(), "y_range", {grid.y.from, grid.y.to});
+    WriteInt(m.basin.get(), "nx", grid.nx);
+    WriteInt(m.basin.get(), "ny", grid.ny);
+    WriteInt(m.basin.get(), "early_stop", grid.early_stop ? 1 : 0);
+  }
+  const hid_t basin = m.basin.get();
+  DeleteLink(basin, "labels");
+  DeleteLink(f, "/attractors");
+  const hsize_t dims[2] = {static_cast<hsize_t>(grid.ny), static_cast<hsize_t>(grid.nx)};
   Handle space(H5Screate_simple(2, dims, nullptr), H5Sclose);
-  Handle labels(Check(H5Dcreate2(basin.get(), "labels", H5T_STD_I32LE, space.get(), H5P_DEFAULT,
-                                 H5P_DEFAULT, H5P_DEFAULT),
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  const hsize_t chunk[2] = {std::min<hsize_t>(dims[0], 64), std::min<hsize_t>(dims[1], 512)};
+  H5Pset_chunk(dcpl.get(), 2, chunk);
+  H5Pset_deflate(dcpl.get(), kDeflate);
+  Handle labels(Check(H5Dcreate2(basin, "labels", H5T_STD_I32LE, space.get(), H5P_DEFAULT,
+                                 dcpl.get(), H5P_DEFAULT),
                       "labels"),
                 H5Dclose);
   Check(H5Dwrite(labels.get(), H5T_NATIVE_INT, H5S_ALL, H5S_ALL, H5P_DEFAULT, st.labels.data()),
         "labels", 0);
-  WriteString(basin.get(), "x", x.name);
-  WriteString(basin.get(), "y", y.name);
-  WriteDoubles(basin.get(), "x_range", {x.from, x.to});
-  WriteDoubles(basin.get(), "y_range", {y.from, y.to});
-  WriteDouble(basin.get(), "unresolved_fraction", st.unresolved_fraction);
-  WriteDouble(basin.get(), "inadmissible_fraction", st.inadmissible_fraction);
+  WriteDouble(basin, "unresolved_fraction", st.unresolved_fraction);
+  WriteDouble(basin, "inadmissible_fraction", st.inadmissible_fraction);
+  WriteDouble(basin, "pending_fraction", st.pending_fraction);
   Handle table(Check(H5Gcreate2(f, "/attractors", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/attractors"),
                H5Gclose);
-  std::vector<double> period, impacts, sp, frac, err;
-  std::string kinds;
+  std::vector<double> period, impacts, sp, frac, err, stable, residual, merged, mcount, mu, lead;
+  std::string kinds, status;
   for (const auto& a : st.attractors) {
     period.push_back(a.attractor.period ? *a.attractor.period : -1);
     impacts.push_back(a.attractor.impacts_per_period ? static_cast<double>(*a.attractor.impacts_per_period) : -1);
@@ -758,6 +995,18 @@ void Hdf5Store::WriteStudy(const StudyResult& st, const Coordinate& x, const Coo
     frac.push_back(a.basin_fraction);
     err.push_back(a.basin_fraction_error);
     kinds += (kinds.empty() ? "" : ",") + a.attractor.kind;
+    status += (status.empty() ? "" : ",") + a.orbit.status;
+    stable.push_back(a.orbit.stable ? (*a.orbit.stable ? 1.0 : 0.0) : -1.0);
+    residual.push_back(a.orbit.residual);
+    merged.push_back(a.orbit.merged);
+    mcount.push_back(static_cast<double>(a.orbit.multipliers.size()));
+    double l = a.orbit.multipliers.empty() ? -1 : 0;
+    for (const auto& z : a.orbit.multipliers) {
+      mu.push_back(z.real());
+      mu.push_back(z.imag());
+      l = std::max(l, std::abs(z));
+    }
+    lead.push_back(l);
   }
   // One attribute per column (label k is row k); null values are −1.
   WriteString(table.get(), "kind", kinds);
@@ -766,6 +1015,76 @@ void Hdf5Store::WriteStudy(const StudyResult& st, const Coordinate& x, const Coo
   WriteDoubles(table.get(), "sticking_fraction", sp);
   WriteDoubles(table.get(), "basin_fraction", frac);
   WriteDoubles(table.get(), "basin_fraction_error", err);
+  // The Poincaré solver's orbit of each class (vibro extension).
+  WriteString(table.get(), "orbit_status", status);
+  WriteDoubles(table.get(), "stable", stable);
+  WriteDoubles(table.get(), "orbit_residual", residual);
+  WriteDoubles(table.get(), "merged_classes", merged);
+  WriteDoubles(table.get(), "multiplier_count", mcount);
+  WriteDoubles(table.get(), "floquet_multipliers", mu, 2);
+  WriteDoubles(table.get(), "leading_multiplier", lead);
+}
+
+namespace {
+
+// A small contiguous 1-D or 2-D dataset written at once.
+void WriteArray(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+                hsize_t rows, hsize_t cols = 0) {
+  const hsize_t dims[2] = {rows, cols};
+  Handle space(H5Screate_simple(cols > 0 ? 2 : 1, dims, nullptr), H5Sclose);
+  Handle d(Check(H5Dcreate2(loc, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name),
+           H5Dclose);
+  if (rows > 0) Check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name, 0);
+}
+
+void WriteStrings(hid_t loc, const char* name, const std::vector<std::string>& v) {
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  Handle type = StringType();
+  WriteArray(loc, name, type.get(), type.get(), p.data(), p.size());
+}
+
+}  // namespace
+
+void Hdf5Store::WriteSweep(const std::vector<SweepPoint>& sweep, const SweepSpec& spec) {
+  const hid_t f = impl_->file.get();
+  Handle g(Check(H5Gcreate2(f, "/sweep", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/sweep"), H5Gclose);
+  const hsize_t n = sweep.size(), rec = static_cast<hsize_t>(std::max(spec.record, 1));
+  std::vector<double> value, sp, xB(n * rec, std::numeric_limits<double>::quiet_NaN()), vB = xB;
+  std::vector<std::uint8_t> up;
+  std::vector<std::int32_t> period;
+  std::vector<std::int64_t> impacts;
+  std::vector<std::string> kind;
+  for (hsize_t i = 0; i < n; ++i) {
+    const SweepPoint& p = sweep[i];
+    value.push_back(p.value);
+    up.push_back(p.upward ? 1 : 0);
+    kind.push_back(p.attractor.kind);
+    period.push_back(p.attractor.period.value_or(-1));
+    impacts.push_back(p.attractor.impacts_per_period.value_or(-1));
+    sp.push_back(p.attractor.sticking_fraction.value_or(std::numeric_limits<double>::quiet_NaN()));
+    // The last `record` section points, the most recent last (rows of shorter runs NaN-padded in front).
+    const hsize_t k = std::min<hsize_t>(p.x_B.size(), rec);
+    for (hsize_t j = 0; j < k; ++j) {
+      xB[i * rec + rec - k + j] = p.x_B[p.x_B.size() - k + j];
+      vB[i * rec + rec - k + j] = p.v_B[p.v_B.size() - k + j];
+    }
+  }
+  const hid_t gg = g.get();
+  WriteArray(gg, "value", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, value.data(), n);
+  WriteArray(gg, "upward", H5T_STD_U8LE, H5T_NATIVE_UINT8, up.data(), n);
+  WriteStrings(gg, "kind", kind);
+  WriteArray(gg, "period", H5T_STD_I32LE, H5T_NATIVE_INT32, period.data(), n);
+  WriteArray(gg, "impacts_per_period", H5T_STD_I64LE, H5T_NATIVE_INT64, impacts.data(), n);
+  WriteArray(gg, "sticking_fraction", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, sp.data(), n);
+  WriteArray(gg, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, xB.data(), n, rec);
+  WriteArray(gg, "v_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, vB.data(), n, rec);
+  WriteString(gg, "param", spec.param);
+  WriteDouble(gg, "from", spec.from);
+  WriteDouble(gg, "to", spec.to);
+  WriteInt(gg, "steps", spec.steps);
+  WriteInt(gg, "record", spec.record);
+  WriteInt(gg, "both_ways", spec.both_ways ? 1 : 0);
 }
 
 void Hdf5Store::WriteGroup(const std::string& group,

@@ -143,11 +143,19 @@ std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordina
     o["basin_fraction"] = a.basin_fraction;
     o["basin_fraction_error"] = a.basin_fraction_error;
     o["example_initial_state"] = {{x.name, a.example.at(0)}, {y.name, a.example.at(1)}};
+    // The Poincaré solver's orbit of the class (vibro extension).
+    o["orbit_status"] = a.orbit.status;
+    auto mu = nlohmann::json::array();
+    for (const auto& m : a.orbit.multipliers) mu.push_back({m.real(), m.imag()});
+    o["floquet_multipliers"] = mu;
+    o["stable"] = a.orbit.stable ? nlohmann::json(*a.orbit.stable) : nlohmann::json(nullptr);
+    o["merged_classes"] = a.orbit.merged;
     list.push_back(o);
   }
   j["attractors"] = list;
   j["unresolved_fraction"] = st.unresolved_fraction;
   j["inadmissible_fraction"] = st.inadmissible_fraction;
+  j["not_computed_fraction"] = st.pending_fraction;
   j["cells"] = st.cells;
   return j.dump();
 }

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -10,6 +11,7 @@
 #include <oneapi/tbb/global_control.h>
 #include <oneapi/tbb/parallel_for.h>
 
+#include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 
 namespace vibro {
@@ -105,72 +107,348 @@ std::vector<std::pair<double, double>> RandomPoints(const Coordinate& a, const C
   return pts;
 }
 
-StudyResult RunStudy(const System& sys, const Scene& scene, const Coordinate& a, const Coordinate& b,
-                     const std::vector<std::pair<double, double>>& points, const StudyOptions& opt) {
-  const auto n = static_cast<long long>(points.size());
-  std::vector<std::optional<Attractor>> found(points.size());
-  std::vector<char> admissible(points.size(), 1);
+namespace {
+
+// Stops a cell's run once its motion has settled (AttractorRecorder::Settled) or reached a known
+// orbit, and passes a stop request of the whole study on. Polled by the automaton between events.
+class SettleWatch final : public Observer {
+ public:
+  SettleWatch(const AttractorRecorder& rec, const StudyOptions& opt)
+      : rec_(rec), opt_(opt) {}
+  void OnEvent(const Event&) override { Poll(); }
+  void OnSection(const Sample& s) override {
+    Poll();
+    if (opt_.settle_remainder <= 0 || reason_ != 0) return;
+    // A known orbit reached at two consecutive periods.
+    const int near = Near(s);
+    if (near >= 0 && near == last_near_) {
+      reason_ = 2;
+    } else if (rec_.Settled(opt_.settle_remainder)) {
+      reason_ = 1;
+    }
+    last_near_ = near;
+    if (reason_ != 0) stop_.store(true, std::memory_order_relaxed);
+  }
+  const std::atomic<bool>* flag() const { return &stop_; }
+  int reason() const { return reason_; }
+  int known() const { return last_near_; }
+
+ private:
+  void Poll() {
+    if (opt_.stop_requested && opt_.stop_requested->load(std::memory_order_relaxed))
+      stop_.store(true, std::memory_order_relaxed);
+  }
+  int Near(const Sample& s) const {
+    const auto n = s.X.size();
+    for (size_t k = 0; k < opt_.known.size(); ++k) {
+      const KnownOrbit& o = opt_.known[k];
+      for (size_t j = 0; j < o.points.size(); ++j) {
+        if (o.modes[j] != s.mode) continue;
+        const Eigen::VectorXd& z = o.points[j];
+        const double scale =
+            1.0 + std::max({z.cwiseAbs().maxCoeff(), s.X.cwiseAbs().maxCoeff(), s.V.cwiseAbs().maxCoeff()});
+        const double d = std::max((s.X - z.head(n)).cwiseAbs().maxCoeff(),
+                                  (s.V - z.tail(n)).cwiseAbs().maxCoeff());
+        if (d <= o.radius * scale) return static_cast<int>(k);
+      }
+    }
+    return -1;
+  }
+  const AttractorRecorder& rec_;
+  const StudyOptions& opt_;
+  std::atomic<bool> stop_{false};
+  int reason_ = 0, last_near_ = -1;
+};
+
+// Section points and modes of one period (q sections) from a state at time t.
+struct SectionLog final : Observer {
+  std::vector<Eigen::VectorXd> z;
+  std::vector<Mode> modes;
+  void OnSection(const Sample& s) override {
+    Eigen::VectorXd v(2 * s.X.size());
+    v << s.X, s.V;
+    z.push_back(std::move(v));
+    modes.push_back(s.mode);
+  }
+};
+
+// Cell order of first appearance → label.
+std::vector<int> Renumber(std::vector<int>& labels, size_t classes) {
+  std::vector<int> map(classes, -1);
+  int next = 0;
+  for (int& l : labels) {
+    if (l < 0) continue;
+    int& m = map[static_cast<size_t>(l)];
+    if (m < 0) m = next++;
+    l = m;
+  }
+  return map;
+}
+
+}  // namespace
+
+int KindCode(const std::string& kind) {
+  if (kind == "sticking-periodic") return 1;
+  if (kind == "impact-periodic") return 2;
+  if (kind == "no-contact-periodic") return 3;
+  if (kind == "permanent-contact") return 4;
+  return 0;
+}
+
+std::string KindName(int code) {
+  switch (code) {
+    case 1: return "sticking-periodic";
+    case 2: return "impact-periodic";
+    case 3: return "no-contact-periodic";
+    case 4: return "permanent-contact";
+    default: return "not-periodic";
+  }
+}
+
+// Layout: state, kind, period (0: none), impacts (−1: none), sticking fraction (NaN: none),
+// periods, stop, #stick phases, pairs, #impacts, phases, velocities, #z, z.
+void PackCell(const CellResult& c, std::vector<double>& out) {
+  const Attractor& a = c.attractor;
+  out.push_back(static_cast<double>(c.state));
+  out.push_back(KindCode(a.kind));
+  out.push_back(a.period.value_or(0));
+  out.push_back(a.impacts_per_period ? static_cast<double>(*a.impacts_per_period) : -1.0);
+  out.push_back(a.sticking_fraction.value_or(std::numeric_limits<double>::quiet_NaN()));
+  out.push_back(static_cast<double>(c.periods));
+  out.push_back(c.stop);
+  out.push_back(static_cast<double>(a.stick_phases.size()));
+  for (const auto& [s, e] : a.stick_phases) {
+    out.push_back(s);
+    out.push_back(e);
+  }
+  out.push_back(static_cast<double>(a.impact_phases.size()));
+  out.insert(out.end(), a.impact_phases.begin(), a.impact_phases.end());
+  out.insert(out.end(), a.impact_velocities.begin(), a.impact_velocities.end());
+  out.push_back(static_cast<double>(c.z.size()));
+  out.insert(out.end(), c.z.data(), c.z.data() + c.z.size());
+}
+
+CellResult UnpackCell(const double*& p) {
+  CellResult c;
+  const auto count = [&p] { return static_cast<size_t>(*p++); };
+  c.state = static_cast<CellResult::State>(static_cast<int>(*p++));
+  Attractor& a = c.attractor;
+  a.kind = KindName(static_cast<int>(*p++));
+  if (const int q = static_cast<int>(*p++); q > 0) a.period = q;
+  if (const double k = *p++; k >= 0) a.impacts_per_period = static_cast<long long>(k);
+  if (const double sp = *p++; !std::isnan(sp)) a.sticking_fraction = sp;
+  c.periods = static_cast<long long>(*p++);
+  c.stop = static_cast<std::int8_t>(*p++);
+  for (size_t i = 0, n = count(); i < n; ++i, p += 2) a.stick_phases.emplace_back(p[0], p[1]);
+  const size_t ni = count();
+  a.impact_phases.assign(p, p + ni);
+  a.impact_velocities.assign(p + ni, p + 2 * ni);
+  p += 2 * ni;
+  const size_t nz = count();
+  c.z = Eigen::Map<const Eigen::VectorXd>(p, static_cast<Eigen::Index>(nz));
+  p += nz;
+  return c;
+}
+
+void RunCells(const System& sys, const Scene& scene, const Coordinate& a, const Coordinate& b,
+              const std::vector<std::pair<double, double>>& points,
+              const std::vector<size_t>& indices, std::vector<CellResult>& cells,
+              const StudyOptions& opt) {
+  const auto n = static_cast<long long>(indices.size());
   std::atomic<long long> done{0};
   Scene sc = scene;
   sc.run.samples_per_period = 0;
   const auto cell = [&](size_t i) {
     if (opt.stop_requested && opt.stop_requested->load()) return;
+    CellResult out;
     const auto start = StartOf(sys, sc, a, points[i].first, b, points[i].second);
     if (!start) {
-      admissible[i] = 0;
+      out.state = CellResult::State::kInadmissible;
     } else {
       AttractorRecorder rec(sys, sc);
+      SettleWatch watch(rec, opt);
       SimulationOptions so;
       so.initial = &*start;
-      so.observers = {&rec};
+      so.observers = {&rec, &watch};
+      so.stop_requested = watch.flag();
       const RunResult r = Simulate(sys, sc, so);
-      if (r.status == RunStatus::kOk) found[i] = rec.Classify();
+      if (r.status == RunStatus::kInterrupted && watch.reason() == 0) return;  // the study stops
+      out.state = r.status == RunStatus::kNumericalFailure ? CellResult::State::kFailed
+                                                           : CellResult::State::kClassified;
+      out.stop = static_cast<std::int8_t>(watch.reason());
+      if (out.state == CellResult::State::kClassified)
+        out.attractor = watch.reason() == 2 ? opt.known[static_cast<size_t>(watch.known())].attractor
+                                            : rec.Classify();
+      out.periods = r.end.period;
+      out.z.resize(2 * sys.dof());
+      out.z << r.X, r.V;
     }
+    cells[i] = std::move(out);
     const long long d = ++done;
     if (opt.progress) opt.progress(d, n);
   };
-  {
-    std::optional<tbb::global_control> limit;
-    if (opt.threads > 0)
-      limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(opt.threads));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t i = r.begin(); i != r.end(); ++i) cell(i);
-                      });
-  }
-  // Labels in cell order: the same for any thread count.
+  std::optional<tbb::global_control> limit;
+  if (opt.threads > 0)
+    limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(opt.threads));
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, indices.size()),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      for (size_t k = r.begin(); k != r.end(); ++k) cell(indices[k]);
+                    });
+}
+
+StudyResult LabelCells(const System& sys, const Scene& scene,
+                       const std::vector<std::pair<double, double>>& points,
+                       const std::vector<CellResult>& cells, const StudyOptions& opt) {
+  using State = CellResult::State;
+  const auto n = static_cast<long long>(cells.size());
   StudyResult out;
   out.cells = n;
-  out.labels.assign(points.size(), -1);
-  long long unresolved = 0, inadmissible = 0;
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (!admissible[i]) {
+  out.labels.assign(cells.size(), -1);
+  // 1. Classes of equal cell attractors, in cell order (the same for any thread count).
+  std::vector<size_t> first_cell;  // of each class
+  for (size_t i = 0; i < cells.size(); ++i) {
+    const CellResult& c = cells[i];
+    if (c.state == State::kPending) {
+      out.labels[i] = -3;
+      continue;
+    }
+    if (c.state == State::kInadmissible) {
       out.labels[i] = -2;
-      ++inadmissible;
       continue;
     }
-    if (!found[i] || found[i]->kind == "not-periodic") {
-      ++unresolved;
-      continue;
-    }
+    if (c.state != State::kClassified || c.attractor.kind == "not-periodic") continue;
     int label = -1;
     for (size_t k = 0; k < out.attractors.size() && label < 0; ++k)
-      if (SameAttractor(out.attractors[k].attractor, *found[i])) label = static_cast<int>(k);
+      if (SameAttractor(out.attractors[k].attractor, c.attractor)) label = static_cast<int>(k);
     if (label < 0) {
       label = static_cast<int>(out.attractors.size());
-      out.attractors.push_back({*found[i], 0, 0, 0, {points[i].first, points[i].second}});
+      out.attractors.push_back({c.attractor, 0, 0, 0, {points[i].first, points[i].second}, {}});
+      first_cell.push_back(i);
     }
-    ++out.attractors[static_cast<size_t>(label)].cells;
     out.labels[i] = label;
   }
-  for (auto& f : out.attractors) {
-    const double p = static_cast<double>(f.cells) / static_cast<double>(std::max(n, 1LL));
-    f.basin_fraction = p;
-    f.basin_fraction_error = std::sqrt(p * (1 - p) / static_cast<double>(std::max(n, 1LL)));
+  // 2. Each class's orbit, solved from the final section point of its first cell; classes whose
+  //    solved orbits are the same attractor are one (slow transients classified early).
+  if (opt.solve_orbits && !out.attractors.empty()) {
+    const size_t m = out.attractors.size();
+    std::vector<std::optional<Attractor>> solved(m);
+    std::vector<ClassOrbit> orbits(m);
+    tbb::parallel_for(size_t{0}, m, [&](size_t k) {
+      const Attractor& a = out.attractors[k].attractor;
+      if (a.kind != "sticking-periodic" && a.kind != "impact-periodic") return;
+      const CellResult& c = cells[first_cell[k]];
+      OrbitRequest req;
+      req.kind = a.kind == "impact-periodic" ? OrbitKind::kImpact : OrbitKind::kSticking;
+      req.period = *a.period;
+      req.transient_periods = 4 * *a.period + 4;
+      const auto dof = c.z.size() / 2;
+      req.start = InitialOverride{scene.initial_time + static_cast<double>(c.periods) * sys.period(),
+                                  c.z.head(dof), c.z.tail(dof)};
+      const OrbitResult r = FindOrbit(sys, scene, req);
+      orbits[k].status = r.status;
+      orbits[k].residual = r.residual;
+      if (r.status != "converged") return;
+      orbits[k].multipliers = r.multipliers;
+      orbits[k].stable = r.stable;
+      solved[k] = r.summary;
+    });
+    std::vector<int> merge(m);
+    for (size_t k = 0; k < m; ++k) {
+      merge[k] = static_cast<int>(k);
+      for (size_t j = 0; j < k && solved[k]; ++j)
+        if (merge[j] == static_cast<int>(j) && solved[j] && SameAttractor(*solved[j], *solved[k])) {
+          merge[k] = static_cast<int>(j);
+          ++orbits[j].merged;
+          break;
+        }
+    }
+    for (int& l : out.labels)
+      if (l >= 0) l = merge[static_cast<size_t>(l)];
+    std::vector<FoundAttractor> kept;
+    const auto map = Renumber(out.labels, m);
+    kept.resize(static_cast<size_t>(std::count_if(map.begin(), map.end(), [](int v) { return v >= 0; })));
+    for (size_t k = 0; k < m; ++k) {
+      if (map[k] < 0) continue;
+      FoundAttractor& f = kept[static_cast<size_t>(map[k])];
+      f = out.attractors[k];
+      f.orbit = orbits[k];
+    }
+    out.attractors = std::move(kept);
   }
-  out.unresolved_fraction = static_cast<double>(unresolved) / static_cast<double>(std::max(n, 1LL));
-  out.inadmissible_fraction = static_cast<double>(inadmissible) / static_cast<double>(std::max(n, 1LL));
+  // 3. Counts and fractions.
+  long long unresolved = 0, inadmissible = 0, pending = 0;
+  for (int l : out.labels) {
+    if (l >= 0) ++out.attractors[static_cast<size_t>(l)].cells;
+    unresolved += l == -1;
+    inadmissible += l == -2;
+    pending += l == -3;
+  }
+  const double N = static_cast<double>(std::max(n, 1LL));
+  for (auto& f : out.attractors) {
+    const double p = static_cast<double>(f.cells) / N;
+    f.basin_fraction = p;
+    f.basin_fraction_error = std::sqrt(p * (1 - p) / N);
+  }
+  out.unresolved_fraction = static_cast<double>(unresolved) / N;
+  out.inadmissible_fraction = static_cast<double>(inadmissible) / N;
+  out.pending_fraction = static_cast<double>(pending) / N;
   return out;
+}
+
+std::vector<KnownOrbit> KnownOrbits(const System& sys, const Scene& scene, const Coordinate& a,
+                                    const Coordinate& b, const StudyOptions& options) {
+  StudyOptions opt = options;
+  opt.known.clear();
+  opt.progress = nullptr;
+  opt.solve_orbits = true;
+  if (opt.settle_remainder <= 0) opt.settle_remainder = 1e-9;
+  const auto pts = GridPoints(a, b, 8, 8);
+  std::vector<CellResult> cells(pts.size());
+  std::vector<size_t> all(pts.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  RunCells(sys, scene, a, b, pts, all, cells, opt);
+  if (opt.stop_requested && opt.stop_requested->load()) return {};
+  const StudyResult pilot = LabelCells(sys, scene, pts, cells, opt);
+  std::vector<KnownOrbit> known;
+  for (size_t k = 0; k < pilot.attractors.size(); ++k) {
+    const FoundAttractor& f = pilot.attractors[k];
+    if (f.orbit.status != "converged" || !f.orbit.stable.value_or(false)) continue;
+    double lead = 0;
+    for (const auto& m : f.orbit.multipliers) lead = std::max(lead, std::abs(m));
+    if (lead >= 0.9) continue;
+    // The first cell of the class: its final state and the next period(s) of sections.
+    size_t first = 0;
+    while (pilot.labels[first] != static_cast<int>(k)) ++first;
+    const CellResult& c = cells[first];
+    const auto n = static_cast<Eigen::Index>(sys.dof());
+    Scene sc = scene;
+    sc.run.samples_per_period = 0;
+    sc.run.periods = *f.attractor.period;
+    const InitialOverride here{scene.initial_time + static_cast<double>(c.periods) * sys.period(),
+                               c.z.head(n), c.z.tail(n)};
+    SectionLog log;
+    SimulationOptions so;
+    so.initial = &here;
+    so.observers = {&log};
+    if (Simulate(sys, sc, so).status != RunStatus::kOk) continue;
+    KnownOrbit o;
+    o.attractor = c.attractor;
+    o.points.assign(log.z.begin() + 1, log.z.end());  // the q section points after the start
+    o.modes.assign(log.modes.begin() + 1, log.modes.end());
+    known.push_back(std::move(o));
+  }
+  return known;
+}
+
+StudyResult RunStudy(const System& sys, const Scene& scene, const Coordinate& a, const Coordinate& b,
+                     const std::vector<std::pair<double, double>>& points, const StudyOptions& options) {
+  StudyOptions opt = options;
+  if (opt.known.empty() && opt.settle_remainder > 0) opt.known = KnownOrbits(sys, scene, a, b, opt);
+  std::vector<CellResult> cells(points.size());
+  std::vector<size_t> all(points.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+  RunCells(sys, scene, a, b, points, all, cells, opt);
+  return LabelCells(sys, scene, points, cells, opt);
 }
 
 namespace {
