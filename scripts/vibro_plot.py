@@ -206,11 +206,13 @@ def plot_sweep(f, title, save, overlay):
         for bv, bk in zip(br["bif_value"], br["bif_kind"]):
             for ax in (ax1, ax2):
                 ax.axvline(bv, color="tab:green", lw=0.8, ls=":")
-            y = np.interp(bv, v, b_sp) if len(v) and v.min() <= bv <= v.max() else 0.0
+            y = b_sp[np.argmin(np.abs(v - bv))] if len(v) else 0.0  # nearest point (folds)
             ax2.plot([bv], [y], "D", color="tab:green", ms=6)
             ax2.annotate(bk, (bv, y), textcoords="offset points", xytext=(4, 6), fontsize=8, color="tab:green")
     ax1.set_ylabel("$x_B$ at the section $t_0 + kT$")
-    ax1.set_title(f"{title}\nbrute-force sweep of {param}, up and down")
+    m = f["model"].attrs  # the scene as run (the title line may predate --set overrides)
+    ax1.set_title(f"{title}\nas run: r = {m['restitution']:g}, ω = {m['frequency']:g}; "
+                  f"brute-force sweep of {param}, up and down")
     ax1.legend(loc="best", fontsize=8)
     ax2.set_xlabel(param)
     ax2.set_ylabel("sticking fraction")

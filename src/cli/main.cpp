@@ -495,6 +495,8 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
       }
     } catch (const vibro::InputError& e) {
       file_problem = e;
+    } catch (const std::exception& e) {  // every rank must hear of it (no rank left waiting)
+      file_problem = vibro::InputError({fmt::format("{}: cannot write the study: {}", args.out, e.what())});
     }
   }
   if (dist.Any(file_problem.has_value())) {
