@@ -210,9 +210,7 @@ def plot_sweep(f, title, save, overlay):
             ax2.plot([bv], [y], "D", color="tab:green", ms=6)
             ax2.annotate(bk, (bv, y), textcoords="offset points", xytext=(4, 6), fontsize=8, color="tab:green")
     ax1.set_ylabel("$x_B$ at the section $t_0 + kT$")
-    m = f["model"].attrs  # the scene as run (the title line may predate --set overrides)
-    ax1.set_title(f"{title}\nas run: r = {m['restitution']:g}, ω = {m['frequency']:g}; "
-                  f"brute-force sweep of {param}, up and down")
+    ax1.set_title(f"{title}\nbrute-force sweep of {param}, up and down")
     ax1.legend(loc="best", fontsize=8)
     ax2.set_xlabel(param)
     ax2.set_ylabel("sticking fraction")

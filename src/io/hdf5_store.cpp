@@ -1027,14 +1027,24 @@ void Hdf5Store::WriteStudy(const StudyResult& st, const StudyGrid& grid) {
 
 namespace {
 
-// A small contiguous 1-D or 2-D dataset written at once.
-void WriteArray(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const void* data,
-                hsize_t rows, hsize_t cols = 0) {
-  const hsize_t dims[2] = {rows, cols};
-  Handle space(H5Screate_simple(cols > 0 ? 2 : 1, dims, nullptr), H5Sclose);
+// A small contiguous dataset of any rank written at once (studies, sweeps, continuation).
+void WriteDataset(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+                  std::vector<hsize_t> dims) {
+  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
   Handle d(Check(H5Dcreate2(loc, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name),
            H5Dclose);
-  if (rows > 0) Check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name, 0);
+  if (dims[0] > 0) Check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name, 0);
+}
+void WriteArray(hid_t loc, const char* name, hid_t file_type, hid_t mem_type, const void* data,
+                hsize_t rows, hsize_t cols = 0) {
+  WriteDataset(loc, name, file_type, mem_type, data, cols > 0 ? std::vector<hsize_t>{rows, cols}
+                                                              : std::vector<hsize_t>{rows});
+}
+void WriteColumn(hid_t g, const char* name, const std::vector<double>& v) {
+  WriteArray(g, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), v.size());
+}
+Handle NewGroup(hid_t f, const char* name) {
+  return Handle(Check(H5Gcreate2(f, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Gclose);
 }
 
 void WriteStrings(hid_t loc, const char* name, const std::vector<std::string>& v) {
@@ -1098,30 +1108,6 @@ void Hdf5Store::WriteGroup(const std::string& group,
   for (const auto& [name, v] : values) WriteDoubles(g.get(), name.c_str(), v);
 }
 
-namespace {
-
-// A fixed-size 1-D or 2-D dataset written at once (continuation output is small).
-void WriteDataset(hid_t g, const char* name, hid_t file_type, hid_t mem_type, const void* data,
-                  std::vector<hsize_t> dims) {
-  Handle space(H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr), H5Sclose);
-  Handle d(Check(H5Dcreate2(g, name, file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name),
-           H5Dclose);
-  if (dims[0] > 0) Check(H5Dwrite(d.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name, 0);
-}
-void WriteColumn(hid_t g, const char* name, const std::vector<double>& v) {
-  WriteDataset(g, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, v.data(), {v.size()});
-}
-void WriteStrings(hid_t g, const char* name, const std::vector<std::string>& v) {
-  std::vector<const char*> p;
-  for (const auto& x : v) p.push_back(x.c_str());
-  Handle type = StringType();
-  WriteDataset(g, name, type.get(), type.get(), p.data(), {v.size()});
-}
-Handle NewGroup(hid_t f, const char* name) {
-  return Handle(Check(H5Gcreate2(f, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Gclose);
-}
-
-}  // namespace
 
 void Hdf5Store::WriteBranch(const Branch& b) {
   const hid_t f = impl_->file.get();
