@@ -6,18 +6,10 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
+
 vibro, scenes = sys.argv[1], sys.argv[2]
-failures = 0
-passed = 0
-
-
-def check(name, ok, detail=""):
-    global failures, passed
-    if ok:
-        passed += 1
-    else:
-        failures += 1
-        print(f"FAIL {name}: {detail}")
 
 
 def run(*args):
@@ -193,5 +185,4 @@ with tempfile.TemporaryDirectory() as d:
     p = run("frobnicate")
     check("unknown command exit 2", p.returncode == 2, p.returncode)
 
-print(f"{passed} passed, {failures} failed")
-sys.exit(1 if failures else 0)
+finish()

@@ -14,19 +14,11 @@ import time
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
+
 vibro, scenes = sys.argv[1], sys.argv[2]
 default = os.path.join(scenes, "fig08_preload.toml")
-failures = 0
-passed = 0
-
-
-def check(name, ok, detail=""):
-    global failures, passed
-    if ok:
-        passed += 1
-    else:
-        failures += 1
-        print(f"FAIL {name}: {detail}", flush=True)
 
 
 def run(*args, timeout=600):
@@ -208,5 +200,4 @@ with tempfile.TemporaryDirectory() as d:
                     ok = fh.read(8) == b"\x89PNG\r\n\x1a\n"
             check(f"plot {label}: {suffix} PNG", ok, png)
 
-print(f"{passed} passed, {failures} failed")
-sys.exit(1 if failures else 0)
+finish()

@@ -18,20 +18,12 @@ import time
 import h5py
 import numpy as np
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
+
 vibro, scenes = sys.argv[1], sys.argv[2]
 mpiexec = sys.argv[sys.argv.index("--mpiexec") + 1] if "--mpiexec" in sys.argv else None
 fig5 = os.path.join(scenes, "fig05_coexistence.toml")
-failures = 0
-passed = 0
-
-
-def check(name, ok, detail=""):
-    global failures, passed
-    if ok:
-        passed += 1
-    else:
-        failures += 1
-        print(f"FAIL {name}: {str(detail)[:2000]}", flush=True)
 
 
 def run(*args, timeout=600, prefix=()):
@@ -259,5 +251,4 @@ with tempfile.TemporaryDirectory() as d:
     p = run("plot", ref, "--overlay", branch, "--out", os.path.join(d, "x"))
     check("overlay on a file without a sweep: exit 2", p.returncode == 2 and "no sweep" in p.stderr, p.stderr)
 
-print(f"{passed} checks passed, {failures} failed")
-sys.exit(1 if failures else 0)
+finish()
