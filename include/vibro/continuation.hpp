@@ -97,7 +97,9 @@ struct PartitionRequest {
 };
 struct PartitionColumn {
   double value1;
-  std::string status = "ok";  // "ok" | "no-orbit" (no orbit of the kind at start2) | "interrupted"
+  // "ok" | "no-orbit" (no orbit of the kind at start2) | "invalid-scene" (the scene is not valid
+  // there; end_down says why) | "interrupted"
+  std::string status = "ok";
   std::vector<LevelCrossing> crossings;
   std::vector<Bifurcation> bifurcations;
   std::string end_down, end_up;  // why each half of the branch stopped

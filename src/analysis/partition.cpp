@@ -1,5 +1,6 @@
 // Two-parameter partitions by families of one-parameter branches (include/vibro/continuation.hpp).
 #include <algorithm>
+#include <exception>
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -27,7 +28,14 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
       c.orbit = req.orbit;
       c.levels = req.levels;
       c.stop_requested = req.stop_requested;
-      const Branch b = Continue(c);
+      Branch b;
+      try {
+        b = Continue(c);
+      } catch (const std::exception& e) {  // the scene is not valid at this column's start
+        col.status = "invalid-scene";
+        (to == req.lo2 ? col.end_down : col.end_up) = e.what();
+        return;
+      }
       (to == req.lo2 ? col.end_down : col.end_up) = b.end;
       if (b.status == "no-orbit") {
         col.status = "no-orbit";

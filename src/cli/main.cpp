@@ -405,6 +405,9 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
   };
   for (int i = 0; i <= a.steps1; ++i)
     req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * i / a.steps1);
+  // The corners of --range1 at the start value must be valid scenes (bad input, exit 2, before
+  // anything is written); values of KEY2 outside its valid range just end a column's branch.
+  for (double v1 : {a.range1[0], a.range1[1]}) req.scene_at(v1, *start2);
   req.start2 = *start2;
   req.lo2 = a.range2[0];
   req.hi2 = a.range2[1];
