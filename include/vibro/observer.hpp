@@ -95,6 +95,11 @@ struct Reset {
   const Eigen::VectorXd& V_after;
   double delta;                     // kAccumulation: Δ∞
   double reaction;                  // kAccumulation: R used in Δ∞
+  // kAccumulation: ∂Δ∞/∂(X, Ẋ) at the post-impact state (2n), and the free state at t∞⁻ before
+  // the projection onto the stop, so that the Jacobian of the jump is that of the jump taken.
+  const Eigen::VectorXd* delta_gradient = nullptr;
+  const Eigen::VectorXd* X_end = nullptr;
+  const Eigen::VectorXd* V_end = nullptr;
 };
 
 class Observer {

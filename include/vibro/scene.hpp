@@ -39,6 +39,8 @@ struct PhysicalStructureSpec {
 enum class Engine { kExact, kCvode };
 enum class ChatterTreatment { kAccumulation, kThreshold, kNone };
 enum class CvodeMethod { kAdams, kBdf };
+// Scalar of the exact engine: double, or 113-bit quad (the reference engine).
+enum class Precision { kDouble, kQuad };
 
 struct RunSpec {
   long long periods = 200;          // forcing periods to simulate (≥ 1)
@@ -49,10 +51,14 @@ struct RunSpec {
   double max_step = 0;              // CVODE maximum step (0 = no limit)
   long max_steps = 10000000;        // CVODE maximum internal steps per segment (one period at most)
   ChatterTreatment chatter = ChatterTreatment::kAccumulation;
-  // Switch velocity of the chattering treatments, relative to the contact velocity of the first
-  // impact of the sequence (MODEL §5.4): accumulation is predicted (or, with "threshold", the
-  // impact made plastic) once |ẋ_B⁻| < chatter_switch · |ẋ_B⁻ of the first impact|.
+  // "threshold": impacts are made plastic once |ẋ_B⁻| < chatter_switch · |ẋ_B⁻ of the first
+  // impact of the sequence| (MODEL §5.4). Not used by "accumulation".
   double chatter_switch = 1e-6;
+  // "accumulation": the accumulation point is predicted only when the estimated error of its time
+  // is at most chatter_tolerance · T (MODEL §5.4a); otherwise the next impact is followed.
+  // 0 = the default of the precision: 1e-12 (double), 1e-28 (quad).
+  double chatter_tolerance = 0;
+  Precision precision = Precision::kDouble;
   int samples_per_period = 64;      // dense samples per forcing period (0 = none)
   int max_period = 32;              // largest period searched by the attractor classification
   double period_tolerance = 1e-7;   // relative tolerance on section points for periodicity
@@ -88,5 +94,8 @@ std::vector<InputIssue> Validate(const Scene& scene);
 const char* ToString(Engine e);
 const char* ToString(ChatterTreatment c);
 const char* ToString(CvodeMethod m);
+const char* ToString(Precision p);
+// run.chatter_tolerance with its default resolved.
+double ChatterTolerance(const RunSpec& run);
 
 }  // namespace vibro

@@ -1,5 +1,6 @@
 // The hybrid automaton of an impact oscillator with sticking (MODEL §1-§5), written once and
-// driven by either engine (exact closed forms, or CVODE).
+// driven by either engine (exact closed forms, or CVODE), in double or, for the exact engine, in
+// 113-bit quad precision (run.precision = "quad", the reference).
 //
 // State: time t = t0 + kT + s (whole periods k, offset s ∈ [0, T)), modal X, Ẋ, the mode
 // (free | sticking) and, during chattering, the speeds of the sequence's first and last impacts.
@@ -17,12 +18,17 @@
 //               R⁻ > 0, or R⁻ = 0 and Ṙ > 0 → emit stick, mode ← sticking
 //               otherwise                   → leave at zero velocity (g = g' = 0, g'' > 0)
 //           else Ẋ⁺ = Ẋ⁻ − (1+r) T_B ẋ_B⁻/s_B (eq. 12); emit impact
-//               "accumulation", r < 1, |ẋ_B⁻| < v_switch, R⁻ > 0 (MODEL §5.4):
-//                   Δ∞ = 2r|ẋ_B⁻| / ((1−r) s_B R⁻); flow freely over Δ∞ (no guards), project
-//                   onto the stop; if R(t∞) > 0 → emit accumulation and stick, mode ← sticking;
-//                   else the sequence is incomplete: undo the jump, keep following impacts
+//               "accumulation", 0 < r < 1, R > 0 on the stuck state (MODEL §5.4, §5.4a):
+//                   Δ0 = 2ẋ_B⁺/((1−r) s_B R), ε = −ṘΔ0/R, Δ∞ = Δ0(1 + ε/3) with an estimated
+//                   error E (dynamics/chatter_tail.hpp); if |ε| ≤ 0.1 and E ≤ chatter_tolerance·T:
+//                   flow freely over Δ∞ (no guards), project onto the stop; if R(t∞) > 0 → emit
+//                   accumulation and stick, mode ← sticking; otherwise follow the next impact
+//                   (counted as an impact followed)
 //               "none": impacts are followed one by one; when the next flight is shorter than
 //                   the time resolution the run stops with status numerical-failure
+//       g = 0, |ẋ_B⁻| below the rounding floor (or, CVODE, below √rtol of the sequence's first
+//                    speed) inside a chattering sequence with R > 0 → status undetermined: the
+//                    accumulation point could not be predicted within the target (never guessed)
 //       g = 0, ẋ_B⁻ ≥ 0 (tangential touch, MODEL §2.1): emit grazing; R > 0 → stick (MODEL
 //                    §4.4 iii), else keep flying (g = g' = 0, g'' > 0 divided out)
 //     sticking:      advance the constrained flow (6) until R reaches 0 or the period boundary
@@ -34,8 +40,9 @@
 // point is recorded (the section sees x⁻). Two guards at one instant are handled in the order
 // contact → reset → the new mode's guards evaluated at the reset state: an impact whose reset
 // state already satisfies the sticking condition goes straight to sticking, a release into a
-// state moving into the stop is an immediate touch. v_switch = run.chatter_switch × |ẋ_B⁻| of the
-// sequence's first impact, but never below 10³ ε max|Ẋ| (the rounding floor of ẋ_B, MODEL §5.4).
+// state moving into the stop is an immediate touch. v_switch ("threshold" only) =
+// run.chatter_switch × |ẋ_B⁻| of the sequence's first impact, but never below the rounding floor
+// of ẋ_B, 10³ ε Σ|Ẋ_i| (MODEL §5.4).
 #pragma once
 
 #include <atomic>
@@ -48,8 +55,17 @@
 
 namespace vibro {
 
-enum class RunStatus { kOk, kNumericalFailure, kInterrupted };
-const char* ToString(RunStatus s);  // "ok", "numerical-failure", "interrupted"
+// kUndetermined: a chattering sequence whose accumulation point cannot be predicted within the
+// run's accuracy target before its impact speeds fall below what the engine resolves.
+enum class RunStatus { kOk, kNumericalFailure, kInterrupted, kUndetermined };
+const char* ToString(RunStatus s);  // "ok", "numerical-failure", "interrupted", "undetermined"
+
+// What the chattering treatment did over a run (MODEL §5.4a).
+struct ChatterStats {
+  long long accumulations_predicted = 0;  // sequences ended by a predicted accumulation point
+  long long impacts_followed = 0;         // impacts followed because a prediction was refused
+  double max_estimated_error = 0;         // largest estimated error of a taken prediction, / T
+};
 
 struct RunResult {
   RunStatus status = RunStatus::kOk;
@@ -60,6 +76,7 @@ struct RunResult {
   Eigen::VectorXd X, V;  // final state
   Mode mode = Mode::kFree;
   SolverStats solver;  // CVODE work (engine "cvode")
+  ChatterStats chatter;
 };
 
 // A start other than the scene's [initial] table: modal state at time t (the Poincaré solver).

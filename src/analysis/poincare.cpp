@@ -116,22 +116,20 @@ void TangentTracker::OnReset(const Reset& r) {
       singular_ = true;  // square-root singularity of the maps (MODEL §5.7)
       break;
     case ResetKind::kAccumulation: {
-      // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop.
-      // D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ.
-      const double delta = r.delta, R = r.reaction, rr = sys_.restitution(), sB = sys_.s_B();
+      // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop
+      // (MODEL §5.4, §5.4a). D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ, with ∇Δ∞ and
+      // the state at t∞⁻ those of the jump the automaton took (dynamics/chatter_tail.hpp).
+      if (!r.delta_gradient || !r.X_end || !r.V_end) {
+        singular_ = true;
+        break;
+      }
+      const double delta = r.delta;
       const double phase_inf = r.phase + sys_.frequency() * delta;
-      const Eigen::VectorXd w2 = sys_.omega().cwiseAbs2();
-      const Eigen::VectorXd D = 2.0 * sys_.damping().cwiseProduct(sys_.omega());
-      const double v_inf = c.dot(r.V_before) - sB * R * delta;  // ẋ_B(t∞⁻), to O(v²)
-      const Eigen::VectorXd V_un = r.V_after + sys_.contact() * (v_inf / sB);
-      const Eigen::VectorXd grad =
-          Stack(-(delta / R) * c.cwiseProduct(w2) / sB,
-                2.0 * c / ((1.0 - rr) * sB * R) - (delta / R) * c.cwiseProduct(D) / sB);
       const Eigen::MatrixXd P = BlockDiag(Pi_, Pi_);
-      const Eigen::VectorXd f_free = Field(Mode::kFree, r.X_after, V_un, phase_inf);
+      const Eigen::VectorXd f_free = Field(Mode::kFree, *r.X_end, *r.V_end, phase_inf);
       const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf);
       const Eigen::MatrixXd flow = (G_free_ * delta).exp();
-      phi_ = (P * flow + (P * f_free - f_stick) * grad.transpose()) * phi_;
+      phi_ = (P * flow + (P * f_free - f_stick) * r.delta_gradient->transpose()) * phi_;
       break;
     }
   }

@@ -161,6 +161,7 @@ int ExitCode(vibro::RunStatus s) {
     case vibro::RunStatus::kOk: return 0;
     case vibro::RunStatus::kNumericalFailure: return kExitNumerical;
     case vibro::RunStatus::kInterrupted: return kExitInterrupted;
+    case vibro::RunStatus::kUndetermined: return kExitNumerical;
   }
   return kExitInternal;
 }
@@ -289,22 +290,24 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   return orbit.status == "converged" ? 0 : kExitNumerical;
 }
 
-int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json) {
+int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json,
+             bool with_quad) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
-  const auto report = vibro::CrossCheck(sys, loaded.scene);
+  const auto report = vibro::CrossCheck(sys, loaded.scene, with_quad);
   if (json) {
     fmt::print("{}\n", vibro::CheckJson(report));
   } else {
     const auto cell = [](const std::optional<double>& v) {
       return v ? fmt::format("{:>18.12g}", *v) : fmt::format("{:>18}", "-");
     };
-    fmt::print("{:<40} {:>18} {:>18} {:>18} {:>10} {:>10}  {}\n", "quantity", "exact", "cvode",
-               "poincare", "max diff", "tolerance", "");
+    fmt::print("{:<40} {:>18} {:>18} {:>18}{} {:>10} {:>10}  {}\n", "quantity", "exact", "cvode",
+               "poincare", with_quad ? fmt::format(" {:>18}", "quad") : "", "max diff",
+               "tolerance", "");
     for (const auto& r : report.rows) {
-      fmt::print("{:<40} {} {} {} {:>10.2e} {:>10.2e}  {}{}\n", r.quantity, cell(r.exact),
-                 cell(r.cvode), cell(r.orbit), r.difference, r.tolerance, r.ok ? "ok" : "FAIL",
-                 r.note.empty() ? "" : "  " + r.note);
+      fmt::print("{:<40} {} {} {}{} {:>10.2e} {:>10.2e}  {}{}\n", r.quantity, cell(r.exact),
+                 cell(r.cvode), cell(r.orbit), with_quad ? " " + cell(r.quad) : "", r.difference,
+                 r.tolerance, r.ok ? "ok" : "FAIL", r.note.empty() ? "" : "  " + r.note);
     }
     fmt::print("{}\n", report.ok ? "agreement: ok" : "agreement: FAILED (beyond tolerance)");
   }
@@ -760,6 +763,10 @@ int main(int argc, char** argv) {
   sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
+  std::string check_precision = "double";
+  check->add_option("--precision", check_precision,
+                    "quad: add the quad-precision exact engine as a fourth opinion (the reference)")
+      ->check(CLI::IsMember({"double", "quad"}));
 
   std::string file_path, plot_prefix;
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
@@ -797,7 +804,7 @@ int main(int argc, char** argv) {
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }
     if (*plot) return RunPlot(file_path, plot_prefix, plot_overlay);
-    if (*check) return RunCheck(scene_path, sets, json);
+    if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
                       sweep_record, sweep_one_way, sweep_out);

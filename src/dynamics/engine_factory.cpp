@@ -7,10 +7,11 @@
 
 namespace vibro::detail {
 
-std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run) {
+std::unique_ptr<Propagator> MakeEngine(const System& system, const ModelT<double>& model,
+                                       const RunSpec& run) {
   switch (run.engine) {
     case Engine::kExact:
-      return std::make_unique<ExactEngine>(system);
+      return std::make_unique<ExactEngine>(system, model);
     case Engine::kCvode:
       return std::make_unique<CvodeEngine>(system, run);
   }

@@ -1,5 +1,6 @@
 // Closed-form flow of one linear oscillator  q̈ + 2ζν q̇ + ν² q = F sin(φ + ω σ)  in local time σ
-// from (q0, v0) at σ = 0 (MODEL §2 relative form, §7 damping, §8.1 resonance).
+// from (q0, v0) at σ = 0 (MODEL §2 relative form, §7 damping, §8.1 resonance), in the scalar S of
+// the engine (dynamics/scalar.hpp).
 //
 // Results are increments Δq = q(σ) − q0: during chattering the gap is O(v²) while the modal
 // terms are O(1), and only increments keep relative accuracy (MODEL §2, §8.12). The undamped
@@ -7,40 +8,142 @@
 // resonance ν = ω.
 #pragma once
 
+#include <type_traits>
+
+#include "dynamics/scalar.hpp"
+
 namespace vibro::detail {
 
-struct Oscillator {
-  double nu;    // ν > 0, natural pulsation
-  double zeta;  // ζ ∈ [0, 1)
-  double F;     // forcing amplitude (T_A,i f, or l_kᵀF_c f in sticking)
+template <class S>
+struct OscillatorT {
+  S nu;    // ν > 0, natural pulsation
+  S zeta;  // ζ ∈ [0, 1)
+  S F;     // forcing amplitude (T_A,i f, or l_kᵀF_c f in sticking)
 };
 
-struct OscillatorState {
-  double dq;  // q(σ) − q0
-  double v;   // q̇(σ)
+template <class S>
+struct OscillatorStateT {
+  S dq;  // q(σ) − q0
+  S v;   // q̇(σ)
 };
 
 // sin and cos of the forcing phase φ at σ = 0 (computed once per segment).
-struct PhaseTrig {
-  double s, c;
-  explicit PhaseTrig(double phase);
+template <class S>
+struct PhaseTrigT {
+  S s, c;
+  explicit PhaseTrigT(const S& phase) : s(Real<S>::sin(phase)), c(Real<S>::cos(phase)) {}
 };
 
+using Oscillator = OscillatorT<double>;
+using OscillatorState = OscillatorStateT<double>;
+using PhaseTrig = PhaseTrigT<double>;
+
+namespace osc {
+
+// sin(x)/x, accurate at and near 0.
+template <class S>
+S Sinc(const S& x) {
+  const S x2 = x * x;
+  if constexpr (std::is_same_v<S, double>) {
+    if (x2 < 1e-6) return 1.0 - x2 / 6.0 * (1.0 - x2 / 20.0);
+  } else {
+    if (x2 < S(1e-10)) return S(1) - x2 / 6 * (S(1) - x2 / 20 * (S(1) - x2 / 42));
+  }
+  return Real<S>::sin(x) / x;
+}
+
+// Undamped: Δq = q0 (cos νσ − 1) + v0 sin(νσ)/ν + F K(σ), v = −q0 ν sin νσ + v0 cos νσ + F K'(σ),
+// K(σ) = sin φ C(σ) + cos φ S(σ), K'(σ) = sin φ E(σ) + cos φ ω C(σ), with δ = ν − ω, Σ = ν + ω:
+//   C = (cos ωσ − cos νσ)/(ν² − ω²)         = σ sin(Σσ/2) sinc(δσ/2) / Σ
+//   S = (sin ωσ − (ω/ν) sin νσ)/(ν² − ω²)    = [sin νσ − νσ cos(Σσ/2) sinc(δσ/2)] / (νΣ)
+//   E = (ν sin νσ − ω sin ωσ)/(ν² − ω²)      = [νσ cos(Σσ/2) sinc(δσ/2) + sin ωσ] / Σ
+// finite at ν = ω (MODEL §8.1: K → [sin ωσ cos φ − ωσ cos(φ + ωσ)]/(2ω²)).
+template <class S>
+OscillatorStateT<S> Undamped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,
+                             const S& q0, const S& v0, const S& sigma) {
+  using R = Real<S>;
+  const S nu = o.nu;
+  const S sn = R::sin(nu * sigma), half = R::sin(S(0.5) * nu * sigma);
+  const S cn = S(1) - S(2) * half * half;
+  OscillatorStateT<S> out{q0 * (S(-2) * half * half) + v0 * sn / nu, -q0 * nu * sn + v0 * cn};
+  if (o.F == S(0)) return out;
+  const S sum = nu + omega, diff = nu - omega;
+  const S sc = Sinc<S>(S(0.5) * diff * sigma);
+  const S s_half = R::sin(S(0.5) * sum * sigma), c_half = R::cos(S(0.5) * sum * sigma);
+  const S C = sigma * s_half * sc / sum;
+  const S Sk = (sn - nu * sigma * c_half * sc) / (nu * sum);
+  const S E = (nu * sigma * c_half * sc + R::sin(omega * sigma)) / sum;
+  out.dq += o.F * (ph.s * C + ph.c * Sk);
+  out.v += o.F * (ph.s * E + ph.c * omega * C);
+  return out;
+}
+
+// Damped (MODEL §7): q = U(φ + ωσ) + h(σ), U = P sin + Q cos the steady forced response,
+// h the decaying homogeneous part; Δq = [U(φ+ωσ) − U(φ)] + [h(σ) − h(0)] written as increments.
+template <class S>
+OscillatorStateT<S> Damped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,
+                           const S& q0, const S& v0, const S& sigma) {
+  using R = Real<S>;
+  const S nu = o.nu, z = o.zeta;
+  const S a = z * nu, nud = nu * R::sqrt(S(1) - z * z);
+  const S den = (nu * nu - omega * omega) * (nu * nu - omega * omega) +
+                (S(2) * z * nu * omega) * (S(2) * z * nu * omega);
+  const S P = o.F * (nu * nu - omega * omega) / den;
+  const S Q = -o.F * S(2) * z * nu * omega / den;
+  const S sp = ph.s, cp = ph.c;
+  const S U0 = P * sp + Q * cp, dU0 = omega * (P * cp - Q * sp);
+  const S A = q0 - U0, B = v0 - dU0;
+  const S Cc = (B + a * A) / nud;
+  const S e = R::exp(-a * sigma), em1 = R::expm1(-a * sigma);
+  const S sd = R::sin(nud * sigma), hd = R::sin(S(0.5) * nud * sigma);
+  const S cd = S(1) - S(2) * hd * hd;
+  const S dh = A * (em1 * cd - S(2) * hd * hd) + Cc * e * sd;
+  const S vh = e * (B * cd - (a * B + nu * nu * A) / nud * sd);
+  const S sw = R::sin(omega * sigma), hw = R::sin(S(0.5) * omega * sigma);
+  const S cwm1 = S(-2) * hw * hw;       // cos ωσ − 1
+  const S dsin = sp * cwm1 + cp * sw;   // sin(φ+ωσ) − sin φ
+  const S dcos = cp * cwm1 - sp * sw;   // cos(φ+ωσ) − cos φ
+  const S dU = P * dsin + Q * dcos;
+  const S vU = omega * (P * (cp + dcos) - Q * (sp + dsin));
+  return {dU + dh, vU + vh};
+}
+
+}  // namespace osc
+
 // Flow over σ ≥ 0; ω > 0 forcing pulsation, φ forcing phase at σ = 0.
-OscillatorState Flow(const Oscillator& o, double omega, const PhaseTrig& phase, double q0,
-                     double v0, double sigma);
+template <class S>
+OscillatorStateT<S> Flow(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& phase,
+                         const S& q0, const S& v0, const S& sigma) {
+  return o.zeta > S(0) ? osc::Damped(o, omega, phase, q0, v0, sigma)
+                       : osc::Undamped(o, omega, phase, q0, v0, sigma);
+}
 inline OscillatorState Flow(const Oscillator& o, double omega, double phase, double q0, double v0,
                             double sigma) {
-  return Flow(o, omega, PhaseTrig(phase), q0, v0, sigma);
+  return Flow<double>(o, omega, PhaseTrig(phase), q0, v0, sigma);
 }
 
 // Energy amplitude A = √(v² + ν² q²). Over a window of length h starting at a state of amplitude
 // A, A(σ) ≤ A + |F| h (damping only removes energy), which bounds every derivative:
-struct DerivativeBounds {
-  double d2, d3, d4;  // bounds on |q''|, |q'''|, |q''''| over the window
+template <class S>
+struct DerivativeBoundsT {
+  S d2, d3, d4;  // bounds on |q''|, |q'''|, |q''''| over the window
 };
-DerivativeBounds Bounds(const Oscillator& o, double omega, double amplitude_at_window_end);
 
-double Amplitude(const Oscillator& o, double q, double v);
+template <class S>
+DerivativeBoundsT<S> Bounds(const OscillatorT<S>& o, const S& omega, const S& A) {
+  // q'' = −ν²q − 2ζνq' + F sin, q''' = −ν²q' − 2ζνq'' + Fω cos, q'''' = −ν²q'' − 2ζνq''' − Fω² sin
+  // with |q'| ≤ A and ν|q| ≤ A.
+  const S F = Real<S>::abs(o.F), nu = o.nu, tz = S(2) * o.zeta * nu;
+  DerivativeBoundsT<S> b{};
+  b.d2 = nu * A + tz * A + F;
+  b.d3 = nu * nu * A + tz * b.d2 + F * omega;
+  b.d4 = nu * nu * b.d2 + tz * b.d3 + F * omega * omega;
+  return b;
+}
+
+template <class S>
+S Amplitude(const OscillatorT<S>& o, const S& q, const S& v) {
+  return Real<S>::hypot(v, o.nu * q);
+}
 
 }  // namespace vibro::detail

@@ -28,13 +28,15 @@ enum class StickStart : int {
   kTangent,      // R = Ṙ = 0, R̈ > 0 (a release tangency that did not cross)
 };
 
-struct SegmentStart {
+template <class S>
+struct SegmentStartT {
+  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
   Mode mode;
-  double phase;              // forcing phase ωt at σ = 0 (reduced)
-  double offset;             // clock offset at σ = 0 (time since the start of the period)
-  const Eigen::VectorXd& X;  // modal state at σ = 0
-  const Eigen::VectorXd& V;
-  double gap;                // x_B − x0 at σ = 0 (free flight; 0 on the stop)
+  S phase;       // forcing phase ωt at σ = 0 (reduced)
+  S offset;      // clock offset at σ = 0 (time since the start of the period)
+  const Vec& X;  // modal state at σ = 0
+  const Vec& V;
+  S gap;         // x_B − x0 at σ = 0 (free flight; 0 on the stop)
   FlightStart flight_start;
   StickStart stick_start;
 };
@@ -46,33 +48,52 @@ enum class SegmentEnd {
   kFailure,  // the engine could not advance (message says why)
 };
 
-struct SegmentResult {
+template <class S>
+struct SegmentResultT {
   SegmentEnd end;
-  double sigma;  // local time reached
+  S sigma;  // local time reached
   std::string message;
   // When the end is known in closed form as a clock offset in the same period (one-DOF release
   // phase), that offset exactly: the clock is set to it rather than to offset + sigma, so that
   // a one-DOF orbit repeats to the bit.
-  double exact_offset = -1.0;
+  S exact_offset = S(-1);
 };
 
 // Called with local-time stretches [lo, hi] on which Evaluate() is valid (exact engine: the whole
 // segment at once; CVODE: each internal step).
-using StretchCallback = std::function<void(double lo, double hi)>;
+template <class S>
+using StretchCallbackT = std::function<void(S lo, S hi)>;
 
-class Propagator {
+// The engine's scalar S is double, or quad for the reference engine (dynamics/quad.hpp).
+template <class S>
+class PropagatorT {
  public:
-  virtual ~Propagator() = default;
-  virtual void Begin(const SegmentStart& start) = 0;
+  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  virtual ~PropagatorT() = default;
+  virtual void Begin(const SegmentStartT<S>& start) = 0;
   // Advance to the first guard crossing (if detect_events) or to sigma_max.
-  virtual SegmentResult Advance(double sigma_max, bool detect_events,
-                                const StretchCallback& on_stretch) = 0;
+  virtual SegmentResultT<S> Advance(S sigma_max, bool detect_events,
+                                    const StretchCallbackT<S>& on_stretch) = 0;
   // Dense output at local time sigma within the last stretch reported.
-  virtual void Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V) const = 0;
+  virtual void Evaluate(S sigma, Vec& X, Vec& V) const = 0;
   // Free flight: x_B − x0 at sigma without cancellation (increments from the start).
-  virtual double Gap(double sigma) const = 0;
+  virtual S Gap(S sigma) const = 0;
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
+  // Polled inside long root searches and stepping loops: true stops the segment with a failure
+  // (a stop request, or the per-segment work limit). Set by the automaton.
+  void SetStopPoll(std::function<bool()> poll) { stop_poll_ = std::move(poll); }
+
+ protected:
+  bool StopRequested() const { return stop_poll_ && stop_poll_(); }
+
+ private:
+  std::function<bool()> stop_poll_;
 };
+
+using SegmentStart = SegmentStartT<double>;
+using SegmentResult = SegmentResultT<double>;
+using StretchCallback = StretchCallbackT<double>;
+using Propagator = PropagatorT<double>;
 
 }  // namespace vibro::detail

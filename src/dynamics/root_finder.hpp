@@ -10,60 +10,65 @@
 #include <cmath>
 #include <limits>
 
+#include "dynamics/scalar.hpp"
+
 namespace vibro::detail {
 
-struct Jet {
-  double g, g1, g2;  // g(u), g'(u), g''(u)
+template <class S>
+struct JetT {
+  S g, g1, g2;  // g(u), g'(u), g''(u)
 };
 
-struct RootSearch {
-  bool found;    // a root in [start, end]
-  double sigma;  // the root (found) or `end`
+template <class S>
+struct RootSearchT {
+  bool found;  // a root in [start, end]
+  S sigma;     // the root (found) or `end`
   int steps;
 };
 
 // First root in (0, H] of p(h) = g + g1 h + g2 h²/2 − M h³/6 with g > 0, M ≥ 0; returns a point
 // h ≤ the root with p(h) ≥ 0 (H if p > 0 on the whole interval, then with `none` = true).
-inline double FirstCubicRoot(double g, double g1, double g2, double M, double H, bool& none) {
-  const auto p = [&](double h) { return g + h * (g1 + h * (0.5 * g2 - h * M / 6.0)); };
+template <class S>
+S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, bool& none) {
+  const auto p = [&](const S& h) -> S { return g + h * (g1 + h * (S(0.5) * g2 - h * M / 6)); };
   // p is monotone between the roots of p'(h) = g1 + g2 h − M h²/2.
-  double cuts[3];
+  S cuts[3];
   int nc = 0;
   if (M > 0) {
-    const double disc = g2 * g2 + 2.0 * M * g1;
+    const S disc = g2 * g2 + S(2) * M * g1;
     if (disc > 0) {
-      const double sq = std::sqrt(disc);
-      const double r1 = (g2 - sq) / M, r2 = (g2 + sq) / M;
+      const S sq = Real<S>::sqrt(disc);
+      const S r1 = (g2 - sq) / M, r2 = (g2 + sq) / M;
       if (r1 > 0 && r1 < H) cuts[nc++] = r1;
       if (r2 > 0 && r2 < H) cuts[nc++] = r2;
     }
   } else if (g2 != 0) {
-    const double r = -g1 / g2;
+    const S r = -g1 / g2;
     if (r > 0 && r < H) cuts[nc++] = r;
   }
   cuts[nc++] = H;
-  double lo = 0.0;
+  S lo(0);
   for (int i = 0; i < nc; ++i) {
-    double hi = cuts[i];
+    S hi = cuts[i];
     if (p(hi) > 0) {
       lo = hi;
       continue;
     }
     // Safeguarded Newton on a monotone stretch, p(lo) > 0 ≥ p(hi).
-    constexpr double kEps = std::numeric_limits<double>::epsilon();
-    double x = lo;
-    for (int it = 0; it < 100 && hi - lo > 4.0 * kEps * hi; ++it) {
-      const double px = p(x);
+    const S kEps = Eps<S>();
+    S x = lo;
+    for (int it = 0; it < 200 && hi - lo > 4 * kEps * hi; ++it) {
+      const S px = p(x);
       (px > 0 ? lo : hi) = x;
-      const double dp = g1 + x * (g2 - 0.5 * M * x);
-      double next = dp != 0 ? x - px / dp : 0.5 * (lo + hi);
-      if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+      const S dp = g1 + x * (g2 - S(0.5) * M * x);
+      S next = dp != 0 ? S(x - px / dp) : S(S(0.5) * (lo + hi));
+      if (!(next > lo && next < hi)) next = S(0.5) * (lo + hi);
       if (next == x) break;
       x = next;
     }
     // Newton may converge from the unsafe side: take the largest point found just below hi
     // where p is still positive.
-    for (double d = 4.0 * kEps * hi; hi - d > lo; d *= 4.0) {
+    for (S d = 4 * kEps * hi; hi - d > lo; d *= 4) {
       if (p(hi - d) > 0) {
         lo = hi - d;
         break;
@@ -76,37 +81,55 @@ inline double FirstCubicRoot(double g, double g1, double g2, double M, double H,
   return H;
 }
 
-struct Probe {
-  Jet jet;   // g, g', g'' at u
-  double M;  // bound on |g'''| over [u, u + H]
+template <class S>
+struct ProbeT {
+  JetT<S> jet;  // g, g', g'' at u
+  S M;          // bound on |g'''| over [u, u + H]
 };
+
+using Jet = JetT<double>;
+using Probe = ProbeT<double>;
+using RootSearch = RootSearchT<double>;
 
 // First root of g in [start, end]. `probe(u, H)` returns the jet at u and a bound on |g'''| over
 // [u, u + H]; steps are capped at h_cap (the bound may grow with H). g(start) > 0 expected: a
-// start with g ≤ 0 is reported as a root at `start`.
+// start with g ≤ 0 is reported as a root at `start`. `stop()` is polled every 1024 steps: when it
+// returns true (a stop request or a work limit) the search gives up with `stopped` set.
+template <class S>
+struct PolledRootSearch {
+  RootSearchT<S> result;
+  bool stopped = false;
+};
+
+template <class S, class ProbeFn, class StopFn>
+PolledRootSearch<S> FirstRootPolled(const ProbeFn& probe, const S& start, const S& end,
+                                    const S& h_cap, const StopFn& stop, int max_steps = 100000) {
+  const S kEps = Eps<S>();
+  const S tiny(std::numeric_limits<double>::min());
+  S u = start;
+  for (int steps = 0; steps < max_steps; ++steps) {
+    if ((steps & 1023) == 1023 && stop()) return {{false, u, steps}, true};
+    if (u >= end) return {{false, end, steps}, false};
+    const S H = end - u < h_cap ? S(end - u) : h_cap;
+    const ProbeT<S> pr = probe(u, H);
+    const JetT<S>& j = pr.jet;
+    if (!(j.g > 0)) return {{true, u, steps}, false};
+    bool none = false;
+    const S h = FirstCubicRoot<S>(j.g, j.g1, j.g2, pr.M, H, none);
+    if (none) {
+      u = (H == end - u) ? end : S(u + H);
+      continue;
+    }
+    if (h <= 4 * kEps * (u > tiny ? u : tiny)) return {{true, u + h, steps}, false};
+    u += h;
+  }
+  return {{true, u, max_steps}, false};  // stalled at a tangency: g → 0⁺ without crossing
+}
+
 template <class ProbeFn>
 RootSearch FirstRoot(const ProbeFn& probe, double start, double end, double h_cap,
                      int max_steps = 100000) {
-  constexpr double kEps = std::numeric_limits<double>::epsilon();
-  double u = start;
-  for (int steps = 0; steps < max_steps; ++steps) {
-    if (u >= end) return {false, end, steps};
-    const double H = std::min(h_cap, end - u);
-    const Probe pr = probe(u, H);
-    const Jet& j = pr.jet;
-    const double M = pr.M;
-    if (!(j.g > 0)) return {true, u, steps};
-    bool none = false;
-    const double h = FirstCubicRoot(j.g, j.g1, j.g2, M, H, none);
-    if (none) {
-      u = (H == end - u) ? end : u + H;
-      continue;
-    }
-    if (h <= 4.0 * kEps * std::max(u, std::numeric_limits<double>::min()))
-      return {true, u + h, steps};
-    u += h;
-  }
-  return {true, u, max_steps};  // stalled at a tangency: g → 0⁺ without crossing
+  return FirstRootPolled<double>(probe, start, end, h_cap, [] { return false; }, max_steps).result;
 }
 
 }  // namespace vibro::detail

@@ -609,6 +609,9 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   WriteInt(f, "sticks", r.counts.sticks);
   WriteInt(f, "releases", r.counts.releases);
   WriteInt(f, "grazings", r.counts.grazings);
+  WriteInt(f, "chatter_accumulations_predicted", r.chatter.accumulations_predicted);
+  WriteInt(f, "chatter_impacts_followed", r.chatter.impacts_followed);
+  WriteDouble(f, "chatter_max_estimated_error", r.chatter.max_estimated_error);
   if (m.header.engine == "cvode") {
     WriteInt(f, "cvode_steps", r.solver.steps);
     WriteInt(f, "cvode_rhs_evals", r.solver.rhs_evals);

@@ -54,6 +54,8 @@ const std::map<std::string, Kind>& Schema() {
       {"run.max_steps", Kind::kInteger},
       {"run.chatter", Kind::kString},
       {"run.chatter_switch", Kind::kNumber},
+      {"run.chatter_tolerance", Kind::kNumber},
+      {"run.precision", Kind::kString},
       {"run.samples_per_period", Kind::kInteger},
       {"run.max_period", Kind::kInteger},
       {"run.period_tolerance", Kind::kNumber},
@@ -419,6 +421,9 @@ LoadedScene Build(toml::table root, const std::string& source,
                 : *v == "threshold"  ? ChatterTreatment::kThreshold
                                      : ChatterTreatment::kNone;
   if (auto v = rd.Number("run.chatter_switch")) r.chatter_switch = *v;
+  if (auto v = rd.Number("run.chatter_tolerance")) r.chatter_tolerance = *v;
+  if (auto v = rd.String("run.precision", {"double", "quad"}))
+    r.precision = *v == "double" ? Precision::kDouble : Precision::kQuad;
   if (auto v = rd.Integer("run.samples_per_period"))
     r.samples_per_period = static_cast<int>(std::clamp<long long>(*v, -1, 1 << 20));
   if (auto v = rd.Integer("run.max_period"))

@@ -51,6 +51,11 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                  {"releases", r.counts.releases},
                  {"grazings", r.counts.grazings}};
   j["attractor"] = AttractorObject(a);
+  j["precision"] = ToString(scene.run.precision);
+  j["chattering"] = {{"accumulations_predicted", r.chatter.accumulations_predicted},
+                     {"impacts_followed", r.chatter.impacts_followed},
+                     {"max_estimated_error", r.chatter.max_estimated_error},
+                     {"tolerance", ChatterTolerance(scene.run)}};
   if (scene.run.engine == Engine::kCvode)
     j["solver"] = {{"steps", r.solver.steps},
                    {"rhs_evals", r.solver.rhs_evals},
@@ -181,11 +186,16 @@ std::string CheckJson(const CheckReport& r) {
   j["exact_kind"] = r.exact_kind;
   j["cvode_kind"] = r.cvode_kind;
   j["orbit_status"] = r.orbit_status;
+  if (!r.quad_kind.empty()) j["quad_kind"] = r.quad_kind;
   auto rows = nlohmann::json::array();
-  for (const auto& row : r.rows)
-    rows.push_back({{"quantity", row.quantity}, {"exact", OrNull(row.exact)}, {"cvode", OrNull(row.cvode)},
-                    {"orbit", OrNull(row.orbit)}, {"difference", row.difference},
-                    {"tolerance", row.tolerance}, {"ok", row.ok}, {"note", row.note}});
+  for (const auto& row : r.rows) {
+    nlohmann::json o = {{"quantity", row.quantity}, {"exact", OrNull(row.exact)},
+                        {"cvode", OrNull(row.cvode)}, {"orbit", OrNull(row.orbit)},
+                        {"difference", row.difference}, {"tolerance", row.tolerance},
+                        {"ok", row.ok}, {"note", row.note}};
+    if (!r.quad_kind.empty()) o["quad"] = OrNull(row.quad);
+    rows.push_back(o);
+  }
   j["rows"] = rows;
   return j.dump();
 }

@@ -143,6 +143,21 @@ std::vector<InputIssue> Validate(const Scene& s) {
   c.Require(r.max_steps >= 1, "run.max_steps", std::to_string(r.max_steps), "max_steps ≥ 1");
   c.Require(r.chatter_switch > 0 && r.chatter_switch < 1, "run.chatter_switch",
             Show(r.chatter_switch), "0 < chatter_switch < 1 (relative to the first impact)");
+  c.Require(r.chatter_tolerance == 0 || (r.chatter_tolerance >= 1e-32 && r.chatter_tolerance <= 1e-3),
+            "run.chatter_tolerance", Show(r.chatter_tolerance),
+            "chatter_tolerance = 0 (the default of the precision) or 1e-32 ≤ chatter_tolerance ≤ "
+            "1e-3 (relative to the forcing period)");
+  if (r.precision == Precision::kQuad) {
+    c.Require(r.engine == Engine::kExact, "run.precision", "\"quad\"",
+              "precision = \"quad\" needs run.engine = \"exact\" (CVODE runs in double)");
+    c.Require(r.chatter_tolerance == 0 || r.chatter_tolerance >= 1e-32, "run.chatter_tolerance",
+              Show(r.chatter_tolerance), "chatter_tolerance ≥ 1e-32 in quad precision");
+  } else {
+    c.Require(r.chatter_tolerance == 0 || r.chatter_tolerance >= 1e-15, "run.chatter_tolerance",
+              Show(r.chatter_tolerance),
+              "chatter_tolerance ≥ 1e-15 in double precision (use run.precision = \"quad\" "
+              "below)");
+  }
   c.Require(r.samples_per_period >= 0, "run.samples_per_period",
             std::to_string(r.samples_per_period), "samples_per_period ≥ 0");
   c.Require(r.max_period >= 1, "run.max_period", std::to_string(r.max_period), "max_period ≥ 1");
@@ -196,5 +211,11 @@ const char* ToString(ChatterTreatment c) {
   return "?";
 }
 const char* ToString(CvodeMethod m) { return m == CvodeMethod::kAdams ? "adams" : "bdf"; }
+const char* ToString(Precision p) { return p == Precision::kDouble ? "double" : "quad"; }
+
+double ChatterTolerance(const RunSpec& run) {
+  if (run.chatter_tolerance > 0) return run.chatter_tolerance;
+  return run.precision == Precision::kQuad ? 1e-28 : 1e-12;
+}
 
 }  // namespace vibro

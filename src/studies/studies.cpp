@@ -273,8 +273,9 @@ void RunCells(const System& sys, const Scene& scene, const Coordinate& a, const 
       so.stop_requested = watch.flag();
       const RunResult r = Simulate(sys, sc, so);
       if (r.status == RunStatus::kInterrupted && watch.reason() == 0) return;  // the study stops
-      out.state = r.status == RunStatus::kNumericalFailure ? CellResult::State::kFailed
-                                                           : CellResult::State::kClassified;
+      out.state = r.status == RunStatus::kNumericalFailure || r.status == RunStatus::kUndetermined
+                      ? CellResult::State::kFailed
+                      : CellResult::State::kClassified;
       out.stop = static_cast<std::int8_t>(watch.reason());
       if (out.state == CellResult::State::kClassified)
         out.attractor = watch.reason() == 2 ? opt.known[static_cast<size_t>(watch.known())].attractor

@@ -40,12 +40,13 @@ TEST(Extremes, RestitutionTinyIsContinuousWithPlastic) {
 }
 
 TEST(Extremes, RestitutionNearOne) {
-  // r = 0.99: 1375 impacts a sequence before the prediction; CVODE agrees.
+  // r = 0.99: hundreds of impacts a sequence before the prediction is within its target (the
+  // tail shrinks by 1 % an impact); CVODE agrees.
   const Scene s = OneDof(0.99, 2.8, 1.001, 1.0, 10);
   const Outcome ex = Simulate(s);
   ASSERT_EQ(ex.result.status, RunStatus::kOk);
   EXPECT_EQ(ex.result.counts.accumulations, 10);
-  EXPECT_GT(ex.result.counts.impacts, 10 * 1300);
+  EXPECT_GT(ex.result.counts.impacts, 10 * 300);
   const Outcome cv = Simulate(Cvode(s));
   ASSERT_EQ(cv.result.status, RunStatus::kOk) << cv.result.message;
   EXPECT_NEAR(*ex.attractor.sticking_fraction, *cv.attractor.sticking_fraction, 1e-4);

@@ -1,0 +1,652 @@
+// The hybrid automaton (pseudocode in include/vibro/simulator.hpp), templated on the scalar S of
+// the exact engine: double (the default, with either engine) or quad (run.precision = "quad",
+// the reference engine). Observers always see doubles.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <limits>
+#include <memory>
+#include <string>
+#include <type_traits>
+
+#include <fmt/format.h>
+
+#include "dynamics/chatter_tail.hpp"
+#include "dynamics/model_t.hpp"
+#include "dynamics/propagator.hpp"
+#include "vibro/simulator.hpp"
+
+namespace vibro::detail {
+
+// One DOF (no constrained mode): the stuck body rests at x0 and R depends on the phase only, so
+// the release phase is closed form (MODEL §4.4, §6.1) and no sticking flow is integrated.
+template <class S>
+class RestingStick final : public PropagatorT<S> {
+ public:
+  using Vec = typename ModelT<S>::Vec;
+  explicit RestingStick(const ModelT<S>& m) : m_(m) {}
+  void Begin(const SegmentStartT<S>& s) override {
+    phase_ = s.phase;
+    offset_ = s.offset;
+    X_ = m_.x0 * m_.static_shape;
+    V_ = Vec::Zero(m_.dof());
+  }
+  SegmentResultT<S> Advance(S sigma_max, bool detect, const StretchCallbackT<S>& cb) override {
+    const S target = detect ? ReleaseOffset() : S(std::numeric_limits<double>::infinity());
+    const bool released = target - offset_ <= sigma_max;
+    const S end = released ? S(target - offset_) : sigma_max;
+    if (cb) cb(S(0), end);
+    if (!released) return {SegmentEnd::kLimit, end, {}};
+    return {SegmentEnd::kRelease, end, {}, target};
+  }
+  void Evaluate(S, Vec& X, Vec& V) const override {
+    X = X_;
+    V = V_;
+  }
+  S Gap(S) const override { return S(0); }
+
+ private:
+  // R ∝ ω_1² x0 − F sin φ with F = s_A f: release where F sin φ rises through ω_1² x0, i.e.
+  // sin φ_1 = β = ω_1² x0 / F with F cos φ_1 > 0. Never when |β| ≥ 1 (permanent sticking).
+  // Returned as the clock offset of the next release (possibly ≥ T, then beyond this period).
+  S ReleaseOffset() const {
+    using R = Real<S>;
+    const S F = m_.s_A * m_.f;
+    const S k = m_.omega[0] * m_.omega[0] * m_.x0;
+    if (F == S(0) || R::abs(k) >= R::abs(F)) return S(std::numeric_limits<double>::infinity());
+    const S beta = k / F;
+    const S phi1 = R::atan2(beta, R::copysign(R::sqrt(S(1) - beta * beta), F));
+    // Offsets o with phase0 + ω o ≡ φ_1 (mod 2π): o_m = (φ_1 − phase0 + 2πm)/ω, the first > now.
+    const S w = m_.w, two_pi = S(2) * R::pi();
+    const S base = phi1 - (phase_ - w * offset_);
+    S mm = R::floor((w * offset_ - base) / two_pi);
+    S o = (base + two_pi * mm) / w;
+    for (int guard = 0; o <= offset_ && guard < 8; ++guard) {
+      mm += 1;
+      o = (base + two_pi * mm) / w;
+    }
+    return o;
+  }
+
+  const ModelT<S>& m_;
+  S phase_{0}, offset_{0};
+  Vec X_, V_;
+};
+
+// Time within the run in the engine's scalar: whole periods plus the offset in [0, T).
+template <class S>
+struct ClockT {
+  long long period = 0;
+  S offset{0};
+};
+
+template <class S>
+class Automaton {
+ public:
+  using Vec = typename ModelT<S>::Vec;
+  using R = Real<S>;
+
+  Automaton(const System& sys, const ModelT<S>& model, const Scene& scene,
+            const SimulationOptions& opt, std::unique_ptr<PropagatorT<S>> engine)
+      : sys_(sys),
+        m_(model),
+        run_(scene.run),
+        opt_(opt),
+        engine_(std::move(engine)),
+        period_(model.period),
+        t0_(scene.initial_time),
+        cvode_(scene.run.engine == Engine::kCvode),
+        // CVODE resolves impact velocities only to about √rtol of the sequence's first one.
+        switch_ratio_(cvode_ ? std::max(scene.run.chatter_switch, std::sqrt(scene.run.rtol))
+                             : scene.run.chatter_switch),
+        resolution_ratio_(cvode_ ? std::sqrt(scene.run.rtol) : 0.0),
+        // The accuracy target of a predicted accumulation point, in time units (MODEL §5.4a).
+        // CVODE's impacts carry errors of about rtol: no prediction need be closer than that.
+        chatter_tol_(S(cvode_ ? std::max(ChatterTolerance(scene.run), scene.run.rtol)
+                              : ChatterTolerance(scene.run)) *
+                     model.period) {
+    if (model.stick_frequencies.size() == 0) resting_ = std::make_unique<RestingStick<S>>(model);
+    const auto poll = [this] { return StopPolled(); };
+    engine_->SetStopPoll(poll);
+    if (opt.initial) {
+      t0_ = opt.initial->time;
+      X_ = opt.initial->X.cast<S>();
+      V_ = opt.initial->V.cast<S>();
+    } else {
+      const auto init = sys.Initial(scene);
+      X_ = init.X.cast<S>();
+      V_ = init.V.cast<S>();
+    }
+    phase0_ = R::fmod(S(m_.w) * S(t0_), S(2) * R::pi());
+  }
+
+  RunResult Run();
+
+ private:
+  S Phase(const ClockT<S>& c) const { return phase0_ + m_.w * c.offset; }
+  double AbsTime(const ClockT<S>& c) const {
+    return R::to_double(S(t0_) + S(static_cast<double>(c.period)) * period_ + c.offset);
+  }
+  Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
+  S ContactSpeedFloor() const {
+    // Rounding floor of ẋ_B = Σ c_i Ẋ_i (MODEL §5.4).
+    return S(1000) * Eps<S>() * m_.shape.cwiseProduct(V_).cwiseAbs().sum();
+  }
+  // Observers see doubles: a view of a state vector (no copy for double).
+  const Eigen::VectorXd& D(const Vec& v, Eigen::VectorXd& tmp) const {
+    if constexpr (std::is_same_v<S, double>) {
+      return v;
+    } else {
+      tmp = v.template cast<double>();
+      return tmp;
+    }
+  }
+  bool StopPolled() const {
+    return opt_.stop_requested && opt_.stop_requested->load(std::memory_order_relaxed);
+  }
+
+  void Emit(EventKind kind, const S& v_before, const S& v_after);
+  void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb);
+  void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
+  void AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
+                    const S& exact_offset = S(-1)) const;
+  void ClassifyInitialState();
+  void EnterSticking(StickStart how);
+  void Depart(FlightStart how);
+  bool OnContact();
+  bool TryAccumulation(const S& reaction);
+  void Checkpointed();
+  bool Fail(std::string message, RunStatus status = RunStatus::kNumericalFailure);
+
+  const System& sys_;
+  const ModelT<S>& m_;
+  const RunSpec& run_;
+  const SimulationOptions& opt_;
+  std::unique_ptr<PropagatorT<S>> engine_;
+  std::unique_ptr<PropagatorT<S>> resting_;
+  S period_;
+  double t0_;
+  S phase0_{0};
+  bool cvode_;
+  double switch_ratio_;      // "threshold": plastic below this fraction of the first speed
+  double resolution_ratio_;  // CVODE: impact speeds below this fraction are not resolved
+  S chatter_tol_;            // accuracy target of a predicted accumulation point (time)
+  int grazing_streak_ = 0;   // consecutive grazings (a degenerate contact loops on them)
+
+  ClockT<S> clock_;
+  Vec X_, V_, Xs_, Vs_;
+  Eigen::VectorXd dx_, dv_, dx2_, dv2_;  // double views for observers (quad)
+  Mode mode_ = Mode::kFree;
+  S gap_{0};
+  FlightStart flight_start_ = FlightStart::kGeneric;
+  StickStart stick_start_ = StickStart::kGeneric;
+  S chatter_first_{0}, chatter_last_{0};
+  TailPrediction<S> last_tail_;  // the last prediction tried in the current sequence
+  bool project_samples_ = false;
+  long long sample_index_ = 0;
+  RunResult result_;
+};
+
+template <class S>
+void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after) {
+  grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
+  Event e{kind,
+          ToClock(clock_),
+          AbsTime(clock_),
+          R::to_double(m_.ContactDisplacement(X_)),
+          R::to_double(v_before),
+          R::to_double(v_after)};
+  if (kind != EventKind::kImpact && kind != EventKind::kGrazing) e.x_B = sys_.stop();
+  auto& c = result_.counts;
+  switch (kind) {
+    case EventKind::kImpact: ++c.impacts; break;
+    case EventKind::kAccumulation: ++c.accumulations; break;
+    case EventKind::kStick: ++c.sticks; break;
+    case EventKind::kRelease: ++c.releases; break;
+    case EventKind::kGrazing: ++c.grazings; break;
+  }
+  for (auto* o : opt_.observers) o->OnEvent(e);
+}
+
+template <class S>
+void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb) {
+  if (opt_.observers.empty()) return;
+  const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
+                0.0, 0.0};
+  for (auto* o : opt_.observers) o->OnReset(r);
+}
+
+// Dense samples and section points whose times fall in (lo, hi] of a segment started at `start`.
+template <class S>
+void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo,
+                               const S& hi) {
+  if (opt_.observers.empty()) return;
+  const int spp = run_.samples_per_period;
+  // Section points: period boundaries t0 + kT.
+  for (long long k = start.period + 1;; ++k) {
+    const S sigma = S(static_cast<double>(k - start.period)) * period_ - start.offset;
+    if (sigma > hi || k > run_.periods) break;
+    if (sigma <= lo) continue;
+    p.Evaluate(sigma, Xs_, Vs_);
+    if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    const Sample s{{k, 0.0},
+                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_),
+                   D(Xs_, dx_),
+                   D(Vs_, dv_),
+                   R::to_double(m_.ContactDisplacement(Xs_)),
+                   mode_};
+    for (auto* o : opt_.observers) o->OnSection(s);
+  }
+  if (spp <= 0) return;
+  const S dt = period_ / spp;
+  for (;; ++sample_index_) {
+    const long long k = sample_index_ / spp;
+    const S off = S(static_cast<double>(sample_index_ % spp)) * dt;
+    const S sigma = S(static_cast<double>(k - start.period)) * period_ + off - start.offset;
+    if (sigma > hi) break;
+    if (sigma < lo) continue;
+    if (k >= run_.periods) break;  // the end state is section row `periods`, not a sample
+    p.Evaluate(sigma, Xs_, Vs_);
+    if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    const Sample s{{k, R::to_double(off)},
+                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off),
+                   D(Xs_, dx_),
+                   D(Vs_, dv_),
+                   R::to_double(m_.ContactDisplacement(Xs_)),
+                   mode_};
+    for (auto* o : opt_.observers) o->OnSample(s);
+  }
+}
+
+template <class S>
+void Automaton<S>::AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
+                                const S& exact_offset) const {
+  if (exact_offset >= 0 && exact_offset < period_) {
+    c.offset = exact_offset;
+  } else if (sigma >= sigma_to_boundary) {
+    // Exactly at (or, after an accumulation jump, past) the boundary.
+    S rest = sigma - sigma_to_boundary;
+    ++c.period;
+    while (rest >= period_) {
+      rest -= period_;
+      ++c.period;
+    }
+    c.offset = rest;
+  } else {
+    c.offset += sigma;
+  }
+}
+
+template <class S>
+void Automaton<S>::EnterSticking(StickStart how) {
+  m_.ProjectOntoStop(X_, V_);
+  gap_ = 0;
+  mode_ = Mode::kSticking;
+  stick_start_ = how;
+  chatter_first_ = chatter_last_ = 0;
+}
+
+template <class S>
+void Automaton<S>::Depart(FlightStart how) {
+  mode_ = Mode::kFree;
+  flight_start_ = how;
+}
+
+// A state on the stop at rest (or the start of a run): stick, leave, or decide with Ṙ.
+template <class S>
+void Automaton<S>::ClassifyInitialState() {
+  // Any positive gap is a free flight; a state at (or, by the rounding of a physical-to-modal
+  // conversion, within validation tolerance inside) the stop is on it.
+  // The decision is taken on the double state, whatever S: the quad engine solves the problem
+  // the double one is given (its data are converted from double, and a start on the stop in
+  // double, e.g. the static equilibrium, stays on the stop in quad rather than 1e-16 above it).
+  const Eigen::VectorXd Xd = X_.template cast<double>(), Vd = V_.template cast<double>();
+  const S xB = m_.ContactDisplacement(X_);
+  if (sys_.ContactDisplacement(Xd) - sys_.stop() > 0) {
+    gap_ = xB - m_.x0;
+    if (!(gap_ > 0)) gap_ = Eps<S>() * (R::abs(m_.x0) + S(1));
+    Depart(FlightStart::kGeneric);
+    return;
+  }
+  gap_ = 0;
+  X_ -= m_.contact * ((xB - m_.x0) / m_.s_B);
+  if (sys_.ContactVelocity(Vd) > 0) {  // leaving the stop: the gap has a simple zero at σ = 0
+    Depart(FlightStart::kAfterImpact);
+    return;
+  }
+  if (!std::is_same_v<S, double>) V_ -= m_.contact * (m_.ContactVelocity(V_) / m_.s_B);
+  const S phase = Phase(clock_);
+  const S Rc = m_.Reaction(X_, V_, phase);
+  if (Rc > 0) {
+    EnterSticking(StickStart::kGeneric);
+  } else if (Rc < 0) {
+    m_.ProjectOntoStop(X_, V_);
+    Depart(FlightStart::kDeparture);
+  } else if (m_.ReactionRate(X_, V_, phase) >= 0) {
+    EnterSticking(StickStart::kRising);
+  } else {
+    m_.ProjectOntoStop(X_, V_);
+    Depart(FlightStart::kAfterRelease);
+  }
+}
+
+template <class S>
+bool Automaton<S>::Fail(std::string message, RunStatus status) {
+  result_.status = status;
+  result_.message = std::move(message);
+  return false;
+}
+
+// MODEL §5.4, §5.4a: predict the accumulation point of a chattering sequence from the impact
+// just taken, when the prediction's estimated error is within the run's target.
+template <class S>
+bool Automaton<S>::TryAccumulation(const S& reaction) {
+  const S phase_k = Phase(clock_);
+  const TailPrediction<S> tail = PredictTail<S>(m_, X_, V_, phase_k, chatter_tol_);
+  last_tail_ = tail;
+  if (!tail.accepted) {
+    ++result_.chatter.impacts_followed;
+    return false;
+  }
+  const S delta = tail.delta;
+  const SegmentStartT<S> start{Mode::kFree, phase_k, clock_.offset, X_, V_, S(0),
+                               FlightStart::kAfterImpact, StickStart::kGeneric};
+  // First pass without output: the jump is taken only if R(t∞) > 0 after the projection.
+  engine_->Begin(start);
+  const auto probe = engine_->Advance(delta, false, {});
+  if (probe.end == SegmentEnd::kFailure) return false;
+  Vec X, V;
+  engine_->Evaluate(delta, X, V);
+  const Vec X_end = X, V_end = V;
+  m_.ProjectOntoStop(X, V);
+  ClockT<S> end = clock_;
+  AdvanceClock(end, delta, period_ - clock_.offset);
+  if (!(m_.Reaction(X, V, Phase(end)) > 0)) {  // the sequence would not complete: follow it
+    ++result_.chatter.impacts_followed;
+    return false;
+  }
+  // Commit: the same flow with dense output, then the state at t∞.
+  const Vec X_k = X_, V_k = V_;
+  engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_k, V_k, S(0), FlightStart::kAfterImpact,
+                  StickStart::kGeneric});
+  const ClockT<S> from = clock_;
+  // Samples inside the tail show the state projected onto the stop: the free flow over Δ∞ sums
+  // the tail's impacts into one impulse at its end and dips below the stop on the way; the true
+  // bounces stay within O(ẋ_B⁺²/(s_B R)) above it.
+  project_samples_ = true;
+  engine_->Advance(delta, false,
+                   [&](const S& lo, const S& hi) { EmitStretch(from, *engine_, lo, hi); });
+  project_samples_ = false;
+  clock_ = end;
+  X_ = X;
+  V_ = V;
+  gap_ = 0;
+  ++result_.chatter.accumulations_predicted;
+  const double err = R::to_double(tail.error / period_);
+  if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
+  if (!opt_.observers.empty()) {
+    Eigen::VectorXd a, b, c, d, xe, ve;
+    const Eigen::VectorXd grad = DeltaGradient<S>(m_, X_k, V_k, phase_k, tail);
+    const Reset jump{ResetKind::kAccumulation, R::to_double(phase_k), D(X_k, a), D(V_k, b),
+                     D(X_, c), D(V_, d), R::to_double(delta), R::to_double(reaction),
+                     &grad, &D(X_end, xe), &D(V_end, ve)};
+    for (auto* o : opt_.observers) o->OnReset(jump);
+  }
+  // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
+  Emit(EventKind::kAccumulation, S(0), S(0));
+  mode_ = Mode::kSticking;
+  stick_start_ = StickStart::kGeneric;
+  chatter_first_ = chatter_last_ = 0;
+  Emit(EventKind::kStick, S(0), S(0));
+  return true;
+}
+
+// Free flight reached g = 0 at the current state.
+template <class S>
+bool Automaton<S>::OnContact() {
+  // Snap the contact coordinate onto the stop (MODEL §8.12).
+  X_ -= m_.contact * ((m_.ContactDisplacement(X_) - m_.x0) / m_.s_B);
+  gap_ = 0;
+  const S phase = Phase(clock_);
+  const S v_minus = m_.ContactVelocity(V_);
+  const S floor = ContactSpeedFloor();
+  const S r = m_.r;
+  const bool accumulating = run_.chatter == ChatterTreatment::kAccumulation && r > 0 && r < 1;
+
+  // CVODE cannot resolve impact speeds below √rtol of the sequence's first one: a sequence that
+  // gets there without a prediction inside its accuracy target is undetermined, as is one that
+  // reaches the rounding floor of ẋ_B (MODEL §5.4a). Sticking there would be a guess.
+  const bool touch = !(v_minus < -floor);
+  const bool unresolved = cvode_ && accumulating && chatter_last_ > 0 &&
+                          -v_minus < S(resolution_ratio_) * chatter_first_;
+  if (accumulating && chatter_last_ > 0 && (touch || unresolved)) {
+    const S Rc = m_.Reaction(X_, V_, phase);
+    if (Rc > 0) {
+      return Fail(
+          fmt::format(
+              "chattering sequence undetermined at this precision: its impacts reached speed "
+              "{:.3g} ({} floor) near t = {:.17g} before its accumulation point could be "
+              "predicted within run.chatter_tolerance = {:.3g} T (last prediction: ε = {:.3g}, "
+              "estimated error {:.3g} T; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
+              "move the parameter",
+              R::to_double(-v_minus), unresolved ? "CVODE's √rtol resolution" : "the rounding",
+              AbsTime(clock_), R::to_double(chatter_tol_ / period_),
+              R::to_double(last_tail_.epsilon), R::to_double(last_tail_.error / period_),
+              R::to_double(Rc), cvode_ ? " with run.engine = \"exact\"" : ""),
+          RunStatus::kUndetermined);
+    }
+  }
+  if (touch) {
+    // Tangential touch (MODEL §2.1): no impact.
+    const S Rc = m_.Reaction(X_, V_, phase);
+    const Vec Xb = X_, Vb = V_;
+    Emit(EventKind::kGrazing, v_minus, v_minus);
+    if (Rc > 0) {
+      EnterSticking(StickStart::kGeneric);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
+      Emit(EventKind::kStick, S(0), S(0));
+    } else {
+      m_.ProjectOntoStop(X_, V_);
+      const S rate = m_.ReactionRate(X_, V_, phase);
+      if (Rc < 0) {
+        Depart(FlightStart::kDeparture);
+        NotifyReset(ResetKind::kGrazing, Xb, Vb);
+      } else if (rate < 0) {
+        Depart(FlightStart::kAfterRelease);
+        NotifyReset(ResetKind::kGrazing, Xb, Vb);
+      } else {
+        EnterSticking(StickStart::kRising);
+        NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
+        Emit(EventKind::kStick, S(0), S(0));
+      }
+    }
+    return true;
+  }
+
+  // Chattering sequence bookkeeping: a sequence is a run of impacts of decreasing speed.
+  const S speed = -v_minus;
+  if (chatter_last_ == 0 || speed > chatter_last_) chatter_first_ = speed;
+  chatter_last_ = speed;
+  const S v_switch = S(switch_ratio_) * chatter_first_ > floor ? S(S(switch_ratio_) * chatter_first_)
+                                                              : floor;
+  const bool in_switch = speed < v_switch && chatter_first_ > speed;
+
+  const bool plastic = r == 0 || (run_.chatter == ChatterTreatment::kThreshold && in_switch);
+  if (plastic) {
+    // MODEL §4.4: plastic impact; stick if R > 0, leave at zero velocity if R < 0, decide with Ṙ
+    // if R = 0.
+    const Vec Xb = X_, Vb = V_;
+    m_.ProjectOntoStop(X_, V_);
+    Emit(EventKind::kImpact, v_minus, S(0));
+    const S Rc = m_.Reaction(X_, V_, phase);
+    if (Rc > 0) {
+      EnterSticking(StickStart::kGeneric);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
+      Emit(EventKind::kStick, S(0), S(0));
+    } else if (Rc < 0) {
+      chatter_first_ = chatter_last_ = 0;
+      Depart(FlightStart::kDeparture);
+      NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
+    } else if (m_.ReactionRate(X_, V_, phase) > 0) {
+      EnterSticking(StickStart::kRising);
+      NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
+      Emit(EventKind::kStick, S(0), S(0));
+    } else {
+      chatter_first_ = chatter_last_ = 0;
+      Depart(FlightStart::kAfterRelease);
+      NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
+    }
+    return true;
+  }
+
+  // Restitution (MODEL eq. 12).
+  const Vec Vb = V_;
+  m_.ApplyImpact(V_, r);
+  const S Rc = m_.Reaction(X_, V_, phase);
+  NotifyReset(ResetKind::kImpact, X_, Vb);
+  Emit(EventKind::kImpact, v_minus, m_.ContactVelocity(V_));
+  if (accumulating && Rc > 0) {
+    if (TryAccumulation(Rc)) return true;
+  }
+  if (run_.chatter == ChatterTreatment::kNone && Rc > 0) {
+    // Impacts followed one by one: stop once the next flight is below the resolution.
+    const S next_flight = S(2) * r * speed / (m_.s_B * Rc);
+    if (r * speed <= floor || next_flight <= S(4) * Eps<S>() * period_)
+      return Fail(fmt::format(
+          "chattering: impacts accumulate near t = {:.17g} and cannot be followed one by one "
+          "(contact speed {:.3g}, next flight {:.3g}; run.chatter = \"none\"). Use run.chatter = "
+          "\"accumulation\" (or \"threshold\")",
+          AbsTime(clock_), R::to_double(r * speed), R::to_double(next_flight)));
+  }
+  Depart(FlightStart::kAfterImpact);
+  return true;
+}
+
+template <class S>
+void Automaton<S>::Checkpointed() {
+  if (opt_.observers.empty()) return;
+  const Checkpoint cp{ToClock(clock_),
+                      X_.template cast<double>(),
+                      V_.template cast<double>(),
+                      mode_,
+                      R::to_double(gap_),
+                      static_cast<int>(mode_ == Mode::kFree ? static_cast<int>(flight_start_)
+                                                            : static_cast<int>(stick_start_)),
+                      R::to_double(chatter_first_),
+                      R::to_double(chatter_last_),
+                      sample_index_,
+                      result_.counts};
+  for (auto* o : opt_.observers) o->OnCheckpoint(cp);
+}
+
+template <class S>
+RunResult Automaton<S>::Run() {
+  if (opt_.resume_from) {
+    const Checkpoint& cp = *opt_.resume_from;
+    clock_ = {cp.clock.period, S(cp.clock.offset)};
+    X_ = cp.X.cast<S>();
+    V_ = cp.V.cast<S>();
+    mode_ = cp.mode;
+    gap_ = cp.gap;
+    if (mode_ == Mode::kFree)
+      flight_start_ = static_cast<FlightStart>(cp.start_kind);
+    else
+      stick_start_ = static_cast<StickStart>(cp.start_kind);
+    chatter_first_ = cp.chatter_first_speed;
+    chatter_last_ = cp.chatter_last_speed;
+    sample_index_ = cp.sample_index;
+    result_.counts = cp.counts;
+  } else {
+    ClassifyInitialState();
+    if (!opt_.observers.empty()) {
+      const Sample s{ToClock(clock_), t0_, D(X_, dx_), D(V_, dv_),
+                     R::to_double(m_.ContactDisplacement(X_)), mode_};
+      for (auto* o : opt_.observers) o->OnSection(s);
+      if (run_.samples_per_period > 0) {
+        for (auto* o : opt_.observers) o->OnSample(s);
+        sample_index_ = 1;
+      }
+    } else if (run_.samples_per_period > 0) {
+      sample_index_ = 1;
+    }
+    if (mode_ == Mode::kSticking) Emit(EventKind::kStick, S(0), S(0));
+    Checkpointed();
+  }
+
+  const S tiny = S(4) * Eps<S>() * period_;
+  int stalled = 0;
+  while (clock_.period < run_.periods) {
+    if (StopPolled()) {
+      result_.status = RunStatus::kInterrupted;
+      result_.message = fmt::format(
+          "interrupted at t = {:.10g} (period {}); everything so far is kept, continue with "
+          "--resume",
+          AbsTime(clock_), clock_.period);
+      break;
+    }
+    const S to_boundary = period_ - clock_.offset;
+    PropagatorT<S>& p = (mode_ == Mode::kSticking && resting_) ? *resting_ : *engine_;
+    p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_});
+    const ClockT<S> from = clock_;
+    const auto seg = p.Advance(
+        to_boundary, true, [&](const S& lo, const S& hi) { EmitStretch(from, p, lo, hi); });
+    if (seg.end == SegmentEnd::kFailure) {
+      if (StopPolled()) continue;  // reported as an interruption at the top of the loop
+      Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),
+                       mode_ == Mode::kFree ? "free flight" : "sticking"));
+      break;
+    }
+    p.Evaluate(seg.sigma, X_, V_);
+    if (mode_ == Mode::kFree) gap_ = p.Gap(seg.sigma);
+    if (!opt_.observers.empty()) {
+      for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma)});
+    }
+    AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
+    stalled = seg.sigma <= tiny ? stalled + 1 : 0;
+    if (stalled > 1000) {
+      Fail(fmt::format("no progress at t = {:.17g}: 1000 consecutive events without time "
+                       "advancing (degenerate contact)",
+                       AbsTime(clock_)));
+      break;
+    }
+    if (seg.end == SegmentEnd::kLimit) {
+      if (mode_ == Mode::kFree) flight_start_ = FlightStart::kGeneric;
+      if (mode_ == Mode::kSticking) stick_start_ = StickStart::kGeneric;
+      Checkpointed();
+      continue;
+    }
+    if (seg.end == SegmentEnd::kContact) {
+      if (!OnContact()) break;
+      if (grazing_streak_ > 1000) {
+        Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}: the contact is "
+                         "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
+                         AbsTime(clock_),
+                         cvode_ ? "; tighten run.rtol or use run.engine = \"exact\""
+                                : " (e.g. next to a rising bifurcation); move the parameter slightly"));
+        break;
+      }
+      continue;
+    }
+    // Release candidate: R reached 0 on the stop.
+    const S phase = Phase(clock_);
+    if (m_.ReactionRate(X_, V_, phase) < 0 || resting_) {
+      m_.ProjectOntoStop(X_, V_);
+      NotifyReset(ResetKind::kRelease, X_, V_);
+      Emit(EventKind::kRelease, S(0), S(0));
+      Depart(FlightStart::kAfterRelease);
+      gap_ = 0;
+    } else {
+      stick_start_ = StickStart::kTangent;  // R touches 0 without crossing: stay
+    }
+  }
+  result_.end = ToClock(clock_);
+  result_.t_end = AbsTime(clock_);
+  result_.X = X_.template cast<double>();
+  result_.V = V_.template cast<double>();
+  result_.mode = mode_;
+  result_.solver = engine_->stats();
+  return result_;
+}
+
+}  // namespace vibro::detail

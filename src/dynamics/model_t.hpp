@@ -1,0 +1,91 @@
+// The modal model of a System in the engine's scalar S (double, or quad for the reference engine):
+// the data of MODEL §1.3 and §4.2 converted once, and the contact quantities the automaton needs.
+// The quad model is the double model's data converted exactly: the quad engine solves the same
+// (double-rounded) structure, so differences between the engines are the engines' own errors.
+#pragma once
+
+#include <Eigen/Dense>
+
+#include "dynamics/scalar.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro::detail {
+
+template <class S>
+struct ModelT {
+  using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
+  using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
+
+  explicit ModelT(const System& sys)
+      : omega(sys.omega().cast<S>()),
+        forcing(sys.forcing().cast<S>()),
+        contact(sys.contact().cast<S>()),
+        shape(sys.contact_shape().cast<S>()),
+        zeta(sys.damping().cast<S>()),
+        damped(sys.damped()),
+        s_A(sys.s_A()),
+        s_B(sys.s_B()),
+        x0(sys.stop()),
+        r(sys.restitution()),
+        f(sys.amplitude()),
+        w(sys.frequency()),
+        period(S(2) * Real<S>::pi() / S(sys.frequency())),
+        flexibility(sys.flexibility()),
+        static_shape(sys.static_shape().cast<S>()),
+        stick_frequencies(sys.constrained().frequencies.cast<S>()),
+        stick_vectors(sys.constrained().vectors.cast<S>()),
+        stick_left(sys.constrained().left.cast<S>()),
+        stick_forcing(sys.constrained().modal_forcing.cast<S>()),
+        stick_reaction(sys.constrained().reaction.cast<S>()) {}
+
+  int dof() const { return static_cast<int>(omega.size()); }
+
+  S ContactDisplacement(const Vec& X) const { return shape.dot(X); }
+  S ContactVelocity(const Vec& V) const { return shape.dot(V); }
+
+  // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (MODEL eq. 5, §7).
+  S Reaction(const Vec& X, const Vec& V, const S& phase) const {
+    S elastic(0);
+    for (Eigen::Index i = 0; i < X.size(); ++i) {
+      if (shape[i] == S(0)) continue;
+      elastic += omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i];
+    }
+    return (elastic - s_A * f * Real<S>::sin(phase)) / s_B;
+  }
+
+  // Ṙ along the sticking flow (MODEL §4.2; damped constrained acceleration of §7).
+  S ReactionRate(const Vec& X, const Vec& V, const S& phase) const {
+    const Vec w2 = omega.cwiseAbs2();
+    S rate = shape.dot(w2.cwiseProduct(V)) - s_A * f * w * Real<S>::cos(phase);
+    if (damped) {
+      const Vec DV = S(2) * zeta.cwiseProduct(omega).cwiseProduct(V);
+      const Vec free_acc = -w2.cwiseProduct(X) - DV + forcing * (f * Real<S>::sin(phase));
+      const Vec acc = free_acc - contact * (shape.dot(free_acc) / s_B);
+      rate += shape.dot(S(2) * zeta.cwiseProduct(omega).cwiseProduct(acc));
+    }
+    return rate / s_B;
+  }
+
+  // Restitution law (MODEL eq. 12).
+  void ApplyImpact(Vec& V, const S& restitution) const {
+    const S p = -(S(1) + restitution) * ContactVelocity(V) / s_B;
+    V += p * contact;
+  }
+  // Plastic projection onto the stop (MODEL §4.4).
+  void ProjectOntoStop(Vec& X, Vec& V) const {
+    V -= contact * (ContactVelocity(V) / s_B);
+    X -= contact * ((ContactDisplacement(X) - x0) / s_B);
+  }
+
+  Vec omega, forcing, contact, shape, zeta;
+  bool damped;
+  S s_A, s_B, x0, r, f, w, period, flexibility;
+  Vec static_shape;
+  Vec stick_frequencies;  // ω'_k
+  Mat stick_vectors;      // v_k (columns)
+  Mat stick_left;         // l_kᵀ (rows)
+  Vec stick_forcing;      // l_kᵀ F_c
+  Vec stick_reaction;     // ρ_k
+};
+
+}  // namespace vibro::detail
