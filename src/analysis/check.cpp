@@ -24,8 +24,10 @@ struct Run {
   std::vector<Eigen::VectorXd> sections;
 };
 
-Run SimulateWith(const System& sys, Scene scene, Engine engine) {
+Run SimulateWith(const System& sys, Scene scene, Engine engine,
+                 Precision precision = Precision::kDouble) {
   scene.run.engine = engine;
+  scene.run.precision = precision;
   scene.run.samples_per_period = 0;
   AttractorRecorder rec(sys, scene);
   SectionLog log;
@@ -65,25 +67,38 @@ std::optional<double> ObservedDecay(const std::vector<Eigen::VectorXd>& z) {
 
 }  // namespace
 
-CheckReport CrossCheck(const System& sys, const Scene& scene) {
+CheckReport CrossCheck(const System& sys, const Scene& scene, bool with_quad) {
   CheckReport rep;
   const Run ex = SimulateWith(sys, scene, Engine::kExact);
   const Run cv = SimulateWith(sys, scene, Engine::kCvode);
+  std::optional<Run> qd;
+  if (with_quad) qd = SimulateWith(sys, scene, Engine::kExact, Precision::kQuad);
   rep.exact_kind = ex.attractor.kind;
   rep.cvode_kind = cv.attractor.kind;
+  if (qd) rep.quad_kind = qd->attractor.kind;
   const double tol_cvode = std::max(1e-6, 100.0 * std::pow(scene.run.rtol, 2.0 / 3.0));
   constexpr double kTolOrbit = 1e-9;
+  constexpr double kTolQuad = 1e-9;
 
   const auto add = [&](CheckRow row) {
     rep.ok = rep.ok && row.ok;
     rep.rows.push_back(std::move(row));
   };
-  add({"attractor kind", {}, {}, {}, 0, 0, ex.attractor.kind == cv.attractor.kind,
-       fmt::format("exact {}, cvode {}", ex.attractor.kind, cv.attractor.kind)});
+  add({"attractor kind", {}, {}, {}, 0, 0,
+       ex.attractor.kind == cv.attractor.kind && (!qd || qd->attractor.kind == ex.attractor.kind),
+       fmt::format("exact {}, cvode {}{}", ex.attractor.kind, cv.attractor.kind,
+                   qd ? ", quad " + qd->attractor.kind : ""),
+       {}});
+  const auto status_note = [](const char* name, const RunResult& r) {
+    return fmt::format("{} {}{}", name, ToString(r.status),
+                       r.message.empty() ? "" : " (" + r.message + ")");
+  };
   add({"status", {}, {}, {}, 0, 0,
-       ex.result.status == RunStatus::kOk && cv.result.status == RunStatus::kOk,
-       fmt::format("exact {}, cvode {}{}", ToString(ex.result.status), ToString(cv.result.status),
-                   cv.result.message.empty() ? "" : " (" + cv.result.message + ")")});
+       ex.result.status == RunStatus::kOk && cv.result.status == RunStatus::kOk &&
+           (!qd || qd->result.status == RunStatus::kOk),
+       fmt::format("{}, {}{}", status_note("exact", ex.result), status_note("cvode", cv.result),
+                   qd ? ", " + status_note("quad", qd->result) : ""),
+       {}});
 
   const bool periodic = ex.attractor.kind == "sticking-periodic" || ex.attractor.kind == "impact-periodic";
   OrbitResult orbit;
@@ -101,37 +116,47 @@ CheckReport CrossCheck(const System& sys, const Scene& scene) {
   add({"poincare solver", {}, {}, {}, orbit.residual, 0, !periodic || have_orbit,
        have_orbit ? fmt::format("converged in {} Newton iterations, residual {:.1e}",
                                 orbit.newton_iterations, orbit.residual)
-                  : orbit.status + ": " + orbit.message});
+                  : orbit.status + ": " + orbit.message,
+       {}});
   if (!periodic) return rep;
 
+  // Each quantity of the exact run against CVODE (tol_cvode), the Poincaré solver and the quad
+  // engine (kTolOrbit, kTolQuad); q is the quad value when the quad engine ran.
   const auto compare = [&](const std::string& name, std::optional<double> e, std::optional<double> c,
-                           std::optional<double> o) {
-    CheckRow row{name, e, c, have_orbit ? o : std::nullopt, 0, tol_cvode, true, ""};
-    if (!e || !c) {
-      row.ok = e.has_value() == c.has_value();
+                           std::optional<double> o, std::optional<double> q) {
+    CheckRow row{name, e, c, have_orbit ? o : std::nullopt, 0, tol_cvode, true, "", q};
+    if (!e || !c || (qd && !q)) {
+      row.ok = e.has_value() == c.has_value() && (!qd || e.has_value() == q.has_value());
       row.note = "missing in one engine";
       add(row);
       return;
     }
     const double dc = std::abs(*c - *e);
     const double dorb = row.orbit ? std::abs(*row.orbit - *e) : 0.0;
-    row.difference = std::max(dc, dorb);
-    row.ok = dc <= tol_cvode && dorb <= kTolOrbit;
+    const double dq = q ? std::abs(*q - *e) : 0.0;
+    row.difference = std::max({dc, dorb, dq});
+    row.ok = dc <= tol_cvode && dorb <= kTolOrbit && dq <= kTolQuad;
     if (dorb > kTolOrbit) row.note = fmt::format("orbit differs by {:.1e} > {:.0e}", dorb, kTolOrbit);
+    if (dq > kTolQuad)
+      row.note += fmt::format("{}quad differs by {:.1e} > {:.0e}", row.note.empty() ? "" : "; ", dq,
+                              kTolQuad);
     add(row);
   };
+  const Attractor none;
+  const Attractor& qa = qd ? qd->attractor : none;
   const auto per = [](const Attractor& a) {
     return a.period ? std::optional<double>(*a.period) : std::nullopt;
   };
-  compare("period", per(ex.attractor), per(cv.attractor), per(orbit.summary));
+  compare("period", per(ex.attractor), per(cv.attractor), per(orbit.summary), per(qa));
   compare("sticking fraction", ex.attractor.sticking_fraction, cv.attractor.sticking_fraction,
-          orbit.summary.sticking_fraction);
+          orbit.summary.sticking_fraction, qa.sticking_fraction);
   const auto ipp = [](const Attractor& a) {
     return a.impacts_per_period ? std::optional<double>(static_cast<double>(*a.impacts_per_period))
                                 : std::nullopt;
   };
   if (ex.attractor.kind == "impact-periodic")
-    compare("impacts per period", ipp(ex.attractor), ipp(cv.attractor), ipp(orbit.summary));
+    compare("impacts per period", ipp(ex.attractor), ipp(cv.attractor), ipp(orbit.summary),
+            ipp(qa));
   const auto& pe = ex.attractor.stick_phases;
   for (size_t i = 0; i < pe.size(); ++i) {
     const auto at = [&](const Attractor& a, bool start) -> std::optional<double> {
@@ -139,15 +164,15 @@ CheckReport CrossCheck(const System& sys, const Scene& scene) {
       return start ? a.stick_phases[i].first : a.stick_phases[i].second;
     };
     compare(fmt::format("stick phase {} start", i + 1), at(ex.attractor, true), at(cv.attractor, true),
-            at(orbit.summary, true));
+            at(orbit.summary, true), qd ? at(qa, true) : std::nullopt);
     compare(fmt::format("stick phase {} end (release)", i + 1), at(ex.attractor, false),
-            at(cv.attractor, false), at(orbit.summary, false));
+            at(cv.attractor, false), at(orbit.summary, false), qd ? at(qa, false) : std::nullopt);
   }
   if (have_orbit) {
     double lead = 0;
     for (const auto& m : orbit.multipliers) lead = std::max(lead, std::abs(m));
     const auto decay = ObservedDecay(ex.sections);
-    CheckRow row{"leading |multiplier| vs transient decay", decay, {}, lead, 0, 0, true, ""};
+    CheckRow row{"leading |multiplier| vs transient decay", decay, {}, lead, 0, 0, true, "", {}};
     if (!decay) {
       row.note = "the transient converged too fast to measure its decay";
     } else {
