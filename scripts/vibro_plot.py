@@ -19,7 +19,7 @@ import numpy as np  # noqa: E402
 
 
 def reaction(model, X, V, t):
-    """MODEL eq. (5) with the damping term of §7: the reaction a state on the stop needs."""
+    """the paper's eq. (5) with the damping term of §7: the reaction a state on the stop needs."""
     w = model.attrs["frequencies"]
     c = model.attrs["contact_shape"]
     z = model.attrs["damping_ratios"]

@@ -1,4 +1,4 @@
-// Scene files (CONTRACT §1): TOML in, Scene out, with `--set KEY=VALUE` overrides and located
+// Scene files (docs/scenes.md): TOML in, Scene out, with `--set KEY=VALUE` overrides and located
 // error messages. The only file that includes toml++ is src/io/scene_file.cpp.
 #pragma once
 

@@ -1,4 +1,4 @@
-// The `vibro` command (CONTRACT §2, §4). The only file that includes CLI11.
+// The `vibro` command (docs/cli.md; exit codes and JSON in docs/output.md). The only file that includes CLI11.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 130 interrupted.
 #include <sys/wait.h>
@@ -684,7 +684,7 @@ int main(int argc, char** argv) {
   add_scene_options(simulate);
   std::string out_path;
   bool resume = false;
-  simulate->add_option("--out", out_path, "write the run to this HDF5 file (CONTRACT §3)");
+  simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
   simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
