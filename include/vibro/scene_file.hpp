@@ -38,4 +38,7 @@ LoadedScene ParseScene(std::string_view text, const std::string& source,
 // The number at `key` (e.g. "excitation.amplitude") in a scene's TOML text, if any.
 std::optional<double> SceneNumber(const std::string& text, const std::string& key);
 
+// The scene key nearest to a mistyped one ("amplitude" → "excitation.amplitude"), or "".
+std::string NearestSceneKey(const std::string& key);
+
 }  // namespace vibro
