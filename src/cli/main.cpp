@@ -814,10 +814,13 @@ int main(int argc, char** argv) {
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }
-    if (*plot)
+    if (*plot) {
+      if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)
+        throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
       return RunPlot(file_path, plot_prefix, plot_overlay,
                      fmt::format(" --format {} --dpi {}{}", plot_format, plot_dpi,
-                                 plot_window.empty() ? "" : " --time-window '" + plot_window + "'"));
+                                 plot_window.empty() ? "" : " --time-window=" + plot_window));
+    }
     if (*check) return RunCheck(scene_path, sets, json);
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
