@@ -34,7 +34,7 @@ fig fig09 partition
 # Fig. 12: 1-DOF clearance, r = 0, ω = 1.4: from f = 40 down to f_min = 2.0204 (docs/model.md
 # §6.3), where the sticking phase is lost.
 run continue "$S/fig11_clearance.toml" --set excitation.amplitude=40 --param excitation.amplitude \
-  --to 2 --out "$tmp/fig12.h5"
+  --to 2 --step 0.2 --out "$tmp/fig12.h5"
 fig fig12 branch
 # Fig. 13: the clearance (ω, f) partition.
 run partition "$S/fig11_clearance.toml" --params excitation.frequency,excitation.amplitude \

@@ -777,9 +777,9 @@ int main(int argc, char** argv) {
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
   info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
   info->add_flag("--json", json, "print one JSON object on stdout");
-  CLI::App* plot = app.add_subcommand("plot", "render PNG plots of a vibro HDF5 file");
+  CLI::App* plot = app.add_subcommand("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
   plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
-  plot->add_option("--out", plot_prefix, "prefix of the PNG files (default: FILE without .h5)");
+  plot->add_option("--out", plot_prefix, "prefix of the files (default: FILE without .h5)");
   std::string plot_overlay;
   plot->add_option("--overlay", plot_overlay,
                    "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
