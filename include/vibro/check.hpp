@@ -27,7 +27,7 @@ struct CheckReport {
   std::string exact_kind, cvode_kind, orbit_status;
 };
 
-// Tolerances: CVODE against exact, 100·rtol^(2/3) (the law of README "What each rtol buys");
+// Tolerances: CVODE against exact, 100·rtol^(2/3) (the law of docs/engines.md, "What each rtol buys");
 // Poincaré solver against exact, 1e-9; the leading multiplier against the decay rate observed in
 // the exact transient, 10 % (+ 0.02).
 CheckReport CrossCheck(const System& system, const Scene& scene);

@@ -20,7 +20,7 @@ namespace {
 
 enum class Kind { kNumber, kInteger, kString, kNumberArray, kMatrix, kTable };
 
-// Every key a scene may hold (docs/scenes.md plus vibro's additions, documented in the README).
+// Every key a scene may hold (docs/scenes.md lists each with its default and constraint).
 const std::map<std::string, Kind>& Schema() {
   static const std::map<std::string, Kind> schema = {
       {"title", Kind::kString},

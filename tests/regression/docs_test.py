@@ -146,7 +146,7 @@ def check_captions(root):
                         block.append(l)
                     j += 1
                 quoted = []
-                for l in block:
+                for l in "\n".join(block).replace("\\\n", " ").splitlines():
                     l = l.split("#")[0].strip()
                     if l.startswith("vibro "):
                         quoted.append(shlex.split(l)[1:])
