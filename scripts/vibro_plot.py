@@ -140,7 +140,8 @@ def dense_run(f, t_from, t_to, per_period=1500):
             continue
         n = max(2, int(np.ceil(per_period * (b - a) / T)))
         grid = np.linspace(a, b, n, endpoint=False)
-        i0, i1 = np.searchsorted(ev_t, a, side="right"), np.searchsorted(ev_t, b, side="left")
+        # Events in [a, b): one at the sample time itself comes before the flight that follows.
+        i0, i1 = np.searchsorted(ev_t, a, side="left"), np.searchsorted(ev_t, b, side="left")
         evs = ev_t[i0:i1]
         first = evs[0] if len(evs) else b
         last = evs[-1] if len(evs) else a
