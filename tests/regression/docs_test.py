@@ -7,6 +7,7 @@
                                        under it are the ones the script runs
     docs_test.py cli ROOT VIBRO        docs/cli.md lists, per command, exactly the options that
                                        `vibro COMMAND --help` shows
+    docs_test.py cpp ROOT EXAMPLE      docs/cpp.md shows examples/first.cpp and its real output
 
 The truth is the file system, the script and the binary's own --help, never the docs themselves.
 """
@@ -190,6 +191,22 @@ def check_cli(root, vibro):
         expect(mentioned <= helped, f"docs/cli.md, vibro {c}: not in --help: {sorted(mentioned - helped)}")
 
 
+def check_cpp(root, exe):
+    """docs/cpp.md shows examples/first.cpp verbatim, and the output it quotes is the program's."""
+    with open(os.path.join(root, "docs", "cpp.md"), encoding="utf-8") as f:
+        text = f.read()
+    blocks = re.findall(r"^```(\w*)\n(.*?)^```", text, re.M | re.S)
+    code = [b for lang, b in blocks if lang == "cpp"]
+    with open(os.path.join(root, "examples", "first.cpp"), encoding="utf-8") as f:
+        source = f.read()
+    expect(len(code) == 1 and code[0] == source, "docs/cpp.md shows examples/first.cpp as it is")
+    p = subprocess.run([exe], capture_output=True, text=True, cwd=root)
+    expect(p.returncode == 0, f"examples/first.cpp runs: {p.stderr}")
+    quoted = [b for lang, b in blocks if lang == "" and b.startswith("t_end")]
+    expect(len(quoted) == 1 and quoted[0] == p.stdout,
+           f"docs/cpp.md quotes the example's output: {p.stdout!r}")
+
+
 def main():
     what, root = sys.argv[1], sys.argv[2]
     if what == "links":
@@ -197,6 +214,8 @@ def main():
         check_captions(root)
     elif what == "cli":
         check_cli(root, sys.argv[3])
+    elif what == "cpp":
+        check_cpp(root, sys.argv[3])
     else:
         sys.exit(f"unknown check {what}")
     finish()
