@@ -18,7 +18,7 @@ import tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES_DIR = os.path.join(ROOT, "data", "scenes")
 DEFAULT_VIBRO = os.path.join(ROOT, "build", "vibro")
-STICK, RELEASE = 3, 4  # HDF5 enum values of events/kind (CONTRACT §3)
+STICK, RELEASE = 3, 4  # HDF5 enum values of events/kind (docs/output.md)
 
 
 def scene_path(scene):

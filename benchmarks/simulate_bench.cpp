@@ -1,6 +1,6 @@
 // Exact engine throughput: events and forcing periods per second (1-DOF to 10-DOF) and the Fig. 5
 // sticking case end to end (200 periods, attractor classification included). Target: Fig. 5 well
-// under 20 ms. The certified chattering rule (MODEL §5.4a) is measured on Fig. 8 far from and
+// under 20 ms. The certified chattering rule (docs/model.md §5.4) is measured on Fig. 8 far from and
 // 1e-7 below the end of sticking, and the quad-precision reference against double on Fig. 8.
 // Periods per second is the fair measure across chattering rules: a rule that predicts earlier
 // follows fewer impacts per period.

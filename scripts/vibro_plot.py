@@ -1,13 +1,19 @@
 #!/usr/bin/python3
-"""Plots of a vibro HDF5 run (called by `vibro plot FILE.h5 [--out PREFIX]`).
+"""Pictures of a vibro HDF5 file (called by `vibro plot FILE.h5 [options]`).
 
-Writes PREFIX_basin.png for a basin study, PREFIX_sweep.png for a sweep (with a continuation
-branch overlaid by --overlay BRANCH.h5), and for a run with samples PREFIX_xB.png (contact
-displacement, sticking shaded, impacts marked), PREFIX_reaction.png (contact reaction R), PREFIX_phase.png (phase portrait x_B, dx_B/dt) and PREFIX_section.png
-(stroboscopic section). The time plots show the last `--periods` forcing periods (default 5).
+Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB (x_B against t,
+sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
+PREFIX_section; PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
+continuation, PREFIX_partition for a partition, PREFIX_basin for a basin study, PREFIX_sweep for
+a sweep (with a continuation branch overlaid by --overlay BRANCH.h5).
+
+Free flights are drawn from the closed-form modal solution (docs/model.md §2, §7) evaluated
+densely between the stored samples and events, so curves are smooth whatever
+run.samples_per_period, and x_B reaches the stop exactly at every impact.
 """
 import argparse
 import os
+import re
 import sys
 
 import h5py
@@ -17,47 +23,232 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+# Okabe–Ito: distinguishable with every common colour-vision deficiency.
+OKABE_ITO = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#F0E442", "#000000"]
+UP, DOWN, BRANCH, BIF = OKABE_ITO[0], OKABE_ITO[1], "#000000", OKABE_ITO[2]
+STICK_SHADE = "#E69F00"
+
+# Scene keys and the symbols the paper uses for them.
+SYMBOLS = {"excitation.amplitude": "f", "excitation.frequency": "ω", "stop.restitution": "r",
+           "stop.position": "x_0"}
+PLAIN = {"excitation.amplitude": "f", "excitation.frequency": "ω", "stop.restitution": "r",
+         "stop.position": "x0"}
+
+
+def axis_label(key):
+    """`$f$ (excitation.amplitude)` for a scene key, the key itself otherwise."""
+    s = SYMBOLS.get(key)
+    return f"${s}$ ({key})" if s else key
+
+
+def text(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def make_title(f, varied=(), width=78):
+    """First title line: the scene's title without the parameter values it quotes, then the
+    values as run, leaving out the varied parameters (their values are on an axis)."""
+    scene = text(f.attrs["scene"])
+    m = re.search(r'^title\s*=\s*(["\'])(.*)\1\s*$', scene, re.M)
+    name = m.group(2) if m else os.path.basename(f.filename)
+    # "r = 0.75, omega = 2.8, f = 1.2" in a title: the values as run replace them.
+    name = re.sub(r",?\s*\b(r|omega|ω|f|x0)\s*=\s*[-+0-9.eE]+", "", name).strip(" ,:")
+    ma = f["model"].attrs
+    values = {"stop.restitution": ma["restitution"], "excitation.frequency": ma["frequency"],
+              "excitation.amplitude": ma["amplitude"]}
+    run = ", ".join(f"{PLAIN[k]} = {float(v):g}" for k, v in values.items() if k not in varied)
+    line = f"{name}: {run}" if run else name
+    return line if len(line) <= width else line[: width - 1] + "…"
+
+
+# ---------------------------------------------------------------------------------------------
+# Dense evaluation of free flights (docs/model.md §2 and §7).
+
+def free_flight(model, X0, V0, t0, t):
+    """Modal state at times t (any order, before or after t0) of the free flight through
+    (t0, X0, V0): Ẍ_i + 2ζ_iω_i Ẋ_i + ω_i² X_i = T_A,i f sin ωt, mode by mode."""
+    a = model.attrs
+    w, z, TA = a["frequencies"], a["damping_ratios"], a["forcing"]
+    f, W = float(a["amplitude"]), float(a["frequency"])
+    t = np.asarray(t, dtype=float)
+    s = t - t0
+    X = np.empty((len(t), len(w)))
+    V = np.empty_like(X)
+    for i, (wi, zi, ta) in enumerate(zip(w, z, TA)):
+        d2 = wi * wi - W * W
+        D = d2 * d2 + (2 * zi * wi * W) ** 2
+        if D > 1e-24 * max(1.0, wi ** 4):
+            def U(tt):
+                return ta * f * (d2 * np.sin(W * tt) - 2 * zi * wi * W * np.cos(W * tt)) / D
+
+            def dU(tt):
+                return ta * f * W * (d2 * np.cos(W * tt) + 2 * zi * wi * W * np.sin(W * tt)) / D
+        else:  # undamped exact resonance: the secular particular solution
+            def U(tt):
+                return -ta * f * tt * np.cos(W * tt) / (2 * W)
+
+            def dU(tt):
+                return -ta * f * (np.cos(W * tt) - W * tt * np.sin(W * tt)) / (2 * W)
+        A = X0[i] - U(t0)
+        B = V0[i] - dU(t0)
+        al = zi * wi
+        wd = wi * np.sqrt(1 - zi * zi)
+        e = np.exp(-al * s)
+        c, sn = np.cos(wd * s), np.sin(wd * s)
+        X[:, i] = U(t) + e * (A * c + (B + al * A) / wd * sn)
+        V[:, i] = dU(t) + e * (B * c - (wi * wi * A + al * B) / wd * sn)
+    return X, V
+
+
+def dense_run(f, t_from, t_to, per_period=1500):
+    # At most about 2·10⁵ points, however long the window.
+    """x_B, ẋ_B and the reaction a free state would need (R*, NaN while stuck) on a dense grid of
+    [t_from, t_to], from the stored samples and events; event points are included exactly."""
+    model = f["model"]
+    c = model.attrs["contact_shape"]
+    x0 = float(model.attrs["stop"])
+    T = float(f.attrs["forcing_period"])
+    per_period = max(50, min(per_period, int(2e5 * T / (t_to - t_from))))
+    t = f["samples/t"][:]
+    lo = max(0, np.searchsorted(t, t_from) - 1)
+    hi = min(len(t), np.searchsorted(t, t_to) + 1)
+    ts = t[lo:hi]
+    Xs, Vs, ms = f["samples/X"][lo:hi], f["samples/V"][lo:hi], f["samples/mode"][lo:hi]
+    ev_t = f["events/t"][:]
+    kinds = f["events/kind"][:]
+    ev_v = f["events/v_after"][:]
+    ev_vb = f["events/v_before"][:]
+    kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+    one_dof = len(c) == 1
+    out_t, out_x, out_v, out_r = [], [], [], []
+
+    def emit(tt, X, V):
+        out_t.append(tt)
+        out_x.append(X @ c)
+        out_v.append(V @ c)
+        out_r.append(reaction(model, X, V, tt))
+
+    def emit_stop(tt, v=None):
+        tt = np.atleast_1d(tt)
+        out_t.append(tt)
+        out_x.append(np.full(len(tt), x0))
+        out_v.append(np.zeros(len(tt)) if v is None else np.atleast_1d(v))
+        out_r.append(np.full(len(tt), np.nan))
+    for k in range(len(ts) - 1):
+        a, b = ts[k], ts[k + 1]
+        if b <= a:
+            continue
+        n = max(2, int(np.ceil(per_period * (b - a) / T)))
+        grid = np.linspace(a, b, n, endpoint=False)
+        # Events in [a, b): one at the sample time itself comes before the flight that follows.
+        i0, i1 = np.searchsorted(ev_t, a, side="left"), np.searchsorted(ev_t, b, side="left")
+        evs = ev_t[i0:i1]
+        first = evs[0] if len(evs) else b
+        last = evs[-1] if len(evs) else a
+        head = grid[grid < first]
+        if ms[k] == 0 and len(head):
+            emit(head, *free_flight(model, Xs[k], Vs[k], a, head))
+        elif len(head):
+            emit_stop(head)
+        for j in range(len(evs)):
+            te, kd = evs[j], kinds[i0 + j]
+            nxt = evs[j + 1] if j + 1 < len(evs) else None
+            emit_stop([te], [ev_vb[i0 + j]] if kd == kind_of["impact"] else None)
+            if kd == kind_of["impact"]:
+                emit_stop([te], [ev_v[i0 + j]])
+            if nxt is None:
+                break
+            mid = grid[(grid > te) & (grid < nxt)]
+            if one_dof and kd in (kind_of["impact"], kind_of["release"], kind_of["grazing"]):
+                mid = np.linspace(te, nxt, max(3, int(per_period * (nxt - te) / T)))[1:-1]
+                emit(mid, *free_flight(model, np.array([x0]), np.array([ev_v[i0 + j]]), te, mid))
+            elif len(mid):
+                emit_stop(mid)
+        tail = grid[grid > last] if len(evs) else np.array([])
+        if len(tail):
+            if ms[k + 1] == 0:
+                emit(tail, *free_flight(model, Xs[k + 1], Vs[k + 1], b, tail))
+            else:
+                emit_stop(tail)
+    if len(ts):
+        emit(np.array([ts[-1]]), Xs[-1:], Vs[-1:])
+    if not out_t:
+        return np.array([]), np.array([]), np.array([]), np.array([])
+    tt, xx, vv, rr = (np.concatenate(v) for v in (out_t, out_x, out_v, out_r))
+    # The tail of a chattering sequence, from the impact at which its accumulation point was
+    # predicted to that point, is drawn on the stop: its bounces are below what the prediction
+    # resolves (docs/chattering.md), and the free flight from that impact would dip through it.
+    for i in np.nonzero(kinds == kind_of["accumulation"])[0]:
+        if i > 0 and kinds[i - 1] == kind_of["impact"]:
+            inside = (tt > ev_t[i - 1]) & (tt < ev_t[i])
+            xx[inside], vv[inside], rr[inside] = x0, 0.0, np.nan
+    sel = (tt >= t_from) & (tt <= t_to)
+    return tt[sel], xx[sel], vv[sel], rr[sel]
+
 
 def reaction(model, X, V, t):
-    """MODEL eq. (5) with the damping term of §7: the reaction a state on the stop needs."""
+    """Eq. (5) of the paper with the damping term of docs/model.md §7: the reaction a state on
+    the stop needs."""
     w = model.attrs["frequencies"]
     c = model.attrs["contact_shape"]
     z = model.attrs["damping_ratios"]
+    X, V = np.atleast_2d(X), np.atleast_2d(V)
     elastic = (X * (c * w * w)).sum(axis=1) + (V * (c * 2 * z * w)).sum(axis=1)
-    forcing = model.attrs["s_A"] * model.attrs["amplitude"] * np.sin(model.attrs["frequency"] * t)
+    forcing = model.attrs["s_A"] * model.attrs["amplitude"] * np.sin(model.attrs["frequency"] * np.asarray(t))
     return (elastic - forcing) / model.attrs["s_B"]
 
 
+# ---------------------------------------------------------------------------------------------
+
+KIND_ORDER = {"sticking-periodic": 0, "impact-periodic": 1, "no-contact-periodic": 2,
+              "permanent-contact": 3, "not-periodic": 4}
+KIND_NAME = {"sticking-periodic": "sticking", "impact-periodic": "impact",
+             "no-contact-periodic": "no contact", "permanent-contact": "permanent contact",
+             "not-periodic": "not periodic"}
+
+
 def plot_basin(f, title, save):
-    """Label map of a basin study, one colour per attractor (grey: unresolved)."""
+    """Label map of a basin study. Colours are keyed to the attractor (kind, period, impacts,
+    sticking fraction), not to the label numbers, which depend on the grid."""
     b = f["basin"]
     labels = b["labels"][:]
     a = f["attractors"].attrs
-    kinds = a["kind"].split(",") if a["kind"] else []
+    kinds = text(a["kind"]).split(",") if len(text(a["kind"])) else []
     n = len(kinds)
-    colors = plt.get_cmap("tab10")
+    ipp = a["impacts_per_period"] if "impacts_per_period" in a else np.zeros(n)
+    key = sorted(range(n), key=lambda k: (KIND_ORDER.get(kinds[k], 9), int(a["period"][k]),
+                                          float(ipp[k]), -round(float(a["sticking_fraction"][k]), 6)))
+    colour = {k: OKABE_ITO[i % len(OKABE_ITO)] for i, k in enumerate(key)}
     rgb = np.ones(labels.shape + (3,)) * 0.85
     rgb[labels == -2] = (1, 1, 1)
     for k in range(n):
-        rgb[labels == k] = colors(k % 10)[:3]
-    fig, ax = plt.subplots(figsize=(7, 6))
+        rgb[labels == k] = matplotlib.colors.to_rgb(colour[k])
+    fig, ax = plt.subplots(figsize=(8.4, 5.2))
     xr, yr = b.attrs["x_range"], b.attrs["y_range"]
     ax.imshow(rgb, origin="lower", extent=(xr[0], xr[1], yr[0], yr[1]), aspect="auto",
               interpolation="nearest")
     from matplotlib.patches import Patch
     handles = []
-    for k in range(n):
+    for k in key:
         per = int(a["period"][k])
-        sp = a["sticking_fraction"][k]
-        label = f"{k}: {kinds[k]}, period {per}" + (f", SP {sp:.3f}" if sp > 0 else "")
-        label += f" ({100 * a['basin_fraction'][k]:.1f} %)"
-        handles.append(Patch(color=colors(k % 10), label=label))
-    handles.append(Patch(color=(0.85, 0.85, 0.85),
-                         label=f"unresolved ({100 * b.attrs['unresolved_fraction']:.1f} %)"))
-    ax.legend(handles=handles, loc="upper right", fontsize=7)
-    ax.set_xlabel(b.attrs["x"])
-    ax.set_ylabel(b.attrs["y"])
-    ax.set_title(f"{title}\nbasins of attraction ({labels.shape[1]} x {labels.shape[0]})")
+        sp = float(a["sticking_fraction"][k])
+        label = f"{KIND_NAME.get(kinds[k], kinds[k])}, period {per}"
+        if kinds[k] == "impact-periodic" and ipp[k] > 0:
+            label += f", {int(ipp[k])} impact{'s' if ipp[k] > 1 else ''}"
+        if sp > 0:
+            label += f", SP {sp:.3f}"
+        label += f": {100 * a['basin_fraction'][k]:.1f} %"
+        handles.append(Patch(color=colour[k], label=label))
+    unresolved = float(b.attrs["unresolved_fraction"])
+    if unresolved > 0:
+        handles.append(Patch(color=(0.85, 0.85, 0.85), label=f"unresolved: {100 * unresolved:.1f} %"))
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
+              frameon=False, title="attractor: basin share", title_fontsize=8)
+    names = {"x_B": "$x_B$", "v_B": "$\\dot x_B$"}
+    ax.set_xlabel(f"initial {names.get(text(b.attrs['x']), text(b.attrs['x']))}")
+    ax.set_ylabel(f"initial {names.get(text(b.attrs['y']), text(b.attrs['y']))}")
+    ax.set_title(f"{title}\nbasins of attraction, {labels.shape[1]} × {labels.shape[0]} initial states",
+                 fontsize=9)
     save(fig, "basin")
 
 
@@ -65,63 +256,77 @@ BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising"
                        "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o"}
 
 
-def draw_branch(ax, f, quantity="sticking_fraction", label_prefix=""):
+def draw_branch(ax, f, y):
     """A continuation branch: solid where stable, dashed where unstable; bifurcations marked."""
     b = f["branch"]
     value = b["value"][:]
-    y = b[quantity][:]
     stable = b["stable"][:].astype(bool)
-    # Split into runs of equal stability (each run drawn with the neighbouring point included).
     start = 0
     for i in range(1, len(value) + 1):
         if i == len(value) or stable[i] != stable[start]:
             j = min(i + 1, len(value))
-            ax.plot(value[start:j], y[start:j], "-" if stable[start] else "--", color="C0", lw=1.5,
-                    label=None)
+            ax.plot(value[start:j], y[start:j], "-" if stable[start] else "--", color=BRANCH, lw=1.4)
             start = i
-    ax.plot([], [], "-", color="C0", label=f"{label_prefix}stable")
-    ax.plot([], [], "--", color="C0", label=f"{label_prefix}unstable")
+    if stable.any():
+        ax.plot([], [], "-", color=BRANCH, label="stable")
+    if (~stable).any():
+        ax.plot([], [], "--", color=BRANCH, label="unstable")
     bif = f["bifurcations"]
-    kinds = [k.decode() if isinstance(k, bytes) else k for k in bif["kind"][:]]
+    kinds = [text(k) for k in bif["kind"][:]]
     seen = set()
     for v, k in zip(bif["value"][:], kinds):
-        yv = np.interp(v, value, y) if np.all(np.diff(value) > 0) else y[np.argmin(np.abs(value - v))]
-        ax.plot([v], [yv], BIFURCATION_MARKERS.get(k, "o"), color="C3", ms=8,
-                label=k if k not in seen else None)
+        yv = y[np.argmin(np.abs(value - v))] if len(value) else np.nan
+        if np.all(np.diff(value) > 0) and np.all(np.isfinite(y)):
+            yv = np.interp(v, value, y)
+        ax.plot([v], [yv], BIFURCATION_MARKERS.get(k, "o"), color=OKABE_ITO[1], ms=8, mec="k", mew=0.5,
+                label=f"{k} ({v:.7g})" if k not in seen else None)
         seen.add(k)
 
 
 def plot_branch(f, title, save):
-    """Bifurcation diagram of a continuation (sticking fraction and largest |multiplier|)."""
+    """Bifurcation diagram of a continuation: the sticking fraction (sticking orbits) or x_B at
+    the section (impact orbits), and the largest |μ| when the orbits have multipliers."""
     b = f["branch"]
-    param = b.attrs["param"]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(7, 6.5), sharex=True)
-    draw_branch(ax1, f)
-    ax1.set_ylabel("sticking fraction")
-    ax1.legend(fontsize=8, loc="best")
-    m = f["model"].attrs
-    ax1.set_title(f"{title}\ncontinued from f = {m['amplitude']:g}; period {b.attrs['period']}; "
-                  f"end: {b.attrs['end']}", fontsize=9)
-    draw_branch(ax2, f, "max_multiplier")
-    ax2.axhline(1.0, color="0.6", lw=0.8)
-    if np.nanmax(b["max_multiplier"][:]) > 10:
-        ax2.set_yscale("log")
-    ax2.set_ylabel("largest |multiplier|")
-    ax2.set_xlabel(param)
+    param = text(b.attrs["param"])
+    value = b["value"][:]
+    sp = b["sticking_fraction"][:]
+    mu = b["max_multiplier"][:]
+    has_sp = np.nanmax(sp, initial=0) > 0
+    has_mu = np.isfinite(mu).any() and np.nanmax(np.where(np.isfinite(mu), mu, 0), initial=0) > 0
+    rows = 2 if has_mu else 1
+    fig, axes = plt.subplots(rows, 1, figsize=(7.5, 6.2 if rows == 2 else 4.2), sharex=True, squeeze=False)
+    ax1 = axes[0, 0]
+    if has_sp:
+        draw_branch(ax1, f, sp)
+        ax1.set_ylabel("sticking fraction")
+    else:
+        draw_branch(ax1, f, b["x_B"][:])
+        ax1.set_ylabel("$x_B$ at the section")
+    ax1.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    sym = SYMBOLS.get(param, param)
+    ax1.set_title(f"{title}\ncontinuation in ${sym}$ from {value[0]:g}, period {int(b.attrs['period'])}; "
+                  f"end: {text(b.attrs['end'])}", fontsize=9)
+    if has_mu:
+        ax2 = axes[1, 0]
+        draw_branch(ax2, f, mu)
+        ax2.axhline(1.0, color="0.6", lw=0.8)
+        if np.nanmax(mu) > 10:
+            ax2.set_yscale("log")
+        ax2.set_ylabel("largest $|\\mu|$")
+    axes[-1, 0].set_xlabel(axis_label(param))
     save(fig, "branch")
 
 
 def plot_partition(f, title, save):
     """Curves of constant sticking fraction and existence boundaries in a parameter plane."""
     p = f["partition"]
-    p1, p2 = p.attrs["param1"], p.attrs["param2"]
+    p1, p2 = text(p.attrs["param1"]), text(p.attrs["param2"])
     xv1, xl, xv2 = p["crossing_value1"][:], p["crossing_level"][:], p["crossing_value2"][:]
     bv1, bv2 = p["boundary_value1"][:], p["boundary_value2"][:]
-    bk = np.array([k.decode() if isinstance(k, bytes) else k for k in p["boundary_kind"][:]])
-    fig, ax = plt.subplots(figsize=(7, 5.5))
+    bk = np.array([text(k) for k in p["boundary_kind"][:]])
+    fig, ax = plt.subplots(figsize=(8.4, 5.4))
     cmap = plt.get_cmap("viridis")
     levels = list(p.attrs["levels"])
-
     span2 = max(1e-300, np.ptp(np.concatenate([xv2, bv2])) if len(xv2) + len(bv2) else 1.0)
 
     def segments(v1, v2):
@@ -142,19 +347,21 @@ def plot_partition(f, title, save):
         return segs
     for i, s in enumerate(levels):
         sel = xl == s
-        colour = cmap(i / max(1, len(levels) - 1))
+        colour = cmap(0.9 * i / max(1, len(levels) - 1))
         for n, (xs, ys, style) in enumerate(segments(xv1[sel], xv2[sel])):
             ax.plot(xs, ys, style, color=colour, lw=1.4, ms=3, label=f"SP = {s:g}" if n == 0 else None)
     for j, k in enumerate(sorted(set(bk))):
         sel = bk == k
-        ax.plot(bv1[sel], bv2[sel], BIFURCATION_MARKERS.get(k, "o"), color=f"C{3 + j % 7}", ms=5,
-                ls="none", label=k)
+        ax.plot(bv1[sel], bv2[sel], BIFURCATION_MARKERS.get(k, "o"), color=OKABE_ITO[(1 + j) % 8],
+                mec="k", mew=0.3, ms=5, ls="none", label=k)
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
-    ax.legend(unique.values(), unique.keys(), fontsize=8, loc="best")
-    ax.set_xlabel(p1)
-    ax.set_ylabel(p2)
-    ax.set_title(f"{title}\npartition: curves of constant sticking fraction", fontsize=9)
+    ax.legend(unique.values(), unique.keys(), fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              frameon=False)
+    ax.set_xlabel(axis_label(p1))
+    ax.set_ylabel(axis_label(p2))
+    ax.set_title(f"{title}\ncurves of constant sticking fraction SP in the "
+                 f"(${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane", fontsize=9)
     save(fig, "partition")
 
 
@@ -164,11 +371,11 @@ def read_branch(path, param):
         with h5py.File(path, "r") as f:
             b = f["branch"]
             br = {k: b[k][()] for k in ("value", "sticking_fraction", "stable")}
-            br["param"] = b.attrs["param"]
+            br["param"] = text(b.attrs["param"])
             bif = f["bifurcations"] if "bifurcations" in f else None
             br["bif_value"] = bif["value"][()] if bif is not None else np.array([])
             kinds = bif["kind"][()] if bif is not None else []
-            br["bif_kind"] = [k.decode() if isinstance(k, bytes) else str(k) for k in kinds]
+            br["bif_kind"] = [text(k) for k in kinds]
     except (OSError, KeyError) as e:
         print(f"--overlay {path}: not a continuation branch file (needs /branch with value, "
               f"sticking_fraction, stable and the attribute param): {e}", file=sys.stderr)
@@ -180,69 +387,203 @@ def read_branch(path, param):
 
 
 def plot_sweep(f, title, save, overlay):
-    """Brute-force bifurcation diagram: x_B at the section and the sticking fraction against the
-    parameter, upward and downward runs marked; optionally a continuation branch overlaid."""
+    """Brute-force bifurcation diagram: x_B at the section and (when anything sticks) the
+    sticking fraction against the parameter, upward and downward runs marked; optionally a
+    continuation branch overlaid."""
     s = f["sweep"]
-    param = s.attrs["param"]
+    param = text(s.attrs["param"])
     value, up = s["value"][()], s["upward"][()].astype(bool)
     xB, sp = s["x_B"][()], s["sticking_fraction"][()]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
-    for sel, marker, color, name in ((up, "o", "tab:blue", "upward"), (~up, "x", "tab:red", "downward")):
+    br = read_branch(overlay, param) if overlay else None
+    has_sp = np.nanmax(np.where(np.isfinite(sp), sp, 0), initial=0) > 0 or br is not None
+    rows = 2 if has_sp else 1
+    fig, axes = plt.subplots(rows, 1, figsize=(8.6, 6.6 if rows == 2 else 4.2), sharex=True, squeeze=False)
+    ax1 = axes[0, 0]
+    for sel, marker, color, name in ((up, "o", UP, "upward"), (~up, "x", DOWN, "downward")):
         if not sel.any():
             continue
         v = np.repeat(value[sel], xB.shape[1])
         ax1.plot(v, xB[sel].ravel(), marker, ms=2.5 if marker == "o" else 3.5, color=color,
                  mfc="none" if marker == "o" else color, lw=0, label=f"{name} sweep")
-        ax2.plot(value[sel], sp[sel], marker, ms=4, color=color, mfc="none" if marker == "o" else color,
-                 lw=0, label=f"{name} sweep")
-    if overlay:
-        br = read_branch(overlay, param)
+        if has_sp:
+            axes[1, 0].plot(value[sel], sp[sel], marker, ms=4, color=color,
+                            mfc="none" if marker == "o" else color, lw=0, label=f"{name} sweep")
+    if br is not None:
+        ax2 = axes[1, 0]
         v, b_sp, stable = br["value"], br["sticking_fraction"], br["stable"].astype(bool)
-        # Solid where stable, dashed where unstable (each segment takes the stability of its start).
         for i in range(len(v) - 1):
-            ax2.plot(v[i:i + 2], b_sp[i:i + 2], "-" if stable[i] else "--", color="k", lw=1.2)
-        ax2.plot([], [], "-", color="k", label="continuation, stable")
-        ax2.plot([], [], "--", color="k", label="continuation, unstable")
+            ax2.plot(v[i:i + 2], b_sp[i:i + 2], "-" if stable[i] else "--", color=BRANCH, lw=1.2)
+        ax2.plot([], [], "-", color=BRANCH, label="continuation, stable")
+        if (~stable).any():
+            ax2.plot([], [], "--", color=BRANCH, label="continuation, unstable")
         for bv, bk in zip(br["bif_value"], br["bif_kind"]):
-            for ax in (ax1, ax2):
-                ax.axvline(bv, color="tab:green", lw=0.8, ls=":")
+            for ax in axes[:, 0]:
+                ax.axvline(bv, color=BIF, lw=0.8, ls=":")
             y = b_sp[np.argmin(np.abs(v - bv))] if len(v) else 0.0  # nearest point (folds)
-            ax2.plot([bv], [y], "D", color="tab:green", ms=6)
-            ax2.annotate(bk, (bv, y), textcoords="offset points", xytext=(4, 6), fontsize=8, color="tab:green")
-    ax1.set_ylabel("$x_B$ at the section $t_0 + kT$")
-    ax1.set_title(f"{title}\nbrute-force sweep of {param}, up and down")
-    ax1.legend(loc="best", fontsize=8)
-    ax2.set_xlabel(param)
-    ax2.set_ylabel("sticking fraction")
-    ax2.legend(loc="best", fontsize=8)
+            ax2.plot([bv], [y], "D", color=BIF, ms=6, label=f"{bk} ({bv:.7g})")
+    sym = SYMBOLS.get(param, param)
+    ax1.set_ylabel("$x_B(t_0 + kT)$")
+    ax1.set_title(f"{title}\nbrute-force sweep in ${sym}$, up and down", fontsize=9)
+    ax1.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    if has_sp:
+        axes[1, 0].set_ylabel("sticking fraction")
+        axes[1, 0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    axes[-1, 0].set_xlabel(axis_label(param))
     save(fig, "sweep")
 
 
+def plot_run(f, title, save, window):
+    """Time plots of a run with dense samples."""
+    model = f["model"]
+    c = model.attrs["contact_shape"]
+    x0 = float(model.attrs["stop"])
+    T = float(f.attrs["forcing_period"])
+    status = text(f.attrs["status"])
+    t = f["samples/t"][:]
+    t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
+    t_from, t_to = max(t_from, t[0]), min(t_to, t[-1])
+    if t_to <= t_from:
+        print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
+              file=sys.stderr)
+        sys.exit(2)
+    tt, xx, vv, rstar = dense_run(f, t_from, t_to)
+    ev_t = f["events/t"][:]
+    kinds = f["events/kind"][:]
+    kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+    in_view = (ev_t >= t_from) & (ev_t <= t_to)
+    sticks = ev_t[kinds == kind_of["stick"]]
+    releases = ev_t[kinds == kind_of["release"]]
+    mode_all = f["samples/mode"][:]
+    sticks_at_all = len(sticks) > 0 or (mode_all == 1).any()
+    span = f"{t_from:.6g} ≤ t ≤ {t_to:.6g}"
+
+    def shade_sticking(ax):
+        # Sticking phases: from each stick event (or a start on the stop) to the next release.
+        starts = list(sticks)
+        if mode_all[0] == 1:
+            starts.insert(0, t[0])
+        spans = set()
+        for s in starts:
+            later = releases[releases > s]
+            e = later[0] if len(later) else t_to
+            if e >= t_from and s <= t_to:
+                spans.add((max(s, t_from), min(e, t_to)))
+        for n, (a, b) in enumerate(sorted(spans)):
+            ax.axvspan(a, b, color=STICK_SHADE, alpha=0.25, lw=0, label="sticking" if n == 0 else None)
+
+    fig, ax = plt.subplots(figsize=(9, 3.8))
+    ax.plot(tt, xx, lw=1, color=OKABE_ITO[0], label="$x_B$")
+    ax.axhline(x0, color="k", lw=1.2, label="stop $x_0$")
+    shade_sticking(ax)
+    imp = in_view & (kinds == kind_of["impact"])
+    if imp.any():
+        ax.plot(ev_t[imp], np.full(imp.sum(), x0), "v", ms=3.5, color=OKABE_ITO[1],
+                label=f"impacts ({imp.sum()})")
+    ax.set_xlabel("$t$")
+    ax.set_ylabel("$x_B$")
+    ax.set_xlim(t_from, t_to)
+    ax.set_title(f"{title}\ncontact displacement, {span} ({status})", fontsize=9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    save(fig, "xB")
+
+    if sticks_at_all:
+        ts = t[(t >= t_from) & (t <= t_to)]
+        sel = (t >= t_from) & (t <= t_to)
+        X, V, mode = f["samples/X"][sel], f["samples/V"][sel], f["samples/mode"][sel]
+        R = reaction(model, X, V, ts)
+        fig, ax = plt.subplots(figsize=(9, 3.8))
+        ax.plot(ts, np.where(mode == 1, R, np.nan), lw=1.6, color=OKABE_ITO[0], label="$R$ (on the stop)")
+        ax.plot(tt, rstar, lw=0.8, ls="--", color="0.45", label="$R^*$ (reaction a free state would need)")
+        ax.axhline(0, color="k", lw=0.8)
+        shade_sticking(ax)
+        ax.set_xlabel("$t$")
+        ax.set_ylabel("$R$")
+        ax.set_xlim(t_from, t_to)
+        ax.set_title(f"{title}\ncontact reaction, {span}", fontsize=9)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        save(fig, "reaction")
+
+    fig, ax = plt.subplots(figsize=(6.4, 5))
+    ax.plot(xx, vv, lw=0.8, color=OKABE_ITO[0])
+    ax.axvline(x0, color="k", lw=1.2)
+    ax.set_xlabel("$x_B$")
+    ax.set_ylabel("$\\dot x_B$")
+    ax.set_title(f"{title}\nphase portrait, {span}", fontsize=9)
+    save(fig, "phase")
+
+    sX = f["section/X"][:]
+    sV = f["section/V"][:]
+    sxB = (sX * c).sum(axis=1)
+    svB = (sV * c).sum(axis=1)
+    fig, ax = plt.subplots(figsize=(6.4, 5))
+    k = np.arange(len(sxB))
+    sc = ax.scatter(sxB, svB, c=k, s=6, cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="period $k$")
+    ax.set_xlabel("$x_B(t_0 + kT)$")
+    ax.set_ylabel("$\\dot x_B(t_0 + kT)$")
+    ax.set_title(f"{title}\nstroboscopic section, {len(sxB)} periods", fontsize=9)
+    save(fig, "section")
+
+    if "orbit" in f:
+        o = f["orbit"].attrs
+        re_, im = np.atleast_1d(o["multipliers_re"]), np.atleast_1d(o["multipliers_im"])
+        if len(re_) == 0:
+            return  # a superstable 1-DOF sticking orbit has no multipliers to draw
+        stable = o["stable"][0] > 0.5
+        fig, ax = plt.subplots(figsize=(5.6, 5))
+        th = np.linspace(0, 2 * np.pi, 400)
+        ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
+        ax.plot(re_, im, "o", color=OKABE_ITO[2] if stable else OKABE_ITO[1],
+                label=f"multipliers $\\mu$ ({'stable' if stable else 'unstable'})")
+        lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re_, im))))
+        ax.set_xlim(-lim, lim)
+        ax.set_ylim(-lim, lim)
+        ax.set_aspect("equal")
+        ax.axhline(0, color="0.7", lw=0.5)
+        ax.axvline(0, color="0.7", lw=0.5)
+        ax.set_xlabel("Re $\\mu$")
+        ax.set_ylabel("Im $\\mu$")
+        ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: Floquet multipliers", fontsize=9)
+        ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+        save(fig, "multipliers")
+
+
 def main():
-    ap = argparse.ArgumentParser(description=__doc__)
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("file")
-    ap.add_argument("--out", default=None, help="prefix of the PNG files")
-    ap.add_argument("--periods", type=float, default=5.0, help="forcing periods shown in time plots")
+    ap.add_argument("--out", default=None, help="prefix of the files")
     ap.add_argument("--overlay", default=None, help="continuation branch (HDF5) drawn over a sweep")
+    ap.add_argument("--format", default="png", choices=["png", "pdf", "svg"])
+    ap.add_argument("--dpi", type=int, default=150)
+    ap.add_argument("--time-window", default=None, help="A,B: time plots show A ≤ t ≤ B")
     args = ap.parse_args()
+    window = None
+    if args.time_window:
+        try:
+            window = tuple(float(v) for v in args.time_window.split(","))
+            ok = len(window) == 2 and window[0] < window[1]
+        except ValueError:
+            ok = False
+        if not ok:
+            print(f"vibro plot: --time-window {args.time_window}: expected A,B with A < B", file=sys.stderr)
+            sys.exit(2)
     prefix = args.out or os.path.splitext(args.file)[0]
     written = []
 
     def save(fig, suffix):
-        fig.tight_layout()
-        fig.savefig(f"{prefix}_{suffix}.png", dpi=110)
-        written.append(f"{prefix}_{suffix}.png")
+        path = f"{prefix}_{suffix}.{args.format}"
+        # No creation dates in PDF and SVG files: the same data give the same file.
+        meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(args.format, {})
+        fig.savefig(path, dpi=args.dpi, bbox_inches="tight", metadata=meta)
+        written.append(path)
         plt.close(fig)
     with h5py.File(args.file, "r") as f:
-        title = f.attrs["scene"].splitlines()[0] if f.attrs["scene"].startswith("title") else args.file
-        title = title.replace("title = ", "").strip("'\"")
-        ma = f["model"].attrs
-        title += f" (run as r = {ma['restitution']:g}, ω = {ma['frequency']:g}, f = {ma['amplitude']:g})"
-        status = f.attrs["status"]
-        T = float(f.attrs["forcing_period"])
-        model = f["model"]
-        c = model.attrs["contact_shape"]
-        x0 = float(model.attrs["stop"])
+        varied = set()
+        for g, attr in (("branch", "param"), ("sweep", "param"), ("partition", "param1"),
+                        ("partition", "param2")):
+            if g in f:
+                varied.add(text(f[g].attrs[attr]))
+        title = make_title(f, varied)
         if "basin" in f:
             plot_basin(f, title, save)
         if "branch" in f:
@@ -254,100 +595,10 @@ def main():
         elif args.overlay:
             print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
             sys.exit(2)
-        t = f["samples/t"][:]
-        if len(t) == 0:
-            if not any(g in f for g in ("basin", "branch", "partition", "sweep")):
-                print("vibro plot: the file has no dense samples (run.samples_per_period = 0)",
-                      file=sys.stderr)
-            for w in written:
-                print(w)
-            return
-        t_end = t[-1] if len(t) else 0.0
-        t_from = t_end - args.periods * T
-        sel = t >= t_from
-        ts = t[sel]
-        X = f["samples/X"][:][sel]
-        V = f["samples/V"][:][sel]
-        xB = f["samples/x_B"][:][sel]
-        mode = f["samples/mode"][:][sel]
-        vB = (V * c).sum(axis=1)
-        ev_t = f["events/t"][:]
-        kinds = f["events/kind"][:]
-        ev_xB = f["events/x_B"][:]
-        kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
-        in_view = (ev_t >= t_from) & (ev_t <= t_end)
-
-        def shade_sticking(ax):
-            sticks = ev_t[(kinds == kind_of["stick"])]
-            releases = ev_t[(kinds == kind_of["release"])]
-            for s in sticks:
-                later = releases[releases > s]
-                e = later[0] if len(later) else t_end
-                if e >= t_from and s <= t_end:
-                    ax.axvspan(max(s, t_from), min(e, t_end), color="tab:orange", alpha=0.25, lw=0)
-
-        fig, ax = plt.subplots(figsize=(9, 4))
-        ax.plot(ts, xB, lw=1, label="$x_B$")
-        ax.axhline(x0, color="k", lw=1.5, label="stop $x_0$")
-        shade_sticking(ax)
-        imp = in_view & (kinds == kind_of["impact"])
-        ax.plot(ev_t[imp], ev_xB[imp], "v", ms=3, color="tab:red", label=f"impacts ({imp.sum()})")
-        ax.set_xlabel("t")
-        ax.set_ylabel("$x_B$")
-        ax.set_title(f"{title}\ncontact displacement, sticking shaded ({status})")
-        ax.legend(loc="upper right", fontsize=8)
-        save(fig, "xB")
-
-        fig, ax = plt.subplots(figsize=(9, 4))
-        R = reaction(model, X, V, ts)
-        ax.plot(ts, np.where(mode == 1, R, np.nan), lw=1.5, label="R (on the stop)")
-        ax.plot(ts, np.where(mode == 0, R, np.nan), lw=0.8, ls="--", color="gray",
-                label="R* (reaction the free state would need)")
-        ax.axhline(0, color="k", lw=0.8)
-        shade_sticking(ax)
-        ax.set_xlabel("t")
-        ax.set_ylabel("R")
-        ax.set_title(f"{title}\ncontact reaction")
-        ax.legend(loc="upper right", fontsize=8)
-        save(fig, "reaction")
-
-        fig, ax = plt.subplots(figsize=(6, 5))
-        ax.plot(xB, vB, lw=0.8)
-        ax.axvline(x0, color="k", lw=1.5)
-        ax.set_xlabel("$x_B$")
-        ax.set_ylabel("$\\dot x_B$")
-        ax.set_title(f"{title}\nphase portrait (last {args.periods:g} periods)")
-        save(fig, "phase")
-
-        sX = f["section/X"][:]
-        sV = f["section/V"][:]
-        sxB = (sX * c).sum(axis=1)
-        svB = (sV * c).sum(axis=1)
-        fig, ax = plt.subplots(figsize=(6, 5))
-        k = np.arange(len(sxB))
-        sc = ax.scatter(sxB, svB, c=k, s=8, cmap="viridis")
-        fig.colorbar(sc, ax=ax, label="period")
-        ax.set_xlabel("$x_B(t_0 + kT)$")
-        ax.set_ylabel("$\\dot x_B(t_0 + kT)$")
-        ax.set_title(f"{title}\nstroboscopic section ({len(sxB)} points)")
-        save(fig, "section")
-        if "orbit" in f:
-            o = f["orbit"].attrs
-            re, im = o["multipliers_re"], o["multipliers_im"]
-            fig, ax = plt.subplots(figsize=(5, 5))
-            th = np.linspace(0, 2 * np.pi, 400)
-            ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
-            ax.plot(re, im, "o", color="tab:red" if o["stable"][0] < 0.5 else "tab:green",
-                    label=f"Floquet multipliers ({'stable' if o['stable'][0] > 0.5 else 'unstable'})")
-            lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re, im))))
-            ax.set_xlim(-lim, lim)
-            ax.set_ylim(-lim, lim)
-            ax.set_aspect("equal")
-            ax.axhline(0, color="gray", lw=0.5)
-            ax.axvline(0, color="gray", lw=0.5)
-            ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: multipliers")
-            ax.legend(loc="upper right", fontsize=8)
-            save(fig, "multipliers")
+        if len(f["samples/t"]) > 1:
+            plot_run(f, title, save, window)
+        elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):
+            print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
     for w in written:
         print(w)
 

@@ -1,5 +1,5 @@
 // Shared helpers of the test suite: scenes built in code, an observer that logs everything, and
-// the independent 1-DOF closed forms of MODEL §6 evaluated in long double.
+// the independent 1-DOF closed forms of docs/model.md §6 evaluated in long double.
 #pragma once
 
 #include <cmath>
@@ -15,7 +15,7 @@
 
 namespace vibro::test {
 
-// The paper's non-dimensional 1-DOF oscillator (ω_1 = 1, T_A = T_B = 1, MODEL §1.2).
+// The paper's non-dimensional 1-DOF oscillator (ω_1 = 1, T_A = T_B = 1, docs/model.md §1.4).
 inline Scene OneDof(double r, double w, double f, double x0 = 1.0, long long periods = 100) {
   Scene s;
   s.modal = ModalStructureSpec{Eigen::VectorXd::Ones(1), Eigen::VectorXd::Ones(1),
@@ -91,10 +91,10 @@ inline Outcome Simulate(const Scene& scene, const InitialOverride* from = nullpt
   return run;
 }
 
-// --- MODEL §6 closed forms (1-DOF, ω_1 = 1, T_A = 1, f sin ωt), long double ----------------------
+// --- docs/model.md §6 closed forms (1-DOF, ω_1 = 1, T_A = 1, f sin ωt), long double ----------------------
 using LD = long double;
 
-// Free flight (MODEL §2) from (x_a, v_a) at t_a: x(t) = U(t) + (x_a − U(t_a)) cos(t − t_a)
+// Free flight (docs/model.md §2) from (x_a, v_a) at t_a: x(t) = U(t) + (x_a − U(t_a)) cos(t − t_a)
 // + (v_a − U̇(t_a)) sin(t − t_a), U = f sin ωt / (1 − ω²).
 struct Flight1 {
   LD w, f, ta, xa, va;

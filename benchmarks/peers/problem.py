@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The impact oscillator of a vibro scene, in modal coordinates, for the peers (MODEL §1, §7).
+"""The impact oscillator of a vibro scene, in modal coordinates, for the peers (docs/model.md §1, §7).
 
 Built from what `vibro model --json SCENE` prints (ω_i, T_A, T_B, ζ_i in the paper's scaling) and
 the scene's stop, excitation and run.periods:
@@ -66,7 +66,7 @@ class Problem:
         return float(X.sum()) - self.x0
 
     def reaction(self, t, X, V):
-        """The reaction that keeps ẍ_B = 0 (MODEL (5), §7)."""
+        """The reaction that keeps ẍ_B = 0 (the paper's (5); docs/model.md §7)."""
         return (float(np.dot(self.w ** 2, X) + np.dot(self.D, V)) - self.sA * self.force(t)) / self.sB
 
     def acc_stuck(self, t, X, V):
@@ -74,7 +74,7 @@ class Problem:
         return a - self.TB * (a.sum() / self.sB)
 
     def impact(self, V, r):
-        """Velocities after an impact with restitution r (MODEL (12))."""
+        """Velocities after an impact with restitution r (the paper's (12))."""
         return V - (1.0 + r) * self.TB * (V.sum() / self.sB)
 
     def onto_stop(self, X):

@@ -1,4 +1,4 @@
-// Attractor classification of a simulated run (CONTRACT §2 `attractor` block): from the
+// Attractor classification of a simulated run (docs/cli.md, docs/output.md `attractor` block): from the
 // stroboscopic section and the event log of the final periods.
 #pragma once
 

@@ -29,7 +29,7 @@ struct CheckReport {
   std::string exact_kind, cvode_kind, orbit_status, quad_kind;  // quad_kind empty: not run
 };
 
-// Tolerances: CVODE against exact, 100·rtol^(2/3) (the law of README "What each rtol buys");
+// Tolerances: CVODE against exact, 100·rtol^(2/3) (the law of docs/engines.md, "What each rtol buys");
 // Poincaré solver against exact, 1e-9; the leading multiplier against the decay rate observed in
 // the exact transient, 10 % (+ 0.02); the exact engine against the quad engine (with_quad),
 // 1e-9 (the double engine's claimed accuracy on periodic quantities, docs/chattering.md).

@@ -1,4 +1,4 @@
-// One-parameter continuation of periodic orbits (paper §5, MODEL §5.6–§5.7): pseudo-arclength
+// One-parameter continuation of periodic orbits (paper §5, docs/model.md §5.6–§5.7): pseudo-arclength
 // predictor–corrector on G(z, λ) = F(z; λ) − z, F the stroboscopic map of the Poincaré solver
 // (analytic ∂F/∂z, central differences in λ since λ is any numeric scene key), with step-size
 // control, so that folds are passed. The section sits at a fixed forcing phase inside a free
@@ -7,7 +7,7 @@
 // Smooth bifurcations, located by bisection of the arclength on a test function (every trial
 // point corrected onto the branch): fold (the λ-component of the tangent changes sign), flip (a
 // real multiplier crosses −1), Neimark–Sacker (a complex pair crosses the unit circle).
-// Non-smooth bifurcations (MODEL §5.7): the event sequence of the orbit over a period changes, or
+// Non-smooth bifurcations (docs/model.md §5.7): the event sequence of the orbit over a period changes, or
 // the orbit ceases to exist; the boundary is located by bisection of the arclength on "the
 // corrected orbit has the same event sequence", and named by the quantity that vanishes there
 // (orbit_probe.hpp): sticking-lost (a sticking phase shrinks to zero: the branch ends), rising
@@ -82,7 +82,7 @@ Branch Continue(const ContinuationRequest& request);
 // Two-parameter partition (paper §5.4, Figs. 9, 13, 17): for each value of the first parameter, the
 // sticking branch is continued in the second, both ways from `start2`, over [lo2, hi2]; the
 // crossings of the requested sticking-fraction levels and the bifurcations (its ends: the
-// existence boundaries f_free-flight, f_sticking and their r > 0 counterparts, MODEL §6.3) are
+// existence boundaries f_free-flight, f_sticking and their r > 0 counterparts, docs/model.md §6.3) are
 // reported per column. Columns are independent and computed in parallel.
 struct PartitionRequest {
   std::function<Scene(double, double)> scene_at;

@@ -1,4 +1,4 @@
-// HDF5 trajectory store (CONTRACT §3): an Observer that streams events, dense samples and the
+// HDF5 trajectory store (docs/output.md): an Observer that streams events, dense samples and the
 // stroboscopic section to a file as a run goes, crash-safe and resumable. The only file that
 // includes hdf5.h is src/io/hdf5_store.cpp.
 //

@@ -12,10 +12,10 @@ namespace vibro {
 
 enum class Mode : std::int8_t { kFree = 0, kSticking = 1 };
 
-// CONTRACT §3 enum values.
+// docs/output.md enum values.
 enum class EventKind : std::int8_t {
   kImpact = 1,        // x_B reaches x0 moving in; restitution (or plastic) reset
-  kAccumulation = 2,  // predicted accumulation point of a chattering sequence (MODEL §5.4)
+  kAccumulation = 2,  // predicted accumulation point of a chattering sequence (docs/model.md §5.4)
   kStick = 3,         // start of a sticking phase (after a plastic impact or an accumulation)
   kRelease = 4,       // R crosses zero going negative: the body leaves the stop
   kGrazing = 5,       // tangential touch of the stop (ẋ_B⁻ = 0): no impact
@@ -83,7 +83,7 @@ enum class ResetKind {
   kPlasticStick,   // plastic impact (or tangential arrival) into sticking: Ẋ ← ΠẊ
   kPlasticLeave,   // r = 0 impact with R < 0: Ẋ ← ΠẊ, free → free (departure at zero velocity)
   kRelease,        // sticking → free at R = 0 (no jump: the saltation is the identity)
-  kAccumulation,   // MODEL §5.4: free flight over `delta` from the post-impact state, projection
+  kAccumulation,   // docs/model.md §5.4: free flight over `delta` from the post-impact state, projection
   kGrazing,        // tangential touch that stays free (the maps are singular there)
 };
 struct Reset {

@@ -1,11 +1,11 @@
-// Periodic orbits and their stability (MODEL §5): fixed points of the stroboscopic map
+// Periodic orbits and their stability (docs/model.md §5): fixed points of the stroboscopic map
 // F: z(t0) ↦ z(t0 + qT) of the hybrid flow, found by Newton with the analytic Jacobian DF.
 //
 // DF is the product, along the orbit, of the closed-form flow Jacobians exp(G s) (free flight:
-// G = [[0, I], [−Ω, −D]]; sticking: G = [[0, I], [−A, −ΠD]], MODEL §4.2, §7) and the saltation
-// matrices of the resets (MODEL §5.6): impacts, plastic entries and departures, releases
-// (identity), and the accumulation map L of a chattering tail (MODEL §5.4, differentiated through
-// Δ∞). Its non-zero spectrum is that of DP, the paper's Poincaré map P = G∘H2∘F^∞∘H1 (MODEL §5.6:
+// G = [[0, I], [−Ω, −D]]; sticking: G = [[0, I], [−A, −ΠD]], docs/model.md §4.2, §7) and the saltation
+// matrices of the resets (docs/model.md §5.6): impacts, plastic entries and departures, releases
+// (identity), and the accumulation map L of a chattering tail (docs/model.md §5.4, differentiated through
+// Δ∞). Its non-zero spectrum is that of DP, the paper's Poincaré map P = G∘H2∘F^∞∘H1 (docs/model.md §5.6:
 // sticking collapses x_B and ẋ_B, so DF has two zero eigenvalues on a sticking orbit): the Floquet
 // multipliers. The section phase is taken inside a free flight of the orbit, so the unknowns are
 // the 2n components of a free state and every Newton iterate stays admissible.

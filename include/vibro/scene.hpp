@@ -1,5 +1,5 @@
 // Scene: the plain description of one system, its initial state and how to run it
-// (CONTRACT §1). Parsing from TOML lives in io/scene_file; this header knows no file format.
+// (docs/scenes.md). Parsing from TOML lives in io/scene_file; this header knows no file format.
 //
 // Validate() checks every physical constraint and returns *all* problems found, each tied to
 // the key path it concerns, so that the file layer can attach file:line:col to each.
@@ -21,14 +21,14 @@ struct InputIssue {
   std::string constraint;
 };
 
-// Modal form of the structure (the paper's eigenbase, MODEL §1.1).
+// Modal form of the structure (the paper's eigenbase, docs/model.md §1.2).
 struct ModalStructureSpec {
   Eigen::VectorXd frequencies;  // ω_i > 0 [rad/time], shape (n)
   Eigen::VectorXd forcing;      // T_A,i, shape (n)
   Eigen::VectorXd contact;      // T_B,i > 0, shape (n)
 };
 
-// Physical form: M q̈ + K q = e_A F sin ωt + e_B R (MODEL §1.3).
+// Physical form: M q̈ + K q = e_A F sin ωt + e_B R (docs/model.md §1.3).
 struct PhysicalStructureSpec {
   Eigen::MatrixXd mass;       // symmetric positive definite, (N, N)
   Eigen::MatrixXd stiffness;  // symmetric positive definite, (N, N)
@@ -52,10 +52,10 @@ struct RunSpec {
   long max_steps = 10000000;        // CVODE maximum internal steps per segment (one period at most)
   ChatterTreatment chatter = ChatterTreatment::kAccumulation;
   // "threshold": impacts are made plastic once |ẋ_B⁻| < chatter_switch · |ẋ_B⁻ of the first
-  // impact of the sequence| (MODEL §5.4). Not used by "accumulation".
+  // impact of the sequence| (docs/model.md §5.4). Not used by "accumulation".
   double chatter_switch = 1e-6;
   // "accumulation": the accumulation point is predicted only when the estimated error of its time
-  // is at most chatter_tolerance · T (MODEL §5.4a); otherwise the next impact is followed.
+  // is at most chatter_tolerance · T (docs/model.md §5.4); otherwise the next impact is followed.
   // 0 = the default of the precision: 1e-12 (double), 1e-28 (quad).
   double chatter_tolerance = 0;
   Precision precision = Precision::kDouble;

@@ -1,4 +1,4 @@
-// Scene files (CONTRACT §1): TOML in, Scene out, with `--set KEY=VALUE` overrides and located
+// Scene files (docs/scenes.md): TOML in, Scene out, with `--set KEY=VALUE` overrides and located
 // error messages. The only file that includes toml++ is src/io/scene_file.cpp.
 #pragma once
 
@@ -37,5 +37,8 @@ LoadedScene ParseScene(std::string_view text, const std::string& source,
 
 // The number at `key` (e.g. "excitation.amplitude") in a scene's TOML text, if any.
 std::optional<double> SceneNumber(const std::string& text, const std::string& key);
+
+// The scene key nearest to a mistyped one ("amplitude" → "excitation.amplitude"), or "".
+std::string NearestSceneKey(const std::string& key);
 
 }  // namespace vibro

@@ -1,4 +1,4 @@
-// The hybrid automaton of an impact oscillator with sticking (MODEL §1-§5), written once and
+// The hybrid automaton of an impact oscillator with sticking (docs/model.md §1-§5), written once and
 // driven by either engine (exact closed forms, or CVODE), in double or, for the exact engine, in
 // 113-bit quad precision (run.precision = "quad", the reference).
 //
@@ -9,16 +9,16 @@
 //   loop until k = periods, an interruption, or a failure:
 //     free flight:   advance the free flow (1) until the gap g = x_B − x0 reaches 0 or t hits the
 //                    period boundary (the engine never skips a root; trivial roots at the start of
-//                    a flight are divided out, MODEL §2.1)
+//                    a flight are divided out, docs/model.md §2.1)
 //       boundary     → section point, checkpoint, k ← k+1 (the flow restarts from the same state)
 //       g = 0, ẋ_B⁻ < 0 (impact):
-//           R⁻ = reaction of the state (MODEL eq. 5)
+//           R⁻ = reaction of the state (the paper's eq. (5))
 //           r = 0, or "threshold" with |ẋ_B⁻| < v_switch:
-//               Ẋ⁺ = Π Ẋ⁻ (plastic projection, MODEL §4.4); emit impact
+//               Ẋ⁺ = Π Ẋ⁻ (plastic projection, docs/model.md §4.4); emit impact
 //               R⁻ > 0, or R⁻ = 0 and Ṙ > 0 → emit stick, mode ← sticking
 //               otherwise                   → leave at zero velocity (g = g' = 0, g'' > 0)
 //           else Ẋ⁺ = Ẋ⁻ − (1+r) T_B ẋ_B⁻/s_B (eq. 12); emit impact
-//               "accumulation", 0 < r < 1, R > 0 on the stuck state (MODEL §5.4, §5.4a):
+//               "accumulation", 0 < r < 1, R > 0 on the stuck state (docs/model.md §5.4, §5.4):
 //                   Δ0 = 2ẋ_B⁺/((1−r) s_B R), ε = −ṘΔ0/R, Δ∞ = Δ0(1 + ε/3) with an estimated
 //                   error E (dynamics/chatter_tail.hpp); if |ε| ≤ 0.1 and E ≤ chatter_tolerance·T:
 //                   flow freely over Δ∞ (no guards), project onto the stop; if R(t∞) > 0 → emit
@@ -29,12 +29,12 @@
 //       g = 0, |ẋ_B⁻| below the rounding floor (or, CVODE, below √rtol of the sequence's first
 //                    speed) inside a chattering sequence with R > 0 → status undetermined: the
 //                    accumulation point could not be predicted within the target (never guessed)
-//       g = 0, ẋ_B⁻ ≥ 0 (tangential touch, MODEL §2.1): emit grazing; R > 0 → stick (MODEL
+//       g = 0, ẋ_B⁻ ≥ 0 (tangential touch, docs/model.md §2.1): emit grazing; R > 0 → stick (docs/model.md
 //                    §4.4 iii), else keep flying (g = g' = 0, g'' > 0 divided out)
 //     sticking:      advance the constrained flow (6) until R reaches 0 or the period boundary
-//                    (one DOF: the body rests and the release phase is closed form, MODEL §4.4)
+//                    (one DOF: the body rests and the release phase is closed form, docs/model.md §4.4)
 //       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
-//       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, MODEL §5.7): stay stuck
+//       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, docs/model.md §5.7): stay stuck
 //
 // Simultaneous events: a guard met exactly at a period boundary is handled after the section
 // point is recorded (the section sees x⁻). Two guards at one instant are handled in the order
@@ -42,7 +42,7 @@
 // state already satisfies the sticking condition goes straight to sticking, a release into a
 // state moving into the stop is an immediate touch. v_switch ("threshold" only) =
 // run.chatter_switch × |ẋ_B⁻| of the sequence's first impact, but never below the rounding floor
-// of ẋ_B, 10³ ε Σ|Ẋ_i| (MODEL §5.4).
+// of ẋ_B, 10³ ε Σ|Ẋ_i| (docs/model.md §5.4).
 #pragma once
 
 #include <atomic>
@@ -60,7 +60,7 @@ namespace vibro {
 enum class RunStatus { kOk, kNumericalFailure, kInterrupted, kUndetermined };
 const char* ToString(RunStatus s);  // "ok", "numerical-failure", "interrupted", "undetermined"
 
-// What the chattering treatment did over a run (MODEL §5.4a).
+// What the chattering treatment did over a run (docs/model.md §5.4).
 struct ChatterStats {
   long long accumulations_predicted = 0;  // sequences ended by a predicted accumulation point
   long long impacts_followed = 0;         // impacts followed because a prediction was refused

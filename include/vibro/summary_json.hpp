@@ -1,4 +1,4 @@
-// JSON summaries printed by `--json` (CONTRACT §2). nlohmann/json stays inside src/io.
+// JSON summaries printed by `--json` (docs/cli.md, docs/output.md). nlohmann/json stays inside src/io.
 #pragma once
 
 #include <string>
@@ -22,10 +22,10 @@ std::string ModelJson(const System& system);
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor);
 
-// `vibro orbit --json` (CONTRACT §2).
+// `vibro orbit --json` (docs/cli.md, docs/output.md).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
 
-// `vibro continue --json` (CONTRACT §2).
+// `vibro continue --json` (docs/cli.md, docs/output.md).
 std::string BranchJson(const Branch& branch);
 // `vibro partition --json`: {"params", "levels", "columns": [{"value1", "status", "crossings":
 // [{"level", "value"}], "bifurcations": [{"kind", "value"}], "end_down", "end_up"}]}.

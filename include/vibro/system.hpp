@@ -1,12 +1,12 @@
-// System: the immutable structural model of a scene in the paper's modal scaling (MODEL §1.3),
-// the stop, the excitation and the constrained (sticking) modes (MODEL §4.2). Built once, shared
+// System: the immutable structural model of a scene in the paper's modal scaling (docs/model.md §1.3),
+// the stop, the excitation and the constrained (sticking) modes (docs/model.md §4.2). Built once, shared
 // by const& across engines and threads.
 //
 // Modal state: X, Ẋ ∈ ℝⁿ. The contact coordinate is x_B = cᵀX, where c_i = 1 for a mode seen by
 // the contact (ψ_i(B) = 1, T_B,i = 1/m_i > 0) and c_i = 0 for a mode with a node at B, which is
-// kept in the response but out of the contact model (MODEL §1.3 step 4; such a mode is mass
+// kept in the response but out of the contact model (docs/model.md §1.3 step 4; such a mode is mass
 // normalised and has T_B,i = 0). In the modal form every mode has c_i = 1, so x_B = 1ᵀX as in
-// MODEL.md; every formula of MODEL.md holds with 1 replaced by c.
+// docs/model.md; every formula of docs/model.md holds with 1 replaced by c.
 #pragma once
 
 #include <optional>
@@ -18,7 +18,7 @@
 
 namespace vibro {
 
-// Modes of the structure held at B (MODEL §4.2): A = Ω − T_B (c∘w2)ᵀ/s_B has the spectrum
+// Modes of the structure held at B (docs/model.md §4.2): A = Ω − T_B (c∘w2)ᵀ/s_B has the spectrum
 // {0} ∪ {ω'_k²}. X(t) = x0·static_shape + Σ_k vectors.col(k) ξ_k(t) while sticking, with
 // ξ̈_k + ω'_k² ξ_k = modal_forcing_k f sin ωt (undamped).
 struct ConstrainedModes {
@@ -28,7 +28,7 @@ struct ConstrainedModes {
   Eigen::VectorXd modal_forcing;  // l_kᵀ F_c, F_c = T_A − (s_A/s_B) T_B, shape (n−1)
   Eigen::VectorXd reaction;       // ρ_k = (c∘w2)ᵀ v_k / s_B: R = R_static + ρᵀξ − (s_A/s_B) f sin ωt
   // ξ̈ + damping ξ̇ + diag(ω'²) ξ = modal_forcing f sin ωt when modal damping is present
-  // (MODEL §7: damping = L Π D V, the projected damping in the constrained modes), shape
+  // (docs/model.md §7: damping = L Π D V, the projected damping in the constrained modes), shape
   // (n−1, n−1); zero when undamped.
   Eigen::MatrixXd damping;
 };
@@ -73,19 +73,19 @@ class System {
 
   double ContactDisplacement(const Eigen::VectorXd& X) const { return shape_.dot(X); }
   double ContactVelocity(const Eigen::VectorXd& V) const { return shape_.dot(V); }
-  // Contact reaction (MODEL eq. 5 with the damping term of §7) for a state on the stop:
+  // Contact reaction (the paper's eq. 5 with the damping term of §7) for a state on the stop:
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B, φ = ωt.
   double Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
-  // Rate Ṙ along the sticking flow (MODEL §4.2, with the damped constrained acceleration of §7).
+  // Rate Ṙ along the sticking flow (docs/model.md §4.2, with the damped constrained acceleration of §7).
   double ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
-  // Free acceleration of B: ẍ_B = −s_B R for the same state (MODEL §2).
+  // Free acceleration of B: ẍ_B = −s_B R for the same state (docs/model.md §2).
   double FreeContactAcceleration(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                                  double phase) const {
     return -s_B_ * Reaction(X, V, phase);
   }
-  // Restitution law (MODEL eq. 12): Ẋ⁺ = Ẋ⁻ + p T_B, p = −(1+r) ẋ_B⁻/s_B.
+  // Restitution law (the paper's eq. 12): Ẋ⁺ = Ẋ⁻ + p T_B, p = −(1+r) ẋ_B⁻/s_B.
   void ApplyImpact(Eigen::VectorXd& V, double restitution) const;
-  // Plastic projection onto the stop (MODEL §4.4): Ẋ ← Ẋ − T_B(cᵀẊ)/s_B and
+  // Plastic projection onto the stop (docs/model.md §4.4): Ẋ ← Ẋ − T_B(cᵀẊ)/s_B and
   // X ← X − T_B(cᵀX − x0)/s_B, so that x_B = x0 and ẋ_B = 0 hold to rounding.
   void ProjectOntoStop(Eigen::VectorXd& X, Eigen::VectorXd& V) const;
 

@@ -165,7 +165,7 @@ bool Sticks(const Point& a) { return a.probe.signature.find_first_of("CPS") != s
 bool SameFamily(const Point& a, const Point& b) { return a.probe.signature == b.probe.signature; }
 
 // The non-smooth bifurcation between `lo` (on the branch) and `hi` (past it, if the orbit goes
-// on): named by the probe quantity that vanishes there (MODEL §5.7, orbit_probe.hpp).
+// on): named by the probe quantity that vanishes there (docs/model.md §5.7, orbit_probe.hpp).
 std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* hi) {
   const auto both = [&](double OrbitProbe::*q) {
     return std::min(lo.probe.*q, hi ? hi->probe.*q : OrbitProbe::kNone);
@@ -385,7 +385,7 @@ Branch Continue(const ContinuationRequest& req) {
       continue;
     } else {
       // A non-smooth point lies in (0, ds], or the orbit ends there: bisection of the arclength
-      // on "corrected, same kind and same events" (MODEL §5.7).
+      // on "corrected, same kind and same events" (docs/model.md §5.7).
       double lo = 0.0, hi = ds;
       bool moved = false;
       std::optional<Point> past = next;

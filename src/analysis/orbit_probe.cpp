@@ -85,7 +85,7 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
   p.ok = true;
   const auto& ev = rec.events;
 
-  // 1. Tokens (MODEL §5.4: a chattering tail is the run of impacts of decreasing speed that ends
+  // 1. Tokens (docs/model.md §5.4: a chattering tail is the run of impacts of decreasing speed that ends
   //    in the accumulation point; impacts before it are isolated).
   std::string tokens;
   std::vector<size_t> pending;  // impacts of the current free flight not yet tokenised

@@ -1,9 +1,9 @@
-// What continuation watches on a periodic orbit between two branch points (MODEL §5.7): the
+// What continuation watches on a periodic orbit between two branch points (docs/model.md §5.7): the
 // sequence of events over one period (its "signature": a change means a non-smooth bifurcation
 // was crossed) and the quantities that vanish at each kind of non-smooth bifurcation:
 //
-//   sticking-lost   the shortest sticking phase                       (→ 0, MODEL §6.3)
-//   rising          the interior minima of R inside a sticking phase  (→ 0, MODEL §5.7), or,
+//   sticking-lost   the shortest sticking phase                       (→ 0, docs/model.md §6.3)
+//   rising          the interior minima of R inside a sticking phase  (→ 0, docs/model.md §5.7), or,
 //                   seen from the other side, the time from a release to the next stick
 //   sticking-entry  R at the start of a sticking phase                (→ 0, e.g. f_sticking)
 //   grazing         interior minima of the gap x_B − x0 in a free flight, and the speed of an

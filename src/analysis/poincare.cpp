@@ -1,4 +1,4 @@
-// Periodic orbits by Newton on the stroboscopic map with the analytic Jacobian (MODEL §5).
+// Periodic orbits by Newton on the stroboscopic map with the analytic Jacobian (docs/model.md §5).
 #include "vibro/poincare.hpp"
 
 #include <algorithm>
@@ -87,7 +87,7 @@ void TangentTracker::OnReset(const Reset& r) {
   const auto n = sys_.dof();
   const Eigen::VectorXd& c = sys_.contact_shape();
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-  // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = cᵀX − x0 (MODEL §5.6).
+  // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = cᵀX − x0 (docs/model.md §5.6).
   const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
     const double denom = c.dot(r.V_before);
     if (!(std::abs(denom) > 1e-300)) {
@@ -113,11 +113,11 @@ void TangentTracker::OnReset(const Reset& r) {
     case ResetKind::kRelease:
       break;  // free and constrained fields coincide at R = 0: S = I
     case ResetKind::kGrazing:
-      singular_ = true;  // square-root singularity of the maps (MODEL §5.7)
+      singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
       break;
     case ResetKind::kAccumulation: {
       // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop
-      // (MODEL §5.4, §5.4a). D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ, with ∇Δ∞ and
+      // (docs/model.md §5.4, §5.4). D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ, with ∇Δ∞ and
       // the state at t∞⁻ those of the jump the automaton took (dynamics/chatter_tail.hpp).
       if (!r.delta_gradient || !r.X_end || !r.V_end) {
         singular_ = true;

@@ -1,10 +1,12 @@
-// The `vibro` command (CONTRACT §2, §4). The only file that includes CLI11.
+// The `vibro` command (docs/cli.md; exit codes and JSON in docs/output.md). The only file that includes CLI11.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 130 interrupted.
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -29,6 +31,8 @@
 #include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
+#include "cli/progress.hpp"
+#include "cli/text_format.hpp"
 
 namespace {
 
@@ -79,12 +83,6 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
                  Vec(sys.mode_shapes().col(i)));
   }
   return 0;
-}
-
-std::string Phases(const std::vector<std::pair<double, double>>& phases) {
-  std::string s;
-  for (const auto& [a, b] : phases) s += fmt::format("{}[{:.6f}, {:.6f}]", s.empty() ? "" : " ", a, b);
-  return s.empty() ? "none" : s;
 }
 
 // The scene of `path` with the overrides and KEY=VALUE on top (continuation and sweeps).
@@ -148,12 +146,9 @@ vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::Syste
   return h;
 }
 
-void PrintAttractor(const vibro::Attractor& a) {
-  fmt::print("attractor    {}", a.kind);
-  if (a.period) fmt::print(", period {}", *a.period);
-  if (a.impacts_per_period) fmt::print(", {} impacts/period", *a.impacts_per_period);
-  if (a.sticking_fraction) fmt::print(", sticking fraction {:.6f}", *a.sticking_fraction);
-  fmt::print("\nstick phases {}\n", Phases(a.stick_phases));
+// restitution: NaN when unknown (then the velocities after impact are not printed).
+void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan("")) {
+  fmt::print("{}", vibro::cli::AttractorText(a, restitution));
 }
 
 int ExitCode(vibro::RunStatus s) {
@@ -197,11 +192,16 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     options.observers.push_back(store.get());
   }
 
+  std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
+  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods,
+                                     stored.checkpoint ? stored.checkpoint->clock.period : 0);
+  if (progress->active()) options.observers.push_back(&periods);
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  progress.reset();
   const auto attractor = recorder.Classify();
   if (store) store->Finish(result, attractor);
 
@@ -210,7 +210,9 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   } else {
     fmt::print("scene        {}{}\n", path,
                loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
-    fmt::print("engine       {}, chatter {}\n", vibro::ToString(loaded.scene.run.engine),
+    fmt::print("engine       {}, {} precision, chatter {}\n",
+               vibro::ToString(loaded.scene.run.engine),
+               vibro::ToString(loaded.scene.run.precision),
                vibro::ToString(loaded.scene.run.chatter));
     fmt::print("status       {}{}\n", vibro::ToString(result.status),
                result.message.empty() ? "" : ": " + result.message);
@@ -218,7 +220,12 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     fmt::print("events       {} impacts, {} accumulations, {} sticks, {} releases, {} grazings\n",
                result.counts.impacts, result.counts.accumulations, result.counts.sticks,
                result.counts.releases, result.counts.grazings);
-    PrintAttractor(attractor);
+    if (result.chatter.accumulations_predicted + result.chatter.impacts_followed > 0)
+      fmt::print("chattering   {} accumulation points predicted (largest estimated error {:.2g} T, "
+                 "target {:.2g} T), {} impacts followed before a prediction was good enough\n",
+                 result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
+                 vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
+    PrintAttractor(attractor, loaded.scene.restitution);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)
       fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "
                  "{} re-initialisations\n",
@@ -277,11 +284,8 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
     fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
                orbit.newton_iterations, orbit.residual);
-    PrintAttractor(orbit.summary);
-    std::string mu;
-    for (const auto& m : orbit.multipliers)
-      mu += fmt::format("{}{:.6g}{:+.6g}i (|·| = {:.6g})", mu.empty() ? "" : ", ", m.real(), m.imag(),
-                        std::abs(m));
+    PrintAttractor(orbit.summary, loaded.scene.restitution);
+    const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
     fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
                                      : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
                                                                    : "-");
@@ -314,15 +318,21 @@ int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool
   return report.ok ? 0 : kExitDisagree;
 }
 
+// The message for a --param KEY the scene has no number at, with the nearest known key.
+std::string NotANumericKey(const std::string& option, const std::string& key) {
+  const std::string near = vibro::NearestSceneKey(key);
+  if (!near.empty() && near != key) return fmt::format("{} {}: not a scene key; did you mean {}?", option, key, near);
+  return fmt::format("{} {}: not a numeric key of the scene (give it in the scene or with --set {}=VALUE)",
+                     option, key, key);
+}
+
 int RunContinue(const std::string& path, const std::vector<std::string>& sets, bool json,
                 const std::string& key, double to, double step, int max_points,
                 const vibro::OrbitRequest& orbit, const std::string& out) {
   const auto loaded = vibro::LoadScene(path, sets);
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
-    throw vibro::InputError({fmt::format("--param {}: not a numeric key of the scene (give it in the "
-                                         "scene or with --set {}=VALUE)",
-                                         key, key)});
+    throw vibro::InputError({NotANumericKey("--param", key)});
   vibro::ContinuationRequest req;
   req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = *from;
@@ -331,16 +341,16 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
   req.max_points = max_points;
   req.orbit = orbit;
   req.stop_requested = &g_stop_requested;
-  if (!json)
+  vibro::cli::Progress progress("continue", json);
+  if (progress.active())
     req.progress = [&](size_t points, double value) {
-      if (points % 25 == 0) fmt::print(stderr, "\r{} points, {} = {:.10g}   ", points, key, value);
+      progress.Update(static_cast<long long>(points), max_points, fmt::format("{} = {:.10g}", key, value));
     };
   const vibro::System sys(loaded.scene);
   std::unique_ptr<vibro::Hdf5Store> store;
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));  // fails early
   auto branch = vibro::Continue(req);
   branch.param = key;
-  if (!json && branch.points.size() >= 25) fmt::print(stderr, "\n");
   if (store) {
     store->WriteBranch(branch);
     vibro::RunResult r;
@@ -393,15 +403,23 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
   if (a.params.size() == 2) {
     for (const auto& k : a.params)
       if (!vibro::SceneNumber(loaded.text_as_run, k))
-        problems.push_back(fmt::format("--params {}: not a numeric key of the scene (give it in the "
-                                       "scene or with --set {}=VALUE)", k, k));
+        problems.push_back(NotANumericKey("--params", k));
     if (!start2) start2 = vibro::SceneNumber(loaded.text_as_run, a.params[1]);
   }
   if (start2 && a.range2.size() == 2 && !(*start2 >= a.range2[0] && *start2 <= a.range2[1]))
     problems.push_back(fmt::format("--from2 {}: outside --range2", *start2));
   if (!problems.empty()) throw vibro::InputError(problems);
   vibro::PartitionRequest req;
+  // Progress: columns started (each column asks for scenes at its own value of KEY1).
+  vibro::cli::Progress progress("columns", json);
+  std::mutex seen_mutex;
+  std::vector<double> seen;
   req.scene_at = [&](double v1, double v2) {
+    if (progress.active()) {
+      std::lock_guard<std::mutex> lock(seen_mutex);
+      if (std::find(seen.begin(), seen.end(), v1) == seen.end()) seen.push_back(v1);
+      progress.Update(static_cast<long long>(seen.size()) - 1, a.steps1 + 1LL);
+    }
     std::vector<std::string> s = sets;
     s.push_back(fmt::format("{}={:.17g}", a.params[0], v1));
     return SceneWith(path, s, a.params[1], v2);
@@ -514,26 +532,20 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   opt.threads = args.threads;
   opt.stop_requested = &g_stop_requested;
   if (args.full_periods) opt.settle_remainder = 0;
-  std::mutex mutex;
-  int shown = -1;
-  // A progress bar on stderr when it is a terminal.
-  if (dist.root() && isatty(STDERR_FILENO)) opt.progress = [&](long long done, long long total) {
-    const int pct = static_cast<int>(100 * std::min(done, total) / std::max(total, 1LL));
-    std::lock_guard<std::mutex> lock(mutex);
-    if (pct == shown) return;
-    shown = pct;
-    fmt::print(stderr, "\r[{:<50}] {:3d}% ({} / {})", std::string(static_cast<size_t>(pct / 2), '#'), pct,
-               std::min(done, total), total);
-    if (done >= total) fmt::print(stderr, "\n");
-  };
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   // Stable orbits known before the cells run (a pilot grid, the same on every rank).
   if (!args.full_periods) opt.known = vibro::KnownOrbits(sys, loaded.scene, cx, cy, opt);
+  // Progress of the cells (not of the pilot) on rank 0's terminal.
+  std::optional<vibro::cli::Progress> progress(std::in_place, "cells", json || !dist.root());
+  if (progress->active())
+    opt.progress = [&](long long done, long long total) { progress->Update(done, total); };
   vibro::RunPendingCells(sys, loaded.scene, cx, cy, points, cells, opt, dist,
                          [&](const std::vector<size_t>& batch) {
                            if (store) store->WriteCells(batch, cells);
                          });
+  opt.progress = nullptr;
+  progress.reset();
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
   const bool interrupted = dist.Any(g_stop_requested.load());
@@ -557,12 +569,10 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                cy.name, cy.from, cy.to, dist.size() > 1 ? fmt::format(" ({} MPI ranks)", dist.size()) : "");
     for (size_t k = 0; k < study.attractors.size(); ++k) {
       const auto& a = study.attractors[k];
-      fmt::print("attractor {}: basin fraction {:.4f} ± {:.4f}, example ({}, {}) = ({:.6g}, {:.6g})\n  ",
+      fmt::print("attractor {}: basin fraction {:.4f} ± {:.4f}, example ({}, {}) = ({:.6g}, {:.6g})\n",
                  k, a.basin_fraction, a.basin_fraction_error, cx.name, cy.name, a.example[0], a.example[1]);
-      PrintAttractor(a.attractor);
-      std::string mu;
-      for (const auto& m : a.orbit.multipliers)
-        mu += fmt::format("{}{:.4g}{:+.4g}i", mu.empty() ? "" : ", ", m.real(), m.imag());
+      fmt::print("{}", vibro::cli::AttractorText(a.attractor, loaded.scene.restitution, "  "));
+      const std::string mu = vibro::cli::FormatMultipliers(a.orbit.multipliers, 4);
       fmt::print("  orbit        {}{}{}{}\n", a.orbit.status,
                  a.orbit.stable ? (*a.orbit.stable ? ", stable" : ", unstable") : "",
                  mu.empty() ? "" : ", multipliers " + mu,
@@ -589,7 +599,14 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   std::unique_ptr<vibro::Hdf5Store> store;
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, vibro::System(loaded.scene)));
   vibro::SweepRequest req;
-  req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
+  // Progress: one scene per run of the sweep, up and (unless --one-way) down.
+  vibro::cli::Progress progress("sweep", json);
+  const long long runs = (steps + 1LL) * (one_way ? 1 : 2);
+  std::atomic<long long> scenes{0};
+  req.scene_at = [&](double v) {
+    progress.Update(scenes++, runs, fmt::format("{} = {:.8g}", key, v));
+    return SceneWith(path, sets, key, v);
+  };
   req.from = from;
   req.to = to;
   req.steps = steps;
@@ -645,14 +662,16 @@ int RunInfo(const std::string& path, bool json) {
   return 0;
 }
 
-int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay) {
-  for (const auto* name : {&path, &prefix, &overlay})
+int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay,
+            const std::string& options) {
+  for (const auto* name : {&path, &prefix, &overlay, &options})
     if (name->find('\'') != std::string::npos)
       throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
   std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
   if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
   if (!overlay.empty()) cmd += fmt::format(" --overlay '{}'", overlay);
+  cmd += options;
   const int rc = std::system(cmd.c_str());
   // The script exits with 2 for bad input (an overlay that is not a continuation branch).
   if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) return kExitBadInput;
@@ -687,7 +706,7 @@ int main(int argc, char** argv) {
   add_scene_options(simulate);
   std::string out_path;
   bool resume = false;
-  simulate->add_option("--out", out_path, "write the run to this HDF5 file (CONTRACT §3)");
+  simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
   simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
@@ -772,12 +791,18 @@ int main(int argc, char** argv) {
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
   info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
   info->add_flag("--json", json, "print one JSON object on stdout");
-  CLI::App* plot = app.add_subcommand("plot", "render PNG plots of a vibro HDF5 file");
+  CLI::App* plot = app.add_subcommand("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
   plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
-  plot->add_option("--out", plot_prefix, "prefix of the PNG files (default: FILE without .h5)");
+  plot->add_option("--out", plot_prefix, "prefix of the files (default: FILE without .h5)");
   std::string plot_overlay;
   plot->add_option("--overlay", plot_overlay,
                    "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
+  std::string plot_format = "png", plot_window;
+  int plot_dpi = 150;
+  plot->add_option("--format", plot_format, "png | pdf | svg (default png)")
+      ->check(CLI::IsMember({"png", "pdf", "svg"}));
+  plot->add_option("--dpi", plot_dpi, "resolution of PNG files (default 150)")->check(CLI::Range(20, 2400));
+  plot->add_option("--time-window", plot_window, "A,B: time plots show A <= t <= B (default: the last 5 periods)");
 
   try {
     app.parse(argc, argv);
@@ -803,7 +828,13 @@ int main(int argc, char** argv) {
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }
-    if (*plot) return RunPlot(file_path, plot_prefix, plot_overlay);
+    if (*plot) {
+      if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)
+        throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
+      return RunPlot(file_path, plot_prefix, plot_overlay,
+                     fmt::format(" --format {} --dpi {}{}", plot_format, plot_dpi,
+                                 plot_window.empty() ? "" : " --time-window=" + plot_window));
+    }
     if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,

@@ -20,7 +20,7 @@
 namespace vibro::detail {
 
 // One DOF (no constrained mode): the stuck body rests at x0 and R depends on the phase only, so
-// the release phase is closed form (MODEL §4.4, §6.1) and no sticking flow is integrated.
+// the release phase is closed form (docs/model.md §4.4, §6.1) and no sticking flow is integrated.
 template <class S>
 class RestingStick final : public PropagatorT<S> {
  public:
@@ -101,7 +101,7 @@ class Automaton {
         switch_ratio_(cvode_ ? std::max(scene.run.chatter_switch, std::sqrt(scene.run.rtol))
                              : scene.run.chatter_switch),
         resolution_ratio_(cvode_ ? std::sqrt(scene.run.rtol) : 0.0),
-        // The accuracy target of a predicted accumulation point, in time units (MODEL §5.4a).
+        // The accuracy target of a predicted accumulation point, in time units (docs/model.md §5.4).
         // CVODE's impacts carry errors of about rtol: no prediction need be closer than that.
         chatter_tol_(S(cvode_ ? std::max(ChatterTolerance(scene.run), scene.run.rtol)
                               : ChatterTolerance(scene.run)) *
@@ -130,7 +130,7 @@ class Automaton {
   }
   Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
   S ContactSpeedFloor() const {
-    // Rounding floor of ẋ_B = Σ c_i Ẋ_i (MODEL §5.4).
+    // Rounding floor of ẋ_B = Σ c_i Ẋ_i (docs/model.md §5.4).
     return S(1000) * Eps<S>() * m_.shape.cwiseProduct(V_).cwiseAbs().sum();
   }
   // Observers see doubles: a view of a state vector (no copy for double).
@@ -338,7 +338,7 @@ bool Automaton<S>::Fail(std::string message, RunStatus status) {
   return false;
 }
 
-// MODEL §5.4, §5.4a: predict the accumulation point of a chattering sequence from the impact
+// docs/model.md §5.4, §5.4: predict the accumulation point of a chattering sequence from the impact
 // just taken, when the prediction's estimated error is within the run's target.
 template <class S>
 bool Automaton<S>::TryAccumulation(const S& reaction) {
@@ -405,7 +405,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
 // Free flight reached g = 0 at the current state.
 template <class S>
 bool Automaton<S>::OnContact() {
-  // Snap the contact coordinate onto the stop (MODEL §8.12).
+  // Snap the contact coordinate onto the stop (docs/model.md §8).
   X_ -= m_.contact * ((m_.ContactDisplacement(X_) - m_.x0) / m_.s_B);
   gap_ = 0;
   const S phase = Phase(clock_);
@@ -416,7 +416,7 @@ bool Automaton<S>::OnContact() {
 
   // CVODE cannot resolve impact speeds below √rtol of the sequence's first one: a sequence that
   // gets there without a prediction inside its accuracy target is undetermined, as is one that
-  // reaches the rounding floor of ẋ_B (MODEL §5.4a). Sticking there would be a guess.
+  // reaches the rounding floor of ẋ_B (docs/model.md §5.4). Sticking there would be a guess.
   const bool touch = !(v_minus < -floor);
   const bool unresolved = cvode_ && accumulating && chatter_last_ > 0 &&
                           -v_minus < S(resolution_ratio_) * chatter_first_;
@@ -438,7 +438,7 @@ bool Automaton<S>::OnContact() {
     }
   }
   if (touch) {
-    // Tangential touch (MODEL §2.1): no impact.
+    // Tangential touch (docs/model.md §2.1): no impact.
     const S Rc = m_.Reaction(X_, V_, phase);
     const Vec Xb = X_, Vb = V_;
     Emit(EventKind::kGrazing, v_minus, v_minus);
@@ -474,7 +474,7 @@ bool Automaton<S>::OnContact() {
 
   const bool plastic = r == 0 || (run_.chatter == ChatterTreatment::kThreshold && in_switch);
   if (plastic) {
-    // MODEL §4.4: plastic impact; stick if R > 0, leave at zero velocity if R < 0, decide with Ṙ
+    // docs/model.md §4.4: plastic impact; stick if R > 0, leave at zero velocity if R < 0, decide with Ṙ
     // if R = 0.
     const Vec Xb = X_, Vb = V_;
     m_.ProjectOntoStop(X_, V_);
@@ -500,7 +500,7 @@ bool Automaton<S>::OnContact() {
     return true;
   }
 
-  // Restitution (MODEL eq. 12).
+  // Restitution (the paper's eq. (12)).
   const Vec Vb = V_;
   m_.ApplyImpact(V_, r);
   const S Rc = m_.Reaction(X_, V_, phase);

@@ -1,20 +1,20 @@
-// The tail of a chattering sequence (MODEL §5.4, §5.4a; docs/chattering.md): from the state just
+// The tail of a chattering sequence (docs/model.md §5.4, §5.4; docs/chattering.md): from the state just
 // after an impact, predict the time Δ∞ to the accumulation point and estimate the error of that
 // prediction, so that the automaton jumps only when the estimate is within the run's target and
 // otherwise follows the next impact.
 //
 // With u = ẋ_B⁺ the contact speed after the impact and R, Ṙ the reaction and its rate on the
 // stuck state (the post-impact state projected onto the stop, the mean path of the tail):
-//   Δ0 = 2u / ((1−r) s_B R)          constant-R sum of the geometric tail (MODEL §5.4)
-//   ε  = −Ṙ Δ0 / R                   how much R falls over the tail (MODEL §5.4a)
+//   Δ0 = 2u / ((1−r) s_B R)          constant-R sum of the geometric tail (docs/model.md §5.4)
+//   ε  = −Ṙ Δ0 / R                   how much R falls over the tail (docs/model.md §5.4)
 //   Δ∞ = Δ0 (1 + ε/3)                first-order correction for a linearly varying R
 // The prediction is accepted only when |ε| ≤ 0.1 (a sequence with ε above ≈ 0.6 never completes;
 // near it no truncated expansion can be trusted) and the estimated time error
 //   E = Δ0 [0.3 ε² + |R̈| Δ0²/(2R) + M3 Δ0³/(6R) + (ω_c Δ0)²/4]
-// is within the target: 0.3 ε² is the residual of the linear-R correction (MODEL §5.4a); the
+// is within the target: 0.3 ε² is the residual of the linear-R correction (docs/model.md §5.4); the
 // curvature terms bound what a quadratic and cubic change of R over the tail can do (R̈ the free
 // second derivative at the start, M3 a bound on |R'''| over the window from the modal amplitudes,
-// MODEL §2.1); ω_c² = Σ c_i T_B,i ω_i² / s_B is the contact's own stiffness, whose restoring force
+// docs/model.md §2.1); ω_c² = Σ c_i T_B,i ω_i² / s_B is the contact's own stiffness, whose restoring force
 // on the O(v²) gap of the tail the constant-R model ignores.
 #pragma once
 
@@ -80,7 +80,7 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
   return t;
 }
 
-// Gradient of the jump time for the Jacobian of the jump (MODEL §5.6), length 2n in (X, Ẋ).
+// Gradient of the jump time for the Jacobian of the jump (docs/model.md §5.6), length 2n in (X, Ẋ).
 // Δ∞ = Δ0 − Ṙ Δ0²/(3R) with Δ0 = 2u/((1−r) s_B R), u = cᵀẊ, R and Ṙ affine in (X, ΠẊ):
 //   ∂Δ∞ = ∂Δ0 (1 + 2ε/3) − Δ0²/(3R) ∂Ṙ − εΔ0/(3R) ∂R,   ∂Δ0 = Δ0 (∂u/u − ∂R/R).
 // The Poincaré solver expresses a perturbation after an impact as a state at the nominal impact

@@ -1,14 +1,14 @@
 // CVODE engine (SUNDIALS 6.4). The one file of vibro that includes SUNDIALS.
 //
 // Free flight: y = (ΔX, Ẋ) ∈ ℝ²ⁿ with ΔX = X − X(0) the increment from the segment start, so that
-// the gap g = gap(0) + cᵀΔX keeps its relative accuracy during chattering (MODEL §8.12).
+// the gap g = gap(0) + cᵀΔX keeps its relative accuracy during chattering (docs/model.md §8).
 //   ΔX' = Ẋ,  Ẋ' = −Ω(X(0) + ΔX) − D Ẋ + T_A f sin(φ + ωσ),   Jacobian [[0, I], [−Ω, −D]].
 // Roots: g/σᵐ (direction −1) and ẋ_B/σ^(m−1) (direction +1), where m is the order of the known
-// zero of g at σ = 0 (MODEL §2.1: after an impact 1, after a plastic departure 2, after a release 3):
+// zero of g at σ = 0 (docs/model.md §2.1: after an impact 1, after a plastic departure 2, after a release 3):
 // the trivial root is divided out, never skipped with a time offset, and the velocity root ends a
 // step at every gap minimum so that a crossing down and back up inside one step is not missed
 // (BUILD-NOTES).
-// Sticking (n ≥ 2): y = (ξ, ξ̇) ∈ ℝ^{2(n−1)} in the constrained modes of MODEL §4.2 (the reduced
+// Sticking (n ≥ 2): y = (ξ, ξ̇) ∈ ℝ^{2(n−1)} in the constrained modes of docs/model.md §4.2 (the reduced
 // system), ξ'' + D'ξ' + Ω'ξ = F' f sin(φ + ωσ); roots R/σᵐ (−1) and Ṙ/σ^(m−1) (+1, minima of R).
 // Each segment runs in local time σ from 0 with the forcing phase reduced; both instances are
 // created once and re-initialised at every mode switch.
@@ -142,7 +142,7 @@ struct CvodeEngine::Impl {
   }
 
   // Guard value/σᵐ and rate/σ^(m−1), m = order of the known zero at σ = 0. Inside the certified
-  // window (MODEL §2.1) no root exists: the divided functions are their positive limits there,
+  // window (docs/model.md §2.1) no root exists: the divided functions are their positive limits there,
   // free of the rounding of value/σᵐ at tiny σ.
   void DividedRoots(double t, double value, double rate, sunrealtype* g) const {
     if (guards_off) {  // constant guards: CVODE sees no root (and none "at and very near" t0)
@@ -301,7 +301,7 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
   m.stick_D = cm.damping;
   m.stick_damped = cm.damping.size() > 0 && cm.damping.cwiseAbs().maxCoeff() > 0;
   m.rho = cm.reaction;
-  // Velocity part of R (MODEL §7): Σ c_i 2ζ_iω_i Ẋ_i / s_B with Ẋ = V ξ̇.
+  // Velocity part of R (docs/model.md §7): Σ c_i 2ζ_iω_i Ẋ_i / s_B with Ẋ = V ξ̇.
   m.rho_v = cm.vectors.transpose() * (m.c.cwiseProduct(m.damp)) / sys.s_B();
   m.react_f = sys.s_A() / sys.s_B() * sys.amplitude();
   m.R_static = sys.stop() / sys.flexibility();

@@ -1,4 +1,4 @@
-// Damped sticking flow in closed form (MODEL §7).
+// Damped sticking flow in closed form (docs/model.md §7).
 #include "dynamics/damped_sticking.hpp"
 
 #include <cmath>

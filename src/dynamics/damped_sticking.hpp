@@ -1,4 +1,4 @@
-// Closed-form sticking flow with modal damping (MODEL §7): in the constrained modes of §4.2,
+// Closed-form sticking flow with modal damping (docs/model.md §7): in the constrained modes of §4.2,
 //   ξ̈ + D'ξ̇ + Ω'ξ = F sin(φ + ωσ)      (D' = L D V couples the modes: non-proportional damping)
 // written first order, ż = G z + h sin(φ + ωσ), z = (ξ, ξ̇), G = [[0, I], [−Ω', −D']], and solved with
 // the eigen-decomposition G = W Λ W⁻¹ (complex) and the forced response

@@ -1,4 +1,4 @@
-// Exact engine (MODEL §2, §2.1, §4.2, §7, §8): the double instantiation. The quad one is in
+// Exact engine (docs/model.md §2, §2.1, §4.2, §7, §8): the double instantiation. The quad one is in
 // dynamics/simulate_quad.cpp.
 #include "dynamics/exact_engine.hpp"
 

@@ -1,5 +1,5 @@
-// The exact engine: free flight and sticking advanced with the closed forms of MODEL §2, §4.2
-// and §7, guards located by certified stepping on the trigonometric sums (MODEL §2.1).
+// The exact engine: free flight and sticking advanced with the closed forms of docs/model.md §2, §4.2
+// and §7, guards located by certified stepping on the trigonometric sums (docs/model.md §2.1).
 // Templated on the scalar: ExactEngineT<double> is the default engine, ExactEngineT<Quad> the
 // quad-precision reference (run.precision = "quad", dynamics/quad.hpp).
 #pragma once
@@ -51,7 +51,7 @@ class ExactEngineT final : public PropagatorT<S> {
   std::vector<OscillatorT<S>> stick_modes_;  // ω'_k, 0, l_kᵀF_c f
   S reaction_forcing_;                       // (s_A/s_B) f
   bool damped_sticking_ = false;             // non-proportional damping in the constrained modes
-  DampedSticking damped_;                    // its closed form (MODEL §7), double only
+  DampedSticking damped_;                    // its closed form (docs/model.md §7), double only
 
   // Current segment.
   Mode mode_ = Mode::kFree;
@@ -101,7 +101,7 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
     X0_ = s.X;
     V0_ = s.V;
   } else {
-    // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (MODEL §4.2).
+    // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (docs/model.md §4.2).
     xi0_ = m_.stick_left * s.X;
     dxi0_ = m_.stick_left * s.V;
     if constexpr (std::is_same_v<S, double>) {
@@ -157,7 +157,7 @@ ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H) const {
 
 template <class S>
 S ExactEngineT<S>::FlightWindow() const {
-  // MODEL §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
+  // docs/model.md §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
   if (flight_start_ == FlightStart::kGeneric) return S(0);
   return CertifiedWindow<S>(flight_start_, StartJet<S>(m_, X0_, V0_, phase_, h_cap_), h_cap_);
 }

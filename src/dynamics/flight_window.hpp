@@ -1,4 +1,4 @@
-// The start of a free flight (MODEL §2.1): derivatives of the gap g = x_B − x0 at σ = 0, rigorous
+// The start of a free flight (docs/model.md §2.1): derivatives of the gap g = x_B − x0 at σ = 0, rigorous
 // bounds of its third and fourth derivatives, and the certified window (0, σ_w) free of roots once
 // the known zero at σ = 0 is divided out. Shared by both engines (and both scalars).
 #pragma once

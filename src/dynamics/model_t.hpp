@@ -1,5 +1,5 @@
 // The modal model of a System in the engine's scalar S (double, or quad for the reference engine):
-// the data of MODEL §1.3 and §4.2 converted once, and the contact quantities the automaton needs.
+// the data of docs/model.md §1.3 and §4.2 converted once, and the contact quantities the automaton needs.
 // The quad model is the double model's data converted exactly: the quad engine solves the same
 // (double-rounded) structure, so differences between the engines are the engines' own errors.
 #pragma once
@@ -43,7 +43,7 @@ struct ModelT {
   S ContactDisplacement(const Vec& X) const { return shape.dot(X); }
   S ContactVelocity(const Vec& V) const { return shape.dot(V); }
 
-  // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (MODEL eq. 5, §7).
+  // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (the paper's eq. (5); docs/model.md §7).
   S Reaction(const Vec& X, const Vec& V, const S& phase) const {
     S elastic(0);
     for (Eigen::Index i = 0; i < X.size(); ++i) {
@@ -53,7 +53,7 @@ struct ModelT {
     return (elastic - s_A * f * Real<S>::sin(phase)) / s_B;
   }
 
-  // Ṙ along the sticking flow (MODEL §4.2; damped constrained acceleration of §7).
+  // Ṙ along the sticking flow (docs/model.md §4.2; damped constrained acceleration of §7).
   S ReactionRate(const Vec& X, const Vec& V, const S& phase) const {
     const Vec w2 = omega.cwiseAbs2();
     S rate = shape.dot(w2.cwiseProduct(V)) - s_A * f * w * Real<S>::cos(phase);
@@ -66,12 +66,12 @@ struct ModelT {
     return rate / s_B;
   }
 
-  // Restitution law (MODEL eq. 12).
+  // Restitution law (the paper's eq. (12)).
   void ApplyImpact(Vec& V, const S& restitution) const {
     const S p = -(S(1) + restitution) * ContactVelocity(V) / s_B;
     V += p * contact;
   }
-  // Plastic projection onto the stop (MODEL §4.4).
+  // Plastic projection onto the stop (docs/model.md §4.4).
   void ProjectOntoStop(Vec& X, Vec& V) const {
     V -= contact * (ContactVelocity(V) / s_B);
     X -= contact * ((ContactDisplacement(X) - x0) / s_B);

@@ -1,9 +1,9 @@
 // Closed-form flow of one linear oscillator  q̈ + 2ζν q̇ + ν² q = F sin(φ + ω σ)  in local time σ
-// from (q0, v0) at σ = 0 (MODEL §2 relative form, §7 damping, §8.1 resonance), in the scalar S of
+// from (q0, v0) at σ = 0 (docs/model.md §2 relative form, §7 damping, §8.1 resonance), in the scalar S of
 // the engine (dynamics/scalar.hpp).
 //
 // Results are increments Δq = q(σ) − q0: during chattering the gap is O(v²) while the modal
-// terms are O(1), and only increments keep relative accuracy (MODEL §2, §8.12). The undamped
+// terms are O(1), and only increments keep relative accuracy (docs/model.md §2, §8.12). The undamped
 // kernel is written with divided differences that stay finite and accurate at and near exact
 // resonance ν = ω.
 #pragma once
@@ -57,7 +57,7 @@ S Sinc(const S& x) {
 //   C = (cos ωσ − cos νσ)/(ν² − ω²)         = σ sin(Σσ/2) sinc(δσ/2) / Σ
 //   S = (sin ωσ − (ω/ν) sin νσ)/(ν² − ω²)    = [sin νσ − νσ cos(Σσ/2) sinc(δσ/2)] / (νΣ)
 //   E = (ν sin νσ − ω sin ωσ)/(ν² − ω²)      = [νσ cos(Σσ/2) sinc(δσ/2) + sin ωσ] / Σ
-// finite at ν = ω (MODEL §8.1: K → [sin ωσ cos φ − ωσ cos(φ + ωσ)]/(2ω²)).
+// finite at ν = ω (docs/model.md §8: K → [sin ωσ cos φ − ωσ cos(φ + ωσ)]/(2ω²)).
 template <class S>
 OscillatorStateT<S> Undamped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,
                              const S& q0, const S& v0, const S& sigma) {
@@ -78,7 +78,7 @@ OscillatorStateT<S> Undamped(const OscillatorT<S>& o, const S& omega, const Phas
   return out;
 }
 
-// Damped (MODEL §7): q = U(φ + ωσ) + h(σ), U = P sin + Q cos the steady forced response,
+// Damped (docs/model.md §7): q = U(φ + ωσ) + h(σ), U = P sin + Q cos the steady forced response,
 // h the decaying homogeneous part; Δq = [U(φ+ωσ) − U(φ)] + [h(σ) − h(0)] written as increments.
 template <class S>
 OscillatorStateT<S> Damped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,

@@ -13,7 +13,7 @@
 namespace vibro::detail {
 
 // How a free flight starts: which derivatives of the gap g = x_B − x0 vanish at σ = 0, so that the
-// trivial root there is divided out (MODEL §2.1, §8.8) rather than skipped with a time offset.
+// trivial root there is divided out (docs/model.md §2.1, §8.8) rather than skipped with a time offset.
 enum class FlightStart : int {
   kGeneric = 0,    // g > 0 (or g = 0 with ẋ_B > 0 and no known structure)
   kAfterImpact,    // g = 0, g' = ẋ_B⁺ > 0

@@ -1,4 +1,4 @@
-// Certified first-root location for the trigonometric sums of the exact engine (MODEL §2.1).
+// Certified first-root location for the trigonometric sums of the exact engine (docs/model.md §2.1).
 //
 // At a point u with g(u) > 0, g(u+h) ≥ p(h) = g + g'h + g''h²/2 − M h³/6 whenever M bounds
 // |g'''| over [u, u+h]. Stepping to the first positive root of p never skips a root of g (g ≥ p > 0

@@ -1,4 +1,4 @@
-// HDF5 store (CONTRACT §3). The one file of vibro that includes hdf5.h.
+// HDF5 store (docs/output.md). The one file of vibro that includes hdf5.h.
 #include "vibro/hdf5_store.hpp"
 
 #include <sys/stat.h>

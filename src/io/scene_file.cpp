@@ -1,4 +1,4 @@
-// TOML scene files (CONTRACT §1). The one file of vibro that includes toml++.
+// TOML scene files (docs/scenes.md). The one file of vibro that includes toml++.
 //
 // Flow: parse the file → apply each `--set KEY=VALUE` (VALUE in TOML syntax) → check the key
 // schema (unknown keys, types, finiteness) → fill a Scene → Validate() the physics. Problems of
@@ -20,7 +20,7 @@ namespace {
 
 enum class Kind { kNumber, kInteger, kString, kNumberArray, kMatrix, kTable };
 
-// Every key a scene may hold (CONTRACT §1 plus vibro's additions, documented in the README).
+// Every key a scene may hold (docs/scenes.md lists each with its default and constraint).
 const std::map<std::string, Kind>& Schema() {
   static const std::map<std::string, Kind> schema = {
       {"title", Kind::kString},
@@ -90,7 +90,12 @@ std::string Suggest(const std::string& path) {
   size_t best_d = std::max<size_t>(2, path.size() / 3) + 1;
   for (const auto& [known, kind] : Schema()) {
     (void)kind;
-    const size_t d = std::min(EditDistance(path, known), EditDistance(leaf, LastComponent(known)) + 1);
+    size_t d = std::min(EditDistance(path, known), EditDistance(leaf, LastComponent(known)) + 1);
+    // A shortened key (`structure.damping` for `structure.damping_ratios`) is a near miss too.
+    const std::string known_leaf = LastComponent(known);
+    if (leaf.size() >= 4 && known_leaf.rfind(leaf, 0) == 0 &&
+        path.substr(0, path.size() - leaf.size()) == known.substr(0, known.size() - known_leaf.size()))
+      d = std::min<size_t>(d, 1);
     if (d < best_d) {
       best_d = d;
       best = known;
@@ -467,6 +472,8 @@ LoadedScene ParseScene(std::string_view text, const std::string& source,
   }
   return Build(std::move(root), source, overrides);
 }
+
+std::string NearestSceneKey(const std::string& key) { return Suggest(key); }
 
 std::optional<double> SceneNumber(const std::string& text, const std::string& key) {
   try {

@@ -1,4 +1,4 @@
-// JSON summaries (CONTRACT §2).
+// JSON summaries (docs/cli.md, docs/output.md).
 #include "vibro/summary_json.hpp"
 
 #include <optional>

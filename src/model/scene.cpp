@@ -1,4 +1,4 @@
-// Scene validation: every physical constraint of CONTRACT §1 / MODEL §1, §8, each problem
+// Scene validation: every physical constraint of docs/scenes.md / docs/model.md §1, §8, each problem
 // reported against its key.
 #include "vibro/scene.hpp"
 

@@ -1,5 +1,5 @@
-// Structural model: modal data in the paper's scaling (MODEL §1.3) and the constrained modes
-// (MODEL §4.2).
+// Structural model: modal data in the paper's scaling (docs/model.md §1.3) and the constrained modes
+// (docs/model.md §4.2).
 #include "vibro/system.hpp"
 
 #include <algorithm>
@@ -52,7 +52,7 @@ System::System(const Scene& scene) {
     physical_ = true;
     const auto& p = *scene.physical;
     mass_ = p.mass;
-    // MODEL §1.3 step 1: K φ = λ M φ (φᵀMφ = 1).
+    // docs/model.md §1.3 step 1: K φ = λ M φ (φᵀMφ = 1).
     Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(p.stiffness, p.mass);
     if (eig.info() != Eigen::Success) throw std::invalid_argument("eigenproblem K φ = λ M φ failed");
     const Eigen::VectorXd lambda = eig.eigenvalues();
@@ -105,7 +105,7 @@ System::System(const Scene& scene) {
 }
 
 void System::BuildConstrained() {
-  // MODEL §4.2 in mass-weighted form: the constrained modes solve (μΩ − λμ) v = c R̂, cᵀv = 0,
+  // docs/model.md §4.2 in mass-weighted form: the constrained modes solve (μΩ − λμ) v = c R̂, cᵀv = 0,
   // μ_i = 1/T_B,i (contact modes) or 1 (modes with a node at B). With N an orthonormal basis of
   // {cᵀX = 0}, v = N y and (NᵀμΩN) y = λ (NᵀμN) y is a symmetric-definite problem.
   const auto n = omega_.size();
@@ -199,7 +199,7 @@ System::InitialState System::Initial(const Scene& scene) const {
                  false};
   if (scene.initial_displacement.size() == 0 && scene.initial_velocity.size() == 0) {
     if (x0_ > 0) {
-      // Static pressed equilibrium (MODEL §4.2, constant term): at rest on the stop.
+      // Static pressed equilibrium (docs/model.md §4.2, constant term): at rest on the stop.
       s.X = x0_ * static_shape_;
       s.sticking = true;
     }

@@ -1,12 +1,12 @@
-// Certified chattering (MODEL §5.4a, docs/chattering.md) at the upper end of sticking, f → f_max,
+// Certified chattering (docs/model.md §5.4, docs/chattering.md) at the upper end of sticking, f → f_max,
 // where the constant-R accumulation prediction used to invent sticking orbits.
 //
 // Truth: the quad-precision exact engine (113 bits, run.precision = "quad", accumulation error
 // target 1e-28 T), which follows the chattering impacts explicitly until its own prediction is
 // certain to 28 digits. f_max is located by bisecting, with that engine, the existence of the
 // period-1 sticking orbit of the non-dimensional 1-DOF preload oscillator: for one DOF every
-// motion that sticks once is periodic from its first release on (MODEL §5.5), so the orbit
-// exists iff the body, released at the closed-form phase sin φ_1 = x0/f (MODEL §6.1), sticks
+// motion that sticks once is periodic from its first release on (docs/model.md §5.5), so the orbit
+// exists iff the body, released at the closed-form phase sin φ_1 = x0/f (docs/model.md §6.1), sticks
 // again within one forcing period.
 #include <cmath>
 #include <optional>

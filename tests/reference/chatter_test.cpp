@@ -1,4 +1,4 @@
-// Chattering treatments (MODEL §5.4, §5.4a) against an exactly summable impact sequence.
+// Chattering treatments (docs/model.md §5.4, §5.4) against an exactly summable impact sequence.
 //
 // Oracle: the unforced 1-DOF oscillator (ω_1 = 1, f = 0) leaving the stop x0 = 1 with speed v
 // returns after Δ(v) = 2 atan(v/x0) with speed v (x = x0 cos s + v sin s), then rebounds with r v.

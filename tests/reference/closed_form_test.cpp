@@ -1,4 +1,4 @@
-// The exact engine against the 1-DOF closed forms of MODEL §6 (r = 0): release (32), landing (33),
+// The exact engine against the 1-DOF closed forms of docs/model.md §6 (r = 0): release (32), landing (33),
 // sticking fraction, the limits f_free-flight (38) and f_sticking (36), clearance, subharmonics.
 #include <cmath>
 
@@ -19,13 +19,13 @@ double PhaseMod(double phase, double m) {
   return p < 0 ? p + m : p;
 }
 
-// MODEL §6.3: f_free-flight(ω, q), √(f² − 1) = ω tan(qπ/ω) (valid when tan > 0, preload).
+// docs/model.md §6.3: f_free-flight(ω, q), √(f² − 1) = ω tan(qπ/ω) (valid when tan > 0, preload).
 double FreeFlightLimit(double w, int q) {
   const double t = std::tan(q * M_PI / w);
   return std::sqrt(1.0 + w * w * t * t);
 }
 
-// MODEL §6.3 (36): √(f² − 1)/ω = tan(((2q − 1)π/2 − arcsin(1/f))/ω), by bisection on [lo, hi].
+// docs/model.md §6.3 (36): √(f² − 1)/ω = tan(((2q − 1)π/2 − arcsin(1/f))/ω), by bisection on [lo, hi].
 double StickingLimit(double w, int q, double lo, double hi) {
   const auto F = [&](double f) {
     return std::sqrt(f * f - 1) / w - std::tan(((2 * q - 1) * M_PI / 2 - std::asin(1 / f)) / w);
@@ -109,7 +109,7 @@ TEST(ClosedForms, ClearanceOrbitOfFig11) {
 
 TEST(ClosedForms, TwoFlightOrbitOfFig10) {
   // (r, ω, f) = (0, 10, 4.8): the landing after a release meets R < 0 and leaves at zero velocity
-  // (MODEL §4.4); the second flight lands with R > 0 and sticks.
+  // (docs/model.md §4.4); the second flight lands with R > 0 and sticks.
   const double w = 10.0, f = 4.8, T = 2 * M_PI / w;
   const Outcome run = Simulate(OneDof(0.0, w, f, 1.0, 40));
   const LD t1 = ReleaseTime(w, f);
@@ -138,7 +138,7 @@ TEST(ClosedForms, TwoFlightOrbitOfFig10) {
 }
 
 TEST(ClosedForms, FreeFlightLimitSticksJustInsideNotJustOutside) {
-  // MODEL §6.3: the period-1 sticking orbits end at f_ff(ω, 1) with SP → 0 linearly.
+  // docs/model.md §6.3: the period-1 sticking orbits end at f_ff(ω, 1) with SP → 0 linearly.
   for (double w : {2.8, 5.0, 10.0}) {
     SCOPED_TRACE(w);
     const double fff = FreeFlightLimit(w, 1);
@@ -160,7 +160,7 @@ TEST(ClosedForms, FreeFlightLimitSticksJustInsideNotJustOutside) {
 }
 
 TEST(ClosedForms, StickingLimitFirstLandingSticksJustAbove) {
-  // MODEL §6.3 (36): just above f_st the first landing sticks (one impact per period q = 2), just
+  // docs/model.md §6.3 (36): just above f_st the first landing sticks (one impact per period q = 2), just
   // below it lands with R < 0 and sticks after a second flight.
   const double w = 10.0;
   const double fst = StickingLimit(w, 2, 4.5, 5.5);
@@ -175,7 +175,7 @@ TEST(ClosedForms, StickingLimitFirstLandingSticksJustAbove) {
 }
 
 TEST(ClosedForms, OneDofRunIsExactlyPeriodicOnceItSticks) {
-  // MODEL §5.5: for n = 1 every trajectory that sticks once is periodic from its first release
+  // docs/model.md §5.5: for n = 1 every trajectory that sticks once is periodic from its first release
   // on, with no transient. With the release phase in closed form this holds to the bit.
   for (double r : {0.0, 0.75}) {
     const Outcome run = Simulate(OneDof(r, 10.0, 1.1, 1.0, 50));

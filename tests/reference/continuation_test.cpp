@@ -1,4 +1,4 @@
-// Continuation: the end of the sticking branch against f_free-flight of MODEL §6.3, branch points
+// Continuation: the end of the sticking branch against f_free-flight of docs/model.md §6.3, branch points
 // against direct orbit solves, and a Neimark–Sacker point bracketed by direct solves.
 #include <cmath>
 
@@ -26,7 +26,7 @@ Branch ImpactBranch(std::function<Scene(double)> at, double from, double to, int
 
 TEST(Continuation, StickingBranchInAmplitudeEndsAtTheFreeFlightLimit) {
   // 1-DOF, r = 0: the period-1 sticking branch in f ends (sticking-lost) at
-  // f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3, valid where tan(π/ω) > 0).
+  // f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (docs/model.md §6.3, valid where tan(π/ω) > 0).
   for (double w : {2.8, 5.0, 10.0}) {
     SCOPED_TRACE(w);
     const double fff = std::sqrt(1.0 + w * w * std::pow(std::tan(M_PI / w), 2));
@@ -124,7 +124,7 @@ TEST(Continuation, FoldOfTheFig5ImpactOrbitIsPassedLocatedAndConfirmedBySimulati
 }
 
 // Trace of DP of the 1-DOF one-impact period-1 orbit (impact phase θ, post-impact speed w+,
-// acceleration a at the impact): tr = −2r cos T − r(1+r) a sin T / w+, det = r² (MODEL §5.6 by
+// acceleration a at the impact): tr = −2r cos T − r(1+r) a sin T / w+, det = r² (docs/model.md §5.6 by
 // hand for the impact map; checked against vibro's multipliers below). Long double throughout.
 long double OneImpactTrace(long double w, long double r, long double x0, long double f) {
   const long double T = 2 * M_PIl / w, tau = std::tan(T / 2), P = f / (1 - w * w);
@@ -182,7 +182,7 @@ TEST(Continuation, FlipOfAOneImpactOrbitIsLocatedAtTheClosedFormAndConfirmedBySi
 
 TEST(Continuation, RisingBifurcationOfATwoDofBranchIsLocatedFromBothSidesAndConfirmedBySimulation) {
   // 2-DOF chain, r = 0, ω = 0.4: along the period-1 sticking branch in f the reaction dips to zero
-  // inside the sticking phase (MODEL §5.7), which splits in two.
+  // inside the sticking phase (docs/model.md §5.7), which splits in two.
   const std::string path = std::string(VIBRO_SCENES_DIR) + "/chain2.toml";
   const auto at = [&](double f) {
     return LoadScene(path, {"run.samples_per_period=0", "stop.restitution=0.0", "excitation.frequency=0.4",
@@ -291,7 +291,7 @@ TEST(Continuation, NeimarkSackerPointIsBracketedByDirectSolves) {
 namespace vibro::test {
 namespace {
 
-// SP of the 1-DOF, r = 0 period-q sticking orbit with one flight (MODEL §6.2), long double.
+// SP of the 1-DOF, r = 0 period-q sticking orbit with one flight (docs/model.md §6.2), long double.
 LD ClosedFormSp(LD w, LD f) {
   const LD t1 = ReleaseTime(w, f);
   const Flight1 fl{w, f, t1, 1, 0};
@@ -302,7 +302,7 @@ LD ClosedFormSp(LD w, LD f) {
 
 TEST(Partition, OneDofPeriodTwoColumnsEndAtTheClosedFormBoundariesAndCrossLevelsWhereSpSays) {
   // ω = 5 and 10, q = 2: the one-flight sticking orbits live on (f_sticking, f_free-flight)
-  // (MODEL §6.3, eqs. (36) and (38)); the partition's columns must end there and cross the
+  // (docs/model.md §6.3, eqs. (36) and (38)); the partition's columns must end there and cross the
   // levels where the closed form's SP equals them.
   PartitionRequest req;
   req.scene_at = [](double w, double f) { return OneDof(0.0, w, f, 1.0, 50); };
@@ -348,7 +348,7 @@ TEST(Partition, OneDofPeriodTwoColumnsEndAtTheClosedFormBoundariesAndCrossLevels
     ASSERT_NE(top, nullptr);
     ASSERT_NE(bottom, nullptr);
     EXPECT_NEAR(top->value, f_ff, 1e-10);
-    EXPECT_NEAR(bottom->value, f_st, 1e-9);  // SP ~ |f − f_st|^(1/3) there (MODEL §6.3)
+    EXPECT_NEAR(bottom->value, f_st, 1e-9);  // SP ~ |f − f_st|^(1/3) there (docs/model.md §6.3)
     // Crossings on the one-flight part (f_st, f_ff); below f_st the column goes on along orbits
     // with two flights per period (landing with R < 0 first), where the closed form does not apply.
     int checked = 0;

@@ -34,7 +34,7 @@ constexpr double kPhaseTolerance = 1e-5;
 
 TEST(Engines, CvodeAgreesWithExactOnEveryScene) {
   // The engines follow a different number of impacts in a chattering sequence (CVODE switches to
-  // the accumulation prediction at √rtol of the first impact speed, MODEL §5.4), so the events
+  // the accumulation prediction at √rtol of the first impact speed, docs/model.md §5.4), so the events
   // compared one to one are the first impact and the sticks, releases and accumulations.
   const auto milestones = [](const std::vector<Event>& events) {
     std::vector<Event> out;

@@ -78,7 +78,7 @@ TEST(Extremes, ElasticImpactsAgreeWithCvodeAndNeverAccumulate) {
 
 TEST(Extremes, ForcingJustAbovePreload) {
   // f = 1 + 1e-9 (r = 0): a flight of 6e-5 that starts with a triple zero and lands almost
-  // tangentially. MODEL (34): t'_0 − t'_1 = 4√(f² − 1)/ω (1 + O(√(f² − 1))), so
+  // tangentially. The paper's (34): t'_0 − t'_1 = 4√(f² − 1)/ω (1 + O(√(f² − 1))), so
   // 1 − SP = 4√(f² − 1)/2π to a relative 1e-4.
   const double w = 2.8, f = 1.0 + 1e-9;
   const Outcome o = Simulate(OneDof(0.0, w, f, 1.0, 10));
@@ -90,7 +90,7 @@ TEST(Extremes, ForcingJustAbovePreload) {
 }
 
 TEST(Extremes, ForcingOneBillionthAroundTheFreeFlightLimit) {
-  // r = 0, ω = 2.8: f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3). 1e-9 below it the period-1
+  // r = 0, ω = 2.8: f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (docs/model.md §6.3). 1e-9 below it the period-1
   // sticking orbit sticks for a fraction 3e-11 of the period, as the closed form of §6.2 says;
   // 1e-9 above it the landing comes after the release phase, R < 0 there, and the motion is the
   // one-impact orbit without sticking.
@@ -206,7 +206,7 @@ TEST(Extremes, MillionPeriodsStayExactlyPeriodic) {
 }
 
 TEST(Extremes, HugeAndTinyStopPositionsFollowTheScalingLaw) {
-  // MODEL §1.2: X → X/|x0|, f → f/|x0| maps any x0 to ±1; the phases are unchanged.
+  // docs/model.md §1.4: X → X/|x0|, f → f/|x0| maps any x0 to ±1; the phases are unchanged.
   for (double sign : {1.0, -1.0}) {
     // Preload: Fig. 8 (r = 0.75, chattering); clearance: Fig. 11 (r = 0).
     const double f = sign > 0 ? 1.2 : 10.0, w = sign > 0 ? 2.8 : 1.4, r = sign > 0 ? 0.75 : 0.0;

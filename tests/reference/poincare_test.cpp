@@ -1,4 +1,4 @@
-// Poincaré solver (MODEL §5): the analytic Jacobian against finite differences of the simulated
+// Poincaré solver (docs/model.md §5): the analytic Jacobian against finite differences of the simulated
 // map, 1-DOF orbits against the closed forms of §6, Newton from a short transient, an unstable
 // orbit, and the multipliers against the decay of the transient and the CVODE engine.
 #include <cmath>
@@ -83,7 +83,7 @@ TEST(Poincare, AnalyticJacobianMatchesFiniteDifferences) {
 }
 
 TEST(Poincare, OneDofOrbitsMatchTheClosedForms) {
-  // MODEL §6 (r = 0): SP = 1 − ω(t'_0 − t'_1)/(2πq); DP is empty (superstable).
+  // docs/model.md §6 (r = 0): SP = 1 − ω(t'_0 − t'_1)/(2πq); DP is empty (superstable).
   for (double w : {2.8, 5.0, 10.0}) {
     const double f = 1.5;
     const Scene s = OneDof(0.0, w, f, 1.0, 50);
@@ -104,7 +104,7 @@ TEST(Poincare, OneDofOrbitsMatchTheClosedForms) {
 }
 
 TEST(Poincare, Fig5CoexistingSingleImpactOrbitHasMultipliersOfModulusR) {
-  // MODEL §5.6: Fig. 5, (r, ω, f, x0) = (0.75, 10, 1.1, 1): a stable single-impact period-1 orbit
+  // docs/model.md §5.6: Fig. 5, (r, ω, f, x0) = (0.75, 10, 1.1, 1): a stable single-impact period-1 orbit
   // coexists with the sticking one; its impact map has det = r², so a complex pair of multipliers
   // has modulus exactly r.
   const Scene s = Shipped("fig05_coexistence.toml");
@@ -196,7 +196,7 @@ TEST(Poincare, MultipliersMatchTheTransientDecayAndTheCvodeMap) {
   const double observed = std::sqrt(dist[9] / dist[7]);
   EXPECT_NEAR(observed, rho, 0.05 * rho);
   // The stroboscopic Jacobian of the CVODE engine, by finite differences, has the same non-zero
-  // spectrum (MODEL §5.6).
+  // spectrum (docs/model.md §5.6).
   Scene c = s;
   c.run.engine = Engine::kCvode;
   c.run.rtol = 1e-12;

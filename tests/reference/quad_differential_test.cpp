@@ -1,4 +1,4 @@
-// Double against quad on seeded random scenes (MODEL §5.4a; docs/verification.md).
+// Double against quad on seeded random scenes (docs/model.md §5.4; docs/verification.md).
 //
 // 240 scenes: 1-3 modes with random pulsations, forcing and contact vectors, r ∈ [0, 0.95], preload
 // or clearance, modal damping on one-mode scenes, forcing pulsation and amplitude over wide

@@ -81,7 +81,7 @@ TEST(Studies, Fig5BothAttractorsAreFoundWithTheirBasins) {
         a.attractor.impacts_per_period == 1) {
       impact = true;
       EXPECT_GT(a.basin_fraction, 0.05);
-      // The one-impact 1-DOF map has det = r² (MODEL §5.6): both multipliers of modulus r.
+      // The one-impact 1-DOF map has det = r² (docs/model.md §5.6): both multipliers of modulus r.
       EXPECT_EQ(a.orbit.status, "converged");
       ASSERT_EQ(a.orbit.multipliers.size(), 2u);
       for (const auto& m : a.orbit.multipliers) EXPECT_NEAR(std::abs(m), 0.75, 1e-9);
@@ -186,7 +186,7 @@ TEST(Studies, ClassesWithTheSameSolvedOrbitAreMerged) {
       EXPECT_EQ(merged.labels[i], merged.labels[i + 1]);
     }
   // The period-2 orbit: stable, and (1 DOF, undamped: the flows preserve area, each impact
-  // scales it by r, MODEL §5.6) det DF = μ1 μ2 = r^(2k) for k impacts per orbit period.
+  // scales it by r, docs/model.md §5.6) det DF = μ1 μ2 = r^(2k) for k impacts per orbit period.
   bool p2 = false;
   for (const auto& a : merged.attractors) {
     if (a.attractor.kind != "impact-periodic" || a.attractor.period != 2) continue;
@@ -252,7 +252,7 @@ TEST(Studies, SameLabelsForOneAndTwoThreads) {
 }
 
 TEST(Studies, SweepAcrossTheFreeFlightLimitLosesStickingWhereContinuationSays) {
-  // 1-DOF, r = 0, ω = 2.8: sticking ends at f_ff (MODEL §6.3); the brute-force sweep, up and down,
+  // 1-DOF, r = 0, ω = 2.8: sticking ends at f_ff (docs/model.md §6.3); the brute-force sweep, up and down,
   // switches between the two steps that bracket the continuation's sticking-lost point.
   const auto at = [](double f) { return OneDof(0.0, 2.8, f, 1.0, 30); };
   SweepRequest req;

@@ -49,7 +49,7 @@ for f in sorted(os.listdir(scenes)):
                                                "sticking_fraction", "stick_phases"}, p.stdout)
             check(f"simulate {f} {engine} solver stats", ("solver" in j) == (engine == "cvode"), p.stdout)
 
-# `vibro check` passes on every scene; `vibro orbit` on every periodic one (CONTRACT §2 fields).
+# `vibro check` passes on every scene; `vibro orbit` on every periodic one (docs/output.md fields).
 for f in sorted(os.listdir(scenes)):
     if not f.endswith(".toml") or os.path.islink(os.path.join(scenes, f)):
         continue
@@ -110,8 +110,8 @@ with tempfile.TemporaryDirectory() as d:
     p = run("basin", fig5, "--x", "X7", "--grid", "2,2")
     check("basin: bad coordinate exit 2", p.returncode == 2 and "X7" in p.stderr, p.stderr)
 
-# Continuation and partitions: JSON fields (CONTRACT §2 and the extensions), the HDF5 file and
-# its plot, the 1-DOF existence boundary f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (MODEL §6.3), bad input.
+# Continuation and partitions: JSON fields (docs/output.md and the extensions), the HDF5 file and
+# its plot, the 1-DOF existence boundary f_ff(ω, 1) = √(1 + ω² tan²(π/ω)) (docs/model.md §6.3), bad input.
 fig8 = os.path.join(scenes, "fig08_preload.toml")
 p = run("continue", fig8, "--set", "stop.restitution=0.0", "--param", "excitation.amplitude",
         "--to", "8", "--json")

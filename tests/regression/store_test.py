@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""HDF5 store through the real `vibro` binary: CONTRACT §3 layout and types read with h5py,
+"""HDF5 store through the real `vibro` binary: docs/output.md layout and types read with h5py,
 SIGINT/SIGTERM/SIGKILL on a long run, resume equal to an uninterrupted run, unwritable
 destinations (exit 2 before any computation), and `vibro plot` on a sticking and a chattering run.
 """

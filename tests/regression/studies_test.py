@@ -193,7 +193,7 @@ with tempfile.TemporaryDirectory() as d:
     check("refused resume leaves a finished file alone", os.path.getmtime(ref) == stamp)
 
     # --- Sweep to HDF5, its plot, and a continuation branch overlaid -------------------------------
-    # 1-DOF, r = 0, ω = 2.8: sticking ends at f_ff = 5.899628658289789 (MODEL §6.3, eq. 38).
+    # 1-DOF, r = 0, ω = 2.8: sticking ends at f_ff = 5.899628658289789 (docs/model.md §6.3, eq. 38).
     f_ff = 5.899628658289789
     sw = os.path.join(d, "sweep.h5")
     sweep_args = ["sweep", os.path.join(scenes, "fig08_preload.toml"), "--set", "stop.restitution=0.0",

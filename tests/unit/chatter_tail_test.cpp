@@ -1,4 +1,4 @@
-// The prediction of a chattering tail (dynamics/chatter_tail.hpp, MODEL §5.4a):
+// The prediction of a chattering tail (dynamics/chatter_tail.hpp, docs/model.md §5.4):
 // - its estimated error bounds the true error of Δ∞, the truth being the quad engine following the
 //   same sequence impact by impact from the same state (error target 1e-28 T);
 // - its gradient, used by the Poincaré solver's Jacobian, equals finite differences of the jump

@@ -13,7 +13,7 @@ namespace {
 using detail::Flow;
 using detail::Oscillator;
 
-// Textbook undamped solution (MODEL §2, absolute form), long double, ν ≠ ω.
+// Textbook undamped solution (docs/model.md §2, absolute form), long double, ν ≠ ω.
 void Textbook(LD nu, LD w, LD F, LD phase, LD q0, LD v0, LD s, LD& q, LD& v) {
   const LD U0 = F * std::sin(phase) / (nu * nu - w * w), dU0 = F * w * std::cos(phase) / (nu * nu - w * w);
   const LD a = q0 - U0, b = (v0 - dU0) / nu;
@@ -35,7 +35,7 @@ TEST(Oscillator, UndampedMatchesTextbookFormula) {
 }
 
 TEST(Oscillator, ExactResonanceIsTheSecularLimit) {
-  // MODEL §8.1: at ν = ω the forced response from rest is F[sin ωs cos φ − ωs cos(φ + ωs)]/(2ω²).
+  // docs/model.md §8: at ν = ω the forced response from rest is F[sin ωs cos φ − ωs cos(φ + ωs)]/(2ω²).
   const double w = 1.7, F = 0.9, phase = 0.3;
   for (double s : {1e-5, 0.5, 3.0, 30.0}) {
     const auto st = Flow({w, 0.0, F}, w, phase, 0.0, 0.0, s);
@@ -145,7 +145,7 @@ TEST(ExactEngine, NearGrazingWithoutPenetrationIsNoImpact) {
 }
 
 double Energy(const System& sys, const Eigen::VectorXd& X, const Eigen::VectorXd& V) {
-  // Modal masses 1/T_B,i (MODEL §3): E = ½ Σ (V_i² + ω_i² X_i²)/T_B,i.
+  // Modal masses 1/T_B,i (docs/model.md §3): E = ½ Σ (V_i² + ω_i² X_i²)/T_B,i.
   double e = 0;
   for (int i = 0; i < sys.dof(); ++i)
     e += 0.5 * (V[i] * V[i] + sys.omega()[i] * sys.omega()[i] * X[i] * X[i]) / sys.contact()[i];

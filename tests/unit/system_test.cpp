@@ -1,4 +1,4 @@
-// Structural model (MODEL §1.3, §4.2): modal data against the physical matrices.
+// Structural model (docs/model.md §1.3, §4.2): modal data against the physical matrices.
 #include "vibro/system.hpp"
 
 #include <cmath>
@@ -55,7 +55,7 @@ Eigen::MatrixXd Without(const Eigen::MatrixXd& m, int b) {
 }
 
 TEST(System, TwoDofExampleOfModelSection13) {
-  // MODEL §1.3: m1 = m2 = 1, k1 = k2 = 1, stop on mass 2, force on mass 1.
+  // docs/model.md §1.3: m1 = m2 = 1, k1 = k2 = 1, stop on mass 2, force on mass 1.
   Eigen::MatrixXd M = Eigen::MatrixXd::Identity(2, 2), K(2, 2);
   K << 2, -1, -1, 1;
   const System sys(PhysicalScene(M, K, 0, 1));
@@ -113,7 +113,7 @@ TEST(System, ModalIdentitiesOnRandomChains) {
 }
 
 TEST(System, ConstrainedModesDiagonaliseTheStickingOperator) {
-  // A = Ω − T_B (c∘w2)ᵀ/s_B (MODEL §4.2): A v_k = ω'_k² v_k, cᵀv_k = 0, L E = I, cᵀF_c = 0.
+  // A = Ω − T_B (c∘w2)ᵀ/s_B (docs/model.md §4.2): A v_k = ω'_k² v_k, cᵀv_k = 0, L E = I, cᵀF_c = 0.
   std::mt19937 gen(7);
   for (int n = 2; n <= 6; ++n) {
     const System sys(RandomChain(gen, n, 0, n - 1));
@@ -142,7 +142,7 @@ TEST(System, ConstrainedModesDiagonaliseTheStickingOperator) {
 }
 
 TEST(System, ConstrainedDampingIsTheProjectedDamping) {
-  // MODEL §7: on the stop Ẍ = −AX − ΠDẊ + F_c f sin ωt. With Ẋ = V ξ̇ the damping force ΠDVξ̇ lies
+  // docs/model.md §7: on the stop Ẍ = −AX − ΠDẊ + F_c f sin ωt. With Ẋ = V ξ̇ the damping force ΠDVξ̇ lies
   // in span(V), and must equal V D' ξ̇ for the reduced matrix D' of the constrained modes.
   std::mt19937 gen(11);
   std::uniform_real_distribution<double> u(0.0, 0.2);

@@ -1,0 +1,62 @@
+#include "cli/text_format.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace vibro::cli {
+
+std::string FormatMultipliers(const std::vector<std::complex<double>>& multipliers, int digits) {
+  std::vector<bool> used(multipliers.size(), false);
+  std::string out;
+  const auto real_enough = [](std::complex<double> m) {
+    return std::abs(m.imag()) <= 1e-12 * std::max(1.0, std::abs(m));
+  };
+  for (size_t i = 0; i < multipliers.size(); ++i) {
+    if (used[i]) continue;
+    used[i] = true;
+    const auto m = multipliers[i];
+    std::string item;
+    if (real_enough(m)) {
+      item = fmt::format("{:.{}g}", m.real(), digits);
+    } else {
+      // Its conjugate, if present, is folded into a ± pair.
+      for (size_t j = i + 1; j < multipliers.size(); ++j)
+        if (!used[j] && std::abs(multipliers[j] - std::conj(m)) <= 1e-9 * std::max(1.0, std::abs(m))) {
+          used[j] = true;
+          item = fmt::format("{:.{}g} ± {:.{}g}i", m.real(), digits, std::abs(m.imag()), digits);
+          break;
+        }
+      if (item.empty())
+        item = fmt::format("{:.{}g} {} {:.{}g}i", m.real(), digits, m.imag() < 0 ? '-' : '+',
+                           std::abs(m.imag()), digits);
+    }
+    out += fmt::format("{}{} (|μ| = {:.{}g})", out.empty() ? "" : ", ", item, std::abs(m), digits);
+  }
+  return out;
+}
+
+std::string AttractorText(const Attractor& a, double restitution, const std::string& indent) {
+  std::string s = fmt::format("{}attractor    {}", indent, a.kind);
+  if (a.period) s += fmt::format(", period {}", *a.period);
+  if (a.impacts_per_period)
+    s += fmt::format(", {} impact{} per orbit period", *a.impacts_per_period,
+                     *a.impacts_per_period == 1 ? "" : "s");
+  if (a.sticking_fraction) s += fmt::format(", sticking fraction {:.6f}", *a.sticking_fraction);
+  s += "\n";
+  if (!a.stick_phases.empty() || a.impact_phases.empty()) {
+    std::string p;
+    for (const auto& [b, e] : a.stick_phases) p += fmt::format("{}[{:.6f}, {:.6f}]", p.empty() ? "" : " ", b, e);
+    s += fmt::format("{}stick phases {}\n", indent, p.empty() ? "none" : p);
+  }
+  for (size_t k = 0; k < a.impact_phases.size(); ++k) {
+    const double before = k < a.impact_velocities.size() ? a.impact_velocities[k] : std::nan("");
+    s += fmt::format("{}{}phase {:.6f}, ẋ_B before {:.6g}{}\n", indent, k == 0 ? "impacts      " : "             ",
+                     a.impact_phases[k], before,
+                     std::isnan(restitution) ? "" : fmt::format(", after {:.6g}", -restitution * before));
+  }
+  return s;
+}
+
+}  // namespace vibro::cli
