@@ -4,6 +4,7 @@
 #include <string>
 
 #include "vibro/attractor.hpp"
+#include "vibro/branch_check.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -24,6 +25,11 @@ std::string SimulationJson(const Scene& scene, const RunResult& result, const At
 
 // `vibro orbit --json` (CONTRACT §2).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+
+// `vibro validate --json`: {"points": [{"value", "verdict", "detail", "distance", "period",
+// "stable", "floquet_multipliers", "sticking_fraction", "simulated_distance"}...],
+// "disagreements": N}; vibro's own values (null where no orbit converged).
+std::string ValidationJson(const std::vector<PointCheck>& checks);
 
 // `vibro continue --json` (CONTRACT §2).
 std::string BranchJson(const Branch& branch);
