@@ -11,6 +11,7 @@
 #include "vibro/poincare.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/scene.hpp"
+#include "vibro/score.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
 
@@ -30,6 +31,12 @@ std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
 // "stable", "floquet_multipliers", "sticking_fraction", "simulated_distance"}...],
 // "disagreements": N}; vibro's own values (null where no orbit converged).
 std::string ValidationJson(const std::vector<PointCheck>& checks);
+
+// `vibro score --json`: {"period", "engine", "chatter", "max_time_error", "max_velocity_error",
+// "kinds": [{"kind", "theirs", "ours", "matched", "max_time_error", "mean_time_error",
+// "max_velocity_error"}], "first_divergence": {"t", "kind", "why", "ours_t"} or null}; errors
+// relative to T (times) and to the largest impact speed (velocities).
+std::string ScoreJson(const ScoreReport& report, const Scene& scene);
 
 // `vibro continue --json` (CONTRACT §2).
 std::string BranchJson(const Branch& branch);

@@ -22,3 +22,12 @@ struct ValidateArgs {
   bool json = false;
 };
 int RunValidate(const ValidateArgs& args);  // exit code: 0, 4 when a point disagrees
+
+// `vibro score SCENE EVENTS.csv` (cmd_score.cpp).
+struct ScoreArgs {
+  std::string scene, csv;
+  std::vector<std::string> sets;
+  double window = 0.05, tolerance = 1e-6;
+  bool json = false;
+};
+int RunScore(const ScoreArgs& args);

@@ -828,6 +828,16 @@ int main(int argc, char** argv) {
   validate->add_option("--sticking-tolerance", val.sticking_tolerance, "largest difference of sticking fractions (default 1e-6)");
   validate->add_flag("--json", val.json, "print one JSON object on stdout");
   validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
+  CLI::App* score = app.add_subcommand("score", "score another simulator's events against vibro's run of the scene");
+  ScoreArgs sco;
+  score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
+  score->add_option("EVENTS", sco.csv, "events CSV: t,kind[,velocity]")->required();
+  score->add_option("--set", sco.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  score->add_option("--window", sco.window, "match events at most WINDOW·T apart (default 0.05)");
+  score->add_option("--tolerance", sco.tolerance, "a time error above TOLERANCE·T is a divergence (default 1e-6)");
+  score->add_flag("--json", sco.json, "print one JSON object on stdout");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
 
@@ -870,6 +880,7 @@ int main(int argc, char** argv) {
     }
     if (*plot) return RunPlot(file_path, plot_prefix, plot_overlay);
     if (*check) return RunCheck(scene_path, sets, json);
+    if (*score) return RunScore(sco);
     if (*validate) {
       val.kind = val_kind == "impact"     ? vibro::OrbitKind::kImpact
                  : val_kind == "sticking" ? vibro::OrbitKind::kSticking

@@ -92,6 +92,33 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   return j.dump();
 }
 
+std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
+  nlohmann::json j;
+  j["period"] = r.period;
+  j["engine"] = ToString(scene.run.engine);
+  j["chatter"] = ToString(scene.run.chatter);
+  j["max_time_error"] = r.max_time_error;
+  j["max_velocity_error"] = OrNull(r.max_velocity_error);
+  auto kinds = nlohmann::json::array();
+  for (const auto& k : r.kinds)
+    kinds.push_back({{"kind", ToString(k.kind)},
+                     {"theirs", k.theirs},
+                     {"ours", k.ours},
+                     {"matched", k.matched},
+                     {"max_time_error", k.max_time_error},
+                     {"mean_time_error", k.mean_time_error},
+                     {"max_velocity_error", OrNull(k.max_velocity_error)}});
+  j["kinds"] = kinds;
+  if (r.divergence)
+    j["first_divergence"] = {{"t", r.divergence->t},
+                             {"kind", ToString(r.divergence->kind)},
+                             {"why", r.divergence->why},
+                             {"ours_t", OrNull(r.divergence->ours_t)}};
+  else
+    j["first_divergence"] = nullptr;
+  return j.dump();
+}
+
 std::string ValidationJson(const std::vector<PointCheck>& checks) {
   nlohmann::json j;
   auto points = nlohmann::json::array();
