@@ -27,6 +27,10 @@ struct ScoreOptions {
 struct KindScore {
   EventKind kind;
   long long theirs = 0, ours = 0, matched = 0;
+  // Their impacts left unmatched between the last impact vibro resolves and vibro's predicted
+  // accumulation point (+ tolerance·T): the tail of a chattering sequence vibro sums up (MODEL §5.4), not a
+  // divergence.
+  long long in_accumulation = 0;
   double max_time_error = 0;   // max |t_theirs − t_ours| / T over matched events
   double mean_time_error = 0;  // mean of the same
   std::optional<double> max_velocity_error;  // max |Δẋ_B⁻| / max |ẋ_B⁻| (ours), when given

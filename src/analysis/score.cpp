@@ -24,19 +24,35 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
   std::map<EventKind, std::vector<const TheirEvent*>> their_kind;
   for (const auto& e : theirs) their_kind[e.kind].push_back(&e);
 
-  // Per kind, in time order: each of theirs to the nearest of ours not matched yet (monotone).
+  // Per kind, in order (the n-th impact of a chattering sequence with the n-th, even where the
+  // impacts are closer together than the time error): the two lists are walked together, a pair
+  // within window·T matches, otherwise the earlier event is left unmatched.
   std::map<const TheirEvent*, const Event*> match;
   for (auto& [kind, list] : their_kind) {
     const auto& mine = by_kind[kind];
-    size_t j = 0;
-    for (const TheirEvent* e : list) {
-      while (j + 1 < mine.size() && std::abs(mine[j + 1]->t - e->t) <= std::abs(mine[j]->t - e->t)) ++j;
-      if (j < mine.size() && std::abs(mine[j]->t - e->t) <= opt.window * T) {
-        match[e] = mine[j];
+    size_t i = 0, j = 0;
+    while (i < list.size() && j < mine.size()) {
+      if (std::abs(mine[j]->t - list[i]->t) <= opt.window * T) {
+        match[list[i++]] = mine[j++];
+      } else if (list[i]->t < mine[j]->t) {
+        ++i;
+      } else {
         ++j;
       }
     }
   }
+  // vibro's accumulation intervals: from the last impact it resolved to the accumulation point.
+  std::vector<std::pair<double, double>> tails;
+  double last_impact = -1e300;
+  for (const auto& e : ours) {
+    if (e.kind == EventKind::kImpact) last_impact = e.t;
+    if (e.kind == EventKind::kAccumulation) tails.emplace_back(last_impact, e.t);
+  }
+  const auto in_tail = [&](double t) {
+    for (const auto& [a, b] : tails)
+      if (t > a && t <= b + opt.tolerance * T) return true;  // (the point itself is known to ±tolerance)
+    return false;
+  };
   std::map<EventKind, KindScore> score;
   for (const auto& [kind, list] : by_kind) {
     score[kind].kind = kind;
@@ -60,6 +76,10 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
         s.max_velocity_error = std::max(s.max_velocity_error.value_or(0.0), dv);
         rep.max_velocity_error = std::max(rep.max_velocity_error.value_or(0.0), dv);
       }
+    }
+    if (!m && e.kind == EventKind::kImpact && in_tail(e.t)) {
+      ++s.in_accumulation;
+      continue;
     }
     if (!rep.divergence && (!m || err > opt.tolerance)) {
       rep.divergence = Divergence{e.t, e.kind, m ? fmt::format("time error {:.3g} T", err) : "unmatched",

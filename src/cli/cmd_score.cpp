@@ -48,11 +48,11 @@ int RunScore(const ScoreArgs& a) {
   } else {
     fmt::print("scene        {} (engine {}, chatter {}), T = {:.10g}, {} periods\n", a.scene,
                vibro::ToString(scene.run.engine), vibro::ToString(scene.run.chatter), T, scene.run.periods);
-    fmt::print("{:<14} {:>8} {:>8} {:>8} {:>14} {:>14} {:>14}\n", "kind", "theirs", "vibro", "matched",
-               "max |dt|/T", "mean |dt|/T", "max |dv|/|v|");
+    fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>14} {:>14} {:>14}\n", "kind", "theirs", "vibro", "matched",
+               "in acc.", "max |dt|/T", "mean |dt|/T", "max |dv|/|v|");
     for (const auto& k : rep.kinds)
-      fmt::print("{:<14} {:>8} {:>8} {:>8} {:>14.3e} {:>14.3e} {:>14}\n", vibro::ToString(k.kind), k.theirs, k.ours,
-                 k.matched, k.max_time_error, k.mean_time_error,
+      fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>14.3e} {:>14.3e} {:>14}\n", vibro::ToString(k.kind), k.theirs,
+                 k.ours, k.matched, k.in_accumulation, k.max_time_error, k.mean_time_error,
                  k.max_velocity_error ? fmt::format("{:.3e}", *k.max_velocity_error) : "-");
     if (rep.divergence)
       fmt::print("first divergence at t = {:.15g} ({}): {}{}\n", rep.divergence->t, vibro::ToString(rep.divergence->kind),

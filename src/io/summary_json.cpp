@@ -105,6 +105,7 @@ std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
                      {"theirs", k.theirs},
                      {"ours", k.ours},
                      {"matched", k.matched},
+                     {"in_accumulation", k.in_accumulation},
                      {"max_time_error", k.max_time_error},
                      {"mean_time_error", k.mean_time_error},
                      {"max_velocity_error", OrNull(k.max_velocity_error)}});
