@@ -256,10 +256,10 @@ OrbitResult SolveOrbit(const System& sys, const Scene& scene, const OrbitRequest
   }
   OrbitResult out;
   for (OrbitKind k : kinds) {
+    // The same request (and start) as given: FindOrbit searches departures of several phases and
+    // speeds for an impact orbit only when neither a start nor a guess is given.
     OrbitRequest r = req;
     r.kind = k;
-    r.start = start;  // the same start as the transient above (FindOrbit prefers a guess)
-    r.guess_phase.reset();
     out = FindOrbit(sys, scene, r);
     if (out.status == "converged") break;
   }
