@@ -186,14 +186,17 @@ with tempfile.TemporaryDirectory() as d:
     check("orbit --transient 0", p.returncode == 0 and o["attractor_kind"] == "impact-periodic"
           and abs(o["floquet_multipliers"][0][0] - 4.2553) < 1e-3 and o["stable"] is False
           and 1e-7 < o["distance_from_start"] < 1e-5, o)
-    # Not converged: stable is null, and the hints apply to the command.
-    p = run("orbit", fig5, "--kind", "impact", "--json")
+    # Not converged: stable is null, and the hints apply to the command. From this start the
+    # transient reaches the stable impact orbit, so there is no sticking orbit to find.
+    start = ["--set", "initial.time=0.51387", "--set", "initial.displacement=[1.0]", "--set",
+             "initial.velocity=[0.27569]"]
+    p = run("orbit", fig5, "--kind", "sticking", *start, "--json")
     o = json.loads(p.stdout)
-    check("orbit no-orbit: stable null", p.returncode == 3 and o["stable"] is None and o["reached"] == "sticking-periodic", o)
-    check("orbit hint names --kind sticking", "--kind sticking" in p.stderr, p.stderr)
-    p = run("continue", fig5, "--kind", "impact", "--param", "excitation.amplitude", "--to", "1.2")
-    check("continue hint has no --guess", p.returncode == 3 and "--guess" not in p.stderr + p.stdout
-          and "--kind sticking" in p.stderr, p.stderr + p.stdout)
+    check("orbit no-orbit: stable null", p.returncode == 3 and o["stable"] is None and o["reached"] == "impact-periodic", o)
+    check("orbit hint names --kind impact", "--kind impact" in p.stderr, p.stderr)
+    p = run("continue", fig5, "--kind", "sticking", *start, "--param", "excitation.amplitude", "--to", "1.2")
+    check("continue hint: --kind impact, no --guess", p.returncode == 3 and "--guess" not in p.stderr + p.stdout
+          and "--kind impact" in p.stderr, p.stderr + p.stdout)
 
     # vibro score: another simulator's events against vibro's run.
     def events_of(tag, *sets):
