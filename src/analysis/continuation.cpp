@@ -71,10 +71,12 @@ class Problem {
     const auto F = Map(z, lambda, &DF);
     const double h = 1e-6 * std::max(1.0, std::abs(lambda));
     const auto Fp = Map(z, lambda + h, nullptr), Fm = Map(z, lambda - h, nullptr);
-    if (!F || !Fp || !Fm) return e;
+    // At an end of the key's valid range (a damping ratio of 0): a one-sided difference.
+    if (!F || (!Fp && !Fm)) return e;
     e.G = *F - z;
     e.Jz = DF - Eigen::MatrixXd::Identity(z.size(), z.size());
-    e.Jl = (*Fp - *Fm) / (2 * h);
+    e.Jl = Fp && Fm ? Eigen::VectorXd((*Fp - *Fm) / (2 * h)) : Fp ? Eigen::VectorXd((*Fp - *F) / h)
+                                                                  : Eigen::VectorXd((*F - *Fm) / h);
     e.ok = true;
     return e;
   }

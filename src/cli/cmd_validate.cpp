@@ -78,8 +78,10 @@ int RunValidate(const ValidateArgs& a) {
   const auto loaded = vibro::LoadScene(a.scene, a.sets);
   if (!vibro::SceneNumber(loaded.text_as_run, a.param))
     throw vibro::InputError({fmt::format("--param {}: not a numeric key of the scene (give it in the scene "
-                                         "or with --set {}=VALUE)",
-                                         a.param, a.param)});
+                                         "or with --set {})",
+                                         a.param, a.param.find('[') == std::string::npos
+                                                      ? a.param + "=VALUE"
+                                                      : a.param.substr(0, a.param.find('[')) + "=[...] (the whole array)")});
   std::vector<std::string> problems;
   if (!(a.tolerance > 0)) problems.push_back(fmt::format("--tolerance {}: expected a positive number", a.tolerance));
   if (a.period < 0) problems.push_back(fmt::format("--period {}: expected Q ≥ 1", a.period));

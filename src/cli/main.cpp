@@ -355,8 +355,10 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
     throw vibro::InputError({fmt::format("--param {}: not a numeric key of the scene (give it in the "
-                                         "scene or with --set {}=VALUE)",
-                                         key, key)});
+                                         "scene or with --set {})",
+                                         key, key.find('[') == std::string::npos
+                                                  ? key + "=VALUE"
+                                                  : key.substr(0, key.find('[')) + "=[...] (the whole array)")});
   vibro::ContinuationRequest req;
   req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = *from;

@@ -171,6 +171,13 @@ with tempfile.TemporaryDirectory() as d:
     o = json.loads(q.stdout)
     check("matrix entry = whole matrix", abs(o["sticking_fraction"] - j["points"][-1]["sticking_fraction"]) < 1e-8,
           (o["sticking_fraction"], j["points"][-1]["sticking_fraction"]))
+    # A damping ratio from 0 (the end of its range: one-sided differences in λ there).
+    p = run("continue", chain2, "--set", "structure.damping_ratios=[0.0,0.0]", "--param", "structure.damping_ratios[0]",
+            "--to", "0.05", "--json")
+    j = json.loads(p.stdout)
+    o = json.loads(run("orbit", chain2, "--set", "structure.damping_ratios=[0.05,0.0]", "--json").stdout)
+    check("continue a damping ratio from 0", p.returncode == 0 and j["points"][-1]["value"] == 0.05
+          and abs(o["sticking_fraction"] - j["points"][-1]["sticking_fraction"]) < 1e-8, (p.stderr, j.get("end"), o))
     # A physical branch validates in physical coordinates (q, q_dot columns).
     rows = to_csv(os.path.join(d, "c2.h5"), os.path.join(d, "c2.csv"))
     check("physical CSV has both DOFs", "displacement_2" in rows[0] and "velocity_2" in rows[0], rows[0].keys())
