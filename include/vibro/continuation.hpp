@@ -34,7 +34,7 @@ struct ContinuationRequest {
   double step = 0;           // initial arclength step (0: |to − from|/50)
   double max_step = 0;       // (0: |to − from|/10)
   int max_points = 1000;
-  OrbitRequest orbit;        // how the first orbit is found
+  OrbitRequest orbit;        // how the first orbit is found (SolveOrbit, orbit_from_state.hpp)
   // Sticking fractions whose crossings along the branch are located (partitions, paper §5.4).
   std::vector<double> levels;
   const std::atomic<bool>* stop_requested = nullptr;  // polled between points
@@ -42,13 +42,23 @@ struct ContinuationRequest {
 };
 
 struct BranchPoint {
-  double value;
+  double value = 0;
   Attractor summary;  // sticking fraction, stick phases, impacts per period
   std::vector<std::complex<double>> multipliers;
-  bool stable;
+  bool stable = false;
   std::string signature;  // events over a period (orbit_probe.hpp: C, P, I, G, S, R)
   double x_B = 0;         // contact displacement at the section point
   double section_phase = 0;  // ωt0 of the section, mod 2π·period
+  // The whole orbit, so that a point can be checked, restarted or plotted later:
+  double section_time = 0;          // t0 of the section (a free state of the orbit)
+  Eigen::VectorXd X, V;             // modal state at t0, (n)
+  Eigen::VectorXd q, q_dot;         // physical DOFs at t0 (physical form; empty otherwise), (N)
+  struct Impact {
+    double phase;     // ωt mod 2π·period
+    double v_before;  // contact velocity ẋ_B just before
+    double v_after;   // and just after (−r·v_before)
+  };
+  std::vector<Impact> impacts;      // every impact of one period from t0, in time order
 };
 
 struct Bifurcation {

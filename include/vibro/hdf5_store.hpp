@@ -50,6 +50,21 @@ struct StoredRun {
   Attractor attractor;  // as written at the end (kind "" when the run did not finish)
 };
 
+// A group of small datasets written or read at once (/branch, /validation: hdf5_branch.hpp).
+struct H5Table {
+  struct Array {
+    std::string name;
+    std::vector<size_t> dims;  // shape (row-major); dims[0] may be 0
+    std::vector<double> data;  // stored as float64, or uint8 / int64 when `type` says so
+    char type = 'f';           // 'f' float64, 'u' uint8, 'i' int64
+  };
+  std::vector<Array> arrays;
+  std::vector<std::pair<std::string, std::vector<std::string>>> strings;  // 1-D string datasets
+  std::vector<std::pair<std::string, std::string>> text;                   // string attributes
+  std::vector<std::pair<std::string, long long>> integers;                 // integer attributes
+  const Array* Find(const std::string& name) const;
+};
+
 class Hdf5Store final : public Observer {
  public:
   // Creates (truncates) `path` and writes the header. Throws InputError when the destination
@@ -106,7 +121,10 @@ class Hdf5Store final : public Observer {
   // none), stable (uint8), x_B, section_phase, max_multiplier, stick_phases count, events
   // (strings), multipliers (N, m, 2) as [re, im] padded with NaN; attributes param, period, end,
   // status) and /bifurcations (value, kind, detail, bracket). Call before Finish.
-  void WriteBranch(const Branch& branch);
+  void WriteBranch(const Branch& branch);  // hdf5_branch.cpp
+
+  // Writes `table` into the new group `group` (absolute path). Call before Finish.
+  void WriteTable(const std::string& group, const H5Table& table);
 
   // Writes a partition: /partition with attributes param1, param2, levels and the tables
   // columns (value1, status), crossings (value1, level, value2) and boundaries (value1, value2,
@@ -132,5 +150,9 @@ class Hdf5Store final : public Observer {
 // Reads a stored run; `tail_periods` > 0 also loads the events and section rows of the last
 // tail_periods periods before the checkpoint. Throws InputError when the file is not a vibro run.
 StoredRun ReadStoredRun(const std::string& path, int tail_periods = 0);
+
+// Reads every dataset (numeric ones as float64) and attribute (strings and integers) of `group`.
+// Throws InputError naming the file and group when either is missing.
+H5Table ReadTable(const std::string& path, const std::string& group);
 
 }  // namespace vibro

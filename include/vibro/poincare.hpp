@@ -43,7 +43,10 @@ class TangentTracker final : public Observer {
   bool singular_ = false;
 };
 
-enum class OrbitKind { kSticking, kImpact };
+// kAuto: the kind of the orbit found (of the attractor after a transient, or of the orbit through
+// the start state); FindOrbit takes kSticking or kImpact only, SolveOrbit (orbit_from_state.hpp)
+// all three.
+enum class OrbitKind { kSticking, kImpact, kAuto };
 
 struct OrbitRequest {
   OrbitKind kind = OrbitKind::kSticking;
@@ -69,6 +72,10 @@ struct OrbitResult {
   std::vector<std::complex<double>> multipliers;      // eigenvalues of DP
   bool stable = false;
   Attractor summary;  // kind, sticking fraction, phases, impacts over one period of the orbit
+  // |z_start − z_orbit|∞ / (1 + |z_orbit|∞) in the start's own time frame (orbit_from_state.hpp);
+  // none when no orbit converged.
+  std::optional<double> distance_from_start;
+  std::string reached;  // no-orbit after a transient: the kind of attractor it reached
 };
 
 OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);

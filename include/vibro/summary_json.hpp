@@ -4,12 +4,14 @@
 #include <string>
 
 #include "vibro/attractor.hpp"
+#include "vibro/branch_check.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/scene.hpp"
+#include "vibro/score.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
 
@@ -24,6 +26,17 @@ std::string SimulationJson(const Scene& scene, const RunResult& result, const At
 
 // `vibro orbit --json` (docs/cli.md, docs/output.md).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+
+// `vibro validate --json`: {"points": [{"value", "verdict", "detail", "distance", "period",
+// "stable", "floquet_multipliers", "sticking_fraction", "simulated_distance"}...],
+// "disagreements": N}; vibro's own values (null where no orbit converged).
+std::string ValidationJson(const std::vector<PointCheck>& checks);
+
+// `vibro score --json`: {"period", "engine", "chatter", "max_time_error", "max_velocity_error",
+// "kinds": [{"kind", "theirs", "ours", "matched", "max_time_error", "mean_time_error",
+// "max_velocity_error"}], "first_divergence": {"t", "kind", "why", "ours_t"} or null}; errors
+// relative to T (times) and to the largest impact speed (velocities).
+std::string ScoreJson(const ScoreReport& report, const Scene& scene);
 
 // `vibro continue --json` (docs/cli.md, docs/output.md).
 std::string BranchJson(const Branch& branch);

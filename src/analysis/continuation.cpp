@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "analysis/orbit_probe.hpp"
+#include "vibro/orbit_from_state.hpp"
 
 namespace vibro {
 namespace {
@@ -70,10 +71,12 @@ class Problem {
     const auto F = Map(z, lambda, &DF);
     const double h = 1e-6 * std::max(1.0, std::abs(lambda));
     const auto Fp = Map(z, lambda + h, nullptr), Fm = Map(z, lambda - h, nullptr);
-    if (!F || !Fp || !Fm) return e;
+    // At an end of the key's valid range (a damping ratio of 0): a one-sided difference.
+    if (!F || (!Fp && !Fm)) return e;
     e.G = *F - z;
     e.Jz = DF - Eigen::MatrixXd::Identity(z.size(), z.size());
-    e.Jl = (*Fp - *Fm) / (2 * h);
+    e.Jl = Fp && Fm ? Eigen::VectorXd((*Fp - *Fm) / (2 * h)) : Fp ? Eigen::VectorXd((*Fp - *F) / h)
+                                                                  : Eigen::VectorXd((*F - *Fm) / h);
     e.ok = true;
     return e;
   }
@@ -108,6 +111,35 @@ class Problem {
   double phase_;
   int q_;
 };
+
+// Every impact of q periods of the orbit from the free state (X, V) at t0.
+std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene, double t0,
+                                           const Eigen::VectorXd& X, const Eigen::VectorXd& V, int q) {
+  struct Log final : Observer {
+    std::vector<Event> impacts;
+    void OnEvent(const Event& e) override {
+      if (e.kind == EventKind::kImpact) impacts.push_back(e);
+    }
+  } log;
+  Scene sc = scene;
+  sc.initial_time = t0;
+  sc.run.periods = q;
+  sc.run.samples_per_period = 0;
+  const InitialOverride here{t0, X, V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.observers = {&log};
+  Simulate(sys, sc, opt);
+  const double cycle = 2.0 * M_PI * q, w = sys.frequency();
+  std::vector<BranchPoint::Impact> out;
+  for (const auto& e : log.impacts) {
+    const double phase = std::fmod(std::fmod(w * t0, cycle) + 2.0 * M_PI * static_cast<double>(e.clock.period) +
+                                       w * e.clock.offset,
+                                   cycle);
+    out.push_back({phase, e.v_before, e.v_after});
+  }
+  return out;
+}
 
 // Unit null vector of the 2n × (2n+1) matrix [Jz Jλ], oriented like `previous`.
 Eigen::VectorXd Tangent(const Evaluation& e, const Eigen::VectorXd& previous) {
@@ -219,7 +251,7 @@ Branch Continue(const ContinuationRequest& req) {
   Branch br;
   const auto first_scene = req.scene_at(req.from);
   const System first_sys(first_scene);
-  const OrbitResult start = FindOrbit(first_sys, first_scene, req.orbit);
+  const OrbitResult start = SolveOrbit(first_sys, first_scene, req.orbit);
   if (start.status != "converged") {
     br.status = "no-orbit";
     br.end = "no orbit at the start: " + start.message;
@@ -238,8 +270,23 @@ Branch Continue(const ContinuationRequest& req) {
   const auto record = [&](const Point& pt) {
     const auto scene = p.SceneAt(pt.y[n2]);
     const System sys(*scene);
-    br.points.push_back({pt.y[n2], pt.orbit.summary, pt.orbit.multipliers, pt.orbit.stable,
-                         pt.probe.signature, sys.ContactDisplacement(pt.y.head(n)), p.phase()});
+    BranchPoint b;
+    b.value = pt.y[n2];
+    b.summary = pt.orbit.summary;
+    b.multipliers = pt.orbit.multipliers;
+    b.stable = pt.orbit.stable;
+    b.signature = pt.probe.signature;
+    b.x_B = sys.ContactDisplacement(pt.y.head(n));
+    b.section_phase = p.phase();
+    b.section_time = p.SectionTime(*scene);
+    b.X = pt.y.head(n);
+    b.V = pt.y.segment(n, n);
+    if (sys.physical()) {
+      b.q = sys.mode_shapes() * b.X;
+      b.q_dot = sys.mode_shapes() * b.V;
+    }
+    b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
+    br.points.push_back(std::move(b));
     if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };
   Eigen::VectorXd y0(n2 + 1);
@@ -368,14 +415,25 @@ Branch Continue(const ContinuationRequest& req) {
           br.crossings.push_back({level, at, bracket});
         }
       }
+      if ((l_new - req.to) * span >= 0) {
+        // Past the end value: the point at λ = to exactly, corrected with λ held fixed (the
+        // hyperplane λ = to instead of the arclength one), from the secant between cur and next.
+        const double w = (req.to - l_old) / (l_new - l_old);
+        Eigen::VectorXd y = cur.y + w * (next->y - cur.y);
+        y[n2] = req.to;
+        Eigen::VectorXd e_lambda = Eigen::VectorXd::Zero(n2 + 1);
+        e_lambda[n2] = 1.0;
+        int iters = 0;
+        const auto yc = Correct(p, y, e_lambda, iters);
+        const auto at_end = yc ? p.Examine(*yc) : std::nullopt;
+        record(at_end && SameFamily(cur, *at_end) ? *at_end : *next);
+        br.end = "reached the end value";
+        return br;
+      }
       cur = *next;
       t = t_new;
       section_fresh = false;
       record(cur);
-      if ((l_new - req.to) * span >= 0) {
-        br.end = "reached the end value";
-        return br;
-      }
       ds = std::min(ds * 1.5, ds_max);
     } else if (ds > ds_retry) {
       ds *= 0.5;  // the corrector may just need a shorter step, or jumped to another orbit

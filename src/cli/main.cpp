@@ -26,6 +26,8 @@
 #include "vibro/distribute.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/hdf5_branch.hpp"
+#include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
@@ -33,6 +35,7 @@
 #include "vibro/system.hpp"
 #include "cli/progress.hpp"
 #include "cli/text_format.hpp"
+#include "cli/cli_common.hpp"
 
 namespace {
 
@@ -116,6 +119,9 @@ vibro::Scene SceneWith(const std::string& path, std::vector<std::string> sets, c
   return vibro::LoadScene(path, sets).scene;
 }
 
+}  // namespace
+
+// Shared with the other command files (cli_common.hpp).
 vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys) {
   const auto& sc = loaded.scene;
   vibro::StoreHeader h;
@@ -145,6 +151,8 @@ vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::Syste
   h.frequency = sys.frequency();
   return h;
 }
+
+namespace {
 
 // restitution: NaN when unknown (then the velocities after impact are not printed).
 void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan("")) {
@@ -276,22 +284,38 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys)).reset();  // fail early
-  const auto orbit = vibro::FindOrbit(sys, loaded.scene, req);
-  if (!out.empty() && orbit.status == "converged") WriteOrbit(out, loaded, sys, orbit);
+  const auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
+  const bool converged = orbit.status == "converged";
+  if (!out.empty() && converged) WriteOrbit(out, loaded, sys, orbit);
   if (json) {
     fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
   } else {
     fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
     fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
                orbit.newton_iterations, orbit.residual);
+    if (orbit.distance_from_start)
+      fmt::print("from start   distance {:.3g} ({})\n", *orbit.distance_from_start,
+                 req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)
+                                           : "Newton started at the start state");
     PrintAttractor(orbit.summary, loaded.scene.restitution);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
     fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
                                      : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
                                                                    : "-");
-    fmt::print("stable       {}\n", orbit.stable ? "yes" : "no");
+    fmt::print("stable       {}\n", !converged ? "-" : orbit.stable ? "yes" : "no");
   }
-  return orbit.status == "converged" ? 0 : kExitNumerical;
+  if (!converged) {
+    const bool sticking = req.kind == vibro::OrbitKind::kSticking, impact = req.kind == vibro::OrbitKind::kImpact;
+    std::string hint = "vibro: try ";
+    if (sticking && orbit.reached == "impact-periodic") hint += "--kind impact (the attractor has impacts and no sticking), ";
+    if (impact && orbit.reached == "sticking-periodic") hint += "--kind sticking (the attractor sticks), ";
+    hint += req.transient_periods > 0
+                ? "--guess PHASE[,VELOCITY], --period Q, or --transient 0 from a state on the orbit "
+                  "([initial], or --set initial.time=T --set initial.displacement=[...] --set initial.velocity=[...])"
+                : "--period Q, another start state, or --transient N to start Newton after N periods";
+    fmt::print(stderr, "{}\n", hint);
+  }
+  return converged ? 0 : kExitNumerical;
 }
 
 int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json,
@@ -326,13 +350,30 @@ std::string NotANumericKey(const std::string& option, const std::string& key) {
                      option, key, key);
 }
 
-int RunContinue(const std::string& path, const std::vector<std::string>& sets, bool json,
+int RunContinue(const std::string& path, std::vector<std::string> sets, bool json,
                 const std::string& key, double to, double step, int max_points,
-                const vibro::OrbitRequest& orbit, const std::string& out) {
+                vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
+                long long restart_point) {
+  if (!restart_file.empty()) {
+    // Restart from a stored point: its parameter value, period and section state (Newton from
+    // there, no transient).
+    const auto pt = vibro::ReadBranchPoint(restart_file, restart_point);
+    if (pt.param != key)
+      throw vibro::InputError({fmt::format("--from {}: the branch varies {}, not --param {}", restart_file,
+                                           pt.param, key)});
+    sets.push_back(fmt::format("{}={:.17g}", key, pt.value));
+    orbit.start = vibro::InitialOverride{pt.section_time, pt.X, pt.V};
+    orbit.transient_periods = 0;
+    orbit.period = pt.period;
+  }
   const auto loaded = vibro::LoadScene(path, sets);
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
-    throw vibro::InputError({NotANumericKey("--param", key)});
+    throw vibro::InputError({key.find('[') == std::string::npos
+                                 ? NotANumericKey("--param", key)
+                                 : fmt::format("--param {}: not a numeric entry of the scene (give the "
+                                               "array in the scene or with --set {}=[...])",
+                                               key, key.substr(0, key.find('[')))});
   vibro::ContinuationRequest req;
   req.scene_at = [&](double v) { return SceneWith(path, sets, key, v); };
   req.from = *from;
@@ -360,6 +401,11 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
     if (!branch.points.empty()) last = branch.points.back().summary;
     store->Finish(r, last);
   }
+  if (branch.status == "no-orbit")
+    fmt::print(stderr, "vibro: try {}--period Q, or --from FILE.h5 --point K to start from a stored branch point\n",
+               orbit.kind == vibro::OrbitKind::kSticking   ? "--kind impact or --kind auto, "
+               : orbit.kind == vibro::OrbitKind::kImpact ? "--kind sticking or --kind auto, "
+                                                         : "--kind sticking|impact, ");
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
@@ -712,8 +758,12 @@ int main(int argc, char** argv) {
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
   add_scene_options(orbit);
   vibro::OrbitRequest orbit_req;
-  std::string orbit_kind = "sticking", orbit_guess;
-  orbit->add_option("--kind", orbit_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
+  std::string orbit_kind = "auto", orbit_guess;
+  orbit->add_option("--kind", orbit_kind, "auto | sticking | impact (default auto: the kind of the attractor or of the start state)")
+      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+  orbit->add_option("--transient", orbit_req.transient_periods,
+                    "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
+      ->check(CLI::NonNegativeNumber);
   orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)");
   orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit");
   orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
@@ -730,9 +780,16 @@ int main(int argc, char** argv) {
   cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)");
   cont->add_option("--max-points", cont_points, "most points on the branch");
   cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)");
-  std::string cont_kind = "sticking", cont_out;
+  std::string cont_kind = "auto", cont_out, cont_from;
+  long long cont_point = -1;
+  int cont_transient = 200;
   cont->add_option("--out", cont_out, "write the branch and its bifurcations to HDF5");
-  cont->add_option("--kind", cont_kind, "sticking | impact")->check(CLI::IsMember({"sticking", "impact"}));
+  cont->add_option("--kind", cont_kind, "auto | sticking | impact (default auto)")
+      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+  cont->add_option("--transient", cont_transient, "periods simulated before the first Newton (default 200; 0: from [initial])")
+      ->check(CLI::NonNegativeNumber);
+  auto* cont_from_opt = cont->add_option("--from", cont_from, "restart from a branch stored by vibro continue --out");
+  cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(cont_from_opt);
   StudyArgs study_args;
   CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
   CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
@@ -780,6 +837,33 @@ int main(int argc, char** argv) {
   sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
   std::string sweep_out;
   sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
+  CLI::App* validate = app.add_subcommand("validate", "confirm or refute, point by point, a branch of orbits from another tool");
+  ValidateArgs val;
+  std::string val_kind = "auto";
+  validate->add_option("SCENE", val.scene, "scene file (TOML)")->required();
+  validate->add_option("BRANCH", val.csv, "branch CSV: value,time,displacement_1..n,velocity_1..n[,period,stable,sticking_fraction]")
+      ->required();
+  validate->add_option("--set", val.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  validate->add_option("--param", val.param, "the numeric scene key the column value sets")->required();
+  validate->add_option("--kind", val_kind, "auto | sticking | impact (default auto: any)")
+      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+  validate->add_option("--period", val.period, "period of the orbits where a row claims none (default: the first return)");
+  validate->add_option("--tolerance", val.tolerance, "largest relative distance from a claimed state to the orbit (default 1e-6)");
+  validate->add_option("--sticking-tolerance", val.sticking_tolerance, "largest difference of sticking fractions (default 1e-6)");
+  validate->add_flag("--json", val.json, "print one JSON object on stdout");
+  validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
+  CLI::App* score = app.add_subcommand("score", "score another simulator's events against vibro's run of the scene");
+  ScoreArgs sco;
+  score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
+  score->add_option("EVENTS", sco.csv, "events CSV: t,kind[,velocity]")->required();
+  score->add_option("--set", sco.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
+      ->take_all()
+      ->allow_extra_args(false);
+  score->add_option("--window", sco.window, "match events at most WINDOW·T apart (default 0.05)");
+  score->add_option("--tolerance", sco.tolerance, "a time error above TOLERANCE·T is a divergence (default 1e-6)");
+  score->add_flag("--json", sco.json, "print one JSON object on stdout");
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   add_scene_options(check);
   std::string check_precision = "double";
@@ -816,7 +900,9 @@ int main(int argc, char** argv) {
     if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume);
     if (*info) return RunInfo(file_path, json);
     if (*orbit) {
-      orbit_req.kind = orbit_kind == "impact" ? vibro::OrbitKind::kImpact : vibro::OrbitKind::kSticking;
+      orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact
+                       : orbit_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                                  : vibro::OrbitKind::kAuto;
       if (!orbit_guess.empty()) {
         const auto comma = orbit_guess.find(',');
         try {
@@ -836,6 +922,13 @@ int main(int argc, char** argv) {
                                  plot_window.empty() ? "" : " --time-window=" + plot_window));
     }
     if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
+    if (*score) return RunScore(sco);
+    if (*validate) {
+      val.kind = val_kind == "impact"     ? vibro::OrbitKind::kImpact
+                 : val_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                          : vibro::OrbitKind::kAuto;
+      return RunValidate(val);
+    }
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
                       sweep_record, sweep_one_way, sweep_out);
@@ -848,8 +941,14 @@ int main(int argc, char** argv) {
     if (*cont) {
       vibro::OrbitRequest req;
       req.period = cont_period;
-      req.kind = cont_kind == "impact" ? vibro::OrbitKind::kImpact : vibro::OrbitKind::kSticking;
-      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out);
+      req.kind = cont_kind == "impact"     ? vibro::OrbitKind::kImpact
+                 : cont_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                           : vibro::OrbitKind::kAuto;
+      req.transient_periods = cont_transient;
+      if (!cont_from.empty() && cont_point < 0)
+        throw vibro::InputError({"--from " + cont_from + ": give the point to restart from with --point K"});
+      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out,
+                         cont_from, cont_point);
     }
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);

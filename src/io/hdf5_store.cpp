@@ -1112,58 +1112,87 @@ void Hdf5Store::WriteGroup(const std::string& group,
 }
 
 
-void Hdf5Store::WriteBranch(const Branch& b) {
-  const hid_t f = impl_->file.get();
-  const Handle g = NewGroup(f, "/branch");
-  const size_t N = b.points.size();
-  size_t m = 0;
-  for (const auto& pt : b.points) m = std::max(m, pt.multipliers.size());
-  std::vector<double> value, sp, xb, phase, lead, phases, mu(N * std::max<size_t>(m, 1) * 2, NAN);
-  std::vector<std::uint8_t> stable;
-  std::vector<std::string> events;
-  for (size_t i = 0; i < N; ++i) {
-    const auto& pt = b.points[i];
-    value.push_back(pt.value);
-    sp.push_back(pt.summary.sticking_fraction.value_or(NAN));
-    xb.push_back(pt.x_B);
-    phase.push_back(pt.section_phase);
-    phases.push_back(static_cast<double>(pt.summary.stick_phases.size()));
-    stable.push_back(pt.stable ? 1 : 0);
-    events.push_back(pt.signature);
-    double l = 0;
-    for (size_t k = 0; k < pt.multipliers.size(); ++k) {
-      l = std::max(l, std::abs(pt.multipliers[k]));
-      mu[(i * m + k) * 2] = pt.multipliers[k].real();
-      mu[(i * m + k) * 2 + 1] = pt.multipliers[k].imag();
+const H5Table::Array* H5Table::Find(const std::string& name) const {
+  for (const auto& a : arrays)
+    if (a.name == name) return &a;
+  return nullptr;
+}
+
+void Hdf5Store::WriteTable(const std::string& group, const H5Table& t) {
+  const Handle g = NewGroup(impl_->file.get(), group.c_str());
+  for (const auto& a : t.arrays) {
+    const std::vector<hsize_t> dims(a.dims.begin(), a.dims.end());
+    if (a.type == 'u') {
+      std::vector<std::uint8_t> v(a.data.begin(), a.data.end());
+      WriteDataset(g.get(), a.name.c_str(), H5T_STD_U8LE, H5T_NATIVE_UINT8, v.data(), dims);
+    } else if (a.type == 'i') {
+      std::vector<std::int64_t> v(a.data.begin(), a.data.end());
+      WriteDataset(g.get(), a.name.c_str(), H5T_STD_I64LE, H5T_NATIVE_INT64, v.data(), dims);
+    } else {
+      WriteDataset(g.get(), a.name.c_str(), H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, a.data.data(), dims);
     }
-    lead.push_back(l);
   }
-  WriteColumn(g.get(), "value", value);
-  WriteColumn(g.get(), "sticking_fraction", sp);
-  WriteColumn(g.get(), "x_B", xb);
-  WriteColumn(g.get(), "section_phase", phase);
-  WriteColumn(g.get(), "max_multiplier", lead);
-  WriteColumn(g.get(), "stick_phases", phases);
-  WriteDataset(g.get(), "stable", H5T_STD_U8LE, H5T_NATIVE_UINT8, stable.data(), {N});
-  WriteStrings(g.get(), "events", events);
-  WriteDataset(g.get(), "multipliers", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, mu.data(), {N, m, 2});
-  WriteString(g.get(), "param", b.param);
-  WriteInt(g.get(), "period", b.period);
-  WriteString(g.get(), "end", b.end);
-  WriteString(g.get(), "status", b.status);
-  const Handle bg = NewGroup(f, "/bifurcations");
-  std::vector<double> bv, bb;
-  std::vector<std::string> kind, detail;
-  for (const auto& x : b.bifurcations) {
-    bv.push_back(x.value);
-    bb.push_back(x.bracket);
-    kind.push_back(x.kind);
-    detail.push_back(x.detail);
+  for (const auto& [name, v] : t.strings) WriteStrings(g.get(), name.c_str(), v);
+  for (const auto& [name, v] : t.text) WriteString(g.get(), name.c_str(), v);
+  for (const auto& [name, v] : t.integers) WriteInt(g.get(), name.c_str(), v);
+}
+
+H5Table ReadTable(const std::string& path, const std::string& group) {
+  SilenceHdf5();
+  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file) throw InputError({fmt::format("{}: cannot open as an HDF5 file", path)});
+  if (H5Lexists(file.get(), group.c_str(), H5P_DEFAULT) <= 0)
+    throw InputError({fmt::format("{}: no group {} in this file", path, group)});
+  Handle g(Check(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), group.c_str()), H5Gclose);
+  H5Table t;
+  H5G_info_t info;
+  Check(H5Gget_info(g.get(), &info), group.c_str(), 0);
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    char name[256];
+    H5Lget_name_by_idx(g.get(), ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT);
+    Handle d(H5Dopen2(g.get(), name, H5P_DEFAULT), H5Dclose);
+    if (!d) continue;
+    Handle type(H5Dget_type(d.get()), H5Tclose);
+    Handle space(H5Dget_space(d.get()), H5Sclose);
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    std::vector<hsize_t> dims(static_cast<size_t>(std::max(rank, 0)));
+    H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+    const auto npts = static_cast<size_t>(H5Sget_simple_extent_npoints(space.get()));
+    if (H5Tget_class(type.get()) == H5T_STRING) {
+      Handle st = StringType();
+      std::vector<char*> p(npts, nullptr);
+      if (npts > 0) Check(H5Dread(d.get(), st.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), name, 0);
+      std::vector<std::string> v;
+      for (char* x : p) {
+        v.emplace_back(x ? x : "");
+        H5free_memory(x);
+      }
+      t.strings.emplace_back(name, v);
+    } else {
+      H5Table::Array a{name, std::vector<size_t>(dims.begin(), dims.end()), std::vector<double>(npts)};
+      if (npts > 0)
+        Check(H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, a.data.data()), name, 0);
+      t.arrays.push_back(std::move(a));
+    }
   }
-  WriteColumn(bg.get(), "value", bv);
-  WriteColumn(bg.get(), "bracket", bb);
-  WriteStrings(bg.get(), "kind", kind);
-  WriteStrings(bg.get(), "detail", detail);
+  std::vector<std::string> names;
+  H5Aiterate2(g.get(), H5_INDEX_NAME, H5_ITER_INC, nullptr,
+              [](hid_t, const char* attr, const H5A_info_t*, void* data) -> herr_t {
+                static_cast<std::vector<std::string>*>(data)->emplace_back(attr);
+                return 0;
+              },
+              &names);
+  for (const auto& attr : names) {
+    const char* name = attr.c_str();
+    Handle a(H5Aopen(g.get(), name, H5P_DEFAULT), H5Aclose);
+    if (!a) continue;
+    Handle type(H5Aget_type(a.get()), H5Tclose);
+    if (H5Tget_class(type.get()) == H5T_STRING)
+      t.text.emplace_back(name, ReadString(g.get(), name));
+    else if (H5Tget_class(type.get()) == H5T_INTEGER)
+      t.integers.emplace_back(name, ReadScalar<long long>(g.get(), name, H5T_NATIVE_LLONG).value_or(0));
+  }
+  return t;
 }
 
 void Hdf5Store::WritePartition(const std::string& param1, const std::string& param2,

@@ -318,6 +318,65 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
                                    where, key, e.description()));
     return;
   }
+  // KEY[i] or KEY[i][j]: one entry of an array or matrix of the scene (continuation of modal data,
+  // damping ratios, matrix entries). The matrices are symmetric: [i][j] also sets [j][i].
+  std::vector<size_t> index;
+  if (const auto bracket = key.find('['); bracket != std::string::npos) {
+    std::string rest = key.substr(bracket);
+    key.resize(bracket);
+    while (!rest.empty()) {
+      const auto close = rest.find(']');
+      size_t used = 0;
+      long long i = -1;
+      try {
+        if (rest[0] == '[' && close != std::string::npos) i = std::stoll(rest.substr(1, close - 1), &used);
+      } catch (const std::exception&) {
+        i = -1;
+      }
+      if (i < 0 || used != close - 1) {
+        messages.push_back(fmt::format("{}: {}{}: expected KEY[i] or KEY[i][j] with indices ≥ 0", where, key, rest));
+        return;
+      }
+      index.push_back(static_cast<size_t>(i));
+      rest.erase(0, close + 1);
+    }
+  }
+  if (!index.empty() && Schema().find(key) != Schema().end()) {
+    const auto* node = root.at_path(key).node();
+    const toml::array* arr = node ? node->as_array() : nullptr;
+    const auto* v = parsed.get("value");
+    if (!v || !(v->is_integer() || v->is_floating_point())) {
+      messages.push_back(fmt::format("{}: {}: an entry of an array takes a number", where, key));
+      return;
+    }
+    const double x = v->value<double>().value_or(0.0);
+    const auto entry = [&](size_t i, size_t j) -> toml::node* {
+      auto* a = root.at_path(key).as_array();
+      if (!a || i >= a->size()) return nullptr;
+      if (index.size() == 1) return a->get(i);
+      auto* row = a->get(i) ? a->get(i)->as_array() : nullptr;
+      return row && j < row->size() ? row->get(j) : nullptr;
+    };
+    const size_t i = index[0], j = index.size() > 1 ? index[1] : 0;
+    if (!arr || index.size() > 2 || !entry(i, j) || (index.size() == 2 && !entry(j, i))) {
+      messages.push_back(fmt::format("{}: {}: the scene has no such entry (give the whole array in the "
+                                     "scene or with --set {}=[...])",
+                                     where, text.substr(0, eq), key));
+      return;
+    }
+    const auto set = [&](size_t a, size_t b) {
+      auto* base = root.at_path(key).as_array();
+      if (index.size() == 1)
+        base->replace(base->cbegin() + static_cast<std::ptrdiff_t>(a), x);
+      else {
+        auto* row = base->get(a)->as_array();
+        row->replace(row->cbegin() + static_cast<std::ptrdiff_t>(b), x);
+      }
+    };
+    set(i, j);
+    if (index.size() == 2) set(j, i);
+    return;
+  }
   if (Schema().find(key) == Schema().end()) {
     const std::string hint = Suggest(key);
     messages.push_back(fmt::format("{}: {}: unknown key{}", where, key,

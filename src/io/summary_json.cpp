@@ -71,24 +71,82 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   j["status"] = o.status;
   if (!o.message.empty()) j["message"] = o.message;
   j["period"] = o.period;
-  if (kind == OrbitKind::kSticking) {
+  // kAuto: both sets of fields (the orbit's kind is attractor_kind).
+  if (kind != OrbitKind::kImpact) {
     j["sticking_fraction"] = OrNull(o.summary.sticking_fraction);
     auto phases = nlohmann::json::array();
     for (const auto& [s, e] : o.summary.stick_phases) phases.push_back({s, e});
     j["stick_phases"] = phases;
     j["impacts_per_period"] = OrNull(o.summary.impacts_per_period);
-  } else {
+  }
+  if (kind != OrbitKind::kSticking) {
     j["impact_phases"] = o.summary.impact_phases;
     j["impact_velocities"] = o.summary.impact_velocities;
   }
   auto mu = nlohmann::json::array();
   for (const auto& m : o.multipliers) mu.push_back({m.real(), m.imag()});
   j["floquet_multipliers"] = mu;
-  j["stable"] = o.stable;
+  // Stability is a property of a converged orbit only.
+  j["stable"] = o.status == "converged" ? nlohmann::json(o.stable) : nlohmann::json(nullptr);
+  j["distance_from_start"] = OrNull(o.distance_from_start);
+  if (!o.reached.empty()) j["reached"] = o.reached;
   j["newton_iterations"] = o.newton_iterations;
   j["residual"] = o.residual;
   j["section_time"] = o.section_time;
   j["attractor_kind"] = o.summary.kind;
+  return j.dump();
+}
+
+std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
+  nlohmann::json j;
+  j["period"] = r.period;
+  j["engine"] = ToString(scene.run.engine);
+  j["chatter"] = ToString(scene.run.chatter);
+  j["max_time_error"] = r.max_time_error;
+  j["max_velocity_error"] = OrNull(r.max_velocity_error);
+  auto kinds = nlohmann::json::array();
+  for (const auto& k : r.kinds)
+    kinds.push_back({{"kind", ToString(k.kind)},
+                     {"theirs", k.theirs},
+                     {"ours", k.ours},
+                     {"matched", k.matched},
+                     {"in_accumulation", k.in_accumulation},
+                     {"max_time_error", k.max_time_error},
+                     {"mean_time_error", k.mean_time_error},
+                     {"max_velocity_error", OrNull(k.max_velocity_error)}});
+  j["kinds"] = kinds;
+  if (r.divergence)
+    j["first_divergence"] = {{"t", r.divergence->t},
+                             {"kind", ToString(r.divergence->kind)},
+                             {"why", r.divergence->why},
+                             {"ours_t", OrNull(r.divergence->ours_t)}};
+  else
+    j["first_divergence"] = nullptr;
+  return j.dump();
+}
+
+std::string ValidationJson(const std::vector<PointCheck>& checks) {
+  nlohmann::json j;
+  auto points = nlohmann::json::array();
+  int disagreements = 0;
+  for (const auto& c : checks) {
+    const bool ok = c.orbit.status == "converged";
+    auto mu = nlohmann::json::array();
+    for (const auto& m : c.orbit.multipliers) mu.push_back({m.real(), m.imag()});
+    points.push_back({{"value", c.value},
+                      {"verdict", c.verdict},
+                      {"detail", c.detail},
+                      {"distance", OrNull(c.distance)},
+                      {"period", ok ? nlohmann::json(c.orbit.summary.period.value_or(c.orbit.period)) : nlohmann::json(nullptr)},
+                      {"stable", ok ? nlohmann::json(c.orbit.stable) : nlohmann::json(nullptr)},
+                      {"floquet_multipliers", mu},
+                      {"sticking_fraction", ok ? OrNull(c.orbit.summary.sticking_fraction) : nlohmann::json(nullptr)},
+                      {"kind", ok ? nlohmann::json(c.orbit.summary.kind) : nlohmann::json(nullptr)},
+                      {"simulated_distance", OrNull(c.simulated_distance)}});
+    if (c.verdict != "confirmed") ++disagreements;
+  }
+  j["points"] = points;
+  j["disagreements"] = disagreements;
   return j.dump();
 }
 

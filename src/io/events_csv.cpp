@@ -1,0 +1,96 @@
+// Another simulator's events as CSV (see include/vibro/events_csv.hpp).
+#include "vibro/events_csv.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "vibro/scene_file.hpp"
+
+namespace vibro {
+
+std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError({fmt::format("{}: cannot open the events file", path)});
+  static const std::map<std::string, EventKind> kKinds = {
+      {"impact", EventKind::kImpact},   {"1", EventKind::kImpact},
+      {"accumulation", EventKind::kAccumulation}, {"2", EventKind::kAccumulation},
+      {"stick", EventKind::kStick},     {"3", EventKind::kStick},
+      {"release", EventKind::kRelease}, {"4", EventKind::kRelease},
+      {"grazing", EventKind::kGrazing}, {"5", EventKind::kGrazing}};
+  std::vector<std::string> problems, names;
+  std::vector<TheirEvent> out;
+  int ct = -1, ck = -1, cv = -1, number = 0;
+  std::string line;
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++number;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    std::vector<std::string> cells;
+    std::stringstream ss(line);
+    for (std::string c; std::getline(ss, c, ',');) {
+      const auto a = c.find_first_not_of(" \t\r\""), b = c.find_last_not_of(" \t\r\"");
+      cells.push_back(a == std::string::npos ? "" : c.substr(a, b - a + 1));
+    }
+    if (!header) {
+      header = true;
+      names = cells;
+      for (size_t i = 0; i < cells.size(); ++i) {
+        const int k = static_cast<int>(i);
+        if (cells[i] == "t") ct = k;
+        else if (cells[i] == "kind") ck = k;
+        else if (cells[i] == "velocity") cv = k;
+        else
+          problems.push_back(fmt::format("{}:{}:{}: unknown column '{}' (expected t, kind and optionally velocity)",
+                                         path, number, i + 1, cells[i]));
+      }
+      if (ct < 0) problems.push_back(fmt::format("{}:{}: missing column 't'", path, number));
+      if (ck < 0) problems.push_back(fmt::format("{}:{}: missing column 'kind'", path, number));
+      if (!problems.empty()) throw InputError(problems);
+      continue;
+    }
+    if (cells.size() != names.size()) {
+      problems.push_back(fmt::format("{}:{}: {} cells, the header has {}", path, number, cells.size(), names.size()));
+      continue;
+    }
+    const auto num = [&](int c, bool required) -> std::optional<double> {
+      const std::string& s = cells[static_cast<size_t>(c)];
+      if (s.empty()) {
+        if (required) problems.push_back(fmt::format("{}:{}:{} ({}): empty cell", path, number, c + 1, names[static_cast<size_t>(c)]));
+        return std::nullopt;
+      }
+      try {
+        size_t used = 0;
+        const double v = std::stod(s, &used);
+        if (used == s.size() && std::isfinite(v)) return v;
+      } catch (const std::exception&) {
+      }
+      problems.push_back(fmt::format("{}:{}:{} ({}): '{}' is not a finite number", path, number, c + 1,
+                                     names[static_cast<size_t>(c)], s));
+      return std::nullopt;
+    };
+    TheirEvent e;
+    e.line = number;
+    e.t = num(ct, true).value_or(0.0);
+    const auto it = kKinds.find(cells[static_cast<size_t>(ck)]);
+    if (it == kKinds.end())
+      problems.push_back(fmt::format("{}:{}:{} (kind): '{}' is not impact, accumulation, stick, release or grazing",
+                                     path, number, ck + 1, cells[static_cast<size_t>(ck)]));
+    else
+      e.kind = it->second;
+    if (cv >= 0) e.velocity = num(cv, false);
+    out.push_back(e);
+  }
+  if (!header) problems.push_back(fmt::format("{}: no header row (t,kind[,velocity])", path));
+  else if (out.empty() && problems.empty()) problems.push_back(fmt::format("{}: no events after the header", path));
+  if (!problems.empty()) throw InputError(problems);
+  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  return out;
+}
+
+}  // namespace vibro
