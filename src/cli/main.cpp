@@ -30,7 +30,14 @@
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
 
+#include "cli/plot_script.hpp"
+#include "frontend/frontend.hpp"
+
 namespace {
+
+using vibro::frontend::HeaderOf;
+using vibro::frontend::SceneWith;
+using vibro::frontend::WriteOrbit;
 
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
@@ -85,67 +92,6 @@ std::string Phases(const std::vector<std::pair<double, double>>& phases) {
   std::string s;
   for (const auto& [a, b] : phases) s += fmt::format("{}[{:.6f}, {:.6f}]", s.empty() ? "" : " ", a, b);
   return s.empty() ? "none" : s;
-}
-
-// The scene of `path` with the overrides and KEY=VALUE on top (continuation and sweeps).
-// The scene of `path` with the overrides and KEY=VALUE on top (continuation, partitions and
-// sweeps). The scalar keys of the excitation and the stop are set in a copy of the scene parsed
-// once, and validated (a value outside a key's range throws as a parse would); other keys re-parse
-// the scene with the override.
-vibro::Scene SceneWith(const std::string& path, std::vector<std::string> sets, const std::string& key,
-                       double value) {
-  static thread_local std::string cached_path, cached_sets;
-  static thread_local vibro::Scene cached;
-  double vibro::Scene::*field = key == "excitation.amplitude"   ? &vibro::Scene::amplitude
-                                : key == "excitation.frequency" ? &vibro::Scene::frequency
-                                : key == "stop.position"        ? &vibro::Scene::stop_position
-                                : key == "stop.restitution"     ? &vibro::Scene::restitution
-                                                                : nullptr;
-  if (field) {
-    std::string joined;
-    for (const auto& x : sets) joined += x + '\n';
-    if (cached_path != path || cached_sets != joined) {
-      cached = vibro::LoadScene(path, sets).scene;
-      cached_path = path;
-      cached_sets = joined;
-    }
-    vibro::Scene s = cached;
-    s.*field = value;
-    const auto issues = vibro::Validate(s);
-    if (issues.empty()) return s;
-  }
-  sets.push_back(fmt::format("{}={:.17g}", key, value));
-  return vibro::LoadScene(path, sets).scene;
-}
-
-vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys) {
-  const auto& sc = loaded.scene;
-  vibro::StoreHeader h;
-  h.scene_text = loaded.text_as_run;
-  h.engine = vibro::ToString(sc.run.engine);
-  h.chatter = vibro::ToString(sc.run.chatter);
-  h.method = vibro::ToString(sc.run.method);
-  h.rtol = sc.run.rtol;
-  h.atol = sc.run.atol;
-  h.dof = sys.dof();
-  h.samples_per_period = sc.run.samples_per_period;
-  h.periods = sc.run.periods;
-  h.period = sys.period();
-  h.initial_time = sc.initial_time;
-  h.max_period = sc.run.max_period;
-  h.frequencies = sys.omega();
-  h.forcing = sys.forcing();
-  h.contact = sys.contact();
-  h.contact_shape = sys.contact_shape();
-  h.damping_ratios = sys.damping();
-  h.constrained_frequencies = sys.constrained().frequencies;
-  h.s_A = sys.s_A();
-  h.s_B = sys.s_B();
-  h.stop = sys.stop();
-  h.restitution = sys.restitution();
-  h.amplitude = sys.amplitude();
-  h.frequency = sys.frequency();
-  return h;
 }
 
 void PrintAttractor(const vibro::Attractor& a) {
@@ -231,36 +177,6 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   if (result.status != vibro::RunStatus::kOk)
     fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);
   return ExitCode(result.status);
-}
-
-// Writes one period of the orbit, densely sampled, with its multipliers (/orbit).
-void WriteOrbit(const std::string& out, const vibro::LoadedScene& loaded, const vibro::System& sys,
-                const vibro::OrbitResult& orbit) {
-  vibro::Scene sc = loaded.scene;
-  sc.initial_time = orbit.section_time;
-  sc.run.periods = orbit.period;
-  sc.run.samples_per_period = std::max(sc.run.samples_per_period, 256);
-  auto store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
-  const vibro::InitialOverride start{orbit.section_time, orbit.X, orbit.V};
-  vibro::SimulationOptions opt;
-  opt.initial = &start;
-  opt.observers = {store.get()};
-  const auto result = vibro::Simulate(sys, sc, opt);
-  std::vector<double> re, im;
-  for (const auto& m : orbit.multipliers) {
-    re.push_back(m.real());
-    im.push_back(m.imag());
-  }
-  store->WriteGroup("/orbit", {{"multipliers_re", re},
-                               {"multipliers_im", im},
-                               {"stable", {orbit.stable ? 1.0 : 0.0}},
-                               {"period", {static_cast<double>(orbit.period)}},
-                               {"newton_iterations", {static_cast<double>(orbit.newton_iterations)}},
-                               {"residual", {orbit.residual}},
-                               {"section_time", {orbit.section_time}},
-                               {"X", {orbit.X.data(), orbit.X.data() + orbit.X.size()}},
-                               {"V", {orbit.V.data(), orbit.V.data() + orbit.V.size()}}});
-  store->Finish(result, orbit.summary);
 }
 
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
@@ -461,15 +377,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
     if (auto p = vibro::CheckCoordinate(sys, name); !p.empty())
       problems.push_back(fmt::format("{} {}: {}", opt, name, p));
   const auto range = [&](const std::vector<double>& r, const std::string& name, const char* opt) {
-    if (r.size() == 2) {
-      if (!(r[1] > r[0])) problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", opt, r[0], r[1]));
-      return vibro::Coordinate{name, r[0], r[1]};
-    }
-    if (!r.empty()) problems.push_back(fmt::format("{}: expected two numbers A,B", opt));
-    // Defaults: x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|).
-    const double scale = std::max(1.0, std::abs(sys.stop()));
-    if (name == "x_B") return vibro::Coordinate{name, sys.stop(), sys.stop() + 2 * scale};
-    return vibro::Coordinate{name, -2 * scale * sys.omega()[0], 2 * scale * sys.omega()[0]};
+    return vibro::frontend::StudyCoordinate(sys, name, r, opt, problems);
   };
   const auto cx = range(args.x_range, args.x, "--x-range");
   const auto cy = range(args.y_range, args.y, "--y-range");
@@ -647,7 +555,18 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
     if (name->find('\'') != std::string::npos)
       throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
-  std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
+  std::vector<std::string> tried;
+  const std::string script = vibro::cli::FindPlotScript(tried);
+  if (script.empty()) {
+    fmt::print(stderr, "vibro: plotting code not found (looked for {}); reinstall vibro\n",
+               fmt::join(tried, " and "));
+    return kExitInternal;
+  }
+  if (script.find('\'') != std::string::npos) {
+    fmt::print(stderr, "vibro: cannot run the plotting code from a directory with a single quote: {}\n", script);
+    return kExitInternal;
+  }
+  std::string cmd = fmt::format("'{}' '{}' '{}'", VIBRO_PYTHON, script, path);
   if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
   if (!overlay.empty()) cmd += fmt::format(" --overlay '{}'", overlay);
   const int rc = std::system(cmd.c_str());
@@ -665,7 +584,7 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
 int main(int argc, char** argv) {
   CLI::App app{"vibro: harmonically forced impact oscillators with sticking and chattering"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", VIBRO_VERSION);
+  app.set_version_flag("--version", "vibro " VIBRO_VERSION " (commit " VIBRO_GIT_COMMIT ")");
 
   std::string scene_path;
   std::vector<std::string> sets;

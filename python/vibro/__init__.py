@@ -1,0 +1,1 @@
+from ._vibro import version as __version__
