@@ -28,12 +28,35 @@ def reaction(model, X, V, t):
     return (elastic - forcing) / model.attrs["s_B"]
 
 
+def attractor_table(g):
+    """/attractors as columns. Files since provenance was stored hold one dataset per column
+    (strings as str, integers as integers, null floats NaN); older files one attribute per column
+    (kind and orbit_status comma-joined, nulls −1)."""
+    if "kind" in g:
+        return {k: (g[k].asstr()[:] if h5py.check_string_dtype(g[k].dtype) else g[k][:]) for k in g}
+    a = dict(g.attrs)
+    for k in ("kind", "orbit_status"):
+        if k in a:
+            a[k] = a[k].split(",") if a[k] else []
+    return a
+
+
+def orbit_group(o):
+    """/orbit: multipliers (m, 2), stable, period. Older files: multipliers_re/_im and floats of
+    shape (1,)."""
+    a = o.attrs
+    if "multipliers" in a:
+        mu = np.asarray(a["multipliers"]).reshape(-1, 2)
+        return mu[:, 0], mu[:, 1], bool(a["stable"]), int(a["period"])
+    return a["multipliers_re"], a["multipliers_im"], a["stable"][0] > 0.5, int(a["period"][0])
+
+
 def plot_basin(f, title, save):
     """Label map of a basin study, one colour per attractor (grey: unresolved)."""
     b = f["basin"]
     labels = b["labels"][:]
-    a = f["attractors"].attrs
-    kinds = a["kind"].split(",") if a["kind"] else []
+    a = attractor_table(f["attractors"])
+    kinds = list(a["kind"])
     n = len(kinds)
     colors = plt.get_cmap("tab10")
     rgb = np.ones(labels.shape + (3,)) * 0.85
@@ -49,7 +72,7 @@ def plot_basin(f, title, save):
     for k in range(n):
         per = int(a["period"][k])
         sp = a["sticking_fraction"][k]
-        label = f"{k}: {kinds[k]}, period {per}" + (f", SP {sp:.3f}" if sp > 0 else "")
+        label = f"{k}: {kinds[k]}, period {per}" + (f", SP {sp:.3f}" if sp > 0 else "")  # NaN: none
         label += f" ({100 * a['basin_fraction'][k]:.1f} %)"
         handles.append(Patch(color=colors(k % 10), label=label))
     handles.append(Patch(color=(0.85, 0.85, 0.85),
@@ -332,20 +355,19 @@ def main():
         ax.set_title(f"{title}\nstroboscopic section ({len(sxB)} points)")
         save(fig, "section")
         if "orbit" in f:
-            o = f["orbit"].attrs
-            re, im = o["multipliers_re"], o["multipliers_im"]
+            re, im, stable, period = orbit_group(f["orbit"])
             fig, ax = plt.subplots(figsize=(5, 5))
             th = np.linspace(0, 2 * np.pi, 400)
             ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
-            ax.plot(re, im, "o", color="tab:red" if o["stable"][0] < 0.5 else "tab:green",
-                    label=f"Floquet multipliers ({'stable' if o['stable'][0] > 0.5 else 'unstable'})")
+            ax.plot(re, im, "o", color="tab:green" if stable else "tab:red",
+                    label=f"Floquet multipliers ({'stable' if stable else 'unstable'})")
             lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re, im))))
             ax.set_xlim(-lim, lim)
             ax.set_ylim(-lim, lim)
             ax.set_aspect("equal")
             ax.axhline(0, color="gray", lw=0.5)
             ax.axvline(0, color="gray", lw=0.5)
-            ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: multipliers")
+            ax.set_title(f"{title}\nperiod-{period} orbit: multipliers")
             ax.legend(loc="upper right", fontsize=8)
             save(fig, "multipliers")
     for w in written:

@@ -230,9 +230,7 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
     vibro::RunResult r;
     r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     r.message = branch.end;
-    vibro::Attractor last;
-    if (!branch.points.empty()) last = branch.points.back().summary;
-    store->Finish(r, last);
+    store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
   }
   return {vibro::BranchJson(branch), branch.status == "interrupted"};
 }
@@ -289,7 +287,7 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
                                 "continue with --resume",
                                 study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
                                 study.cells);
-      store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
+      store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
     }
   }
   py::dict d;
@@ -378,6 +376,10 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("parse_scene", [](const std::string& text, const std::string& source,
                           const std::vector<std::string>& sets) {
     return LoadPyScene(SceneOrigin{"", text, source, sets});
+  });
+  m.def("set_invocation", [](const std::string& command, const std::string& call,
+                             const std::string& options, bool force) {
+    vibro::frontend::SetInvocation({command, call, options, force});
   });
   m.def("model", &Model);
   m.def("simulate", &SimulateScene);

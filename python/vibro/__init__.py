@@ -105,6 +105,17 @@ def _scene(scene):
     return load_scene(scene)._core  # a path
 
 
+def _invoke(command, scene, **options):
+    """Provenance of the files the next call writes: the command, the Python call and its options
+    (root attributes command, command_line and options); `force` lets `out` replace a vibro file
+    of another scene or command."""
+    force = bool(options.pop("force", False))
+    source = scene.source if isinstance(scene, Scene) else str(scene)
+    shown = {k: (str(v) if k == "out" and v is not None else v) for k, v in options.items()}
+    call = f"vibro.{command}({source!r}" + "".join(f", {k}={v!r}" for k, v in shown.items()) + ")"
+    _vibro.set_invocation(command.rstrip("_"), call, _json.dumps(shown, default=str, sort_keys=True), force)
+
+
 def _main_thread():
     return _threading.current_thread() is _threading.main_thread()
 
@@ -154,8 +165,10 @@ class SimulationResult:
                 f"{len(self.events)} events, {len(self.samples)} samples)")
 
 
-def simulate(scene, out=None):
-    """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file."""
+def simulate(scene, out=None, force=False):
+    """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file (``force``:
+    replace a vibro file of another scene or command)."""
+    _invoke("simulate", scene, out=out, force=force)
     r = _vibro.simulate(_scene(scene), str(out) if out else "", _main_thread())
     if r["interrupted"]:
         raise _interrupted("simulation", out)
@@ -163,9 +176,10 @@ def simulate(scene, out=None):
                             _rows_array(r["section"]))
 
 
-def orbit(scene, kind="sticking", period=0, impacts=0, guess=None, out=None):
+def orbit(scene, kind="sticking", period=0, impacts=0, guess=None, out=None, force=False):
     """Finds a periodic orbit with the Poincaré solver (``vibro orbit --json``). ``guess`` is the
     phase ωt of the release (or first impact), or (phase, contact velocity)."""
+    _invoke("orbit", scene, kind=kind, period=period, impacts=impacts, guess=guess, out=out, force=force)
     phase = velocity = None
     if guess is not None:
         if isinstance(guess, (tuple, list)):
@@ -184,10 +198,12 @@ def _branch_table(points):
     return t
 
 
-def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="sticking", out=None):
+def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="sticking", out=None, force=False):
     """Continues a periodic orbit in ``param`` up to ``to`` (``vibro continue --json``; named with a
     trailing underscore because ``continue`` is a Python keyword). The dict also holds ``table``, a
     structured array (value, sticking_fraction, stable) of the branch points."""
+    _invoke("continue", scene, param=param, to=to, step=step, max_points=max_points, period=period, kind=kind,
+            out=out, force=force)
     text, interrupted = _vibro.continue_branch(_scene(scene), param, float(to), float(step),
                                                int(max_points), int(period), kind,
                                                str(out) if out else "", _main_thread())
@@ -198,7 +214,10 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="stick
     return d
 
 
-def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, full_periods, out):
+def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, full_periods, out, force=False):
+    _invoke("basin" if basin else "attractors", scene, x=x, y=y, x_range=x_range, y_range=y_range,
+            **({"grid": tuple(grid), "out": out, "force": force} if basin else {"samples": samples, "seed": seed}),
+            threads=threads, full_periods=full_periods)
     r = _vibro.study(_scene(scene), basin, x, y, list(x_range or []), list(y_range or []),
                      list(grid), int(samples), int(seed), int(threads), bool(full_periods),
                      str(out) if out else "", _main_thread())
@@ -216,14 +235,14 @@ def attractors(scene, x="x_B", y="v_B", x_range=None, y_range=None, samples=200,
 
 
 def basin(scene, x="x_B", y="v_B", x_range=None, y_range=None, grid=(64, 64), threads=0,
-          full_periods=False, out=None):
+          full_periods=False, out=None, force=False):
     """Basins of attraction over two initial-state coordinates (``vibro basin --json``).
 
     Besides the keys of the JSON, the dict holds ``labels`` (ny, nx) int32: the attractor index of
     each cell (−1 unresolved, −2 inadmissible, −3 not computed), and ``x``, ``y``: the cell
     centres (nx,) and (ny,), and ``extent`` = (x_from, x_to, y_from, y_to) for ``imshow``.
     """
-    d, r = _study(scene, True, x, y, x_range, y_range, grid, 1, 1, threads, full_periods, out)
+    d, r = _study(scene, True, x, y, x_range, y_range, grid, 1, 1, threads, full_periods, out, force)
     nx, ny = r["nx"], r["ny"]
     d["labels"] = _np.asarray(r["labels"], dtype=_np.int32).reshape(ny, nx)
     d["x"] = _np.asarray(r["x"])[:nx]
@@ -232,8 +251,10 @@ def basin(scene, x="x_B", y="v_B", x_range=None, y_range=None, grid=(64, 64), th
     return d
 
 
-def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None):
+def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None, force=False):
     """Brute-force bifurcation diagram by simulation, up then down (``vibro sweep --json``)."""
+    _invoke("sweep", scene, param=param, from_=from_, to=to, steps=steps, record=record, one_way=one_way,
+            out=out, force=force)
     text, interrupted = _vibro.sweep(_scene(scene), param, float(from_), float(to), int(steps),
                                      int(record), bool(one_way), str(out) if out else "", _main_thread())
     if interrupted:

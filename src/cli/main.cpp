@@ -94,12 +94,28 @@ std::string Phases(const std::vector<std::pair<double, double>>& phases) {
   return s.empty() ? "none" : s;
 }
 
+// An argument as a POSIX shell reads it back.
+std::string ShellQuoted(const std::string& arg) {
+  if (!arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                            "_-+=/.,:@%") == std::string::npos)
+    return arg;
+  std::string q = "'";
+  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
 void PrintAttractor(const vibro::Attractor& a) {
   fmt::print("attractor    {}", a.kind);
   if (a.period) fmt::print(", period {}", *a.period);
   if (a.impacts_per_period) fmt::print(", {} impacts/period", *a.impacts_per_period);
   if (a.sticking_fraction) fmt::print(", sticking fraction {:.6f}", *a.sticking_fraction);
   fmt::print("\nstick phases {}\n", Phases(a.stick_phases));
+  if (!a.impact_phases.empty()) {
+    std::string ph;
+    for (size_t i = 0; i < a.impact_phases.size(); ++i)
+      ph += fmt::format("{}{:.6f}", i ? " " : "", a.impact_phases[i]);
+    fmt::print("impact phases {}\n", ph);
+  }
 }
 
 int ExitCode(vibro::RunStatus s) {
@@ -259,9 +275,7 @@ int RunContinue(const std::string& path, const std::vector<std::string>& sets, b
     vibro::RunResult r;
     r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     r.message = branch.end;
-    vibro::Attractor last;
-    if (!branch.points.empty()) last = branch.points.back().summary;
-    store->Finish(r, last);
+    store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
   }
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
@@ -340,7 +354,7 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
     store->WritePartition(a.params[0], a.params[1], a.levels, columns);
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    store->Finish(r, {});
+    store->Finish(r, vibro::frontend::NoAttractor());
   }
   if (json) {
     fmt::print("{}\n", vibro::PartitionJson(a.params[0], a.params[1], a.levels, columns));
@@ -453,7 +467,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                               "continue with --resume",
                               study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
                               study.cells);
-    store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
+    store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
   }
   if (json) {
     fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
@@ -532,7 +546,10 @@ int RunInfo(const std::string& path, bool json) {
     return 0;
   }
   fmt::print("file         {}\n", path);
-  fmt::print("created      {} by vibro {}\n", run.created, run.version);
+  fmt::print("created      {} by vibro {}{}{}\n", run.created, run.version,
+             run.git_commit.empty() ? "" : " (commit " + run.git_commit + ")",
+             run.command.empty() ? "" : ", command '" + run.command + "'");
+  fmt::print("groups       {}\n", fmt::join(run.groups, ", "));
   fmt::print("engine       {}, chatter {}\n", run.engine, run.chatter);
   fmt::print("status       {}{}\n", run.status, run.message.empty() ? "" : ": " + run.message);
   fmt::print("rows         {} events, {} samples, {} section points\n", run.events, run.samples,
@@ -691,11 +708,22 @@ int main(int argc, char** argv) {
   plot->add_option("--overlay", plot_overlay,
                    "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
 
+  bool force = false;
+  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
+    cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : kExitBadInput;
+  }
+  // Provenance of every file this run writes: the command, its command line and options.
+  if (!app.get_subcommands().empty()) {
+    const CLI::App* cmd = app.get_subcommands().front();
+    std::string line;
+    for (int i = 0; i < argc; ++i) line += (i ? " " : "") + ShellQuoted(argv[i]);
+    vibro::frontend::SetInvocation({cmd->get_name(), line, cmd->config_to_str(true, false), force});
   }
 
   try {

@@ -3,9 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 
+#include "vibro/scene_toml.hpp"
 #include "vibro/simulator.hpp"
 
 namespace vibro::frontend {
@@ -44,6 +46,12 @@ Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, c
   return SceneWith(SceneOrigin{path, std::nullopt, path, sets}, key, value);
 }
 
+namespace {
+thread_local Invocation g_invocation;
+}  // namespace
+
+void SetInvocation(Invocation invocation) { g_invocation = std::move(invocation); }
+
 StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
   const auto& sc = loaded.scene;
   StoreHeader h;
@@ -71,6 +79,19 @@ StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
   h.restitution = sys.restitution();
   h.amplitude = sys.amplitude();
   h.frequency = sys.frequency();
+  if (sys.physical() && loaded.scene.physical) {
+    h.mode_shapes = sys.mode_shapes();
+    for (Eigen::Index i = 0; i < h.mode_shapes.rows(); ++i) {
+      const auto dof = static_cast<int>(i);
+      const bool a = dof == loaded.scene.physical->forcing_dof, b = dof == loaded.scene.physical->contact_dof;
+      h.dof_labels.push_back(fmt::format("dof {}{}", dof, a && b ? " (A, B)" : a ? " (A)" : b ? " (B)" : ""));
+    }
+  }
+  h.command = g_invocation.command;
+  h.force = g_invocation.force;
+  h.provenance = {{"command_line", g_invocation.command_line},
+                  {"options", g_invocation.options},
+                  {"scene_resolved", ResolvedSceneToml(loaded.scene)}};
   return h;
 }
 
@@ -99,20 +120,7 @@ void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System&
   opt.initial = &start;
   opt.observers = {store.get()};
   const auto result = Simulate(sys, sc, opt);
-  std::vector<double> re, im;
-  for (const auto& m : orbit.multipliers) {
-    re.push_back(m.real());
-    im.push_back(m.imag());
-  }
-  store->WriteGroup("/orbit", {{"multipliers_re", re},
-                               {"multipliers_im", im},
-                               {"stable", {orbit.stable ? 1.0 : 0.0}},
-                               {"period", {static_cast<double>(orbit.period)}},
-                               {"newton_iterations", {static_cast<double>(orbit.newton_iterations)}},
-                               {"residual", {orbit.residual}},
-                               {"section_time", {orbit.section_time}},
-                               {"X", {orbit.X.data(), orbit.X.data() + orbit.X.size()}},
-                               {"V", {orbit.V.data(), orbit.V.data() + orbit.V.size()}}});
+  store->WriteOrbit(orbit);
   store->Finish(result, orbit.summary);
 }
 

@@ -35,7 +35,19 @@ Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value)
 Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,
                 double value);
 
-// The header of an HDF5 output of a run of `loaded` (the scene as run and the model).
+// How the current command was invoked, stored as provenance in every output file written on
+// this thread afterwards: `command` ("simulate", "basin", ...), the full command line (or the
+// Python call), the command's options with their values (defaults included) and whether an
+// existing vibro file of another scene or command may be replaced (--force).
+struct Invocation {
+  std::string command, command_line, options;
+  bool force = false;
+};
+void SetInvocation(Invocation invocation);
+
+// The header of an HDF5 output of a run of `loaded`: the scene as run, the model (with mode shapes
+// and DOF labels for the physical form) and the provenance (the invocation, and the scene with
+// every default resolved).
 StoreHeader HeaderOf(const LoadedScene& loaded, const System& system);
 
 // A study's coordinate over `range` (A,B with A < B), or its default range when `range` is empty:
@@ -43,6 +55,14 @@ StoreHeader HeaderOf(const LoadedScene& loaded, const System& system);
 // appended to `problems` with `option` (e.g. "--x-range") named.
 Coordinate StudyCoordinate(const System& system, const std::string& name, const std::vector<double>& range,
                            const char* option, std::vector<std::string>& problems);
+
+// What Hdf5Store::Finish takes for a study, branch or partition: no single attractor (the file
+// then has no /attractor group).
+inline Attractor NoAttractor() {
+  Attractor a;
+  a.kind.clear();
+  return a;
+}
 
 // Writes one period of a converged orbit, densely sampled, and its multipliers (/orbit) to `out`.
 void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& system,
