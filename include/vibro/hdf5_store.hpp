@@ -61,6 +61,8 @@ struct StoredRun {
   Attractor attractor;  // as written at the end (kind "" when the run did not finish)
   std::string command, git_commit;  // "" in files written before they were stored
   std::vector<std::string> groups;  // the root's groups, e.g. "events", "orbit", "basin"
+  // One line per group: its rows and main attributes (e.g. "27 rows, param = excitation.amplitude").
+  std::vector<std::string> group_notes;
 };
 
 class Hdf5Store final : public Observer {

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -550,6 +552,10 @@ int RunInfo(const std::string& path, bool json) {
              run.git_commit.empty() ? "" : " (commit " + run.git_commit + ")",
              run.command.empty() ? "" : ", command '" + run.command + "'");
   fmt::print("groups       {}\n", fmt::join(run.groups, ", "));
+  for (size_t i = 0; i < run.groups.size(); ++i)  // the results a file holds besides the run
+    if (!run.group_notes[i].empty() &&
+        !std::set<std::string>{"checkpoint", "attractor", "events", "samples", "section"}.count(run.groups[i]))
+      fmt::print("  /{:<13} {}\n", run.groups[i], run.group_notes[i]);
   fmt::print("engine       {}, chatter {}\n", run.engine, run.chatter);
   fmt::print("status       {}{}\n", run.status, run.message.empty() ? "" : ": " + run.message);
   fmt::print("rows         {} events, {} samples, {} section points\n", run.events, run.samples,
@@ -561,6 +567,8 @@ int RunInfo(const std::string& path, bool json) {
                run.checkpoint->counts.releases);
   if (!run.attractor.kind.empty())
     PrintAttractor(run.attractor);
+  else if (std::find(run.groups.begin(), run.groups.end(), "attractor") == run.groups.end())
+    fmt::print("attractor    none (a study, branch or partition: see the groups above)\n");
   else
     fmt::print("attractor    (not classified: the run did not finish)\n");
   fmt::print("scene:\n{}", run.scene_text);

@@ -734,6 +734,50 @@ herr_t ListGroup(hid_t loc, const char* name, const H5L_info_t*, void* names) {
 }
 }  // namespace
 
+namespace {
+// An attribute as text for `vibro info`: strings as they are, a scalar number with fmt's
+// shortest form, an array as its length.
+std::string AttrText(hid_t obj, const char* name) {
+  Handle a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  if (!a) return "";
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  if (H5Tget_class(type.get()) == H5T_STRING) return ReadString(obj, name);
+  const auto n = H5Sget_simple_extent_npoints(space.get());
+  if (H5Sget_simple_extent_ndims(space.get()) > 0) return fmt::format("[{} values]", n);
+  double v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0) return "";
+  return fmt::format("{}", v);
+}
+
+// What a result group holds, in a line: its rows and main attributes.
+std::string DescribeGroup(hid_t f, const std::string& name) {
+  Handle g(H5Gopen2(f, name.c_str(), H5P_DEFAULT), H5Gclose);
+  if (!g) return "";
+  std::vector<std::string> parts;
+  for (const char* d : {"value", "labels", "t", "kind", "value1", "index"}) {
+    if (H5Lexists(g.get(), d, H5P_DEFAULT) <= 0) continue;
+    Handle ds(H5Dopen2(g.get(), d, H5P_DEFAULT), H5Dclose);
+    if (!ds) continue;
+    Handle space(H5Dget_space(ds.get()), H5Sclose);
+    hsize_t dims[2] = {0, 0};
+    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    parts.push_back(rank == 2 && std::string(d) == "labels" ? fmt::format("{} × {} cells", dims[1], dims[0])
+                                                             : fmt::format("{} rows", dims[0]));
+    break;
+  }
+  for (const char* k : {"param", "param1", "param2", "x", "y", "period", "stable", "residual", "end", "status",
+                        "unresolved_fraction"}) {
+    if (H5Aexists(g.get(), k) <= 0) continue;
+    const auto text = AttrText(g.get(), k);
+    if (!text.empty()) parts.push_back(fmt::format("{} = {}", k, text));
+  }
+  std::string line;
+  for (const auto& p : parts) line += (line.empty() ? "" : ", ") + p;
+  return line;
+}
+}  // namespace
+
 StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
   SilenceHdf5();
   StoredRun out;
@@ -838,6 +882,7 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     }
 
     // Studies and branches (and their files since provenance was stored) have no /attractor.
+    out.attractor.kind.clear();
     if (H5Lexists(f, "/attractor", H5P_DEFAULT) > 0) {
       Handle ag(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
       out.attractor.kind = ReadString(ag.get(), "kind");
@@ -854,6 +899,7 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     if (H5Aexists(f, "command") > 0) out.command = ReadString(f, "command");
     if (H5Aexists(f, "git_commit") > 0) out.git_commit = ReadString(f, "git_commit");
     H5Literate(f, H5_INDEX_NAME, H5_ITER_INC, nullptr, ListGroup, &out.groups);
+    for (const auto& name : out.groups) out.group_notes.push_back(DescribeGroup(f, name));
   } catch (const std::runtime_error& e) {
     throw InputError({fmt::format("{}: not a readable vibro output file: {}", path, e.what())});
   }

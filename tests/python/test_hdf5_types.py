@@ -143,7 +143,12 @@ def test_no_stray_attractor_and_info_lists_groups(files):
         assert group in info["groups"], (k, info["groups"])
         text = run("info", out[k]).stdout
         assert group in text.split("groups", 1)[1].splitlines()[0], text
-    # An impact orbit's phases: in the file, in info --json and in the text.
+    # What the result groups hold, one line each.
+    text = run("info", out["basin"]).stdout
+    assert "/basin         6 × 6 cells, x = x_B, y = v_B" in text and "attractor    none" in text, text
+    assert vibro.info(out["basin"])["attractor"] is None
+    assert "param = excitation.amplitude" in run("info", out["continue"]).stdout
+        # An impact orbit's phases: in the file, in info --json and in the text.
     j = json.loads(run("orbit", FIG05, "--kind", "impact", "--period", "1", "--json").stdout)
     info = vibro.info(out["impact"])
     assert info["attractor"]["impact_phases"] == pytest.approx(j["impact_phases"], abs=1e-9)
