@@ -8,6 +8,7 @@ packages=(
   libfmt-dev libtbb-dev nlohmann-json3-dev python3-h5py python3-matplotlib
   libopenmpi-dev openmpi-bin
   libboost-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -207,17 +207,42 @@ KIND_NAME = {"sticking-periodic": "sticking", "impact-periodic": "impact",
              "not-periodic": "not periodic"}
 
 
+def attractor_table(g):
+    """/attractors as columns. Files since provenance was stored hold one dataset per column
+    (strings as str, integers as integers, null floats NaN); older files one attribute per column
+    (kind and orbit_status comma-joined, nulls −1)."""
+    if "kind" in g:
+        return {k: (g[k].asstr()[:] if h5py.check_string_dtype(g[k].dtype) else g[k][:]) for k in g}
+    a = dict(g.attrs)
+    for k in ("kind", "orbit_status"):
+        if k in a:
+            a[k] = a[k].split(",") if a[k] else []
+    return a
+
+
+def orbit_group(o):
+    """/orbit: multipliers (m, 2), stable, period. Older files: multipliers_re/_im and floats of
+    shape (1,)."""
+    a = o.attrs
+    if "multipliers" in a:
+        mu = np.asarray(a["multipliers"]).reshape(-1, 2)
+        return mu[:, 0], mu[:, 1], bool(a["stable"]), int(a["period"])
+    return a["multipliers_re"], a["multipliers_im"], a["stable"][0] > 0.5, int(a["period"][0])
+
+
 def plot_basin(f, title, save):
     """Label map of a basin study. Colours are keyed to the attractor (kind, period, impacts,
     sticking fraction), not to the label numbers, which depend on the grid."""
     b = f["basin"]
     labels = b["labels"][:]
-    a = f["attractors"].attrs
-    kinds = text(a["kind"]).split(",") if len(text(a["kind"])) else []
+    a = attractor_table(f["attractors"])
+    kinds = list(a["kind"])
     n = len(kinds)
     ipp = a["impacts_per_period"] if "impacts_per_period" in a else np.zeros(n)
+    sp_of = [0.0 if np.isnan(float(a["sticking_fraction"][k])) else float(a["sticking_fraction"][k])
+             for k in range(n)]
     key = sorted(range(n), key=lambda k: (KIND_ORDER.get(kinds[k], 9), int(a["period"][k]),
-                                          float(ipp[k]), -round(float(a["sticking_fraction"][k]), 6)))
+                                          float(ipp[k]), -round(sp_of[k], 6)))
     colour = {k: OKABE_ITO[i % len(OKABE_ITO)] for i, k in enumerate(key)}
     rgb = np.ones(labels.shape + (3,)) * 0.85
     rgb[labels == -2] = (1, 1, 1)
@@ -525,11 +550,10 @@ def plot_run(f, title, save, window):
     save(fig, "section")
 
     if "orbit" in f:
-        o = f["orbit"].attrs
-        re_, im = np.atleast_1d(o["multipliers_re"]), np.atleast_1d(o["multipliers_im"])
+        re_, im, stable, period = orbit_group(f["orbit"])
+        re_, im = np.atleast_1d(re_), np.atleast_1d(im)
         if len(re_) == 0:
             return  # a superstable 1-DOF sticking orbit has no multipliers to draw
-        stable = o["stable"][0] > 0.5
         fig, ax = plt.subplots(figsize=(5.6, 5))
         th = np.linspace(0, 2 * np.pi, 400)
         ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
@@ -543,7 +567,7 @@ def plot_run(f, title, save, window):
         ax.axvline(0, color="0.7", lw=0.5)
         ax.set_xlabel("Re $\\mu$")
         ax.set_ylabel("Im $\\mu$")
-        ax.set_title(f"{title}\nperiod-{int(o['period'][0])} orbit: Floquet multipliers", fontsize=9)
+        ax.set_title(f"{title}\nperiod-{period} orbit: Floquet multipliers", fontsize=9)
         ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
         save(fig, "multipliers")
 

@@ -17,6 +17,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/observer.hpp"
+#include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/studies.hpp"
 
@@ -36,6 +37,16 @@ struct StoreHeader {
   Eigen::VectorXd frequencies, forcing, contact, contact_shape, damping_ratios,
       constrained_frequencies;
   double s_A = 0, s_B = 0, stop = 0, restitution = 0, amplitude = 0, frequency = 0;
+  // Physical form: mode shapes ψ_i as columns (N, n), x = Σ ψ_i X_i, and a label per physical DOF;
+  // empty for the modal form.
+  Eigen::MatrixXd mode_shapes;
+  std::vector<std::string> dof_labels;
+  // Provenance: the command that writes the file ("simulate", "basin", ...; root attribute
+  // `command`) and further root string attributes (command_line, options, scene_resolved).
+  std::string command;
+  std::vector<std::pair<std::string, std::string>> provenance;
+  // Create() refuses to replace a vibro file of another scene or command unless `force`.
+  bool force = false;
 };
 
 // What a stored run holds, read back (for `vibro info`, resume and tests).
@@ -48,6 +59,10 @@ struct StoredRun {
   std::vector<Eigen::VectorXd> tail_section_X, tail_section_V;
   std::vector<Mode> tail_section_modes;
   Attractor attractor;  // as written at the end (kind "" when the run did not finish)
+  std::string command, git_commit;  // "" in files written before they were stored
+  std::vector<std::string> groups;  // the root's groups, e.g. "events", "orbit", "basin"
+  // One line per group: its rows and main attributes (e.g. "27 rows, param = excitation.amplitude").
+  std::vector<std::string> group_notes;
 };
 
 // A group of small datasets written or read at once (/branch, /validation: hdf5_branch.hpp).
@@ -82,8 +97,12 @@ class Hdf5Store final : public Observer {
   void OnSection(const Sample& s) override;
   void OnCheckpoint(const Checkpoint& c) override;
 
-  // Writes numeric attributes into group `group` (created if needed), e.g. /orbit. Call before
-  // Finish.
+  // Writes /orbit: scalars period, newton_iterations (int64), stable (bool), residual,
+  // section_time (float64) as scalar attributes, the section point X, V and the multipliers
+  // (m, 2) as [re, im]. Call before Finish.
+  void WriteOrbit(const OrbitResult& orbit);
+
+  // Writes numeric attributes into group `group` (created if needed). Call before Finish.
   void WriteGroup(const std::string& group,
                   const std::vector<std::pair<std::string, std::vector<double>>>& values);
 
@@ -132,7 +151,9 @@ class Hdf5Store final : public Observer {
   void WritePartition(const std::string& param1, const std::string& param2,
                       const std::vector<double>& levels, const std::vector<PartitionColumn>& columns);
 
-  // Writes the final status, message, counts and attractor, and closes the file.
+  // Writes the final status, message, counts and attractor (/attractor; removed when
+  // `attractor.kind` is empty: studies and branches have no single attractor), and closes the
+  // file.
   void Finish(const RunResult& result, const Attractor& attractor);
 
   struct Stats {

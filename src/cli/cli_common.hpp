@@ -4,13 +4,14 @@
 #include <string>
 #include <vector>
 
+#include "frontend/frontend.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
 
-// The header of an HDF5 output file for a scene as run.
-vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys);
+// The header of an HDF5 output file for a scene as run, with the provenance of the invocation.
+using vibro::frontend::HeaderOf;
 
 // `vibro validate SCENE BRANCH.csv --param KEY ...` (cmd_validate.cpp).
 struct ValidateArgs {

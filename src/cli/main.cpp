@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,14 @@
 #include "cli/text_format.hpp"
 #include "cli/cli_common.hpp"
 
+#include "cli/plot_script.hpp"
+#include "frontend/frontend.hpp"
+
 namespace {
+
+using vibro::frontend::HeaderOf;
+using vibro::frontend::SceneWith;
+using vibro::frontend::WriteOrbit;
 
 constexpr int kExitInternal = 1;
 constexpr int kExitBadInput = 2;
@@ -88,71 +96,15 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
   return 0;
 }
 
-// The scene of `path` with the overrides and KEY=VALUE on top (continuation and sweeps).
-// The scene of `path` with the overrides and KEY=VALUE on top (continuation, partitions and
-// sweeps). The scalar keys of the excitation and the stop are set in a copy of the scene parsed
-// once, and validated (a value outside a key's range throws as a parse would); other keys re-parse
-// the scene with the override.
-vibro::Scene SceneWith(const std::string& path, std::vector<std::string> sets, const std::string& key,
-                       double value) {
-  static thread_local std::string cached_path, cached_sets;
-  static thread_local vibro::Scene cached;
-  double vibro::Scene::*field = key == "excitation.amplitude"   ? &vibro::Scene::amplitude
-                                : key == "excitation.frequency" ? &vibro::Scene::frequency
-                                : key == "stop.position"        ? &vibro::Scene::stop_position
-                                : key == "stop.restitution"     ? &vibro::Scene::restitution
-                                                                : nullptr;
-  if (field) {
-    std::string joined;
-    for (const auto& x : sets) joined += x + '\n';
-    if (cached_path != path || cached_sets != joined) {
-      cached = vibro::LoadScene(path, sets).scene;
-      cached_path = path;
-      cached_sets = joined;
-    }
-    vibro::Scene s = cached;
-    s.*field = value;
-    const auto issues = vibro::Validate(s);
-    if (issues.empty()) return s;
-  }
-  sets.push_back(fmt::format("{}={:.17g}", key, value));
-  return vibro::LoadScene(path, sets).scene;
+// An argument as a POSIX shell reads it back.
+std::string ShellQuoted(const std::string& arg) {
+  if (!arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
+                                            "_-+=/.,:@%") == std::string::npos)
+    return arg;
+  std::string q = "'";
+  for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
 }
-
-}  // namespace
-
-// Shared with the other command files (cli_common.hpp).
-vibro::StoreHeader HeaderOf(const vibro::LoadedScene& loaded, const vibro::System& sys) {
-  const auto& sc = loaded.scene;
-  vibro::StoreHeader h;
-  h.scene_text = loaded.text_as_run;
-  h.engine = vibro::ToString(sc.run.engine);
-  h.chatter = vibro::ToString(sc.run.chatter);
-  h.method = vibro::ToString(sc.run.method);
-  h.rtol = sc.run.rtol;
-  h.atol = sc.run.atol;
-  h.dof = sys.dof();
-  h.samples_per_period = sc.run.samples_per_period;
-  h.periods = sc.run.periods;
-  h.period = sys.period();
-  h.initial_time = sc.initial_time;
-  h.max_period = sc.run.max_period;
-  h.frequencies = sys.omega();
-  h.forcing = sys.forcing();
-  h.contact = sys.contact();
-  h.contact_shape = sys.contact_shape();
-  h.damping_ratios = sys.damping();
-  h.constrained_frequencies = sys.constrained().frequencies;
-  h.s_A = sys.s_A();
-  h.s_B = sys.s_B();
-  h.stop = sys.stop();
-  h.restitution = sys.restitution();
-  h.amplitude = sys.amplitude();
-  h.frequency = sys.frequency();
-  return h;
-}
-
-namespace {
 
 // restitution: NaN when unknown (then the velocities after impact are not printed).
 void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan("")) {
@@ -247,36 +199,6 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   if (result.status != vibro::RunStatus::kOk)
     fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);
   return ExitCode(result.status);
-}
-
-// Writes one period of the orbit, densely sampled, with its multipliers (/orbit).
-void WriteOrbit(const std::string& out, const vibro::LoadedScene& loaded, const vibro::System& sys,
-                const vibro::OrbitResult& orbit) {
-  vibro::Scene sc = loaded.scene;
-  sc.initial_time = orbit.section_time;
-  sc.run.periods = orbit.period;
-  sc.run.samples_per_period = std::max(sc.run.samples_per_period, 256);
-  auto store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
-  const vibro::InitialOverride start{orbit.section_time, orbit.X, orbit.V};
-  vibro::SimulationOptions opt;
-  opt.initial = &start;
-  opt.observers = {store.get()};
-  const auto result = vibro::Simulate(sys, sc, opt);
-  std::vector<double> re, im;
-  for (const auto& m : orbit.multipliers) {
-    re.push_back(m.real());
-    im.push_back(m.imag());
-  }
-  store->WriteGroup("/orbit", {{"multipliers_re", re},
-                               {"multipliers_im", im},
-                               {"stable", {orbit.stable ? 1.0 : 0.0}},
-                               {"period", {static_cast<double>(orbit.period)}},
-                               {"newton_iterations", {static_cast<double>(orbit.newton_iterations)}},
-                               {"residual", {orbit.residual}},
-                               {"section_time", {orbit.section_time}},
-                               {"X", {orbit.X.data(), orbit.X.data() + orbit.X.size()}},
-                               {"V", {orbit.V.data(), orbit.V.data() + orbit.V.size()}}});
-  store->Finish(result, orbit.summary);
 }
 
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
@@ -397,9 +319,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     vibro::RunResult r;
     r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     r.message = branch.end;
-    vibro::Attractor last;
-    if (!branch.points.empty()) last = branch.points.back().summary;
-    store->Finish(r, last);
+    store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
   }
   if (branch.status == "no-orbit")
     fmt::print(stderr, "vibro: try {}--period Q, or --from FILE.h5 --point K to start from a stored branch point\n",
@@ -491,7 +411,7 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
     store->WritePartition(a.params[0], a.params[1], a.levels, columns);
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    store->Finish(r, {});
+    store->Finish(r, vibro::frontend::NoAttractor());
   }
   if (json) {
     fmt::print("{}\n", vibro::PartitionJson(a.params[0], a.params[1], a.levels, columns));
@@ -528,15 +448,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
     if (auto p = vibro::CheckCoordinate(sys, name); !p.empty())
       problems.push_back(fmt::format("{} {}: {}", opt, name, p));
   const auto range = [&](const std::vector<double>& r, const std::string& name, const char* opt) {
-    if (r.size() == 2) {
-      if (!(r[1] > r[0])) problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", opt, r[0], r[1]));
-      return vibro::Coordinate{name, r[0], r[1]};
-    }
-    if (!r.empty()) problems.push_back(fmt::format("{}: expected two numbers A,B", opt));
-    // Defaults: x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|).
-    const double scale = std::max(1.0, std::abs(sys.stop()));
-    if (name == "x_B") return vibro::Coordinate{name, sys.stop(), sys.stop() + 2 * scale};
-    return vibro::Coordinate{name, -2 * scale * sys.omega()[0], 2 * scale * sys.omega()[0]};
+    return vibro::frontend::StudyCoordinate(sys, name, r, opt, problems);
   };
   const auto cx = range(args.x_range, args.x, "--x-range");
   const auto cy = range(args.y_range, args.y, "--y-range");
@@ -606,7 +518,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                               "continue with --resume",
                               study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
                               study.cells);
-    store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
+    store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
   }
   if (json) {
     fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
@@ -690,7 +602,14 @@ int RunInfo(const std::string& path, bool json) {
     return 0;
   }
   fmt::print("file         {}\n", path);
-  fmt::print("created      {} by vibro {}\n", run.created, run.version);
+  fmt::print("created      {} by vibro {}{}{}\n", run.created, run.version,
+             run.git_commit.empty() ? "" : " (commit " + run.git_commit + ")",
+             run.command.empty() ? "" : ", command '" + run.command + "'");
+  fmt::print("groups       {}\n", fmt::join(run.groups, ", "));
+  for (size_t i = 0; i < run.groups.size(); ++i)  // the results a file holds besides the run
+    if (!run.group_notes[i].empty() &&
+        !std::set<std::string>{"checkpoint", "attractor", "events", "samples", "section"}.count(run.groups[i]))
+      fmt::print("  /{:<13} {}\n", run.groups[i], run.group_notes[i]);
   fmt::print("engine       {}, chatter {}\n", run.engine, run.chatter);
   fmt::print("status       {}{}\n", run.status, run.message.empty() ? "" : ": " + run.message);
   fmt::print("rows         {} events, {} samples, {} section points\n", run.events, run.samples,
@@ -702,6 +621,8 @@ int RunInfo(const std::string& path, bool json) {
                run.checkpoint->counts.releases);
   if (!run.attractor.kind.empty())
     PrintAttractor(run.attractor);
+  else if (std::find(run.groups.begin(), run.groups.end(), "attractor") == run.groups.end())
+    fmt::print("attractor    none (a study, branch or partition: see the groups above)\n");
   else
     fmt::print("attractor    (not classified: the run did not finish)\n");
   fmt::print("scene:\n{}", run.scene_text);
@@ -714,7 +635,18 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
     if (name->find('\'') != std::string::npos)
       throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
-  std::string cmd = fmt::format("'{}' '{}/vibro_plot.py' '{}'", VIBRO_PYTHON, VIBRO_SCRIPTS_DIR, path);
+  std::vector<std::string> tried;
+  const std::string script = vibro::cli::FindPlotScript(tried);
+  if (script.empty()) {
+    fmt::print(stderr, "vibro: plotting code not found (looked for {}); reinstall vibro\n",
+               fmt::join(tried, " and "));
+    return kExitInternal;
+  }
+  if (script.find('\'') != std::string::npos) {
+    fmt::print(stderr, "vibro: cannot run the plotting code from a directory with a single quote: {}\n", script);
+    return kExitInternal;
+  }
+  std::string cmd = fmt::format("'{}' '{}' '{}'", VIBRO_PYTHON, script, path);
   if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
   if (!overlay.empty()) cmd += fmt::format(" --overlay '{}'", overlay);
   cmd += options;
@@ -733,7 +665,7 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
 int main(int argc, char** argv) {
   CLI::App app{"vibro: harmonically forced impact oscillators with sticking and chattering"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", VIBRO_VERSION);
+  app.set_version_flag("--version", "vibro " VIBRO_VERSION " (commit " VIBRO_GIT_COMMIT ")");
 
   std::string scene_path;
   std::vector<std::string> sets;
@@ -888,11 +820,22 @@ int main(int argc, char** argv) {
   plot->add_option("--dpi", plot_dpi, "resolution of PNG files (default 150)")->check(CLI::Range(20, 2400));
   plot->add_option("--time-window", plot_window, "A,B: time plots show A <= t <= B (default: the last 5 periods)");
 
+  bool force = false;
+  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
+    cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? 0 : kExitBadInput;
+  }
+  // Provenance of every file this run writes: the command, its command line and options.
+  if (!app.get_subcommands().empty()) {
+    const CLI::App* cmd = app.get_subcommands().front();
+    std::string line;
+    for (int i = 0; i < argc; ++i) line += (i ? " " : "") + ShellQuoted(argv[i]);
+    vibro::frontend::SetInvocation({cmd->get_name(), line, cmd->config_to_str(true, false), force});
   }
 
   try {

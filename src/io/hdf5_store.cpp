@@ -127,6 +127,17 @@ void WriteDoubles(hid_t obj, const char* name, const std::vector<double>& v, hsi
   if (!v.empty()) Check(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), name, 0);
 }
 
+void WriteStringArray(hid_t obj, const char* name, const std::vector<std::string>& v) {
+  DeleteAttr(obj, name);
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  Handle type = StringType();
+  const hsize_t dims[1] = {v.size()};
+  Handle space(H5Screate_simple(1, dims, nullptr), H5Sclose);
+  Handle a(Check(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), name), H5Aclose);
+  if (!v.empty()) Check(H5Awrite(a.get(), type.get(), p.data()), name, 0);
+}
+
 std::string ReadString(hid_t obj, const char* name) {
   if (H5Aexists(obj, name) <= 0) return {};
   Handle a(Check(H5Aopen(obj, name, H5P_DEFAULT), name), H5Aclose);
@@ -504,7 +515,18 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     if (!ours)
       throw InputError({fmt::format("{}: exists and is not a vibro output file; refusing to "
                                     "overwrite it (remove it or choose another --out)",
-                                    path)});
+                                    path)});    if (!h.force) {  // a vibro file of another scene or command is someone's result
+      Handle probe(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+      const std::string scene = probe ? ReadString(probe.get(), "scene") : "";
+      const std::string command = probe && H5Aexists(probe.get(), "command") > 0
+                                      ? ReadString(probe.get(), "command") : "";
+      if (scene != h.scene_text || (!command.empty() && command != h.command))
+        throw InputError({fmt::format(
+            "{}: holds a vibro {} of {}; refusing to overwrite it (--force to replace it, or "
+            "choose another --out)",
+            path, command.empty() ? "run" : "'" + command + "' run",
+            scene != h.scene_text ? "another scene" : "another command")});
+    }
   }
   auto impl = std::make_unique<Impl>();
   impl->path = path;
@@ -528,6 +550,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     impl->sa.Create(impl->samples.get(), static_cast<hsize_t>(h.dof));
     impl->se.Create(impl->section.get(), static_cast<hsize_t>(h.dof));
     WriteString(f, "vibro_version", VIBRO_VERSION);
+    WriteString(f, "git_commit", VIBRO_GIT_COMMIT);
+    WriteString(f, "command", h.command);
+    for (const auto& [name, value] : h.provenance) WriteString(f, name.c_str(), value);
     WriteString(f, "scene", h.scene_text);
     WriteString(f, "engine", h.engine);
     WriteDouble(f, "rtol", h.rtol);
@@ -557,6 +582,14 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
       WriteDouble(mg.get(), "restitution", h.restitution);
       WriteDouble(mg.get(), "amplitude", h.amplitude);
       WriteDouble(mg.get(), "frequency", h.frequency);
+      WriteString(mg.get(), "form", h.mode_shapes.size() > 0 ? "physical" : "modal");
+      if (h.mode_shapes.size() > 0) {  // (N, n), row-major as HDF5 stores it
+        std::vector<double> rows;
+        for (Eigen::Index i = 0; i < h.mode_shapes.rows(); ++i)
+          for (Eigen::Index j = 0; j < h.mode_shapes.cols(); ++j) rows.push_back(h.mode_shapes(i, j));
+        WriteDoubles(mg.get(), "mode_shapes", rows, static_cast<hsize_t>(h.mode_shapes.cols()));
+        WriteStringArray(mg.get(), "dof_labels", h.dof_labels);
+      }
     }
     impl->Flush();
     // A destination that is (nearly) full fails now, before any computation.
@@ -621,7 +654,17 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
     WriteInt(f, "cvode_reinits", r.solver.reinits);
     WriteString(f, "cvode_method", m.header.method);
   }
-  Handle g(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
+  if (a.kind.empty()) {  // a study, branch or partition: no single attractor to describe
+    if (H5Lexists(f, "/attractor", H5P_DEFAULT) > 0) H5Ldelete(f, "/attractor", H5P_DEFAULT);
+    m.Flush();
+    m.Close();
+    return;
+  }
+  Handle g(Check(H5Lexists(f, "/attractor", H5P_DEFAULT) > 0
+                     ? H5Gopen2(f, "/attractor", H5P_DEFAULT)
+                     : H5Gcreate2(f, "/attractor", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+                 "/attractor"),
+           H5Gclose);
   WriteString(g.get(), "kind", a.kind);
   // Null values of the JSON summary are absent attributes.
   for (const char* k : {"period", "impacts_per_period", "sticking_fraction"}) DeleteAttr(g.get(), k);
@@ -684,6 +727,59 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
+
+namespace {
+// H5Literate callback: appends the names of the groups among the links to a vector<string>.
+herr_t ListGroup(hid_t loc, const char* name, const H5L_info_t*, void* names) {
+  Handle g(H5Gopen2(loc, name, H5P_DEFAULT), H5Gclose);  // fails (silently) for a dataset
+  if (g) static_cast<std::vector<std::string>*>(names)->push_back(name);
+  return 0;
+}
+}  // namespace
+
+namespace {
+// An attribute as text for `vibro info`: strings as they are, a scalar number with fmt's
+// shortest form, an array as its length.
+std::string AttrText(hid_t obj, const char* name) {
+  Handle a(H5Aopen(obj, name, H5P_DEFAULT), H5Aclose);
+  if (!a) return "";
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  if (H5Tget_class(type.get()) == H5T_STRING) return ReadString(obj, name);
+  const auto n = H5Sget_simple_extent_npoints(space.get());
+  if (H5Sget_simple_extent_ndims(space.get()) > 0) return fmt::format("[{} values]", n);
+  double v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0) return "";
+  return fmt::format("{}", v);
+}
+
+// What a result group holds, in a line: its rows and main attributes.
+std::string DescribeGroup(hid_t f, const std::string& name) {
+  Handle g(H5Gopen2(f, name.c_str(), H5P_DEFAULT), H5Gclose);
+  if (!g) return "";
+  std::vector<std::string> parts;
+  for (const char* d : {"value", "labels", "t", "kind", "value1", "index"}) {
+    if (H5Lexists(g.get(), d, H5P_DEFAULT) <= 0) continue;
+    Handle ds(H5Dopen2(g.get(), d, H5P_DEFAULT), H5Dclose);
+    if (!ds) continue;
+    Handle space(H5Dget_space(ds.get()), H5Sclose);
+    hsize_t dims[2] = {0, 0};
+    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    parts.push_back(rank == 2 && std::string(d) == "labels" ? fmt::format("{} × {} cells", dims[1], dims[0])
+                                                             : fmt::format("{} rows", dims[0]));
+    break;
+  }
+  for (const char* k : {"param", "param1", "param2", "x", "y", "period", "stable", "residual", "end", "status",
+                        "unresolved_fraction"}) {
+    if (H5Aexists(g.get(), k) <= 0) continue;
+    const auto text = AttrText(g.get(), k);
+    if (!text.empty()) parts.push_back(fmt::format("{} = {}", k, text));
+  }
+  std::string line;
+  for (const auto& p : parts) line += (line.empty() ? "" : ", ") + p;
+  return line;
+}
+}  // namespace
 
 StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
   SilenceHdf5();
@@ -788,15 +884,25 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
         out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i]});
     }
 
-    Handle ag(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
-    out.attractor.kind = ReadString(ag.get(), "kind");
-    if (auto p = ReadScalar<std::int64_t>(ag.get(), "period", H5T_NATIVE_INT64))
-      out.attractor.period = static_cast<int>(*p);
-    if (auto p = ReadScalar<std::int64_t>(ag.get(), "impacts_per_period", H5T_NATIVE_INT64))
-      out.attractor.impacts_per_period = *p;
-    out.attractor.sticking_fraction = ReadScalar<double>(ag.get(), "sticking_fraction", H5T_NATIVE_DOUBLE);
-    const auto ph = ReadDoubles(ag.get(), "stick_phases");
-    for (size_t i = 0; i + 1 < ph.size(); i += 2) out.attractor.stick_phases.emplace_back(ph[i], ph[i + 1]);
+    // Studies and branches (and their files since provenance was stored) have no /attractor.
+    out.attractor.kind.clear();
+    if (H5Lexists(f, "/attractor", H5P_DEFAULT) > 0) {
+      Handle ag(Check(H5Gopen2(f, "/attractor", H5P_DEFAULT), "/attractor"), H5Gclose);
+      out.attractor.kind = ReadString(ag.get(), "kind");
+      if (auto p = ReadScalar<std::int64_t>(ag.get(), "period", H5T_NATIVE_INT64))
+        out.attractor.period = static_cast<int>(*p);
+      if (auto p = ReadScalar<std::int64_t>(ag.get(), "impacts_per_period", H5T_NATIVE_INT64))
+        out.attractor.impacts_per_period = *p;
+      out.attractor.sticking_fraction = ReadScalar<double>(ag.get(), "sticking_fraction", H5T_NATIVE_DOUBLE);
+      const auto ph = ReadDoubles(ag.get(), "stick_phases");
+      for (size_t i = 0; i + 1 < ph.size(); i += 2) out.attractor.stick_phases.emplace_back(ph[i], ph[i + 1]);
+      out.attractor.impact_phases = ReadDoubles(ag.get(), "impact_phases");
+      out.attractor.impact_velocities = ReadDoubles(ag.get(), "impact_velocities");
+    }
+    if (H5Aexists(f, "command") > 0) out.command = ReadString(f, "command");
+    if (H5Aexists(f, "git_commit") > 0) out.git_commit = ReadString(f, "git_commit");
+    H5Literate(f, H5_INDEX_NAME, H5_ITER_INC, nullptr, ListGroup, &out.groups);
+    for (const auto& name : out.groups) out.group_notes.push_back(DescribeGroup(f, name));
   } catch (const std::runtime_error& e) {
     throw InputError({fmt::format("{}: not a readable vibro output file: {}", path, e.what())});
   }
@@ -956,6 +1062,10 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
 
+namespace {
+void WriteAttractorTable(hid_t f, const StudyResult& st);
+}  // namespace
+
 void Hdf5Store::WriteStudy(const StudyResult& st, const StudyGrid& grid) {
   auto& m = *impl_;
   const hid_t f = m.file.get();
@@ -987,45 +1097,8 @@ void Hdf5Store::WriteStudy(const StudyResult& st, const StudyGrid& grid) {
   WriteDouble(basin, "unresolved_fraction", st.unresolved_fraction);
   WriteDouble(basin, "inadmissible_fraction", st.inadmissible_fraction);
   WriteDouble(basin, "pending_fraction", st.pending_fraction);
-  Handle table(Check(H5Gcreate2(f, "/attractors", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), "/attractors"),
-               H5Gclose);
-  std::vector<double> period, impacts, sp, frac, err, stable, residual, merged, mcount, mu, lead;
-  std::string kinds, status;
-  for (const auto& a : st.attractors) {
-    period.push_back(a.attractor.period ? *a.attractor.period : -1);
-    impacts.push_back(a.attractor.impacts_per_period ? static_cast<double>(*a.attractor.impacts_per_period) : -1);
-    sp.push_back(a.attractor.sticking_fraction.value_or(-1));
-    frac.push_back(a.basin_fraction);
-    err.push_back(a.basin_fraction_error);
-    kinds += (kinds.empty() ? "" : ",") + a.attractor.kind;
-    status += (status.empty() ? "" : ",") + a.orbit.status;
-    stable.push_back(a.orbit.stable ? (*a.orbit.stable ? 1.0 : 0.0) : -1.0);
-    residual.push_back(a.orbit.residual);
-    merged.push_back(a.orbit.merged);
-    mcount.push_back(static_cast<double>(a.orbit.multipliers.size()));
-    double l = a.orbit.multipliers.empty() ? -1 : 0;
-    for (const auto& z : a.orbit.multipliers) {
-      mu.push_back(z.real());
-      mu.push_back(z.imag());
-      l = std::max(l, std::abs(z));
-    }
-    lead.push_back(l);
-  }
-  // One attribute per column (label k is row k); null values are −1.
-  WriteString(table.get(), "kind", kinds);
-  WriteDoubles(table.get(), "period", period);
-  WriteDoubles(table.get(), "impacts_per_period", impacts);
-  WriteDoubles(table.get(), "sticking_fraction", sp);
-  WriteDoubles(table.get(), "basin_fraction", frac);
-  WriteDoubles(table.get(), "basin_fraction_error", err);
-  // The Poincaré solver's orbit of each class (vibro extension).
-  WriteString(table.get(), "orbit_status", status);
-  WriteDoubles(table.get(), "stable", stable);
-  WriteDoubles(table.get(), "orbit_residual", residual);
-  WriteDoubles(table.get(), "merged_classes", merged);
-  WriteDoubles(table.get(), "multiplier_count", mcount);
-  WriteDoubles(table.get(), "floquet_multipliers", mu, 2);
-  WriteDoubles(table.get(), "leading_multiplier", lead);
+  // /attractors: a table, one dataset per column, row k ↔ label k.
+  WriteAttractorTable(f, st);
 }
 
 namespace {
@@ -1055,6 +1128,59 @@ void WriteStrings(hid_t loc, const char* name, const std::vector<std::string>& v
   for (const auto& x : v) p.push_back(x.c_str());
   Handle type = StringType();
   WriteArray(loc, name, type.get(), type.get(), p.data(), p.size());
+}
+
+// The attractors of a study as a table: one dataset per column, row k ↔ label k. Integer
+// columns are integers (−1 for a null period or impact count, stable −1 when the orbit was not
+// solved), null floats NaN, strings variable-length UTF-8; the multipliers of row k are the
+// rows multiplier_offset[k] … + multiplier_count[k] − 1 of floquet_multipliers (M, 2) [re, im].
+void WriteAttractorTable(hid_t f, const StudyResult& st) {
+  Handle table = NewGroup(f, "/attractors");
+  const hid_t g = table.get();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<std::int32_t> period, merged, count, offset;
+  std::vector<std::int64_t> impacts;
+  std::vector<std::int8_t> stable;
+  std::vector<double> sp, frac, err, residual, mu, lead;
+  std::vector<std::string> kinds, status;
+  for (const auto& a : st.attractors) {
+    period.push_back(a.attractor.period ? *a.attractor.period : -1);
+    impacts.push_back(a.attractor.impacts_per_period ? *a.attractor.impacts_per_period : -1);
+    sp.push_back(a.attractor.sticking_fraction.value_or(nan));
+    frac.push_back(a.basin_fraction);
+    err.push_back(a.basin_fraction_error);
+    kinds.push_back(a.attractor.kind);
+    status.push_back(a.orbit.status);
+    stable.push_back(a.orbit.stable ? (*a.orbit.stable ? 1 : 0) : -1);
+    residual.push_back(a.orbit.residual);
+    merged.push_back(a.orbit.merged);
+    offset.push_back(static_cast<std::int32_t>(mu.size() / 2));
+    count.push_back(static_cast<std::int32_t>(a.orbit.multipliers.size()));
+    double l = a.orbit.multipliers.empty() ? nan : 0;
+    for (const auto& z : a.orbit.multipliers) {
+      mu.push_back(z.real());
+      mu.push_back(z.imag());
+      l = std::max(l, std::abs(z));
+    }
+    lead.push_back(l);
+  }
+  const hsize_t n = st.attractors.size();
+  WriteStrings(g, "kind", kinds);
+  WriteArray(g, "period", H5T_STD_I32LE, H5T_NATIVE_INT32, period.data(), n);
+  WriteArray(g, "impacts_per_period", H5T_STD_I64LE, H5T_NATIVE_INT64, impacts.data(), n);
+  WriteColumn(g, "sticking_fraction", sp);
+  WriteColumn(g, "basin_fraction", frac);
+  WriteColumn(g, "basin_fraction_error", err);
+  // The Poincaré solver's orbit of each class (vibro extension).
+  WriteStrings(g, "orbit_status", status);
+  WriteArray(g, "stable", H5T_STD_I8LE, H5T_NATIVE_INT8, stable.data(), n);
+  WriteColumn(g, "orbit_residual", residual);
+  WriteArray(g, "merged_classes", H5T_STD_I32LE, H5T_NATIVE_INT32, merged.data(), n);
+  WriteArray(g, "multiplier_count", H5T_STD_I32LE, H5T_NATIVE_INT32, count.data(), n);
+  WriteArray(g, "multiplier_offset", H5T_STD_I32LE, H5T_NATIVE_INT32, offset.data(), n);
+  WriteArray(g, "floquet_multipliers", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, mu.data(), mu.size() / 2, 2);
+  WriteColumn(g, "leading_multiplier", lead);
+  WriteInt(g, "rows", static_cast<long long>(n));
 }
 
 }  // namespace
@@ -1111,6 +1237,46 @@ void Hdf5Store::WriteGroup(const std::string& group,
   for (const auto& [name, v] : values) WriteDoubles(g.get(), name.c_str(), v);
 }
 
+
+namespace {
+// h5py's bool: an int8 enum {FALSE = 0, TRUE = 1}.
+Handle BoolType() {
+  Handle t(H5Tenum_create(H5T_NATIVE_INT8), H5Tclose);
+  const std::int8_t no = 0, yes = 1;
+  H5Tenum_insert(t.get(), "FALSE", &no);
+  H5Tenum_insert(t.get(), "TRUE", &yes);
+  return t;
+}
+}  // namespace
+
+void Hdf5Store::WriteOrbit(const OrbitResult& orbit) {
+  const hid_t f = impl_->file.get();
+  Handle g(H5Lexists(f, "/orbit", H5P_DEFAULT) > 0 ? H5Gopen2(f, "/orbit", H5P_DEFAULT)
+                                                   : H5Gcreate2(f, "/orbit", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+           H5Gclose);
+  Check(g.get(), "/orbit");
+  WriteInt(g.get(), "period", orbit.period);
+  WriteInt(g.get(), "newton_iterations", orbit.newton_iterations);
+  Handle bool_type = BoolType();
+  WriteScalar(g.get(), "stable", static_cast<std::int8_t>(orbit.stable ? 1 : 0), bool_type.get(), bool_type.get());
+  WriteDouble(g.get(), "residual", orbit.residual);
+  WriteDouble(g.get(), "section_time", orbit.section_time);
+  WriteDoubles(g.get(), "X", {orbit.X.data(), orbit.X.data() + orbit.X.size()});
+  WriteDoubles(g.get(), "V", {orbit.V.data(), orbit.V.data() + orbit.V.size()});
+  std::vector<double> mu;
+  for (const auto& z : orbit.multipliers) {
+    mu.push_back(z.real());
+    mu.push_back(z.imag());
+  }
+  // (m, 2) as [re, im]; (0, 2) for none (one-DOF sticking orbits).
+  DeleteAttr(g.get(), "multipliers");
+  const hsize_t dims[2] = {orbit.multipliers.size(), 2};
+  Handle space(H5Screate_simple(2, dims, nullptr), H5Sclose);
+  Handle a(Check(H5Acreate2(g.get(), "multipliers", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
+                 "multipliers"),
+           H5Aclose);
+  if (!mu.empty()) Check(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, mu.data()), "multipliers", 0);
+}
 
 const H5Table::Array* H5Table::Find(const std::string& name) const {
   for (const auto& a : arrays)

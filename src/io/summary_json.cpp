@@ -266,6 +266,9 @@ std::string StoredRunJson(const StoredRun& run) {
   j["chatter"] = run.chatter;
   j["created"] = run.created;
   j["vibro_version"] = run.version;
+  j["git_commit"] = run.git_commit;
+  j["command"] = run.command;
+  j["groups"] = run.groups;
   j["rows"] = {{"events", run.events}, {"samples", run.samples}, {"sections", run.sections}};
   if (run.checkpoint) {
     const auto& c = run.checkpoint->counts;

@@ -16,6 +16,7 @@
 
 #include "support.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/poincare.hpp"
 
 namespace vibro::test {
 namespace {
@@ -173,6 +174,94 @@ TEST(StickingLost, ContinuationLocatesItAtTheQuadFmax) {
     EXPECT_NEAR(br.bifurcations.back().value, b->lo, 1e-10)
         << fmt::format("continuation {:.15g}, quad [{:.15g}, {:.15g}]", br.bifurcations.back().value,
                        b->lo, b->hi);
+  }
+}
+
+// The 2-DOF chain (data/scenes/chain2.toml: unit masses and springs, stop on mass 2 with preload
+// x0 = 1, r = 0.5, ω = 0.8): its period-1 sticking branch in f ends (sticking-lost) near 1.2063.
+// Truth: the quad engine simulating from a point of the double orbit just below the end (the
+// orbit is stable: a transient from a nearby state settles on it), over 40 periods; the branch
+// exists at f iff the motion then sticks once in each of the last 10 periods.
+Scene Chain2At(double f, Precision precision, long long periods) {
+  Scene s = Chain(2, 1.0, 0.5, 0.8, f);
+  s.run.periods = periods;
+  s.run.precision = precision;
+  return s;
+}
+
+struct ChainSticking {
+  RunStatus status;
+  bool sticks_every_period = false;
+  double sticking_fraction = 0;  // over the last 10 periods
+};
+
+ChainSticking ChainRun(double f, Precision precision, const InitialOverride& from, long long periods) {
+  const Outcome run = Simulate(Chain2At(f, precision, periods), &from);
+  ChainSticking out{run.result.status};
+  const double T = 2.0 * M_PI / 0.8, t_end = from.time + static_cast<double>(periods) * T;
+  int sticks = 0;
+  double stuck = 0, since = -1;
+  for (const auto& e : run.log.events) {
+    if (e.t < t_end - 10 * T) continue;
+    if (e.kind == EventKind::kStick) {
+      ++sticks;
+      since = e.t;
+    }
+    if (e.kind == EventKind::kRelease && since >= 0) {
+      stuck += e.t - since;
+      since = -1;
+    }
+  }
+  out.sticks_every_period = sticks >= 10;
+  out.sticking_fraction = stuck / (10 * T);
+  return out;
+}
+
+TEST(StickingLost, TwoDofChainAgreesWithTheQuadEngine) {
+  ContinuationRequest req;
+  req.scene_at = [](double f) { return Chain2At(f, Precision::kDouble, 50); };
+  req.from = 0.8;
+  req.to = 2.0;
+  const Branch br = Continue(req);
+  ASSERT_FALSE(br.bifurcations.empty());
+  ASSERT_EQ(br.bifurcations.back().kind, "sticking-lost");
+  const double f_cont = br.bifurcations.back().value;
+  // A start on the orbit 1e-4 below the end, for every quad run.
+  const double f_start = f_cont - 1e-4;
+  OrbitRequest oreq;
+  oreq.kind = OrbitKind::kSticking;
+  oreq.period = 1;
+  const OrbitResult o = FindOrbit(System(Chain2At(f_start, Precision::kDouble, 50)),
+                                  Chain2At(f_start, Precision::kDouble, 50), oreq);
+  ASSERT_EQ(o.status, "converged") << o.message;
+  const InitialOverride start{o.section_time, o.X, o.V};
+  // Quad bisection of the end of the branch.
+  double lo = f_start, hi = f_cont + 1e-4;
+  ASSERT_TRUE(ChainRun(lo, Precision::kQuad, start, 40).sticks_every_period);
+  ASSERT_FALSE(ChainRun(hi, Precision::kQuad, start, 40).sticks_every_period);
+  while (hi - lo > 1e-12) {
+    const double mid = 0.5 * (lo + hi);
+    const ChainSticking c = ChainRun(mid, Precision::kQuad, start, 40);
+    if (c.status != RunStatus::kOk) break;
+    (c.sticks_every_period ? lo : hi) = mid;
+  }
+  std::printf("2-DOF chain: continuation %.15g, quad [%.15g, %.15g]\n", f_cont, lo, hi);
+  EXPECT_LT(hi - lo, 1e-10);
+  EXPECT_NEAR(f_cont, lo, 1e-9);
+  // Above the end the double engine sticks in no period either; below it the sticking fractions
+  // agree with quad (both simulating from the same start until the transient has gone).
+  for (double d : {1e-8, 1e-6, 1e-4}) {
+    const ChainSticking c = ChainRun(hi + d, Precision::kDouble, start, 40);
+    EXPECT_FALSE(c.sticks_every_period && c.status == RunStatus::kOk) << "f_max + " << d;
+  }
+  for (double d : {1e-5, 1e-7}) {
+    const ChainSticking q = ChainRun(lo - d, Precision::kQuad, start, 200);
+    const ChainSticking c = ChainRun(lo - d, Precision::kDouble, start, 200);
+    ASSERT_EQ(c.status, RunStatus::kOk) << "f_max − " << d;
+    ASSERT_TRUE(q.sticks_every_period && c.sticks_every_period);
+    std::printf("  f_max − %g: SP double %.15g quad %.15g\n", d, c.sticking_fraction,
+                q.sticking_fraction);
+    EXPECT_NEAR(c.sticking_fraction, q.sticking_fraction, 1e-10) << "f_max − " << d;
   }
 }
 

@@ -1,0 +1,127 @@
+// The pieces of running a command that the command line and the Python module share.
+#include "frontend/frontend.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include <fmt/format.h>
+
+#include "vibro/scene_toml.hpp"
+#include "vibro/simulator.hpp"
+
+namespace vibro::frontend {
+
+LoadedScene SceneOrigin::Load(const std::vector<std::string>& more_sets) const {
+  std::vector<std::string> all = sets;
+  all.insert(all.end(), more_sets.begin(), more_sets.end());
+  return text ? ParseScene(*text, source, all) : LoadScene(path, all);
+}
+
+Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value) {
+  static thread_local std::string cached_key;
+  static thread_local Scene cached;
+  double Scene::*field = key == "excitation.amplitude"   ? &Scene::amplitude
+                         : key == "excitation.frequency" ? &Scene::frequency
+                         : key == "stop.position"        ? &Scene::stop_position
+                         : key == "stop.restitution"     ? &Scene::restitution
+                                                         : nullptr;
+  if (field) {
+    std::string joined = origin.path + '\n' + origin.text.value_or("") + '\n' + origin.source + '\n';
+    for (const auto& x : origin.sets) joined += x + '\n';
+    if (cached_key != joined) {
+      cached = origin.Load().scene;
+      cached_key = joined;
+    }
+    Scene s = cached;
+    s.*field = value;
+    const auto issues = Validate(s);
+    if (issues.empty()) return s;
+  }
+  return origin.Load({fmt::format("{}={:.17g}", key, value)}).scene;
+}
+
+Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,
+                double value) {
+  return SceneWith(SceneOrigin{path, std::nullopt, path, sets}, key, value);
+}
+
+namespace {
+thread_local Invocation g_invocation;
+}  // namespace
+
+void SetInvocation(Invocation invocation) { g_invocation = std::move(invocation); }
+
+StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
+  const auto& sc = loaded.scene;
+  StoreHeader h;
+  h.scene_text = loaded.text_as_run;
+  h.engine = ToString(sc.run.engine);
+  h.chatter = ToString(sc.run.chatter);
+  h.method = ToString(sc.run.method);
+  h.rtol = sc.run.rtol;
+  h.atol = sc.run.atol;
+  h.dof = sys.dof();
+  h.samples_per_period = sc.run.samples_per_period;
+  h.periods = sc.run.periods;
+  h.period = sys.period();
+  h.initial_time = sc.initial_time;
+  h.max_period = sc.run.max_period;
+  h.frequencies = sys.omega();
+  h.forcing = sys.forcing();
+  h.contact = sys.contact();
+  h.contact_shape = sys.contact_shape();
+  h.damping_ratios = sys.damping();
+  h.constrained_frequencies = sys.constrained().frequencies;
+  h.s_A = sys.s_A();
+  h.s_B = sys.s_B();
+  h.stop = sys.stop();
+  h.restitution = sys.restitution();
+  h.amplitude = sys.amplitude();
+  h.frequency = sys.frequency();
+  if (sys.physical() && loaded.scene.physical) {
+    h.mode_shapes = sys.mode_shapes();
+    for (Eigen::Index i = 0; i < h.mode_shapes.rows(); ++i) {
+      const auto dof = static_cast<int>(i);
+      const bool a = dof == loaded.scene.physical->forcing_dof, b = dof == loaded.scene.physical->contact_dof;
+      h.dof_labels.push_back(fmt::format("dof {}{}", dof, a && b ? " (A, B)" : a ? " (A)" : b ? " (B)" : ""));
+    }
+  }
+  h.command = g_invocation.command;
+  h.force = g_invocation.force;
+  h.provenance = {{"command_line", g_invocation.command_line},
+                  {"options", g_invocation.options},
+                  {"scene_resolved", ResolvedSceneToml(loaded.scene)}};
+  return h;
+}
+
+Coordinate StudyCoordinate(const System& sys, const std::string& name, const std::vector<double>& r,
+                           const char* option, std::vector<std::string>& problems) {
+  if (r.size() == 2) {
+    if (!(r[1] > r[0])) problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", option, r[0], r[1]));
+    return Coordinate{name, r[0], r[1]};
+  }
+  if (!r.empty()) problems.push_back(fmt::format("{}: expected two numbers A,B", option));
+  // Defaults: x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|).
+  const double scale = std::max(1.0, std::abs(sys.stop()));
+  if (name == "x_B") return Coordinate{name, sys.stop(), sys.stop() + 2 * scale};
+  return Coordinate{name, -2 * scale * sys.omega()[0], 2 * scale * sys.omega()[0]};
+}
+
+void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& sys,
+                const OrbitResult& orbit) {
+  Scene sc = loaded.scene;
+  sc.initial_time = orbit.section_time;
+  sc.run.periods = orbit.period;
+  sc.run.samples_per_period = std::max(sc.run.samples_per_period, 256);
+  auto store = Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+  SimulationOptions opt;
+  opt.initial = &start;
+  opt.observers = {store.get()};
+  const auto result = Simulate(sys, sc, opt);
+  store->WriteOrbit(orbit);
+  store->Finish(result, orbit.summary);
+}
+
+}  // namespace vibro::frontend

@@ -1,0 +1,71 @@
+// What the command line (src/cli/main.cpp) and the Python module (python/src/bindings.cpp) share,
+// so that both run a command the same way: where a scene comes from and the scene with one key
+// changed, the header of an HDF5 output, the default ranges of a study and one period of an
+// orbit written to a file.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vibro/hdf5_store.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/studies.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro::frontend {
+
+// A scene file (`path`), or TOML text named `source` in messages, with `--set` overrides.
+struct SceneOrigin {
+  std::string path;
+  std::optional<std::string> text;  // when set, parsed instead of reading `path`
+  std::string source;
+  std::vector<std::string> sets;
+
+  LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
+};
+
+// The scene of `origin` with KEY=VALUE on top (continuation, partitions and sweeps). The scalar
+// keys of the excitation and the stop are set in a copy of the scene parsed once per thread, and
+// validated (a value outside a key's range throws as a parse would); other keys re-parse the
+// scene with the override.
+Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value);
+// Same for a scene file and overrides.
+Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,
+                double value);
+
+// How the current command was invoked, stored as provenance in every output file written on
+// this thread afterwards: `command` ("simulate", "basin", ...), the full command line (or the
+// Python call), the command's options with their values (defaults included) and whether an
+// existing vibro file of another scene or command may be replaced (--force).
+struct Invocation {
+  std::string command, command_line, options;
+  bool force = false;
+};
+void SetInvocation(Invocation invocation);
+
+// The header of an HDF5 output of a run of `loaded`: the scene as run, the model (with mode shapes
+// and DOF labels for the physical form) and the provenance (the invocation, and the scene with
+// every default resolved).
+StoreHeader HeaderOf(const LoadedScene& loaded, const System& system);
+
+// A study's coordinate over `range` (A,B with A < B), or its default range when `range` is empty:
+// x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|). Problems are
+// appended to `problems` with `option` (e.g. "--x-range") named.
+Coordinate StudyCoordinate(const System& system, const std::string& name, const std::vector<double>& range,
+                           const char* option, std::vector<std::string>& problems);
+
+// What Hdf5Store::Finish takes for a study, branch or partition: no single attractor (the file
+// then has no /attractor group).
+inline Attractor NoAttractor() {
+  Attractor a;
+  a.kind.clear();
+  return a;
+}
+
+// Writes one period of a converged orbit, densely sampled, and its multipliers (/orbit) to `out`.
+void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& system,
+                const OrbitResult& orbit);
+
+}  // namespace vibro::frontend
