@@ -7,14 +7,20 @@
 
 namespace vibro::detail {
 
-std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run) {
+std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run,
+                                       const std::atomic<bool>* stop) {
+  std::unique_ptr<Propagator> engine;
   switch (run.engine) {
     case Engine::kExact:
-      return std::make_unique<ExactEngine>(system);
+      engine = std::make_unique<ExactEngine>(system);
+      break;
     case Engine::kCvode:
-      return std::make_unique<CvodeEngine>(system, run);
+      engine = std::make_unique<CvodeEngine>(system, run);
+      break;
   }
-  throw std::invalid_argument("unknown engine");
+  if (!engine) throw std::invalid_argument("unknown engine");
+  engine->set_stop_flag(stop);
+  return engine;
 }
 
 }  // namespace vibro::detail

@@ -9,6 +9,8 @@
 
 namespace vibro::detail {
 
-std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run);
+// `stop`: a stop request polled inside the engine's stepping loops (may be null).
+std::unique_ptr<Propagator> MakeEngine(const System& system, const RunSpec& run,
+                                       const std::atomic<bool>* stop = nullptr);
 
 }  // namespace vibro::detail

@@ -3,6 +3,7 @@
 // time limit, and give dense output on what was advanced.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <string>
 
@@ -54,6 +55,9 @@ struct SegmentResult {
   // phase), that offset exactly: the clock is set to it rather than to offset + sigma, so that
   // a one-DOF orbit repeats to the bit.
   double exact_offset = -1.0;
+  // kFailure because a stop request (SIGINT/SIGTERM) was seen inside the segment: the run is
+  // interrupted, not failed; everything up to sigma is valid.
+  bool stopped = false;
 };
 
 // Called with local-time stretches [lo, hi] on which Evaluate() is valid (exact engine: the whole
@@ -73,6 +77,16 @@ class Propagator {
   virtual double Gap(double sigma) const = 0;
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
+
+  // A stop request polled inside Advance's loops (null: never stopped). A segment that sees it
+  // ends as kFailure with `stopped` set, so that a segment that would never end still stops.
+  void set_stop_flag(const std::atomic<bool>* flag) { stop_flag_ = flag; }
+
+ protected:
+  bool StopRequested() const { return stop_flag_ && stop_flag_->load(std::memory_order_relaxed); }
+
+ private:
+  const std::atomic<bool>* stop_flag_ = nullptr;
 };
 
 }  // namespace vibro::detail
