@@ -562,7 +562,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   const bool interrupted = dist.Any(g_stop_requested.load());
   if (!dist.root()) return interrupted ? kExitInterrupted : 0;
   const auto study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
-  if (store) {
+  if (store) try {
     const vibro::cli::FinalWrite writing;
     store->WriteStudy(study, grid);
     vibro::RunResult r;
@@ -574,6 +574,10 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                               study.cells);
     store->Finish(r, study.attractors.empty() ? vibro::Attractor{} : study.attractors.front().attractor);
     store.reset();
+  } catch (const std::runtime_error& e) {  // a resumed file whose damage shows only when written
+    fmt::print(stderr, "vibro: cannot write the study to {}: {}; the cells computed are in its /basin/cells\n",
+               args.out, e.what());
+    return kExitInternal;
   }
   if (json) {
     fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
