@@ -19,7 +19,7 @@ void AttractorRecorder::OnSection(const Sample& s) {
   Eigen::VectorXd z(2 * s.X.size());
   z << s.X, s.V;
   sections_.push_back({s.clock.period, std::move(z), s.mode});
-  const auto keep = static_cast<size_t>(2 * max_period_ + 2);
+  const auto keep = static_cast<size_t>(3 * max_period_ + 2);  // three windows of the longest period
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
@@ -106,6 +106,41 @@ Attractor AttractorRecorder::Classify() const {
     }
     return true;
   };
+  // The events of every whole window of p periods in the last max(3p, max_period) periods recorded
+  // must repeat in kind and order (impacts left out where a window chatters): a motion that
+  // sticks every 7 periods is not period 1 because its last two periods look alike.
+  const auto log_repeats = [&](int p) {
+    const long long span = std::min<long long>(std::max(3 * p, max_period_), static_cast<long long>(n) - 1);
+    std::vector<std::vector<EventKind>> windows;
+    for (long long to = K; to - p >= K - span; to -= p) {
+      std::vector<EventKind> log;
+      const bool chatters = count(EventKind::kAccumulation, to - p, to) > 0;
+      for (const auto& e : events_)
+        if (in_window(e, to - p, to) && !(chatters && e.kind == EventKind::kImpact)) log.push_back(e.kind);
+      windows.push_back(std::move(log));
+    }
+    for (size_t i = 1; i < windows.size(); ++i)
+      if (windows[i] != windows[0]) return false;
+    return true;
+  };
+  // Section points repeating within the tolerance are not enough: a decaying transient can
+  // repeat within it by aliasing (a free oscillation whose phase returns after p periods while
+  // it decays by 4 % a period). With the repeat distances δ1, δ2 of the last two windows
+  // (Difference), the distance left to the orbit is about δ1·λ/(1 − λ), λ = δ1/δ2: the period is
+  // accepted when that is within the tolerance too, or when δ1 is at the rounding floor.
+  const auto decayed = [&](int p) {
+    const auto q = static_cast<size_t>(p);
+    if (3 * q > n) return true;  // too short a record to tell (a run of a few periods)
+    double d1 = 0, d2 = 0;
+    for (size_t j = 0; j < q; ++j) {
+      d1 = std::max(d1, Difference(n - 1 - j, n - 1 - j - q));
+      d2 = std::max(d2, Difference(n - 1 - j - q, n - 1 - j - 2 * q));
+    }
+    if (d1 <= 1e-3 * tolerance_) return true;  // rounding floor of a periodic orbit
+    if (!(d2 > d1)) return false;              // not contracting: still drifting, or diverging
+    const double lambda = d1 / d2;
+    return d1 * lambda / (1 - lambda) <= tolerance_;
+  };
   int period = 0;
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
     bool ok = true;
@@ -116,7 +151,7 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
-    ok = ok && same_timing(p);
+    ok = ok && same_timing(p) && log_repeats(p) && decayed(p);
     if (ok) {
       period = p;
       break;
@@ -124,12 +159,17 @@ Attractor AttractorRecorder::Classify() const {
   }
 
   // Sticking phases: each release in the window closes one phase; its start is the last stick
-  // before it.
-  const int p = period > 0 ? period : std::min<int>(max_period_, static_cast<int>(n) - 1);
+  // before it. Without a period the window is the whole record, and the time on the stop is
+  // counted inside it only (a phase begun before the window, or still running at its end, is
+  // cut at the window's edges), so that the fraction is an average over whole periods in [0, 1].
+  const int p = period > 0 ? period : static_cast<int>(n) - 1;
   const long long from = K - p;
   double stuck = 0.0;
   std::vector<std::pair<double, double>> phases;
   const Event* last_stick = nullptr;
+  const auto since_from = [&](const Clock& c) {
+    return static_cast<double>(c.period - from) * T + c.offset;
+  };
   for (const auto& e : events_) {
     if (e.kind == EventKind::kStick) last_stick = &e;
     if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
@@ -137,9 +177,13 @@ Attractor AttractorRecorder::Classify() const {
                                e.clock.offset - last_stick->clock.offset);
       const double start = Phase(last_stick->clock, p);
       phases.emplace_back(start, start + w * duration);
-      stuck += duration;
+      stuck += period > 0 ? duration : since_from(e.clock) - std::max(0.0, since_from(last_stick->clock));
+      last_stick = nullptr;
     }
   }
+  if (period == 0 && last_stick && sections_.back().mode == Mode::kSticking)
+    stuck += p * T - std::max(0.0, since_from(last_stick->clock));  // stuck at the end
+  stuck = std::clamp(stuck, 0.0, p * T);
   std::sort(phases.begin(), phases.end());
   const bool released = !phases.empty();
   const bool always_stuck = !released && sections_.back().mode == Mode::kSticking &&
