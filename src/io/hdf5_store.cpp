@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -664,7 +665,7 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
 }
 
 namespace {
-void ProbeWrite(const std::string& path);  // below
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes);  // below
 }  // namespace
 
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
@@ -682,14 +683,16 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   if (stored.checkpoint->X.size() != h.dof)
     throw InputError({fmt::format("{}: cannot resume: the checkpoint has {} coordinates, the scene {}", path,
                                   stored.checkpoint->X.size(), h.dof)});
-  ProbeWrite(path);
+  // Opens `file_path` and makes every change a resume makes before the run goes on; done first on
+  // a copy (ProbeWrite), so that a file that cannot take them is refused unchanged.
+  const auto prepare = [&](const std::string& file_path) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->header = h;
   impl->flush_interval = flush_interval;
   try {
     Handle fapl = FileAccess();
-    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    impl->file = Handle(H5Fopen(file_path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
     if (!impl->file) throw std::runtime_error("cannot open the file for writing");
     impl->OpenGroups();
     impl->kind_type = KindType();
@@ -709,6 +712,10 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
+  return impl;
+  };
+  ProbeWrite(path, prepare);
+  auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
@@ -792,9 +799,13 @@ void ProbeInChild(const std::string& path) {
                                   path, WTERMSIG(st))});
 }
 
-// Before a resume changes a file: the first write it makes (its status) is tried on a copy, in a
-// child process, so that a file whose metadata cannot take a write is refused unchanged.
-void ProbeWrite(const std::string& path) {
+// Before a resume changes a file, `changes` (every change it makes before the run goes on) are
+// made to a copy in a child process: a file whose metadata cannot take them (a failed truncation
+// would leave it half changed) is refused unchanged. A refusal for a reason of the input itself
+// (InputError) is left to the real call, which throws it before changing anything.
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes) {
+  struct stat st_file {};
+  if (stat(path.c_str(), &st_file) != 0 || st_file.st_size > (off_t{1} << 30)) return;  // no copy of GBs
   std::fflush(nullptr);
   const pid_t pid = fork();
   if (pid < 0) return;
@@ -815,12 +826,11 @@ void ProbeWrite(const std::string& path) {
     close(fd);
     int code = 0;
     if (ok) {
-      Handle file(H5Fopen(copy, H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose);
       try {
-        if (!file) throw std::runtime_error("open");
-        WriteString(file.get(), "status", "running");
-        WriteString(file.get(), "message", "");
-        Check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "flush", 0);
+        changes(copy);
+      } catch (const InputError& e) {
+        // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
+        code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;
       } catch (const std::exception&) {
         code = 3;
       }
@@ -1035,16 +1045,17 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
         path)});
   if (stored.status == "ok")
     throw InputError({fmt::format("{}: nothing to resume: the study finished (status ok)", path)});
+  // As in Resume: every change is made first on a copy (ProbeWrite).
+  const auto prepare = [&](const std::string& file_path) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->header = h;
   impl->flush_interval = flush_interval;
   impl->zcols = static_cast<hsize_t>(2 * h.dof);
   std::vector<std::string> problems;
-  ProbeWrite(path);
   try {
     Handle fapl = FileAccess();
-    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    impl->file = Handle(H5Fopen(file_path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
     if (!impl->file) throw std::runtime_error("cannot open the file for writing");
     const hid_t f = impl->file.get();
     if (H5Lexists(f, "/basin", H5P_DEFAULT) <= 0 || H5Lexists(f, "/basin/cells", H5P_DEFAULT) <= 0)
@@ -1151,6 +1162,10 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
+  return impl;
+  };
+  ProbeWrite(path, prepare);
+  auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
