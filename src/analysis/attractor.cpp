@@ -19,7 +19,7 @@ void AttractorRecorder::OnSection(const Sample& s) {
   Eigen::VectorXd z(2 * s.X.size());
   z << s.X, s.V;
   sections_.push_back({s.clock.period, std::move(z), s.mode});
-  const auto keep = static_cast<size_t>(3 * max_period_ + 2);  // three windows of the longest period
+  const auto keep = static_cast<size_t>(4 * max_period_ + 2);  // four windows of the longest period
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
@@ -110,7 +110,8 @@ Attractor AttractorRecorder::Classify() const {
   // must repeat in kind and order (impacts left out where a window chatters): a motion that
   // sticks every 7 periods is not period 1 because its last two periods look alike.
   const auto log_repeats = [&](int p) {
-    const long long span = std::min<long long>(std::max(3 * p, max_period_), static_cast<long long>(n) - 1);
+    const long long recorded = static_cast<long long>(n) - 1;
+    const long long span = std::min<long long>(std::max<long long>(3 * p, max_period_), recorded);
     std::vector<std::vector<EventKind>> windows;
     for (long long to = K; to - p >= K - span; to -= p) {
       std::vector<EventKind> log;
@@ -125,22 +126,24 @@ Attractor AttractorRecorder::Classify() const {
   };
   // Section points repeating within the tolerance are not enough: a decaying transient can
   // repeat within it by aliasing (a free oscillation whose phase returns after p periods while
-  // it decays by 4 % a period). With the repeat distances δ1, δ2 of the last two windows
-  // (Difference), the distance left to the orbit is about δ1·λ/(1 − λ), λ = δ1/δ2: the period is
-  // accepted when that is within the tolerance too, or when δ1 is at the rounding floor.
+  // it decays by 4 % a period). With the repeat distances δ1, δ2, δ3 of the last three windows
+  // (Difference): when they fall geometrically (δ1 < δ2 < δ3 with δ1/δ2 and δ2/δ3 within 10 %),
+  // a transient is still there, and the distance left to the orbit, about δ1·λ/(1 − λ) with
+  // λ = δ1/δ2, must be within the tolerance too. Repeat distances that do not fall geometrically
+  // are the rounding floor of a periodic orbit.
   const auto decayed = [&](int p) {
     const auto q = static_cast<size_t>(p);
-    if (3 * q > n) return true;  // too short a record to tell (a run of a few periods)
-    double d1 = 0, d2 = 0;
-    for (size_t j = 0; j < q; ++j) {
-      d1 = std::max(d1, Difference(n - 1 - j, n - 1 - j - q));
-      d2 = std::max(d2, Difference(n - 1 - j - q, n - 1 - j - 2 * q));
-    }
-    if (d1 <= 1e-3 * tolerance_) return true;  // rounding floor of a periodic orbit
-    if (!(d2 > d1)) return false;              // not contracting: still drifting, or diverging
-    const double lambda = d1 / d2;
-    return d1 * lambda / (1 - lambda) <= tolerance_;
+    if (4 * q > n) return true;  // too short a record to tell
+    double d[3] = {0, 0, 0};
+    for (size_t win = 0; win < 3; ++win)
+      for (size_t j = 0; j < q; ++j)
+        d[win] = std::max(d[win], Difference(n - 1 - j - win * q, n - 1 - j - (win + 1) * q));
+    if (!(d[0] < d[1] && d[1] < d[2])) return true;
+    const double l1 = d[0] / d[1], l2 = d[1] / d[2];
+    if (std::abs(l1 - l2) > 0.1 * l2) return true;
+    return d[0] * l1 / (1 - l1) <= tolerance_;
   };
+  const bool full_record = n >= static_cast<size_t>(4 * max_period_ + 2);
   int period = 0;
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
     bool ok = true;
@@ -151,7 +154,10 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
-    ok = ok && same_timing(p) && log_repeats(p) && decayed(p);
+    // Both checks need the whole record (4·max_period + 2 section points): on a shorter one (an
+    // early stop of a study cell, a run of a few periods) the windows a long period could be
+    // checked over would be fewer than a short period's, and the long period would win.
+    ok = ok && same_timing(p) && (!full_record || (log_repeats(p) && decayed(p)));
     if (ok) {
       period = p;
       break;

@@ -670,7 +670,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
 
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
                                              StoredRun& stored, double flush_interval) {
-  stored = ReadStoredRun(path, 3 * h.max_period + 2);  // what the attractor recorder keeps
+  stored = ReadStoredRun(path, 4 * h.max_period + 2);  // what the attractor recorder keeps
   if (stored.scene_text != h.scene_text)
     throw InputError({fmt::format(
         "{}: cannot resume: the file holds a different scene (or different --set overrides) "

@@ -263,8 +263,12 @@ class Reader {
       Report(n, path, "expected a whole number");
       return std::nullopt;
     }
-    if (*v < lo || *v > hi) {
-      Report(n, path, fmt::format("violated constraint {} ≤ {} ≤ {}", lo, LastComponent(path), hi));
+    if (*v < lo) {
+      Report(n, path, fmt::format("violated constraint {} ≥ {}", LastComponent(path), lo));
+      return std::nullopt;
+    }
+    if (*v > hi) {
+      Report(n, path, fmt::format("violated constraint {} ≤ {}", LastComponent(path), hi));
       return std::nullopt;
     }
     return v;
@@ -457,8 +461,8 @@ LoadedScene Build(toml::table root, const std::string& source,
     PhysicalStructureSpec p;
     auto M = rd.Matrix("structure.mass");
     auto K = rd.Matrix("structure.stiffness");
-    auto a = rd.Integer("structure.forcing_dof", 0, kMaxIndex);
-    auto b = rd.Integer("structure.contact_dof", 0, kMaxIndex);
+    auto a = rd.Integer("structure.forcing_dof", -kMaxIndex, kMaxIndex);
+    auto b = rd.Integer("structure.contact_dof", -kMaxIndex, kMaxIndex);
     if (M && K && a && b) {
       p.mass = *M;
       p.stiffness = *K;

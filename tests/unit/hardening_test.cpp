@@ -102,9 +102,10 @@ TEST(Hardening, EventLogOfTheWholeWindowMustRepeat) {
   }
 }
 
-// A motion that never repeats, stuck from period 102.5 to 199.5 (a phase begun before the
-// analysed record of 97 periods, 103..200): the time on the stop inside the record is
-// 199.5 − 103 = 96.5 periods, a fraction 96.5/97 (not 97 periods over a shorter window, > 1).
+// A motion that never repeats, stuck from period 70.5 to 199.5 (a phase begun before the
+// analysed record of 4·max_period + 1 = 129 periods, 71..200): the time on the stop inside the
+// record is 199.5 − 71 = 128.5 periods, a fraction 128.5/129 (not 129 periods over a window of
+// the last max_period periods, > 1).
 TEST(Hardening, StickingFractionOfNonPeriodicMotionIsAWholeWindowAverage) {
   const Scene scene = TwoDof(1.3);
   const System sys(scene);
@@ -115,14 +116,14 @@ TEST(Hardening, StickingFractionOfNonPeriodicMotionIsAWholeWindowAverage) {
     Eigen::VectorXd z(4);
     z << 0.3 * std::sin(1.7 * static_cast<double>(k)), 0.2 * std::cos(2.3 * static_cast<double>(k)),
         0.1 * std::sin(0.9 * static_cast<double>(k)), 0.05;
-    Section(rec, sys, k, z, k > 102 && k < 200 ? Mode::kSticking : Mode::kFree);
-    if (k == 102) rec.OnEvent({EventKind::kStick, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, 0.0, 0.0});
+    Section(rec, sys, k, z, k > 70 && k < 200 ? Mode::kSticking : Mode::kFree);
+    if (k == 70) rec.OnEvent({EventKind::kStick, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, 0.0, 0.0});
     if (k == 199) rec.OnEvent({EventKind::kRelease, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, 0.0, 0.0});
   }
   const Attractor a = rec.Classify();
   EXPECT_EQ(a.kind, "not-periodic");
   ASSERT_TRUE(a.sticking_fraction.has_value());
-  const long long record = 3 * scene.run.max_period + 1;  // periods between the sections kept
+  const long long record = 4 * scene.run.max_period + 1;  // periods between the sections kept
   EXPECT_NEAR(*a.sticking_fraction, (199.5 - static_cast<double>(K - record)) / static_cast<double>(record), 1e-12);
   EXPECT_LE(*a.sticking_fraction, 1.0);
 }
