@@ -9,6 +9,7 @@ packages=(
   libopenmpi-dev openmpi-bin
   libboost-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
+  clang libclang-rt-14-dev
 )
 missing=()
 for p in "${packages[@]}"; do

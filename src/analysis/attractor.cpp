@@ -19,7 +19,7 @@ void AttractorRecorder::OnSection(const Sample& s) {
   Eigen::VectorXd z(2 * s.X.size());
   z << s.X, s.V;
   sections_.push_back({s.clock.period, std::move(z), s.mode});
-  const auto keep = static_cast<size_t>(2 * max_period_ + 2);
+  const auto keep = static_cast<size_t>(4 * max_period_ + 2);  // four windows of the longest period
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
@@ -106,6 +106,44 @@ Attractor AttractorRecorder::Classify() const {
     }
     return true;
   };
+  // The events of every whole window of p periods in the last max(3p, max_period) periods recorded
+  // must repeat in kind and order (impacts left out where a window chatters): a motion that
+  // sticks every 7 periods is not period 1 because its last two periods look alike.
+  const auto log_repeats = [&](int p) {
+    const long long recorded = static_cast<long long>(n) - 1;
+    const long long span = std::min<long long>(std::max<long long>(3 * p, max_period_), recorded);
+    std::vector<std::vector<EventKind>> windows;
+    for (long long to = K; to - p >= K - span; to -= p) {
+      std::vector<EventKind> log;
+      const bool chatters = count(EventKind::kAccumulation, to - p, to) > 0;
+      for (const auto& e : events_)
+        if (in_window(e, to - p, to) && !(chatters && e.kind == EventKind::kImpact)) log.push_back(e.kind);
+      windows.push_back(std::move(log));
+    }
+    for (size_t i = 1; i < windows.size(); ++i)
+      if (windows[i] != windows[0]) return false;
+    return true;
+  };
+  // Section points repeating within the tolerance are not enough: a decaying transient can
+  // repeat within it by aliasing (a free oscillation whose phase returns after p periods while
+  // it decays by 4 % a period). With the repeat distances δ1, δ2, δ3 of the last three windows
+  // (Difference): when they fall geometrically (δ1 < δ2 < δ3 with δ1/δ2 and δ2/δ3 within 10 %),
+  // a transient is still there, and the distance left to the orbit, about δ1·λ/(1 − λ) with
+  // λ = δ1/δ2, must be within the tolerance too. Repeat distances that do not fall geometrically
+  // are the rounding floor of a periodic orbit.
+  const auto decayed = [&](int p) {
+    const auto q = static_cast<size_t>(p);
+    if (4 * q > n) return true;  // too short a record to tell
+    double d[3] = {0, 0, 0};
+    for (size_t win = 0; win < 3; ++win)
+      for (size_t j = 0; j < q; ++j)
+        d[win] = std::max(d[win], Difference(n - 1 - j - win * q, n - 1 - j - (win + 1) * q));
+    if (!(d[0] < d[1] && d[1] < d[2])) return true;
+    const double l1 = d[0] / d[1], l2 = d[1] / d[2];
+    if (std::abs(l1 - l2) > 0.1 * l2) return true;
+    return d[0] * l1 / (1 - l1) <= tolerance_;
+  };
+  const bool full_record = n >= static_cast<size_t>(4 * max_period_ + 2);
   int period = 0;
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
     bool ok = true;
@@ -116,7 +154,10 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
-    ok = ok && same_timing(p);
+    // Both checks need the whole record (4·max_period + 2 section points): on a shorter one (an
+    // early stop of a study cell, a run of a few periods) the windows a long period could be
+    // checked over would be fewer than a short period's, and the long period would win.
+    ok = ok && same_timing(p) && (!full_record || (log_repeats(p) && decayed(p)));
     if (ok) {
       period = p;
       break;
@@ -124,12 +165,17 @@ Attractor AttractorRecorder::Classify() const {
   }
 
   // Sticking phases: each release in the window closes one phase; its start is the last stick
-  // before it.
-  const int p = period > 0 ? period : std::min<int>(max_period_, static_cast<int>(n) - 1);
+  // before it. Without a period the window is the whole record, and the time on the stop is
+  // counted inside it only (a phase begun before the window, or still running at its end, is
+  // cut at the window's edges), so that the fraction is an average over whole periods in [0, 1].
+  const int p = period > 0 ? period : static_cast<int>(n) - 1;
   const long long from = K - p;
   double stuck = 0.0;
   std::vector<std::pair<double, double>> phases;
   const Event* last_stick = nullptr;
+  const auto since_from = [&](const Clock& c) {
+    return static_cast<double>(c.period - from) * T + c.offset;
+  };
   for (const auto& e : events_) {
     if (e.kind == EventKind::kStick) last_stick = &e;
     if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
@@ -137,9 +183,13 @@ Attractor AttractorRecorder::Classify() const {
                                e.clock.offset - last_stick->clock.offset);
       const double start = Phase(last_stick->clock, p);
       phases.emplace_back(start, start + w * duration);
-      stuck += duration;
+      stuck += period > 0 ? duration : since_from(e.clock) - std::max(0.0, since_from(last_stick->clock));
+      last_stick = nullptr;
     }
   }
+  if (period == 0 && last_stick && sections_.back().mode == Mode::kSticking)
+    stuck += p * T - std::max(0.0, since_from(last_stick->clock));  // stuck at the end
+  stuck = std::clamp(stuck, 0.0, p * T);
   std::sort(phases.begin(), phases.end());
   const bool released = !phases.empty();
   const bool always_stuck = !released && sections_.back().mode == Mode::kSticking &&

@@ -302,6 +302,8 @@ Branch Continue(const ContinuationRequest& req) {
   Eigen::VectorXd t = Tangent(cur.eval, Eigen::VectorXd());
   if (t[n2] * span < 0) t = -t;
 
+  // A stop request (SIGINT/SIGTERM), also polled inside the bisections below.
+  const auto stop_requested = [&] { return req.stop_requested && req.stop_requested->load(); };
   // Corrects the predictor at arclength s from `cur` along `t`.
   const auto trial = [&](double s) -> std::optional<Point> {
     int iters = 0;
@@ -316,6 +318,7 @@ Branch Continue(const ContinuationRequest& req) {
     const double sign_lo = test(cur, t);
     double l_lo = cur.y[n2], l_hi = fallback;
     for (int it = 0; it < 80; ++it) {
+      if (stop_requested()) break;  // the bracket reached so far is reported with the point
       const double mid = 0.5 * (lo + hi);
       int iters = 0;
       const auto yc = Correct(p, cur.y + mid * t, t, iters);
@@ -362,7 +365,7 @@ Branch Continue(const ContinuationRequest& req) {
   bool section_fresh = false;  // the section was just moved to the middle of a flight of cur
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
-    if (req.stop_requested && req.stop_requested->load()) {
+    if (stop_requested()) {
       br.status = "interrupted";
       br.end = "interrupted";
       return br;
@@ -448,6 +451,7 @@ Branch Continue(const ContinuationRequest& req) {
       bool moved = false;
       std::optional<Point> past = next;
       for (int it = 0; it < 100; ++it) {
+        if (stop_requested()) break;
         const double mid = 0.5 * (lo + hi);
         auto pm = trial(mid);
         if (pm && SameFamily(cur, *pm)) {
@@ -463,6 +467,12 @@ Branch Continue(const ContinuationRequest& req) {
         const double l_hi = past ? past->y[n2] : cur.y[n2] + hi * t[n2];
         if (std::abs(l_hi - cur.y[n2]) < 1e-13 * std::max(1.0, std::abs(cur.y[n2])) && it > 5) break;
         if (hi < 1e-15 * std::max(1.0, cur.y.norm())) break;
+      }
+      if (stop_requested()) {  // the boundary is not located: keep what the branch has
+        if (moved) record(cur);
+        br.status = "interrupted";
+        br.end = "interrupted";
+        return br;
       }
       // A point of another orbit met on the same corrector hyperplane is not "past" anything:
       // along one branch, corrected points an arclength h apart are O(h) apart.

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -21,6 +20,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "cli/stop_signals.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
@@ -53,8 +53,19 @@ constexpr int kExitNumerical = 3;
 constexpr int kExitInterrupted = 130;
 constexpr int kExitDisagree = 4;  // vibro check: the methods disagree beyond tolerance
 
-std::atomic<bool> g_stop_requested{false};
-extern "C" void OnSignal(int) { g_stop_requested.store(true); }
+// A number option must be finite: nan, inf and values that overflow to inf are bad input (exit 2),
+// refused before anything is computed or written.
+const CLI::Validator kFinite(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (end == text.c_str() || !std::isfinite(v)) return "expected a finite number, got " + text;
+      return {};
+    },
+    "FINITE");
+
+// Set by SIGINT/SIGTERM (cli/stop_signals.hpp); polled by every long loop.
+const std::atomic<bool>& g_stop_requested = vibro::cli::StopFlag();
 
 std::string Vec(const Eigen::VectorXd& v) {
   std::string s = "[";
@@ -156,14 +167,14 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods,
                                      stored.checkpoint ? stored.checkpoint->clock.period : 0);
   if (progress->active()) options.observers.push_back(&periods);
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
   progress.reset();
   const auto attractor = recorder.Classify();
-  if (store) store->Finish(result, attractor);
+  if (store) {
+    const vibro::cli::FinalWrite writing;
+    store->Finish(result, attractor);
+    store.reset();
+  }
 
   if (json) {
     fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor));
@@ -206,9 +217,15 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys)).reset();  // fail early
+  // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.
+  vibro::cli::DiscardOnStop(out);
   const auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
+  vibro::cli::KeepOnStop();
   const bool converged = orbit.status == "converged";
-  if (!out.empty() && converged) WriteOrbit(out, loaded, sys, orbit);
+  if (!out.empty() && converged) {
+    const vibro::cli::FinalWrite writing;
+    WriteOrbit(out, loaded, sys, orbit);
+  }
   if (json) {
     fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
   } else {
@@ -244,7 +261,9 @@ int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool
              bool with_quad) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
+  vibro::cli::DiscardOnStop("");  // nothing partial to keep
   const auto report = vibro::CrossCheck(sys, loaded.scene, with_quad);
+  vibro::cli::KeepOnStop();
   if (json) {
     fmt::print("{}\n", vibro::CheckJson(report));
   } else {
@@ -314,12 +333,18 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));  // fails early
   auto branch = vibro::Continue(req);
   branch.param = key;
+  // The file's status and the exit code say the same thing (docs/output.md).
+  const vibro::RunStatus status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted
+                                  : branch.status == "ok"        ? vibro::RunStatus::kOk
+                                                                 : vibro::RunStatus::kNumericalFailure;
   if (store) {
+    const vibro::cli::FinalWrite writing;
     store->WriteBranch(branch);
     vibro::RunResult r;
-    r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+    r.status = status;
     r.message = branch.end;
     store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
+    store.reset();
   }
   if (branch.status == "no-orbit")
     fmt::print(stderr, "vibro: try {}--period Q, or --from FILE.h5 --point K to start from a stored branch point\n",
@@ -340,8 +365,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
       fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
     fmt::print("end          {}\n", branch.end);
   }
-  if (branch.status == "interrupted") return kExitInterrupted;
-  return branch.status == "ok" ? 0 : kExitNumerical;
+  return ExitCode(status);
 }
 
 struct PartitionArgs {
@@ -408,10 +432,12 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
   const auto columns = vibro::Partition(req);
   const bool interrupted = g_stop_requested.load();
   if (store) {
+    const vibro::cli::FinalWrite writing;
     store->WritePartition(a.params[0], a.params[1], a.levels, columns);
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     store->Finish(r, vibro::frontend::NoAttractor());
+    store.reset();
   }
   if (json) {
     fmt::print("{}\n", vibro::PartitionJson(a.params[0], a.params[1], a.levels, columns));
@@ -454,6 +480,9 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   const auto cy = range(args.y_range, args.y, "--y-range");
   if (basin && (args.grid.size() != 2 || args.grid[0] < 1 || args.grid[1] < 1))
     problems.push_back("--grid: expected NX,NY with NX, NY ≥ 1");
+  else if (basin && static_cast<long long>(args.grid[0]) * args.grid[1] > (1LL << 24))
+    problems.push_back(fmt::format("--grid {},{}: at most {} cells (2^24) in one study", args.grid[0],
+                                   args.grid[1], 1LL << 24));
   if (!basin && args.samples < 1) problems.push_back("--samples: expected N ≥ 1");
   if (args.resume && args.out.empty()) problems.push_back("--resume needs --out FILE.h5 (the study to continue)");
   if (!problems.empty()) throw vibro::InputError(problems);
@@ -490,8 +519,6 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   opt.threads = args.threads;
   opt.stop_requested = &g_stop_requested;
   if (args.full_periods) opt.settle_remainder = 0;
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
   // Stable orbits known before the cells run (a pilot grid, the same on every rank).
   if (!args.full_periods) opt.known = vibro::KnownOrbits(sys, loaded.scene, cx, cy, opt);
   // Progress of the cells (not of the pilot) on rank 0's terminal.
@@ -504,12 +531,11 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                          });
   opt.progress = nullptr;
   progress.reset();
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
   const bool interrupted = dist.Any(g_stop_requested.load());
   if (!dist.root()) return interrupted ? kExitInterrupted : 0;
   const auto study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
-  if (store) {
+  if (store) try {
+    const vibro::cli::FinalWrite writing;
     store->WriteStudy(study, grid);
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
@@ -519,6 +545,11 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                               study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
                               study.cells);
     store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
+    store.reset();
+  } catch (const std::runtime_error& e) {  // a resumed file whose damage shows only when written
+    fmt::print(stderr, "vibro: cannot write the study to {}: {}; the cells computed are in its /basin/cells\n",
+               args.out, e.what());
+    return kExitInternal;
   }
   if (json) {
     fmt::print("{}\n", vibro::StudyJson(study, cx, cy));
@@ -570,18 +601,16 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   req.steps = steps;
   req.record = record;
   req.both_ways = !one_way;
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
   const auto sweep = vibro::Sweep(req, &g_stop_requested);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
   const bool interrupted = g_stop_requested.load();
   if (store) {
+    const vibro::cli::FinalWrite writing;
     store->WriteSweep(sweep, {key, from, to, steps, record, !one_way});
     vibro::RunResult r;
     r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     if (interrupted) r.message = fmt::format("interrupted after {} of the sweep's runs", sweep.size());
     store->Finish(r, sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+    store.reset();
   }
   if (json) {
     fmt::print("{}\n", vibro::SweepJson(sweep));
@@ -696,8 +725,8 @@ int main(int argc, char** argv) {
   orbit->add_option("--transient", orbit_req.transient_periods,
                     "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
       ->check(CLI::NonNegativeNumber);
-  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)");
-  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit");
+  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")->check(CLI::Range(0, 4096));
+  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")->check(CLI::Range(0, 1 << 20));
   orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
   std::string orbit_out;
   orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
@@ -708,10 +737,10 @@ int main(int argc, char** argv) {
   double cont_to = 0, cont_step = 0;
   int cont_points = 1000, cont_period = 0;
   cont->add_option("--param", cont_param, "the numeric scene key to vary, e.g. excitation.amplitude")->required();
-  cont->add_option("--to", cont_to, "end value of the parameter")->required();
-  cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)");
-  cont->add_option("--max-points", cont_points, "most points on the branch");
-  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)");
+  cont->add_option("--to", cont_to, "end value of the parameter")->check(kFinite)->required();
+  cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)")->check(kFinite);
+  cont->add_option("--max-points", cont_points, "most points on the branch")->check(CLI::Range(1, 1 << 24));
+  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)")->check(CLI::Range(0, 4096));
   std::string cont_kind = "auto", cont_out, cont_from;
   long long cont_point = -1;
   int cont_transient = 200;
@@ -729,15 +758,15 @@ int main(int argc, char** argv) {
     add_scene_options(cmd);
     cmd->add_option("--x", study_args.x, "first coordinate: x_B, v_B, X<i>, V<i> (default x_B)");
     cmd->add_option("--y", study_args.y, "second coordinate (default v_B)");
-    cmd->add_option("--x-range", study_args.x_range, "A,B")->delimiter(',')->expected(2);
-    cmd->add_option("--y-range", study_args.y_range, "C,D")->delimiter(',')->expected(2);
-    cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)");
+    cmd->add_option("--x-range", study_args.x_range, "A,B")->check(kFinite)->delimiter(',')->expected(2);
+    cmd->add_option("--y-range", study_args.y_range, "C,D")->check(kFinite)->delimiter(',')->expected(2);
+    cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)")->check(CLI::Range(0, 4096));
     cmd->add_flag("--full-periods", study_args.full_periods,
                   "run every cell for run.periods periods (no early stop when it settles)");
   }
-  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)");
+  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)")->check(CLI::Range(1LL, 1LL << 24));
   attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
-  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->delimiter(',')->expected(2);
+  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->check(CLI::Range(1, 1 << 16))->delimiter(',')->expected(2);
   basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
   basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
   CLI::App* partition = app.add_subcommand(
@@ -746,14 +775,14 @@ int main(int argc, char** argv) {
   PartitionArgs part;
   double part_from2 = 0;
   partition->add_option("--params", part.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
-  partition->add_option("--range1", part.range1, "A,B: range of KEY1")->delimiter(',')->required();
-  partition->add_option("--steps1", part.steps1, "steps of KEY1 (default 20: 21 columns)");
-  partition->add_option("--range2", part.range2, "C,D: range of KEY2 (each column is continued in it)")
+  partition->add_option("--range1", part.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
+  partition->add_option("--steps1", part.steps1, "steps of KEY1 (default 20: 21 columns)")->check(CLI::Range(1, 1 << 16));
+  partition->add_option("--range2", part.range2, "C,D: range of KEY2 (each column is continued in it)")->check(kFinite)
       ->delimiter(',')->required();
-  auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)");
-  partition->add_option("--sticking-fraction", part.levels, "S1,S2,...: levels to trace")->delimiter(',')->required();
-  partition->add_option("--period", part.period, "period of the sticking orbits (default: from a transient)");
-  partition->add_option("--threads", part.threads, "threads (default: all cores)");
+  auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)")->check(kFinite);
+  partition->add_option("--sticking-fraction", part.levels, "S1,S2,...: levels to trace")->check(kFinite)->delimiter(',')->required();
+  partition->add_option("--period", part.period, "period of the sticking orbits (default: from a transient)")->check(CLI::Range(0, 4096));
+  partition->add_option("--threads", part.threads, "threads (default: all cores)")->check(CLI::Range(0, 4096));
   partition->add_option("--out", part.out, "write the partition to HDF5");
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
   add_scene_options(sweep);
@@ -762,10 +791,10 @@ int main(int argc, char** argv) {
   int sweep_steps = 50, sweep_record = 16;
   bool sweep_one_way = false;
   sweep->add_option("--param", sweep_param, "numeric scene key to vary")->required();
-  sweep->add_option("--from", sweep_from, "first value")->required();
-  sweep->add_option("--to", sweep_to, "last value")->required();
-  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)");
-  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)");
+  sweep->add_option("--from", sweep_from, "first value")->check(kFinite)->required();
+  sweep->add_option("--to", sweep_to, "last value")->check(kFinite)->required();
+  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)")->check(CLI::Range(1, 1 << 22));
+  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)")->check(CLI::Range(1, 1 << 16));
   sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
   std::string sweep_out;
   sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
@@ -824,6 +853,7 @@ int main(int argc, char** argv) {
   for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
     cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
 
+  vibro::cli::InstallStopHandlers();
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -854,6 +884,9 @@ int main(int argc, char** argv) {
         } catch (const std::exception&) {
           throw vibro::InputError({"--guess " + orbit_guess + ": expected PHASE or PHASE,VELOCITY (numbers)"});
         }
+        if (!std::isfinite(*orbit_req.guess_phase) ||
+            (orbit_req.guess_velocity && !std::isfinite(*orbit_req.guess_velocity)))
+          throw vibro::InputError({"--guess " + orbit_guess + ": expected finite numbers (no nan or inf)"});
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }

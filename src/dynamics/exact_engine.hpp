@@ -169,7 +169,7 @@ SegmentResultT<S> ExactEngineT<S>::Search(const ProbeFn& probe, const S& from, c
   const auto rs = FirstRootPolled<S>(probe, from, sigma_max, h_cap_,
                                      [this] { return this->StopRequested(); });
   if (rs.stopped)
-    return {SegmentEnd::kFailure, rs.result.sigma, "stopped inside a root search"};
+    return {SegmentEnd::kFailure, rs.result.sigma, "stopped inside a root search", S(-1), true};
   if (!rs.result.found) return {SegmentEnd::kLimit, sigma_max, {}};
   return {end, rs.result.sigma, {}};
 }

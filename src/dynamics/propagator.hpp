@@ -3,6 +3,7 @@
 // time limit, and give dense output on what was advanced.
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <string>
 
@@ -57,6 +58,9 @@ struct SegmentResultT {
   // phase), that offset exactly: the clock is set to it rather than to offset + sigma, so that
   // a one-DOF orbit repeats to the bit.
   S exact_offset = S(-1);
+  // kFailure because a stop request (SIGINT/SIGTERM) was seen inside the segment: the run is
+  // interrupted, not failed; everything up to sigma is valid.
+  bool stopped = false;
 };
 
 // Called with local-time stretches [lo, hi] on which Evaluate() is valid (exact engine: the whole

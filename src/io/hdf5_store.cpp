@@ -2,6 +2,8 @@
 #include "vibro/hdf5_store.hpp"
 
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <sys/statvfs.h>
 
 #include <algorithm>
@@ -12,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <ctime>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -185,15 +188,31 @@ class Column {
                          name),
                    H5Dclose);
   }
-  Column(hid_t group, const char* name, hid_t mem_type, size_t elem_size)
-      : mem_type_(mem_type), elem_size_(elem_size) {
+  // Opens an existing column and checks its shape: one-dimensional when cols = 0, else two
+  // columns... `cols` wide (kAnyCols: any width, checked by the caller with cols()).
+  static constexpr hsize_t kAnyCols = ~hsize_t{0};
+  Column(hid_t group, const char* name, hid_t mem_type, size_t elem_size, hsize_t cols = 0)
+      : mem_type_(mem_type), elem_size_(elem_size), name_(name) {
     dset_ = Handle(Check(H5Dopen2(group, name, H5P_DEFAULT), name), H5Dclose);
-    Handle space(H5Dget_space(dset_.get()), H5Sclose);
+    Handle space(Check(H5Dget_space(dset_.get()), name), H5Sclose);
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    if (rank != (cols > 0 ? 2 : 1))
+      throw std::runtime_error(fmt::format("dataset {} has rank {}, expected {}", name, rank, cols > 0 ? 2 : 1));
     hsize_t dims[2] = {0, 0};
-    const int rank = H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    H5Sget_simple_extent_dims(space.get(), dims, nullptr);
     rows_ = dims[0];
     cols_ = rank == 2 ? dims[1] : 0;
+    if (rank == 2 && cols != kAnyCols && cols_ != cols)
+      throw std::runtime_error(fmt::format("dataset {} has {} columns, expected {}", name, cols_, cols));
+    if (rank == 2 && (cols_ == 0 || cols_ > (1u << 16)))
+      throw std::runtime_error(fmt::format("dataset {} has {} columns", name, cols_));
+    // The stored type must convert to the memory type's class (no string read as numbers).
+    Handle type(Check(H5Dget_type(dset_.get()), name), H5Tclose);
+    const H5T_class_t have = H5Tget_class(type.get()), want = H5Tget_class(mem_type);
+    if (have != want)
+      throw std::runtime_error(fmt::format("dataset {} has the wrong element type", name));
   }
+  hsize_t cols() const { return cols_; }
 
   template <class T>
   void Push(const T& v) {
@@ -229,6 +248,9 @@ class Column {
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
   void Read(hsize_t first, hsize_t n, void* out) const {
     if (n == 0) return;
+    if (first > rows_ || n > rows_ - first)
+      throw std::runtime_error(fmt::format("dataset {}: rows [{}, {}) beyond its {} rows", name_, first,
+                                           first + n, rows_));
     const int rank = cols_ > 0 ? 2 : 1;
     const hsize_t start[2] = {first, 0}, count[2] = {n, cols_};
     Handle fs(H5Dget_space(dset_.get()), H5Sclose);
@@ -241,6 +263,7 @@ class Column {
   Handle dset_;
   hid_t mem_type_ = H5I_INVALID_HID;
   size_t elem_size_ = 8;
+  std::string name_;
   hsize_t cols_ = 0;
   hsize_t rows_ = 0;
   std::vector<unsigned char> buf_;
@@ -290,11 +313,12 @@ struct StateTable {
     xB = Column(g, "x_B", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
     mode = Column(g, "mode", H5T_STD_I8LE, H5T_NATIVE_INT8, 1, 0);
   }
-  void Open(hid_t g) {
+  // dof: width of X and V (Column::kAnyCols: checked later against the checkpoint).
+  void Open(hid_t g, hsize_t dof) {
     t = Column(g, "t", H5T_NATIVE_DOUBLE, 8);
     period = Column(g, "period", H5T_NATIVE_INT64, 8);
-    X = Column(g, "X", H5T_NATIVE_DOUBLE, 8);
-    V = Column(g, "V", H5T_NATIVE_DOUBLE, 8);
+    X = Column(g, "X", H5T_NATIVE_DOUBLE, 8, dof);
+    V = Column(g, "V", H5T_NATIVE_DOUBLE, 8, dof);
     xB = Column(g, "x_B", H5T_NATIVE_DOUBLE, 8);
     mode = Column(g, "mode", H5T_NATIVE_INT8, 1);
   }
@@ -365,7 +389,7 @@ struct CellTable {
     z = Column(g, "z", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, zcols);
     phases = Column(g, "phases", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8, 0);
   }
-  void Open(hid_t g) {
+  void Open(hid_t g, hsize_t zcols) {
     index = Column(g, "index", H5T_NATIVE_INT64, 8);
     state = Column(g, "state", H5T_NATIVE_INT8, 1);
     kind = Column(g, "kind", H5T_NATIVE_INT8, 1);
@@ -376,7 +400,7 @@ struct CellTable {
     stop = Column(g, "stop", H5T_NATIVE_INT8, 1);
     stick_count = Column(g, "stick_phase_count", H5T_NATIVE_INT32, 4);
     impact_count = Column(g, "impact_count", H5T_NATIVE_INT32, 4);
-    z = Column(g, "z", H5T_NATIVE_DOUBLE, 8);
+    z = Column(g, "z", H5T_NATIVE_DOUBLE, 8, zcols);
     phases = Column(g, "phases", H5T_NATIVE_DOUBLE, 8);
   }
   void Push(size_t i, const CellResult& c, hsize_t zcols) {
@@ -470,8 +494,8 @@ struct Hdf5Store::Impl {
 
   void OpenColumns() {
     ev.Open(events.get(), kind_type.get());
-    sa.Open(samples.get());
-    se.Open(section.get());
+    sa.Open(samples.get(), static_cast<hsize_t>(header.dof));
+    se.Open(section.get(), static_cast<hsize_t>(header.dof));
   }
 
   void Close() {
@@ -686,9 +710,13 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   m.Close();
 }
 
+namespace {
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes);  // below
+}  // namespace
+
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
                                              StoredRun& stored, double flush_interval) {
-  stored = ReadStoredRun(path, 2 * h.max_period + 2);
+  stored = ReadStoredRun(path, 4 * h.max_period + 2);  // what the attractor recorder keeps
   if (stored.scene_text != h.scene_text)
     throw InputError({fmt::format(
         "{}: cannot resume: the file holds a different scene (or different --set overrides) "
@@ -698,13 +726,19 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
     throw InputError({fmt::format("{}: cannot resume: the file holds no checkpoint", path)});
   if (stored.status == "ok")
     throw InputError({fmt::format("{}: nothing to resume: the run finished (status ok)", path)});
+  if (stored.checkpoint->X.size() != h.dof)
+    throw InputError({fmt::format("{}: cannot resume: the checkpoint has {} coordinates, the scene {}", path,
+                                  stored.checkpoint->X.size(), h.dof)});
+  // Opens `file_path` and makes every change a resume makes before the run goes on; done first on
+  // a copy (ProbeWrite), so that a file that cannot take them is refused unchanged.
+  const auto prepare = [&](const std::string& file_path) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->header = h;
   impl->flush_interval = flush_interval;
   try {
     Handle fapl = FileAccess();
-    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    impl->file = Handle(H5Fopen(file_path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
     if (!impl->file) throw std::runtime_error("cannot open the file for writing");
     impl->OpenGroups();
     impl->kind_type = KindType();
@@ -724,11 +758,143 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
+  return impl;
+  };
+  ProbeWrite(path, prepare);
+  auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
 
 namespace {
+
+// ---- A contained first read of a file given to vibro ----
+// The HDF5 library trusts a file's metadata: a flipped byte in a global heap makes H5Aread copy
+// out of bounds and crash. Before vibro reads a file it is read once in full by a child process
+// (every attribute, every dataset up to kProbeBytes): if that child dies, the file is reported as
+// corrupt (bad input) and vibro itself never touches it.
+constexpr double kProbeBytes = 64e6;
+
+bool ReadAll(hid_t obj, hid_t file_type, hid_t space, bool attribute) {
+  Handle mtype(H5Tget_native_type(file_type, H5T_DIR_ASCEND), H5Tclose);
+  if (!mtype) return false;
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  const size_t size = H5Tget_size(mtype.get());
+  if (n < 0 || size == 0) return false;
+  Handle mem_space(H5Scopy(space), H5Sclose);
+  hssize_t count = n;
+  if (static_cast<double>(n) * static_cast<double>(size) > kProbeBytes && !attribute) {
+    // The first rows of a large dataset (its metadata is what can be corrupt, not its values).
+    const int rank = H5Sget_simple_extent_ndims(space);
+    if (rank < 1 || rank > 8) return false;
+    hsize_t dims[8] = {0}, start[8] = {0};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    const hssize_t row = dims[0] > 0 ? n / static_cast<hssize_t>(dims[0]) : 1;
+    dims[0] = std::max<hsize_t>(1, static_cast<hsize_t>(kProbeBytes / static_cast<double>(size) / static_cast<double>(std::max<hssize_t>(row, 1))));
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, nullptr, dims, nullptr);
+    mem_space = Handle(H5Screate_simple(rank, dims, nullptr), H5Sclose);
+    count = H5Sget_simple_extent_npoints(mem_space.get());
+  }
+  std::vector<unsigned char> buf(static_cast<size_t>(count) * size + 16);
+  const herr_t st = attribute ? H5Aread(obj, mtype.get(), buf.data())
+                              : H5Dread(obj, mtype.get(), mem_space.get(), space, H5P_DEFAULT, buf.data());
+  if (st < 0) return false;
+  if (H5Tdetect_class(mtype.get(), H5T_VLEN) > 0 || H5Tis_variable_str(mtype.get()) > 0)
+    H5Dvlen_reclaim(mtype.get(), mem_space.get(), H5P_DEFAULT, buf.data());
+  return true;
+}
+
+herr_t ProbeAttribute(hid_t loc, const char* name, const H5A_info_t*, void*) {
+  Handle a(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose);
+  if (!a) return -1;
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  return type && space && ReadAll(a.get(), type.get(), space.get(), true) ? 0 : -1;
+}
+
+herr_t ProbeObject(hid_t root, const char* name, const H5O_info_t* info, void*) {
+  if (H5Aiterate_by_name(root, name, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr, ProbeAttribute, nullptr,
+                         H5P_DEFAULT) < 0)
+    return -1;
+  if (info->type != H5O_TYPE_DATASET) return 0;
+  Handle d(H5Dopen2(root, name, H5P_DEFAULT), H5Dclose);
+  if (!d) return -1;
+  Handle type(H5Dget_type(d.get()), H5Tclose);
+  Handle space(H5Dget_space(d.get()), H5Sclose);
+  return type && space && ReadAll(d.get(), type.get(), space.get(), false) ? 0 : -1;
+}
+
+void ProbeInChild(const std::string& path) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return;  // no child: vibro's own checked reads follow
+  if (pid == 0) {
+    alarm(120);  // a corrupt file that makes the library loop is reported too
+    SilenceHdf5();
+    Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+    // Not readable as HDF5 at all, or an object that fails cleanly: vibro's own reads report it.
+    if (file) H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, nullptr, H5O_INFO_BASIC);
+    _exit(0);
+  }
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  // The child exits 0 whatever it read; a signal or another exit (a sanitizer's report) is a crash.
+  if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
+    throw InputError({fmt::format("{}: a corrupt HDF5 file: reading it makes the HDF5 library fail "
+                                  "(status {} of a test read); the file was not changed",
+                                  path, WIFSIGNALED(st) ? WTERMSIG(st) : WEXITSTATUS(st))});
+}
+
+// Before a resume changes a file, `changes` (every change it makes before the run goes on) are
+// made to a copy in a child process: a file whose metadata cannot take them (a failed truncation
+// would leave it half changed) is refused unchanged. A refusal for a reason of the input itself
+// (InputError) is left to the real call, which throws it before changing anything.
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes) {
+  struct stat st_file {};
+  if (stat(path.c_str(), &st_file) != 0 || st_file.st_size > (off_t{1} << 30)) return;  // no copy of GBs
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return;
+  if (pid == 0) {
+    alarm(120);
+    SilenceHdf5();
+    char copy[] = "/tmp/vibro-resume-probe-XXXXXX";
+    const int fd = mkstemp(copy);
+    if (fd < 0) _exit(0);  // no room for a copy: go on without the trial
+    bool ok = false;
+    if (FILE* in = std::fopen(path.c_str(), "rb")) {
+      char buf[1 << 16];
+      size_t n;
+      ok = true;
+      while (ok && (n = std::fread(buf, 1, sizeof buf, in)) > 0) ok = write(fd, buf, n) == static_cast<ssize_t>(n);
+      std::fclose(in);
+    }
+    close(fd);
+    int code = 0;
+    if (ok) {
+      try {
+        changes(copy);
+      } catch (const InputError& e) {
+        // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
+        code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;
+      } catch (const std::exception&) {
+        code = 3;
+      }
+    }
+    unlink(copy);
+    _exit(code);
+  }
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
+    throw InputError({fmt::format("{}: cannot resume: a corrupt HDF5 file (a test write to a copy of it "
+                                  "failed); the file was not changed",
+                                  path)});
+}
+
+
 // H5Literate callback: appends the names of the groups among the links to a vector<string>.
 herr_t ListGroup(hid_t loc, const char* name, const H5L_info_t*, void* names) {
   Handle g(H5Gopen2(loc, name, H5P_DEFAULT), H5Gclose);  // fails (silently) for a dataset
@@ -783,6 +949,7 @@ std::string DescribeGroup(hid_t f, const std::string& name) {
 
 StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
   SilenceHdf5();
+  ProbeInChild(path);
   StoredRun out;
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!file) throw InputError({fmt::format("{}: cannot open as an HDF5 file", path)});
@@ -804,8 +971,8 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     EventTable events;
     StateTable samples, sections;
     events.Open(ev.get(), kind_type.get());
-    samples.Open(sa.get());
-    sections.Open(se.get());
+    samples.Open(sa.get(), Column::kAnyCols);
+    sections.Open(se.get(), Column::kAnyCols);
     out.events = static_cast<long long>(events.t.rows());
     out.samples = static_cast<long long>(samples.t.rows());
     out.sections = static_cast<long long>(sections.t.rows());
@@ -817,6 +984,16 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       Checkpoint c{};
       c.clock = {*period, *ReadScalar<double>(g, "offset", H5T_NATIVE_DOUBLE)};
       const auto X = ReadDoubles(g, "X"), V = ReadDoubles(g, "V");
+      // Every value of the checkpoint in its range before it is used (a resume starts from it).
+      const auto bad = [](const std::string& what) {
+        throw std::runtime_error("checkpoint " + what + " out of range");
+      };
+      if (*period < 0 || !std::isfinite(c.clock.offset) || c.clock.offset < 0) bad("period/offset");
+      if (X.empty() || X.size() != V.size() || X.size() != sections.X.cols() ||
+          V.size() != sections.V.cols() || samples.X.cols() != X.size() || samples.V.cols() != X.size())
+        bad("X/V (their length must be the width of /section/X, /section/V, /samples/X, /samples/V)");
+      for (double x : X) if (!std::isfinite(x)) bad("X");
+      for (double x : V) if (!std::isfinite(x)) bad("V");
       c.X = Eigen::Map<const Eigen::VectorXd>(X.data(), static_cast<Eigen::Index>(X.size()));
       c.V = Eigen::Map<const Eigen::VectorXd>(V.data(), static_cast<Eigen::Index>(V.size()));
       c.mode = static_cast<Mode>(*ReadScalar<std::int64_t>(g, "mode", H5T_NATIVE_INT64));
@@ -832,6 +1009,22 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       c.counts.grazings = *ReadScalar<std::int64_t>(g, "grazings", H5T_NATIVE_INT64);
       cp_events = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "events", H5T_NATIVE_INT64));
       cp_sections = static_cast<hsize_t>(*ReadScalar<std::int64_t>(g, "sections", H5T_NATIVE_INT64));
+      const auto cp_samples = *ReadScalar<std::int64_t>(g, "samples", H5T_NATIVE_INT64);
+      if (static_cast<int>(c.mode) != 0 && static_cast<int>(c.mode) != 1) bad("mode");
+      if (c.start_kind < 0 || c.start_kind > 8 || !std::isfinite(c.gap)) bad("start");
+      if (!std::isfinite(c.chatter_first_speed) || !std::isfinite(c.chatter_last_speed)) bad("chatter speeds");
+      if (c.sample_index < 0 || c.counts.impacts < 0 || c.counts.accumulations < 0 || c.counts.sticks < 0 ||
+          c.counts.releases < 0 || c.counts.grazings < 0)
+        bad("counts");
+      if (cp_events > events.t.rows() || cp_sections > sections.t.rows() || cp_samples < 0 ||
+          static_cast<hsize_t>(cp_samples) > samples.t.rows())
+        bad("row counts (more rows than the tables hold)");
+      for (Column* col : events.All())
+        if (col->rows() < cp_events) bad("events (a column of /events is short)");
+      for (Column* col : sections.All())
+        if (col->rows() < cp_sections) bad("sections (a column of /section is short)");
+      for (Column* col : samples.All())
+        if (col->rows() < static_cast<hsize_t>(cp_samples)) bad("samples (a column of /samples is short)");
       out.checkpoint = c;
     }
 
@@ -903,7 +1096,9 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     if (H5Aexists(f, "git_commit") > 0) out.git_commit = ReadString(f, "git_commit");
     H5Literate(f, H5_INDEX_NAME, H5_ITER_INC, nullptr, ListGroup, &out.groups);
     for (const auto& name : out.groups) out.group_notes.push_back(DescribeGroup(f, name));
-  } catch (const std::runtime_error& e) {
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {  // also a missing attribute (bad_optional_access)
     throw InputError({fmt::format("{}: not a readable vibro output file: {}", path, e.what())});
   }
   return out;
@@ -958,6 +1153,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
         path)});
   if (stored.status == "ok")
     throw InputError({fmt::format("{}: nothing to resume: the study finished (status ok)", path)});
+  // As in Resume: every change is made first on a copy (ProbeWrite).
+  const auto prepare = [&](const std::string& file_path) {
   auto impl = std::make_unique<Impl>();
   impl->path = path;
   impl->header = h;
@@ -966,7 +1163,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
   std::vector<std::string> problems;
   try {
     Handle fapl = FileAccess();
-    impl->file = Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+    impl->file = Handle(H5Fopen(file_path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
     if (!impl->file) throw std::runtime_error("cannot open the file for writing");
     const hid_t f = impl->file.get();
     if (H5Lexists(f, "/basin", H5P_DEFAULT) <= 0 || H5Lexists(f, "/basin/cells", H5P_DEFAULT) <= 0)
@@ -995,13 +1192,12 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
          ReadScalar<std::int64_t>(b, "early_stop", H5T_NATIVE_INT64).value_or(1) ? "off" : "on",
          grid.early_stop ? "off" : "on");
     if (!problems.empty()) throw InputError(problems);
-    // A label map and table of an interrupted run are written again at the end.
-    DeleteLink(b, "labels");
-    DeleteLink(f, "/attractors");
+    // Everything is read and checked before anything is changed: a refused resume leaves the
+    // file as it was.
     impl->cells_group = Handle(Check(H5Gopen2(b, "cells", H5P_DEFAULT), "cells"), H5Gclose);
     impl->cells.emplace();
     CellTable& t = *impl->cells;
-    t.Open(impl->cells_group.get());
+    t.Open(impl->cells_group.get(), impl->zcols);
     hsize_t rows = t.index.rows();
     for (Column* c : t.All())
       if (c != &t.phases) rows = std::min(rows, c->rows());
@@ -1022,11 +1218,21 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
     t.impact_count.Read(0, rows, ni.data());
     t.z.Read(0, rows, z.data());
     hsize_t values = 0;
-    for (size_t i = 0; i < n; ++i) values += static_cast<hsize_t>(2 * ns[i] + 2 * ni[i]);
+    for (size_t i = 0; i < n; ++i) {
+      // Each cell's fields in range (a flipped bit must not index past the tables).
+      if (ns[i] < 0 || ni[i] < 0 || ns[i] > (1 << 20) || ni[i] > (1 << 20))
+        throw std::runtime_error(fmt::format("cell row {}: phase counts {}, {} out of range", i, ns[i], ni[i]));
+      if (state[i] < 0 || state[i] > 3 || kind[i] < 0 || kind[i] > 5 || periods[i] < 0 || period[i] < 0)
+        throw std::runtime_error(fmt::format("cell row {}: state, kind or period out of range", i));
+      if (index[i] < 0 || static_cast<size_t>(index[i]) >= cells.size())
+        throw std::runtime_error("a cell index beyond the grid");
+      if (!std::isnan(sp[i]) && !(sp[i] >= 0 && sp[i] <= 1))
+        throw std::runtime_error(fmt::format("cell row {}: sticking fraction {} outside [0, 1]", i, sp[i]));
+      values += static_cast<hsize_t>(2 * ns[i] + 2 * ni[i]);
+    }
     if (values > t.phases.rows()) throw std::runtime_error("the cell table is incomplete");
     std::vector<double> ph(static_cast<size_t>(values));
     t.phases.Read(0, values, ph.data());
-    for (Column* c : t.All()) c->Truncate(c == &t.phases ? values : rows);
     const double* p = ph.data();
     const auto dof = static_cast<Eigen::Index>(h.dof);
     for (size_t i = 0; i < n; ++i) {
@@ -1047,17 +1253,27 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
       c.z = Eigen::Map<const Eigen::VectorXd>(z.data() + i * impl->zcols, 2 * dof);
       cells[static_cast<size_t>(index[i])] = std::move(c);
     }
+    // Now the file changes, first its status (a file whose metadata cannot take a write fails
+    // here, before anything else changed); then rows after the last complete batch are dropped,
+    // and the label map and table of the interrupted run removed (written again at the end).
+    WriteString(f, "status", "running");
+    WriteString(f, "message", "");
+    for (Column* c : t.All()) c->Truncate(c == &t.phases ? values : rows);
+    DeleteLink(b, "labels");
+    DeleteLink(f, "/attractors");
     impl->OpenGroups();
     impl->kind_type = KindType();
     impl->OpenColumns();
-    WriteString(f, "status", "running");
-    WriteString(f, "message", "");
     impl->Flush();
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
+  return impl;
+  };
+  ProbeWrite(path, prepare);
+  auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

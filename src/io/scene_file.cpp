@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -17,6 +18,77 @@
 
 namespace vibro {
 namespace {
+
+// Limits applied before toml++ sees any text: its parser recurses on nesting and on the
+// components of dotted keys, so deep input would overflow the stack.
+constexpr size_t kMaxSceneBytes = 1 << 20;  // 1 MiB
+constexpr int kMaxNesting = 32;             // [ and { open at once
+constexpr int kMaxKeyComponents = 16;       // a.b.c... in one key or table header
+constexpr long long kMaxIndex = 1 << 20;    // DOF indices and mode counts (int after checking)
+
+// The first violation of the limits above in `text` ("" when none), located as file:line:col.
+// A light scan of TOML's lexical structure: strings (basic, literal, multi-line) and comments are
+// skipped; brackets outside them count as nesting; a run of key characters and dots (newline, =,
+// comma and brackets end it) counts the components of a dotted key.
+std::string PreScan(std::string_view text, const std::string& source) {
+  if (text.size() > kMaxSceneBytes)
+    return fmt::format("{}: larger than {} bytes: not a scene file", source, kMaxSceneBytes);
+  int depth = 0, dots = 0, line = 1;
+  size_t line_start = 0;
+  const auto where = [&](size_t i) { return fmt::format("{}:{}:{}", source, line, i - line_start + 1); };
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char ch = text[i];
+    if (ch == '\0') return where(i) + ": a NUL byte: not a text file";
+    if (ch == '\n') {
+      ++line;
+      line_start = i + 1;
+      dots = 0;
+      continue;
+    }
+    if (ch == '#') {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (ch == '"' || ch == '\'') {
+      const bool triple = text.substr(i, 3) == std::string(3, ch);
+      const size_t open = i;
+      i += triple ? 3 : 1;
+      for (; i < text.size(); ++i) {
+        if (text[i] == '\n') {
+          if (!triple) break;  // an unterminated string: toml++ reports it
+          ++line;
+          line_start = i + 1;
+        }
+        if (ch == '"' && text[i] == '\\') {
+          ++i;
+          continue;
+        }
+        if (text[i] == ch && (!triple || text.substr(i, 3) == std::string(3, ch))) {
+          if (triple) i += 2;
+          break;
+        }
+      }
+      if (i >= text.size()) return {};  // unterminated: toml++ says so
+      if (text[i] == '\n') --i;
+      (void)open;
+      continue;
+    }
+    if (ch == '[' || ch == '{') {
+      if (++depth > kMaxNesting)
+        return where(i) + fmt::format(": nesting deeper than {} levels of [ and {{", kMaxNesting);
+      dots = 0;
+    } else if (ch == ']' || ch == '}') {
+      depth = std::max(0, depth - 1);
+      dots = 0;
+    } else if (ch == '.') {
+      if (++dots >= kMaxKeyComponents)
+        return where(i) + fmt::format(": a dotted key of more than {} components", kMaxKeyComponents);
+    } else if (ch == '=' || ch == ',') {
+      dots = 0;
+    }
+  }
+  return {};
+}
 
 enum class Kind { kNumber, kInteger, kString, kNumberArray, kMatrix, kTable };
 
@@ -184,16 +256,29 @@ class Reader {
     return v;
   }
 
-  std::optional<long long> Integer(const std::string& path) {
+  // A whole number in [lo, hi], checked before any conversion to a narrower type.
+  std::optional<long long> Integer(const std::string& path, long long lo, long long hi) {
     const toml::node* n = Find(path);
     if (!n) return std::nullopt;
-    if (const auto* i = n->as_integer()) return i->get();
+    std::optional<long long> v;
+    if (const auto* i = n->as_integer()) v = i->get();
     if (const auto* f = n->as_floating_point()) {
-      const double v = f->get();
-      if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 9e15) return static_cast<long long>(v);
+      const double d = f->get();
+      if (std::isfinite(d) && d == std::floor(d) && std::abs(d) < 9e15) v = static_cast<long long>(d);
     }
-    Report(n, path, "expected a whole number");
-    return std::nullopt;
+    if (!v) {
+      Report(n, path, "expected a whole number");
+      return std::nullopt;
+    }
+    if (*v < lo) {
+      Report(n, path, fmt::format("violated constraint {} ≥ {}", LastComponent(path), lo));
+      return std::nullopt;
+    }
+    if (*v > hi) {
+      Report(n, path, fmt::format("violated constraint {} ≤ {}", LastComponent(path), hi));
+      return std::nullopt;
+    }
+    return v;
   }
 
   std::optional<std::string> String(const std::string& path,
@@ -309,6 +394,17 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
   key.erase(key.find_last_not_of(" \t") + 1);
   key.erase(0, key.find_first_not_of(" \t"));
   const std::string where = "--set " + text;
+  // KEY[i] / KEY[i][j] (below) name an entry of the array KEY.
+  if (Schema().find(key.substr(0, key.find('['))) == Schema().end()) {
+    const std::string hint = Suggest(key.substr(0, 200));
+    messages.push_back(fmt::format("{}: {}: unknown key{}", where.substr(0, 300), key.substr(0, 200),
+                                   hint.empty() ? "" : "; did you mean " + hint + "?"));
+    return;
+  }
+  if (const auto problem = PreScan(value, where); !problem.empty()) {
+    messages.push_back(problem);
+    return;
+  }
   toml::table parsed;
   try {
     parsed = toml::parse("value = " + value, where);
@@ -316,6 +412,12 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
     messages.push_back(fmt::format("{}: {}: VALUE is not valid TOML ({}); strings need quotes, "
                                    "e.g. run.engine='\"exact\"'",
                                    where, key, e.description()));
+    return;
+  }
+  if (parsed.size() != 1 || !parsed.get("value")) {
+    messages.push_back(fmt::format("{}: {}: VALUE must be one TOML value, not more TOML (e.g. "
+                                   "excitation.amplitude=2.5)",
+                                   where, key));
     return;
   }
   // KEY[i] or KEY[i][j]: one entry of an array or matrix of the scene (continuation of modal data,
@@ -432,8 +534,8 @@ LoadedScene Build(toml::table root, const std::string& source,
     PhysicalStructureSpec p;
     auto M = rd.Matrix("structure.mass");
     auto K = rd.Matrix("structure.stiffness");
-    auto a = rd.Integer("structure.forcing_dof");
-    auto b = rd.Integer("structure.contact_dof");
+    auto a = rd.Integer("structure.forcing_dof", -kMaxIndex, kMaxIndex);
+    auto b = rd.Integer("structure.contact_dof", -kMaxIndex, kMaxIndex);
     if (M && K && a && b) {
       p.mass = *M;
       p.stiffness = *K;
@@ -450,7 +552,7 @@ LoadedScene Build(toml::table root, const std::string& source,
     if (w && ta && tb) s.modal = ModalStructureSpec{*w, *ta, *tb};
   }
   if (auto z = rd.Vector("structure.damping_ratios")) s.damping_ratios = *z;
-  if (auto m = rd.Integer("structure.modes")) {
+  if (auto m = rd.Integer("structure.modes", std::numeric_limits<long long>::min(), kMaxIndex)) {
     if (*m < 1)
       rd.Report(rd.Find("structure.modes"), "structure.modes", "modes ≥ 1 (omit it to keep all)");
     else
@@ -471,7 +573,7 @@ LoadedScene Build(toml::table root, const std::string& source,
   if (auto v = rd.Vector("initial.velocity")) s.initial_velocity = *v;
 
   auto& r = s.run;
-  if (auto v = rd.Integer("run.periods")) r.periods = *v;
+  if (auto v = rd.Integer("run.periods", 1, 1LL << 53)) r.periods = *v;
   if (auto v = rd.String("run.engine", {"exact", "cvode"}))
     r.engine = *v == "exact" ? Engine::kExact : Engine::kCvode;
   if (auto v = rd.Number("run.rtol")) r.rtol = *v;
@@ -479,7 +581,7 @@ LoadedScene Build(toml::table root, const std::string& source,
   if (auto v = rd.String("run.method", {"adams", "bdf"}))
     r.method = *v == "adams" ? CvodeMethod::kAdams : CvodeMethod::kBdf;
   if (auto v = rd.Number("run.max_step")) r.max_step = *v;
-  if (auto v = rd.Integer("run.max_steps")) r.max_steps = static_cast<long>(*v);
+  if (auto v = rd.Integer("run.max_steps", 1, 1LL << 53)) r.max_steps = static_cast<long>(*v);
   if (auto v = rd.String("run.chatter", {"accumulation", "threshold", "none"}))
     r.chatter = *v == "accumulation" ? ChatterTreatment::kAccumulation
                 : *v == "threshold"  ? ChatterTreatment::kThreshold
@@ -488,10 +590,8 @@ LoadedScene Build(toml::table root, const std::string& source,
   if (auto v = rd.Number("run.chatter_tolerance")) r.chatter_tolerance = *v;
   if (auto v = rd.String("run.precision", {"double", "quad"}))
     r.precision = *v == "double" ? Precision::kDouble : Precision::kQuad;
-  if (auto v = rd.Integer("run.samples_per_period"))
-    r.samples_per_period = static_cast<int>(std::clamp<long long>(*v, -1, 1 << 20));
-  if (auto v = rd.Integer("run.max_period"))
-    r.max_period = static_cast<int>(std::clamp<long long>(*v, -1, 1 << 20));
+  if (auto v = rd.Integer("run.samples_per_period", 0, 1 << 20)) r.samples_per_period = static_cast<int>(*v);
+  if (auto v = rd.Integer("run.max_period", 1, 1 << 12)) r.max_period = static_cast<int>(*v);
   if (auto v = rd.Number("run.period_tolerance")) r.period_tolerance = *v;
 
   // Physics, once the file gave a structure; keys already reported are not reported twice.
@@ -522,6 +622,7 @@ InputError::InputError(std::vector<std::string> messages)
 
 LoadedScene ParseScene(std::string_view text, const std::string& source,
                        const std::vector<std::string>& overrides) {
+  if (const auto problem = PreScan(text, source); !problem.empty()) throw InputError({problem});
   toml::table root;
   try {
     root = toml::parse(text, source);
@@ -546,9 +647,11 @@ std::optional<double> SceneNumber(const std::string& text, const std::string& ke
 LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError({fmt::format("{}: cannot read the scene file", path)});
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return ParseScene(buffer.str(), path, overrides);
+  // At most one byte more than a scene may hold (/dev/zero, a FIFO, a huge file end here).
+  std::string buffer(kMaxSceneBytes + 1, '\0');
+  in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
+  buffer.resize(static_cast<size_t>(in.gcount()));
+  return ParseScene(buffer, path, overrides);
 }
 
 }  // namespace vibro

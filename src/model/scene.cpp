@@ -94,6 +94,25 @@ void CheckPhysical(const PhysicalStructureSpec& p, Checker& c) {
             std::to_string(p.contact_dof), fmt::format("a DOF index in [0, {})", N));
 }
 
+// Magnitudes the double arithmetic of the engines can square and sum without overflow.
+constexpr double kHuge = 1e100;
+constexpr double kTiny = 1e-100;
+// Largest structure: the model keeps several n×n matrices, and so does every engine.
+constexpr Eigen::Index kMaxModes = 2000;
+
+void CheckMagnitude(const Eigen::Ref<const Eigen::VectorXd>& v, const std::string& key, Checker& c) {
+  for (Eigen::Index i = 0; i < v.size(); ++i)
+    if (!(std::abs(v[i]) <= kHuge)) {
+      c.Require(false, key, "",
+                fmt::format("|value| ≤ {:g} (element {} is {}; its square must be representable)", kHuge,
+                            i, v[i]));
+      return;
+    }
+}
+void CheckMagnitude(double v, const std::string& key, Checker& c) {
+  c.Require(std::abs(v) <= kHuge, key, Show(v), fmt::format("|value| ≤ {:g} (its square must be representable)", kHuge));
+}
+
 }  // namespace
 
 std::vector<InputIssue> Validate(const Scene& s) {
@@ -133,6 +152,30 @@ std::vector<InputIssue> Validate(const Scene& s) {
             "0 ≤ r ≤ 1");
   c.Require(s.amplitude >= 0, "excitation.amplitude", Show(s.amplitude), "f ≥ 0");
   c.Require(s.frequency > 0, "excitation.frequency", Show(s.frequency), "ω > 0");
+  // What the machine allows: the period T = 2π/ω, the forcing and the squares of every state
+  // (energies, ω²X) must be representable with room to spare, so magnitudes stay in
+  // [kTiny, kHuge]; a forcing below kTiny is no forcing (give 0).
+  c.Require(s.amplitude == 0 || (s.amplitude >= kTiny && s.amplitude <= kHuge), "excitation.amplitude",
+            Show(s.amplitude), fmt::format("f = 0 or {:g} ≤ f ≤ {:g} (representable forcing)", kTiny, kHuge));
+  c.Require(!(s.frequency > 0) || (s.frequency >= kTiny && s.frequency <= kHuge), "excitation.frequency",
+            Show(s.frequency),
+            fmt::format("{:g} ≤ ω ≤ {:g} (the period 2π/ω and the phase ωt representable)", kTiny, kHuge));
+  CheckMagnitude(s.stop_position, "stop.position", c);
+  CheckMagnitude(s.initial_time, "initial.time", c);
+  CheckMagnitude(s.initial_displacement, "initial.displacement", c);
+  CheckMagnitude(s.initial_velocity, "initial.velocity", c);
+  CheckMagnitude(s.run.max_step, "run.max_step", c);
+  if (s.modal) {
+    CheckMagnitude(s.modal->frequencies, "structure.frequencies", c);
+    CheckMagnitude(s.modal->forcing, "structure.forcing", c);
+    CheckMagnitude(s.modal->contact, "structure.contact", c);
+  }
+  if (s.physical) {
+    CheckMagnitude(s.physical->mass.reshaped(), "structure.mass", c);
+    CheckMagnitude(s.physical->stiffness.reshaped(), "structure.stiffness", c);
+  }
+  c.Require(n_listed <= kMaxModes, "structure", std::to_string(n_listed),
+            fmt::format("at most {} modes or DOFs (the model's matrices are n×n)", kMaxModes));
 
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");

@@ -1,0 +1,67 @@
+#include "cli/stop_signals.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <csignal>
+#include <cstring>
+
+namespace vibro::cli {
+namespace {
+
+std::atomic<bool> g_stop{false};
+std::atomic<int> g_signals{0};
+std::atomic<int> g_writing{0};
+std::atomic<bool> g_discard{false};
+// The file to remove on a stop in discard mode; written before g_discard is set, read by the
+// handler only (unlink and _exit are async-signal-safe).
+char g_discard_path[4096] = {0};
+
+void Say(const char* text) {
+  const ssize_t n = write(STDERR_FILENO, text, std::strlen(text));
+  (void)n;
+}
+
+extern "C" void OnStopSignal(int) {
+  g_stop.store(true);
+  const int count = g_signals.fetch_add(1) + 1;
+  if (g_discard.load()) {
+    if (g_discard_path[0] != '\0') unlink(g_discard_path);
+    Say("\nvibro: interrupted; nothing to keep\n");
+    _exit(130);
+  }
+  if (count >= 3 && g_writing.load() == 0) {
+    Say("\nvibro: third stop request: leaving now (files keep what was flushed)\n");
+    _exit(130);
+  }
+}
+
+}  // namespace
+
+const std::atomic<bool>& StopFlag() { return g_stop; }
+bool StopRequested() { return g_stop.load(); }
+
+void InstallStopHandlers() {
+  struct sigaction sa {};
+  sa.sa_handler = OnStopSignal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+FinalWrite::FinalWrite() { g_writing.fetch_add(1); }
+FinalWrite::~FinalWrite() { g_writing.fetch_sub(1); }
+
+void DiscardOnStop(const std::string& path) {
+  g_discard.store(false);
+  const size_t n = std::min(path.size(), sizeof g_discard_path - 1);
+  std::memcpy(g_discard_path, path.data(), n);
+  g_discard_path[n] = '\0';
+  g_discard.store(true);
+  if (g_stop.load()) OnStopSignal(SIGTERM);  // a signal that came before: leave now
+}
+
+void KeepOnStop() { g_discard.store(false); }
+
+}  // namespace vibro::cli

@@ -1,0 +1,189 @@
+// Hardening (docs/reliability.md): classification that does not invent periods, CVODE starts on
+// the stop that must not tunnel, and stop requests seen inside a CVODE segment.
+#include <atomic>
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "dynamics/cvode_engine.hpp"
+#include "support.hpp"
+#include "vibro/attractor.hpp"
+#include "vibro/simulator.hpp"
+
+namespace vibro {
+namespace {
+
+constexpr double kTwoPi = 2.0 * M_PI;
+
+// A 2-DOF modal structure; the recorder only needs its forcing period and the tolerances.
+Scene TwoDof(double w) {
+  Scene s;
+  s.modal = ModalStructureSpec{Eigen::Vector2d(1.0, 2.7), Eigen::Vector2d(1.0, 1.0), Eigen::Vector2d(1.0, 1.0)};
+  s.damping_ratios = Eigen::Vector2d(0.01, 0.01);
+  s.stop_position = -100.0;  // never reached: no contact
+  s.frequency = w;
+  s.amplitude = 0.1;
+  return s;
+}
+
+void Section(AttractorRecorder& rec, const System& sys, long long k, const Eigen::VectorXd& z, Mode mode) {
+  const Eigen::VectorXd X = z.head(2), V = z.tail(2);
+  rec.OnSection({{k, 0.0}, static_cast<double>(k) * sys.period(), X, V, sys.ContactDisplacement(X), mode});
+}
+
+// Section points of a forced damped response: a period-1 steady state z_p plus a free transient
+// that decays by 0.96 per period and turns by θ = 2π/3 + 1e-9 per period, so that every 3 periods
+// it comes back nearly in phase (aliasing). With the amplitude a_k = A·0.96^k:
+//   |z_k − z_{k−3}| ≈ a_k |0.96³ − 1| ≈ 0.115 a_k,  |z_k − z_{k−1}| ≈ a_k |0.96 e^{iθ} − 1| ≈ 1.68 a_k.
+// At a_K = 3e-7 the 3-period repeat is within period_tolerance = 1e-7 but the 1-period one is not:
+// a repeat test alone says "period 3". The motion is the steady state (period 1) plus a transient
+// that has not decayed: not periodic yet; once a_K < 1e-12 it is period 1.
+Eigen::VectorXd Aliased(long long k, double amplitude_at_K, long long K) {
+  const double theta = kTwoPi / 3 + 1e-9;
+  const double a = amplitude_at_K * std::pow(0.96, static_cast<double>(k - K));
+  Eigen::VectorXd z(4);
+  z << 0.5 + a * std::cos(theta * static_cast<double>(k)), 0.2 + a * std::sin(theta * static_cast<double>(k)),
+      -0.3 + 0.5 * a * std::cos(theta * static_cast<double>(k) + 1.0), 0.1 - 0.7 * a * std::sin(theta * static_cast<double>(k));
+  return z;
+}
+
+TEST(Hardening, DecayingFreeTransientIsNeverPeriodic) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  AttractorRecorder rec(sys, scene);
+  const long long K = 400;
+  for (long long k = 0; k <= K; ++k) Section(rec, sys, k, Aliased(k, 3e-7, K), Mode::kFree);
+  // Precondition: the aliasing is there (the last 3 section points repeat within the tolerance).
+  double d3 = 0;
+  for (long long j = 0; j < 3; ++j) {
+    const Eigen::VectorXd a = Aliased(K - j, 3e-7, K), b = Aliased(K - j - 3, 3e-7, K);
+    d3 = std::max(d3, (a - b).cwiseAbs().maxCoeff() / (1 + std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff())));
+  }
+  ASSERT_LT(d3, scene.run.period_tolerance);
+  const Attractor a = rec.Classify();
+  EXPECT_EQ(a.kind, "not-periodic");
+  EXPECT_FALSE(a.period.has_value());
+
+  // The same response 500 periods later: the transient (3e-7 · 0.96^500 ≈ 4e-16) has decayed.
+  AttractorRecorder later(sys, scene);
+  for (long long k = 0; k <= K + 500; ++k) Section(later, sys, k, Aliased(k, 3e-7, K), Mode::kFree);
+  const Attractor b = later.Classify();
+  EXPECT_EQ(b.kind, "no-contact-periodic");
+  ASSERT_TRUE(b.period.has_value());
+  EXPECT_EQ(*b.period, 1);
+}
+
+// Identical section points every period (what a contracting orbit shows between its sticking
+// phases), one impact at mid-period, and a sticking phase [0.1 T, 0.3 T] every 7th period: the
+// motion has period 7 and sticking fraction 0.2/7, whether the record ends just after a sticking
+// period or not (the last two periods alike must not make it "period 1").
+TEST(Hardening, EventLogOfTheWholeWindowMustRepeat) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  const double T = sys.period();
+  const Eigen::VectorXd z = (Eigen::VectorXd(4) << 0.4, 0.1, -0.2, 0.3).finished();
+  for (long long K : {300LL, 301LL, 302LL, 306LL}) {
+    AttractorRecorder rec(sys, scene);
+    for (long long k = 0; k <= K; ++k) {
+      Section(rec, sys, k, z, Mode::kFree);
+      if (k == K) break;
+      if (k % 7 == 3) {
+        rec.OnEvent({EventKind::kStick, {k, 0.1 * T}, (static_cast<double>(k) + 0.1) * T, 1.0, 0.0, 0.0});
+        rec.OnEvent({EventKind::kRelease, {k, 0.3 * T}, (static_cast<double>(k) + 0.3) * T, 1.0, 0.0, 0.0});
+      }
+      rec.OnEvent({EventKind::kImpact, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, -0.2, 0.15});
+    }
+    const Attractor a = rec.Classify();
+    ASSERT_TRUE(a.period.has_value()) << "K = " << K;
+    EXPECT_EQ(*a.period, 7) << "K = " << K;
+    EXPECT_EQ(a.kind, "sticking-periodic") << "K = " << K;
+    ASSERT_TRUE(a.sticking_fraction.has_value());
+    EXPECT_NEAR(*a.sticking_fraction, 0.2 / 7, 1e-12) << "K = " << K;
+  }
+}
+
+// A motion that never repeats, stuck from period 70.5 to 199.5 (a phase begun before the
+// analysed record of 4·max_period + 1 = 129 periods, 71..200): the time on the stop inside the
+// record is 199.5 − 71 = 128.5 periods, a fraction 128.5/129 (not 129 periods over a window of
+// the last max_period periods, > 1).
+TEST(Hardening, StickingFractionOfNonPeriodicMotionIsAWholeWindowAverage) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  const double T = sys.period();
+  AttractorRecorder rec(sys, scene);
+  const long long K = 200;
+  for (long long k = 0; k <= K; ++k) {
+    Eigen::VectorXd z(4);
+    z << 0.3 * std::sin(1.7 * static_cast<double>(k)), 0.2 * std::cos(2.3 * static_cast<double>(k)),
+        0.1 * std::sin(0.9 * static_cast<double>(k)), 0.05;
+    Section(rec, sys, k, z, k > 70 && k < 200 ? Mode::kSticking : Mode::kFree);
+    if (k == 70) rec.OnEvent({EventKind::kStick, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, 0.0, 0.0});
+    if (k == 199) rec.OnEvent({EventKind::kRelease, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, 0.0, 0.0});
+  }
+  const Attractor a = rec.Classify();
+  EXPECT_EQ(a.kind, "not-periodic");
+  ASSERT_TRUE(a.sticking_fraction.has_value());
+  const long long record = 4 * scene.run.max_period + 1;  // periods between the sections kept
+  EXPECT_NEAR(*a.sticking_fraction, (199.5 - static_cast<double>(K - record)) / static_cast<double>(record), 1e-12);
+  EXPECT_LE(*a.sticking_fraction, 1.0);
+}
+
+// CVODE: a stop request ends a segment that would otherwise run on (the flag is polled at every
+// step), with `stopped` set; without it the same flight ends at the stop.
+TEST(Hardening, CvodeSegmentSeesTheStopFlag) {
+  Scene s = test::OneDof(0.75, 2.8, 1.2);
+  s.run.engine = Engine::kCvode;
+  const System sys(s);
+  detail::CvodeEngine engine(sys, s.run);
+  const Eigen::VectorXd X = Eigen::VectorXd::Constant(1, 2.0), V = Eigen::VectorXd::Zero(1);
+  std::atomic<bool> stop{true};
+  engine.SetStopPoll([&stop] { return stop.load(); });
+  engine.Begin({Mode::kFree, 0.0, 0.0, X, V, 1.0, detail::FlightStart::kGeneric, detail::StickStart::kGeneric});
+  const auto stopped = engine.Advance(1e6, true, {});
+  EXPECT_EQ(stopped.end, detail::SegmentEnd::kFailure);
+  EXPECT_TRUE(stopped.stopped);
+  stop = false;
+  engine.Begin({Mode::kFree, 0.0, 0.0, X, V, 1.0, detail::FlightStart::kGeneric, detail::StickStart::kGeneric});
+  const auto flew = engine.Advance(1e6, true, {});
+  EXPECT_EQ(flew.end, detail::SegmentEnd::kContact);
+  EXPECT_FALSE(flew.stopped);
+  EXPECT_NEAR(engine.Gap(flew.sigma), 0.0, 1e-8);
+}
+
+// Leaving the stop at ẋ_B = 5e-324 (or 1e-300) with the body pushed into it: the flight lasts
+// about 2ẋ_B/|ẍ_B|, far below the clock's resolution, so the state touches the stop at once and
+// sticks. CVODE used to miss the crossing (g(t_lo)·g(t_hi) underflowed to −0) and let the body fall
+// through the stop with status ok. The exact engine is the reference: same attractor, and no
+// sample of the CVODE run below the stop.
+TEST(Hardening, CvodeStartLeavingTheStopByAHairDoesNotTunnel) {
+  for (double v0 : {5e-324, 1e-300, 1e-20}) {
+    Scene s = test::OneDof(0.75, 2.8, 1.2, 1.0, 30);
+    s.initial_displacement = Eigen::VectorXd::Constant(1, 1.0);
+    s.initial_velocity = Eigen::VectorXd::Constant(1, v0);
+    s.run.samples_per_period = 64;
+    const System sys(s);
+    test::Log exact_log, cvode_log;
+    AttractorRecorder exact_rec(sys, s), cvode_rec(sys, s);
+    SimulationOptions eo, co;
+    eo.observers = {&exact_log, &exact_rec};
+    co.observers = {&cvode_log, &cvode_rec};
+    const RunResult exact = Simulate(sys, s, eo);
+    Scene c = s;
+    c.run.engine = Engine::kCvode;
+    c.run.rtol = 1e-11;
+    const RunResult cvode = Simulate(sys, c, co);
+    ASSERT_EQ(exact.status, RunStatus::kOk) << exact.message;
+    ASSERT_EQ(cvode.status, RunStatus::kOk) << cvode.message;
+    double lowest = INFINITY;
+    for (const auto& row : cvode_log.samples) lowest = std::min(lowest, row.x_B);
+    EXPECT_GE(lowest, s.stop_position - 1e-9) << "v0 = " << v0;
+    const Attractor ae = exact_rec.Classify(), ac = cvode_rec.Classify();
+    EXPECT_EQ(ac.kind, ae.kind) << "v0 = " << v0;
+    EXPECT_EQ(ac.period, ae.period) << "v0 = " << v0;
+    ASSERT_TRUE(ae.sticking_fraction && ac.sticking_fraction);
+    EXPECT_NEAR(*ac.sticking_fraction, *ae.sticking_fraction, 1e-6) << "v0 = " << v0;
+  }
+}
+
+}  // namespace
+}  // namespace vibro
