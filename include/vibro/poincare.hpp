@@ -80,6 +80,12 @@ struct OrbitResult {
 
 OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);
 
+// Newton on the stroboscopic map F(z) − z from z = (X, Ẋ) at the section time t0 over q periods,
+// with the analytic DF: fills status ("converged" or not), message, residual, newton_iterations,
+// section_time, X, V and monodromy of `orbit`.
+void NewtonOnStroboscopicMap(const System& system, const Scene& scene, double t0, Eigen::VectorXd z,
+                             int q, const OrbitRequest& request, OrbitResult& orbit);
+
 // Fills summary, multipliers and stability of `orbit` from its section point, period and
 // monodromy matrix (simulates three periods of the orbit).
 void Characterize(const System& system, const Scene& scene, OrbitResult& orbit);

@@ -154,9 +154,23 @@ CheckReport CrossCheck(const System& sys, const Scene& scene, bool with_quad) {
     return a.impacts_per_period ? std::optional<double>(static_cast<double>(*a.impacts_per_period))
                                 : std::nullopt;
   };
-  if (ex.attractor.kind == "impact-periodic")
+  if (ex.attractor.kind == "impact-periodic") {
     compare("impacts per period", ipp(ex.attractor), ipp(cv.attractor), ipp(orbit.summary),
             ipp(qa));
+    // Each impact of the orbit: its phase and the contact velocity just before it.
+    const auto nth = [](const std::vector<double>& v, size_t i) -> std::optional<double> {
+      return i < v.size() ? std::optional<double>(v[i]) : std::nullopt;
+    };
+    for (size_t i = 0; i < ex.attractor.impact_phases.size(); ++i) {
+      compare(fmt::format("impact {} phase", i + 1), nth(ex.attractor.impact_phases, i),
+              nth(cv.attractor.impact_phases, i), nth(orbit.summary.impact_phases, i),
+              qd ? nth(qa.impact_phases, i) : std::nullopt);
+      compare(fmt::format("impact {} velocity before", i + 1),
+              nth(ex.attractor.impact_velocities, i), nth(cv.attractor.impact_velocities, i),
+              nth(orbit.summary.impact_velocities, i),
+              qd ? nth(qa.impact_velocities, i) : std::nullopt);
+    }
+  }
   const auto& pe = ex.attractor.stick_phases;
   for (size_t i = 0; i < pe.size(); ++i) {
     const auto at = [&](const Attractor& a, bool start) -> std::optional<double> {

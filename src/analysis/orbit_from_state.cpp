@@ -93,7 +93,6 @@ std::string KindName(OrbitKind k) {
 OrbitResult OrbitFromState(const System& sys, const Scene& scene, const InitialOverride& start,
                            const OrbitRequest& req, double far) {
   OrbitResult out;
-  const auto n = sys.dof();
 
   // 1. The period: the first return of the start's trajectory, compared at a sample in a free
   //    flight of the first period (a start on an event would be compared with x⁻ at the
@@ -141,41 +140,8 @@ OrbitResult OrbitFromState(const System& sys, const Scene& scene, const InitialO
   Eigen::VectorXd z = z1;
 
   // 3. Newton on F(z) − z with the analytic DF (poincare.hpp).
-  const auto admissible = [&](const Eigen::VectorXd& zz) {
-    return sys.ContactDisplacement(zz.head(n)) > sys.stop();
-  };
-  MapValue m;
-  for (int it = 0; it <= req.max_iterations; ++it) {
-    m = StroboscopicMap(sys, scene, t1, z.head(n), z.tail(n), q);
-    if (m.status != RunStatus::kOk) {
-      out.message = "the map evaluation failed (numerical failure of the simulation)";
-      break;
-    }
-    const Eigen::VectorXd r = Stack(m.X, m.V) - z;
-    out.residual = r.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
-    out.newton_iterations = it;
-    if (out.residual < req.tolerance) {
-      out.status = "converged";
-      break;
-    }
-    if (m.singular) {
-      out.message = "a grazing contact on the orbit makes the map singular";
-      break;
-    }
-    const Eigen::MatrixXd J = m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n);
-    const Eigen::VectorXd step = -J.fullPivLu().solve(r);
-    double lambda = 1.0;
-    Eigen::VectorXd next = z + step;
-    for (int h = 0; h < 30 && !admissible(next); ++h) {
-      lambda *= 0.5;
-      next = z + lambda * step;
-    }
-    z = next;
-  }
-  out.section_time = t1;
-  out.X = z.head(n);
-  out.V = z.tail(n);
-  out.monodromy = m.jacobian;
+  NewtonOnStroboscopicMap(sys, scene, t1, z, q, req, out);
+  z << out.X, out.V;
   if (out.status != "converged") {
     if (out.message.empty()) out.message = "Newton did not converge from the start state";
     return out;

@@ -174,6 +174,48 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
 }
 
+// Newton on F(z) − z from z at the section time t0, with the analytic DF; the step is halved while
+// it would put the contact point on or below the stop.
+void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, Eigen::VectorXd z,
+                             int q, const OrbitRequest& req, OrbitResult& out) {
+  const auto n = sys.dof();
+  const auto admissible = [&](const Eigen::VectorXd& zz) {
+    return sys.ContactDisplacement(zz.head(n)) > sys.stop();
+  };
+  MapValue m;
+  for (int it = 0; it <= req.max_iterations; ++it) {
+    m = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q);
+    if (m.status != RunStatus::kOk) {
+      out.message = "the map evaluation failed (numerical failure of the simulation)";
+      break;
+    }
+    const Eigen::VectorXd r = Stack(m.X, m.V) - z;
+    out.residual = r.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
+    out.newton_iterations = it;
+    if (out.residual < req.tolerance) {
+      out.status = "converged";
+      break;
+    }
+    if (m.singular) {
+      out.message = "a grazing contact on the orbit makes the map singular";
+      break;
+    }
+    const Eigen::MatrixXd J = m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n);
+    const Eigen::VectorXd step = -J.fullPivLu().solve(r);
+    double lambda = 1.0;
+    Eigen::VectorXd next = z + step;
+    for (int h = 0; h < 30 && !admissible(next); ++h) {
+      lambda *= 0.5;
+      next = z + lambda * step;
+    }
+    z = next;
+  }
+  out.section_time = t0;
+  out.X = z.head(n);
+  out.V = z.tail(n);
+  out.monodromy = m.jacobian;
+}
+
 OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest& req) {
   OrbitResult out;
   const double T = sys.period(), w = sys.frequency();
@@ -303,41 +345,7 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   Eigen::VectorXd z = Stack(catcher.X, catcher.V);
 
   // 3. Newton on F(z) − z with the analytic DF.
-  const auto admissible = [&](const Eigen::VectorXd& zz) {
-    return sys.ContactDisplacement(zz.head(n)) > sys.stop();
-  };
-  MapValue m;
-  for (int it = 0; it <= req.max_iterations; ++it) {
-    m = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q);
-    if (m.status != RunStatus::kOk) {
-      out.message = "the map evaluation failed (numerical failure of the simulation)";
-      break;
-    }
-    const Eigen::VectorXd r = Stack(m.X, m.V) - z;
-    out.residual = r.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
-    out.newton_iterations = it;
-    if (out.residual < req.tolerance) {
-      out.status = "converged";
-      break;
-    }
-    if (m.singular) {
-      out.message = "a grazing contact on the orbit makes the map singular";
-      break;
-    }
-    const Eigen::MatrixXd J = m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n);
-    const Eigen::VectorXd step = -J.fullPivLu().solve(r);
-    double lambda = 1.0;
-    Eigen::VectorXd next = z + step;
-    for (int h = 0; h < 30 && !admissible(next); ++h) {
-      lambda *= 0.5;
-      next = z + lambda * step;
-    }
-    z = next;
-  }
-  out.section_time = t0;
-  out.X = z.head(n);
-  out.V = z.tail(n);
-  out.monodromy = m.jacobian;
+  NewtonOnStroboscopicMap(sys, scene, t0, z, q, req, out);
   if (out.status != "converged") {
     if (out.message.empty()) out.message = "Newton did not converge";
     return out;
