@@ -282,15 +282,7 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
     interrupted = guard.interrupted();
     study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
     if (store) {
-      store->WriteStudy(study, study_grid);
-      vibro::RunResult r;
-      r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-      if (interrupted)
-        r.message = fmt::format("interrupted with {} of {} cells done; everything so far is kept, "
-                                "continue with --resume",
-                                study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
-                                study.cells);
-      store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
+      vibro::frontend::FinishStudy(*store, study, study_grid, interrupted);
     }
   }
   py::dict d;

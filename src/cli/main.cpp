@@ -536,15 +536,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   const auto study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
   if (store) try {
     const vibro::cli::FinalWrite writing;
-    store->WriteStudy(study, grid);
-    vibro::RunResult r;
-    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    if (interrupted)
-      r.message = fmt::format("interrupted with {} of {} cells done; everything so far is kept, "
-                              "continue with --resume",
-                              study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
-                              study.cells);
-    store->Finish(r, vibro::frontend::NoAttractor());  // a study has no single attractor (they are in /attractors)
+    vibro::frontend::FinishStudy(*store, study, grid, interrupted);
     store.reset();
   } catch (const std::runtime_error& e) {  // a resumed file whose damage shows only when written
     fmt::print(stderr, "vibro: cannot write the study to {}: {}; the cells computed are in its /basin/cells\n",

@@ -124,4 +124,16 @@ void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System&
   store->Finish(result, orbit.summary);
 }
 
+void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::StudyGrid& grid, bool interrupted) {
+  store.WriteStudy(study, grid);
+  RunResult r;
+  r.status = interrupted ? RunStatus::kInterrupted : RunStatus::kOk;
+  if (interrupted)
+    r.message = fmt::format("interrupted with {} of {} cells done; everything so far is kept, "
+                            "continue with --resume",
+                            study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
+                            study.cells);
+  store.Finish(r, NoAttractor());  // a study has no single attractor (they are in /attractors)
+}
+
 }  // namespace vibro::frontend

@@ -64,6 +64,10 @@ inline Attractor NoAttractor() {
   return a;
 }
 
+// Writes a finished (or interrupted) study to `store` and closes its run: /basin or /attractors,
+// status and, when interrupted, how many cells are done and how to resume.
+void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::StudyGrid& grid, bool interrupted);
+
 // Writes one period of a converged orbit, densely sampled, and its multipliers (/orbit) to `out`.
 void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& system,
                 const OrbitResult& orbit);
