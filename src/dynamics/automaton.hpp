@@ -427,8 +427,8 @@ bool Automaton<S>::OnContact() {
           fmt::format(
               "chattering sequence undetermined at this precision: its impacts reached speed "
               "{:.3g} ({} floor) near t = {:.17g} before its accumulation point could be "
-              "predicted within run.chatter_tolerance = {:.3g} T (last prediction: ε = {:.3g}, "
-              "estimated error {:.3g} T; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
+              "predicted within run.chatter_tolerance = {:.3g} T (last prediction tried: ε = {:.3g}, "
+              "estimated error at least {:.3g} T; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
               "move the parameter",
               R::to_double(-v_minus), unresolved ? "CVODE's √rtol resolution" : "the rounding",
               AbsTime(clock_), R::to_double(chatter_tol_ / period_),

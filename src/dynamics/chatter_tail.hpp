@@ -40,6 +40,9 @@ struct TailPrediction {
   S reaction{0}, rate{0}, speed{0};  // R, Ṙ on the stuck state, u = ẋ_B⁺
 };
 
+// The terms of E are computed cheapest first and the prediction is refused as soon as their sum
+// exceeds the target (early in a sequence, most impacts), so that `error` of a refused prediction
+// is a lower bound of E.
 template <class S>
 TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                               const typename ModelT<S>::Vec& V, const S& phase, const S& target) {
@@ -51,14 +54,19 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
   const Vec W = V - m.contact * (t.speed / m.s_B);  // ΠẊ: the stuck velocity
   t.reaction = m.Reaction(X, W, phase);
   if (!(t.reaction > 0)) return t;
-  t.rate = m.ReactionRate(X, W, phase);
   t.delta0 = S(2) * t.speed / ((S(1) - m.r) * m.s_B * t.reaction);
+  const S d = t.delta0;
+  t.error = d * m.contact_stiffness * d * d / 4;
+  if (!(t.error <= target)) return t;
+  t.rate = m.ReactionRate(X, W, phase);
   t.epsilon = -t.rate * t.delta0 / t.reaction;
   t.delta = t.delta0 * (S(1) + t.epsilon / 3);
+  t.error += d * S(0.3) * t.epsilon * t.epsilon;
+  if (!(t.error <= target) || !(R::abs(t.epsilon) <= S(kTailEpsilonMax))) return t;
 
   // Free second derivative of R at the start and a bound on |R'''| over [0, 2Δ0].
   const S sp = R::sin(phase), cp = R::cos(phase), H = S(2) * t.delta0;
-  S r2 = m.s_A * m.f * m.w * m.w * sp, M3 = R::abs(m.s_A * m.f) * m.w * m.w * m.w, wc2(0);
+  S r2 = m.s_A * m.f * m.w * m.w * sp, M3 = R::abs(m.s_A * m.f) * m.w * m.w * m.w;
   for (int i = 0; i < m.dof(); ++i) {
     if (m.shape[i] == S(0)) continue;
     const OscillatorT<S> o{m.omega[i], m.zeta[i], m.forcing[i] * m.f};
@@ -68,15 +76,11 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
     r2 += w2 * acc + tz * jerk;
     const auto b = Bounds<S>(o, m.w, Amplitude<S>(o, X[i], W[i]) + R::abs(o.F) * H);
     M3 += w2 * b.d3 + tz * b.d4;
-    wc2 += m.contact[i] * w2;
   }
   r2 /= m.s_B;
   M3 /= m.s_B;
-  wc2 /= m.s_B;
-  const S d = t.delta0;
-  t.error = d * (S(0.3) * t.epsilon * t.epsilon + R::abs(r2) * d * d / (S(2) * t.reaction) +
-                 M3 * d * d * d / (S(6) * t.reaction) + wc2 * d * d / 4);
-  t.accepted = R::isfinite(t.error) && R::abs(t.epsilon) <= S(kTailEpsilonMax) && t.error <= target;
+  t.error += d * (R::abs(r2) * d * d / (S(2) * t.reaction) + M3 * d * d * d / (S(6) * t.reaction));
+  t.accepted = R::isfinite(t.error) && t.error <= target;
   return t;
 }
 

@@ -36,7 +36,11 @@ struct ModelT {
         stick_vectors(sys.constrained().vectors.cast<S>()),
         stick_left(sys.constrained().left.cast<S>()),
         stick_forcing(sys.constrained().modal_forcing.cast<S>()),
-        stick_reaction(sys.constrained().reaction.cast<S>()) {}
+        stick_reaction(sys.constrained().reaction.cast<S>()) {
+    for (Eigen::Index i = 0; i < omega.size(); ++i)
+      contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
+    contact_stiffness /= s_B;
+  }
 
   int dof() const { return static_cast<int>(omega.size()); }
 
@@ -86,6 +90,7 @@ struct ModelT {
   Mat stick_left;         // l_kᵀ (rows)
   Vec stick_forcing;      // l_kᵀ F_c
   Vec stick_reaction;     // ρ_k
+  S contact_stiffness{0};  // ω_c² = Σ c_i T_B,i ω_i² / s_B, the stiffness the contact point sees
 };
 
 }  // namespace vibro::detail
