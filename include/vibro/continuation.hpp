@@ -63,7 +63,8 @@ struct BranchPoint {
 
 struct Bifurcation {
   // "fold" | "flip" | "neimark-sacker" | "rising" | "grazing" | "sticking-entry" |
-  // "sticking-lost" | "non-smooth"
+  // "sticking-lost" | "non-smooth" | "undetermined" (past it the precision cannot decide a
+  // chattering sequence, so where the motion changes is not known; CVODE, or beyond quad)
   std::string kind;
   double value;
   std::string detail;
@@ -84,6 +85,9 @@ struct Branch {
   std::vector<Bifurcation> bifurcations;
   std::vector<LevelCrossing> crossings;
   std::string end;  // why the branch stopped
+  // Map evaluations done in quad precision because the double engine left a chattering sequence
+  // undetermined there (near the end of a sticking branch; docs/chattering.md).
+  int quad_evaluations = 0;
 };
 
 Branch Continue(const ContinuationRequest& request);

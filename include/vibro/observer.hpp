@@ -4,6 +4,8 @@
 // the run to end with that exception.
 #pragma once
 
+#include <limits>
+
 #include <cstdint>
 
 #include <Eigen/Dense>
@@ -100,6 +102,9 @@ struct Reset {
   const Eigen::VectorXd* delta_gradient = nullptr;
   const Eigen::VectorXd* X_end = nullptr;
   const Eigen::VectorXd* V_end = nullptr;
+  // ẋ_B just before the reset, computed in the run's precision (a quad run's chattering impacts
+  // reach speeds that the double state V_before cannot resolve); NaN when not given.
+  double contact_velocity_before = std::numeric_limits<double>::quiet_NaN();
 };
 
 class Observer {

@@ -51,13 +51,36 @@ class Problem {
   int period() const { return q_; }
   void MoveSection(double phase) { phase_ = phase; }
 
+  // The scene at λ in the precision that decides its chattering sequences: double, or quad at the
+  // values of λ where double left one undetermined (a map evaluation there switched).
+  std::optional<Scene> DecidingSceneAt(double lambda) const {
+    auto scene = SceneAt(lambda);
+    if (scene && std::find(quad_at_.begin(), quad_at_.end(), lambda) != quad_at_.end())
+      scene->run.precision = Precision::kQuad;
+    return scene;
+  }
+
   std::optional<Eigen::VectorXd> Map(const Eigen::VectorXd& z, double lambda,
                                      Eigen::MatrixXd* jac) const {
-    const auto scene = SceneAt(lambda);
+    auto scene = SceneAt(lambda);
     if (!scene) return std::nullopt;
     const System sys(*scene);
     const auto n = sys.dof();
-    const MapValue m = StroboscopicMap(sys, *scene, SectionTime(*scene), z.head(n), z.tail(n), q_);
+    MapValue m = StroboscopicMap(sys, *scene, SectionTime(*scene), z.head(n), z.tail(n), q_);
+    // Near the end of a sticking branch the double engine's chattering tails can reach the
+    // rounding floor of ẋ_B before their accumulation point is predicted within the tolerance
+    // (docs/chattering.md): the map is then evaluated with the quad engine instead, so that the
+    // boundary is located where the motion changes, not where double precision gives out.
+    if (m.status == RunStatus::kUndetermined && scene->run.precision == Precision::kDouble &&
+        scene->run.engine == Engine::kExact) {
+      scene->run.precision = Precision::kQuad;
+      m = StroboscopicMap(sys, *scene, SectionTime(*scene), z.head(n), z.tail(n), q_);
+      ++quad_evaluations_;
+      if (m.status == RunStatus::kOk &&
+          std::find(quad_at_.begin(), quad_at_.end(), lambda) == quad_at_.end())
+        quad_at_.push_back(lambda);
+    }
+    if (m.status == RunStatus::kUndetermined) undetermined_ = true;
     if (m.status != RunStatus::kOk || m.singular) return std::nullopt;
     if (jac) *jac = m.jacobian;
     Eigen::VectorXd out(2 * n);
@@ -86,7 +109,7 @@ class Problem {
     const Eigen::VectorXd& y = c.y;
     const auto N = y.size() - 1;
     const double lambda = y[N];
-    const auto scene = SceneAt(lambda);
+    const auto scene = DecidingSceneAt(lambda);
     if (!scene) return std::nullopt;
     const System sys(*scene);
     const auto n = sys.dof();
@@ -106,10 +129,19 @@ class Problem {
     return pt;
   }
 
+  // Map evaluations done in quad precision, and whether one stayed undetermined even so (or
+  // could not switch: CVODE, or a scene quad does not cover).
+  int quad_evaluations() const { return quad_evaluations_; }
+  bool undetermined() const { return undetermined_; }
+  void ClearUndetermined() { undetermined_ = false; }
+
  private:
   const ContinuationRequest& req_;
   double phase_;
   int q_;
+  mutable std::vector<double> quad_at_;  // the λ values at which the map switched to quad
+  mutable int quad_evaluations_ = 0;
+  mutable bool undetermined_ = false;
 };
 
 // Every impact of q periods of the orbit from the free state (X, V) at t0.
@@ -245,6 +277,12 @@ std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* 
                                     "(smallest: {} {:.1e}); {}", best->kind, best->value, change)};
 }
 
+// The branch as returned, with how many map evaluations needed the quad engine.
+Branch& Finish(Branch& br, const Problem& p) {
+  br.quad_evaluations = p.quad_evaluations();
+  return br;
+}
+
 }  // namespace
 
 Branch Continue(const ContinuationRequest& req) {
@@ -295,7 +333,7 @@ Branch Continue(const ContinuationRequest& req) {
   auto first = e.ok ? p.Examine({y0, e}) : std::nullopt;
   if (!first) {
     br.end = "the map could not be evaluated at the start";
-    return br;
+    return Finish(br, p);
   }
   Point cur = *first;
   record(cur);
@@ -368,7 +406,7 @@ Branch Continue(const ContinuationRequest& req) {
     if (stop_requested()) {
       br.status = "interrupted";
       br.end = "interrupted";
-      return br;
+      return Finish(br, p);
     }
     const auto next = trial(ds);
     // Step control (Allgower & Georg): a step whose corrected point strays far from the predictor
@@ -431,7 +469,7 @@ Branch Continue(const ContinuationRequest& req) {
         const auto at_end = yc ? p.Examine(*yc) : std::nullopt;
         record(at_end && SameFamily(cur, *at_end) ? *at_end : *next);
         br.end = "reached the end value";
-        return br;
+        return Finish(br, p);
       }
       cur = *next;
       t = t_new;
@@ -450,6 +488,7 @@ Branch Continue(const ContinuationRequest& req) {
       double lo = 0.0, hi = ds;
       bool moved = false;
       std::optional<Point> past = next;
+      p.ClearUndetermined();
       for (int it = 0; it < 100; ++it) {
         if (stop_requested()) break;
         const double mid = 0.5 * (lo + hi);
@@ -472,7 +511,7 @@ Branch Continue(const ContinuationRequest& req) {
         if (moved) record(cur);
         br.status = "interrupted";
         br.end = "interrupted";
-        return br;
+        return Finish(br, p);
       }
       // A point of another orbit met on the same corrector hyperplane is not "past" anything:
       // along one branch, corrected points an arclength h apart are O(h) apart.
@@ -492,21 +531,32 @@ Branch Continue(const ContinuationRequest& req) {
         auto po = trial(s_over);
         if (po && !SameFamily(cur, *po) && (po->y - cur.y).norm() < 1e3 * s_over) past = po;
       }
-      const auto [kind, detail] = NameNonSmooth(cur, past ? &*past : nullptr);
+      auto [kind, detail] = NameNonSmooth(cur, past ? &*past : nullptr);
       // The boundary lies between cur and its predictor at arclength hi.
       const double at = cur.y[n2] + 0.5 * hi * t[n2], bracket = hi * std::abs(t[n2]);
       if (moved) record(cur);
+      // Past cur the map could not be evaluated because a chattering sequence stayed undetermined
+      // (CVODE, or beyond quad too): the bisection found where this precision gives out, which
+      // need not be where the motion changes. Say so rather than name a bifurcation there.
+      const bool undecided = p.undetermined() && !past;
+      if (undecided) {
+        detail = fmt::format("past λ = {:.17g} a chattering sequence of the orbit is undetermined at this "
+                             "precision (the computation gives out before the motion is seen to change; "
+                             "{} suspected: {}). The exact engine evaluates such points in quad precision",
+                             cur.y[n2], kind, detail);
+        kind = "undetermined";
+      }
       br.bifurcations.push_back({kind, at, detail, bracket});
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
       const bool goes_on = past && Sticks(*past) == Sticks(cur) &&
                            past->probe.signature.find_first_of("RI") != std::string::npos;
       if (!goes_on) {
-        br.end = kind == "sticking-lost" ? kind
+        br.end = kind == "sticking-lost" || kind == "undetermined" ? kind
                  : past && past->probe.signature.find_first_of("RI") == std::string::npos
                      ? kind + " (permanent contact beyond)"
                      : kind + " (the orbit does not go on)";
-        return br;
+        return Finish(br, p);
       }
       t = Tangent(past->eval, t);
       cur = *past;
@@ -518,11 +568,11 @@ Branch Continue(const ContinuationRequest& req) {
       br.end = section_fresh || br.bifurcations.empty()
                    ? "could not move the section away from an event"
                    : br.bifurcations.back().kind + " (the orbit past it is too degenerate to continue)";
-      return br;
+      return Finish(br, p);
     }
   }
   br.end = "max points";
-  return br;
+  return Finish(br, p);
 }
 
 }  // namespace vibro

@@ -89,7 +89,7 @@ void TangentTracker::OnReset(const Reset& r) {
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
   // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = cᵀX − x0 (docs/model.md §5.6).
   const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
-    const double denom = c.dot(r.V_before);
+    const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;
     if (!(std::abs(denom) > 1e-300)) {
       singular_ = true;
       return;

@@ -364,6 +364,9 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     for (const auto& b : branch.bifurcations)
       fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
     fmt::print("end          {}\n", branch.end);
+    if (branch.quad_evaluations > 0)
+      fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
+                 "leaves undetermined)\n", branch.quad_evaluations);
   }
   return ExitCode(status);
 }

@@ -213,7 +213,7 @@ template <class S>
 void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb) {
   if (opt_.observers.empty()) return;
   const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
-                0.0, 0.0};
+                0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(m_.ContactVelocity(Vb))};
   for (auto* o : opt_.observers) o->OnReset(r);
 }
 

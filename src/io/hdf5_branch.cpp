@@ -98,7 +98,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   col("impact_v_after", iva);
   t.strings.emplace_back("events", events);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
-  t.integers = {{"period", b.period}};
+  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
   WriteTable("/branch", t);
 
   H5Table bt;

@@ -177,6 +177,7 @@ std::string BranchJson(const Branch& b) {
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["bifurcations"] = bif;
   j["end"] = b.end;
+  j["quad_evaluations"] = b.quad_evaluations;
   return j.dump();
 }
 
