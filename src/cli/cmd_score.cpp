@@ -12,7 +12,6 @@
 
 namespace {
 
-constexpr int kExitNumerical = 3;
 
 struct EventLog final : vibro::Observer {
   std::vector<vibro::Event> events;

@@ -14,7 +14,6 @@
 
 namespace {
 
-constexpr int kExitDisagree = 4;
 
 vibro::H5Table ValidationTable(const std::vector<vibro::ClaimedPoint>& claims,
                                const std::vector<vibro::PointCheck>& checks) {
@@ -108,7 +107,7 @@ int RunValidate(const ValidateArgs& a) {
   }
   if (!problems.empty()) throw vibro::InputError(problems);
   std::unique_ptr<vibro::Hdf5Store> store;
-  if (!a.out.empty()) store = vibro::Hdf5Store::Create(a.out, HeaderOf(loaded, vibro::System(loaded.scene)));
+  if (!a.out.empty()) store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, vibro::System(loaded.scene)));
 
   vibro::CheckTolerances tol;
   tol.distance = a.tolerance;
