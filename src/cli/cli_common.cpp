@@ -19,10 +19,3 @@ int ExitCode(vibro::RunStatus s) {
   }
   return kExitInternal;
 }
-
-std::string NotANumericKey(const std::string& option, const std::string& key) {
-  const std::string near = vibro::NearestSceneKey(key);
-  if (!near.empty() && near != key) return fmt::format("{} {}: not a scene key; did you mean {}?", option, key, near);
-  return fmt::format("{} {}: not a numeric key of the scene (give it in the scene or with --set {}=VALUE)",
-                     option, key, key);
-}

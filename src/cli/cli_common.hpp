@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/poincare.hpp"
@@ -32,7 +33,7 @@ int ExitCode(vibro::RunStatus s);
 // are not printed).
 void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""));
 // The message for a --param KEY the scene has no number at, with the nearest known key.
-std::string NotANumericKey(const std::string& option, const std::string& key);
+using vibro::frontend::NotANumericKey;
 
 // `vibro model SCENE` (cmd_model.cpp).
 int RunModel(const std::string& path, const std::vector<std::string>& sets, bool json);
@@ -57,10 +58,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
 
 // `vibro partition SCENE --params KEY1,KEY2 ...` (cmd_partition.cpp).
 struct PartitionArgs {
-  std::vector<std::string> params;
-  std::vector<double> range1, range2, levels;
-  int steps1 = 20, period = 0, threads = 0;
-  std::optional<double> from2;
+  vibro::frontend::PartitionSpec spec;  // the checks and the request: frontend/commands.hpp
   std::string out;
 };
 int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,

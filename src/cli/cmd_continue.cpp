@@ -26,7 +26,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     if (pt.param != key)
       throw vibro::InputError({fmt::format("--from {}: the branch varies {}, not --param {}", restart_file,
                                            pt.param, key)});
-    sets.push_back(fmt::format("{}={:.17g}", key, pt.value));
+    sets.push_back(vibro::frontend::Assignment(key, pt.value));
     orbit.start = vibro::InitialOverride{pt.section_time, pt.X, pt.V};
     orbit.transient_periods = 0;
     orbit.period = pt.period;

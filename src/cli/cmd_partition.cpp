@@ -1,5 +1,6 @@
 // `vibro partition SCENE --params KEY1,KEY2`: curves of constant sticking fraction in a
-// parameter plane (docs/orbits.md).
+// parameter plane (docs/orbits.md). The checks and the request are frontend/commands.hpp's,
+// shared with Python's vibro.partition.
 #include <algorithm>
 #include <memory>
 #include <mutex>
@@ -9,6 +10,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
+#include "frontend/commands.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
@@ -17,53 +19,21 @@
 
 int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
                  const PartitionArgs& a) {
-  const auto loaded = vibro::LoadScene(path, sets);
-  std::vector<std::string> problems;
-  if (a.params.size() != 2) problems.push_back("--params: expected KEY1,KEY2");
-  if (a.range1.size() != 2 || !(a.range1[0] < a.range1[1]))
-    problems.push_back("--range1: expected A,B with A < B");
-  if (a.range2.size() != 2 || !(a.range2[0] < a.range2[1]))
-    problems.push_back("--range2: expected C,D with C < D");
-  if (a.steps1 < 1) problems.push_back("--steps1: expected N ≥ 1");
-  if (a.levels.empty()) problems.push_back("--sticking-fraction: expected S1,S2,... in (0, 1)");
-  for (double s : a.levels)
-    if (!(s > 0 && s < 1)) problems.push_back(fmt::format("--sticking-fraction {}: not in (0, 1)", s));
-  std::optional<double> start2 = a.from2;
-  if (a.params.size() == 2) {
-    for (const auto& k : a.params)
-      if (!vibro::SceneNumber(loaded.text_as_run, k))
-        problems.push_back(NotANumericKey("--params", k));
-    if (!start2) start2 = vibro::SceneNumber(loaded.text_as_run, a.params[1]);
-  }
-  if (start2 && a.range2.size() == 2 && !(*start2 >= a.range2[0] && *start2 <= a.range2[1]))
-    problems.push_back(fmt::format("--from2 {}: outside --range2", *start2));
-  if (!problems.empty()) throw vibro::InputError(problems);
-  vibro::PartitionRequest req;
+  const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
+  const auto loaded = origin.Load();
   // Progress: columns started (each column asks for scenes at its own value of KEY1).
   vibro::cli::Progress progress("columns", json);
   std::mutex seen_mutex;
   std::vector<double> seen;
-  req.scene_at = [&](double v1, double v2) {
-    if (progress.active()) {
-      std::lock_guard<std::mutex> lock(seen_mutex);
-      if (std::find(seen.begin(), seen.end(), v1) == seen.end()) seen.push_back(v1);
-      progress.Update(static_cast<long long>(seen.size()) - 1, a.steps1 + 1LL);
-    }
-    std::vector<std::string> s = sets;
-    s.push_back(fmt::format("{}={:.17g}", a.params[0], v1));
-    return vibro::frontend::SceneWith(path, s, a.params[1], v2);
-  };
-  for (int i = 0; i <= a.steps1; ++i)
-    req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * i / a.steps1);
-  // The corners of --range1 at the start value must be valid scenes (bad input, exit 2, before
-  // anything is written); values of KEY2 outside its valid range just end a column's branch.
-  for (double v1 : {a.range1[0], a.range1[1]}) req.scene_at(v1, *start2);
-  req.start2 = *start2;
-  req.lo2 = a.range2[0];
-  req.hi2 = a.range2[1];
-  req.levels = a.levels;
-  req.orbit.period = a.period;
-  req.threads = a.threads;
+  auto req = vibro::frontend::PartitionRequestFor(origin, loaded, a.spec, vibro::frontend::Naming::kCli,
+                                                  [&](double v1) {
+                                                    if (!progress.active()) return;
+                                                    std::lock_guard<std::mutex> lock(seen_mutex);
+                                                    if (std::find(seen.begin(), seen.end(), v1) == seen.end())
+                                                      seen.push_back(v1);
+                                                    progress.Update(static_cast<long long>(seen.size()) - 1,
+                                                                    a.spec.steps1 + 1LL);
+                                                  });
   req.stop_requested = &vibro::cli::StopFlag();
   const vibro::System sys(loaded.scene);
   std::unique_ptr<vibro::Hdf5Store> store;
@@ -72,21 +42,18 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
   const bool interrupted = vibro::cli::StopRequested();
   if (store) {
     const vibro::cli::FinalWrite writing;
-    store->WritePartition(a.params[0], a.params[1], a.levels, columns);
-    vibro::RunResult r;
-    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    store->Finish(r, vibro::frontend::NoAttractor());
+    vibro::frontend::FinishPartition(*store, a.spec, columns, interrupted);
     store.reset();
   }
+  const auto& keys = a.spec.params;
   if (json) {
-    fmt::print("{}\n", vibro::PartitionJson(a.params[0], a.params[1], a.levels, columns));
+    fmt::print("{}\n", vibro::PartitionJson(keys[0], keys[1], a.spec.levels, columns));
   } else {
     for (const auto& c : columns) {
-      fmt::print("{} = {:.10g}: {}\n", a.params[0], c.value1, c.status);
+      fmt::print("{} = {:.10g}: {}\n", keys[0], c.value1, c.status);
       for (const auto& x : c.crossings)
-        fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, a.params[1], x.value);
-      for (const auto& b : c.bifurcations)
-        fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, a.params[1], b.value);
+        fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, keys[1], x.value);
+      for (const auto& b : c.bifurcations) fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, keys[1], b.value);
     }
   }
   return interrupted ? kExitInterrupted : 0;

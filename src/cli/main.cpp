@@ -129,15 +129,15 @@ int main(int argc, char** argv) {
   add_scene_options(partition);
   PartitionArgs part;
   double part_from2 = 0;
-  partition->add_option("--params", part.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
-  partition->add_option("--range1", part.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--steps1", part.steps1, "steps of KEY1 (default 20: 21 columns)")->check(CLI::Range(1, 1 << 16));
-  partition->add_option("--range2", part.range2, "C,D: range of KEY2 (each column is continued in it)")->check(kFinite)
+  partition->add_option("--params", part.spec.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
+  partition->add_option("--range1", part.spec.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
+  partition->add_option("--steps1", part.spec.steps1, "steps of KEY1 (default 20: 21 columns)")->check(CLI::Range(1, 1 << 16));
+  partition->add_option("--range2", part.spec.range2, "C,D: range of KEY2 (each column is continued in it)")->check(kFinite)
       ->delimiter(',')->required();
   auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)")->check(kFinite);
-  partition->add_option("--sticking-fraction", part.levels, "S1,S2,...: levels to trace")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--period", part.period, "period of the sticking orbits (default: from a transient)")->check(CLI::Range(0, 4096));
-  partition->add_option("--threads", part.threads, "threads (default: all cores)")->check(CLI::Range(0, 4096));
+  partition->add_option("--sticking-fraction", part.spec.levels, "S1,S2,...: levels to trace")->check(kFinite)->delimiter(',')->required();
+  partition->add_option("--period", part.spec.period, "period of the sticking orbits (default: from a transient)")->check(CLI::Range(0, 4096));
+  partition->add_option("--threads", part.spec.threads, "threads (default: all cores)")->check(CLI::Range(0, 4096));
   partition->add_option("--out", part.out, "write the partition to HDF5");
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
   add_scene_options(sweep);
@@ -265,7 +265,7 @@ int main(int argc, char** argv) {
     if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
     if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
     if (*partition) {
-      if (*from2_opt) part.from2 = part_from2;
+      if (*from2_opt) part.spec.from2 = part_from2;
       return RunPartition(scene_path, sets, json, part);
     }
     if (*cont) {
