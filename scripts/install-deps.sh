@@ -9,6 +9,7 @@ packages=(
   libopenmpi-dev openmpi-bin
   libboost-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
+  jupyter-nbconvert python3-ipykernel python3-nbformat python3-nbclient
   clang libclang-rt-14-dev
 )
 missing=()

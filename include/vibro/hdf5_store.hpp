@@ -1,6 +1,7 @@
 // HDF5 trajectory store (docs/output.md): an Observer that streams events, dense samples and the
-// stroboscopic section to a file as a run goes, crash-safe and resumable. The only file that
-// includes hdf5.h is src/io/hdf5_store.cpp.
+// stroboscopic section to a file as a run goes, crash-safe and resumable. The HDF5 C API
+// is included by src/io/h5_file.cpp alone (a small RAII wrapper); each record kind has its own
+// src/io/hdf5_*.cpp.
 //
 // Crash safety: rows are buffered in memory and written, with the latest checkpoint, at flushes
 // (every `flush_interval` seconds of wall time and at the end). Between flushes nothing touches

@@ -1,5 +1,5 @@
 // The extension module vibro._vibro: the only file that includes pybind11. It runs each command
-// with the same library calls as the command line (src/cli/main.cpp, src/frontend/) and returns
+// with the same library calls as the command line (src/cli/cmd_*.cpp, src/frontend/) and returns
 // the same JSON text as `--json` (src/io/summary_json.cpp), which python/vibro/__init__.py turns
 // into dicts and numpy arrays.
 //
@@ -15,6 +15,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -23,6 +24,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
@@ -343,6 +345,60 @@ std::string Check(const PyScene& s) {
 
 std::string Info(const std::string& path) { return vibro::StoredRunJson(vibro::ReadStoredRun(path)); }
 
+// vibro validate: a branch from another tool, point by point (frontend/commands.hpp).
+std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::string& param,
+                                      const std::string& kind, int period, double tolerance,
+                                      double sticking_tolerance, const std::string& out, bool handle_sigint) {
+  const vibro::frontend::ValidationSpec spec{csv, param, KindOf(kind), period, tolerance, sticking_tolerance};
+  const auto job = vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, vibro::frontend::Naming::kPython);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
+  py::gil_scoped_release release;
+  SigintGuard guard(handle_sigint);
+  const auto result = vibro::frontend::RunValidation(job, spec, guard.flag());
+  if (store) vibro::frontend::FinishValidation(*store, job, result);
+  return {vibro::ValidationJson(result.checks), result.interrupted};
+}
+
+// vibro score: another simulator's events against vibro's run (frontend/commands.hpp). Returns
+// the JSON, whether it was interrupted, and vibro's own run status and message.
+std::tuple<std::string, bool, std::string, std::string> Score(const PyScene& s, const std::string& csv,
+                                                              double window, double tolerance, bool handle_sigint) {
+  py::gil_scoped_release release;
+  SigintGuard guard(handle_sigint);
+  const auto r = vibro::frontend::ScoreEventsCsv(s.loaded, csv, window, tolerance, guard.flag(),
+                                                 vibro::frontend::Naming::kPython);
+  return {vibro::ScoreJson(r.report, r.scene), r.run.status == vibro::RunStatus::kInterrupted,
+          vibro::ToString(r.run.status), r.run.message};
+}
+
+// vibro partition: curves of constant sticking fraction in a parameter plane.
+std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<std::string>& params,
+                                            const std::vector<double>& range1, const std::vector<double>& range2,
+                                            const std::vector<double>& levels, int steps1,
+                                            std::optional<double> from2, int period, int threads,
+                                            const std::string& out, bool handle_sigint) {
+  vibro::frontend::PartitionSpec spec;
+  spec.params = params;
+  spec.range1 = range1;
+  spec.range2 = range2;
+  spec.levels = levels;
+  spec.steps1 = steps1;
+  spec.from2 = from2;
+  spec.period = period;
+  spec.threads = threads;
+  auto req = vibro::frontend::PartitionRequestFor(s.origin, s.loaded, spec, vibro::frontend::Naming::kPython);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
+  py::gil_scoped_release release;
+  SigintGuard guard(handle_sigint);
+  req.stop_requested = guard.flag();
+  const auto columns = vibro::Partition(req);
+  const bool interrupted = guard.interrupted();
+  if (store) vibro::frontend::FinishPartition(*store, spec, columns, interrupted);
+  return {vibro::PartitionJson(params[0], params[1], levels, columns), interrupted};
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_vibro, m) {
@@ -384,4 +440,7 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("sweep", &SweepScene);
   m.def("check", &Check);
   m.def("info", &Info);
+  m.def("validate", &Validate);
+  m.def("score", &Score);
+  m.def("partition", &PartitionPlane);
 }

@@ -26,8 +26,9 @@ EVENT_KINDS = {1: "impact", 2: "accumulation", 3: "stick", 4: "release", 5: "gra
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
-__all__ = ["Scene", "SimulationResult", "load_scene", "model", "simulate", "orbit", "continue_",
-           "attractors", "basin", "sweep", "check", "info", "EVENT_KINDS", "MODES"]
+__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "continue_",
+           "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
+           "EVENT_KINDS", "MODES"]
 
 
 def _toml_value(value):
@@ -272,3 +273,138 @@ def check(scene):
 def info(path):
     """What a vibro HDF5 file holds (``vibro info --json``)."""
     return _json.loads(_vibro.info(str(path)))
+
+
+def _records(rows, fields):
+    """A structured array from a list of dicts: fields (name, dtype, null) in order, None → null."""
+    a = _np.empty(len(rows), dtype=[(name, dtype) for name, dtype, _ in fields])
+    for i, r in enumerate(rows):
+        a[i] = tuple(null if r.get(name) is None else r[name] for name, _, null in fields)
+    return a
+
+
+def _text_width(rows, name):
+    return "U%d" % max([1] + [len(r.get(name) or "") for r in rows])
+
+
+def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticking_tolerance=1e-6, out=None,
+             force=False):
+    """Confirms or refutes, point by point, a branch of periodic orbits computed by another tool
+    (``vibro validate --json``). ``branch`` is the CSV file (value, time, displacement_1..n,
+    velocity_1..n[, period, stable, sticking_fraction]) and ``param`` the scene key its value column
+    sets. Besides the keys of the JSON, the dict holds ``table``: a structured array with one row per
+    point (value, verdict, distance, period (−1: none), stable (−1: none), sticking_fraction,
+    simulated_distance; NaN for null floats)."""
+    _invoke("validate", scene, branch=str(branch), param=param, kind=kind, period=period, tolerance=tolerance,
+            sticking_tolerance=sticking_tolerance, out=out, force=force)
+    text, interrupted = _vibro.validate(_scene(scene), str(branch), param, kind, int(period), float(tolerance),
+                                        float(sticking_tolerance), str(out) if out else "", _main_thread())
+    if interrupted:
+        raise _interrupted("validation", out)
+    d = _json.loads(text)
+    points = d["points"]
+    d["table"] = _records(points, [("value", "f8", _np.nan), ("verdict", _text_width(points, "verdict"), ""),
+                                   ("distance", "f8", _np.nan), ("period", "i4", -1), ("stable", "i1", -1),
+                                   ("sticking_fraction", "f8", _np.nan), ("simulated_distance", "f8", _np.nan)])
+    return d
+
+
+def score(scene, events, window=0.05, tolerance=1e-6):
+    """Scores another simulator's events against vibro's run of the scene (``vibro score --json``).
+    ``events`` is the CSV file (t, kind[, velocity]). Besides the keys of the JSON, the dict holds
+    ``table``: a structured array with one row per event kind (kind, theirs, ours, matched,
+    in_accumulation, max_time_error, mean_time_error, max_velocity_error (NaN: none)), and
+    ``vibro_run``: the status and message of vibro's own run ("ok" unless it stopped early, when
+    the command line exits 3)."""
+    _invoke("score", scene, events=str(events), window=window, tolerance=tolerance)
+    text, interrupted, status, message = _vibro.score(_scene(scene), str(events), float(window), float(tolerance),
+                                                      _main_thread())
+    if interrupted:
+        raise _interrupted("scoring run", None)
+    d = _json.loads(text)
+    kinds = d["kinds"]
+    d["table"] = _records(kinds, [("kind", _text_width(kinds, "kind"), ""), ("theirs", "i8", 0), ("ours", "i8", 0),
+                                  ("matched", "i8", 0), ("in_accumulation", "i8", 0),
+                                  ("max_time_error", "f8", _np.nan), ("mean_time_error", "f8", _np.nan),
+                                  ("max_velocity_error", "f8", _np.nan)])
+    d["vibro_run"] = {"status": status, "message": message}
+    return d
+
+
+def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2=None, period=0, threads=0,
+              out=None, force=False):
+    """Curves of constant sticking fraction in the plane of two scene keys, and the existence
+    boundaries of the sticking orbits (``vibro partition --json``). ``params`` = (KEY1, KEY2);
+    ``range1`` = (A, B) is split in ``steps1`` steps, each column being continued in KEY2 over
+    ``range2`` = (C, D) from ``from2`` (default: the scene's KEY2); ``sticking_fraction`` lists the
+    levels to trace. Besides the keys of the JSON, the dict holds ``crossings`` (value1, level,
+    value2) and ``boundaries`` (value1, kind, value2): structured arrays, one row per point."""
+    levels = [float(s) for s in (sticking_fraction if _np.ndim(sticking_fraction) else [sticking_fraction])]
+    _invoke("partition", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2),
+            sticking_fraction=tuple(levels), steps1=steps1, from2=from2, period=period, threads=threads, out=out,
+            force=force)
+    text, interrupted = _vibro.partition(_scene(scene), [str(p) for p in params], [float(v) for v in range1],
+                                         [float(v) for v in range2], levels, int(steps1),
+                                         None if from2 is None else float(from2), int(period), int(threads),
+                                         str(out) if out else "", _main_thread())
+    if interrupted:
+        raise _interrupted("partition", out)
+    d = _json.loads(text)
+    crossings = [{"value1": c["value1"], "level": x["level"], "value2": x["value"]}
+                 for c in d["columns"] for x in c["crossings"]]
+    boundaries = [{"value1": c["value1"], "kind": b["kind"], "value2": b["value"]}
+                  for c in d["columns"] for b in c["bifurcations"]]
+    d["crossings"] = _records(crossings, [("value1", "f8", _np.nan), ("level", "f8", _np.nan),
+                                          ("value2", "f8", _np.nan)])
+    d["boundaries"] = _records(boundaries, [("value1", "f8", _np.nan), ("kind", _text_width(boundaries, "kind"), ""),
+                                            ("value2", "f8", _np.nan)])
+    return d
+
+
+class Group(dict):
+    """A group of a vibro HDF5 file read into memory by :func:`read`: datasets as numpy arrays
+    (string datasets as arrays of ``str``), subgroups as ``Group``; ``attrs`` holds the attributes
+    (strings as ``str``, string arrays as lists of ``str``, scalars as Python numbers)."""
+
+    def __init__(self, name, items, attrs):
+        super().__init__(items)
+        self.name, self.attrs = name, attrs
+
+    def __repr__(self):
+        return f"vibro.Group({self.name!r}, {sorted(self)}, attrs={sorted(self.attrs)})"
+
+
+def _attr_value(v):
+    if isinstance(v, bytes):
+        return v.decode("utf-8")
+    if isinstance(v, _np.ndarray) and v.dtype.kind in "OS":
+        return [x.decode("utf-8") if isinstance(x, bytes) else str(x) for x in v.ravel()]
+    if isinstance(v, _np.generic):
+        return v.item()
+    return v
+
+
+def _dataset_value(d):
+    import h5py
+    if h5py.check_string_dtype(d.dtype) is not None:
+        # h5py 3 reads variable-length strings as bytes; .asstr() decodes them (UTF-8).
+        return _np.array(d.asstr()[()], dtype=str).reshape(d.shape)
+    return d[()]
+
+
+def read(path):
+    """Reads a whole vibro HDF5 file (docs/output.md) into memory with h5py: a :class:`Group` of the
+    root, e.g. ``read("run.h5")["events"]["t"]``, ``read("b.h5")["branch"]["events"]`` (an array of
+    ``str``, where h5py alone gives ``bytes``) and ``read("run.h5").attrs["scene"]``. Meant for the
+    result groups (branches, studies, sweeps, orbits); for long runs read ``/samples`` with h5py
+    directly, slice by slice."""
+    import h5py
+
+    def group(g):
+        items = {}
+        for k, v in g.items():
+            items[k] = group(v) if isinstance(v, h5py.Group) else _dataset_value(v)
+        return Group(g.name, items, {k: _attr_value(v) for k, v in g.attrs.items()})
+
+    with h5py.File(str(path), "r") as f:
+        return group(f)

@@ -1,17 +1,95 @@
-// What the command files of src/cli share (main.cpp holds the parsing; CLI11 stays there).
+// What the command files of src/cli share. main.cpp holds the parsing (CLI11 stays there: it
+// costs seconds of compile time per including file) and calls one Run<Command> per subcommand,
+// each in its cmd_<command>.cpp, with plain values and option structs.
+//
+// Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement
+// (check, validate) · 130 interrupted.
 #pragma once
 
+#include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
+#include "vibro/attractor.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/simulator.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
 
-// The header of an HDF5 output file for a scene as run, with the provenance of the invocation.
-using vibro::frontend::HeaderOf;
+inline constexpr int kExitInternal = 1;
+inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitNumerical = 3;
+inline constexpr int kExitDisagree = 4;  // check, validate: the methods or the claims disagree
+inline constexpr int kExitInterrupted = 130;
+
+// The exit code of a run's status.
+int ExitCode(vibro::RunStatus s);
+// Prints an attractor's summary; restitution NaN when unknown (then the velocities after impact
+// are not printed).
+void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""));
+// The message for a --param KEY the scene has no number at, with the nearest known key.
+using vibro::frontend::NotANumericKey;
+
+// `vibro model SCENE` (cmd_model.cpp).
+int RunModel(const std::string& path, const std::vector<std::string>& sets, bool json);
+
+// `vibro simulate SCENE [--out FILE [--resume]]` (cmd_simulate.cpp).
+int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
+                const std::string& out, bool resume);
+
+// `vibro orbit SCENE` (cmd_orbit.cpp).
+int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
+             const vibro::OrbitRequest& req, const std::string& out);
+
+// `vibro check SCENE [--precision quad]` (cmd_check.cpp). Exit 4 when the methods disagree.
+int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json, bool with_quad);
+
+// `vibro continue SCENE --param KEY --to B` (cmd_continue.cpp); restart_file/restart_point:
+// --from FILE --point K ("" and -1 for none).
+int RunContinue(const std::string& path, std::vector<std::string> sets, bool json,
+                const std::string& key, double to, double step, int max_points,
+                vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
+                long long restart_point);
+
+// `vibro partition SCENE --params KEY1,KEY2 ...` (cmd_partition.cpp).
+struct PartitionArgs {
+  vibro::frontend::PartitionSpec spec;  // the checks and the request: frontend/commands.hpp
+  std::string out;
+};
+int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
+                 const PartitionArgs& a);
+
+// `vibro attractors SCENE` and `vibro basin SCENE` (cmd_study.cpp).
+struct StudyArgs {
+  std::string x = "x_B", y = "v_B";
+  std::vector<double> x_range, y_range;
+  std::vector<int> grid{64, 64};
+  long long samples = 200;
+  unsigned long long seed = 1;
+  int threads = 0;
+  std::string out;
+  bool resume = false;
+  bool full_periods = false;
+};
+int RunStudyCommand(const std::string& path, const std::vector<std::string>& sets, bool json,
+                    const StudyArgs& args, bool basin);
+
+// `vibro sweep SCENE --param KEY --from A --to B` (cmd_sweep.cpp).
+int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool json,
+             const std::string& key, double from, double to, int steps, int record, bool one_way,
+             const std::string& out);
+
+// `vibro info FILE` (cmd_info.cpp).
+int RunInfo(const std::string& path, bool json);
+
+// `vibro plot FILE` (cmd_plot.cpp); options: the script's further options (--format ...).
+int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay,
+            const std::string& options);
 
 // `vibro validate SCENE BRANCH.csv --param KEY ...` (cmd_validate.cpp).
 struct ValidateArgs {

@@ -1,53 +1,25 @@
 // `vibro score SCENE EVENTS.csv`: another simulator's events against vibro's own run of the same
-// scene (docs/validation.md).
-#include <cmath>
-
+// scene (docs/validation.md). The run and the scoring are frontend/commands.hpp's, shared with
+// Python's vibro.score.
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
-#include "vibro/events_csv.hpp"
-#include "vibro/score.hpp"
-#include "vibro/simulator.hpp"
+#include "cli/stop_signals.hpp"
+#include "frontend/commands.hpp"
+#include "vibro/scene_file.hpp"
 #include "vibro/summary_json.hpp"
 
-namespace {
-
-constexpr int kExitNumerical = 3;
-
-struct EventLog final : vibro::Observer {
-  std::vector<vibro::Event> events;
-  void OnEvent(const vibro::Event& e) override { events.push_back(e); }
-};
-
-}  // namespace
-
 int RunScore(const ScoreArgs& a) {
-  std::vector<std::string> problems;
-  if (!(a.window > 0)) problems.push_back(fmt::format("--window {}: expected a positive number", a.window));
-  if (!(a.tolerance > 0)) problems.push_back(fmt::format("--tolerance {}: expected a positive number", a.tolerance));
-  if (!problems.empty()) throw vibro::InputError(problems);
   const auto loaded = vibro::LoadScene(a.scene, a.sets);
-  const auto theirs = vibro::ReadEventsCsv(a.csv);
-  vibro::Scene scene = loaded.scene;
-  const vibro::System sys(scene);
-  const double T = sys.period();
-  // Long enough to cover their last event.
-  const double span = theirs.back().t - scene.initial_time;
-  scene.run.periods = std::max<long long>(1, static_cast<long long>(std::ceil(span / T + a.window)) + 1);
-  scene.run.samples_per_period = 0;
-  EventLog log;
-  vibro::SimulationOptions opt;
-  opt.observers = {&log};
-  const auto run = vibro::Simulate(sys, scene, opt);
-  vibro::ScoreOptions so;
-  so.window = a.window;
-  so.tolerance = a.tolerance;
-  const auto rep = vibro::ScoreEvents(log.events, theirs, T, so);
+  const auto s = vibro::frontend::ScoreEventsCsv(loaded, a.csv, a.window, a.tolerance, &vibro::cli::StopFlag(),
+                                                 vibro::frontend::Naming::kCli);
+  const auto& rep = s.report;
   if (a.json) {
-    fmt::print("{}\n", vibro::ScoreJson(rep, scene));
+    fmt::print("{}\n", vibro::ScoreJson(rep, s.scene));
   } else {
     fmt::print("scene        {} (engine {}, chatter {}), T = {:.10g}, {} periods\n", a.scene,
-               vibro::ToString(scene.run.engine), vibro::ToString(scene.run.chatter), T, scene.run.periods);
+               vibro::ToString(s.scene.run.engine), vibro::ToString(s.scene.run.chatter), rep.period,
+               s.scene.run.periods);
     fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>14} {:>14} {:>14}\n", "kind", "theirs", "vibro", "matched",
                "in acc.", "max |dt|/T", "mean |dt|/T", "max |dv|/|v|");
     for (const auto& k : rep.kinds)
@@ -61,8 +33,9 @@ int RunScore(const ScoreArgs& a) {
     else
       fmt::print("no divergence: every event matched within {:g} T\n", a.tolerance);
   }
-  if (run.status != vibro::RunStatus::kOk) {
-    fmt::print(stderr, "vibro: vibro's own run stopped early: {}\n", run.message);
+  if (s.run.status == vibro::RunStatus::kInterrupted) return kExitInterrupted;
+  if (s.run.status != vibro::RunStatus::kOk) {
+    fmt::print(stderr, "vibro: vibro's own run stopped early: {}\n", s.run.message);
     return kExitNumerical;
   }
   return 0;

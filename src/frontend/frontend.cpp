@@ -18,6 +18,12 @@ LoadedScene SceneOrigin::Load(const std::vector<std::string>& more_sets) const {
   return text ? ParseScene(*text, source, all) : LoadScene(path, all);
 }
 
+std::string Assignment(const std::string& key, double value) {
+  std::string text = fmt::format("{}", value);  // fmt: the shortest form that reads back exactly
+  if (text.find_first_of(".eEn") == std::string::npos) text += ".0";  // "n": nan/inf (refused later)
+  return key + "=" + text;
+}
+
 Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value) {
   static thread_local std::string cached_key;
   static thread_local Scene cached;
@@ -38,7 +44,7 @@ Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value)
     const auto issues = Validate(s);
     if (issues.empty()) return s;
   }
-  return origin.Load({fmt::format("{}={:.17g}", key, value)}).scene;
+  return origin.Load({Assignment(key, value)}).scene;
 }
 
 Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,

@@ -26,6 +26,11 @@ struct SceneOrigin {
   LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
 };
 
+// The override "KEY=VALUE" with VALUE in its shortest round-trip form ("2.8", not
+// "2.7999999999999998"; ".0" added to integral values, which TOML would read as integers): the
+// value is exactly `value`, and the scene stored in an output reads as the user would write it.
+std::string Assignment(const std::string& key, double value);
+
 // The scene of `origin` with KEY=VALUE on top (continuation, partitions and sweeps). The scalar
 // keys of the excitation and the stop are set in a copy of the scene parsed once per thread, and
 // validated (a value outside a key's range throws as a parse would); other keys re-parse the

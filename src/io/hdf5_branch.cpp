@@ -1,5 +1,6 @@
 // Continuation branches in HDF5 (see include/vibro/hdf5_branch.hpp), through the store's
-// generic tables (hdf5.h stays in hdf5_store.cpp).
+// generic tables (hdf5_table.cpp), and partitions (/partition: continuation columns in a
+// parameter plane) through the HDF5 wrapper io/h5_file.hpp.
 #include "vibro/hdf5_branch.hpp"
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "io/hdf5_store_impl.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -141,6 +143,39 @@ StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {
   p.X = Eigen::Map<const Eigen::VectorXd>(X->data.data() + i * n, static_cast<Eigen::Index>(n));
   p.V = Eigen::Map<const Eigen::VectorXd>(V->data.data() + i * n, static_cast<Eigen::Index>(n));
   return p;
+}
+
+void Hdf5Store::WritePartition(const std::string& param1, const std::string& param2,
+                               const std::vector<double>& levels,
+                               const std::vector<PartitionColumn>& columns) {
+  const h5::Handle g = h5::CreateGroup(impl_->file.get(), "/partition");
+  h5::WriteString(g.get(), "param1", param1);
+  h5::WriteString(g.get(), "param2", param2);
+  h5::WriteDoubles(g.get(), "levels", levels);
+  std::vector<double> cv, xv1, xl, xv2, bv1, bv2;
+  std::vector<std::string> cs, bk;
+  for (const auto& c : columns) {
+    cv.push_back(c.value1);
+    cs.push_back(c.status);
+    for (const auto& x : c.crossings) {
+      xv1.push_back(c.value1);
+      xl.push_back(x.level);
+      xv2.push_back(x.value);
+    }
+    for (const auto& b : c.bifurcations) {
+      bv1.push_back(c.value1);
+      bv2.push_back(b.value);
+      bk.push_back(b.kind);
+    }
+  }
+  h5::WriteColumn(g.get(), "column_value1", cv);
+  h5::WriteStrings(g.get(), "column_status", cs);
+  h5::WriteColumn(g.get(), "crossing_value1", xv1);
+  h5::WriteColumn(g.get(), "crossing_level", xl);
+  h5::WriteColumn(g.get(), "crossing_value2", xv2);
+  h5::WriteColumn(g.get(), "boundary_value1", bv1);
+  h5::WriteColumn(g.get(), "boundary_value2", bv2);
+  h5::WriteStrings(g.get(), "boundary_kind", bk);
 }
 
 }  // namespace vibro

@@ -1,0 +1,96 @@
+// `vibro continue SCENE --param KEY --to B`: a branch of periodic orbits (docs/orbits.md).
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "cli/cli_common.hpp"
+#include "cli/progress.hpp"
+#include "cli/stop_signals.hpp"
+#include "vibro/continuation.hpp"
+#include "vibro/hdf5_branch.hpp"
+#include "vibro/hdf5_store.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/summary_json.hpp"
+#include "vibro/system.hpp"
+
+int RunContinue(const std::string& path, std::vector<std::string> sets, bool json,
+                const std::string& key, double to, double step, int max_points,
+                vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
+                long long restart_point) {
+  if (!restart_file.empty()) {
+    // Restart from a stored point: its parameter value, period and section state (Newton from
+    // there, no transient).
+    const auto pt = vibro::ReadBranchPoint(restart_file, restart_point);
+    if (pt.param != key)
+      throw vibro::InputError({fmt::format("--from {}: the branch varies {}, not --param {}", restart_file,
+                                           pt.param, key)});
+    sets.push_back(vibro::frontend::Assignment(key, pt.value));
+    orbit.start = vibro::InitialOverride{pt.section_time, pt.X, pt.V};
+    orbit.transient_periods = 0;
+    orbit.period = pt.period;
+  }
+  const auto loaded = vibro::LoadScene(path, sets);
+  const auto from = vibro::SceneNumber(loaded.text_as_run, key);
+  if (!from)
+    throw vibro::InputError({key.find('[') == std::string::npos
+                                 ? NotANumericKey("--param", key)
+                                 : fmt::format("--param {}: not a numeric entry of the scene (give the "
+                                               "array in the scene or with --set {}=[...])",
+                                               key, key.substr(0, key.find('[')))});
+  vibro::ContinuationRequest req;
+  req.scene_at = [&](double v) { return vibro::frontend::SceneWith(path, sets, key, v); };
+  req.from = *from;
+  req.to = to;
+  req.step = step;
+  req.max_points = max_points;
+  req.orbit = orbit;
+  req.stop_requested = &vibro::cli::StopFlag();
+  vibro::cli::Progress progress("continue", json);
+  if (progress.active())
+    req.progress = [&](size_t points, double value) {
+      progress.Update(static_cast<long long>(points), max_points, fmt::format("{} = {:.10g}", key, value));
+    };
+  const vibro::System sys(loaded.scene);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!out.empty()) store = vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys));  // fails early
+  auto branch = vibro::Continue(req);
+  branch.param = key;
+  // The file's status and the exit code say the same thing (docs/output.md).
+  const vibro::RunStatus status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted
+                                  : branch.status == "ok"        ? vibro::RunStatus::kOk
+                                                                 : vibro::RunStatus::kNumericalFailure;
+  if (store) {
+    const vibro::cli::FinalWrite writing;
+    store->WriteBranch(branch);
+    vibro::RunResult r;
+    r.status = status;
+    r.message = branch.end;
+    store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
+    store.reset();
+  }
+  if (branch.status == "no-orbit")
+    fmt::print(stderr, "vibro: try {}--period Q, or --from FILE.h5 --point K to start from a stored branch point\n",
+               orbit.kind == vibro::OrbitKind::kSticking   ? "--kind impact or --kind auto, "
+               : orbit.kind == vibro::OrbitKind::kImpact ? "--kind sticking or --kind auto, "
+                                                         : "--kind sticking|impact, ");
+  if (json) {
+    fmt::print("{}\n", vibro::BranchJson(branch));
+  } else {
+    fmt::print("{:>16} {:>12} {:>8} {:>12}  {}\n", key, "SP", "stable", "max|mu|", "events");
+    for (const auto& p : branch.points) {
+      double lead = 0;
+      for (const auto& m : p.multipliers) lead = std::max(lead, std::abs(m));
+      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}  {}\n", p.value,
+                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, p.signature);
+    }
+    for (const auto& b : branch.bifurcations)
+      fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
+    fmt::print("end          {}\n", branch.end);
+    if (branch.quad_evaluations > 0)
+      fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
+                 "leaves undetermined)\n", branch.quad_evaluations);
+  }
+  return ExitCode(status);
+}

@@ -1,0 +1,51 @@
+// `vibro model SCENE`: the structural model derived from a scene (docs/cli.md).
+#include <fmt/format.h>
+
+#include "cli/cli_common.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/summary_json.hpp"
+#include "vibro/system.hpp"
+
+namespace {
+
+std::string Vec(const Eigen::VectorXd& v) {
+  std::string s = "[";
+  for (Eigen::Index i = 0; i < v.size(); ++i) s += fmt::format("{}{:.10g}", i ? ", " : "", v[i]);
+  return s + "]";
+}
+
+}  // namespace
+
+int RunModel(const std::string& path, const std::vector<std::string>& sets, bool json) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  if (json) {
+    fmt::print("{}\n", vibro::ModelJson(sys));
+    return 0;
+  }
+  fmt::print("scene               {}{}\n", path,
+             loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
+  fmt::print("form                {}, {} mode(s) kept\n", sys.physical() ? "physical" : "modal",
+             sys.dof());
+  fmt::print("frequencies ω_i     {}\n", Vec(sys.omega()));
+  fmt::print("forcing T_A         {}\n", Vec(sys.forcing()));
+  fmt::print("contact T_B         {}\n", Vec(sys.contact()));
+  if (sys.damped()) fmt::print("damping ratios ζ_i  {}\n", Vec(sys.damping()));
+  fmt::print("s_A, s_B            {:.10g}, {:.10g}\n", sys.s_A(), sys.s_B());
+  fmt::print("constrained ω'_k    {}\n", Vec(sys.constrained().frequencies));
+  fmt::print("static flexibility  {:.10g}\n", sys.flexibility());
+  if (auto r = sys.static_reaction())
+    fmt::print("static reaction     {:.10g}\n", *r);
+  else
+    fmt::print("static reaction     none (clearance)\n");
+  fmt::print("stop x0, r          {:.10g}, {:.10g}\n", sys.stop(), sys.restitution());
+  fmt::print("excitation f, ω, T  {:.10g}, {:.10g}, {:.10g}\n", sys.amplitude(), sys.frequency(),
+             sys.period());
+  if (sys.physical()) {
+    for (int i = 0; i < sys.dof(); ++i)
+      fmt::print("mode shape ψ_{}{}     {}\n", i + 1,
+                 sys.contact_shape()[i] > 0 ? "" : " (node at B)",
+                 Vec(sys.mode_shapes().col(i)));
+  }
+  return 0;
+}

@@ -1,0 +1,56 @@
+// `vibro orbit SCENE`: a periodic orbit and its Floquet multipliers (docs/orbits.md).
+#include <fmt/format.h>
+
+#include "cli/cli_common.hpp"
+#include "cli/stop_signals.hpp"
+#include "cli/text_format.hpp"
+#include "vibro/hdf5_store.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/summary_json.hpp"
+#include "vibro/system.hpp"
+
+int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
+             const vibro::OrbitRequest& req, const std::string& out) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early
+  // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.
+  vibro::cli::DiscardOnStop(out);
+  const auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
+  vibro::cli::KeepOnStop();
+  const bool converged = orbit.status == "converged";
+  if (!out.empty() && converged) {
+    const vibro::cli::FinalWrite writing;
+    vibro::frontend::WriteOrbit(out, loaded, sys, orbit);
+  }
+  if (json) {
+    fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
+  } else {
+    fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
+    fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
+               orbit.newton_iterations, orbit.residual);
+    if (orbit.distance_from_start)
+      fmt::print("from start   distance {:.3g} ({})\n", *orbit.distance_from_start,
+                 req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)
+                                           : "Newton started at the start state");
+    PrintAttractor(orbit.summary, loaded.scene.restitution);
+    const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
+    fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
+                                     : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
+                                                                   : "-");
+    fmt::print("stable       {}\n", !converged ? "-" : orbit.stable ? "yes" : "no");
+  }
+  if (!converged) {
+    const bool sticking = req.kind == vibro::OrbitKind::kSticking, impact = req.kind == vibro::OrbitKind::kImpact;
+    std::string hint = "vibro: try ";
+    if (sticking && orbit.reached == "impact-periodic") hint += "--kind impact (the attractor has impacts and no sticking), ";
+    if (impact && orbit.reached == "sticking-periodic") hint += "--kind sticking (the attractor sticks), ";
+    hint += req.transient_periods > 0
+                ? "--guess PHASE[,VELOCITY], --period Q, or --transient 0 from a state on the orbit "
+                  "([initial], or --set initial.time=T --set initial.displacement=[...] --set initial.velocity=[...])"
+                : "--period Q, another start state, or --transient N to start Newton after N periods";
+    fmt::print(stderr, "{}\n", hint);
+  }
+  return converged ? 0 : kExitNumerical;
+}

@@ -1,0 +1,60 @@
+// `vibro partition SCENE --params KEY1,KEY2`: curves of constant sticking fraction in a
+// parameter plane (docs/orbits.md). The checks and the request are frontend/commands.hpp's,
+// shared with Python's vibro.partition.
+#include <algorithm>
+#include <memory>
+#include <mutex>
+
+#include <fmt/format.h>
+
+#include "cli/cli_common.hpp"
+#include "cli/progress.hpp"
+#include "cli/stop_signals.hpp"
+#include "frontend/commands.hpp"
+#include "vibro/continuation.hpp"
+#include "vibro/hdf5_store.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/summary_json.hpp"
+#include "vibro/system.hpp"
+
+int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
+                 const PartitionArgs& a) {
+  const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
+  const auto loaded = origin.Load();
+  // Progress: columns started (each column asks for scenes at its own value of KEY1).
+  vibro::cli::Progress progress("columns", json);
+  std::mutex seen_mutex;
+  std::vector<double> seen;
+  auto req = vibro::frontend::PartitionRequestFor(origin, loaded, a.spec, vibro::frontend::Naming::kCli,
+                                                  [&](double v1) {
+                                                    if (!progress.active()) return;
+                                                    std::lock_guard<std::mutex> lock(seen_mutex);
+                                                    if (std::find(seen.begin(), seen.end(), v1) == seen.end())
+                                                      seen.push_back(v1);
+                                                    progress.Update(static_cast<long long>(seen.size()) - 1,
+                                                                    a.spec.steps1 + 1LL);
+                                                  });
+  req.stop_requested = &vibro::cli::StopFlag();
+  const vibro::System sys(loaded.scene);
+  std::unique_ptr<vibro::Hdf5Store> store;
+  if (!a.out.empty()) store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, sys));  // fails early
+  const auto columns = vibro::Partition(req);
+  const bool interrupted = vibro::cli::StopRequested();
+  if (store) {
+    const vibro::cli::FinalWrite writing;
+    vibro::frontend::FinishPartition(*store, a.spec, columns, interrupted);
+    store.reset();
+  }
+  const auto& keys = a.spec.params;
+  if (json) {
+    fmt::print("{}\n", vibro::PartitionJson(keys[0], keys[1], a.spec.levels, columns));
+  } else {
+    for (const auto& c : columns) {
+      fmt::print("{} = {:.10g}: {}\n", keys[0], c.value1, c.status);
+      for (const auto& x : c.crossings)
+        fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, keys[1], x.value);
+      for (const auto& b : c.bifurcations) fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, keys[1], b.value);
+    }
+  }
+  return interrupted ? kExitInterrupted : 0;
+}

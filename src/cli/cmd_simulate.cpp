@@ -1,0 +1,95 @@
+// `vibro simulate SCENE [--out FILE.h5 [--resume]]`: one run and its attractor (docs/cli.md).
+#include <memory>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "cli/cli_common.hpp"
+#include "cli/progress.hpp"
+#include "cli/stop_signals.hpp"
+#include "vibro/attractor.hpp"
+#include "vibro/hdf5_store.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/simulator.hpp"
+#include "vibro/summary_json.hpp"
+#include "vibro/system.hpp"
+
+int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
+                const std::string& out, bool resume) {
+  const auto loaded = vibro::LoadScene(path, sets);
+  const vibro::System sys(loaded.scene);
+  vibro::AttractorRecorder recorder(sys, loaded.scene);
+  vibro::SimulationOptions options;
+  options.observers.push_back(&recorder);
+  options.stop_requested = &vibro::cli::StopFlag();
+
+  std::unique_ptr<vibro::Hdf5Store> store;
+  vibro::StoredRun stored;
+  if (resume && out.empty()) throw vibro::InputError({"--resume needs --out FILE.h5 (the file to continue)"});
+  if (!out.empty()) {
+    if (resume) {
+      store = vibro::Hdf5Store::Resume(out, vibro::frontend::HeaderOf(loaded, sys), stored);
+      options.resume_from = &*stored.checkpoint;
+      // Give the classification the history it would have had.
+      for (size_t i = 0; i < stored.tail_section_clocks.size(); ++i) {
+        const auto& c = stored.tail_section_clocks[i];
+        recorder.OnSection({c, loaded.scene.initial_time + static_cast<double>(c.period) * sys.period(),
+                            stored.tail_section_X[i], stored.tail_section_V[i],
+                            sys.ContactDisplacement(stored.tail_section_X[i]),
+                            stored.tail_section_modes[i]});
+      }
+      for (const auto& e : stored.tail_events) recorder.OnEvent(e);
+    } else {
+      store = vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys));
+    }
+    options.observers.push_back(store.get());
+  }
+
+  std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
+  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods,
+                                     stored.checkpoint ? stored.checkpoint->clock.period : 0);
+  if (progress->active()) options.observers.push_back(&periods);
+  const auto result = vibro::Simulate(sys, loaded.scene, options);
+  progress.reset();
+  const auto attractor = recorder.Classify();
+  if (store) {
+    const vibro::cli::FinalWrite writing;
+    store->Finish(result, attractor);
+    store.reset();
+  }
+
+  if (json) {
+    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor));
+  } else {
+    fmt::print("scene        {}{}\n", path,
+               loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
+    fmt::print("engine       {}, {} precision, chatter {}\n",
+               vibro::ToString(loaded.scene.run.engine),
+               vibro::ToString(loaded.scene.run.precision),
+               vibro::ToString(loaded.scene.run.chatter));
+    fmt::print("status       {}{}\n", vibro::ToString(result.status),
+               result.message.empty() ? "" : ": " + result.message);
+    fmt::print("t_end        {:.10g} ({} periods)\n", result.t_end, result.end.period);
+    fmt::print("events       {} impacts, {} accumulations, {} sticks, {} releases, {} grazings\n",
+               result.counts.impacts, result.counts.accumulations, result.counts.sticks,
+               result.counts.releases, result.counts.grazings);
+    if (result.chatter.accumulations_predicted + result.chatter.impacts_followed > 0)
+      fmt::print("chattering   {} accumulation points predicted (largest estimated error {:.2g} T, "
+                 "target {:.2g} T), {} impacts followed before a prediction was good enough\n",
+                 result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
+                 vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
+    PrintAttractor(attractor, loaded.scene.restitution);
+    if (loaded.scene.run.engine == vibro::Engine::kCvode)
+      fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "
+                 "{} re-initialisations\n",
+                 vibro::ToString(loaded.scene.run.method), "SUNDIALS 6.4", loaded.scene.run.rtol,
+                 loaded.scene.run.atol, result.solver.steps, result.solver.rhs_evals,
+                 result.solver.root_evals, result.solver.reinits);
+    if (store)
+      fmt::print("output       {}{} ({} flushes, {:.3f} s writing)\n", out, resume ? " (resumed)" : "",
+                 store->stats().flushes, store->stats().flush_seconds);
+  }
+  if (result.status != vibro::RunStatus::kOk)
+    fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);
+  return ExitCode(result.status);
+}

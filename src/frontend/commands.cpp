@@ -1,0 +1,254 @@
+// The commands validate, score and partition as the CLI and the Python module share them
+// (commands.hpp).
+#include "frontend/commands.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "vibro/branch_csv.hpp"
+#include "vibro/events_csv.hpp"
+#include "vibro/scene_file.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro::frontend {
+
+std::string OptionName(Naming naming, const std::string& cli_option) {
+  if (naming == Naming::kCli) return cli_option;
+  std::string name = cli_option.substr(cli_option.find_first_not_of('-'));
+  std::replace(name.begin(), name.end(), '-', '_');
+  return name;
+}
+
+std::string NotANumericKey(const std::string& option, const std::string& key) {
+  const std::string near = NearestSceneKey(key);
+  if (!near.empty() && near != key) return fmt::format("{} {}: not a scene key; did you mean {}?", option, key, near);
+  return fmt::format("{} {}: not a numeric key of the scene (give it in the scene or with --set {}=VALUE)",
+                     option, key, key);
+}
+
+// ---- validate ----
+
+namespace {
+
+H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
+                               const std::vector<PointCheck>& checks) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  const size_t N = checks.size();
+  size_t m = 1, n = 1;
+  for (const auto& c : checks) {
+    m = std::max(m, c.orbit.multipliers.size());
+    n = std::max(n, static_cast<size_t>(c.orbit.X.size()));
+  }
+  std::vector<double> value, distance, period, stable, sp, sim, t0, cp, cs, csp;
+  std::vector<double> mu(N * m * 2, kNaN), X(N * n, kNaN), V(N * n, kNaN);
+  std::vector<std::string> verdict, detail;
+  for (size_t i = 0; i < N; ++i) {
+    const auto& c = checks[i];
+    const auto& o = c.orbit;
+    const bool ok = o.status == "converged";
+    value.push_back(c.value);
+    verdict.push_back(c.verdict);
+    detail.push_back(c.detail);
+    distance.push_back(c.distance.value_or(kNaN));
+    period.push_back(ok ? o.summary.period.value_or(o.period) : kNaN);
+    stable.push_back(ok ? (o.stable ? 1 : 0) : kNaN);
+    sp.push_back(ok ? o.summary.sticking_fraction.value_or(kNaN) : kNaN);
+    sim.push_back(c.simulated_distance.value_or(kNaN));
+    t0.push_back(ok ? o.section_time : kNaN);
+    for (size_t k = 0; k < o.multipliers.size(); ++k) {
+      mu[(i * m + k) * 2] = o.multipliers[k].real();
+      mu[(i * m + k) * 2 + 1] = o.multipliers[k].imag();
+    }
+    for (Eigen::Index k = 0; ok && k < o.X.size(); ++k) {
+      X[i * n + static_cast<size_t>(k)] = o.X[k];
+      V[i * n + static_cast<size_t>(k)] = o.V[k];
+    }
+    cp.push_back(claims[i].period ? *claims[i].period : kNaN);
+    cs.push_back(claims[i].stable ? (*claims[i].stable ? 1.0 : 0.0) : kNaN);
+    csp.push_back(claims[i].sticking_fraction.value_or(kNaN));
+  }
+  H5Table t;
+  const auto col = [&](const char* name, const std::vector<double>& v) { t.arrays.push_back({name, {v.size()}, v}); };
+  col("value", value);
+  col("distance", distance);
+  col("period", period);
+  col("stable", stable);
+  col("sticking_fraction", sp);
+  col("simulated_distance", sim);
+  col("section_time", t0);
+  col("claimed_period", cp);
+  col("claimed_stable", cs);
+  col("claimed_sticking_fraction", csp);
+  t.arrays.push_back({"multipliers", {N, m, 2}, mu});
+  t.arrays.push_back({"X", {N, n}, X});
+  t.arrays.push_back({"V", {N, n}, V});
+  t.strings = {{"verdict", verdict}, {"detail", detail}};
+  return t;
+}
+
+}  // namespace
+
+ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& a,
+                                Naming naming) {
+  const auto opt = [&](const char* o) { return OptionName(naming, o); };
+  if (!SceneNumber(loaded.text_as_run, a.param)) {
+    const bool element = a.param.find('[') != std::string::npos;
+    const std::string key = element ? a.param.substr(0, a.param.find('[')) : a.param;
+    const std::string how = naming == Naming::kCli
+                                ? (element ? "--set " + key + "=[...] (the whole array)" : "--set " + key + "=VALUE")
+                                : (element ? "set={\"" + key + "\": [...]} (the whole array)"
+                                           : "set={\"" + key + "\": VALUE}");
+    throw InputError({fmt::format("{} {}: not a numeric key of the scene (give it in the scene or with {})",
+                                  opt("--param"), a.param, how)});
+  }
+  std::vector<std::string> problems;
+  if (!(a.tolerance > 0))
+    problems.push_back(fmt::format("{} {}: expected a positive number", opt("--tolerance"), a.tolerance));
+  if (!(a.sticking_tolerance > 0))
+    problems.push_back(
+        fmt::format("{} {}: expected a positive number", opt("--sticking-tolerance"), a.sticking_tolerance));
+  if (a.period < 0) problems.push_back(fmt::format("{} {}: expected Q ≥ 1", opt("--period"), a.period));
+  if (!problems.empty()) throw InputError(problems);
+  const int n = loaded.scene.physical ? static_cast<int>(loaded.scene.physical->mass.rows())
+                                      : static_cast<int>(loaded.scene.modal->frequencies.size());
+  ValidationJob job;
+  job.claims = ReadBranchCsv(a.csv, n);
+  // Every row's scene and state before anything is computed or written (bad input).
+  for (const auto& p : job.claims) {
+    try {
+      job.scenes.push_back(origin.Load({Assignment(a.param, p.value)}).scene);
+    } catch (const InputError& e) {
+      for (const auto& m : e.messages()) problems.push_back(fmt::format("{}:{}: value {}: {}", a.csv, p.line, p.value, m));
+      continue;
+    }
+    std::string why;
+    ClaimedStart(System(job.scenes.back()), job.scenes.back(), p, why);
+    if (!why.empty()) problems.push_back(fmt::format("{}:{}: {}", a.csv, p.line, why));
+  }
+  if (!problems.empty()) throw InputError(problems);
+  return job;
+}
+
+Validation RunValidation(const ValidationJob& job, const ValidationSpec& spec, const std::atomic<bool>* stop,
+                         const std::function<void(size_t, size_t)>& progress) {
+  CheckTolerances tol;
+  tol.distance = spec.tolerance;
+  tol.sticking_fraction = spec.sticking_tolerance;
+  Validation v;
+  for (size_t i = 0; i < job.claims.size(); ++i) {
+    if (stop && stop->load()) {
+      v.interrupted = true;
+      break;
+    }
+    v.checks.push_back(CheckPoint(job.scenes[i], job.claims[i], spec.kind, spec.period, tol));
+    if (v.checks.back().verdict != "confirmed") ++v.disagreements;
+    if (progress) progress(i + 1, job.claims.size());
+  }
+  return v;
+}
+
+void FinishValidation(Hdf5Store& store, const ValidationJob& job, const Validation& v) {
+  store.WriteTable("/validation", ValidationTable(job.claims, v.checks));
+  RunResult r;
+  r.status = v.interrupted ? RunStatus::kInterrupted : RunStatus::kOk;
+  r.message = v.interrupted ? fmt::format("interrupted after {} of {} points, {} disagree", v.checks.size(),
+                                          job.claims.size(), v.disagreements)
+                            : fmt::format("{} of {} points disagree", v.disagreements, v.checks.size());
+  store.Finish(r, Attractor{});
+}
+
+// ---- score ----
+
+namespace {
+struct EventLog final : Observer {
+  std::vector<Event> events;
+  void OnEvent(const Event& e) override { events.push_back(e); }
+};
+}  // namespace
+
+Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double window, double tolerance,
+                       const std::atomic<bool>* stop, Naming naming) {
+  std::vector<std::string> problems;
+  if (!(window > 0))
+    problems.push_back(fmt::format("{} {}: expected a positive number", OptionName(naming, "--window"), window));
+  if (!(tolerance > 0))
+    problems.push_back(fmt::format("{} {}: expected a positive number", OptionName(naming, "--tolerance"), tolerance));
+  if (!problems.empty()) throw InputError(problems);
+  const auto theirs = ReadEventsCsv(csv);
+  Scoring s;
+  s.scene = loaded.scene;
+  const System sys(s.scene);
+  const double T = sys.period();
+  // Long enough to cover their last event.
+  const double span = theirs.back().t - s.scene.initial_time;
+  s.scene.run.periods = std::max<long long>(1, static_cast<long long>(std::ceil(span / T + window)) + 1);
+  s.scene.run.samples_per_period = 0;
+  EventLog log;
+  SimulationOptions opt;
+  opt.observers = {&log};
+  opt.stop_requested = stop;
+  s.run = Simulate(sys, s.scene, opt);
+  ScoreOptions so;
+  so.window = window;
+  so.tolerance = tolerance;
+  s.report = ScoreEvents(log.events, theirs, T, so);
+  return s;
+}
+
+// ---- partition ----
+
+PartitionRequest PartitionRequestFor(const SceneOrigin& origin, const LoadedScene& loaded, const PartitionSpec& a,
+                                     Naming naming, std::function<void(double)> on_scene) {
+  const auto opt = [&](const char* o) { return OptionName(naming, o); };
+  std::vector<std::string> problems;
+  if (a.params.size() != 2) problems.push_back(opt("--params") + ": expected KEY1,KEY2");
+  if (a.range1.size() != 2 || !(a.range1[0] < a.range1[1]))
+    problems.push_back(opt("--range1") + ": expected A,B with A < B");
+  if (a.range2.size() != 2 || !(a.range2[0] < a.range2[1]))
+    problems.push_back(opt("--range2") + ": expected C,D with C < D");
+  if (a.steps1 < 1) problems.push_back(opt("--steps1") + ": expected N ≥ 1");
+  if (a.levels.empty()) problems.push_back(opt("--sticking-fraction") + ": expected S1,S2,... in (0, 1)");
+  for (double s : a.levels)
+    if (!(s > 0 && s < 1)) problems.push_back(fmt::format("{} {}: not in (0, 1)", opt("--sticking-fraction"), s));
+  std::optional<double> start2 = a.from2;
+  if (a.params.size() == 2) {
+    for (const auto& k : a.params)
+      if (!SceneNumber(loaded.text_as_run, k)) problems.push_back(NotANumericKey(opt("--params"), k));
+    if (!start2) start2 = SceneNumber(loaded.text_as_run, a.params[1]);
+  }
+  if (start2 && a.range2.size() == 2 && !(*start2 >= a.range2[0] && *start2 <= a.range2[1]))
+    problems.push_back(fmt::format("{} {}: outside {}", opt("--from2"), *start2, opt("--range2")));
+  if (!problems.empty()) throw InputError(problems);
+  PartitionRequest req;
+  req.scene_at = [origin, key1 = a.params[0], key2 = a.params[1], on_scene = std::move(on_scene)](double v1,
+                                                                                                    double v2) {
+    if (on_scene) on_scene(v1);
+    SceneOrigin at = origin;
+    at.sets.push_back(Assignment(key1, v1));
+    return SceneWith(at, key2, v2);
+  };
+  for (int i = 0; i <= a.steps1; ++i) req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * i / a.steps1);
+  // The corners of range1 at the start value must be valid scenes (bad input before anything is
+  // written); values of KEY2 outside its valid range just end a column's branch.
+  for (double v1 : {a.range1[0], a.range1[1]}) req.scene_at(v1, *start2);
+  req.start2 = *start2;
+  req.lo2 = a.range2[0];
+  req.hi2 = a.range2[1];
+  req.levels = a.levels;
+  req.orbit.period = a.period;
+  req.threads = a.threads;
+  return req;
+}
+
+void FinishPartition(Hdf5Store& store, const PartitionSpec& spec, const std::vector<PartitionColumn>& columns,
+                     bool interrupted) {
+  store.WritePartition(spec.params[0], spec.params[1], spec.levels, columns);
+  RunResult r;
+  r.status = interrupted ? RunStatus::kInterrupted : RunStatus::kOk;
+  store.Finish(r, NoAttractor());
+}
+
+}  // namespace vibro::frontend

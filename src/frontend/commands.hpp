@@ -1,0 +1,82 @@
+// The commands `validate`, `score` and `partition` as the command line (src/cli/cmd_*.cpp) and the
+// Python module (python/src/bindings.cpp) both run them: the checks of their options (every
+// problem in one InputError, the option named as the caller's users write it), the computation
+// with a stop flag, and what is written to an HDF5 output. Printing stays with the callers.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "frontend/frontend.hpp"
+#include "vibro/branch_check.hpp"
+#include "vibro/continuation.hpp"
+#include "vibro/hdf5_store.hpp"
+#include "vibro/score.hpp"
+#include "vibro/simulator.hpp"
+
+namespace vibro::frontend {
+
+// How options are named in messages: "--sticking-fraction" (command line) or "sticking_fraction"
+// (Python keyword arguments).
+enum class Naming { kCli, kPython };
+std::string OptionName(Naming naming, const std::string& cli_option);
+// The message for a KEY the scene has no number at, with the nearest known key.
+std::string NotANumericKey(const std::string& option, const std::string& key);
+
+// ---- validate: a branch of orbits from another tool, point by point (docs/validation.md) ----
+struct ValidationSpec {
+  std::string csv, param;  // the branch CSV and the scene key its value column sets
+  OrbitKind kind = OrbitKind::kAuto;
+  int period = 0;  // where a row claims none (0: the first return)
+  double tolerance = 1e-6, sticking_tolerance = 1e-6;
+};
+// The claimed points with the scene at each point's value, all checked before anything is
+// computed or written (InputError with csv:line for each bad row).
+struct ValidationJob {
+  std::vector<ClaimedPoint> claims;
+  std::vector<Scene> scenes;
+};
+ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& spec,
+                                Naming naming);
+struct Validation {
+  std::vector<PointCheck> checks;  // the points checked, in order (fewer when interrupted)
+  int disagreements = 0;
+  bool interrupted = false;
+};
+// Checks the points in order; `stop` is polled between points; progress(done, total) after each.
+Validation RunValidation(const ValidationJob& job, const ValidationSpec& spec, const std::atomic<bool>* stop,
+                         const std::function<void(size_t, size_t)>& progress = {});
+// Writes /validation (verdicts, vibro's orbits, the claims) and closes the run.
+void FinishValidation(Hdf5Store& store, const ValidationJob& job, const Validation& validation);
+
+// ---- score: another simulator's events against vibro's run of the same scene ----
+struct Scoring {
+  Scene scene;  // as run: long enough to cover their last event, no dense samples
+  ScoreReport report;
+  RunResult run;  // vibro's own run (status kInterrupted when stopped)
+};
+// Reads the events CSV, checks window and tolerance (> 0), runs the scene and scores.
+Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double window, double tolerance,
+                       const std::atomic<bool>* stop, Naming naming);
+
+// ---- partition: curves of constant sticking fraction in a parameter plane ----
+struct PartitionSpec {
+  std::vector<std::string> params;             // KEY1, KEY2
+  std::vector<double> range1, range2, levels;  // A,B of KEY1; C,D of KEY2; sticking fractions
+  int steps1 = 20, period = 0, threads = 0;
+  std::optional<double> from2;  // where each column starts (default: the scene's KEY2)
+};
+// Checks `spec` against the scene and builds the request: columns at KEY1 = A + (B − A)·i/steps1,
+// each continued in KEY2 over [C, D]. on_scene(value1) is called (from any thread) whenever a
+// column asks for a scene. The corners of range1 at the start value must be valid scenes.
+PartitionRequest PartitionRequestFor(const SceneOrigin& origin, const LoadedScene& loaded,
+                                     const PartitionSpec& spec, Naming naming,
+                                     std::function<void(double)> on_scene = {});
+// Writes /partition and closes the run (status interrupted or ok).
+void FinishPartition(Hdf5Store& store, const PartitionSpec& spec, const std::vector<PartitionColumn>& columns,
+                     bool interrupted);
+
+}  // namespace vibro::frontend

@@ -1,0 +1,503 @@
+// The HDF5 C API behind h5_file.hpp. The one file of vibro that includes it.
+#include "io/h5_file.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <stdexcept>
+#include <type_traits>
+
+#include <fmt/format.h>
+#include <hdf5.h>
+
+namespace vibro::h5 {
+
+static_assert(std::is_same_v<hid_t, Id>, "h5::Id must be hid_t (HDF5 ≥ 1.10)");
+static_assert(std::is_same_v<hsize_t, Size> || sizeof(hsize_t) == sizeof(Size), "h5::Size must be hsize_t");
+static_assert(std::is_same_v<herr_t, int>, "h5::Handle::Closer must match herr_t (*)(hid_t)");
+
+namespace {
+
+constexpr hsize_t kChunkRows = 4096;
+constexpr int kDeflate = 4;
+
+hid_t Check(hid_t id, const std::string& what) {
+  if (id < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+  return id;
+}
+void CheckStatus(herr_t status, const std::string& what) {
+  if (status < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+}
+
+Handle StringMemType() {
+  Handle t(H5Tcopy(H5T_C_S1), H5Tclose);
+  H5Tset_size(t.get(), H5T_VARIABLE);
+  H5Tset_cset(t.get(), H5T_CSET_UTF8);
+  return t;
+}
+
+Handle FileAccess() {
+  Handle fapl(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  // No metadata reaches the disk between flushes (see vibro/hdf5_store.hpp).
+  H5AC_cache_config_t cfg;
+  cfg.version = H5AC__CURR_CACHE_CONFIG_VERSION;
+  H5Pget_mdc_config(fapl.get(), &cfg);
+  cfg.incr_mode = H5C_incr__off;
+  cfg.flash_incr_mode = H5C_flash_incr__off;
+  cfg.decr_mode = H5C_decr__off;
+  cfg.evictions_enabled = 0;
+  cfg.max_size = 128 * 1024 * 1024;
+  cfg.min_size = 1024 * 1024;
+  cfg.set_initial_size = 1;
+  cfg.initial_size = 16 * 1024 * 1024;
+  CheckStatus(H5Pset_mdc_config(fapl.get(), &cfg), "metadata cache configuration");
+  // No file lock: h5py users may watch a long run as it goes (the file is consistent as of the
+  // last flush; a read that meets a flush in progress may fail and should be retried).
+  H5Pset_file_locking(fapl.get(), 0, 1);
+  return fapl;
+}
+
+}  // namespace
+
+// ---- Types ----
+
+Type::Type(Handle owned, size_t size) : owned_(std::move(owned)), size_(size) {
+  file_ = memory_ = owned_.get();
+}
+Type Type::F64() { return {H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 8}; }
+Type Type::I64() { return {H5T_STD_I64LE, H5T_NATIVE_INT64, 8}; }
+Type Type::I32() { return {H5T_STD_I32LE, H5T_NATIVE_INT32, 4}; }
+Type Type::I8() { return {H5T_STD_I8LE, H5T_NATIVE_INT8, 1}; }
+Type Type::U8() { return {H5T_STD_U8LE, H5T_NATIVE_UINT8, 1}; }
+Type Type::String() { return {StringMemType(), sizeof(char*)}; }
+Type Type::Bool() { return Enum8({{"FALSE", 0}, {"TRUE", 1}}); }
+Type Type::Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members) {
+  Handle t(H5Tenum_create(H5T_NATIVE_INT8), H5Tclose);
+  for (const auto& [name, value] : members) H5Tenum_insert(t.get(), name.c_str(), &value);
+  return {std::move(t), 1};
+}
+
+void Silence() {
+  static const bool once = [] {
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+    return true;
+  }();
+  (void)once;
+}
+
+// ---- Files ----
+
+bool IsHdf5(const std::string& path) { return H5Fis_hdf5(path.c_str()) > 0; }
+
+Handle CreateFile(const std::string& path) {
+  Handle fcpl(H5Pcreate(H5P_FILE_CREATE), H5Pclose);
+  // Freed space is never reused: a flushed file never points at overwritten bytes.
+  CheckStatus(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "file space");
+  Handle fapl = FileAccess();
+  errno = 0;
+  Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
+  if (!file) throw std::runtime_error(errno != 0 ? std::strerror(errno) : "HDF5 could not create it");
+  return file;
+}
+
+Handle OpenFile(const std::string& path, bool write) {
+  if (!write) return Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  Handle fapl = FileAccess();
+  return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
+}
+
+void FlushFile(Id file) { CheckStatus(H5Fflush(file, H5F_SCOPE_LOCAL), "flush"); }
+
+// ---- Links and groups ----
+
+bool Exists(Id loc, const std::string& path) { return H5Lexists(loc, path.c_str(), H5P_DEFAULT) > 0; }
+
+void DeleteLink(Id loc, const std::string& name) {
+  if (Exists(loc, name)) H5Ldelete(loc, name.c_str(), H5P_DEFAULT);
+}
+
+Handle CreateGroup(Id loc, const std::string& name) {
+  return Handle(Check(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), name), H5Gclose);
+}
+
+Handle OpenGroup(Id loc, const std::string& name) {
+  return Handle(Check(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Gclose);
+}
+
+Handle TryOpenGroup(Id loc, const std::string& name) {
+  return Handle(H5Gopen2(loc, name.c_str(), H5P_DEFAULT), H5Gclose);
+}
+
+Handle OpenOrCreateGroup(Id loc, const std::string& name) {
+  return Exists(loc, name) ? OpenGroup(loc, name) : CreateGroup(loc, name);
+}
+
+std::vector<std::string> ChildGroups(Id loc) {
+  std::vector<std::string> names;
+  H5Literate(loc, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+             [](hid_t l, const char* name, const H5L_info_t*, void* out) -> herr_t {
+               Handle g(H5Gopen2(l, name, H5P_DEFAULT), H5Gclose);  // fails (silently) for a dataset
+               if (g) static_cast<std::vector<std::string>*>(out)->push_back(name);
+               return 0;
+             },
+             &names);
+  return names;
+}
+
+// ---- Attributes ----
+
+bool HasAttr(Id obj, const std::string& name) { return H5Aexists(obj, name.c_str()) > 0; }
+
+void DeleteAttr(Id obj, const std::string& name) {
+  if (HasAttr(obj, name)) H5Adelete(obj, name.c_str());
+}
+
+std::vector<std::string> AttrNames(Id obj) {
+  std::vector<std::string> names;
+  H5Aiterate2(obj, H5_INDEX_NAME, H5_ITER_INC, nullptr,
+              [](hid_t, const char* attr, const H5A_info_t*, void* data) -> herr_t {
+                static_cast<std::vector<std::string>*>(data)->emplace_back(attr);
+                return 0;
+              },
+              &names);
+  return names;
+}
+
+Class AttrClass(Id obj, const std::string& name) {
+  Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose);
+  if (!a) return Class::kOther;
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  switch (H5Tget_class(type.get())) {
+    case H5T_STRING: return Class::kString;
+    case H5T_INTEGER: return Class::kInteger;
+    case H5T_FLOAT: return Class::kFloat;
+    default: return Class::kOther;
+  }
+}
+
+namespace {
+
+// A new attribute `name` of `file_type` and the given shape (empty dims: scalar), replacing one.
+Handle NewAttr(Id obj, const std::string& name, hid_t file_type, const std::vector<hsize_t>& dims) {
+  DeleteAttr(obj, name);
+  Handle space(dims.empty() ? H5Screate(H5S_SCALAR)
+                            : H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr),
+               H5Sclose);
+  return Handle(Check(H5Acreate2(obj, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), name),
+                H5Aclose);
+}
+
+template <class T>
+void WriteScalar(Id obj, const std::string& name, T value, const Type& type) {
+  Handle a = NewAttr(obj, name, type.file(), {});
+  CheckStatus(H5Awrite(a.get(), type.memory(), &value), name);
+}
+
+template <class T>
+std::optional<T> ReadScalar(Id obj, const std::string& name, hid_t mem_type) {
+  if (!HasAttr(obj, name)) return std::nullopt;
+  Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  T v{};
+  CheckStatus(H5Aread(a.get(), mem_type, &v), name);
+  return v;
+}
+
+}  // namespace
+
+void WriteString(Id obj, const std::string& name, const std::string& value) {
+  const Type type = Type::String();
+  Handle a = NewAttr(obj, name, type.file(), {});
+  const char* p = value.c_str();
+  CheckStatus(H5Awrite(a.get(), type.memory(), &p), name);
+}
+
+void WriteDouble(Id obj, const std::string& name, double value) { WriteScalar(obj, name, value, Type::F64()); }
+
+void WriteInt(Id obj, const std::string& name, long long value) {
+  WriteScalar(obj, name, static_cast<std::int64_t>(value), Type::I64());
+}
+
+void WriteBool(Id obj, const std::string& name, bool value) {
+  WriteScalar(obj, name, static_cast<std::int8_t>(value ? 1 : 0), Type::Bool());
+}
+
+void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v, Size cols) {
+  const std::vector<hsize_t> dims =
+      cols > 1 ? std::vector<hsize_t>{v.size() / cols, cols} : std::vector<hsize_t>{v.size()};
+  Handle a = NewAttr(obj, name, H5T_IEEE_F64LE, dims);
+  if (!v.empty()) CheckStatus(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
+}
+
+void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v) {
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  const Type type = Type::String();
+  Handle a = NewAttr(obj, name, type.file(), {v.size()});
+  if (!v.empty()) CheckStatus(H5Awrite(a.get(), type.memory(), p.data()), name);
+}
+
+std::string ReadString(Id obj, const std::string& name) {
+  if (!HasAttr(obj, name)) return {};
+  Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  Handle type = StringMemType();
+  char* p = nullptr;
+  CheckStatus(H5Aread(a.get(), type.get(), &p), name);
+  std::string s = p ? p : "";
+  H5free_memory(p);
+  return s;
+}
+
+std::optional<std::int64_t> ReadInt(Id obj, const std::string& name) {
+  return ReadScalar<std::int64_t>(obj, name, H5T_NATIVE_INT64);
+}
+
+std::optional<double> ReadDouble(Id obj, const std::string& name) {
+  return ReadScalar<double>(obj, name, H5T_NATIVE_DOUBLE);
+}
+
+std::vector<double> ReadDoubles(Id obj, const std::string& name) {
+  if (!HasAttr(obj, name)) return {};
+  Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  std::vector<double> v(static_cast<size_t>(H5Sget_simple_extent_npoints(space.get())));
+  if (!v.empty()) CheckStatus(H5Aread(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
+  return v;
+}
+
+std::string AttrText(Id obj, const std::string& name) {
+  Handle a(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose);
+  if (!a) return "";
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  if (H5Tget_class(type.get()) == H5T_STRING) return ReadString(obj, name);
+  const auto n = H5Sget_simple_extent_npoints(space.get());
+  if (H5Sget_simple_extent_ndims(space.get()) > 0) return fmt::format("[{} values]", n);
+  double v = 0;
+  if (H5Aread(a.get(), H5T_NATIVE_DOUBLE, &v) < 0) return "";
+  return fmt::format("{}", v);
+}
+
+// ---- Small datasets ----
+
+void WriteDataset(Id loc, const std::string& name, const Type& type, const void* data,
+                  const std::vector<Size>& dims, const std::vector<Size>& chunk) {
+  const std::vector<hsize_t> d(dims.begin(), dims.end());
+  Handle space(H5Screate_simple(static_cast<int>(d.size()), d.data(), nullptr), H5Sclose);
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  if (!chunk.empty()) {
+    const std::vector<hsize_t> c(chunk.begin(), chunk.end());
+    H5Pset_chunk(dcpl.get(), static_cast<int>(c.size()), c.data());
+    H5Pset_deflate(dcpl.get(), kDeflate);
+  }
+  Handle ds(Check(H5Dcreate2(loc, name.c_str(), type.file(), space.get(), H5P_DEFAULT,
+                             chunk.empty() ? H5P_DEFAULT : dcpl.get(), H5P_DEFAULT),
+                  name),
+            H5Dclose);
+  if (!d.empty() && d[0] > 0)
+    CheckStatus(H5Dwrite(ds.get(), type.memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+}
+
+void WriteStrings(Id loc, const std::string& name, const std::vector<std::string>& v) {
+  std::vector<const char*> p;
+  for (const auto& x : v) p.push_back(x.c_str());
+  WriteDataset(loc, name, Type::String(), p.data(), {p.size()});
+}
+
+void WriteColumn(Id loc, const std::string& name, const std::vector<double>& v) {
+  WriteDataset(loc, name, Type::F64(), v.data(), {v.size()});
+}
+
+std::vector<std::string> DatasetNames(Id loc) {
+  std::vector<std::string> names;
+  H5G_info_t info;
+  CheckStatus(H5Gget_info(loc, &info), "group info");
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    char name[256];
+    H5Lget_name_by_idx(loc, ".", H5_INDEX_NAME, H5_ITER_INC, i, name, sizeof name, H5P_DEFAULT);
+    Handle d(H5Dopen2(loc, name, H5P_DEFAULT), H5Dclose);
+    if (d) names.emplace_back(name);
+  }
+  return names;
+}
+
+std::optional<std::vector<Size>> DatasetShape(Id loc, const std::string& name) {
+  if (!Exists(loc, name)) return std::nullopt;
+  Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!ds) return std::nullopt;
+  Handle space(H5Dget_space(ds.get()), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  std::vector<hsize_t> dims(static_cast<size_t>(std::max(rank, 0)));
+  H5Sget_simple_extent_dims(space.get(), dims.data(), nullptr);
+  return std::vector<Size>(dims.begin(), dims.end());
+}
+
+bool IsStringDataset(Id loc, const std::string& name) {
+  Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle type(H5Dget_type(d.get()), H5Tclose);
+  return H5Tget_class(type.get()) == H5T_STRING;
+}
+
+std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name) {
+  Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle space(H5Dget_space(d.get()), H5Sclose);
+  std::vector<double> v(static_cast<size_t>(H5Sget_simple_extent_npoints(space.get())));
+  if (!v.empty()) CheckStatus(H5Dread(d.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), name);
+  return v;
+}
+
+std::vector<std::string> ReadDatasetStrings(Id loc, const std::string& name) {
+  Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle space(H5Dget_space(d.get()), H5Sclose);
+  const auto n = static_cast<size_t>(H5Sget_simple_extent_npoints(space.get()));
+  Handle st = StringMemType();
+  std::vector<char*> p(n, nullptr);
+  if (n > 0) CheckStatus(H5Dread(d.get(), st.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), name);
+  std::vector<std::string> v;
+  for (char* x : p) {
+    v.emplace_back(x ? x : "");
+    H5free_memory(x);
+  }
+  return v;
+}
+
+// ---- Extendible tables ----
+
+Column::Column(Id group, const std::string& name, const Type& type, Size cols)
+    : mem_type_(H5Tcopy(type.memory()), H5Tclose), elem_size_(type.size()), name_(name), cols_(cols) {
+  const int rank = cols > 0 ? 2 : 1;
+  const hsize_t dims[2] = {0, cols}, maxdims[2] = {H5S_UNLIMITED, cols};
+  const hsize_t chunk[2] = {cols > 0 ? std::max<hsize_t>(64, kChunkRows / cols) : kChunkRows, cols};
+  Handle space(H5Screate_simple(rank, dims, maxdims), H5Sclose);
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose);
+  H5Pset_chunk(dcpl.get(), rank, chunk);
+  H5Pset_shuffle(dcpl.get());
+  H5Pset_deflate(dcpl.get(), kDeflate);
+  dset_ = Handle(Check(H5Dcreate2(group, name.c_str(), type.file(), space.get(), H5P_DEFAULT, dcpl.get(),
+                                  H5P_DEFAULT),
+                       name),
+                 H5Dclose);
+}
+
+Column Column::Open(Id group, const std::string& name, const Type& type, Size cols) {
+  Column c;
+  c.mem_type_ = Handle(H5Tcopy(type.memory()), H5Tclose);
+  c.elem_size_ = type.size();
+  c.name_ = name;
+  c.dset_ = Handle(Check(H5Dopen2(group, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle space(Check(H5Dget_space(c.dset_.get()), name), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank != (cols > 0 ? 2 : 1))
+    throw std::runtime_error(fmt::format("dataset {} has rank {}, expected {}", name, rank, cols > 0 ? 2 : 1));
+  hsize_t dims[2] = {0, 0};
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  c.rows_ = dims[0];
+  c.cols_ = rank == 2 ? dims[1] : 0;
+  if (rank == 2 && cols != kAnyCols && c.cols_ != cols)
+    throw std::runtime_error(fmt::format("dataset {} has {} columns, expected {}", name, c.cols_, cols));
+  if (rank == 2 && (c.cols_ == 0 || c.cols_ > (1u << 16)))
+    throw std::runtime_error(fmt::format("dataset {} has {} columns", name, c.cols_));
+  // The stored type must convert to the memory type's class (no string read as numbers).
+  Handle stored(Check(H5Dget_type(c.dset_.get()), name), H5Tclose);
+  if (H5Tget_class(stored.get()) != H5Tget_class(type.memory()))
+    throw std::runtime_error(fmt::format("dataset {} has the wrong element type", name));
+  return c;
+}
+
+void Column::Flush() {
+  const hsize_t n = pending();
+  if (n == 0) return;
+  const int rank = cols_ > 0 ? 2 : 1;
+  const hsize_t dims[2] = {rows_ + n, cols_}, start[2] = {rows_, 0}, count[2] = {n, cols_};
+  CheckStatus(H5Dset_extent(dset_.get(), dims), "extend");
+  Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+  H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+  Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  CheckStatus(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), "write");
+  rows_ += n;
+  buf_.clear();
+}
+
+void Column::Truncate(Size rows) {
+  buf_.clear();
+  const hsize_t dims[2] = {rows, cols_};
+  CheckStatus(H5Dset_extent(dset_.get(), dims), "truncate");
+  rows_ = rows;
+}
+
+void Column::Read(Size first, Size n, void* out) const {
+  if (n == 0) return;
+  if (first > rows_ || n > rows_ - first)
+    throw std::runtime_error(
+        fmt::format("dataset {}: rows [{}, {}) beyond its {} rows", name_, first, first + n, rows_));
+  const int rank = cols_ > 0 ? 2 : 1;
+  const hsize_t start[2] = {first, 0}, count[2] = {n, cols_};
+  Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+  H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
+  Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  CheckStatus(H5Dread(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, out), "read");
+}
+
+// ---- A full read, for the child process of a contained first read ----
+
+namespace {
+
+// max_bytes reaches the H5Ovisit2/H5Aiterate callbacks through their user data.
+bool ReadAll(hid_t obj, hid_t file_type, hid_t space, bool attribute, double max_bytes) {
+  Handle mtype(H5Tget_native_type(file_type, H5T_DIR_ASCEND), H5Tclose);
+  if (!mtype) return false;
+  const hssize_t n = H5Sget_simple_extent_npoints(space);
+  const size_t size = H5Tget_size(mtype.get());
+  if (n < 0 || size == 0) return false;
+  Handle mem_space(H5Scopy(space), H5Sclose);
+  hssize_t count = n;
+  if (static_cast<double>(n) * static_cast<double>(size) > max_bytes && !attribute) {
+    // The first rows of a large dataset (its metadata is what can be corrupt, not its values).
+    const int rank = H5Sget_simple_extent_ndims(space);
+    if (rank < 1 || rank > 8) return false;
+    hsize_t dims[8] = {0}, start[8] = {0};
+    H5Sget_simple_extent_dims(space, dims, nullptr);
+    const hssize_t row = dims[0] > 0 ? n / static_cast<hssize_t>(dims[0]) : 1;
+    dims[0] = std::max<hsize_t>(1, static_cast<hsize_t>(max_bytes / static_cast<double>(size) /
+                                                        static_cast<double>(std::max<hssize_t>(row, 1))));
+    H5Sselect_hyperslab(space, H5S_SELECT_SET, start, nullptr, dims, nullptr);
+    mem_space = Handle(H5Screate_simple(rank, dims, nullptr), H5Sclose);
+    count = H5Sget_simple_extent_npoints(mem_space.get());
+  }
+  std::vector<unsigned char> buf(static_cast<size_t>(count) * size + 16);
+  const herr_t st = attribute ? H5Aread(obj, mtype.get(), buf.data())
+                              : H5Dread(obj, mtype.get(), mem_space.get(), space, H5P_DEFAULT, buf.data());
+  if (st < 0) return false;
+  if (H5Tdetect_class(mtype.get(), H5T_VLEN) > 0 || H5Tis_variable_str(mtype.get()) > 0)
+    H5Dvlen_reclaim(mtype.get(), mem_space.get(), H5P_DEFAULT, buf.data());
+  return true;
+}
+
+herr_t ProbeAttribute(hid_t loc, const char* name, const H5A_info_t*, void* max_bytes) {
+  Handle a(H5Aopen(loc, name, H5P_DEFAULT), H5Aclose);
+  if (!a) return -1;
+  Handle type(H5Aget_type(a.get()), H5Tclose);
+  Handle space(H5Aget_space(a.get()), H5Sclose);
+  return type && space && ReadAll(a.get(), type.get(), space.get(), true, *static_cast<double*>(max_bytes)) ? 0 : -1;
+}
+
+herr_t ProbeObject(hid_t root, const char* name, const H5O_info_t* info, void* max_bytes) {
+  if (H5Aiterate_by_name(root, name, H5_INDEX_NAME, H5_ITER_NATIVE, nullptr, ProbeAttribute, max_bytes,
+                         H5P_DEFAULT) < 0)
+    return -1;
+  if (info->type != H5O_TYPE_DATASET) return 0;
+  Handle d(H5Dopen2(root, name, H5P_DEFAULT), H5Dclose);
+  if (!d) return -1;
+  Handle type(H5Dget_type(d.get()), H5Tclose);
+  Handle space(H5Dget_space(d.get()), H5Sclose);
+  return type && space && ReadAll(d.get(), type.get(), space.get(), false, *static_cast<double*>(max_bytes)) ? 0 : -1;
+}
+
+}  // namespace
+
+bool ReadEverything(const std::string& path, double max_bytes) {
+  Silence();
+  Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!file) return false;
+  return H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, &max_bytes, H5O_INFO_BASIC) >= 0;
+}
+
+}  // namespace vibro::h5

@@ -1,0 +1,183 @@
+// A small RAII layer over the HDF5 C API for the store's files (docs/output.md). h5_file.cpp is
+// the one file of vibro that includes the C header: the record writers and readers (hdf5_*.cpp) see
+// handles as plain integers (hid_t is int64_t since HDF5 1.10) and element types as h5::Type.
+//
+// Errors: a failed call that vibro needs throws std::runtime_error("HDF5: <what> failed"); the
+// Try*/Has* functions return an empty handle or false instead, for the optional parts of a file.
+#pragma once
+
+#include <algorithm>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+namespace vibro::h5 {
+
+using Id = std::int64_t;     // hid_t
+using Size = std::uint64_t;  // hsize_t
+
+// Owns one hid_t and closes it with the matching H5?close.
+class Handle {
+ public:
+  using Closer = int (*)(Id);  // herr_t (*)(hid_t)
+  Handle() = default;
+  Handle(Id id, Closer closer) : id_(id), closer_(closer) {}
+  Handle(Handle&& o) noexcept : id_(o.id_), closer_(o.closer_) { o.id_ = -1; }
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      Reset();
+      id_ = o.id_;
+      closer_ = o.closer_;
+      o.id_ = -1;
+    }
+    return *this;
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  ~Handle() { Reset(); }
+  Id get() const { return id_; }
+  explicit operator bool() const { return id_ >= 0; }
+  void Reset() {
+    if (id_ >= 0 && closer_) closer_(id_);
+    id_ = -1;
+  }
+
+ private:
+  Id id_ = -1;
+  Closer closer_ = nullptr;
+};
+
+// An element type: how it is stored in the file (little-endian, fixed width) and its native
+// memory form. Variable-length UTF-8 strings and enums are the same type in file and memory.
+class Type {
+ public:
+  static Type F64();
+  static Type I64();
+  static Type I32();
+  static Type I8();
+  static Type U8();
+  static Type String();  // variable-length UTF-8: memory elements are const char* / char*
+  static Type Bool();    // h5py's bool: an int8 enum {FALSE = 0, TRUE = 1}
+  static Type Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members);
+  Id file() const { return file_; }
+  Id memory() const { return memory_; }
+  size_t size() const { return size_; }  // bytes of one memory element
+
+ private:
+  Type(Id file, Id memory, size_t size) : file_(file), memory_(memory), size_(size) {}
+  Type(Handle owned, size_t size);
+  Handle owned_;
+  Id file_ = -1, memory_ = -1;
+  size_t size_ = 0;
+};
+
+// Turns the library's own error printing off (vibro reports errors itself). Idempotent.
+void Silence();
+
+// ---- Files ----
+bool IsHdf5(const std::string& path);
+// Creates (truncates) `path` for the store: freed space never reused, metadata written at
+// flushes only (see vibro/hdf5_store.hpp). Throws runtime_error with the system's reason.
+Handle CreateFile(const std::string& path);
+// Opens `path` read-only, or read-write with the store's cache settings. Empty on failure.
+Handle OpenFile(const std::string& path, bool write);
+void FlushFile(Id file);
+
+// ---- Links and groups ----
+bool Exists(Id loc, const std::string& path);
+void DeleteLink(Id loc, const std::string& name);  // if it exists
+Handle CreateGroup(Id loc, const std::string& name);
+Handle OpenGroup(Id loc, const std::string& name);  // throws when missing
+Handle TryOpenGroup(Id loc, const std::string& name);  // empty when missing or not a group
+Handle OpenOrCreateGroup(Id loc, const std::string& name);
+std::vector<std::string> ChildGroups(Id loc);  // names of the groups linked from loc, in order
+
+// ---- Attributes ----
+enum class Class { kString, kInteger, kFloat, kOther };
+bool HasAttr(Id obj, const std::string& name);
+void DeleteAttr(Id obj, const std::string& name);  // if it exists
+std::vector<std::string> AttrNames(Id obj);
+Class AttrClass(Id obj, const std::string& name);
+void WriteString(Id obj, const std::string& name, const std::string& value);
+void WriteDouble(Id obj, const std::string& name, double value);
+void WriteInt(Id obj, const std::string& name, long long value);  // int64
+void WriteBool(Id obj, const std::string& name, bool value);
+// A float64 array, (n) or (n / cols, cols) when cols > 1.
+void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v, Size cols = 1);
+void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v);
+std::string ReadString(Id obj, const std::string& name);  // "" when absent
+std::optional<std::int64_t> ReadInt(Id obj, const std::string& name);
+std::optional<double> ReadDouble(Id obj, const std::string& name);
+std::vector<double> ReadDoubles(Id obj, const std::string& name);  // empty when absent
+// An attribute as text for `vibro info`: a string as it is, a scalar number in fmt's shortest
+// form, an array as "[n values]"; "" when it cannot be read.
+std::string AttrText(Id obj, const std::string& name);
+
+// ---- Small datasets written or read at once ----
+// A contiguous dataset of shape `dims` (dims[0] may be 0) from `data` in type's memory form;
+// chunk: optional chunk shape (then deflated).
+void WriteDataset(Id loc, const std::string& name, const Type& type, const void* data,
+                  const std::vector<Size>& dims, const std::vector<Size>& chunk = {});
+void WriteStrings(Id loc, const std::string& name, const std::vector<std::string>& v);
+void WriteColumn(Id loc, const std::string& name, const std::vector<double>& v);  // float64 (n)
+std::vector<std::string> DatasetNames(Id loc);  // the datasets linked from loc, by name
+// Shape of dataset `name`; nullopt when it is missing or not a dataset.
+std::optional<std::vector<Size>> DatasetShape(Id loc, const std::string& name);
+bool IsStringDataset(Id loc, const std::string& name);
+std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name);  // converted to float64
+std::vector<std::string> ReadDatasetStrings(Id loc, const std::string& name);
+
+// ---- Extendible tables ----
+// A chunked, deflated dataset of `cols` columns (cols = 0: one-dimensional) that grows by rows
+// buffered in memory and written at Flush.
+class Column {
+ public:
+  static constexpr Size kAnyCols = ~Size{0};
+  Column() = default;
+  // Creates dataset `name` in `group`.
+  Column(Id group, const std::string& name, const Type& type, Size cols);
+  // Opens an existing dataset and checks its rank (2 when cols > 0), its width (unless
+  // kAnyCols: the caller checks cols()) and its element class against `type`.
+  static Column Open(Id group, const std::string& name, const Type& type, Size cols = 0);
+  Column(Column&&) noexcept = default;
+  Column& operator=(Column&&) noexcept = default;
+
+  Size cols() const { return cols_; }
+  Size rows() const { return rows_ + pending(); }
+  Size pending() const { return buf_.size() / (elem_size_ * std::max<Size>(cols_, 1)); }
+
+  template <class T>
+  void Push(const T& v) {
+    const auto* p = reinterpret_cast<const unsigned char*>(&v);
+    buf_.insert(buf_.end(), p, p + sizeof(T));
+  }
+  void PushRow(const Eigen::VectorXd& v) {
+    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
+    buf_.insert(buf_.end(), p, p + sizeof(double) * static_cast<size_t>(v.size()));
+  }
+  void Flush();
+  void Truncate(Size rows);
+  // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
+  void Read(Size first, Size n, void* out) const;
+
+ private:
+  Handle dset_;
+  Handle mem_type_;  // a copy of the memory type
+  size_t elem_size_ = 8;
+  std::string name_;
+  Size cols_ = 0;
+  Size rows_ = 0;
+  std::vector<unsigned char> buf_;
+};
+
+// Reads every attribute and every dataset (up to `max_bytes` each) of the file at `path`, for a
+// child process that tests whether the library survives the file. False when an object fails
+// cleanly; a corrupt file may crash the caller instead (that is what the child is for).
+bool ReadEverything(const std::string& path, double max_bytes);
+
+}  // namespace vibro::h5

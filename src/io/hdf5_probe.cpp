@@ -1,0 +1,91 @@
+// A contained first read (and first write) of a file given to vibro (docs/reliability.md).
+// The HDF5 library trusts a file's metadata: a flipped byte in a global heap makes it copy out of
+// bounds and crash. Before vibro reads a file it is read once in full by a child process (every
+// attribute, every dataset up to kProbeBytes): if that child dies, the file is reported as
+// corrupt (bad input) and vibro itself never touches it.
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+
+#include <fmt/format.h>
+
+#include "io/hdf5_store_impl.hpp"
+#include "vibro/scene_file.hpp"
+
+namespace vibro::store {
+namespace {
+constexpr double kProbeBytes = 64e6;
+}  // namespace
+
+void ProbeInChild(const std::string& path) {
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return;  // no child: vibro's own checked reads follow
+  if (pid == 0) {
+    alarm(120);  // a corrupt file that makes the library loop is reported too
+    // Not readable as HDF5 at all, or an object that fails cleanly: vibro's own reads report it.
+    h5::ReadEverything(path, kProbeBytes);
+    _exit(0);
+  }
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  // The child exits 0 whatever it read; a signal or another exit (a sanitizer's report) is a crash.
+  if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
+    throw InputError({fmt::format("{}: a corrupt HDF5 file: reading it makes the HDF5 library fail "
+                                  "(status {} of a test read); the file was not changed",
+                                  path, WIFSIGNALED(st) ? WTERMSIG(st) : WEXITSTATUS(st))});
+}
+
+// A file whose metadata cannot take a resume's changes (a failed truncation would leave it half
+// changed) is refused unchanged. A refusal for a reason of the input itself (InputError) is left
+// to the real call, which throws it before changing anything.
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes) {
+  struct stat st_file {};
+  if (stat(path.c_str(), &st_file) != 0 || st_file.st_size > (off_t{1} << 30)) return;  // no copy of GBs
+  std::fflush(nullptr);
+  const pid_t pid = fork();
+  if (pid < 0) return;
+  if (pid == 0) {
+    alarm(120);
+    h5::Silence();
+    char copy[] = "/tmp/vibro-resume-probe-XXXXXX";
+    const int fd = mkstemp(copy);
+    if (fd < 0) _exit(0);  // no room for a copy: go on without the trial
+    bool ok = false;
+    if (FILE* in = std::fopen(path.c_str(), "rb")) {
+      char buf[1 << 16];
+      size_t n;
+      ok = true;
+      while (ok && (n = std::fread(buf, 1, sizeof buf, in)) > 0) ok = write(fd, buf, n) == static_cast<ssize_t>(n);
+      std::fclose(in);
+    }
+    close(fd);
+    int code = 0;
+    if (ok) {
+      try {
+        changes(copy);
+      } catch (const InputError& e) {
+        // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
+        code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;
+      } catch (const std::exception&) {
+        code = 3;
+      }
+    }
+    unlink(copy);
+    _exit(code);
+  }
+  int st = 0;
+  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
+    throw InputError({fmt::format("{}: cannot resume: a corrupt HDF5 file (a test write to a copy of it "
+                                  "failed); the file was not changed",
+                                  path)});
+}
+
+}  // namespace vibro::store

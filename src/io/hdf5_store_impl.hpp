@@ -1,0 +1,95 @@
+// What the files of the HDF5 store share (private to src/io): the row tables of a run and of a
+// study, the store's state (Hdf5Store::Impl), the file header (hdf5_provenance.cpp) and the
+// contained first read and write of a given file (hdf5_probe.cpp).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/h5_file.hpp"
+#include "vibro/hdf5_store.hpp"
+
+namespace vibro::store {
+
+// The int8 enum of /events/kind.
+h5::Type EventKindType();
+
+// /events: one row per event.
+struct EventTable {
+  h5::Column t, period, offset, kind, xB, v_before, v_after;
+  void Create(h5::Id g);
+  void Open(h5::Id g);
+  void Push(const Event& e);
+  std::vector<h5::Column*> All() { return {&t, &period, &offset, &kind, &xB, &v_before, &v_after}; }
+};
+
+// /samples and /section: one row per state.
+struct StateTable {
+  h5::Column t, period, X, V, xB, mode;
+  void Create(h5::Id g, h5::Size n);
+  // dof: width of X and V (h5::Column::kAnyCols: checked later against the checkpoint).
+  void Open(h5::Id g, h5::Size dof);
+  void Push(const Sample& s);
+  std::vector<h5::Column*> All() { return {&t, &period, &X, &V, &xB, &mode}; }
+};
+
+// /basin/cells: one row per finished cell of a study, appended as batches finish (resume).
+struct CellTable {
+  h5::Column index, state, kind, period, impacts, sticking_fraction, periods, stop, stick_count,
+      impact_count, z, phases;
+  std::vector<h5::Column*> All() {
+    return {&index, &state, &kind, &period, &impacts, &sticking_fraction, &periods, &stop,
+            &stick_count, &impact_count, &z, &phases};
+  }
+  void Create(h5::Id g, h5::Size zcols);
+  void Open(h5::Id g, h5::Size zcols);
+  void Push(size_t i, const CellResult& c, h5::Size zcols);
+};
+
+// The root attributes and /model of a new file (provenance, the scene, the model).
+void WriteHeader(h5::Id file, const StoreHeader& header);
+// Refuses (InputError) to replace at `path` anything but a vibro file of the same scene and
+// command (any vibro file with header.force). Nothing is changed.
+void CheckReplaceable(const std::string& path, const StoreHeader& header, bool& existed);
+
+// A contained first read of a file given to vibro (hdf5_probe.cpp): the whole file is read once
+// by a child process; InputError when that child crashes.
+void ProbeInChild(const std::string& path);
+// Before a resume changes a file, `changes` are made to a copy in a child process; InputError
+// when the copy cannot take them.
+void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes);
+
+}  // namespace vibro::store
+
+namespace vibro {
+
+struct Hdf5Store::Impl {
+  std::string path;
+  StoreHeader header;
+  h5::Handle file, events, samples, section, checkpoint;
+  store::EventTable ev;
+  store::StateTable sa, se;
+  std::optional<Checkpoint> last_checkpoint;
+  h5::Size cp_events = 0, cp_samples = 0, cp_sections = 0;  // rows at the last checkpoint
+  double flush_interval = 1.0;
+  std::chrono::steady_clock::time_point last_flush;
+  unsigned calls = 0;
+  Stats stats;
+  h5::Handle basin, cells_group;
+  std::optional<store::CellTable> cells;
+  h5::Size zcols = 0;
+
+  void OpenGroups();
+  void OpenColumns();
+  void MaybeFlush();
+  void WriteCheckpoint();
+  std::vector<h5::Column*> Columns();
+  void Close();
+  void Flush();
+};
+
+}  // namespace vibro
