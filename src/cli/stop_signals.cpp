@@ -6,6 +6,8 @@
 #include <csignal>
 #include <cstring>
 
+#include "vibro/stop_request.hpp"
+
 namespace vibro::cli {
 namespace {
 
@@ -48,6 +50,9 @@ void InstallStopHandlers() {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // Every run polls the flag, also those started deep inside another computation (an orbit
+  // solve inside a continuation, the orbits of a study's classes).
+  SetProcessStopFlag(&g_stop);
 }
 
 FinalWrite::FinalWrite() { g_writing.fetch_add(1); }
