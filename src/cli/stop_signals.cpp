@@ -55,6 +55,12 @@ void InstallStopHandlers() {
   SetProcessStopFlag(&g_stop);
 }
 
+namespace {
+// Installed before main() runs (static initialization of the program), so that a stop request
+// that comes while the command line is being set up is honoured too; main() installs them again.
+[[maybe_unused]] const bool g_installed_early = (InstallStopHandlers(), true);
+}  // namespace
+
 FinalWrite::FinalWrite() { g_writing.fetch_add(1); }
 FinalWrite::~FinalWrite() { g_writing.fetch_sub(1); }
 

@@ -142,6 +142,15 @@ void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System&
   store->Finish(result, orbit.summary);
 }
 
+void WriteOrbitFailure(const std::string& out, const LoadedScene& loaded, const System& sys,
+                       const OrbitResult& orbit) {
+  auto store = Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  RunResult r;
+  r.status = RunStatus::kNumericalFailure;
+  r.message = fmt::format("no orbit ({}){}", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
+  store->Finish(r, NoAttractor());
+}
+
 void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::StudyGrid& grid, bool interrupted) {
   store.WriteStudy(study, grid);
   RunResult r;

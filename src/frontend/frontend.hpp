@@ -76,6 +76,11 @@ void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::St
 // failed (numerical failure or undetermined, with `key` and the value named), else ok.
 RunResult SweepOutcome(const std::vector<SweepPoint>& sweep, const std::string& key, bool interrupted);
 
+// Closes the `out` file of an orbit search that found no orbit: status numerical-failure with the
+// search's status and message (the file exit 3 leaves behind agrees with it).
+void WriteOrbitFailure(const std::string& out, const LoadedScene& loaded, const System& system,
+                       const OrbitResult& orbit);
+
 // Writes one period of a converged orbit, densely sampled, and its multipliers (/orbit) to `out`.
 void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& system,
                 const OrbitResult& orbit);
