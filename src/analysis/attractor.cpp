@@ -106,16 +106,17 @@ Attractor AttractorRecorder::Classify() const {
     }
     return true;
   };
-  // The event log of the last S = max(3p, max_period) periods recorded (all of them when fewer
-  // are) must be p-periodic: the kinds and order of the events in (K − S, K − p] are those in
-  // (K − S + p, K] (impacts left out when the span chatters). A motion that sticks every 7
-  // periods is not period 1 because its last two periods look alike. The span is the same for
-  // every p ≤ S/3 whatever the record's length, so a long period is never checked over less of
-  // the log than a short one, and wins nothing on a short record (a study cell stopped early,
-  // a sweep's run of a few periods).
+  // The event log of the last S = max(3p, max_period) periods recorded must be p-periodic: the
+  // kinds and order of the events in (K − S, K − p] are those in (K − S + p, K] (impacts left out
+  // when the span chatters). A motion that sticks every 7 periods is not period 1 because its
+  // last two periods look alike. On a short record (a study cell stopped early, a sweep's run of
+  // a few dozen periods) S is all of it but its first period (where the run's start, not the
+  // orbit, set the events), and at least 3p: the same span for every p, so that a long period
+  // wins nothing there.
   const auto log_repeats = [&](int p) {
     const long long recorded = static_cast<long long>(n) - 1;
-    const long long span = std::min<long long>(std::max<long long>(3 * p, max_period_), recorded);
+    const long long span =
+        std::max<long long>(3 * p, std::min<long long>(max_period_, recorded - 1));
     const bool chatters = count(EventKind::kAccumulation, K - span, K) > 0;
     const auto log = [&](long long from, long long to) {
       std::vector<EventKind> kinds;
@@ -153,6 +154,7 @@ Attractor AttractorRecorder::Classify() const {
     }
     return d[0] * l1 / (1 - l1) <= tolerance_;
   };
+  const bool full_record = n >= static_cast<size_t>(4 * max_period_ + 2);
   int period = 0;
   // A period p is accepted only on a record of at least three windows of it (3p + 1 section
   // points): two to see the points repeat and one more to see the transient has decayed.
@@ -165,7 +167,14 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
-    ok = ok && same_timing(p) && log_repeats(p) && decayed(p);
+    ok = ok && same_timing(p) && log_repeats(p);
+    // A period whose points and events repeat while its transient has not decayed: the motion is
+    // not periodic yet, and no multiple of p may be accepted instead (its repeat distances can
+    // alias smaller than p's, as in the decaying free transient above). The decay is judged on a
+    // full record only (4·max_period + 2 section points): a study cell that ends earlier is
+    // classified as before (its early stop, AttractorRecorder::Settled, has its own decay test),
+    // and a sweep's runs are never shorter than a full record.
+    if (ok && full_record && !decayed(p)) break;
     if (ok) {
       period = p;
       break;
@@ -178,6 +187,7 @@ Attractor AttractorRecorder::Classify() const {
   const long long from = K - p;
   std::vector<std::pair<double, double>> phases;
   const Event* last_stick = nullptr;
+  double per_orbit = 0.0;  // periodic: the durations of the phases released in the window
   for (const auto& e : events_) {
     if (e.kind == EventKind::kStick) last_stick = &e;
     if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
@@ -185,15 +195,19 @@ Attractor AttractorRecorder::Classify() const {
                                e.clock.offset - last_stick->clock.offset);
       const double start = Phase(last_stick->clock, p);
       phases.emplace_back(start, start + w * duration);
+      per_orbit += duration;
       last_stick = nullptr;
     }
   }
   std::sort(phases.begin(), phases.end());
-  // The time on the stop is the measure of the sticking intervals inside the window [K − p, K],
-  // an average over whole periods: a phase begun before the window (the section point at its
-  // start is on the stop) or still running at its end (the last one is) is cut at the window's
-  // edges. The intervals alternate stick → release, so the fraction is in [0, 1] by construction;
-  // for a periodic orbit it is the time on the stop per period.
+  // Without a period, the time on the stop is the measure of the sticking intervals inside the
+  // window [K − p, K] (the whole record), an average over whole periods: a phase begun before the
+  // window (the section point at its start is on the stop) or still running at its end (the last
+  // one is) is cut at the window's edges. The intervals alternate stick → release, so the
+  // fraction is in [0, 1] by construction. With a period p it is the same measure for an orbit
+  // that repeats exactly; the durations of the phases released in the window are used (the
+  // classification accepted p only when their stick and release times repeat), and a sum
+  // outside [0, pT] would mean the period is wrong: the motion is then not periodic.
   const auto since_from = [&](const Clock& c) {
     return std::clamp(static_cast<double>(c.period - from) * T + c.offset, 0.0, p * T);
   };
@@ -212,6 +226,15 @@ Attractor AttractorRecorder::Classify() const {
   }
   if (open) stuck += p * T - open_since;
   stuck = std::min(stuck, p * T);  // rounding of the sum
+  if (period > 0) {
+    // Rounding (1e-12 of the window) aside, per_orbit is in [0, pT] for a true period.
+    if (per_orbit < -1e-12 * p * T || per_orbit > (1 + 1e-12) * p * T) {
+      Attractor none;
+      none.sticking_fraction = stuck / (p * T);
+      return none;  // not periodic: a period-p window cannot hold more than pT on the stop
+    }
+    stuck = std::clamp(per_orbit, 0.0, p * T);
+  }
   const bool released = !phases.empty();
   const bool always_stuck = !released && sections_.back().mode == Mode::kSticking &&
                             count(EventKind::kImpact, from, K) == 0 &&

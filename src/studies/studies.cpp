@@ -486,6 +486,10 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
     if (stop && stop->load()) break;
     Scene sc = req.scene_at(values[i]);
     sc.run.samples_per_period = 0;
+    // The classification checks that the transient has decayed and that the event log repeats
+    // only on a full record (4·max_period + 1 periods): a sweep's run is never shorter, so that a
+    // decaying free transient is not called periodic by aliasing (docs/reliability.md).
+    sc.run.periods = std::max<long long>(sc.run.periods, 4LL * sc.run.max_period + 1);
     const System sys(sc);
     AttractorRecorder rec(sys, sc);
     SectionTail tail(static_cast<size_t>(req.record), sys);
