@@ -572,6 +572,19 @@ def plot_run(f, title, save, window):
         save(fig, "multipliers")
 
 
+def read_everything(path):
+    """Reads every attribute and dataset of the file (raises what h5py raises on damage)."""
+    def visit(_name, obj):
+        for k in obj.attrs:
+            obj.attrs[k]
+        if isinstance(obj, h5py.Dataset):
+            obj[()]
+    with h5py.File(path, "r") as f:
+        for k in f.attrs:
+            f.attrs[k]
+        f.visititems(visit)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("file")
@@ -601,6 +614,29 @@ def main():
         fig.savefig(path, dpi=args.dpi, bbox_inches="tight", metadata=meta)
         written.append(path)
         plt.close(fig)
+    # A corrupt file (a damaged compressed chunk that the HDF5 library reports cleanly) is bad
+    # input: every dataset and attribute is read before any picture is written (exit 2, nothing
+    # created); a picture that fails on damaged values removes what was written.
+    try:
+        read_everything(args.file)
+    except Exception as e:  # noqa: BLE001 (h5py raises OSError, KeyError, ValueError, TypeError)
+        print(f"vibro plot: {args.file}: a corrupt file ({type(e).__name__}: {e}); nothing was written",
+              file=sys.stderr)
+        sys.exit(2)
+    try:
+        draw(args, save, window)
+    except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+        for w in written:
+            if os.path.exists(w):
+                os.remove(w)
+        print(f"vibro plot: {args.file}: cannot be drawn, its data are damaged ({type(e).__name__}: {e}); "
+              "nothing was written", file=sys.stderr)
+        sys.exit(2)
+    for w in written:
+        print(w)
+
+
+def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
         varied = set()
         for g, attr in (("branch", "param"), ("sweep", "param"), ("partition", "param1"),
@@ -623,8 +659,6 @@ def main():
             plot_run(f, title, save, window)
         elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):
             print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
-    for w in written:
-        print(w)
 
 
 if __name__ == "__main__":

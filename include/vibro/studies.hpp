@@ -145,12 +145,16 @@ std::vector<std::pair<double, double>> RandomPoints(const Coordinate& a, const C
 
 // Brute-force bifurcation diagram: the parameter is stepped up from `from` to `to` and back down,
 // each run starting from the final state of the previous one (so hysteresis shows), and the last
-// `record` stroboscopic points and the attractor of each run are kept.
+// `record` stroboscopic points and the attractor of each run are kept. A run that fails
+// (numerical failure, undetermined chattering) is the sweep's last point, with its status and
+// message and no attractor; a run cut short by a stop request is not kept.
 struct SweepPoint {
   double value;
   bool upward;
   Attractor attractor;
   std::vector<double> x_B, v_B;  // contact displacement and velocity at the last section points
+  std::string status = "ok";     // the run's status (ToString(RunStatus))
+  std::string message;           // why the run failed (status other than "ok")
 };
 struct SweepRequest {
   std::function<Scene(double)> scene_at;

@@ -329,10 +329,8 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
   const bool interrupted = guard.interrupted();
   if (store) {
     store->WriteSweep(sweep, {key, from, to, steps, record, !one_way});
-    vibro::RunResult r;
-    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    if (interrupted) r.message = fmt::format("interrupted after {} of the sweep's runs", sweep.size());
-    store->Finish(r, sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+    store->Finish(vibro::frontend::SweepOutcome(sweep, key, interrupted),
+                  sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
   }
   return {vibro::SweepJson(sweep), interrupted};
 }

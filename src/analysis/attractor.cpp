@@ -106,23 +106,25 @@ Attractor AttractorRecorder::Classify() const {
     }
     return true;
   };
-  // The events of every whole window of p periods in the last max(3p, max_period) periods recorded
-  // must repeat in kind and order (impacts left out where a window chatters): a motion that
-  // sticks every 7 periods is not period 1 because its last two periods look alike.
+  // The event log of the last S = max(3p, max_period) periods recorded must be p-periodic: the
+  // kinds and order of the events in (K − S, K − p] are those in (K − S + p, K] (impacts left out
+  // when the span chatters). A motion that sticks every 7 periods is not period 1 because its
+  // last two periods look alike. On a short record (a study cell stopped early, a sweep's run of
+  // a few dozen periods) S is all of it but its first period (where the run's start, not the
+  // orbit, set the events), and at least 3p: the same span for every p, so that a long period
+  // wins nothing there.
   const auto log_repeats = [&](int p) {
     const long long recorded = static_cast<long long>(n) - 1;
-    const long long span = std::min<long long>(std::max<long long>(3 * p, max_period_), recorded);
-    std::vector<std::vector<EventKind>> windows;
-    for (long long to = K; to - p >= K - span; to -= p) {
-      std::vector<EventKind> log;
-      const bool chatters = count(EventKind::kAccumulation, to - p, to) > 0;
+    const long long span =
+        std::max<long long>(3 * p, std::min<long long>(max_period_, recorded - 1));
+    const bool chatters = count(EventKind::kAccumulation, K - span, K) > 0;
+    const auto log = [&](long long from, long long to) {
+      std::vector<EventKind> kinds;
       for (const auto& e : events_)
-        if (in_window(e, to - p, to) && !(chatters && e.kind == EventKind::kImpact)) log.push_back(e.kind);
-      windows.push_back(std::move(log));
-    }
-    for (size_t i = 1; i < windows.size(); ++i)
-      if (windows[i] != windows[0]) return false;
-    return true;
+        if (in_window(e, from, to) && !(chatters && e.kind == EventKind::kImpact)) kinds.push_back(e.kind);
+      return kinds;
+    };
+    return log(K - span, K - p) == log(K - span + p, K);
   };
   // Section points repeating within the tolerance are not enough: a decaying transient can
   // repeat within it by aliasing (a free oscillation whose phase returns after p periods while
@@ -131,21 +133,32 @@ Attractor AttractorRecorder::Classify() const {
   // a transient is still there, and the distance left to the orbit, about δ1·λ/(1 − λ) with
   // λ = δ1/δ2, must be within the tolerance too. Repeat distances that do not fall geometrically
   // are the rounding floor of a periodic orbit.
+  // On a record of only two windows of differences (3p + 1 section points), δ1 < δ2 cannot tell
+  // a geometric fall from rounding noise: the distance left, δ1·λ/(1 − λ), must then be within
+  // the tolerance whenever δ1 is above the rounding floor (10⁻³ of the tolerance).
   const auto decayed = [&](int p) {
     const auto q = static_cast<size_t>(p);
-    if (4 * q > n) return true;  // too short a record to tell
+    const size_t windows = std::min<size_t>(3, (n - 1) / q - 1);  // 2 or 3 (3p + 1 ≤ n)
     double d[3] = {0, 0, 0};
-    for (size_t win = 0; win < 3; ++win)
+    for (size_t win = 0; win < windows; ++win)
       for (size_t j = 0; j < q; ++j)
         d[win] = std::max(d[win], Difference(n - 1 - j - win * q, n - 1 - j - (win + 1) * q));
-    if (!(d[0] < d[1] && d[1] < d[2])) return true;
-    const double l1 = d[0] / d[1], l2 = d[1] / d[2];
-    if (std::abs(l1 - l2) > 0.1 * l2) return true;
+    if (!(d[0] < d[1])) return true;
+    const double l1 = d[0] / d[1];
+    if (windows == 3) {
+      if (!(d[1] < d[2])) return true;
+      const double l2 = d[1] / d[2];
+      if (std::abs(l1 - l2) > 0.1 * l2) return true;
+    } else if (d[0] <= 1e-3 * tolerance_) {
+      return true;
+    }
     return d[0] * l1 / (1 - l1) <= tolerance_;
   };
   const bool full_record = n >= static_cast<size_t>(4 * max_period_ + 2);
   int period = 0;
-  for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n; ++p) {
+  // A period p is accepted only on a record of at least three windows of it (3p + 1 section
+  // points): two to see the points repeat and one more to see the transient has decayed.
+  for (int p = 1; p <= max_period_ && static_cast<size_t>(3 * p) < n; ++p) {
     bool ok = true;
     for (int j = 0; j < p && ok; ++j) ok = close(sections_[n - 1 - j], sections_[n - 1 - j - p]);
     for (EventKind kind : {EventKind::kStick, EventKind::kRelease, EventKind::kAccumulation})
@@ -154,10 +167,14 @@ Attractor AttractorRecorder::Classify() const {
     // before its accumulation point is predicted is a numerical choice, not part of the orbit.
     if (count(EventKind::kAccumulation, K - p, K) == 0)
       ok = ok && count(EventKind::kImpact, K - p, K) == count(EventKind::kImpact, K - 2 * p, K - p);
-    // Both checks need the whole record (4·max_period + 2 section points): on a shorter one (an
-    // early stop of a study cell, a run of a few periods) the windows a long period could be
-    // checked over would be fewer than a short period's, and the long period would win.
-    ok = ok && same_timing(p) && (!full_record || (log_repeats(p) && decayed(p)));
+    ok = ok && same_timing(p) && log_repeats(p);
+    // A period whose points and events repeat while its transient has not decayed: the motion is
+    // not periodic yet, and no multiple of p may be accepted instead (its repeat distances can
+    // alias smaller than p's, as in the decaying free transient above). The decay is judged on a
+    // full record only (4·max_period + 2 section points): a study cell that ends earlier is
+    // classified as before (its early stop, AttractorRecorder::Settled, has its own decay test),
+    // and a sweep's runs are never shorter than a full record.
+    if (ok && full_record && !decayed(p)) break;
     if (ok) {
       period = p;
       break;
@@ -165,17 +182,12 @@ Attractor AttractorRecorder::Classify() const {
   }
 
   // Sticking phases: each release in the window closes one phase; its start is the last stick
-  // before it. Without a period the window is the whole record, and the time on the stop is
-  // counted inside it only (a phase begun before the window, or still running at its end, is
-  // cut at the window's edges), so that the fraction is an average over whole periods in [0, 1].
+  // before it. The window is p periods (the whole record without a period).
   const int p = period > 0 ? period : static_cast<int>(n) - 1;
   const long long from = K - p;
-  double stuck = 0.0;
   std::vector<std::pair<double, double>> phases;
   const Event* last_stick = nullptr;
-  const auto since_from = [&](const Clock& c) {
-    return static_cast<double>(c.period - from) * T + c.offset;
-  };
+  double per_orbit = 0.0;  // periodic: the durations of the phases released in the window
   for (const auto& e : events_) {
     if (e.kind == EventKind::kStick) last_stick = &e;
     if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
@@ -183,14 +195,46 @@ Attractor AttractorRecorder::Classify() const {
                                e.clock.offset - last_stick->clock.offset);
       const double start = Phase(last_stick->clock, p);
       phases.emplace_back(start, start + w * duration);
-      stuck += period > 0 ? duration : since_from(e.clock) - std::max(0.0, since_from(last_stick->clock));
+      per_orbit += duration;
       last_stick = nullptr;
     }
   }
-  if (period == 0 && last_stick && sections_.back().mode == Mode::kSticking)
-    stuck += p * T - std::max(0.0, since_from(last_stick->clock));  // stuck at the end
-  stuck = std::clamp(stuck, 0.0, p * T);
   std::sort(phases.begin(), phases.end());
+  // Without a period, the time on the stop is the measure of the sticking intervals inside the
+  // window [K − p, K] (the whole record), an average over whole periods: a phase begun before the
+  // window (the section point at its start is on the stop) or still running at its end (the last
+  // one is) is cut at the window's edges. The intervals alternate stick → release, so the
+  // fraction is in [0, 1] by construction. With a period p it is the same measure for an orbit
+  // that repeats exactly; the durations of the phases released in the window are used (the
+  // classification accepted p only when their stick and release times repeat), and a sum
+  // outside [0, pT] would mean the period is wrong: the motion is then not periodic.
+  const auto since_from = [&](const Clock& c) {
+    return std::clamp(static_cast<double>(c.period - from) * T + c.offset, 0.0, p * T);
+  };
+  double stuck = 0.0, open_since = 0.0;
+  bool open = sections_[n - 1 - static_cast<size_t>(p)].mode == Mode::kSticking;
+  for (const auto& e : events_) {
+    const bool at_start = e.clock.period == from && e.clock.offset == 0.0;  // after the section point
+    if (!at_start && !in_window(e, from, K)) continue;
+    if (e.kind == EventKind::kStick && !open) {
+      open = true;
+      open_since = since_from(e.clock);
+    } else if (e.kind == EventKind::kRelease && open) {
+      open = false;
+      stuck += since_from(e.clock) - open_since;
+    }
+  }
+  if (open) stuck += p * T - open_since;
+  stuck = std::min(stuck, p * T);  // rounding of the sum
+  if (period > 0) {
+    // Rounding (1e-12 of the window) aside, per_orbit is in [0, pT] for a true period.
+    if (per_orbit < -1e-12 * p * T || per_orbit > (1 + 1e-12) * p * T) {
+      Attractor none;
+      none.sticking_fraction = stuck / (p * T);
+      return none;  // not periodic: a period-p window cannot hold more than pT on the stop
+    }
+    stuck = std::clamp(per_orbit, 0.0, p * T);
+  }
   const bool released = !phases.empty();
   const bool always_stuck = !released && sections_.back().mode == Mode::kSticking &&
                             count(EventKind::kImpact, from, K) == 0 &&

@@ -290,6 +290,14 @@ Branch Continue(const ContinuationRequest& req) {
   const auto first_scene = req.scene_at(req.from);
   const System first_sys(first_scene);
   const OrbitResult start = SolveOrbit(first_sys, first_scene, req.orbit);
+  // Every run polls the process's stop request (vibro/stop_request.hpp): an orbit solve cut
+  // short by it is an interruption, not the absence of an orbit.
+  const auto stopped = [&] { return req.stop_requested && req.stop_requested->load(); };
+  if (stopped()) {
+    br.status = "interrupted";
+    br.end = "interrupted";
+    return br;
+  }
   if (start.status != "converged") {
     br.status = "no-orbit";
     br.end = "no orbit at the start: " + start.message;
@@ -306,6 +314,9 @@ Branch Continue(const ContinuationRequest& req) {
   const double ds_retry = 1e-4 * std::abs(span);  // below this a failed step means a boundary
 
   const auto record = [&](const Point& pt) {
+    // A point computed while a stop request came may rest on runs it cut short: not kept (the
+    // branch kept is the start of the uninterrupted branch; the loop reports the interruption).
+    if (stopped()) return;
     const auto scene = p.SceneAt(pt.y[n2]);
     const System sys(*scene);
     BranchPoint b;
@@ -331,6 +342,11 @@ Branch Continue(const ContinuationRequest& req) {
   y0 << start.X, start.V, req.from;
   Evaluation e = p.Evaluate(y0.head(n2), y0[n2]);
   auto first = e.ok ? p.Examine({y0, e}) : std::nullopt;
+  if (stopped()) {
+    br.status = "interrupted";
+    br.end = "interrupted";
+    return br;
+  }
   if (!first) {
     br.end = "the map could not be evaluated at the start";
     return Finish(br, p);

@@ -23,6 +23,9 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   if (!out.empty() && converged) {
     const vibro::cli::FinalWrite writing;
     vibro::frontend::WriteOrbit(out, loaded, sys, orbit);
+  } else if (!out.empty()) {
+    const vibro::cli::FinalWrite writing;
+    vibro::frontend::WriteOrbitFailure(out, loaded, sys, orbit);
   }
   if (json) {
     fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));

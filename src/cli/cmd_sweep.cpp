@@ -23,7 +23,9 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   if (record < 1) problems.push_back(fmt::format("--record {}: expected K ≥ 1", record));
   if (!problems.empty()) throw vibro::InputError(problems);
   // Both ends must be valid values of the key (bad input before any computation).
-  for (double v : {from, to}) vibro::frontend::SceneWith(path, sets, key, v);
+  const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
+  for (const auto& [v, option] : {std::pair{from, "--from"}, std::pair{to, "--to"}})
+    vibro::frontend::SceneAtOption(origin, key, v, option);
   std::unique_ptr<vibro::Hdf5Store> store;
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, vibro::System(loaded.scene)));
   vibro::SweepRequest req;
@@ -42,13 +44,11 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   req.both_ways = !one_way;
   const auto sweep = vibro::Sweep(req, &vibro::cli::StopFlag());
   const bool interrupted = vibro::cli::StopRequested();
+  const auto outcome = vibro::frontend::SweepOutcome(sweep, key, interrupted);
   if (store) {
     const vibro::cli::FinalWrite writing;
     store->WriteSweep(sweep, {key, from, to, steps, record, !one_way});
-    vibro::RunResult r;
-    r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
-    if (interrupted) r.message = fmt::format("interrupted after {} of the sweep's runs", sweep.size());
-    store->Finish(r, sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+    store->Finish(outcome, sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
     store.reset();
   }
   if (json) {
@@ -60,5 +60,7 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
                  p.attractor.kind, p.attractor.period ? std::to_string(*p.attractor.period) : "-",
                  p.attractor.sticking_fraction.value_or(0.0));
   }
-  return interrupted ? kExitInterrupted : 0;
+  if (outcome.status == vibro::RunStatus::kNumericalFailure || outcome.status == vibro::RunStatus::kUndetermined)
+    fmt::print(stderr, "vibro: {}\n", outcome.message);
+  return ExitCode(outcome.status);
 }

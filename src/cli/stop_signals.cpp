@@ -6,6 +6,8 @@
 #include <csignal>
 #include <cstring>
 
+#include "vibro/stop_request.hpp"
+
 namespace vibro::cli {
 namespace {
 
@@ -48,7 +50,16 @@ void InstallStopHandlers() {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  // Every run polls the flag, also those started deep inside another computation (an orbit
+  // solve inside a continuation, the orbits of a study's classes).
+  SetProcessStopFlag(&g_stop);
 }
+
+namespace {
+// Installed before main() runs (static initialization of the program), so that a stop request
+// that comes while the command line is being set up is honoured too; main() installs them again.
+[[maybe_unused]] const bool g_installed_early = (InstallStopHandlers(), true);
+}  // namespace
 
 FinalWrite::FinalWrite() { g_writing.fetch_add(1); }
 FinalWrite::~FinalWrite() { g_writing.fetch_sub(1); }

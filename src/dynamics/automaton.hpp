@@ -16,6 +16,7 @@
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/stop_request.hpp"
 
 namespace vibro::detail {
 
@@ -143,7 +144,8 @@ class Automaton {
     }
   }
   bool StopPolled() const {
-    return opt_.stop_requested && opt_.stop_requested->load(std::memory_order_relaxed);
+    return (opt_.stop_requested && opt_.stop_requested->load(std::memory_order_relaxed)) ||
+           (process_stop_ && process_stop_->load(std::memory_order_relaxed));
   }
 
   void Emit(EventKind kind, const S& v_before, const S& v_after);
@@ -159,10 +161,21 @@ class Automaton {
   void Checkpointed();
   bool Fail(std::string message, RunStatus status = RunStatus::kNumericalFailure);
 
+  // Physics invariants, checked where they arise (docs/reliability.md): a state below the stop
+  // beyond tolerance after a flight or in a sample of one, a sticking state off the stop, a
+  // non-finite state, a clock that goes backwards. The first violation is kept and ends the run
+  // as a numerical failure naming it (Guarded()); the run is never reported ok.
+  S GapTolerance(const Vec& X) const;
+  void CheckFreeGap(const S& gap, const Vec& X, double t, const char* where);
+  void CheckSegment(const ClockT<S>& from, const S& sigma);
+  void CheckEventClock();
+  bool Guarded();
+
   const System& sys_;
   const ModelT<S>& m_;
   const RunSpec& run_;
   const SimulationOptions& opt_;
+  const std::atomic<bool>* process_stop_ = ProcessStopFlag();  // vibro/stop_request.hpp
   std::unique_ptr<PropagatorT<S>> engine_;
   std::unique_ptr<PropagatorT<S>> resting_;
   S period_;
@@ -185,12 +198,15 @@ class Automaton {
   TailPrediction<S> last_tail_;  // the last prediction tried in the current sequence
   bool project_samples_ = false;
   long long sample_index_ = 0;
+  std::string violation_;           // the first physics invariant broken (empty: none)
+  ClockT<S> last_event_{-1, S(0)};  // clock of the last event emitted (monotone)
   RunResult result_;
 };
 
 template <class S>
 void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after) {
   grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
+  CheckEventClock();
   Event e{kind,
           ToClock(clock_),
           AbsTime(clock_),
@@ -230,6 +246,9 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (sigma <= lo) continue;
     p.Evaluate(sigma, Xs_, Vs_);
     if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    if (mode_ == Mode::kFree && !project_samples_)
+      CheckFreeGap(m_.ContactDisplacement(Xs_) - m_.x0, Xs_,
+                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight");
     const Sample s{{k, 0.0},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_),
                    D(Xs_, dx_),
@@ -249,6 +268,9 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (k >= run_.periods) break;  // the end state is section row `periods`, not a sample
     p.Evaluate(sigma, Xs_, Vs_);
     if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    if (mode_ == Mode::kFree && !project_samples_)
+      CheckFreeGap(m_.ContactDisplacement(Xs_) - m_.x0, Xs_,
+                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight");
     const Sample s{{k, R::to_double(off)},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off),
                    D(Xs_, dx_),
@@ -336,6 +358,82 @@ bool Automaton<S>::Fail(std::string message, RunStatus status) {
   result_.status = status;
   result_.message = std::move(message);
   return false;
+}
+
+// How far below the stop a state may be found without breaking the contact law: the exact
+// engine's rounding (relative 1e-6 of the contact displacement's scale is far above it); CVODE's
+// local error, rtol of that scale plus atol per modal coordinate, with a margin of 10.
+template <class S>
+S Automaton<S>::GapTolerance(const Vec& X) const {
+  const S scale = S(1) + R::abs(m_.x0) + m_.shape.cwiseProduct(X).cwiseAbs().sum();
+  S tol = S(1e-6) * scale;
+  if (cvode_) tol += S(10 * run_.rtol) * scale + S(10 * run_.atol) * m_.shape.cwiseAbs().sum();
+  return tol;
+}
+
+template <class S>
+void Automaton<S>::CheckFreeGap(const S& gap, const Vec& X, double t, const char* where) {
+  if (!violation_.empty() || gap >= -GapTolerance(X)) return;
+  if (!R::isfinite(gap)) return;  // a non-finite state is reported by CheckSegment
+  violation_ = fmt::format(
+      "state below the stop: x_B − x0 = {:.3g} in {} at t = {:.17g} (tolerance {:.3g}); the {} "
+      "engine crossed the stop without detecting the contact{}",
+      R::to_double(gap), where, t, R::to_double(GapTolerance(X)), cvode_ ? "CVODE" : "exact",
+      cvode_ ? ": tighten run.rtol and run.atol, or use run.engine = \"exact\"" : "");
+}
+
+// After a segment from clock `from` over local time `sigma`, with X_, V_, gap_ and clock_ updated.
+template <class S>
+void Automaton<S>::CheckSegment(const ClockT<S>& from, const S& sigma) {
+  if (!violation_.empty()) return;
+  bool finite = R::isfinite(sigma);
+  for (Eigen::Index i = 0; i < X_.size(); ++i) finite = finite && R::isfinite(X_[i]) && R::isfinite(V_[i]);
+  if (!finite) {
+    violation_ = fmt::format("state not finite after a {} segment from t = {:.17g} (σ = {:.3g})",
+                             mode_ == Mode::kFree ? "free-flight" : "sticking", AbsTime(from),
+                             R::to_double(sigma));
+    return;
+  }
+  const bool forward = sigma >= 0 && R::isfinite(clock_.offset) && clock_.offset >= 0 &&
+                       clock_.offset < period_ &&
+                       (clock_.period > from.period ||
+                        (clock_.period == from.period && clock_.offset >= from.offset));
+  if (!forward) {
+    violation_ = fmt::format(
+        "non-monotone clock: a {} segment from period {} + {:.17g} ended at period {} + {:.17g} "
+        "(σ = {:.3g})",
+        mode_ == Mode::kFree ? "free-flight" : "sticking", from.period, R::to_double(from.offset),
+        clock_.period, R::to_double(clock_.offset), R::to_double(sigma));
+    return;
+  }
+  if (mode_ == Mode::kFree) {
+    CheckFreeGap(gap_, X_, AbsTime(clock_), "the state at the end of a flight");
+  } else {
+    const S off = m_.ContactDisplacement(X_) - m_.x0;
+    if (R::abs(off) > GapTolerance(X_))
+      violation_ = fmt::format("sticking state off the stop: x_B − x0 = {:.3g} at t = {:.17g} "
+                               "(tolerance {:.3g})",
+                               R::to_double(off), AbsTime(clock_), R::to_double(GapTolerance(X_)));
+  }
+}
+
+template <class S>
+void Automaton<S>::CheckEventClock() {
+  if (violation_.empty() &&
+      (clock_.period < last_event_.period ||
+       (clock_.period == last_event_.period && clock_.offset < last_event_.offset)))
+    violation_ = fmt::format(
+        "non-monotone clock: an event at period {} + {:.17g} follows one at period {} + {:.17g}",
+        clock_.period, R::to_double(clock_.offset), last_event_.period,
+        R::to_double(last_event_.offset));
+  last_event_ = clock_;
+}
+
+// Ends the run as a numerical failure when an invariant was broken; false then.
+template <class S>
+bool Automaton<S>::Guarded() {
+  if (violation_.empty() || result_.status != RunStatus::kOk) return true;
+  return Fail("physics invariant broken: " + violation_);
 }
 
 // docs/model.md §5.4, §5.4: predict the accumulation point of a chattering sequence from the impact
@@ -577,6 +675,7 @@ RunResult Automaton<S>::Run() {
   const S tiny = S(4) * Eps<S>() * period_;
   int stalled = 0;
   while (clock_.period < run_.periods) {
+    if (!Guarded()) break;
     if (StopPolled()) {
       result_.status = RunStatus::kInterrupted;
       result_.message = fmt::format(
@@ -603,6 +702,8 @@ RunResult Automaton<S>::Run() {
       for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma)});
     }
     AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
+    CheckSegment(from, seg.sigma);
+    if (!Guarded()) break;
     stalled = seg.sigma <= tiny ? stalled + 1 : 0;
     if (stalled > 1000) {
       Fail(fmt::format("no progress at t = {:.17g}: 1000 consecutive events without time "
@@ -640,6 +741,7 @@ RunResult Automaton<S>::Run() {
       stick_start_ = StickStart::kTangent;  // R touches 0 without crossing: stay
     }
   }
+  Guarded();
   result_.end = ToClock(clock_);
   result_.t_end = AbsTime(clock_);
   result_.X = X_.template cast<double>();

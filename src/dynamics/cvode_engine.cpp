@@ -478,9 +478,12 @@ void CvodeEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
   CVodeGetCurrentTime(in.mem, &tn);
   CVodeGetLastStep(in.mem, &hu);
   sigma = std::clamp(sigma, tn - hu, tn);
-  if (CVodeGetDky(in.mem, sigma, 0, in.tmp) < 0)
+  // No step since Begin (a contact at σ = 0): the start values, still in y. CVodeGetDky would
+  // divide by the step size h = 0 and return NaN (found by the automaton's invariant checks).
+  const bool at_start = tn <= 0.0;
+  if (!at_start && CVodeGetDky(in.mem, sigma, 0, in.tmp) < 0)
     throw std::logic_error(fmt::format("CVodeGetDky outside the last step (σ = {})", sigma));
-  const double* Y = N_VGetArrayPointer(in.tmp);
+  const double* Y = N_VGetArrayPointer(at_start ? in.y : in.tmp);
   if (m.mode == Mode::kFree) {
     for (int i = 0; i < n; ++i) {
       X[i] = m.X0[i] + Y[i];
@@ -498,6 +501,9 @@ void CvodeEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
 double CvodeEngine::Gap(double sigma) const {
   auto& m = *impl_;
   if (m.mode != Mode::kFree) return 0.0;
+  double tn = 0.0;
+  CVodeGetCurrentTime(m.active->mem, &tn);
+  if (tn <= 0.0) return m.gap0;  // no step since Begin (see Evaluate)
   if (CVodeGetDky(m.active->mem, sigma, 0, m.active->tmp) < 0) return 0.0;
   const double* Y = N_VGetArrayPointer(m.active->tmp);
   double gap = m.gap0;

@@ -5,8 +5,15 @@
 #include "dynamics/automaton.hpp"
 #include "dynamics/engine_factory.hpp"
 #include "dynamics/simulate_quad.hpp"
+#include "vibro/stop_request.hpp"
 
 namespace vibro {
+namespace {
+std::atomic<const std::atomic<bool>*> g_process_stop{nullptr};
+}  // namespace
+
+void SetProcessStopFlag(const std::atomic<bool>* flag) { g_process_stop.store(flag); }
+const std::atomic<bool>* ProcessStopFlag() { return g_process_stop.load(); }
 
 const char* ToString(RunStatus s) {
   switch (s) {

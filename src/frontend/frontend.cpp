@@ -52,6 +52,16 @@ Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, c
   return SceneWith(SceneOrigin{path, std::nullopt, path, sets}, key, value);
 }
 
+Scene SceneAtOption(const SceneOrigin& origin, const std::string& key, double value, const char* option) {
+  try {
+    return SceneWith(origin, key, value);
+  } catch (const InputError& e) {
+    std::vector<std::string> located;
+    for (const auto& m : e.messages()) located.push_back(fmt::format("{} {:.17g} (--param {}): {}", option, value, key, m));
+    throw InputError(located);
+  }
+}
+
 namespace {
 thread_local Invocation g_invocation;
 }  // namespace
@@ -104,7 +114,15 @@ StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
 Coordinate StudyCoordinate(const System& sys, const std::string& name, const std::vector<double>& r,
                            const char* option, std::vector<std::string>& problems) {
   if (r.size() == 2) {
-    if (!(r[1] > r[0])) problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", option, r[0], r[1]));
+    // The bound on a scene's initial coordinates (docs/reliability.md): a start beyond it has a
+    // square the engines cannot represent.
+    constexpr double kHuge = 1e100;
+    if (!(std::abs(r[0]) <= kHuge && std::abs(r[1]) <= kHuge))
+      problems.push_back(fmt::format("{} {},{}: expected |A|, |B| ≤ {:g} (a start of the study is an initial "
+                                     "state, whose square must be representable)",
+                                     option, r[0], r[1], kHuge));
+    else if (!(r[1] > r[0]))
+      problems.push_back(fmt::format("{} {},{}: expected A,B with A < B", option, r[0], r[1]));
     return Coordinate{name, r[0], r[1]};
   }
   if (!r.empty()) problems.push_back(fmt::format("{}: expected two numbers A,B", option));
@@ -130,6 +148,15 @@ void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System&
   store->Finish(result, orbit.summary);
 }
 
+void WriteOrbitFailure(const std::string& out, const LoadedScene& loaded, const System& sys,
+                       const OrbitResult& orbit) {
+  auto store = Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  RunResult r;
+  r.status = RunStatus::kNumericalFailure;
+  r.message = fmt::format("no orbit ({}){}", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
+  store->Finish(r, NoAttractor());
+}
+
 void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::StudyGrid& grid, bool interrupted) {
   store.WriteStudy(study, grid);
   RunResult r;
@@ -140,6 +167,20 @@ void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::St
                             study.cells - std::llround(study.pending_fraction * static_cast<double>(study.cells)),
                             study.cells);
   store.Finish(r, NoAttractor());  // a study has no single attractor (they are in /attractors)
+}
+
+RunResult SweepOutcome(const std::vector<SweepPoint>& sweep, const std::string& key, bool interrupted) {
+  RunResult r;
+  if (interrupted) {
+    r.status = RunStatus::kInterrupted;
+    r.message = fmt::format("interrupted after {} of the sweep's runs", sweep.size());
+  } else if (!sweep.empty() && sweep.back().status != "ok") {
+    const SweepPoint& p = sweep.back();
+    r.status = p.status == ToString(RunStatus::kUndetermined) ? RunStatus::kUndetermined
+                                                              : RunStatus::kNumericalFailure;
+    r.message = fmt::format("the sweep ended at {} = {:.17g}: {}", key, p.value, p.message);
+  }
+  return r;
 }
 
 }  // namespace vibro::frontend

@@ -40,6 +40,10 @@ Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value)
 Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,
                 double value);
 
+// SceneWith for a value given by a command-line option (`--from`, `--to`): a value outside the
+// key's range is refused with the option named, e.g. "--from 1e+308 (--param KEY): ...".
+Scene SceneAtOption(const SceneOrigin& origin, const std::string& key, double value, const char* option);
+
 // How the current command was invoked, stored as provenance in every output file written on
 // this thread afterwards: `command` ("simulate", "basin", ...), the full command line (or the
 // Python call), the command's options with their values (defaults included) and whether an
@@ -72,6 +76,15 @@ inline Attractor NoAttractor() {
 // Writes a finished (or interrupted) study to `store` and closes its run: /basin or /attractors,
 // status and, when interrupted, how many cells are done and how to resume.
 void FinishStudy(Hdf5Store& store, const StudyResult& study, const Hdf5Store::StudyGrid& grid, bool interrupted);
+
+// The status of a sweep as a whole: interrupted, the status of its last point when that run
+// failed (numerical failure or undetermined, with `key` and the value named), else ok.
+RunResult SweepOutcome(const std::vector<SweepPoint>& sweep, const std::string& key, bool interrupted);
+
+// Closes the `out` file of an orbit search that found no orbit: status numerical-failure with the
+// search's status and message (the file exit 3 leaves behind agrees with it).
+void WriteOrbitFailure(const std::string& out, const LoadedScene& loaded, const System& system,
+                       const OrbitResult& orbit);
 
 // Writes one period of a converged orbit, densely sampled, and its multipliers (/orbit) to `out`.
 void WriteOrbit(const std::string& out, const LoadedScene& loaded, const System& system,

@@ -233,6 +233,10 @@ std::string SweepJson(const std::vector<SweepPoint>& sweep) {
     o["direction"] = p.upward ? "up" : "down";
     o["x_B"] = p.x_B;
     o["v_B"] = p.v_B;
+    if (p.status != "ok") {  // the run that ended the sweep
+      o["status"] = p.status;
+      o["message"] = p.message;
+    }
     pts.push_back(o);
   }
   j["points"] = pts;

@@ -486,6 +486,10 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
     if (stop && stop->load()) break;
     Scene sc = req.scene_at(values[i]);
     sc.run.samples_per_period = 0;
+    // The classification checks that the transient has decayed and that the event log repeats
+    // only on a full record (4·max_period + 1 periods): a sweep's run is never shorter, so that a
+    // decaying free transient is not called periodic by aliasing (docs/reliability.md).
+    sc.run.periods = std::max<long long>(sc.run.periods, 4LL * sc.run.max_period + 1);
     const System sys(sc);
     AttractorRecorder rec(sys, sc);
     SectionTail tail(static_cast<size_t>(req.record), sys);
@@ -495,9 +499,15 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
       opt.initial = &*state;
     }
     opt.observers = {&rec, &tail};
+    opt.stop_requested = stop;  // a run of many periods stops within the second too
     const RunResult r = Simulate(sys, sc, opt);
-    out.push_back({values[i], i < up, rec.Classify(), tail.x, tail.v});
-    if (r.status != RunStatus::kOk) break;
+    if (r.status == RunStatus::kInterrupted) break;  // cut short: nothing to classify
+    // A failed run ends the sweep; its partial record is not classified (it would be reported as
+    // an attractor of a motion that was never computed to the end).
+    const bool ok = r.status == RunStatus::kOk;
+    out.push_back({values[i], i < up, ok ? rec.Classify() : Attractor{}, tail.x, tail.v,
+                   ToString(r.status), ok ? std::string() : r.message});
+    if (!ok) break;
     // The next run continues from this one's final state, at a whole number of periods later.
     state = InitialOverride{sc.initial_time, r.X, r.V};
     if (r.mode == Mode::kSticking || sys.ContactDisplacement(r.X) <= sys.stop()) {

@@ -16,6 +16,7 @@ killed), not speed measurements.
 usage: hardening_test.py VIBRO SCENES_DIR
 """
 import hashlib
+import json
 import os
 import random
 import shutil
@@ -225,6 +226,70 @@ nonfinite = {
 for name, args in nonfinite.items():
     has_out = args[0] not in ("attractors",)
     refused(name, args + (["--out", out] if has_out else []), out if has_out else None)
+
+# ---- issue 15's reproducers: refused naming the option or key (nothing created), or stopped ----
+reproducers = {
+    "attractors --y-range -1e300,1e300": (["attractors", fig5, "--y-range", "-1e300,1e300"], "--y-range", False),
+    "basin --x-range 0,1e101": (["basin", fig5, "--x-range", "0,1e101", "--grid", "4,4"], "--x-range", True),
+    "sweep --from 1e308 --to 1.7e308": (["sweep", default, "--param", "excitation.frequency", "--from", "1e308",
+                                         "--to", "1.7e308"], "--from", True),
+    "sweep stop.position --to 1.7e308": (["sweep", default, "--param", "stop.position", "--from", "1", "--to",
+                                          "1.7e308"], "--to", True),
+    "basin excitation.amplitude=5e-324": (["basin", fig5, "--set", "excitation.amplitude=5e-324", "--grid", "4,4"],
+                                          "excitation.amplitude", True),
+    "simulate excitation.amplitude=1e-310, x = 2": (["simulate", default, "--set", "excitation.amplitude=1e-310",
+                                                     "--set", "initial.displacement=[2.0]", "--set",
+                                                     "initial.velocity=[0.0]"], "excitation.amplitude", True),
+    "simulate excitation.frequency=5e-324": (["simulate", default, "--set", "excitation.frequency=5e-324"],
+                                             "excitation.frequency", True),
+    "simulate excitation.frequency=1.797e308": (["simulate", default, "--set", "excitation.frequency=1.797e308"],
+                                                "excitation.frequency", True),
+    "orbit --guess inf,1": (["orbit", default, "--guess", "inf,1"], "--guess", True),
+}
+for name, (args, where, has_out) in reproducers.items():
+    refused(name, args + (["--out", out] if has_out else []), out if has_out else None, located=where)
+
+# Stop requests reach runs started deep inside another computation: the orbit solves of a
+# partition's continuations (a root search in a sticking phase at f ~ 1e99 ran 7 s after SIGTERM),
+# and a sweep's run of many periods.
+deep = {
+    "partition at f ~ 1e99": ["partition", chain3, "--params", "excitation.amplitude,excitation.frequency",
+                               "--range1", "1e99,1e100", "--range2", "0.3,0.8", "--sticking-fraction", "0.5"],
+    "sweep of long runs": ["sweep", default, "--set", "run.periods=100000000", "--param", "excitation.amplitude",
+                           "--from", "1.1", "--to", "1.2", "--steps", "2"],
+}
+for name, args in deep.items():
+    out = os.path.join(tmp, "deep.h5")
+    if os.path.exists(out):
+        os.remove(out)
+    rc, took, err = interrupt(args + ["--out", out], 1.5)
+    check(f"{name}: SIGTERM → exit 130", rc == 130, f"exit {rc} {err[-300:]}")
+    check(f"{name}: stops within {LIVENESS} s", took < LIVENESS, f"{took:.2f} s")
+    check(f"{name}: file status interrupted", os.path.exists(out) and status(out) == "interrupted")
+
+# ---- physics invariants: a run that breaks one is a numerical failure, never ok ----
+# f = 1e100 on Fig. 8's scene: the double flight's rounding (1e84) puts the body far below the stop
+# at the end of the first flight; it used to be reported ok.
+out = os.path.join(tmp, "below.h5")
+r = run("simulate", default, "--set", "excitation.amplitude=1e100", "--set", "run.periods=3", "--out", out)
+check("f = 1e100: exit 3", r.returncode == 3, f"{r.returncode} {r.stderr[-300:]}")
+check("f = 1e100: status numerical-failure naming the cause",
+      status(out) == "numerical-failure" and "state below the stop" in r.stderr, r.stderr[-300:])
+
+# A sweep whose run fails ends there with the file's status, the exit code and the last point
+# saying so (it used to exit 0 with status ok and a classification of the partial run).
+out = os.path.join(tmp, "sweep_fail.h5")
+r = run("sweep", default, "--set", 'run.chatter="none"', "--param", "excitation.amplitude", "--from", "1.1", "--to",
+        "1.2", "--steps", "2", "--out", out, "--json")
+check("failing sweep: exit 3", r.returncode == 3, f"{r.returncode} {r.stderr[-300:]}")
+check("failing sweep: file status numerical-failure", status(out) == "numerical-failure", status(out))
+with h5py.File(out, "r") as f:
+    msg = f.attrs["message"]
+    msg = msg.decode() if isinstance(msg, bytes) else msg
+check("failing sweep: message names the value", "excitation.amplitude = 1.1" in msg, msg)
+last = json.loads(r.stdout.strip().splitlines()[-1])["points"][-1] if r.stdout.strip() else {}
+check("failing sweep: the last point has the run's status and no period",
+      last.get("status") == "numerical-failure" and last.get("period") is None, str(last)[:300])
 
 # ---- corrupt files given to --resume: exit 2, file untouched ----
 run_file = os.path.join(tmp, "run.h5")

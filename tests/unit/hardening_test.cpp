@@ -5,10 +5,16 @@
 
 #include <gtest/gtest.h>
 
+#include "dynamics/automaton.hpp"
 #include "dynamics/cvode_engine.hpp"
+#include "dynamics/engine_factory.hpp"
+#include "dynamics/exact_engine.hpp"
+#include "dynamics/quad.hpp"
 #include "support.hpp"
 #include "vibro/attractor.hpp"
+#include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/studies.hpp"
 
 namespace vibro {
 namespace {
@@ -102,6 +108,64 @@ TEST(Hardening, EventLogOfTheWholeWindowMustRepeat) {
   }
 }
 
+// Studies classify short records (a cell stopped early, fewer than the 4·max_period + 1 = 129
+// periods the recorder can hold): the motion that sticks every 7 periods is never "period 1"
+// there either: it is period 7 once the record holds three windows of 7 periods (22 section
+// points), and not periodic before.
+TEST(Hardening, ShortRecordsDoNotInventPeriods) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  const double T = sys.period();
+  const Eigen::VectorXd z = (Eigen::VectorXd(4) << 0.4, 0.1, -0.2, 0.3).finished();
+  for (long long K = 8; K <= 40; ++K) {
+    AttractorRecorder rec(sys, scene);
+    for (long long k = 0; k <= K; ++k) {
+      Section(rec, sys, k, z, Mode::kFree);
+      if (k == K) break;
+      if (k % 7 == 3) {
+        rec.OnEvent({EventKind::kStick, {k, 0.1 * T}, (static_cast<double>(k) + 0.1) * T, 1.0, 0.0, 0.0});
+        rec.OnEvent({EventKind::kRelease, {k, 0.3 * T}, (static_cast<double>(k) + 0.3) * T, 1.0, 0.0, 0.0});
+      }
+      rec.OnEvent({EventKind::kImpact, {k, 0.5 * T}, (static_cast<double>(k) + 0.5) * T, 1.0, -0.2, 0.15});
+    }
+    const Attractor a = rec.Classify();
+    if (K + 1 > 21) {
+      ASSERT_TRUE(a.period.has_value()) << "K = " << K;
+      EXPECT_EQ(*a.period, 7) << "K = " << K;
+      EXPECT_NEAR(*a.sticking_fraction, 0.2 / 7, 1e-12) << "K = " << K;
+    } else {
+      EXPECT_FALSE(a.period.has_value()) << "K = " << K << ", period " << a.period.value_or(0);
+      EXPECT_GE(*a.sticking_fraction, 0.0);
+      EXPECT_LE(*a.sticking_fraction, 1.0);
+    }
+  }
+}
+
+// A sweep's runs hold a full record whatever run.periods says (the decay test needs it): a sweep
+// of the free 2-DOF structure with run.periods = 10 classifies each value from 4·max_period + 1
+// periods, which the section points it keeps show (record = 200 > 129 points asked, 129 + 1 given).
+TEST(Hardening, SweepRunsHoldAFullRecord) {
+  Scene scene = TwoDof(1.3);
+  scene.run.periods = 10;
+  SweepRequest req;
+  req.scene_at = [&](double f) {
+    Scene s = scene;
+    s.amplitude = f;
+    return s;
+  };
+  req.from = 0.1;
+  req.to = 0.2;
+  req.steps = 1;
+  req.record = 200;
+  req.both_ways = false;
+  const auto points = Sweep(req);
+  ASSERT_EQ(points.size(), 2u);
+  for (const auto& p : points) {
+    EXPECT_EQ(p.x_B.size(), static_cast<size_t>(4 * scene.run.max_period + 2));
+    EXPECT_EQ(p.status, "ok");
+  }
+}
+
 // A motion that never repeats, stuck from period 70.5 to 199.5 (a phase begun before the
 // analysed record of 4·max_period + 1 = 129 periods, 71..200): the time on the stop inside the
 // record is 199.5 − 71 = 128.5 periods, a fraction 128.5/129 (not 129 periods over a window of
@@ -183,6 +247,143 @@ TEST(Hardening, CvodeStartLeavingTheStopByAHairDoesNotTunnel) {
     ASSERT_TRUE(ae.sticking_fraction && ac.sticking_fraction);
     EXPECT_NEAR(*ac.sticking_fraction, *ae.sticking_fraction, 1e-6) << "v0 = " << v0;
   }
+}
+
+
+// ---- physics invariants guarded in the automaton (a test seam: a broken engine) ----
+
+enum class Fault { kNone, kBelowStop, kOffTheStop, kBackwards, kNotFinite };
+
+// A real engine whose results are corrupted from its `after`-th segment on: the flight state
+// pushed 0.5 below the stop, the sticking state lifted 0.5 off it, a segment that ends before it
+// began, or a non-finite state. What a faulty engine (or a bug in one) would hand the automaton.
+template <class S>
+class BrokenEngine final : public detail::PropagatorT<S> {
+ public:
+  using Vec = typename detail::PropagatorT<S>::Vec;
+  BrokenEngine(std::unique_ptr<detail::PropagatorT<S>> inner, const detail::ModelT<S>& m, Fault fault, int after)
+      : inner_(std::move(inner)), m_(m), fault_(fault), after_(after) {}
+  void Begin(const detail::SegmentStartT<S>& s) override {
+    ++segments_;
+    mode_ = s.mode;
+    inner_->Begin(s);
+  }
+  detail::SegmentResultT<S> Advance(S sigma_max, bool detect, const detail::StretchCallbackT<S>& cb) override {
+    auto r = inner_->Advance(sigma_max, detect, cb);
+    if (Broken() && fault_ == Fault::kBackwards) r.sigma = -S(0.25) * m_.period;
+    return r;
+  }
+  void Evaluate(S sigma, Vec& X, Vec& V) const override {
+    inner_->Evaluate(sigma, X, V);
+    if (!Broken()) return;
+    if (fault_ == Fault::kBelowStop && mode_ == Mode::kFree) X -= m_.contact * (S(0.5) / m_.s_B);
+    if (fault_ == Fault::kOffTheStop && mode_ == Mode::kSticking) X += m_.contact * (S(0.5) / m_.s_B);
+    if (fault_ == Fault::kNotFinite) X[0] = S(std::numeric_limits<double>::quiet_NaN());
+  }
+  S Gap(S sigma) const override {
+    const S g = inner_->Gap(sigma);
+    return Broken() && fault_ == Fault::kBelowStop ? S(g - S(0.5)) : g;
+  }
+
+ private:
+  bool Broken() const { return fault_ != Fault::kNone && segments_ > after_; }
+  std::unique_ptr<detail::PropagatorT<S>> inner_;
+  const detail::ModelT<S>& m_;
+  Fault fault_;
+  int after_;
+  int segments_ = 0;
+  Mode mode_ = Mode::kFree;
+};
+
+// The 2-DOF chain (free flights, chattering, and sticking phases integrated by the engine: mass 1
+// moves while mass 2 is stuck) with the exact engine in double or quad, or CVODE, its engine
+// broken after `after` segments.
+template <class S>
+RunResult RunBroken(Fault fault, int after, Engine engine, std::vector<Observer*> observers = {}) {
+  Scene s = LoadScene(std::string(VIBRO_SCENES_DIR) + "/chain2.toml", {"run.periods=30", "run.samples_per_period=16"}).scene;
+  s.run.engine = engine;
+  const System sys(s);
+  const detail::ModelT<S> model(sys);
+  std::unique_ptr<detail::PropagatorT<S>> inner;
+  if constexpr (std::is_same_v<S, double>)
+    inner = detail::MakeEngine(sys, model, s.run);
+  else
+    inner = std::make_unique<detail::ExactEngineT<S>>(sys, model);
+  SimulationOptions opt;
+  opt.observers = std::move(observers);
+  detail::Automaton<S> a(sys, model, s, opt, std::make_unique<BrokenEngine<S>>(std::move(inner), model, fault, after));
+  return a.Run();
+}
+
+template <class S>
+void ExpectInvariantsGuarded(Engine engine) {
+  test::Log log;
+  const RunResult healthy = RunBroken<S>(Fault::kNone, 0, engine, {&log});
+  ASSERT_EQ(healthy.status, RunStatus::kOk) << healthy.message;  // the seam itself changes nothing
+  ASSERT_GT(healthy.counts.sticks, 5);
+  ASSERT_FALSE(log.samples.empty());
+  const struct {
+    Fault fault;
+    const char* cause;
+  } cases[] = {{Fault::kBelowStop, "state below the stop"},
+               {Fault::kOffTheStop, "sticking state off the stop"},
+               {Fault::kBackwards, "non-monotone clock"},
+               {Fault::kNotFinite, "state not finite"}};
+  for (const auto& c : cases) {
+    for (const bool observed : {false, true}) {  // samples checked too, or segment ends only
+      test::Log seen;
+      const RunResult r = RunBroken<S>(c.fault, 12, engine, observed ? std::vector<Observer*>{&seen}
+                                                                     : std::vector<Observer*>{});
+      EXPECT_EQ(r.status, RunStatus::kNumericalFailure) << c.cause << ", observed " << observed;
+      EXPECT_NE(r.message.find(c.cause), std::string::npos) << r.message;
+      EXPECT_NE(r.message.find("physics invariant broken"), std::string::npos) << r.message;
+      EXPECT_LT(r.end.period, 30) << c.cause;  // caught where it arose, not at the end
+    }
+  }
+}
+
+TEST(Hardening, InvariantsGuardedExactDouble) { ExpectInvariantsGuarded<double>(Engine::kExact); }
+TEST(Hardening, InvariantsGuardedCvode) { ExpectInvariantsGuarded<double>(Engine::kCvode); }
+TEST(Hardening, InvariantsGuardedExactQuad) { ExpectInvariantsGuarded<detail::Quad>(Engine::kExact); }
+
+// The case: chain2 at f = 0.681 over 600 periods used to report a sticking fraction of
+// 1.016. Whatever the motion, the fraction is the time on the stop inside the analysed window
+// (the stick/release events of the run, cut at its edges) over the window's length: compared here
+// with that time summed independently from the full event log and the section modes.
+TEST(Hardening, Chain2StickingFractionIsAWindowAverage) {
+  auto loaded = LoadScene(std::string(VIBRO_SCENES_DIR) + "/chain2.toml",
+                          {"excitation.frequency=0.681", "run.periods=600"});
+  const Scene& s = loaded.scene;
+  const System sys(s);
+  AttractorRecorder rec(sys, s);
+  test::Log log;
+  SimulationOptions opt;
+  opt.observers = {&rec, &log};
+  const RunResult r = Simulate(sys, s, opt);
+  ASSERT_EQ(r.status, RunStatus::kOk) << r.message;
+  const Attractor a = rec.Classify();
+  ASSERT_TRUE(a.sticking_fraction.has_value());
+  EXPECT_GE(*a.sticking_fraction, 0.0);
+  EXPECT_LE(*a.sticking_fraction, 1.0);
+  // Independent truth: the window is the last p periods (p = the period, or the record).
+  const double T = sys.period();
+  const long long K = s.run.periods;
+  const long long p = a.period ? *a.period : 4LL * s.run.max_period + 1;
+  const double lo = static_cast<double>(K - p) * T, hi = static_cast<double>(K) * T;
+  double stuck = 0, since = -1;
+  bool on = false;
+  for (const auto& e : log.events) {
+    const double t = static_cast<double>(e.clock.period) * T + e.clock.offset;
+    if (e.kind == EventKind::kStick && !on) {
+      on = true;
+      since = t;
+    } else if (e.kind == EventKind::kRelease && on) {
+      on = false;
+      stuck += std::max(0.0, std::min(t, hi) - std::max(since, lo));
+    }
+  }
+  if (on) stuck += hi - std::max(since, lo);
+  EXPECT_NEAR(*a.sticking_fraction, stuck / (hi - lo), 1e-9) << a.kind << " period " << a.period.value_or(0);
 }
 
 }  // namespace
