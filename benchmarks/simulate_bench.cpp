@@ -4,6 +4,8 @@
 // 1e-7 below the end of sticking, and the quad-precision reference against double on Fig. 8.
 // Periods per second is the fair measure across chattering rules: a rule that predicts earlier
 // follows fewer impacts per period.
+#include <string>
+
 #include <benchmark/benchmark.h>
 
 #include "vibro/attractor.hpp"
@@ -76,5 +78,21 @@ void BM_Events10DofStiff(benchmark::State& state) {
   RunScene(state, "chain10_stiff.toml", {"run.samples_per_period=0"});
 }
 BENCHMARK(BM_Events10DofStiff)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// Cost per event against the number of modes: the 50-node beam (data/scenes/large/beam50.toml) truncated
+// to its lowest n modes (structure.modes), 50 periods each. benchmarks/mode_sweep.py turns the
+// counters into docs/mode_sweep.{csv,png}.
+void BM_BeamModes(benchmark::State& state) {
+  RunScene(state, "large/beam50.toml",
+           {"run.samples_per_period=0", "structure.modes=" + std::to_string(state.range(0))});
+}
+BENCHMARK(BM_BeamModes)
+    ->Arg(1)->Arg(2)->Arg(3)->Arg(5)->Arg(8)->Arg(12)->Arg(16)->Arg(20)->Arg(25)->Arg(30)->Arg(40)
+    ->Arg(50)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
