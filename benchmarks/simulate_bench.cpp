@@ -8,6 +8,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include "dynamics/exact_engine.hpp"
+#include "dynamics/flight_window.hpp"
+#include "dynamics/model_t.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
@@ -94,5 +97,36 @@ BENCHMARK(BM_BeamModes)
     ->Arg(1)->Arg(2)->Arg(3)->Arg(5)->Arg(8)->Arg(12)->Arg(16)->Arg(20)->Arg(25)->Arg(30)->Arg(40)
     ->Arg(50)
     ->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// One certified probe of the free-flight gap (closed-form state of every mode, jet, bounds and the
+// far bound) on the beam truncated to n modes: the cost per probe, linear in n by construction.
+// µs per event / µs per probe = probes per event (docs/performance.md).
+void BM_BeamGapProbe(benchmark::State& state) {
+  const auto loaded = vibro::LoadScene(std::string(VIBRO_SCENES_DIR) + "/large/beam50.toml",
+                                       {"structure.modes=" + std::to_string(state.range(0))});
+  const vibro::System sys(loaded.scene);
+  const vibro::detail::ModelT<double> model(sys);
+  vibro::detail::ExactEngine engine(sys, model);
+  const auto n = sys.dof();
+  const Eigen::VectorXd X = Eigen::VectorXd::Constant(n, 1e-3), V = Eigen::VectorXd::Constant(n, 1e-2);
+  engine.Begin({vibro::Mode::kFree, 0.3, 0.0, X, V, 0.05, vibro::detail::FlightStart::kGeneric,
+                vibro::detail::StickStart::kGeneric});
+  const double cap = vibro::detail::StepCap<double>(model);
+  double u = 0;
+  long long probes = 0;
+  for (auto _ : state) {
+    const auto p = engine.GapProbe(u, cap, 10.0);
+    benchmark::DoNotOptimize(p);
+    u = u < 5.0 ? u + 1e-3 : 0.0;
+    ++probes;
+  }
+  state.counters["probes/s"] = benchmark::Counter(static_cast<double>(probes), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_BeamGapProbe)->Arg(1)->Arg(2)->Arg(3)->Arg(5)->Arg(8)->Arg(12)->Arg(16)->Arg(20)->Arg(25)
+    ->Arg(30)->Arg(40)->Arg(50);
 
 }  // namespace
