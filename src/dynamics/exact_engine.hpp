@@ -4,6 +4,7 @@
 // quad-precision reference (run.precision = "quad", dynamics/quad.hpp).
 #pragma once
 
+#include <algorithm>
 #include <type_traits>
 #include <vector>
 
@@ -31,10 +32,24 @@ class ExactEngineT final : public PropagatorT<S> {
   S Gap(S sigma) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
-  // [sigma, sigma + H] (free flight). Public for tests.
-  ProbeT<S> GapProbe(const S& sigma, const S& H) const;
-  // Reaction R and its derivatives, with a bound on |R'''| (sticking, n ≥ 2).
-  ProbeT<S> ReactionProbe(const S& sigma, const S& H) const;
+  // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
+  // `rest` (root_finder.hpp, AddFarBound). Public for tests.
+  ProbeT<S> GapProbe(const S& sigma, const S& H, const S& rest = S(0)) const;
+  // Reaction R and its derivatives, with a bound on |R'''| (sticking, n ≥ 2), likewise.
+  ProbeT<S> ReactionProbe(const S& sigma, const S& H, const S& rest = S(0)) const;
+
+  // What the far bound needs of one mode, constant over a run: the steady forced response
+  // U(σ) = P sin(φ+ωσ) + Q cos(φ+ωσ), |U| ≤ u_max (docs/model.md §7, ζ = 0 included).
+  struct ModeFar {
+    S P, Q, u_max;
+    bool eligible;  // ν ≥ 2ω (far from resonance) and a nonzero weight
+  };
+  // One mode sampled at the probe point.
+  struct ModeSample {
+    S x, v, acc, A;  // coordinate, velocity, acceleration, energy amplitude
+    S loss;          // w·x + |w|·(largest |coordinate| ever): what the mode can still take off
+    bool far;        // bounded by its amplitude in the far bound
+  };
 
  private:
   SegmentResultT<S> AdvanceFree(const S& sigma_max, bool detect_events);
@@ -43,12 +58,23 @@ class ExactEngineT final : public PropagatorT<S> {
   SegmentResultT<S> Search(const ProbeFn& probe, const S& from, const S& sigma_max, SegmentEnd end);
   // Start of the certified search: the end of the window free of the trivial root at σ = 0.
   S FlightWindow() const;
+  // Loss of a mode of weight w sampled at a point where the forcing angle is (sf, cf).
+  S Loss(const OscillatorT<S>& o, const ModeFar& mf, const S& w, const S& x, const S& v,
+         const S& sf, const S& cf) const;
+  // Adds the far bound to p from samples_ (see ProbeT::far).
+  void AddFarBound(ProbeT<S>& p, const std::vector<OscillatorT<S>>& modes,
+                   const std::vector<ModeFar>& far, const std::vector<int>& order,
+                   const typename ModelT<S>::Vec* weights, const JetT<S>& base, const S& base_M,
+                   const S& H, const S& rest) const;
 
   const ModelT<S>& m_;
   S omega_;
   S h_cap_;  // largest root-search step (the bounds grow with the step)
   std::vector<OscillatorT<S>> free_modes_;   // ω_i, ζ_i, T_A,i f
   std::vector<OscillatorT<S>> stick_modes_;  // ω'_k, 0, l_kᵀF_c f
+  std::vector<ModeFar> free_far_, stick_far_;
+  std::vector<int> free_order_, stick_order_;  // mode indices, fastest first
+  mutable std::vector<ModeSample> samples_;     // scratch of the probes (no allocation per probe)
   S reaction_forcing_;                       // (s_A/s_B) f
   bool damped_sticking_ = false;             // non-proportional damping in the constrained modes
   DampedSticking damped_;                    // its closed form (docs/model.md §7), double only
@@ -87,6 +113,88 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
   h_cap_ = StepCap<S>(m);
   reaction_forcing_ = m.s_A / m.s_B * m.f;
   static_reaction_ = m.x0 / m.flexibility;
+  const auto far_of = [&](const std::vector<OscillatorT<S>>& modes, const auto& weight,
+                          std::vector<ModeFar>& far, std::vector<int>& order) {
+    for (size_t i = 0; i < modes.size(); ++i) {
+      const OscillatorT<S>& o = modes[i];
+      const S d = o.nu * o.nu - omega_ * omega_, e = S(2) * o.zeta * o.nu * omega_;
+      const S den = d * d + e * e;
+      const bool eligible = o.nu >= S(2) * omega_ && weight(i) != S(0);
+      far.push_back(eligible ? ModeFar{o.F * d / den, -o.F * e / den,
+                                       Real<S>::abs(o.F) / Real<S>::sqrt(den), true}
+                             : ModeFar{S(0), S(0), S(0), false});
+      order.push_back(static_cast<int>(i));
+    }
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+      return modes[static_cast<size_t>(a)].nu > modes[static_cast<size_t>(b)].nu;
+    });
+  };
+  far_of(free_modes_, [&](size_t i) { return m.shape[static_cast<Eigen::Index>(i)]; }, free_far_,
+         free_order_);
+  far_of(stick_modes_, [&](size_t k) { return m.stick_reaction[static_cast<Eigen::Index>(k)]; },
+         stick_far_, stick_order_);
+  samples_.resize(std::max(free_modes_.size(), stick_modes_.size()));
+}
+
+template <class S>
+S ExactEngineT<S>::Loss(const OscillatorT<S>& o, const ModeFar& mf, const S& w, const S& x,
+                        const S& v, const S& sf, const S& cf) const {
+  // The homogeneous part h = x − U obeys ḧ + 2ζνḣ + ν²h = 0, whose energy ḣ² + ν²h² never rises:
+  // |x(σ)| ≤ |h|max + |U|max ≤ √(ḣ² + ν²h²)/ν + u_max for every later σ.
+  using R = Real<S>;
+  const S h = x - (mf.P * sf + mf.Q * cf);
+  const S dh = v - omega_ * (mf.P * cf - mf.Q * sf);
+  const S reach = R::sqrt(dh * dh + o.nu * o.nu * h * h) / o.nu + mf.u_max;
+  const S aw = R::abs(w);
+  // Rounding of the terms (relative 1e-9 of their size, like BoundMargin).
+  return w * x + aw * reach + S(1e-9) * aw * (R::abs(x) + reach + R::abs(h));
+}
+
+template <class S>
+void ExactEngineT<S>::AddFarBound(ProbeT<S>& p, const std::vector<OscillatorT<S>>& modes,
+                                  const std::vector<ModeFar>& far, const std::vector<int>& order,
+                                  const typename ModelT<S>::Vec* weights, const JetT<S>& base,
+                                  const S& base_M, const S& H, const S& rest) const {
+  // Far from the stop (g well above what the fast modes can take off), bound the fastest modes by
+  // their amplitude, Δ(w x) ≥ −loss, and keep the Taylor model for the slower ones only; the step
+  // is then set by the fastest Taylor mode instead of the fastest mode. Greedy from the fastest,
+  // while the losses sum to at most g/2.
+  const S limit = S(0.5) * p.jet.g;
+  S lost(0);
+  int taken = 0;
+  S fastest = omega_;
+  for (const int i : order) {
+    const auto ui = static_cast<size_t>(i);
+    const S w = weights ? (*weights)[i] : S(1);
+    if (w == S(0)) continue;
+    if (!far[ui].eligible || !(lost + samples_[ui].loss <= limit)) {
+      if (modes[ui].nu > fastest) fastest = modes[ui].nu;
+      break;
+    }
+    lost += samples_[ui].loss;
+    samples_[ui].far = true;
+    ++taken;
+  }
+  if (taken == 0) return;
+  S far_H = S(0.5) * Real<S>::pi() / fastest;  // a quarter of the fastest Taylor period
+  if (far_H < H) far_H = H;
+  if (far_H > rest) far_H = rest;
+  p.far = {p.jet.g - lost, base.g1, base.g2};
+  p.far_M = base_M;
+  p.far_H = far_H;
+  for (size_t i = 0; i < modes.size(); ++i) {
+    ModeSample& smp = samples_[i];
+    const S w = weights ? (*weights)[static_cast<Eigen::Index>(i)] : S(1);
+    if (smp.far || w == S(0)) {
+      smp.far = false;
+      continue;
+    }
+    const OscillatorT<S>& o = modes[i];
+    p.far.g1 += w * smp.v;
+    p.far.g2 += w * smp.acc;
+    p.far_M += Real<S>::abs(w) * Bounds<S>(o, omega_, smp.A + Real<S>::abs(o.F) * far_H).d3;
+  }
+  p.far_M *= BoundMargin<S>();
 }
 
 template <class S>
@@ -111,47 +219,72 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
 }
 
 template <class S>
-ProbeT<S> ExactEngineT<S>::GapProbe(const S& sigma, const S& H) const {
+ProbeT<S> ExactEngineT<S>::GapProbe(const S& sigma, const S& H, const S& rest) const {
   using R = Real<S>;
   const auto& c = m_.shape;
-  const S s_forcing = trig_.s * R::cos(omega_ * sigma) + trig_.c * R::sin(omega_ * sigma);
+  const ForcingTrigT<S> fw(omega_, sigma);
+  const S s_forcing = fw.SinPhase(trig_);
+  const bool far = rest > H;
+  const S c_forcing = far ? fw.CosPhase(trig_) : S(0);
   ProbeT<S> p{{gap0_, S(0), S(0)}, S(0)};
   S dq_sum(0);
   for (size_t i = 0; i < free_modes_.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     if (c[ii] == S(0)) continue;
     const OscillatorT<S>& o = free_modes_[i];
-    const auto st = Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma);
+    const auto st = Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma, fw);
     const S x = X0_[ii] + st.dq;
+    const S acc = -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v + o.F * s_forcing;
+    const S A = Amplitude<S>(o, x, st.v);
     dq_sum += st.dq;
     p.jet.g1 += st.v;
-    p.jet.g2 += -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v + o.F * s_forcing;
-    p.M += Bounds<S>(o, omega_, Amplitude<S>(o, x, st.v) + R::abs(o.F) * H).d3;
+    p.jet.g2 += acc;
+    p.M += Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    if (far) {
+      const ModeFar& mf = free_far_[i];
+      samples_[i] = {x, st.v, acc, A,
+                     mf.eligible ? Loss(o, mf, S(1), x, st.v, s_forcing, c_forcing) : S(0), false};
+    }
   }
   p.jet.g += dq_sum;
   p.M *= BoundMargin<S>();
+  if (far && p.jet.g > 0)
+    AddFarBound(p, free_modes_, free_far_, free_order_, nullptr, {S(0), S(0), S(0)}, S(0), H, rest);
   return p;
 }
 
 template <class S>
-ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H) const {
+ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H, const S& rest) const {
   using R = Real<S>;
   const auto& rho = m_.stick_reaction;
-  const S sf = R::sin(phase_ + omega_ * sigma), cf = R::cos(phase_ + omega_ * sigma);
-  ProbeT<S> p{{static_reaction_ - reaction_forcing_ * sf, -reaction_forcing_ * omega_ * cf,
-               reaction_forcing_ * omega_ * omega_ * sf},
-              R::abs(reaction_forcing_) * omega_ * omega_ * omega_};
+  const ForcingTrigT<S> fw(omega_, sigma);
+  const S sf = fw.SinPhase(trig_), cf = fw.CosPhase(trig_);
+  const JetT<S> base{static_reaction_ - reaction_forcing_ * sf, -reaction_forcing_ * omega_ * cf,
+                     reaction_forcing_ * omega_ * omega_ * sf};
+  const S base_M = R::abs(reaction_forcing_) * omega_ * omega_ * omega_;
+  ProbeT<S> p{base, base_M};
+  const bool far = rest > H;
   for (size_t k = 0; k < stick_modes_.size(); ++k) {
     const auto kk = static_cast<Eigen::Index>(k);
     const OscillatorT<S>& o = stick_modes_[k];
-    const auto st = Flow<S>(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma);
+    const auto st = Flow<S>(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
     const S xi = xi0_[kk] + st.dq;
+    const S acc = -o.nu * o.nu * xi + o.F * sf;
+    const S A = Amplitude<S>(o, xi, st.v);
     p.jet.g += rho[kk] * xi;
     p.jet.g1 += rho[kk] * st.v;
-    p.jet.g2 += rho[kk] * (-o.nu * o.nu * xi + o.F * sf);
-    p.M += R::abs(rho[kk]) * Bounds<S>(o, omega_, Amplitude<S>(o, xi, st.v) + R::abs(o.F) * H).d3;
+    p.jet.g2 += rho[kk] * acc;
+    p.M += R::abs(rho[kk]) * Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    if (far) {
+      const ModeFar& mf = stick_far_[k];
+      samples_[k] = {xi, st.v, acc, A,
+                     mf.eligible ? Loss(o, mf, rho[kk], xi, st.v, sf, cf) : S(0), false};
+    }
   }
   p.M *= BoundMargin<S>();
+  if (far && p.jet.g > 0)
+    AddFarBound(p, stick_modes_, stick_far_, stick_order_, &rho, base, base_M * BoundMargin<S>(),
+                H, rest);
   return p;
 }
 
@@ -179,7 +312,8 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
   const S w = FlightWindow();
   if (w >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
-  return Search([this](const S& u, const S& H) { return GapProbe(u, H); }, w, sigma_max,
+  return Search([this](const S& u, const S& H, const S& rest) { return GapProbe(u, H, rest); }, w,
+                sigma_max,
                 SegmentEnd::kContact);
 }
 
@@ -198,15 +332,15 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
               "modes; use run.precision = \"double\""};
   }
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
-  const auto probe = [this](const S& u, const S& H) -> ProbeT<S> {
+  const auto probe = [this](const S& u, const S& H, const S& rest) -> ProbeT<S> {
     if constexpr (std::is_same_v<S, double>) {
       if (damped_sticking_) return damped_.ReactionProbe(u);
     }
-    return ReactionProbe(u, H);
+    return ReactionProbe(u, H, rest);
   };
   S w(0);
   if (stick_start_ != StickStart::kGeneric) {
-    const ProbeT<S> p = probe(S(0), h_cap_);
+    const ProbeT<S> p = probe(S(0), h_cap_, S(0));
     const auto cap = [&](const S& x) { return x < h_cap_ ? x : h_cap_; };
     if (stick_start_ == StickStart::kRising) {
       const S v = p.jet.g1, a = p.jet.g2, M = p.M;
@@ -236,9 +370,10 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   X.resize(n);
   V.resize(n);
   if (mode_ == Mode::kFree) {
+    const ForcingTrigT<S> fw(omega_, sigma);
     for (int i = 0; i < n; ++i) {
       const auto st =
-          Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma);
+          Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
       X[i] = X0_[i] + st.dq;
       V[i] = st.v;
     }
@@ -253,9 +388,10 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
       done = true;
     }
   }
+  const ForcingTrigT<S> fw(omega_, sigma);
   for (Eigen::Index k = 0; k < k_count && !done; ++k) {
     const auto st =
-        Flow<S>(stick_modes_[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma);
+        Flow<S>(stick_modes_[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma, fw);
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;
   }

@@ -34,6 +34,23 @@ struct PhaseTrigT {
   explicit PhaseTrigT(const S& phase) : s(Real<S>::sin(phase)), c(Real<S>::cos(phase)) {}
 };
 
+// The forcing's angle ωσ at one local time σ, shared by every mode evaluated at that σ (one
+// sincos per probe instead of one per mode): sin and cos of ωσ/2, sin ωσ and cos ωσ − 1 written
+// with the half angle so that they keep relative accuracy as σ → 0.
+template <class S>
+struct ForcingTrigT {
+  S s2, c2;  // sin(ωσ/2), cos(ωσ/2)
+  S s, cm1;  // sin ωσ, cos ωσ − 1
+  ForcingTrigT(const S& omega, const S& sigma) {
+    Real<S>::sincos(S(0.5) * omega * sigma, s2, c2);
+    s = S(2) * s2 * c2;
+    cm1 = S(-2) * s2 * s2;
+  }
+  // sin(φ + ωσ), cos(φ + ωσ) for the segment's phase φ.
+  S SinPhase(const PhaseTrigT<S>& ph) const { return ph.s * (S(1) + cm1) + ph.c * s; }
+  S CosPhase(const PhaseTrigT<S>& ph) const { return ph.c * (S(1) + cm1) - ph.s * s; }
+};
+
 using Oscillator = OscillatorT<double>;
 using OscillatorState = OscillatorStateT<double>;
 using PhaseTrig = PhaseTrigT<double>;
@@ -58,21 +75,28 @@ S Sinc(const S& x) {
 //   S = (sin ωσ − (ω/ν) sin νσ)/(ν² − ω²)    = [sin νσ − νσ cos(Σσ/2) sinc(δσ/2)] / (νΣ)
 //   E = (ν sin νσ − ω sin ωσ)/(ν² − ω²)      = [νσ cos(Σσ/2) sinc(δσ/2) + sin ωσ] / Σ
 // finite at ν = ω (docs/model.md §8: K → [sin ωσ cos φ − ωσ cos(φ + ωσ)]/(2ω²)).
+// The half angles νσ/2 and ωσ/2 are the only ones evaluated: νσ and Σσ/2 = νσ/2 + ωσ/2 follow
+// by the double-angle and addition formulas (absolute error a few ulps, like the direct sines of
+// the rounded arguments), δσ/2 = νσ/2 − ωσ/2 by the subtraction formula only where |δσ/2| ≥ 1/2
+// (relative error ≤ 4 ulps · νσ there); closer to resonance sinc(δσ/2) is evaluated directly.
 template <class S>
 OscillatorStateT<S> Undamped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,
-                             const S& q0, const S& v0, const S& sigma) {
+                             const S& q0, const S& v0, const S& sigma, const ForcingTrigT<S>& fw) {
   using R = Real<S>;
   const S nu = o.nu;
-  const S sn = R::sin(nu * sigma), half = R::sin(S(0.5) * nu * sigma);
+  S half, half_c;
+  R::sincos(S(0.5) * nu * sigma, half, half_c);
+  const S sn = S(2) * half * half_c;
   const S cn = S(1) - S(2) * half * half;
   OscillatorStateT<S> out{q0 * (S(-2) * half * half) + v0 * sn / nu, -q0 * nu * sn + v0 * cn};
   if (o.F == S(0)) return out;
   const S sum = nu + omega, diff = nu - omega;
-  const S sc = Sinc<S>(S(0.5) * diff * sigma);
-  const S s_half = R::sin(S(0.5) * sum * sigma), c_half = R::cos(S(0.5) * sum * sigma);
+  const S x = S(0.5) * diff * sigma;
+  const S sc = R::abs(x) < S(0.5) ? Sinc<S>(x) : S((half * fw.c2 - half_c * fw.s2) / x);
+  const S s_half = half * fw.c2 + half_c * fw.s2, c_half = half_c * fw.c2 - half * fw.s2;
   const S C = sigma * s_half * sc / sum;
   const S Sk = (sn - nu * sigma * c_half * sc) / (nu * sum);
-  const S E = (nu * sigma * c_half * sc + R::sin(omega * sigma)) / sum;
+  const S E = (nu * sigma * c_half * sc + fw.s) / sum;
   out.dq += o.F * (ph.s * C + ph.c * Sk);
   out.v += o.F * (ph.s * E + ph.c * omega * C);
   return out;
@@ -82,7 +106,7 @@ OscillatorStateT<S> Undamped(const OscillatorT<S>& o, const S& omega, const Phas
 // h the decaying homogeneous part; Δq = [U(φ+ωσ) − U(φ)] + [h(σ) − h(0)] written as increments.
 template <class S>
 OscillatorStateT<S> Damped(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& ph,
-                           const S& q0, const S& v0, const S& sigma) {
+                           const S& q0, const S& v0, const S& sigma, const ForcingTrigT<S>& fw) {
   using R = Real<S>;
   const S nu = o.nu, z = o.zeta;
   const S a = z * nu, nud = nu * R::sqrt(S(1) - z * z);
@@ -94,15 +118,17 @@ OscillatorStateT<S> Damped(const OscillatorT<S>& o, const S& omega, const PhaseT
   const S U0 = P * sp + Q * cp, dU0 = omega * (P * cp - Q * sp);
   const S A = q0 - U0, B = v0 - dU0;
   const S Cc = (B + a * A) / nud;
-  const S e = R::exp(-a * sigma), em1 = R::expm1(-a * sigma);
-  const S sd = R::sin(nud * sigma), hd = R::sin(S(0.5) * nud * sigma);
+  // e = 1 + (e − 1) keeps relative accuracy while e ≥ 1/2; below, exp itself.
+  const S em1 = R::expm1(-a * sigma);
+  const S e = em1 > S(-0.5) ? S(S(1) + em1) : R::exp(-a * sigma);
+  S hd, hdc;
+  R::sincos(S(0.5) * nud * sigma, hd, hdc);
+  const S sd = S(2) * hd * hdc;
   const S cd = S(1) - S(2) * hd * hd;
   const S dh = A * (em1 * cd - S(2) * hd * hd) + Cc * e * sd;
   const S vh = e * (B * cd - (a * B + nu * nu * A) / nud * sd);
-  const S sw = R::sin(omega * sigma), hw = R::sin(S(0.5) * omega * sigma);
-  const S cwm1 = S(-2) * hw * hw;       // cos ωσ − 1
-  const S dsin = sp * cwm1 + cp * sw;   // sin(φ+ωσ) − sin φ
-  const S dcos = cp * cwm1 - sp * sw;   // cos(φ+ωσ) − cos φ
+  const S dsin = sp * fw.cm1 + cp * fw.s;  // sin(φ+ωσ) − sin φ
+  const S dcos = cp * fw.cm1 - sp * fw.s;  // cos(φ+ωσ) − cos φ
   const S dU = P * dsin + Q * dcos;
   const S vU = omega * (P * (cp + dcos) - Q * (sp + dsin));
   return {dU + dh, vU + vh};
@@ -110,12 +136,17 @@ OscillatorStateT<S> Damped(const OscillatorT<S>& o, const S& omega, const PhaseT
 
 }  // namespace osc
 
-// Flow over σ ≥ 0; ω > 0 forcing pulsation, φ forcing phase at σ = 0.
+// Flow over σ ≥ 0; ω > 0 forcing pulsation, φ forcing phase at σ = 0, fw the forcing's angle at σ.
+template <class S>
+OscillatorStateT<S> Flow(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& phase,
+                         const S& q0, const S& v0, const S& sigma, const ForcingTrigT<S>& fw) {
+  return o.zeta > S(0) ? osc::Damped(o, omega, phase, q0, v0, sigma, fw)
+                       : osc::Undamped(o, omega, phase, q0, v0, sigma, fw);
+}
 template <class S>
 OscillatorStateT<S> Flow(const OscillatorT<S>& o, const S& omega, const PhaseTrigT<S>& phase,
                          const S& q0, const S& v0, const S& sigma) {
-  return o.zeta > S(0) ? osc::Damped(o, omega, phase, q0, v0, sigma)
-                       : osc::Undamped(o, omega, phase, q0, v0, sigma);
+  return Flow<S>(o, omega, phase, q0, v0, sigma, ForcingTrigT<S>(omega, sigma));
 }
 inline OscillatorState Flow(const Oscillator& o, double omega, double phase, double q0, double v0,
                             double sigma) {
@@ -143,7 +174,12 @@ DerivativeBoundsT<S> Bounds(const OscillatorT<S>& o, const S& omega, const S& A)
 
 template <class S>
 S Amplitude(const OscillatorT<S>& o, const S& q, const S& v) {
-  return Real<S>::hypot(v, o.nu * q);
+  // √(v² + (νq)²) rounds within a few ulps, far inside BoundMargin; hypot's care for overflow
+  // costs a fifth of a stiff run, so it is kept for the (never seen) overflowing case only.
+  const S nq = o.nu * q;
+  const S a = Real<S>::sqrt(v * v + nq * nq);
+  // Below 1e-150 the squares may underflow: hypot again.
+  return Real<S>::isfinite(a) && a > S(1e-150) ? a : Real<S>::hypot(v, nq);
 }
 
 }  // namespace vibro::detail

@@ -19,6 +19,12 @@ struct Real<Quad> {
   static __float128 q(const Quad& x) { return x.backend().value(); }
   static Quad sin(const Quad& x) { return Quad(sinq(q(x))); }
   static Quad cos(const Quad& x) { return Quad(cosq(q(x))); }
+  static void sincos(const Quad& x, Quad& s, Quad& c) {
+    __float128 sv, cv;
+    sincosq(q(x), &sv, &cv);
+    s = Quad(sv);
+    c = Quad(cv);
+  }
   static Quad sqrt(const Quad& x) { return Quad(sqrtq(q(x))); }
   static Quad exp(const Quad& x) { return Quad(expq(q(x))); }
   static Quad expm1(const Quad& x) { return Quad(expm1q(q(x))); }

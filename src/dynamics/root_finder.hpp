@@ -85,14 +85,24 @@ template <class S>
 struct ProbeT {
   JetT<S> jet;  // g, g', g'' at u
   S M;          // bound on |g'''| over [u, u + H]
+  // Optional second lower bound over a longer window [u, u + far_H] (used when far_H > H):
+  // g(u + h) ≥ far.g + far.g1 h + far.g2 h²/2 − far_M h³/6 there. The exact engine builds it by
+  // bounding the fast modes by their amplitude instead of their Taylor remainder
+  // (dynamics/exact_engine.hpp, AddFarBound), so that they stop dictating the step far from the
+  // stop (docs/performance.md).
+  JetT<S> far{S(0), S(0), S(0)};
+  S far_M{0};
+  S far_H{0};
 };
 
 using Jet = JetT<double>;
 using Probe = ProbeT<double>;
 using RootSearch = RootSearchT<double>;
 
-// First root of g in [start, end]. `probe(u, H)` returns the jet at u and a bound on |g'''| over
-// [u, u + H]; steps are capped at h_cap (the bound may grow with H). g(start) > 0 expected: a
+// First root of g in [start, end]. `probe(u, H, rest)` returns the jet at u and a bound on |g'''|
+// over [u, u + H], and optionally a second lower bound over [u, u + far_H], far_H ≤ rest = end − u;
+// steps are capped at h_cap (the bound may grow with H) or far_H. Each lower bound is positive up
+// to its first root, so stepping to the larger of the two first roots skips no root of g. g(start) > 0 expected: a
 // start with g ≤ 0 is reported as a root at `start`. `stop()` is polled every 1024 steps: when it
 // returns true (a stop request or a work limit) the search gives up with `stopped` set.
 template <class S>
@@ -110,14 +120,26 @@ PolledRootSearch<S> FirstRootPolled(const ProbeFn& probe, const S& start, const 
   for (int steps = 0; steps < max_steps; ++steps) {
     if ((steps & 1023) == 1023 && stop()) return {{false, u, steps}, true};
     if (u >= end) return {{false, end, steps}, false};
-    const S H = end - u < h_cap ? S(end - u) : h_cap;
-    const ProbeT<S> pr = probe(u, H);
+    const S rest = end - u;
+    const S H = rest < h_cap ? rest : h_cap;
+    const ProbeT<S> pr = probe(u, H, rest);
     const JetT<S>& j = pr.jet;
     if (!(j.g > 0)) return {{true, u, steps}, false};
     bool none = false;
-    const S h = FirstCubicRoot<S>(j.g, j.g1, j.g2, pr.M, H, none);
+    S h = FirstCubicRoot<S>(j.g, j.g1, j.g2, pr.M, H, none);
+    S reach = H;
+    if (pr.far_H > H && pr.far.g > 0) {
+      bool far_none = false;
+      const S far_H = pr.far_H < rest ? pr.far_H : rest;
+      const S h_far = FirstCubicRoot<S>(pr.far.g, pr.far.g1, pr.far.g2, pr.far_M, far_H, far_none);
+      if (h_far > (none ? H : h)) {
+        h = h_far;
+        none = far_none;
+        reach = far_H;
+      }
+    }
     if (none) {
-      u = (H == end - u) ? end : S(u + H);
+      u = (reach == rest) ? end : S(u + reach);
       continue;
     }
     if (h <= 4 * kEps * (u > tiny ? u : tiny)) return {{true, u + h, steps}, false};
@@ -126,10 +148,13 @@ PolledRootSearch<S> FirstRootPolled(const ProbeFn& probe, const S& start, const 
   return {{true, u, max_steps}, false};  // stalled at a tangency: g → 0⁺ without crossing
 }
 
+// `probe(u, H)` without the second bound.
 template <class ProbeFn>
 RootSearch FirstRoot(const ProbeFn& probe, double start, double end, double h_cap,
                      int max_steps = 100000) {
-  return FirstRootPolled<double>(probe, start, end, h_cap, [] { return false; }, max_steps).result;
+  return FirstRootPolled<double>([&](double u, double H, double) { return probe(u, H); }, start, end,
+                                 h_cap, [] { return false; }, max_steps)
+      .result;
 }
 
 }  // namespace vibro::detail

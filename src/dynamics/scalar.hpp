@@ -15,6 +15,7 @@ template <>
 struct Real<double> {
   static double sin(double x) { return std::sin(x); }
   static double cos(double x) { return std::cos(x); }
+  static void sincos(double x, double& s, double& c) { ::sincos(x, &s, &c); }
   static double sqrt(double x) { return std::sqrt(x); }
   static double exp(double x) { return std::exp(x); }
   static double expm1(double x) { return std::expm1(x); }
