@@ -11,7 +11,7 @@ from conftest import SCENES
 
 def test_main_thread_runs_while_vibro_computes():
     scene = vibro.load_scene(os.path.join(SCENES, "fig05_coexistence.toml"),
-                             set={"run.periods": 4000, "run.samples_per_period": 0})
+                             set={"run.periods": 20000, "run.samples_per_period": 0})
     result = {}
     worker = threading.Thread(target=lambda: result.update(run=vibro.simulate(scene)))
     iterations, longest_gap = 0, 0.0
