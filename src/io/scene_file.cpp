@@ -6,11 +6,13 @@
 #include "vibro/scene_file.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <map>
+#include <regex>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -501,6 +503,46 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
   table->insert_or_assign(key.substr(start), std::move(*parsed.get("value")));
 }
 
+// toml++ writes every float with 17 significant digits (2.8 → 2.7999999999999998): rewrite each
+// float token outside strings in its shortest round-trip form, kept a TOML float.
+std::string ShortestFloats(const std::string& text) {
+  static const std::regex kFloat(R"([-+]?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
+  std::string out;
+  out.reserve(text.size());
+  for (size_t i = 0; i < text.size();) {
+    const char c = text[i];
+    if (c == '"' || c == '\'') {  // a string, copied as it is (escapes included)
+      size_t j = i + 1;
+      while (j < text.size() && text[j] != c) j += (text[j] == '\\' && c == '"') ? 2 : 1;
+      j = std::min(j + 1, text.size());
+      out.append(text, i, j - i);
+      i = j;
+      continue;
+    }
+    const bool starts = (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+') &&
+                        (i == 0 || !(std::isalnum(static_cast<unsigned char>(text[i - 1])) ||
+                                     text[i - 1] == '_' || text[i - 1] == '.' || text[i - 1] == ':'));
+    std::smatch m;
+    if (starts && std::regex_search(text.begin() + static_cast<long>(i), text.end(), m, kFloat,
+                                    std::regex_constants::match_continuous) &&
+        (m[1].matched || m[2].matched)) {
+      const size_t end = i + static_cast<size_t>(m.length(0));
+      const bool word_follows = end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) ||
+                                                      text[end] == '_' || text[end] == '-' || text[end] == ':');
+      if (!word_follows) {  // not a date, a time or part of a bare key
+        std::string shortest = fmt::format("{}", std::stod(m.str(0)));
+        if (shortest.find_first_of(".eEni") == std::string::npos) shortest += ".0";
+        out += shortest;
+        i = end;
+        continue;
+      }
+    }
+    out += c;
+    ++i;
+  }
+  return out;
+}
+
 LoadedScene Build(toml::table root, const std::string& source,
                   const std::vector<std::string>& overrides) {
   std::vector<std::string> messages;
@@ -611,7 +653,7 @@ LoadedScene Build(toml::table root, const std::string& source,
 
   std::ostringstream text;
   text << rd.root();
-  return LoadedScene{std::move(s), source, text.str() + "\n"};
+  return LoadedScene{std::move(s), source, ShortestFloats(text.str()) + "\n"};
 }
 
 }  // namespace
