@@ -88,6 +88,19 @@ void StateTable::Push(const Sample& s) {
 
 }  // namespace store
 
+namespace {
+
+// The event counts, as attributes of a checkpoint or of the finished file.
+void WriteCounts(h5::Id where, const EventCounts& counts) {
+  h5::WriteInt(where, "impacts", counts.impacts);
+  h5::WriteInt(where, "accumulations", counts.accumulations);
+  h5::WriteInt(where, "sticks", counts.sticks);
+  h5::WriteInt(where, "releases", counts.releases);
+  h5::WriteInt(where, "grazings", counts.grazings);
+}
+
+}  // namespace
+
 void Hdf5Store::Impl::OpenGroups() {
   events = h5::OpenGroup(file.get(), "/events");
   samples = h5::OpenGroup(file.get(), "/samples");
@@ -121,11 +134,7 @@ void Hdf5Store::Impl::WriteCheckpoint() {
   h5::WriteDouble(g, "chatter_first_speed", c.chatter_first_speed);
   h5::WriteDouble(g, "chatter_last_speed", c.chatter_last_speed);
   h5::WriteInt(g, "sample_index", c.sample_index);
-  h5::WriteInt(g, "impacts", c.counts.impacts);
-  h5::WriteInt(g, "accumulations", c.counts.accumulations);
-  h5::WriteInt(g, "sticks", c.counts.sticks);
-  h5::WriteInt(g, "releases", c.counts.releases);
-  h5::WriteInt(g, "grazings", c.counts.grazings);
+  WriteCounts(g, c.counts);
   h5::WriteInt(g, "events", static_cast<long long>(cp_events));
   h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));
   h5::WriteInt(g, "sections", static_cast<long long>(cp_sections));
@@ -230,11 +239,7 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   h5::WriteString(f, "status", ToString(r.status));
   h5::WriteString(f, "message", r.message);
   h5::WriteDouble(f, "t_end", r.t_end);
-  h5::WriteInt(f, "impacts", r.counts.impacts);
-  h5::WriteInt(f, "accumulations", r.counts.accumulations);
-  h5::WriteInt(f, "sticks", r.counts.sticks);
-  h5::WriteInt(f, "releases", r.counts.releases);
-  h5::WriteInt(f, "grazings", r.counts.grazings);
+  WriteCounts(f, r.counts);
   h5::WriteInt(f, "chatter_accumulations_predicted", r.chatter.accumulations_predicted);
   h5::WriteInt(f, "chatter_impacts_followed", r.chatter.impacts_followed);
   h5::WriteDouble(f, "chatter_max_estimated_error", r.chatter.max_estimated_error);
