@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <functional>
 #include <limits>
@@ -530,7 +531,10 @@ std::string ShortestFloats(const std::string& text) {
       const bool word_follows = end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) ||
                                                       text[end] == '_' || text[end] == '-' || text[end] == ':');
       if (!word_follows) {  // not a date, a time or part of a bare key
-        std::string shortest = fmt::format("{}", std::stod(m.str(0)));
+        // strtod, not stod: a subnormal or overflowing token is kept as written, never thrown on.
+        const std::string token = m.str(0);
+        const double value = std::strtod(token.c_str(), nullptr);
+        std::string shortest = std::isfinite(value) && value != 0.0 ? fmt::format("{}", value) : token;
         if (shortest.find_first_of(".eEni") == std::string::npos) shortest += ".0";
         out += shortest;
         i = end;
