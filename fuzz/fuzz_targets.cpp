@@ -78,7 +78,28 @@ void StoredRunTarget(const std::uint8_t* data, std::size_t size, const std::stri
     h.engine = "exact";
     StoredRun stored;
     auto store = Hdf5Store::Resume(scratch, h, stored);
-    (void)store;
+    // An accepted resume must be able to write what the run writes: rows, checkpoints, the end.
+    try {
+      const Checkpoint& c = *stored.checkpoint;
+      const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
+      const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
+      for (int i = 0; i < 5000; ++i) {
+        store->OnEvent(e);
+        store->OnSample(s);
+        store->OnSection(s);
+      }
+      store->OnCheckpoint(c);
+      RunResult r;
+      r.status = RunStatus::kInterrupted;
+      Attractor a;
+      a.kind = "impact-periodic";
+      a.period = 1;
+      a.impact_phases = {0.5};
+      a.impact_velocities = {1.0};
+      store->Finish(r, a);
+    } catch (const std::exception& e) {
+      Finding(std::string("an accepted resume could not write: ") + e.what());
+    }
   } catch (const InputError& e) {
     RequireLocated(e, scratch);
     if (Slurp(scratch) != before) Finding("a refused resume changed the file: " + e.messages().front());

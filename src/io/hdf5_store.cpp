@@ -323,7 +323,34 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
     }
     return impl;
   };
-  store::ProbeWrite(path, prepare);
+  // The trial on the copy also makes what the resumed run will write later: rows appended to
+  // every table (enough for new chunks), a checkpoint, and the final attributes and /attractor.
+  // Damage that only a later write meets (a corrupt chunk index or heap) is refused now too.
+  store::ProbeWrite(path, [&](const std::string& copy) {
+    auto trial = prepare(copy);
+    const Checkpoint& c = *trial->last_checkpoint;
+    const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
+    const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
+    for (int i = 0; i < 20000; ++i) {
+      trial->ev.Push(e);
+      trial->sa.Push(s);
+      trial->se.Push(s);
+    }
+    trial->Flush();
+    Hdf5Store store(std::move(trial));
+    RunResult r;
+    r.status = RunStatus::kInterrupted;
+    r.message = "trial";
+    Attractor a;
+    a.kind = "impact-periodic";
+    a.period = 1;
+    a.impacts_per_period = 1;
+    a.sticking_fraction = 0.5;
+    a.stick_phases = {{0.25, 0.5}};
+    a.impact_phases = {0.125};
+    a.impact_velocities = {1.0};
+    store.Finish(r, a);
+  });
   auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
