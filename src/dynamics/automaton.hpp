@@ -196,6 +196,7 @@ class Automaton {
   StickStart stick_start_ = StickStart::kGeneric;
   S chatter_first_{0}, chatter_last_{0};
   TailPrediction<S> last_tail_;  // the last prediction tried in the current sequence
+  std::string last_jump_failure_;  // why the engine could not take the last jump tried (CVODE)
   bool project_samples_ = false;
   long long sample_index_ = 0;
   std::string violation_;           // the first physics invariant broken (empty: none)
@@ -443,6 +444,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   const S phase_k = Phase(clock_);
   const TailPrediction<S> tail = PredictTail<S>(m_, X_, V_, phase_k, chatter_tol_);
   last_tail_ = tail;
+  last_jump_failure_.clear();
   if (!tail.accepted) {
     ++result_.chatter.impacts_followed;
     return false;
@@ -453,7 +455,10 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   // First pass without output: the jump is taken only if R(t∞) > 0 after the projection.
   engine_->Begin(start);
   const auto probe = engine_->Advance(delta, false, {});
-  if (probe.end == SegmentEnd::kFailure) return false;
+  if (probe.end == SegmentEnd::kFailure) {  // a stop request is seen again by the next segment
+    if (!probe.stopped) last_jump_failure_ = probe.message;
+    return false;
+  }
   Vec X, V;
   engine_->Evaluate(delta, X, V);
   const Vec X_end = X, V_end = V;
@@ -526,11 +531,12 @@ bool Automaton<S>::OnContact() {
               "chattering sequence undetermined at this precision: its impacts reached speed "
               "{:.3g} ({} floor) near t = {:.17g} before its accumulation point could be "
               "predicted within run.chatter_tolerance = {:.3g} T (last prediction tried: ε = {:.3g}, "
-              "estimated error at least {:.3g} T; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
+              "estimated error at least {:.3g} T{}; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
               "move the parameter",
               R::to_double(-v_minus), unresolved ? "CVODE's √rtol resolution" : "the rounding",
               AbsTime(clock_), R::to_double(chatter_tol_ / period_),
               R::to_double(last_tail_.epsilon), R::to_double(last_tail_.error / period_),
+              last_jump_failure_.empty() ? "" : ", but the jump could not be taken: " + last_jump_failure_,
               R::to_double(Rc), cvode_ ? " with run.engine = \"exact\"" : ""),
           RunStatus::kUndetermined);
     }

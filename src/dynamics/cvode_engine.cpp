@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -90,6 +91,26 @@ struct CvodeEngine::Impl {
   SolverStats totals;
   std::string last_error;
   std::exception_ptr pending;
+  // Inside one CVode call (one step): a stop request and a work limit are checked in the
+  // right-hand side, because a step whose error test keeps failing (an atol of 1e-308 on the
+  // stiff chain) never returns to the stepping loop of Advance.
+  std::function<bool()> poll;
+  long rhs_in_call = 0;                 // right-hand-side evaluations in the current CVode call
+  bool stopped_in_rhs = false;          // the poll said stop
+  bool overworked_in_rhs = false;       // the work limit was hit
+  static constexpr long kRhsPerStep = 100000;  // a normal step needs fewer than 100
+  // False when the call must end: the right-hand side then returns an unrecoverable error.
+  bool MayGoOn() {
+    if (++rhs_in_call > kRhsPerStep) {
+      overworked_in_rhs = true;
+      return false;
+    }
+    if ((rhs_in_call & 255) == 0 && poll && poll()) {
+      stopped_in_rhs = true;
+      return false;
+    }
+    return true;
+  }
 
   // Segment data.
   Mode mode = Mode::kFree;
@@ -115,6 +136,7 @@ struct CvodeEngine::Impl {
   // ---- right-hand sides, roots, Jacobians (reached through user data) ----
   static int FreeRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
     auto* m = static_cast<Impl*>(user);
+    if (!m->MayGoOn()) return -1;
     try {
       const auto n = m->sys.dof();
       const double* Y = N_VGetArrayPointer(y);
@@ -199,6 +221,7 @@ struct CvodeEngine::Impl {
 
   static int StickRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
     auto* m = static_cast<Impl*>(user);
+    if (!m->MayGoOn()) return -1;
     try {
       const auto k = m->stick_w2.size();
       const double* Y = N_VGetArrayPointer(y);
@@ -438,8 +461,23 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
     }
     double t = 0.0;
     m.last_error.clear();
+    m.poll = [this] { return StopRequested(); };
+    m.rhs_in_call = 0;
+    m.stopped_in_rhs = m.overworked_in_rhs = false;
     const int flag = CVode(in.mem, sigma_max, in.y, &t, CV_ONE_STEP);
     if (m.pending) std::rethrow_exception(std::exchange(m.pending, nullptr));
+    if (m.stopped_in_rhs) {
+      SegmentResult stop{SegmentEnd::kFailure, t_prev,
+                         fmt::format("stop requested inside a CVODE step (local time {:.6g})", t_prev)};
+      stop.stopped = true;
+      return stop;
+    }
+    if (m.overworked_in_rhs)
+      return {SegmentEnd::kFailure, t_prev,
+              fmt::format("CVODE made more than {} right-hand-side evaluations in one step at local "
+                          "time {:.6g} without completing it (the tolerances cannot be met: raise "
+                          "run.atol or run.rtol)",
+                          Impl::kRhsPerStep, t_prev)};
     if (flag < 0)
       return {SegmentEnd::kFailure, t_prev,
               fmt::format("CVODE {} at local time {:.6g}{}; {}", FlagName(flag), t_prev,

@@ -257,6 +257,12 @@ deep = {
                                "--range1", "1e99,1e100", "--range2", "0.3,0.8", "--sticking-fraction", "0.5"],
     "sweep of long runs": ["sweep", default, "--set", "run.periods=100000000", "--param", "excitation.amplitude",
                            "--from", "1.1", "--to", "1.2", "--steps", "2"],
+    # One CVODE step that never completes (error tests failing forever at atol = 2.2e-308 in a
+    # chattering sequence of the stiff chain): ran 11 minutes after SIGTERM before the right-hand
+    # side polled the stop flag.
+    "CVODE step at atol 2.2e-308": ["simulate", os.path.join(scenes, "chain10_stiff.toml"), "--set",
+                                    'run.engine="cvode"', "--set", "run.atol=2.2e-308", "--set",
+                                    "run.periods=100000"],
 }
 for name, args in deep.items():
     out = os.path.join(tmp, "deep.h5")
@@ -266,6 +272,14 @@ for name, args in deep.items():
     check(f"{name}: SIGTERM → exit 130", rc == 130, f"exit {rc} {err[-300:]}")
     check(f"{name}: stops within {LIVENESS} s", took < LIVENESS, f"{took:.2f} s")
     check(f"{name}: file status interrupted", os.path.exists(out) and status(out) == "interrupted")
+
+# Without a signal the same run ends by itself: the step's work limit makes the jump fail, and the
+# sequence is reported undetermined with the reason (exit 3), never sticking.
+out = os.path.join(tmp, "atol.h5")
+r = run("simulate", os.path.join(scenes, "chain10_stiff.toml"), "--set", 'run.engine="cvode"', "--set",
+        "run.atol=2.2e-308", "--set", "run.periods=50", "--out", out, timeout=120)
+check("CVODE atol 2.2e-308: exit 3 naming the work limit",
+      r.returncode == 3 and "right-hand-side evaluations in one step" in r.stderr, f"{r.returncode} {r.stderr[-300:]}")
 
 # ---- physics invariants: a run that breaks one is a numerical failure, never ok ----
 # f = 1e100 on Fig. 8's scene: the double flight's rounding (1e84) puts the body far below the stop
