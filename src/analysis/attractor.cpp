@@ -47,7 +47,7 @@ bool AttractorRecorder::Settled(double remainder) const {
   for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n && !repeats; ++p)
     repeats = Difference(n - 1, n - 1 - static_cast<size_t>(p)) <= tolerance_;
   if (!repeats) return false;
-  const Attractor a = Classify();
+  const Attractor a = ClassifyRecord(false);
   if (!a.period) return false;
   const auto p = static_cast<size_t>(*a.period);
   if (3 * p >= n) return false;  // two windows of differences needed
@@ -62,7 +62,9 @@ bool AttractorRecorder::Settled(double remainder) const {
   return lambda < 0.95 && d1 * lambda / (1 - lambda) <= remainder;
 }
 
-Attractor AttractorRecorder::Classify() const {
+Attractor AttractorRecorder::Classify() const { return ClassifyRecord(true); }
+
+Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   Attractor a;
   if (sections_.size() < 2) return a;
   const size_t n = sections_.size();
@@ -154,7 +156,6 @@ Attractor AttractorRecorder::Classify() const {
     }
     return d[0] * l1 / (1 - l1) <= tolerance_;
   };
-  const bool full_record = n >= static_cast<size_t>(4 * max_period_ + 2);
   int period = 0;
   // A period p is accepted only on a record of at least three windows of it (3p + 1 section
   // points): two to see the points repeat and one more to see the transient has decayed.
@@ -170,11 +171,9 @@ Attractor AttractorRecorder::Classify() const {
     ok = ok && same_timing(p) && log_repeats(p);
     // A period whose points and events repeat while its transient has not decayed: the motion is
     // not periodic yet, and no multiple of p may be accepted instead (its repeat distances can
-    // alias smaller than p's, as in the decaying free transient above). The decay is judged on a
-    // full record only (4·max_period + 2 section points): a study cell that ends earlier is
-    // classified as before (its early stop, AttractorRecorder::Settled, has its own decay test),
-    // and a sweep's runs are never shorter than a full record.
-    if (ok && full_record && !decayed(p)) break;
+    // alias smaller than p's, as in the decaying free transient above). The decay is judged on
+    // every record, however short (three windows of p at least, see above).
+    if (ok && check_decay && !decayed(p)) break;
     if (ok) {
       period = p;
       break;

@@ -373,6 +373,10 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
       FoundAttractor& f = kept[static_cast<size_t>(map[k])];
       f = out.attractors[k];
       f.orbit = orbits[k];
+      // A class is described by its solved orbit when there is one: its first cell may still be
+      // a transient's width (up to run.period_tolerance) away from it, the orbit is not.
+      if (solved[k] && solved[k]->kind == f.attractor.kind && solved[k]->period == f.attractor.period)
+        f.attractor = *solved[k];
     }
     out.attractors = std::move(kept);
   }
@@ -407,9 +411,13 @@ std::vector<KnownOrbit> KnownOrbits(const System& sys, const Scene& scene, const
   std::vector<CellResult> cells(pts.size());
   std::vector<size_t> all(pts.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = i;
-  RunCells(sys, scene, a, b, pts, all, cells, opt);
+  // The pilot runs at least a full record (4·max_period + 2 periods), so that a slowly attracting
+  // orbit has shown that its transient has decayed (AttractorRecorder::Classify) and is known.
+  Scene pilot_scene = scene;
+  pilot_scene.run.periods = std::max<long long>(scene.run.periods, 4LL * scene.run.max_period + 2);
+  RunCells(sys, pilot_scene, a, b, pts, all, cells, opt);
   if (opt.stop_requested && opt.stop_requested->load()) return {};
-  const StudyResult pilot = LabelCells(sys, scene, pts, cells, opt);
+  const StudyResult pilot = LabelCells(sys, pilot_scene, pts, cells, opt);
   std::vector<KnownOrbit> known;
   for (size_t k = 0; k < pilot.attractors.size(); ++k) {
     const FoundAttractor& f = pilot.attractors[k];

@@ -79,6 +79,27 @@ TEST(Hardening, DecayingFreeTransientIsNeverPeriodic) {
   EXPECT_EQ(*b.period, 1);
 }
 
+// The same aliasing on short records (a study cell that ends after fewer periods than the
+// 4·max_period + 2 = 130 section points a full record holds): never periodic while the transient
+// is there, whatever the length of the record.
+TEST(Hardening, DecayingFreeTransientOnAShortRecordIsNeverPeriodic) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  for (long long K : {12LL, 20LL, 40LL, 100LL}) {
+    AttractorRecorder rec(sys, scene);
+    for (long long k = 0; k <= K; ++k) Section(rec, sys, k, Aliased(k, 3e-7, K), Mode::kFree);
+    double d3 = 0;
+    for (long long j = 0; j < 3; ++j) {
+      const Eigen::VectorXd a = Aliased(K - j, 3e-7, K), b = Aliased(K - j - 3, 3e-7, K);
+      d3 = std::max(d3, (a - b).cwiseAbs().maxCoeff() / (1 + std::max(a.cwiseAbs().maxCoeff(), b.cwiseAbs().maxCoeff())));
+    }
+    ASSERT_LT(d3, scene.run.period_tolerance) << "K = " << K;
+    const Attractor a = rec.Classify();
+    EXPECT_EQ(a.kind, "not-periodic") << "K = " << K;
+    EXPECT_FALSE(a.period.has_value()) << "K = " << K;
+  }
+}
+
 // Identical section points every period (what a contracting orbit shows between its sticking
 // phases), one impact at mid-period, and a sticking phase [0.1 T, 0.3 T] every 7th period: the
 // motion has period 7 and sticking fraction 0.2/7, whether the record ends just after a sticking
