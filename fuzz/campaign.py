@@ -205,6 +205,9 @@ class Campaign:
         text = err.lower()
         if any(a in err for a in argv if a.startswith("/") or a.endswith((".toml", ".h5"))):
             return True
+        # A file given by any name (a path without a slash, or an empty one shown as '').
+        if any(a and (err.startswith(a + ":") or ("\n" + a + ":") in err) for a in argv) or "'':" in err:
+            return True
         if "--" in err or "line " in text or "run.periods" in err:
             return True
         for key in ("structure.", "excitation.", "stop.", "initial.", "run.", "scene", "option", "argument",

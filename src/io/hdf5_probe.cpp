@@ -21,6 +21,16 @@ namespace {
 constexpr double kProbeBytes = 64e6;
 }  // namespace
 
+InputError CannotOpen(const std::string& path) {
+  const std::string name = path.empty() ? "''" : path;
+  struct stat st {};
+  if (path.empty() || stat(path.c_str(), &st) != 0)
+    return InputError({fmt::format("{}: no such file", name)});
+  if (S_ISDIR(st.st_mode)) return InputError({fmt::format("{}: is a directory, not a vibro file", name)});
+  if (access(path.c_str(), R_OK) != 0) return InputError({fmt::format("{}: not readable", name)});
+  return InputError({fmt::format("{}: not an HDF5 file (or one damaged beyond opening)", name)});
+}
+
 void ProbeInChild(const std::string& path) {
   std::fflush(nullptr);
   const pid_t pid = fork();

@@ -46,7 +46,7 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
   store::ProbeInChild(path);
   StoredRun out;
   const h5::Handle file = h5::OpenFile(path, false);
-  if (!file) throw InputError({fmt::format("{}: cannot open as an HDF5 file", path)});
+  if (!file) throw store::CannotOpen(path);
   const h5::Id f = file.get();
   if (!h5::HasAttr(f, "vibro_version"))
     throw InputError({fmt::format("{}: not a vibro output file (no vibro_version attribute)", path)});

@@ -12,6 +12,7 @@
 
 #include "io/h5_file.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/scene_file.hpp"
 
 namespace vibro::store {
 
@@ -56,6 +57,9 @@ void WriteHeader(h5::Id file, const StoreHeader& header);
 // command (any vibro file with header.force). Nothing is changed.
 void CheckReplaceable(const std::string& path, const StoreHeader& header, bool& existed);
 
+// The refusal of a file that HDF5 cannot open, saying why: no such file (an empty name is shown
+// as ''), a directory, not readable, or not an HDF5 file (hdf5_probe.cpp).
+InputError CannotOpen(const std::string& path);
 // A contained first read of a file given to vibro (hdf5_probe.cpp): the whole file is read once
 // by a child process; InputError when that child crashes.
 void ProbeInChild(const std::string& path);

@@ -41,7 +41,7 @@ void Hdf5Store::WriteGroup(const std::string& group,
 H5Table ReadTable(const std::string& path, const std::string& group) {
   h5::Silence();
   const h5::Handle file = h5::OpenFile(path, false);
-  if (!file) throw InputError({fmt::format("{}: cannot open as an HDF5 file", path)});
+  if (!file) throw store::CannotOpen(path);
   if (!h5::Exists(file.get(), group)) throw InputError({fmt::format("{}: no group {} in this file", path, group)});
   const h5::Handle g = h5::OpenGroup(file.get(), group);
   H5Table t;
