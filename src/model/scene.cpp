@@ -179,6 +179,22 @@ std::vector<InputIssue> Validate(const Scene& s) {
 
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");
+  // The absolute times written (t0 + k·T + offset, one double) must resolve every sample: their
+  // rounding, about 2e-16 of (|t0|/T + periods)·T, stays below 2e-4 of the sample spacing.
+  if (s.frequency >= kTiny && s.frequency <= kHuge && std::isfinite(s.initial_time) && r.periods >= 1) {
+    const double T = 2 * M_PI / s.frequency;
+    const double per = std::max<double>(1.0, static_cast<double>(r.samples_per_period));
+    const double span = std::abs(s.initial_time) / T + static_cast<double>(r.periods);
+    if (!(span * per <= 1e12)) {
+      const bool t0 = std::abs(s.initial_time) / T * per > 0.5e12;
+      c.Require(false, t0 ? "initial.time" : "run.periods",
+                t0 ? Show(s.initial_time) : std::to_string(r.periods),
+                fmt::format("(|t0|/T + periods) · max(1, samples_per_period) ≤ 1e12, here {:.3g} with T = {:.6g}: "
+                            "beyond, the absolute times written no longer resolve the samples{}",
+                            span * per, T,
+                            t0 ? " (t0 only sets the forcing phase: give t0 modulo T)" : ""));
+    }
+  }
   c.Require(r.rtol >= 1e-14 && r.rtol < 1, "run.rtol", Show(r.rtol),
             "1e-14 ≤ rtol < 1 (CVODE cannot honour a smaller relative tolerance in double precision)");
   c.Require(r.atol > 0 && r.atol < 1, "run.atol", Show(r.atol), "0 < atol < 1");

@@ -90,6 +90,9 @@ TEST(SceneFile, EveryConstraintIsRejected) {
   ExpectRejected(kModal, "run.chatter_switch=2", "run.chatter_switch", "chatter_switch < 1");
   ExpectRejected(kModal, "run.samples_per_period=-1", "run.samples_per_period", "≥ 0");
   ExpectRejected(kModal, "run.periods=2.5", "run.periods", "whole number");
+  // Absolute times of 9.2e18 had an ulp of 2048: the written section times stopped increasing.
+  ExpectRejected(kModal, "initial.time=9223372036854775807", "initial.time", "≤ 1e12");
+  ExpectRejected(kModal, "run.periods=100000000000", "run.periods", "≤ 1e12");
   ExpectRejected(kPhysical, "structure.mass=[[1.0, 0.0], [0.0, -1.0]]", "structure.mass",
                  "positive definite");
   ExpectRejected(kPhysical, "structure.stiffness=[[2.0, -1.0], [-0.5, 1.0]]",
