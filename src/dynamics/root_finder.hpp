@@ -62,6 +62,10 @@ S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, b
       (px > 0 ? lo : hi) = x;
       const S dp = g1 + x * (g2 - S(0.5) * M * x);
       S next = dp != 0 ? S(x - px / dp) : S(S(0.5) * (lo + hi));
+      // Newton from the unsafe side (p ≤ 0) moving by a few ulps: the root is at hi to rounding,
+      // and the scan below finds the point just under it. (Closing the bracket from lo instead
+      // took ~25 halvings per call: every Newton step from the safe side overshoots hi then.)
+      if (!(px > 0) && dp != 0 && x - next <= 8 * kEps * x) break;
       if (!(next > lo && next < hi)) next = S(0.5) * (lo + hi);
       if (next == x) break;
       x = next;
