@@ -282,7 +282,40 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
   }
   return impl;
   };
-  store::ProbeWrite(path, prepare);
+  // The trial on the copy (a child process) also writes what the resumed study writes later:
+  // a batch of cells, the label map, the attractor table and the end. Damage that only those
+  // writes meet is refused now, with the file unchanged.
+  store::ProbeWrite(path, [&](const std::string& copy) {
+    Hdf5Store store(prepare(copy));
+    CellResult c;
+    c.state = CellResult::State::kClassified;
+    c.attractor.kind = "impact-periodic";
+    c.attractor.period = 1;
+    c.attractor.impacts_per_period = 1;
+    c.attractor.impact_phases = {0.5};
+    c.attractor.impact_velocities = {1.0};
+    c.periods = 10;
+    c.z = Eigen::VectorXd::Zero(2 * static_cast<Eigen::Index>(h.dof));
+    const size_t n = cells.size();
+    std::vector<size_t> batch;
+    for (size_t i = 0; i < n && batch.size() < 4096; ++i) batch.push_back(i);
+    store.WriteCells(batch, std::vector<CellResult>(batch.size(), c));
+    StudyResult st;
+    st.cells = static_cast<long long>(n);
+    st.labels.assign(n, 0);
+    FoundAttractor found;
+    found.attractor = c.attractor;
+    found.cells = st.cells;
+    found.basin_fraction = 1;
+    found.example = {grid.x.from, grid.y.from};
+    st.attractors.push_back(found);
+    store.WriteStudy(st, grid);
+    RunResult r;
+    r.status = RunStatus::kInterrupted;
+    Attractor none;
+    none.kind.clear();
+    store.Finish(r, none);
+  });
   auto impl = prepare(path);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
