@@ -23,7 +23,8 @@ Each run is judged against what vibro promises:
 - a result reported `ok` keeps to the physics: no section point, sample or event below the stop
   beyond tolerance, time increasing, every sticking fraction in [0, 1].
 
-usage: campaign.py VIBRO SCENES_DIR [--runs N] [--seed S] [--minutes M] [--report FILE.json]
+usage: campaign.py VIBRO SCENES_DIR [--runs N] [--seed S] [--minutes M] [--report FILE.json] [--only CATEGORY]
+A run that hangs past SIGTERM is reported with the stacks of its threads (gdb, when installed).
 Exits 1 when there are findings; the report lists each with its command line.
 """
 import argparse
@@ -43,7 +44,7 @@ import numpy as np
 
 LIVENESS = 1.0  # seconds from a stop request to the exit that vibro promises
 HANG = 5.0      # past this the run is a hang (the margin is for a loaded machine)
-STARTUP = 0.02  # a signal this soon after the start may come before the program has loaded
+STARTUP = 0.05  # a signal this soon may come while the loader maps vibro's libraries (10-30 ms loaded)
 CORNERS = ["nan", "inf", "-inf", "1e999", "-1e999", "0", "-0.0", "-1", "1", "5e-324", "-5e-324", "1e-310",
            "2.2250738585072014e-308", "1e308", "1.7976931348623157e308", "-1e308", "1e100", "1e-100",
            "4294967297", "9223372036854775807", "-9223372036854775808", "18446744073709551617", "0.5",
@@ -58,6 +59,23 @@ EXTREMES = ["1e-100", "1e100", "-1e100", "1e-50", "1e50", "1e-12", "1e12", "0", 
 VECTOR_KEYS = {"structure.damping_ratios", "initial.displacement", "initial.velocity"}
 STRINGS = {"run.engine": ["exact", "cvode", "lsoda", ""], "run.chatter": ["accumulation", "threshold", "none", "x"],
            "run.precision": ["double", "quad", "half"], "run.method": ["bdf", "adams", "rk"]}
+
+
+def default_stop_signals():
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def backtrace(pid):
+    """The stacks of every thread of a hung process (gdb, when installed), for the report."""
+    if not shutil.which("gdb"):
+        return "(no gdb)"
+    try:
+        r = subprocess.run(["gdb", "-p", str(pid), "-batch", "-ex", "thread apply all bt 25"],
+                           capture_output=True, text=True, timeout=60)
+        return "\n".join(l for l in r.stdout.splitlines() if l.startswith(("#", "Thread")))[:6000]
+    except (subprocess.TimeoutExpired, OSError) as e:
+        return f"(gdb failed: {e})"
 
 
 def digest(path):
@@ -113,8 +131,9 @@ class Campaign:
 
     def find(self, kind, argv, detail):
         self.findings.append({"kind": kind, "command": " ".join(repr(a) if " " in a or not a else a for a in argv),
-                              "detail": detail[-1500:]})
-        print(f"FINDING {kind}: {' '.join(argv)[:300]}\n    {detail[-400:]}", flush=True)
+                              "detail": detail[:8000] if "stacks:" in detail else detail[-1500:]})
+        shown = detail[:2500] if "stacks:" in detail else detail[-400:]
+        print(f"FINDING {kind}: {' '.join(argv)[:300]}\n    {shown}", flush=True)
 
     # One run of the binary, judged. `signals`: [(delay, signal), ...] sent in order.
     def run(self, category, argv, signals=(), limit=20.0, watch=(), out=None, key=None, content=None):
@@ -125,7 +144,11 @@ class Campaign:
         os.mkdir(scratch)
         before = snapshot([scratch, *watch])
         full = [self.vibro, *argv]
-        p = subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=scratch)
+        # Default dispositions for the stop signals, whatever this script inherited: started in the
+        # background by a shell, SIGINT is ignored, and a SIGINT sent while vibro's libraries are
+        # still being loaded (before its handlers exist) would be silently lost, not a hang.
+        p = subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=scratch,
+                             preexec_fn=default_stop_signals)
         sent, t_signal, first_after = [], None, None
         start = time.monotonic()
         for delay, sig in signals:
@@ -156,6 +179,7 @@ class Campaign:
             else:
                 hung = True
             if hung:
+                stacks = backtrace(p.pid)
                 p.kill()
                 out_, err = p.communicate()
         took = time.monotonic() - t_signal if t_signal is not None else None
@@ -165,7 +189,8 @@ class Campaign:
         self.exits[rc] = self.exits.get(rc, 0) + 1
         tag = f"[{category}]"
         if hung:
-            self.find("hang ignoring SIGTERM", full, f"{tag} still running {HANG} s after SIGTERM")
+            self.find("hang ignoring SIGTERM", full,
+                      f"{tag} still running {HANG} s after SIGTERM (signals {signals}, sent {sent}); stacks:\n{stacks}")
         elif rc < 0 and -rc in sent and first_after is not None and first_after < STARTUP:
             self.before_main += 1  # the signal came while the program was being loaded
         elif rc < 0:
@@ -560,6 +585,8 @@ class Campaign:
         weights = [("mutated-scene", 0.30, self.gen_mutated_scene), ("numerical-extremes", 0.22, self.gen_set_extreme),
                    ("cli-misuse", 0.20, self.gen_cli_misuse), ("signals", 0.13, self.gen_signal),
                    ("corrupt-files", 0.15, self.gen_corrupt)]
+        if self.only:
+            weights = [(name, 1.0, gen) for name, _, gen in weights if name == self.only]
         while self.runs < runs and self.time_left():
             x = self.rng.random()
             for name, w, gen in weights:
@@ -580,9 +607,13 @@ def main():
     ap.add_argument("--seed", type=int, default=15)
     ap.add_argument("--minutes", type=float, default=40)
     ap.add_argument("--report", default="")
+    ap.add_argument("--only", default="", choices=["", "mutated-scene", "numerical-extremes", "cli-misuse",
+                                                   "signals", "corrupt-files"],
+                    help="generate runs of this category only (after the reproducers and seeds)")
     a = ap.parse_args()
     work = tempfile.mkdtemp(prefix="vibro_campaign_")
     c = Campaign(os.path.abspath(a.vibro), os.path.abspath(a.scenes), a.seed, time.monotonic() + 60 * a.minutes, work)
+    c.only = a.only
     t0 = time.monotonic()
     try:
         c.main(a.runs)
