@@ -18,7 +18,9 @@ static_assert(std::is_same_v<herr_t, int>, "h5::Handle::Closer must match herr_t
 namespace {
 
 constexpr hsize_t kChunkRows = 4096;
-constexpr int kDeflate = 4;
+// Deflate level 1: files about 10 % larger than at level 4, and a long run with the store keeps
+// 0.70 of its throughput instead of 0.59 (instructions of a 2000-period Fig. 8 run, docs/performance.md).
+constexpr int kDeflate = 1;
 
 hid_t Check(hid_t id, const std::string& what) {
   if (id < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));

@@ -95,7 +95,7 @@ with tempfile.TemporaryDirectory() as d:
 
     # --- Interruption, hard kill and resume -----------------------------------------------------
     # 60000 periods: ~3e6 events, a few seconds; interrupted after the first flush (~1 s).
-    long_sets = ["--set", "run.periods=60000", "--set", "run.samples_per_period=4"]
+    long_sets = ["--set", "run.periods=150000", "--set", "run.samples_per_period=4"]
     ref = os.path.join(d, "ref.h5")
     p = run("simulate", default, *long_sets, "--out", ref, "--json")
     check("reference long run", p.returncode == 0, p.stderr)
@@ -135,7 +135,7 @@ with tempfile.TemporaryDirectory() as d:
     path = os.path.join(d, "killed.h5")
     proc = start("simulate", default, *long_sets, "--out", path)
     wait_for_rows(path, proc, 20)
-    time.sleep(1.5)
+    time.sleep(0.3)
     t_kill = time.time()
     proc.kill()
     proc.communicate(timeout=60)
