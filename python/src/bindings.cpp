@@ -201,7 +201,9 @@ std::string Orbit(const PyScene& s, const std::string& kind, int period, int imp
   if (!out.empty()) vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, sys)).reset();  // fail early
   py::gil_scoped_release release;
   const auto orbit = vibro::SolveOrbit(sys, s.loaded.scene, req);
+  // As the CLI: a failed solve still ends the file, with its status and message (never "running").
   if (!out.empty() && orbit.status == "converged") vibro::frontend::WriteOrbit(out, s.loaded, sys, orbit);
+  else if (!out.empty()) vibro::frontend::WriteOrbitFailure(out, s.loaded, sys, orbit);
   return vibro::OrbitJson(orbit, req.kind);
 }
 

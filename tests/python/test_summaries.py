@@ -1,7 +1,9 @@
 """The Python functions return exactly what the command line's --json prints, on every shipped
 scene (short runs): the same library calls and the same JSON writer behind both."""
 import os
+import subprocess
 
+import h5py
 import pytest
 
 import vibro
@@ -72,3 +74,20 @@ def test_studies_equal_cli():
     assert extent[0] < x[0] < x[-1] < extent[1] and extent[2] < y[0] < y[-1] < extent[3]
     assert vibro.attractors(scene, samples=12, seed=3) == \
         cli_json("attractors", path, *args, "--samples", "12", "--seed", "3")
+
+
+def test_failed_orbit_file_ends_as_the_cli_file(tmp_path):
+    """A Newton solve that does not converge still ends the --out file (status numerical-failure
+    with the reason), as the command line does; it used to stay at status "running"."""
+    path = os.path.join(SCENES, "chain10_stiff.toml")
+    out = tmp_path / "py.h5"
+    got = vibro.orbit(vibro.load_scene(path), kind="impact", period=3, transient=0, out=str(out))
+    assert got["status"] == "not-converged"
+    cli_out = tmp_path / "cli.h5"
+    from conftest import CLI
+    p = subprocess.run([CLI, "orbit", path, "--kind", "impact", "--period", "3", "--transient", "0",
+                        "--out", str(cli_out)], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 3, p.stderr
+    with h5py.File(out, "r") as a, h5py.File(cli_out, "r") as b:
+        assert a.attrs["status"] == b.attrs["status"] == "numerical-failure"
+        assert a.attrs["message"] == b.attrs["message"]
