@@ -452,6 +452,7 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
   CVodeSetStopTime(in.mem, sigma_max);
   double t_prev = 0.0;
   long steps = 0;
+  m.poll = [this] { return StopRequested(); };
   while (true) {
     if (StopRequested()) {
       SegmentResult stop{SegmentEnd::kFailure, t_prev,
@@ -461,7 +462,6 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
     }
     double t = 0.0;
     m.last_error.clear();
-    m.poll = [this] { return StopRequested(); };
     m.rhs_in_call = 0;
     m.stopped_in_rhs = m.overworked_in_rhs = false;
     const int flag = CVode(in.mem, sigma_max, in.y, &t, CV_ONE_STEP);

@@ -65,7 +65,7 @@ S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, b
       // Newton from the unsafe side (p ≤ 0) moving by a few ulps: the root is at hi to rounding,
       // and the scan below finds the point just under it. (Closing the bracket from lo instead
       // took ~25 halvings per call: every Newton step from the safe side overshoots hi then.)
-      if (!(px > 0) && dp != 0 && x - next <= 8 * kEps * x) break;
+      if (!(px > 0) && dp != 0 && next <= x && x - next <= 8 * kEps * x) break;
       if (!(next > lo && next < hi)) next = S(0.5) * (lo + hi);
       if (next == x) break;
       x = next;
