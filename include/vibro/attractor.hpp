@@ -56,8 +56,8 @@ class AttractorRecorder final : public Observer {
     Eigen::VectorXd z;  // (X, Ẋ)
     Mode mode;
   };
-  // Classify(); `check_decay` false skips the decay test of the period (Settled makes its own,
-  // stricter one on the same windows).
+  // Classify(); `check_decay` false (for Settled) skips the decay test of the period (Settled
+  // makes its own, stricter one on the same windows) and returns no description without a period.
   Attractor ClassifyRecord(bool check_decay) const;
   double Phase(const Clock& c, int p) const;  // ωt mod 2π p
   double Difference(size_t i, size_t j) const;  // |z_i − z_j|∞ / (1 + max |z|∞); ∞ if modes differ

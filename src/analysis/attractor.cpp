@@ -42,24 +42,31 @@ double AttractorRecorder::Difference(size_t i, size_t j) const {
 
 bool AttractorRecorder::Settled(double remainder) const {
   const size_t n = sections_.size();
-  // Cheap test first: the last section point repeats one of the max_period before it.
-  bool repeats = false;
-  for (int p = 1; p <= max_period_ && static_cast<size_t>(2 * p) < n && !repeats; ++p)
-    repeats = Difference(n - 1, n - 1 - static_cast<size_t>(p)) <= tolerance_;
-  if (!repeats) return false;
+  // The decay test of a candidate period p: the differences δ1, δ2 of the last two windows of p
+  // section points vanish or fall geometrically to a remaining distance below `remainder`.
+  const auto decayed = [&](size_t p) {
+    double d1 = 0, d2 = 0;
+    for (size_t j = 0; j < p; ++j) {
+      d1 = std::max(d1, Difference(n - 1 - j, n - 1 - j - p));
+      d2 = std::max(d2, Difference(n - 1 - j - p, n - 1 - j - 2 * p));
+    }
+    if (d1 == 0) return true;  // repeats to the bit (1-DOF sticking orbits)
+    if (!(d2 > 0)) return false;
+    const double lambda = d1 / d2;
+    return lambda < 0.95 && d1 * lambda / (1 - lambda) <= remainder;
+  };
+  // Cheap test first, on every p the classification could return (its last section point repeats
+  // within the tolerance, relaxed by rounding): unless one of them has decayed, the full
+  // classification (a quarter of a basin's work when it ran at every period) cannot say settled.
+  bool candidate = false;
+  for (size_t p = 1; p <= static_cast<size_t>(max_period_) && 3 * p < n && !candidate; ++p)
+    candidate = Difference(n - 1, n - 1 - p) <= tolerance_ * (1 + 1e-9) && decayed(p);
+  if (!candidate) return false;
   const Attractor a = ClassifyRecord(false);
   if (!a.period) return false;
   const auto p = static_cast<size_t>(*a.period);
   if (3 * p >= n) return false;  // two windows of differences needed
-  double d1 = 0, d2 = 0;
-  for (size_t j = 0; j < p; ++j) {
-    d1 = std::max(d1, Difference(n - 1 - j, n - 1 - j - p));
-    d2 = std::max(d2, Difference(n - 1 - j - p, n - 1 - j - 2 * p));
-  }
-  if (d1 == 0) return true;  // repeats to the bit (1-DOF sticking orbits)
-  if (!(d2 > 0)) return false;
-  const double lambda = d1 / d2;
-  return lambda < 0.95 && d1 * lambda / (1 - lambda) <= remainder;
+  return decayed(p);
 }
 
 Attractor AttractorRecorder::Classify() const { return ClassifyRecord(true); }
@@ -82,10 +89,18 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     if (e.clock.period == to && e.clock.offset > 0.0) return false;
     return true;
   };
+  // Calls f on the events in the window, in order. The events are in time order: the window's
+  // first one is found by bisection (a chattering record holds thousands of events, and the
+  // checks below look at windows of every period p up to max_period).
+  const auto each_in = [&](long long from, long long to, const auto& f) {
+    auto it = std::partition_point(events_.begin(), events_.end(),
+                                   [&](const Event& e) { return e.clock.period < from; });
+    for (; it != events_.end() && it->clock.period <= to; ++it)
+      if (in_window(*it, from, to)) f(*it);
+  };
   const auto count = [&](EventKind kind, long long from, long long to) {
     long long c = 0;
-    for (const auto& e : events_)
-      if (e.kind == kind && in_window(e, from, to)) ++c;
+    each_in(from, to, [&](const Event& e) { c += e.kind == kind; });
     return c;
   };
 
@@ -95,13 +110,13 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   const auto same_timing = [&](int p) {
     for (EventKind kind : {EventKind::kStick, EventKind::kRelease}) {
       std::vector<double> last, before;
-      for (const auto& e : events_) {
-        if (e.kind != kind) continue;
+      each_in(K - 2 * p, K, [&](const Event& e) {
+        if (e.kind != kind) return;
         if (in_window(e, K - p, K))
           last.push_back(static_cast<double>(e.clock.period - (K - p)) * T + e.clock.offset);
         else if (in_window(e, K - 2 * p, K - p))
           before.push_back(static_cast<double>(e.clock.period - (K - 2 * p)) * T + e.clock.offset);
-      }
+      });
       if (last.size() != before.size()) return false;
       for (size_t i = 0; i < last.size(); ++i)
         if (std::abs(last[i] - before[i]) > 10.0 * tolerance_ * T) return false;
@@ -122,8 +137,9 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     const bool chatters = count(EventKind::kAccumulation, K - span, K) > 0;
     const auto log = [&](long long from, long long to) {
       std::vector<EventKind> kinds;
-      for (const auto& e : events_)
-        if (in_window(e, from, to) && !(chatters && e.kind == EventKind::kImpact)) kinds.push_back(e.kind);
+      each_in(from, to, [&](const Event& e) {
+        if (!(chatters && e.kind == EventKind::kImpact)) kinds.push_back(e.kind);
+      });
       return kinds;
     };
     return log(K - span, K - p) == log(K - span + p, K);
@@ -179,6 +195,9 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
       break;
     }
   }
+  // Settled asks only for a period: without one, the whole-record averages below (a pass over
+  // every event with a phase each) would be most of a study's classification work.
+  if (period == 0 && !check_decay) return a;
 
   // Sticking phases: each release in the window closes one phase; its start is the last stick
   // before it. The window is p periods (the whole record without a period).
