@@ -24,9 +24,27 @@ void Say(const char* text) {
   (void)n;
 }
 
+// After a stop request every loop ends within a second; a library call that never returns (the
+// HDF5 filter pipeline on a damaged chunk of a resumed file was seen to) cannot poll. The first
+// request therefore arms a grace period: past it, the process leaves (files keep what was last
+// flushed, as after SIGKILL). A final write in progress gets up to 30 s.
+constexpr unsigned kGraceSeconds = 4;
+std::atomic<int> g_grace_extensions{0};
+
+extern "C" void OnGraceOver(int) {
+  if (g_writing.load() > 0 && g_grace_extensions.fetch_add(1) < 6) {
+    alarm(kGraceSeconds);
+    return;
+  }
+  Say("\nvibro: the stop request could not be honoured in time (a library call does not return); "
+      "leaving now: files keep what was last flushed\n");
+  _exit(130);
+}
+
 extern "C" void OnStopSignal(int) {
   g_stop.store(true);
   const int count = g_signals.fetch_add(1) + 1;
+  if (count == 1) alarm(kGraceSeconds);
   if (g_discard.load()) {
     if (g_discard_path[0] != '\0') unlink(g_discard_path);
     Say("\nvibro: interrupted; nothing to keep\n");
@@ -50,6 +68,11 @@ void InstallStopHandlers() {
   sa.sa_flags = SA_RESTART;
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+  struct sigaction grace {};
+  grace.sa_handler = OnGraceOver;
+  sigemptyset(&grace.sa_mask);
+  grace.sa_flags = SA_RESTART;
+  sigaction(SIGALRM, &grace, nullptr);
   // Every run polls the flag, also those started deep inside another computation (an orbit
   // solve inside a continuation, the orbits of a study's classes).
   SetProcessStopFlag(&g_stop);

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 
@@ -36,6 +37,7 @@ void ProbeInChild(const std::string& path) {
   const pid_t pid = fork();
   if (pid < 0) return;  // no child: vibro's own checked reads follow
   if (pid == 0) {
+    signal(SIGALRM, SIG_DFL);  // the parent's stop-grace handler is not for this child
     alarm(120);  // a corrupt file that makes the library loop is reported too
     // Not readable as HDF5 at all, or an object that fails cleanly: vibro's own reads report it.
     h5::ReadEverything(path, kProbeBytes);
@@ -61,6 +63,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
   const pid_t pid = fork();
   if (pid < 0) return;
   if (pid == 0) {
+    signal(SIGALRM, SIG_DFL);  // the parent's stop-grace handler is not for this child
     alarm(120);
     h5::Silence();
     char copy[] = "/tmp/vibro-resume-probe-XXXXXX";
