@@ -54,6 +54,7 @@ class AttractorRecorder final : public Observer {
   struct Section {
     long long k;
     Eigen::VectorXd z;  // (X, Ẋ)
+    double amax;        // |z|∞
     Mode mode;
   };
   // Classify(); `check_decay` false (for Settled) skips the decay test of the period (Settled

@@ -2,6 +2,7 @@
 #include "vibro/attractor.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -16,10 +17,16 @@ AttractorRecorder::AttractorRecorder(const System& system, const Scene& scene)
 void AttractorRecorder::OnEvent(const Event& e) { events_.push_back(e); }
 
 void AttractorRecorder::OnSection(const Sample& s) {
-  Eigen::VectorXd z(2 * s.X.size());
-  z << s.X, s.V;
-  sections_.push_back({s.clock.period, std::move(z), s.mode});
   const auto keep = static_cast<size_t>(4 * max_period_ + 2);  // four windows of the longest period
+  Eigen::VectorXd z;
+  if (sections_.size() >= keep) {  // the oldest point's storage is reused: no allocation per period
+    z = std::move(sections_.front().z);
+    sections_.pop_front();
+  }
+  z.resize(2 * s.X.size());
+  z << s.X, s.V;
+  const double amax = z.cwiseAbs().maxCoeff();
+  sections_.push_back({s.clock.period, std::move(z), amax, s.mode});
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
@@ -36,8 +43,10 @@ double AttractorRecorder::Difference(size_t i, size_t j) const {
   const Section& x = sections_[i];
   const Section& y = sections_[j];
   if (x.mode != y.mode) return std::numeric_limits<double>::infinity();
-  const double scale = 1.0 + std::max(x.z.cwiseAbs().maxCoeff(), y.z.cwiseAbs().maxCoeff());
-  return (x.z - y.z).cwiseAbs().maxCoeff() / scale;
+  // At every section point once the points repeat (Settled): a plain loop, the scales cached.
+  double d = 0.0;
+  for (Eigen::Index k = 0; k < x.z.size(); ++k) d = std::max(d, std::abs(x.z[k] - y.z[k]));
+  return d / (1.0 + std::max(x.amax, y.amax));
 }
 
 bool AttractorRecorder::Settled(double remainder) const {
@@ -79,7 +88,7 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   const double T = sys_.period(), w = sys_.frequency();
   const auto close = [&](const Section& x, const Section& y) {
     if (x.mode != y.mode) return false;
-    const double scale = 1.0 + std::max(x.z.cwiseAbs().maxCoeff(), y.z.cwiseAbs().maxCoeff());
+    const double scale = 1.0 + std::max(x.amax, y.amax);
     return (x.z - y.z).cwiseAbs().maxCoeff() <= tolerance_ * scale;
   };
   const auto in_window = [&](const Event& e, long long from, long long to) {
@@ -98,10 +107,27 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     for (; it != events_.end() && it->clock.period <= to; ++it)
       if (in_window(*it, from, to)) f(*it);
   };
+  // Event counts by kind, per period of the record, as prefix sums: the period checks below
+  // count events in windows of every p up to max_period, several kinds each, and a chattering
+  // record holds thousands of events. An event at time t belongs to the period slot j with
+  // jT < t ≤ (j + 1)T (so that a window (from·T, to·T] is the slots from … to − 1, as in_window);
+  // built on the first count, as most calls during a transient never count.
+  const long long lo = sections_.front().k - 2;  // no event kept lies in an earlier slot
+  std::vector<std::array<long long, 6>> prefix;  // prefix[i][kind]: events in slots lo … lo + i − 1
   const auto count = [&](EventKind kind, long long from, long long to) {
-    long long c = 0;
-    each_in(from, to, [&](const Event& e) { c += e.kind == kind; });
-    return c;
+    if (prefix.empty()) {
+      prefix.assign(static_cast<size_t>(K - lo) + 1, {0, 0, 0, 0, 0, 0});
+      for (const Event& e : events_) {
+        const long long slot = e.clock.offset > 0.0 ? e.clock.period : e.clock.period - 1;
+        if (slot < lo || slot >= K) continue;
+        ++prefix[static_cast<size_t>(slot - lo) + 1][static_cast<size_t>(e.kind)];
+      }
+      for (size_t i = 1; i < prefix.size(); ++i)
+        for (size_t k = 0; k < 6; ++k) prefix[i][k] += prefix[i - 1][k];
+    }
+    const auto at = [&](long long j) { return static_cast<size_t>(std::clamp(j, lo, K) - lo); };
+    const auto k = static_cast<size_t>(kind);
+    return prefix[at(to)][k] - prefix[at(from)][k];
   };
 
   // The stick and release times of two consecutive windows of p periods must repeat too: during
@@ -135,14 +161,22 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     const long long span =
         std::max<long long>(3 * p, std::min<long long>(max_period_, recorded - 1));
     const bool chatters = count(EventKind::kAccumulation, K - span, K) > 0;
-    const auto log = [&](long long from, long long to) {
-      std::vector<EventKind> kinds;
-      each_in(from, to, [&](const Event& e) {
-        if (!(chatters && e.kind == EventKind::kImpact)) kinds.push_back(e.kind);
-      });
-      return kinds;
+    // The two logs compared event by event (no copies: a chattering span is long).
+    const auto first = [&](long long from) {
+      return std::partition_point(events_.begin(), events_.end(),
+                                  [&](const Event& e) { return e.clock.period < from; });
     };
-    return log(K - span, K - p) == log(K - span + p, K);
+    const auto next = [&](auto it, long long from, long long to) {
+      for (; it != events_.end() && it->clock.period <= to; ++it)
+        if (in_window(*it, from, to) && !(chatters && it->kind == EventKind::kImpact)) return it;
+      return events_.end();
+    };
+    auto u = next(first(K - span), K - span, K - p);
+    auto v = next(first(K - span + p), K - span + p, K);
+    for (; u != events_.end() && v != events_.end();
+         u = next(u + 1, K - span, K - p), v = next(v + 1, K - span + p, K))
+      if (u->kind != v->kind) return false;
+    return u == events_.end() && v == events_.end();
   };
   // Section points repeating within the tolerance are not enough: a decaying transient can
   // repeat within it by aliasing (a free oscillation whose phase returns after p periods while

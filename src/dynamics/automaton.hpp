@@ -189,7 +189,9 @@ class Automaton {
 
   ClockT<S> clock_;
   Vec X_, V_, Xs_, Vs_;
+  Vec Xb_, Vb_;                          // the state just before a reset (scratch: no allocation per event)
   Eigen::VectorXd dx_, dv_, dx2_, dv2_;  // double views for observers (quad)
+  Checkpoint checkpoint_{};              // reused at every period boundary
   Mode mode_ = Mode::kFree;
   S gap_{0};
   FlightStart flight_start_ = FlightStart::kGeneric;
@@ -544,7 +546,10 @@ bool Automaton<S>::OnContact() {
   if (touch) {
     // Tangential touch (docs/model.md §2.1): no impact.
     const S Rc = m_.Reaction(X_, V_, phase);
-    const Vec Xb = X_, Vb = V_;
+    Xb_ = X_;
+    Vb_ = V_;
+    const Vec& Xb = Xb_;
+    const Vec& Vb = Vb_;
     Emit(EventKind::kGrazing, v_minus, v_minus);
     if (Rc > 0) {
       EnterSticking(StickStart::kGeneric);
@@ -580,7 +585,10 @@ bool Automaton<S>::OnContact() {
   if (plastic) {
     // docs/model.md §4.4: plastic impact; stick if R > 0, leave at zero velocity if R < 0, decide with Ṙ
     // if R = 0.
-    const Vec Xb = X_, Vb = V_;
+    Xb_ = X_;
+    Vb_ = V_;
+    const Vec& Xb = Xb_;
+    const Vec& Vb = Vb_;
     m_.ProjectOntoStop(X_, V_);
     Emit(EventKind::kImpact, v_minus, S(0));
     const S Rc = m_.Reaction(X_, V_, phase);
@@ -605,7 +613,8 @@ bool Automaton<S>::OnContact() {
   }
 
   // Restitution (the paper's eq. (12)).
-  const Vec Vb = V_;
+  Vb_ = V_;
+  const Vec& Vb = Vb_;
   m_.ApplyImpact(V_, r);
   const S Rc = m_.Reaction(X_, V_, phase);
   NotifyReset(ResetKind::kImpact, X_, Vb);
@@ -630,17 +639,17 @@ bool Automaton<S>::OnContact() {
 template <class S>
 void Automaton<S>::Checkpointed() {
   if (opt_.observers.empty()) return;
-  const Checkpoint cp{ToClock(clock_),
-                      X_.template cast<double>(),
-                      V_.template cast<double>(),
-                      mode_,
-                      R::to_double(gap_),
-                      static_cast<int>(mode_ == Mode::kFree ? static_cast<int>(flight_start_)
-                                                            : static_cast<int>(stick_start_)),
-                      R::to_double(chatter_first_),
-                      R::to_double(chatter_last_),
-                      sample_index_,
-                      result_.counts};
+  Checkpoint& cp = checkpoint_;  // assigned in place: its vectors keep their storage
+  cp.clock = ToClock(clock_);
+  cp.X = X_.template cast<double>();
+  cp.V = V_.template cast<double>();
+  cp.mode = mode_;
+  cp.gap = R::to_double(gap_);
+  cp.start_kind = mode_ == Mode::kFree ? static_cast<int>(flight_start_) : static_cast<int>(stick_start_);
+  cp.chatter_first_speed = R::to_double(chatter_first_);
+  cp.chatter_last_speed = R::to_double(chatter_last_);
+  cp.sample_index = sample_index_;
+  cp.counts = result_.counts;
   for (auto* o : opt_.observers) o->OnCheckpoint(cp);
 }
 
@@ -694,8 +703,16 @@ RunResult Automaton<S>::Run() {
     PropagatorT<S>& p = (mode_ == Mode::kSticking && resting_) ? *resting_ : *engine_;
     p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_});
     const ClockT<S> from = clock_;
-    const auto seg = p.Advance(
-        to_boundary, true, [&](const S& lo, const S& hi) { EmitStretch(from, p, lo, hi); });
+    // The callback captures one pointer, so that std::function keeps it inline (no allocation per
+    // segment).
+    struct {
+      Automaton* self;
+      const ClockT<S>* from;
+      PropagatorT<S>* p;
+    } stretch{this, &from, &p};
+    const auto seg = p.Advance(to_boundary, true, [ctx = &stretch](const S& lo, const S& hi) {
+      ctx->self->EmitStretch(*ctx->from, *ctx->p, lo, hi);
+    });
     if (seg.end == SegmentEnd::kFailure) {
       if (StopPolled()) continue;  // reported as an interruption at the top of the loop
       Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),

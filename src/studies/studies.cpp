@@ -140,13 +140,13 @@ class SettleWatch final : public Observer {
   }
   int Near(const Sample& s) const {
     const auto n = s.X.size();
+    const double here = std::max(s.X.cwiseAbs().maxCoeff(), s.V.cwiseAbs().maxCoeff());
     for (size_t k = 0; k < opt_.known.size(); ++k) {
       const KnownOrbit& o = opt_.known[k];
       for (size_t j = 0; j < o.points.size(); ++j) {
         if (o.modes[j] != s.mode) continue;
         const Eigen::VectorXd& z = o.points[j];
-        const double scale =
-            1.0 + std::max({z.cwiseAbs().maxCoeff(), s.X.cwiseAbs().maxCoeff(), s.V.cwiseAbs().maxCoeff()});
+        const double scale = 1.0 + std::max(z.cwiseAbs().maxCoeff(), here);
         const double d = std::max((s.X - z.head(n)).cwiseAbs().maxCoeff(),
                                   (s.V - z.tail(n)).cwiseAbs().maxCoeff());
         if (d <= o.radius * scale) return static_cast<int>(k);
