@@ -39,7 +39,7 @@ double AttractorRecorder::Phase(const Clock& c, int p) const {
   return ph;
 }
 
-double AttractorRecorder::Difference(size_t i, size_t j) const {
+inline double AttractorRecorder::Difference(size_t i, size_t j) const {
   const Section& x = sections_[i];
   const Section& y = sections_[j];
   if (x.mode != y.mode) return std::numeric_limits<double>::infinity();

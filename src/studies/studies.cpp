@@ -113,8 +113,10 @@ namespace {
 // orbit, and passes a stop request of the whole study on. Polled by the automaton between events.
 class SettleWatch final : public Observer {
  public:
-  SettleWatch(const AttractorRecorder& rec, const StudyOptions& opt)
-      : rec_(rec), opt_(opt) {}
+  SettleWatch(const AttractorRecorder& rec, const StudyOptions& opt) : rec_(rec), opt_(opt) {
+    for (const KnownOrbit& o : opt_.known)
+      for (const Eigen::VectorXd& z : o.points) known_amax_.push_back(z.cwiseAbs().maxCoeff());
+  }
   void OnEvent(const Event&) override { Poll(); }
   void OnSection(const Sample& s) override {
     Poll();
@@ -141,12 +143,13 @@ class SettleWatch final : public Observer {
   int Near(const Sample& s) const {
     const auto n = s.X.size();
     const double here = std::max(s.X.cwiseAbs().maxCoeff(), s.V.cwiseAbs().maxCoeff());
+    size_t point = 0;  // index into known_amax_
     for (size_t k = 0; k < opt_.known.size(); ++k) {
       const KnownOrbit& o = opt_.known[k];
-      for (size_t j = 0; j < o.points.size(); ++j) {
+      for (size_t j = 0; j < o.points.size(); ++j, ++point) {
         if (o.modes[j] != s.mode) continue;
         const Eigen::VectorXd& z = o.points[j];
-        const double scale = 1.0 + std::max(z.cwiseAbs().maxCoeff(), here);
+        const double scale = 1.0 + std::max(known_amax_[point], here);
         const double d = std::max((s.X - z.head(n)).cwiseAbs().maxCoeff(),
                                   (s.V - z.tail(n)).cwiseAbs().maxCoeff());
         if (d <= o.radius * scale) return static_cast<int>(k);
@@ -156,6 +159,7 @@ class SettleWatch final : public Observer {
   }
   const AttractorRecorder& rec_;
   const StudyOptions& opt_;
+  std::vector<double> known_amax_;  // |z|∞ of every known orbit's points, in order
   std::atomic<bool> stop_{false};
   int reason_ = 0, last_near_ = -1;
 };
