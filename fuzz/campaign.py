@@ -78,12 +78,24 @@ def backtrace(pid):
         return f"(gdb failed: {e})"
 
 
+_digests = {}  # path → (stat key, digest)
+
+
 def digest(path):
+    """SHA-256 of the file, recomputed only when its inode, size, mtime or ctime changed: every run
+    snapshots the whole work directory twice, which grows to gigabytes over a campaign (hashing it
+    all made the runs slower and slower)."""
+    st = os.stat(path)
+    key = (st.st_ino, st.st_size, st.st_mtime_ns, st.st_ctime_ns)
+    cached = _digests.get(path)
+    if cached and cached[0] == key:
+        return cached[1]
     h = hashlib.sha256()
     with open(path, "rb") as f:
         for block in iter(lambda: f.read(1 << 20), b""):
             h.update(block)
-    return h.hexdigest()
+    _digests[path] = (key, h.hexdigest())
+    return _digests[path][1]
 
 
 def snapshot(paths):
