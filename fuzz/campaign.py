@@ -228,7 +228,15 @@ class Campaign:
                 if after != before:
                     changed = sorted(set(after.items()) ^ set(before.items()))
                     self.find("exit 2 created or changed files", full, f"{tag} {changed[:4]} {err}")
-            if out and os.path.exists(out) and rc in (0, 3, 130):
+            if rc == 130 and "nothing was written" in err:
+                # Stopped before anything was computed (during the test read of a file given):
+                # like exit 2, nothing may have been created or changed.
+                after = snapshot([scratch, *watch])
+                if after != before:
+                    changed = sorted(set(after.items()) ^ set(before.items()))
+                    self.find("exit 130 said nothing was written, but files changed", full,
+                              f"{tag} {changed[:4]} {err}")
+            elif out and os.path.exists(out) and rc in (0, 3, 130):
                 self.check_file(full, out, rc, tag)
             if rc == 0 and "--json" in argv:
                 self.check_json(full, out_, tag)

@@ -89,7 +89,7 @@ int RunInfo(const std::string& path, bool json);
 
 // `vibro plot FILE` (cmd_plot.cpp); options: the script's further options (--format ...).
 int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay,
-            const std::string& options);
+            const std::vector<std::string>& options);
 
 // `vibro validate SCENE BRANCH.csv --param KEY ...` (cmd_validate.cpp).
 struct ValidateArgs {

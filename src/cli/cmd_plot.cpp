@@ -9,13 +9,11 @@
 
 #include "cli/cli_common.hpp"
 #include "cli/plot_script.hpp"
+#include "vibro/child_process.hpp"
 #include "vibro/hdf5_store.hpp"
 
 int RunPlot(const std::string& path, const std::string& prefix, const std::string& overlay,
-            const std::string& options) {
-  for (const auto* name : {&path, &prefix, &overlay, &options})
-    if (name->find('\'') != std::string::npos)
-      throw vibro::InputError({"vibro plot: file names with a single quote are not supported"});
+            const std::vector<std::string>& options) {
   vibro::ReadStoredRun(path);  // a clear error (exit 2) for a file that is not a vibro run
   std::vector<std::string> tried;
   const std::string script = vibro::cli::FindPlotScript(tried);
@@ -24,14 +22,10 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
                fmt::join(tried, " and "));
     return kExitInternal;
   }
-  if (script.find('\'') != std::string::npos) {
-    fmt::print(stderr, "vibro: cannot run the plotting code from a directory with a single quote: {}\n", script);
-    return kExitInternal;
-  }
-  std::string cmd = fmt::format("'{}' '{}' '{}'", VIBRO_PYTHON, script, path);
-  if (!prefix.empty()) cmd += fmt::format(" --out '{}'", prefix);
-  if (!overlay.empty()) cmd += fmt::format(" --overlay '{}'", overlay);
-  cmd += options;
+  std::vector<std::string> argv{VIBRO_PYTHON, script, path};
+  if (!prefix.empty()) argv.insert(argv.end(), {"--out", prefix});
+  if (!overlay.empty()) argv.insert(argv.end(), {"--overlay", overlay});
+  argv.insert(argv.end(), options.begin(), options.end());
   // The pictures written so far are named from the prefix (or the file): noted first, so that a
   // crash of the plotting process leaves nothing new behind.
   namespace fs = std::filesystem;
@@ -45,22 +39,33 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
     return found;
   };
   const std::set<fs::path> before = ours();
-  const int rc = std::system(cmd.c_str());
-  // The script exits with 2 for bad input (an overlay that is not a continuation branch).
-  if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) return kExitBadInput;
-  // Killed by a signal (the shell reports 128 + signal): h5py's HDF5 library crashed on a file
-  // that vibro's own contained read survived. That is the file's damage: bad input, nothing kept.
-  if (WIFSIGNALED(rc) || (WIFEXITED(rc) && WEXITSTATUS(rc) > 128)) {
+  const auto remove_new = [&] {
     std::error_code ec;
     for (const auto& f : ours())
       if (!before.count(f)) fs::remove(f, ec);
+  };
+  int rc = 0;
+  try {
+    // A stop request kills the plotting process: its pictures are removed (a half-written one is
+    // worth nothing), exit 130.
+    rc = vibro::RunChild(argv, "plotting " + path);
+  } catch (const vibro::Interrupted&) {
+    remove_new();
+    throw;
+  }
+  // The script exits with 2 for bad input (an overlay that is not a continuation branch).
+  if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) return kExitBadInput;
+  // Killed by a signal: h5py's HDF5 library crashed on a file that vibro's own contained read
+  // survived. That is the file's damage: bad input, nothing kept.
+  if (WIFSIGNALED(rc)) {
+    remove_new();
     throw vibro::InputError({fmt::format(
         "{}: a corrupt HDF5 file: reading it makes the HDF5 library crash in the plotting process "
         "(signal {}); nothing was written",
-        path, WIFSIGNALED(rc) ? WTERMSIG(rc) : WEXITSTATUS(rc) - 128)});
+        path, WTERMSIG(rc))});
   }
   if (rc != 0) {
-    fmt::print(stderr, "vibro: plotting failed (python exit status {})\n", rc);
+    fmt::print(stderr, "vibro: plotting failed (python exit status {})\n", WEXITSTATUS(rc));
     return kExitInternal;
   }
   return 0;

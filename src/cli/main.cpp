@@ -16,6 +16,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/stop_signals.hpp"
 #include "frontend/frontend.hpp"
+#include "vibro/child_process.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -247,9 +248,9 @@ int main(int argc, char** argv) {
     if (*plot) {
       if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)
         throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
-      return RunPlot(file_path, plot_prefix, plot_overlay,
-                     fmt::format(" --format {} --dpi {}{}", plot_format, plot_dpi,
-                                 plot_window.empty() ? "" : " --time-window=" + plot_window));
+      std::vector<std::string> options{"--format", plot_format, "--dpi", std::to_string(plot_dpi)};
+      if (!plot_window.empty()) options.push_back("--time-window=" + plot_window);
+      return RunPlot(file_path, plot_prefix, plot_overlay, options);
     }
     if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
     if (*score) return RunScore(sco);
@@ -285,6 +286,9 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
                e.messages().size());
     return kExitBadInput;
+  } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
+    fmt::print(stderr, "vibro: {}; nothing was written\n", e.what());
+    return kExitInterrupted;
   } catch (const std::exception& e) {
     fmt::print(stderr, "vibro: internal error: {}\n", e.what());
     return kExitInternal;

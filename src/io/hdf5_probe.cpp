@@ -3,6 +3,7 @@
 // bounds and crash. Before vibro reads a file it is read once in full by a child process (every
 // attribute, every dataset up to kProbeBytes): if that child dies, the file is reported as
 // corrupt (bad input) and vibro itself never touches it.
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -15,11 +16,29 @@
 #include <fmt/format.h>
 
 #include "io/hdf5_store_impl.hpp"
+#include "vibro/child_process.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro::store {
 namespace {
 constexpr double kProbeBytes = 64e6;
+constexpr int kOutOfMemory = 5;  // the test read's exit status when an allocation failed
+
+// A test read may ask for more memory than a vibro file can need (a flipped length of a
+// variable-length attribute made HDF5 allocate 23 GB, the machine's memory): the child gets its
+// address space now plus 2 GiB; past that its allocations fail, and it fails or dies, which
+// reports the file as corrupt.
+void LimitMemory() {
+  long pages = 0;
+  if (FILE* f = std::fopen("/proc/self/statm", "r")) {
+    if (std::fscanf(f, "%ld", &pages) != 1) pages = 0;
+    std::fclose(f);
+  }
+  if (pages <= 0) return;
+  const rlim_t limit = static_cast<rlim_t>(pages) * static_cast<rlim_t>(sysconf(_SC_PAGESIZE)) + (rlim_t{2} << 30);
+  const rlimit r{limit, limit};
+  setrlimit(RLIMIT_AS, &r);
+}
 }  // namespace
 
 InputError CannotOpen(const std::string& path) {
@@ -39,13 +58,20 @@ void ProbeInChild(const std::string& path) {
   if (pid == 0) {
     signal(SIGALRM, SIG_DFL);  // the parent's stop-grace handler is not for this child
     alarm(120);  // a corrupt file that makes the library loop is reported too
+    LimitMemory();
     // Not readable as HDF5 at all, or an object that fails cleanly: vibro's own reads report it.
-    h5::ReadEverything(path, kProbeBytes);
-    _exit(0);
+    // A read that failed for want of memory (the limit above) would make vibro's own read ask for
+    // the same: status kOutOfMemory.
+    errno = 0;
+    const bool read = h5::ReadEverything(path, kProbeBytes);
+    _exit(!read && errno == ENOMEM ? kOutOfMemory : 0);
   }
-  int st = 0;
-  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
-  }
+  // A stop request ends the wait (the child is killed): nothing was read or written.
+  const int st = WaitForChild(pid, "the test read of " + path);
+  if (WIFEXITED(st) && WEXITSTATUS(st) == kOutOfMemory)
+    throw InputError({fmt::format("{}: a corrupt HDF5 file: reading it makes the HDF5 library ask for "
+                                  "more than 2 GiB of memory (a damaged length); the file was not changed",
+                                  path)});
   // The child exits 0 whatever it read; a signal or another exit (a sanitizer's report) is a crash.
   if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
     throw InputError({fmt::format("{}: a corrupt HDF5 file: reading it makes the HDF5 library fail "
@@ -65,6 +91,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
   if (pid == 0) {
     signal(SIGALRM, SIG_DFL);  // the parent's stop-grace handler is not for this child
     alarm(120);
+    LimitMemory();
     h5::Silence();
     char copy[] = "/tmp/vibro-resume-probe-XXXXXX";
     const int fd = mkstemp(copy);
@@ -92,9 +119,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
     unlink(copy);
     _exit(code);
   }
-  int st = 0;
-  while (waitpid(pid, &st, 0) < 0 && errno == EINTR) {
-  }
+  const int st = WaitForChild(pid, "the test write to a copy of " + path);
   if (WIFSIGNALED(st) || (WIFEXITED(st) && WEXITSTATUS(st) != 0))
     throw InputError({fmt::format("{}: cannot resume: a corrupt HDF5 file (a test write to a copy of it "
                                   "failed); the file was not changed",

@@ -1,9 +1,11 @@
 #!/usr/bin/python3
-"""The stop grace period (docs/reliability.md, "Stop requests"): a stop request that comes while a
-library call never returns still ends the process.
+"""Stop requests while a library call never returns, or while vibro waits for a child process
+(docs/reliability.md, "Stop requests").
 
-An LD_PRELOAD shim (tests/support/hang_flush_shim.cpp) makes the N-th H5Fflush block for ever, as
-HDF5's filter pipeline was seen to on a damaged file. vibro cannot poll its stop flag there; after
+An LD_PRELOAD shim (tests/support/hang_shim.cpp) makes the N-th H5Fflush or H5Dread block for ever,
+as HDF5's filter pipeline was seen to on a damaged file.
+
+1. The grace period. An H5Fflush of vibro's own blocks. vibro cannot poll its stop flag there; after
 SIGTERM it must leave on its own once the grace period is over (4 s; 28 s when the call is part of
 the final write, which is given more time): exit 130, a message saying why, and the --out file as
 it was at its last completed flush (readable, status "running").
@@ -11,9 +13,16 @@ it was at its last completed flush (readable, status "running").
 Without the grace period the process would hang until killed; the test then fails at its liveness
 bound.
 
+2. Waiting for a child. The contained test read of a file given to `info` (and every other reader)
+runs in a child process, and `vibro plot` draws in one: a stop request must end the wait within a
+second (LIVENESS_CHILD), kill the child, exit 130 and write nothing. The campaign found `info` of a
+damaged file finishing 1.7 s after SIGTERM with exit 0: the test read took seconds, and the wait for
+it did not poll the stop flag.
+
 usage: grace_test.py VIBRO SHIM SCENES_DIR
 """
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -25,9 +34,11 @@ from checks import check, finish  # noqa: E402
 
 vibro, shim, scenes = sys.argv[1], sys.argv[2], sys.argv[3]
 tmp = tempfile.mkdtemp(prefix="vibro_grace_")
+markers = tempfile.mkdtemp(prefix="vibro_grace_markers_")  # apart from the files watched
 GRACE = 4.0        # vibro's grace period (src/cli/stop_signals.cpp)
 FINAL_GRACE = 28.0  # during a final write: the grace period and six extensions of it
 LIVENESS = 10.0  # seconds from the signal to the exit, at most (a loaded machine)
+LIVENESS_CHILD = 1.5  # a stop during a child's wait: vibro promises a second
 
 
 def hang_then_stop(name, args, flush, out, grace=GRACE):
@@ -81,4 +92,84 @@ hang_then_stop("basin, a batch of cells", ["basin", fig5, "--grid", "8,8", "--th
 out = os.path.join(tmp, "basin_final.h5")
 hang_then_stop("basin, its final write", ["basin", fig5, "--grid", "8,8", "--threads", "1",
                                            "--out", out], 3, out, FINAL_GRACE)
+
+
+def stop_child_wait(name, args, env_extra, files_before):
+    marker = os.path.join(markers, f"{name.split(',')[0]}.marker")
+    env = dict(os.environ, LD_PRELOAD=shim, VIBRO_TEST_HANG_MARKER=marker, **env_extra)
+    p = subprocess.Popen([vibro, *args], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True, cwd=tmp)
+    deadline = time.monotonic() + 60
+    while not os.path.exists(marker) and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    began = os.path.exists(marker)
+    check(f"{name}: the child's call began", began, f"exit {p.poll()}")
+    if not began:
+        p.kill()
+        p.communicate()
+        return
+    time.sleep(0.2)
+    with open(marker) as f:
+        child = int(f.read().split()[0])
+    check(f"{name}: the stuck call is in a child", child != p.pid, f"pid {child}")
+    t0 = time.monotonic()
+    p.send_signal(signal.SIGTERM)
+    try:
+        _, err = p.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        _, err = p.communicate()
+    elapsed = time.monotonic() - t0
+    check(f"{name}: exit 130", p.returncode == 130, f"exit {p.returncode} {err[-300:]}")
+    check(f"{name}: within {LIVENESS_CHILD} s of SIGTERM ({elapsed:.2f} s)", elapsed <= LIVENESS_CHILD,
+          f"{elapsed:.2f} s")
+    check(f"{name}: says so", "interrupted by a stop request" in err, err[-300:])
+    try:
+        os.kill(child, 0)
+        gone = False
+    except ProcessLookupError:
+        gone = True
+    check(f"{name}: the child is gone", gone, f"pid {child} still exists")
+    check(f"{name}: nothing written", sorted(os.listdir(tmp)) == files_before,
+          sorted(set(os.listdir(tmp)) ^ set(files_before)))
+
+
+# A finished run to read (made without the shim).
+done = os.path.join(tmp, "done.h5")
+subprocess.run([vibro, "simulate", default, "--set", "run.periods=20", "--out", done],
+               capture_output=True, timeout=120, check=True)
+before = sorted(os.listdir(tmp))
+# `info`: the first H5Dread of the test read (in the child) never returns.
+stop_child_wait("info, its test read", ["info", done], {"VIBRO_TEST_HANG_READ": "1"}, before)
+# `plot`: the plotting process is a Python child (h5py calls HDF5 through its own binding, which
+# the shim does not reach): SIGTERM while it draws; its pictures are removed.
+p = subprocess.Popen([vibro, "plot", done, "--out", os.path.join(tmp, "pic")],
+                     stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+time.sleep(0.8)  # the Python child is importing matplotlib or drawing (about 3 s in all)
+t0 = time.monotonic()
+p.send_signal(signal.SIGTERM)
+_, err = p.communicate(timeout=30)
+elapsed = time.monotonic() - t0
+check("plot: exit 130 on SIGTERM while drawing", p.returncode == 130, f"exit {p.returncode} {err[-300:]}")
+check(f"plot: within {LIVENESS_CHILD} s ({elapsed:.2f} s)", elapsed <= LIVENESS_CHILD, f"{elapsed:.2f} s")
+check("plot: no picture left", not [f for f in os.listdir(tmp) if f.startswith("pic")],
+      [f for f in os.listdir(tmp) if f.startswith("pic")])
+
+# 3. Files from the campaign whose damaged variable-length lengths made the test read ask HDF5 for
+# up to 23 GB (78 s, the machine's memory; the wait for it outlived SIGTERM). The test read's
+# address space is limited: refused at once, exit 2, the file unchanged.
+corrupt = os.path.join(os.path.dirname(os.path.abspath(__file__)), "corrupt")
+for name in ("vlen_length_23gb.h5", "vlen_length_slow.h5"):
+    path = os.path.join(tmp, name)
+    shutil.copy(os.path.join(corrupt, name), path)
+    with open(path, "rb") as f:
+        data = f.read()
+    t0 = time.monotonic()
+    r = subprocess.run([vibro, "info", path], capture_output=True, text=True, timeout=300)
+    elapsed = time.monotonic() - t0
+    check(f"{name}: exit 2", r.returncode == 2, f"exit {r.returncode} {r.stderr[-300:]}")
+    check(f"{name}: refused within 5 s ({elapsed:.2f} s)", elapsed < 5, f"{elapsed:.2f} s")
+    check(f"{name}: names the file", path in r.stderr, r.stderr[-300:])
+    with open(path, "rb") as f:
+        check(f"{name}: unchanged", f.read() == data)
 finish()
