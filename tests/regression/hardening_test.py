@@ -335,7 +335,7 @@ check("checkpoint beyond the tables: exit 2 and untouched", r.returncode == 2 an
       f"{r.returncode} {r.stderr[-300:]}")
 
 basin_file = os.path.join(tmp, "basin.h5")
-basin_args = ["basin", fig5, "--grid", "200,200", "--threads", "2", "--out", basin_file]
+basin_args = ["basin", fig5, "--grid", "400,400", "--threads", "2", "--out", basin_file]  # ~8 s uninterrupted
 rc, _, _ = interrupt(basin_args, 2.0)
 with h5py.File(basin_file, "r") as f:
     cells = f["/basin/cells/index"].shape[0]
