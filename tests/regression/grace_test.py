@@ -41,21 +41,34 @@ LIVENESS = 10.0  # seconds from the signal to the exit, at most (a loaded machin
 LIVENESS_CHILD = 1.5  # a stop during a child's wait: vibro promises a second
 
 
-def hang_then_stop(name, args, flush, out, grace=GRACE):
-    marker = os.path.join(tmp, f"{name}.marker")
-    env = dict(os.environ, LD_PRELOAD=shim, VIBRO_TEST_HANG_FLUSH=str(flush),
-               VIBRO_TEST_HANG_MARKER=marker)
-    p = subprocess.Popen([vibro, *args], env=env, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.PIPE, text=True)
+def start_stuck(name, args, hang):
+    """Starts vibro with the shim (`hang`: its VIBRO_TEST_HANG_* setting) and waits until the call
+    that never returns has begun. Returns the process and the id of the process that is stuck in
+    the call, or None (checked) when the call never began."""
+    marker = os.path.join(markers, "".join(c if c.isalnum() else "_" for c in name) + ".marker")
+    assert not os.path.exists(marker), name  # one marker per case
+    env = dict(os.environ, LD_PRELOAD=shim, VIBRO_TEST_HANG_MARKER=marker, **hang)
+    p = subprocess.Popen([vibro, *args], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                         text=True, cwd=tmp)
     deadline = time.monotonic() + 60
     while not os.path.exists(marker) and p.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
+        time.sleep(0.02)
+    time.sleep(0.05)  # the marker's content is written just after it is created
     began = os.path.exists(marker)
-    check(f"{name}: the shim's flush {flush} began", began, f"exit {p.poll()}")
+    check(f"{name}: the call that never returns began", began, f"exit {p.poll()}")
     if not began:
         p.kill()
         p.communicate()
+        return None
+    with open(marker) as f:
+        return p, int(f.read().split()[0])
+
+
+def hang_then_stop(name, args, flush, out, grace=GRACE):
+    started = start_stuck(name, args, {"VIBRO_TEST_HANG_FLUSH": str(flush)})
+    if started is None:
         return
+    p, _ = started
     time.sleep(0.3)  # well inside the blocked call
     t0 = time.monotonic()
     p.send_signal(signal.SIGTERM)
@@ -94,30 +107,23 @@ hang_then_stop("basin, its final write", ["basin", fig5, "--grid", "8,8", "--thr
                                            "--out", out], 3, out, FINAL_GRACE)
 
 
-def stop_child_wait(name, args, env_extra, files_before):
-    marker = os.path.join(markers, f"{name.split(',')[0]}.marker")
-    env = dict(os.environ, LD_PRELOAD=shim, VIBRO_TEST_HANG_MARKER=marker, **env_extra)
-    p = subprocess.Popen([vibro, *args], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                         text=True, cwd=tmp)
-    deadline = time.monotonic() + 60
-    while not os.path.exists(marker) and p.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.02)
-    began = os.path.exists(marker)
-    check(f"{name}: the child's call began", began, f"exit {p.poll()}")
-    if not began:
-        p.kill()
-        p.communicate()
+def stop_child_wait(name, args, hang, files_before):
+    started = start_stuck(name, args, hang)
+    if started is None:
         return
+    p, child = started
     time.sleep(0.2)
-    with open(marker) as f:
-        child = int(f.read().split()[0])
     check(f"{name}: the stuck call is in a child", child != p.pid, f"pid {child}")
     t0 = time.monotonic()
     p.send_signal(signal.SIGTERM)
     try:
         _, err = p.communicate(timeout=30)
     except subprocess.TimeoutExpired:
-        p.kill()
+        for pid in (p.pid, child):  # the stuck child holds the pipes too
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
         _, err = p.communicate()
     elapsed = time.monotonic() - t0
     check(f"{name}: exit 130", p.returncode == 130, f"exit {p.returncode} {err[-300:]}")
