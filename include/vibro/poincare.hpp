@@ -26,20 +26,29 @@
 
 namespace vibro {
 
-// Accumulates DF along a simulated trajectory (an Observer of Simulate).
+// Accumulates DF along a simulated trajectory (an Observer of Simulate). Free flights and
+// impacts, most of a run, are applied in closed form without allocating (per-mode 2 × 2 flow
+// blocks, rank-one saltation updates), so that the Lyapunov observer can follow every period.
 class TangentTracker final : public Observer {
  public:
   explicit TangentTracker(const System& system);
   void OnStretch(const Stretch& s) override;
   void OnReset(const Reset& r) override;
-  const Eigen::MatrixXd& jacobian() const { return phi_; }  // ∂z(t)/∂z(t0), (2n, 2n)
+  const Eigen::MatrixXd& jacobian() const { return phi_; }  // ∂z(t)/∂z(t0) · start, (2n, k)
   bool singular() const { return singular_; }               // a grazing on the way
+  // Starts the product again from `start` (2n rows; the identity for DF itself): the Lyapunov
+  // observer carries its orthonormal frame this way.
+  void Restart(const Eigen::MatrixXd& start);
 
  private:
   Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                         double phase) const;
+  void FreeFlight(double duration, Eigen::MatrixXd& m) const;
+  void Impact(const Reset& r);
   const System& sys_;
   Eigen::MatrixXd G_free_, G_stick_, Pi_, phi_;
+  Eigen::VectorXd w2_, D_;                  // ω_i², 2ζ_iω_i
+  Eigen::VectorXd du_, dv_;                 // the impact saltation's column: work space, (n)
   bool singular_ = false;
 };
 

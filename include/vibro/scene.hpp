@@ -62,6 +62,7 @@ struct RunSpec {
   int samples_per_period = 64;      // dense samples per forcing period (0 = none)
   int max_period = 32;              // largest period searched by the attractor classification
   double period_tolerance = 1e-7;   // relative tolerance on section points for periodicity
+  bool lyapunov = true;             // Lyapunov exponents of the run (simulate; docs/model.md §5.8)
 };
 
 struct Scene {

@@ -8,6 +8,7 @@
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/scene.hpp"
@@ -22,7 +23,10 @@ namespace vibro {
 std::string ModelJson(const System& system);
 
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
-std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor);
+// `lyapunov`: the run's Lyapunov exponents ("lyapunov_exponents", "lyapunov_ci", "chaotic"), when
+// measured (run.lyapunov); −∞ is written as null.
+std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor,
+                           const LyapunovSpectrum* lyapunov = nullptr);
 
 // `vibro orbit --json` (docs/cli.md, docs/output.md).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);

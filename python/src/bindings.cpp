@@ -147,6 +147,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
   const auto& loaded = s.loaded;
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder attractor_recorder(sys, loaded.scene);
+  std::optional<vibro::LyapunovObserver> lyapunov;
+  if (loaded.scene.run.lyapunov) lyapunov.emplace(sys, loaded.scene);
   Recorder recorder(sys.dof());
   std::unique_ptr<vibro::Hdf5Store> store;
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
@@ -157,12 +159,15 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
     SigintGuard guard(handle_sigint);
     vibro::SimulationOptions options;
     options.observers = {&attractor_recorder, &recorder};
+    if (lyapunov) options.observers.push_back(&*lyapunov);
     if (store) options.observers.push_back(store.get());
     options.stop_requested = guard.flag();
     const auto result = vibro::Simulate(sys, loaded.scene, options);
     const auto attractor = attractor_recorder.Classify();
     if (store) store->Finish(result, attractor);
-    json = vibro::SimulationJson(loaded.scene, result, attractor);
+    std::optional<vibro::LyapunovSpectrum> spectrum;
+    if (lyapunov) spectrum = lyapunov->Spectrum();
+    json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr);
     interrupted = result.status == vibro::RunStatus::kInterrupted;
   }
   py::dict d;

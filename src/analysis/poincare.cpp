@@ -67,6 +67,15 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
   G_stick_.bottomLeftCorner(n, n) = -A;
   G_stick_.bottomRightCorner(n, n) = -Pi_ * D.asDiagonal();
   phi_ = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  w2_ = w2;
+  D_ = D;
+  du_.resize(n);
+  dv_.resize(n);
+}
+
+void TangentTracker::Restart(const Eigen::MatrixXd& start) {
+  phi_ = start;
+  singular_ = false;
 }
 
 Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
@@ -80,7 +89,72 @@ Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
 }
 
 void TangentTracker::OnStretch(const Stretch& s) {
-  phi_ = ((s.mode == Mode::kFree ? G_free_ : G_stick_) * s.duration).exp() * phi_;
+  if (s.mode == Mode::kFree)
+    FreeFlight(s.duration, phi_);
+  else
+    phi_ = (G_stick_ * s.duration).exp() * phi_;
+}
+
+// exp(G_free s) is block diagonal over the modes: for Ẍ_i = −ω_i² X_i − 2ζ_iω_i Ẋ_i (ζ_i < 1),
+// with a = ζ_iω_i and ω_d = ω_i √(1 − ζ_i²), the block acting on (X_i, Ẋ_i) is
+// e^{−a s} [[cos + (a/ω_d) sin, sin/ω_d], [−(ω_i²/ω_d) sin, cos − (a/ω_d) sin]] at ω_d s.
+// Applied in place to the rows of `m`.
+void TangentTracker::FreeFlight(double s, Eigen::MatrixXd& m) const {
+  const auto n = sys_.dof();
+  for (int i = 0; i < n; ++i) {
+    const double a = 0.5 * D_[i], wd = std::sqrt(w2_[i] - a * a);
+    double sn, c;
+    ::sincos(wd * s, &sn, &c);
+    const double e = a == 0.0 ? 1.0 : std::exp(-a * s);
+    const double b00 = e * (c + a / wd * sn), b01 = e * sn / wd, b10 = -e * w2_[i] / wd * sn,
+                 b11 = e * (c - a / wd * sn);
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      const double x = m(i, j), v = m(n + i, j);
+      m(i, j) = b00 * x + b01 * v;
+      m(n + i, j) = b10 * x + b11 * v;
+    }
+  }
+}
+
+// The restitution law's saltation S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻) (docs/model.md §5.6) with
+// ∂g = diag(I, I − (1+r) T_B cᵀ/s_B) and ∇h = (c, 0), applied as rank-one updates column by column
+// (a run has millions of impacts: no temporaries): the phase does not change across the impact,
+// so f⁺ − ∂g f⁻ = (Ẋ⁺ − Ẋ⁻, a⁺ − ∂g_V a⁻) with a = −ω²X − DẊ + T_A f sin φ on either side (X⁺ is
+// X⁻ snapped onto the stop: equal to rounding).
+void TangentTracker::Impact(const Reset& r) {
+  const auto n = sys_.dof();
+  const Eigen::VectorXd& c = sys_.contact_shape();
+  const Eigen::VectorXd& T_B = sys_.contact();
+  const Eigen::VectorXd& T_A = sys_.forcing();
+  const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;
+  if (!(std::abs(denom) > 1e-300)) {
+    singular_ = true;
+    return;
+  }
+  const double k = (1.0 + sys_.restitution()) / sys_.s_B();
+  const double forcing = sys_.amplitude() * std::sin(r.phase);
+  // a⁺ − ∂g_V a⁻ = a⁺ − a⁻ + k T_B (cᵀa⁻), a⁺ − a⁻ = −ω²(X⁺ − X⁻) − D(Ẋ⁺ − Ẋ⁻).
+  double c_a_minus = 0;
+  for (int i = 0; i < n; ++i)
+    c_a_minus += c[i] * (-w2_[i] * r.X_before[i] - D_[i] * r.V_before[i] + T_A[i] * forcing);
+  for (int i = 0; i < n; ++i) {
+    du_[i] = r.V_after[i] - r.V_before[i];
+    dv_[i] = -w2_[i] * (r.X_after[i] - r.X_before[i]) - D_[i] * du_[i] + k * c_a_minus * T_B[i];
+  }
+  for (Eigen::Index j = 0; j < phi_.cols(); ++j) {
+    double* col = phi_.col(j).data();
+    double cx = 0, cv = 0;
+    for (int i = 0; i < n; ++i) {
+      cx += c[i] * col[i];
+      cv += c[i] * col[n + i];
+    }
+    cx /= denom;
+    cv *= k;
+    for (int i = 0; i < n; ++i) {
+      col[i] += du_[i] * cx;
+      col[n + i] += dv_[i] * cx - T_B[i] * cv;
+    }
+  }
 }
 
 void TangentTracker::OnReset(const Reset& r) {
@@ -102,7 +176,7 @@ void TangentTracker::OnReset(const Reset& r) {
   };
   switch (r.kind) {
     case ResetKind::kImpact:
-      salt(I - (1.0 + sys_.restitution()) * sys_.contact() * c.transpose() / sys_.s_B(), Mode::kFree);
+      Impact(r);
       break;
     case ResetKind::kPlasticStick:
       salt(Pi_, Mode::kSticking);
@@ -128,8 +202,9 @@ void TangentTracker::OnReset(const Reset& r) {
       const Eigen::MatrixXd P = BlockDiag(Pi_, Pi_);
       const Eigen::VectorXd f_free = Field(Mode::kFree, *r.X_end, *r.V_end, phase_inf);
       const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf);
-      const Eigen::MatrixXd flow = (G_free_ * delta).exp();
-      phi_ = (P * flow + (P * f_free - f_stick) * r.delta_gradient->transpose()) * phi_;
+      const Eigen::RowVectorXd grad_phi = r.delta_gradient->transpose() * phi_;  // ∇Δ∞ᵀ Φ
+      FreeFlight(delta, phi_);                                                      // Φ(Δ∞) Φ
+      phi_ = P * phi_ + (P * f_free - f_stick) * grad_phi;
       break;
     }
   }

@@ -17,6 +17,7 @@
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
@@ -32,6 +33,8 @@ int ExitCode(vibro::RunStatus s);
 // Prints an attractor's summary; restitution NaN when unknown (then the velocities after impact
 // are not printed).
 void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""));
+// Prints the Lyapunov exponents of a run with their 95 % intervals, and whether it is chaotic.
+void PrintLyapunov(const vibro::LyapunovSpectrum& s);
 // The message for a --param KEY the scene has no number at, with the nearest known key.
 using vibro::frontend::NotANumericKey;
 

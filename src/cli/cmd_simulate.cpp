@@ -9,6 +9,7 @@
 #include "cli/stop_signals.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
@@ -21,6 +22,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
+  std::optional<vibro::LyapunovObserver> lyapunov;
+  if (loaded.scene.run.lyapunov) options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
 
   std::unique_ptr<vibro::Hdf5Store> store;
@@ -52,6 +55,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   progress.reset();
   const auto attractor = recorder.Classify();
+  std::optional<vibro::LyapunovSpectrum> spectrum;
+  if (lyapunov) spectrum = lyapunov->Spectrum();
   if (store) {
     const vibro::cli::FinalWrite writing;
     store->Finish(result, attractor);
@@ -59,7 +64,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   }
 
   if (json) {
-    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor));
+    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr));
   } else {
     fmt::print("scene        {}{}\n", path,
                loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
@@ -79,6 +84,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
                  vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
     PrintAttractor(attractor, loaded.scene.restitution);
+    if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)
       fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "
                  "{} re-initialisations\n",

@@ -93,7 +93,7 @@ std::string PreScan(std::string_view text, const std::string& source) {
   return {};
 }
 
-enum class Kind { kNumber, kInteger, kString, kNumberArray, kMatrix, kTable };
+enum class Kind { kNumber, kInteger, kString, kBoolean, kNumberArray, kMatrix, kTable };
 
 // Every key a scene may hold (docs/scenes.md lists each with its default and constraint).
 const std::map<std::string, Kind>& Schema() {
@@ -134,6 +134,7 @@ const std::map<std::string, Kind>& Schema() {
       {"run.samples_per_period", Kind::kInteger},
       {"run.max_period", Kind::kInteger},
       {"run.period_tolerance", Kind::kNumber},
+      {"run.lyapunov", Kind::kBoolean},
   };
   return schema;
 }
@@ -300,6 +301,17 @@ class Reader {
       return std::nullopt;
     }
     return s->get();
+  }
+
+  std::optional<bool> Boolean(const std::string& path) {
+    const toml::node* n = Find(path);
+    if (!n) return std::nullopt;
+    const auto* b = n->as_boolean();
+    if (!b) {
+      Report(n, path, "expected true or false");
+      return std::nullopt;
+    }
+    return b->get();
   }
 
   // Numbers of an array node; reports and returns nullopt on any bad element.
@@ -638,6 +650,7 @@ LoadedScene Build(toml::table root, const std::string& source,
     r.precision = *v == "double" ? Precision::kDouble : Precision::kQuad;
   if (auto v = rd.Integer("run.samples_per_period", 0, 1 << 20)) r.samples_per_period = static_cast<int>(*v);
   if (auto v = rd.Integer("run.max_period", 1, 1 << 12)) r.max_period = static_cast<int>(*v);
+  if (auto v = rd.Boolean("run.lyapunov")) r.lyapunov = *v;
   if (auto v = rd.Number("run.period_tolerance")) r.period_tolerance = *v;
 
   // Physics, once the file gave a structure; keys already reported are not reported twice.

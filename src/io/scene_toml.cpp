@@ -67,10 +67,10 @@ std::string ResolvedSceneToml(const Scene& sc) {
   s += fmt::format(
       "\n[run]\nperiods = {}\nengine = \"{}\"\nrtol = {}\natol = {}\nmethod = \"{}\"\nmax_step = {}\n"
       "max_steps = {}\nchatter = \"{}\"\nchatter_switch = {}\nsamples_per_period = {}\nmax_period = {}\n"
-      "period_tolerance = {}\n",
+      "period_tolerance = {}\nlyapunov = {}\n",
       r.periods, ToString(r.engine), Number(r.rtol), Number(r.atol), ToString(r.method), Number(r.max_step),
       r.max_steps, ToString(r.chatter), Number(r.chatter_switch), r.samples_per_period, r.max_period,
-      Number(r.period_tolerance));
+      Number(r.period_tolerance), r.lyapunov);
   return s;
 }
 

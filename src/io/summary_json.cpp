@@ -1,6 +1,7 @@
 // JSON summaries (docs/cli.md, docs/output.md).
 #include "vibro/summary_json.hpp"
 
+#include <cmath>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -38,7 +39,10 @@ nlohmann::json AttractorObject(const Attractor& a) {
 
 }  // namespace
 
-std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a) {
+// A finite number, or JSON null for ±∞ (Lyapunov exponents of collapsed directions).
+nlohmann::json FiniteOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly) {
   nlohmann::json j;
   j["status"] = ToString(r.status);
   if (r.status != RunStatus::kOk) j["message"] = r.message;
@@ -63,6 +67,17 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                    {"jac_evals", r.solver.jac_evals},
                    {"error_test_failures", r.solver.error_test_failures},
                    {"reinits", r.solver.reinits}};
+  if (ly) {
+    auto exponents = nlohmann::json::array(), ci = nlohmann::json::array();
+    for (double e : ly->exponents) exponents.push_back(FiniteOrNull(e));
+    for (const auto& [lo, hi] : ly->ci) ci.push_back({FiniteOrNull(lo), FiniteOrNull(hi)});
+    j["lyapunov_exponents"] = exponents;
+    j["lyapunov_ci"] = ci;
+    j["lyapunov_periods"] = ly->periods;
+    if (ly->singular_periods) j["lyapunov_singular_periods"] = ly->singular_periods;
+    if (!ly->undefined.empty()) j["lyapunov_undefined"] = ly->undefined;
+    j["chaotic"] = ly->chaotic();
+  }
   return j.dump();
 }
 

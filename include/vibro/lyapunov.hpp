@@ -1,0 +1,69 @@
+// Lyapunov exponents of a simulated run (docs/model.md §5.8): Benettin's method on the exact tangent
+// map of the hybrid flow. The TangentTracker carries an orthonormal frame through every flight,
+// impact, sticking phase and accumulation point (the same closed-form Jacobians and saltation
+// matrices as the orbit solver's DF); once per forcing period the frame is re-orthonormalised by
+// QR and log|R_ii| is summed. Over the second half of the run the sums are taken in blocks, whose
+// spread gives a batch-means confidence interval.
+//
+// Sticking collapses two directions (x_B and ẋ_B are fixed on the stop, docs/model.md §5.6): once
+// a sticking phase is entered in the measured window, the two smallest exponents are −∞ (all of
+// them for one DOF, whose sticking motions are superstable).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "vibro/observer.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+
+struct LyapunovSpectrum {
+  // Per unit time, largest first, 2n of them; −∞ for directions collapsed by sticking.
+  std::vector<double> exponents;
+  // 95 % confidence interval of each exponent from the block means (Student's t); equal to
+  // (−∞, −∞) for a collapsed direction, empty when there are fewer than two blocks.
+  std::vector<std::pair<double, double>> ci;
+  long long periods = 0;  // forcing periods measured (the second half of the run)
+  int blocks = 0;         // blocks of periods behind the interval
+  long long singular_periods = 0;  // periods left out: a grazing contact made the map singular
+  std::string undefined;           // why there are no exponents; empty when there are
+  // The largest exponent is positive beyond its confidence interval.
+  bool chaotic() const { return undefined.empty() && !ci.empty() && ci.front().first > 0; }
+};
+
+class LyapunovObserver final : public Observer {
+ public:
+  // Measures the periods after the first half of scene.run.periods (at least one).
+  LyapunovObserver(const System& system, const Scene& scene);
+  void OnStretch(const Stretch& s) override;
+  void OnReset(const Reset& r) override;
+  void OnSection(const Sample& s) override;
+  LyapunovSpectrum Spectrum() const;
+
+ private:
+  static constexpr int kBlocks = 10;
+  void EndPeriod(long long k);
+  TangentTracker tangent_;
+  double period_;            // T
+  long long first_measured_;  // first period (section index k, the period ending at k) measured
+  long long window_;          // periods in the measured window
+  long long last_k_ = -1;     // section index of the frame's start, −1 before the first section
+  // A section point is reported while the flight that reaches it is still being located: the
+  // period it ends is closed by the OnStretch that follows (−1: none pending).
+  long long pending_ = -1;
+  bool stuck_ = false;        // a sticking entry since the last section
+  bool collapsed_ = false;    // a sticking entry in the measured window
+  Eigen::MatrixXd frame_;     // orthonormal frame Q, (2n, 2n)
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;  // its storage reused every period
+  Eigen::MatrixXd block_sums_;  // Σ log|R_ii| per block, (2n, kBlocks)
+  Eigen::VectorXi block_periods_;
+  long long measured_ = 0, singular_ = 0;
+};
+
+}  // namespace vibro

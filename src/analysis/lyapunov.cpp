@@ -1,0 +1,125 @@
+// Lyapunov exponents by QR re-orthonormalisation of the exact tangent map (docs/model.md §5.8).
+#include "vibro/lyapunov.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace vibro {
+namespace {
+
+// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom (1 to 9).
+double StudentT975(int dof) {
+  static const double t[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262};
+  return t[std::clamp(dof, 1, 9) - 1];
+}
+
+}  // namespace
+
+LyapunovObserver::LyapunovObserver(const System& sys, const Scene& scene)
+    : tangent_(sys), period_(sys.period()) {
+  const long long total = std::max<long long>(1, scene.run.periods);
+  window_ = std::max<long long>(1, total / 2);
+  first_measured_ = total - window_ + 1;
+  const auto m = 2 * sys.dof();
+  frame_ = Eigen::MatrixXd::Identity(m, m);
+  block_sums_ = Eigen::MatrixXd::Zero(m, kBlocks);
+  block_periods_ = Eigen::VectorXi::Zero(kBlocks);
+}
+
+void LyapunovObserver::OnReset(const Reset& r) {
+  tangent_.OnReset(r);
+  if (r.kind == ResetKind::kPlasticStick || r.kind == ResetKind::kAccumulation) stuck_ = true;
+}
+
+void LyapunovObserver::OnSection(const Sample& s) {
+  const long long k = s.clock.period;
+  if (last_k_ >= 0 && k == last_k_ + 1) {
+    pending_ = k;
+    return;
+  }
+  // The first section point (the start, or a resumed run), or a gap: a new frame from here.
+  frame_.setIdentity();
+  last_k_ = k;
+  stuck_ = false;
+  tangent_.Restart(frame_);
+}
+
+void LyapunovObserver::OnStretch(const Stretch& s) {
+  tangent_.OnStretch(s);
+  if (pending_ >= 0) {
+    EndPeriod(pending_);
+    pending_ = -1;
+  }
+}
+
+void LyapunovObserver::EndPeriod(long long k) {
+  if (tangent_.singular()) {
+    // A grazing contact: the tangent map is unbounded there (docs/model.md §5.7). The period is
+    // left out and the frame goes on unchanged.
+    if (k >= first_measured_) ++singular_;
+  } else {
+    qr_.compute(tangent_.jacobian());
+    const Eigen::MatrixXd& packed = qr_.matrixQR();
+    frame_ = qr_.householderQ();
+    if (k >= first_measured_) {
+      const auto b = static_cast<int>(
+          std::min<long long>(kBlocks - 1, (k - first_measured_) * kBlocks / std::max<long long>(1, window_)));
+      for (Eigen::Index i = 0; i < packed.cols(); ++i) block_sums_(i, b) += std::log(std::abs(packed(i, i)));
+      ++block_periods_[b];
+      ++measured_;
+      collapsed_ = collapsed_ || stuck_;
+    }
+  }
+  last_k_ = k;
+  stuck_ = false;
+  tangent_.Restart(frame_);
+}
+
+LyapunovSpectrum LyapunovObserver::Spectrum() const {
+  LyapunovSpectrum out;
+  out.periods = measured_;
+  out.singular_periods = singular_;
+  if (measured_ == 0) {
+    out.undefined = "no period of the second half of the run was measured";
+    return out;
+  }
+  const auto m = static_cast<int>(block_sums_.rows());
+  // Directions kept: all, or 2n − 2 when sticking collapsed two of them. QR orders the frame by
+  // decreasing growth, so the collapsed directions are the last ones.
+  const int kept = collapsed_ ? m - 2 : m;
+  const double ninf = -std::numeric_limits<double>::infinity();
+  const double time = static_cast<double>(measured_) * period_;
+  std::vector<int> full;  // blocks holding periods
+  for (int b = 0; b < kBlocks; ++b)
+    if (block_periods_[b] > 0) full.push_back(b);
+  out.blocks = static_cast<int>(full.size());
+  std::vector<std::pair<double, std::pair<double, double>>> rows;
+  for (int i = 0; i < kept; ++i) {
+    const double mean = block_sums_.row(i).sum() / time;
+    std::pair<double, double> ci{mean, mean};
+    if (full.size() >= 2) {
+      double ss = 0;
+      for (int b : full) {
+        const double x = block_sums_(i, b) / (block_periods_[b] * period_) - mean;
+        ss += x * x;
+      }
+      const double half = StudentT975(static_cast<int>(full.size()) - 1) *
+                          std::sqrt(ss / static_cast<double>(full.size() - 1) / static_cast<double>(full.size()));
+      ci = {mean - half, mean + half};
+    }
+    rows.push_back({mean, ci});
+  }
+  std::sort(rows.begin(), rows.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  for (const auto& [e, ci] : rows) {
+    out.exponents.push_back(e);
+    if (full.size() >= 2) out.ci.push_back(ci);
+  }
+  for (int i = kept; i < m; ++i) {
+    out.exponents.push_back(ninf);
+    if (full.size() >= 2) out.ci.push_back({ninf, ninf});
+  }
+  return out;
+}
+
+}  // namespace vibro

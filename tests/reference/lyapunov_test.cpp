@@ -1,0 +1,158 @@
+// Lyapunov exponents (docs/model.md §5.8) against truths that do not share the QR machinery:
+// - on periodic orbits, ln|μ_i| / (qT) from the Floquet multipliers of the orbit solver;
+// - on any motion without sticking, the sum of the exponents is fixed by the determinants alone:
+//   a free flight contracts phase volume by exp(−Σ 2ζ_iω_i s) (trace of G) and an impact by r²
+//   (det of the saltation matrix: det ∂g = −r times 1 + ∇hᵀ∂g⁻¹u/∇h·f⁻ = −r), so
+//   Σ λ_i = 2 ln r · (impacts per unit time) − Σ 2ζ_iω_i exactly;
+// - a 1-DOF sticking orbit is superstable: every exponent is −∞.
+// The chaotic case is checked against the divergence of two quad-precision runs in
+// tests/regression/lyapunov_test.py.
+#include <cmath>
+#include <complex>
+
+#include <gtest/gtest.h>
+
+#include "support.hpp"
+#include "vibro/lyapunov.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene_file.hpp"
+
+namespace vibro::test {
+namespace {
+
+Scene Shipped(const char* file, std::vector<std::string> sets = {}) {
+  sets.push_back("run.samples_per_period=0");
+  return LoadScene(std::string(VIBRO_SCENES_DIR) + "/" + file, sets).scene;
+}
+
+// Impacts and sticking entries per period index (the period an event falls in).
+struct EventsByPeriod final : Observer {
+  long long from = 0, impacts = 0, sticks = 0, grazings = 0;
+  void OnEvent(const Event& e) override {
+    if (e.clock.period < from) return;
+    impacts += e.kind == EventKind::kImpact;
+    sticks += e.kind == EventKind::kStick;
+    grazings += e.kind == EventKind::kGrazing;
+  }
+};
+
+LyapunovSpectrum MeasureRun(const System& sys, const Scene& scene, const InitialOverride* start = nullptr,
+                     Observer* more = nullptr) {
+  LyapunovObserver ly(sys, scene);
+  SimulationOptions opt;
+  opt.observers = {&ly};
+  if (more) opt.observers.push_back(more);
+  opt.initial = start;
+  const RunResult r = Simulate(sys, scene, opt);
+  EXPECT_EQ(r.status, RunStatus::kOk) << r.message;
+  return ly.Spectrum();
+}
+
+TEST(Lyapunov, OneDofStickingOrbitIsSuperstable) {
+  const Scene scene = Shipped("fig08_preload.toml");
+  const System sys(scene);
+  const auto s = MeasureRun(sys, scene);
+  ASSERT_TRUE(s.undefined.empty()) << s.undefined;
+  EXPECT_EQ(s.periods, scene.run.periods / 2);
+  ASSERT_EQ(s.exponents.size(), 2u);
+  for (double e : s.exponents) EXPECT_TRUE(std::isinf(e) && e < 0) << e;
+  EXPECT_FALSE(s.chaotic());
+}
+
+// The 2-DOF chain's sticking orbit: a complex pair of multipliers (|μ| = 0.2844) and two
+// directions collapsed by sticking.
+TEST(Lyapunov, TwoDofStickingOrbitMatchesItsFloquetMultipliers) {
+  Scene scene = Shipped("chain2.toml");
+  scene.run.periods = 4000;
+  const System sys(scene);
+  const OrbitResult o = FindOrbit(sys, scene, {});
+  ASSERT_EQ(o.status, "converged") << o.message;
+  const double qT = o.period * sys.period();
+  std::vector<double> want;
+  for (const auto& m : o.multipliers) want.push_back(std::log(std::abs(m)) / qT);
+  std::sort(want.rbegin(), want.rend());
+  ASSERT_EQ(want.size(), 2u);
+  const auto s = MeasureRun(sys, scene);
+  ASSERT_EQ(s.exponents.size(), 4u);
+  // The pair's sum converges like 1/periods from the frame's start; each of a complex pair too,
+  // oscillating (2000 periods measured: 1e-4).
+  EXPECT_NEAR(s.exponents[0] + s.exponents[1], want[0] + want[1], 2e-5);
+  EXPECT_NEAR(s.exponents[0], want[0], 1e-4);
+  EXPECT_NEAR(s.exponents[1], want[1], 1e-4);
+  EXPECT_TRUE(std::isinf(s.exponents[2]) && std::isinf(s.exponents[3]));
+  EXPECT_LT(s.ci[0].second, 0.0);
+  EXPECT_FALSE(s.chaotic());
+}
+
+// Fig. 5's stable impact orbit, started on the orbit: no sticking, both exponents
+// finite, equal to ln|μ| / (qT) (a complex pair of modulus r for one DOF: det DP = r²).
+TEST(Lyapunov, ImpactOrbitMatchesItsFloquetMultipliers) {
+  Scene scene = Shipped("fig05_coexistence.toml");
+  scene.run.periods = 2000;
+  const System sys(scene);
+  OrbitRequest req;
+  req.kind = OrbitKind::kImpact;
+  const OrbitResult o = FindOrbit(sys, scene, req);
+  ASSERT_EQ(o.status, "converged") << o.message;
+  ASSERT_TRUE(o.stable);
+  const double qT = o.period * sys.period();
+  double sum = 0;
+  for (const auto& m : o.multipliers) sum += std::log(std::abs(m)) / qT;
+  const InitialOverride start{o.section_time, o.X, o.V};
+  const auto s = MeasureRun(sys, scene, &start);
+  ASSERT_EQ(s.exponents.size(), 2u);
+  EXPECT_NEAR(s.exponents[0] + s.exponents[1], sum, 1e-9 * std::abs(sum));
+  for (size_t i = 0; i < 2; ++i)
+    EXPECT_NEAR(s.exponents[i], std::log(std::abs(o.multipliers[i])) / qT, 2e-4) << i;
+  EXPECT_NEAR(std::abs(o.multipliers[0]), scene.restitution, 1e-9);
+}
+
+// A chaotic impacting motion of the damped 2-DOF chain (no sticking in the measured window):
+// the sum of the exponents is the volume contraction of flights and impacts, to rounding.
+TEST(Lyapunov, SumIsThePhaseVolumeContractionOfFlightsAndImpacts) {
+  for (const double zeta : {0.0, 0.01}) {
+    Scene scene = Shipped("chain2.toml", {"stop.restitution=0.5", "excitation.frequency=1.1",
+                                          "excitation.amplitude=2.0", "run.periods=3000"});
+    scene.damping_ratios = Eigen::VectorXd::Constant(2, zeta);
+    const System sys(scene);
+    EventsByPeriod events;
+    events.from = scene.run.periods - scene.run.periods / 2;  // the measured window's events
+    const auto s = MeasureRun(sys, scene, nullptr, &events);
+    ASSERT_EQ(events.sticks, 0) << "zeta " << zeta << ": sticking in the window; pick another scene";
+    ASSERT_EQ(events.grazings, 0);
+    ASSERT_GT(events.impacts, 1000);
+    const double time = static_cast<double>(s.periods) * sys.period();
+    const double trace = -2.0 * sys.damping().cwiseProduct(sys.omega()).sum();
+    const double want = 2.0 * std::log(scene.restitution) * static_cast<double>(events.impacts) / time + trace;
+    double sum = 0;
+    for (double e : s.exponents) sum += e;
+    EXPECT_NEAR(sum, want, 1e-9 * std::abs(want)) << "zeta " << zeta;
+    if (zeta == 0.0) {
+      EXPECT_TRUE(s.chaotic()) << s.exponents[0] << " [" << s.ci[0].first << ", " << s.ci[0].second << "]";
+    }
+  }
+}
+
+TEST(Lyapunov, ChaoticStickingResponseHasAPositiveExponentBeyondItsInterval) {
+  const Scene scene = Shipped("chaotic/chain2_sticking.toml");
+  const System sys(scene);
+  const auto s = MeasureRun(sys, scene);
+  ASSERT_EQ(s.exponents.size(), 4u);
+  EXPECT_TRUE(s.chaotic());
+  EXPECT_GT(s.ci[0].first, 0.05);
+  EXPECT_LT(s.ci[0].second, 0.2);
+  EXPECT_TRUE(std::isinf(s.exponents[3]));  // sticking collapsed two directions
+  EXPECT_EQ(s.blocks, 10);
+}
+
+TEST(Lyapunov, TooShortARunHasNoExponentsAndSaysWhy) {
+  Scene scene = Shipped("chain2.toml", {"run.periods=1"});
+  const System sys(scene);
+  LyapunovObserver ly(sys, scene);
+  const auto s = ly.Spectrum();  // nothing simulated
+  EXPECT_FALSE(s.undefined.empty());
+  EXPECT_FALSE(s.chaotic());
+}
+
+}  // namespace
+}  // namespace vibro::test
