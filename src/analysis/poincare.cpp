@@ -199,12 +199,16 @@ void TangentTracker::OnReset(const Reset& r) {
       }
       const double delta = r.delta;
       const double phase_inf = r.phase + sys_.frequency() * delta;
-      const Eigen::MatrixXd P = BlockDiag(Pi_, Pi_);
       const Eigen::VectorXd f_free = Field(Mode::kFree, *r.X_end, *r.V_end, phase_inf);
       const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf);
       const Eigen::RowVectorXd grad_phi = r.delta_gradient->transpose() * phi_;  // ∇Δ∞ᵀ Φ
       FreeFlight(delta, phi_);                                                      // Φ(Δ∞) Φ
-      phi_ = P * phi_ + (P * f_free - f_stick) * grad_phi;
+      // P = diag(Π, Π), applied by blocks.
+      phi_.topRows(n) = Pi_ * phi_.topRows(n);
+      phi_.bottomRows(n) = Pi_ * phi_.bottomRows(n);
+      Eigen::VectorXd jump(2 * n);
+      jump << Pi_ * f_free.head(n), Pi_ * f_free.tail(n);
+      phi_ += (jump - f_stick) * grad_phi;
       break;
     }
   }
