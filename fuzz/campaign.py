@@ -198,6 +198,7 @@ class Campaign:
         rc = p.returncode
         err = err.decode(errors="replace")
         out_ = out_.decode(errors="replace")
+        self.last_stdout = out_  # for the judges of surfaces.py (validate's and score's JSON)
         self.exits[rc] = self.exits.get(rc, 0) + 1
         tag = f"[{category}]"
         if hung:

@@ -1,0 +1,624 @@
+#!/usr/bin/python3
+"""A fuzz campaign over the surfaces that campaign.py does not reach (docs/reliability.md):
+
+- from-branch: continuation branch files given to `continue --from FILE --point K`, damaged by
+  bit flips and by targeted edits (empty or short state tables, a state below the stop, a branch
+  of another scene, strings where numbers belong, attributes out of range, datasets declaring
+  billions of elements);
+- validate-input: branch CSVs given to `vibro validate`, with altered states, non-finite values,
+  duplicate columns, a UTF-8 BOM, garbage and endless files;
+- score-input: event CSVs given to `vibro score`, with events shifted, dropped or added, times
+  out of range or out of order, duplicate columns, a BOM, and extreme `--window` values;
+- python-api: every Python function called with corner arguments, and Ctrl-C during the long ones;
+- two-writers: a second process on the output file of a running one (the same --out, with and
+  without --force, and --resume), and two --resume of one interrupted file at once;
+- full-disk: runs whose output lives on a 3 MiB tmpfs (when this process may mount one).
+
+Each run is judged as campaign.py judges its runs (no crash, no hang, the allowed exit codes,
+exit 2 located and changing nothing, `ok` files within the physics), and against the promise of
+its surface:
+
+- an input that is invalid by construction (a non-finite time, a state below the stop, a branch
+  of another scene...) is refused with exit 2; an input that is valid but wrong (a shifted event,
+  an altered state) is never reported as agreeing (exit 4, or that row not `confirmed`);
+- an unaltered input is accepted (exit 0);
+- Python raises ValueError or TypeError for a bad argument (never MemoryError, IndexError,
+  SystemError or a crash), and KeyboardInterrupt within LIVENESS s of Ctrl-C;
+- a second writer is refused with exit 2 naming the process that holds the file, and the first
+  run ends as it would alone, its file readable;
+- a full disk ends a run with exit 3 ("no space") or 130, never 1 or a crash, its file readable.
+
+usage: surfaces.py VIBRO SCENES_DIR SCRIPTS_DIR PYTHONPATH [--runs N] [--seed S] [--minutes M]
+                   [--report FILE.json] [--only CATEGORY]
+Exits 1 when there are findings; the report lists each with its command line.
+"""
+import argparse
+import csv
+import io
+import json
+import math
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+
+import h5py
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from campaign import Campaign, default_stop_signals, HANG, LIVENESS  # noqa: E402
+
+CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk"]
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(f) if r and not r[0].startswith("#")]
+    return rows[0], rows[1:]
+
+
+def write_csv(path, header, rows, bom=False):
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    w.writerows(rows)
+    with open(path, "w", newline="", encoding="utf-8-sig" if bom else "utf-8") as f:
+        f.write(buf.getvalue())
+
+
+class Surfaces(Campaign):
+    def __init__(self, vibro, scenes, scripts, pythonpath, seed, deadline, work):
+        super().__init__(vibro, scenes, seed, deadline, work)
+        self.scripts, self.pythonpath = scripts, pythonpath
+        self.default = os.path.join(scenes, "fig08_preload.toml")
+        self.chain2 = os.path.join(scenes, "chain2.toml")
+        self.fig5 = os.path.join(scenes, "fig05_coexistence.toml")
+        self.can_mount = None
+
+    # ---- seeds: files made by vibro itself ----
+    def make(self, argv, out):
+        p = subprocess.run([self.vibro, *argv], capture_output=True, text=True, timeout=300)
+        if p.returncode != 0 or not os.path.exists(out):
+            raise RuntimeError(f"seed {' '.join(argv)} failed ({p.returncode}): {p.stderr}")
+        return out
+
+    def seeds_(self):
+        d = os.path.join(self.work, "seeds")
+        os.mkdir(d)
+        s = {}
+        s["branch"] = self.make(["continue", self.default, "--param", "excitation.amplitude", "--to", "1.25",
+                                 "--max-points", "8", "--out", os.path.join(d, "b.h5")], os.path.join(d, "b.h5"))
+        s["branch2"] = self.make(["continue", self.chain2, "--param", "excitation.frequency", "--to", "0.75",
+                                  "--max-points", "6", "--out", os.path.join(d, "b2.h5")], os.path.join(d, "b2.h5"))
+        csv_path = os.path.join(d, "b.csv")
+        subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "branch_to_csv.py"), s["branch"], csv_path],
+                       check=True, capture_output=True, timeout=60)
+        s["branch_csv"] = csv_path
+        run = self.make(["simulate", self.default, "--set", "run.periods=6", "--out", os.path.join(d, "th.h5")],
+                        os.path.join(d, "th.h5"))
+        ev = os.path.join(d, "th.csv")
+        subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "events_to_csv.py"), run, ev],
+                       check=True, capture_output=True, timeout=60)
+        s["events_csv"] = ev
+        self.seed_files = s
+
+    # ---- from-branch ----
+    def damaged_branch(self):
+        """A copy of a seed branch with one damage; returns (path, what, valid) where valid is
+        False when the damage makes the file one vibro must refuse, None when it cannot tell."""
+        r = self.rng
+        src = self.seed_files["branch"]
+        path = self.fresh(".h5")
+        shutil.copy(src, path)
+        what = r.choice(["bits", "bits", "empty-rows", "empty-cols", "short-X", "below-stop", "other-scene",
+                         "string-values", "period-wrap", "huge-value", "nan-state", "negative-period",
+                         "missing-X", "untouched"])
+        valid = False
+        if what == "bits":
+            data = bytearray(open(path, "rb").read())
+            for _ in range(r.randint(1, 24)):
+                data[r.randrange(len(data))] ^= 1 << r.randrange(8)
+            open(path, "wb").write(data)
+            valid = None
+        elif what == "other-scene":
+            shutil.copy(self.seed_files["branch2"], path)
+        elif what == "untouched":
+            valid = True
+        else:
+            with h5py.File(path, "r+") as f:
+                b = f["branch"]
+                n = b["value"].shape[0]
+
+                def replace(name, data):
+                    del b[name]
+                    b.create_dataset(name, data=data)
+                if what == "empty-rows":
+                    replace(r.choice(["X", "V"]), np.zeros((0, 1)))
+                elif what == "empty-cols":
+                    replace(r.choice(["X", "V"]), np.zeros((n, 0)))
+                elif what == "short-X":
+                    replace("X", b["X"][: max(0, n - 3)])
+                elif what == "below-stop":
+                    stop = float(f["model"].attrs["stop"])
+                    replace("X", np.full((n, 1), stop - r.choice([0.5, 1e-3, 1e3])))
+                    replace("V", np.zeros((n, 1)))
+                elif what == "string-values":
+                    name = r.choice(["X", "V", "value", "section_time"])
+                    replace(name, np.array([b"abc"] * n, dtype=object) if name != "X" else np.array([[b"x"]] * n))
+                elif what == "period-wrap":
+                    b.attrs["period"] = np.uint64(2 ** 32 + 1)
+                elif what == "negative-period":
+                    b.attrs["period"] = np.int64(r.choice([-1, 0, 2 ** 62]))
+                elif what == "huge-value":
+                    del b["value"]
+                    b.create_dataset("value", shape=(r.choice([2 ** 31, 2 ** 34, 2 ** 40]),), dtype="f8",
+                                     chunks=(1024,), compression="gzip")
+                elif what == "nan-state":
+                    X = b["X"][:]
+                    X[r.randrange(n), 0] = r.choice([np.nan, np.inf, -np.inf])
+                    replace("X", X)
+                elif what == "missing-X":
+                    del b[r.choice(["X", "V", "value", "section_time"])]
+        return path, what, valid
+
+    def gen_from_branch(self):
+        r = self.rng
+        path, what, valid = self.damaged_branch()
+        point = r.choice([0, 1, 5, 7, 8, 1000, -1])
+        out = self.fresh(".h5")
+        argv = ["continue", self.default, "--from", path, "--point", str(point), "--param", "excitation.amplitude",
+                "--to", "1.26", "--max-points", "3", "--out", out]
+        rc, err = self.run("from-branch", argv, limit=30, watch=[path, self.work], out=out, key=what)
+        in_range = 0 <= point < 8
+        if rc == 0 and (valid is False or not in_range):
+            self.find("accepted a branch file it must refuse", [self.vibro, *argv],
+                      f"[from-branch] damage {what}, point {point}: exit 0")
+        if rc == 2 and valid is True and in_range:
+            self.find("refused a valid branch file", [self.vibro, *argv], f"[from-branch] {err}")
+
+    # ---- validate-input ----
+    def gen_validate_input(self):
+        r = self.rng
+        header, rows = read_csv(self.seed_files["branch_csv"])
+        rows = [list(x) for x in rows]
+        what = r.choice(["alter-velocity", "alter-displacement", "non-finite", "dup-column", "bom", "garbage",
+                         "untouched", "devzero", "reorder-columns", "empty-cells", "huge-value", "signal"])
+        expect = {"exit": None, "row": None}  # the promise for this input
+        bom = False
+        if what in ("alter-velocity", "alter-displacement"):
+            i = r.randrange(len(rows))
+            col = header.index("velocity_1" if what == "alter-velocity" else "displacement_1")
+            old = float(rows[i][col])
+            rows[i][col] = repr(r.choice([-5.0, -1e3, -1e308, 1e3, old + 0.3, -old - 1]))
+            expect["row"] = i  # that row must not be confirmed (or the input refused)
+        elif what == "non-finite":
+            i, j = r.randrange(len(rows)), r.randrange(len(header))
+            if header[j] in ("stable", "period"):
+                j = header.index("value")
+            rows[i][j] = r.choice(["nan", "inf", "-inf", "1e999"])
+            expect["exit"] = 2
+        elif what == "dup-column":
+            j = r.randrange(len(header))
+            header = header + [header[j]]
+            rows = [x + [x[j]] for x in rows]
+            expect["exit"] = 2
+        elif what == "bom":
+            bom = True
+            expect["exit"] = 0
+        elif what == "garbage":
+            rows.insert(r.randrange(len(rows) + 1), [r.choice(["x", "", "1,2", "\x00", "1e3e3"])] * len(header))
+            expect["exit"] = 2
+        elif what == "untouched":
+            expect["exit"] = 0
+        elif what == "reorder-columns":
+            order = list(range(len(header)))
+            r.shuffle(order)
+            header = [header[k] for k in order]
+            rows = [[x[k] for k in order] for x in rows]
+            expect["exit"] = 0
+        elif what == "empty-cells":
+            for name in ("period", "stable", "sticking_fraction"):
+                if name in header:
+                    for x in rows:
+                        x[header.index(name)] = ""
+            expect["exit"] = 0
+        elif what == "huge-value":
+            i = r.randrange(len(rows))
+            rows[i][header.index("value")] = r.choice(["1e308", "-1e308", "5e-324", "1e20"])
+            expect["row"] = i  # refused (exit 2) or judged, but never confirmed there
+        elif what == "signal":
+            rows = rows * 2500  # 20 000 rows: a stop request must be honoured within a second
+        path = "/dev/zero" if what == "devzero" else self.fresh(".csv")
+        if what != "devzero":
+            write_csv(path, header, rows, bom)
+        argv = ["validate", self.default, path, "--param", "excitation.amplitude", "--json"]
+        signals = [(r.uniform(0.3, 2.0), r.choice([signal.SIGINT, signal.SIGTERM]))] if what == "signal" else ()
+        rc, err = self.run("validate-input", argv, signals=signals, limit=60 if what != "devzero" else 20,
+                           watch=[self.work], key=what)
+        out = self.last_stdout
+        full = [self.vibro, *argv]
+        if what == "devzero" and rc != 2:
+            self.find("validate read /dev/zero", full, f"[validate-input] exit {rc}")
+        if expect["exit"] == 2 and rc not in (2,):
+            self.find("validate accepted invalid input", full, f"[validate-input] {what}: exit {rc}")
+        if expect["exit"] == 0 and rc not in (0, 4):
+            self.find("validate refused valid input", full, f"[validate-input] {what}: exit {rc} {err}")
+        if expect["exit"] == 0 and rc == 4:
+            self.find("validate disagrees with vibro's own branch", full, f"[validate-input] {what}: {out[-600:]}")
+        if expect["row"] is not None and rc in (0, 4):
+            try:
+                pts = json.loads(out)["points"]
+                if pts[expect["row"]]["verdict"] == "confirmed":
+                    self.find("validate confirmed an altered state", full,
+                              f"[validate-input] row {expect['row']}: {pts[expect['row']]}")
+            except (ValueError, KeyError, IndexError) as e:
+                self.find("validate printed no usable JSON", full, f"[validate-input] {e}: {out[-300:]}")
+
+    # ---- score-input ----
+    def gen_score_input(self):
+        r = self.rng
+        header, rows = read_csv(self.seed_files["events_csv"])
+        rows = [list(x) for x in rows]
+        it = header.index("t")
+        period = 2 * math.pi / 2.8  # the scene's forcing period (fig08_preload: ω = 2.8)
+        what = r.choice(["untouched", "shift", "drop", "drop-tail", "add", "time-huge", "time-nan", "decreasing",
+                         "dup-column", "bom", "window-inf", "window-nan", "window-neg", "garbage", "devzero"])
+        expect = None
+        window = "0.05"
+        bom = False
+        if what == "untouched":
+            expect = 0
+        elif what == "shift":
+            i = r.randrange(len(rows))
+            rows[i][it] = repr(float(rows[i][it]) + r.choice([1e-3, 1e-2, 0.02]) * period)
+            expect = 4
+        elif what == "drop":
+            del rows[r.randrange(len(rows))]
+            expect = 4
+        elif what == "drop-tail":
+            rows = rows[: r.randrange(1, len(rows))]
+            expect = 4
+        elif what == "add":
+            i = r.randrange(len(rows) - 1)
+            t = 0.5 * (float(rows[i][it]) + float(rows[i + 1][it]))
+            new = list(rows[i])
+            new[it] = repr(t)
+            new[header.index("kind")] = "grazing"
+            rows.insert(i + 1, new)
+            expect = 4
+        elif what in ("time-huge", "time-nan"):
+            i = r.randrange(len(rows))
+            rows[i][it] = r.choice(["1e308", "1e9", "-1e308"]) if what == "time-huge" else r.choice(["nan", "inf"])
+            expect = 2
+        elif what == "decreasing":
+            i = r.randrange(1, len(rows))
+            rows[i - 1], rows[i] = rows[i], rows[i - 1]
+            if rows[i - 1][it] != rows[i][it]:
+                expect = 2
+        elif what == "dup-column":
+            header = header + [header[it]]
+            rows = [x + [x[it]] for x in rows]
+            expect = 2
+        elif what == "bom":
+            bom = True
+            expect = 0
+        elif what.startswith("window"):
+            window = {"window-inf": "inf", "window-nan": "nan", "window-neg": "-0.1"}[what]
+            expect = 2
+        elif what == "garbage":
+            rows.insert(r.randrange(len(rows) + 1), [r.choice(["x", "", "1e3e3", "\x00"])] * len(header))
+            expect = 2
+        path = "/dev/zero" if what == "devzero" else self.fresh(".csv")
+        if what == "devzero":
+            expect = 2
+        else:
+            write_csv(path, header, rows, bom)
+        argv = ["score", self.default, path, "--set", "run.periods=6", "--window", window, "--json"]
+        rc, err = self.run("score-input", argv, limit=30, watch=[self.work], key=what)
+        full = [self.vibro, *argv]
+        if expect is not None and rc != expect:
+            self.find(f"score exit {rc} where {expect} is promised", full,
+                      f"[score-input] {what}: {err[-300:]} {self.last_stdout[-300:]}")
+
+    # ---- python-api ----
+    PY_CASES = [
+        ("basin", "vibro.basin(S, grid=(46341, 46341))"),
+        ("basin", "vibro.basin(S, grid=(4, 4), threads=-1)"),
+        ("basin", "vibro.basin(S, grid=(4, 4), x='X1099511627776')"),
+        ("basin", "vibro.basin(S, grid=(0, 4))"),
+        ("basin", "vibro.basin(S, grid=(4, 4), x_range=(float('nan'), 1))"),
+        ("continue", "vibro.continue_(S, 'excitation.amplitude', float('nan'))"),
+        ("continue", "vibro.continue_(S, 'excitation.amplitude', float('inf'))"),
+        ("continue", "vibro.continue_(S, 'excitation.amplitude', 1.25, step=float('nan'))"),
+        ("continue", "vibro.continue_(S, 'excitation.amplitude', 1.25, max_points=0)"),
+        ("continue", "vibro.continue_(S, 'excitation.amplitude', 1.25, max_points=-5)"),
+        ("attractors", "vibro.attractors(S, samples=2**31)"),
+        ("attractors", "vibro.attractors(S, samples=-1)"),
+        ("sweep", "vibro.sweep(S, 'excitation.frequency', 2.0, 3.0, steps=10**9)"),
+        ("sweep", "vibro.sweep(S, 'excitation.frequency', 2.0, float('nan'))"),
+        ("partition", "vibro.partition(S, ['excitation.amplitude', 'excitation.frequency'], (1.0, 1.2), (2.5, 3.0),"
+                      " [0.3], steps1=10**9)"),
+        ("load", "vibro.load_scene(SCENE + '\\x00junk')"),
+        ("load", "vibro.load_scene(SCENE, set=['excitation.amplitude=nan'])"),
+        ("simulate", "vibro.simulate(S.with_(['run.periods=3']))"),
+        ("orbit", "vibro.orbit(S, period=-1)"),
+        ("orbit", "vibro.orbit(S, guess=(float('nan'), 0.0))"),
+        ("score", "vibro.score(S, np.zeros(3))"),
+        ("score", "vibro.score(S, 42)"),
+        ("validate", "vibro.validate(S, {'value': [1.2]}, 'excitation.amplitude')"),
+        ("read", "vibro.read('/dev/zero')"),
+        ("info", "vibro.info(SCENE)"),
+    ]
+    PY_LONG = [
+        ("check", "vibro.check(vibro.load_scene(CHAIN3, set=['run.periods=100000000']))"),
+        ("orbit", "vibro.orbit(vibro.load_scene(CHAIN3), period=3, transient=100000000)"),
+        ("simulate", "vibro.simulate(S.with_(['run.periods=100000000']))"),
+        ("basin", "vibro.basin(vibro.load_scene(FIG5), grid=(300, 300), threads=1)"),
+    ]
+
+    def python(self, code, signals=(), limit=30.0):
+        """Runs `code` in a fresh interpreter; returns (rc, outcome dict or None, stderr, seconds
+        from the first signal to the end)."""
+        prog = (
+            "import json, sys, numpy as np\n"
+            "import vibro\n"
+            f"SCENE = {self.default!r}; CHAIN3 = {os.path.join(self.scenes, 'chain3.toml')!r}; FIG5 = {self.fig5!r}\n"
+            "S = vibro.load_scene(SCENE)\n"
+            "print('started', flush=True)\n"
+            "try:\n"
+            f"    {code}\n"
+            "    print(json.dumps({'outcome': 'ok'}))\n"
+            "except BaseException as e:\n"
+            "    print(json.dumps({'outcome': type(e).__name__, 'message': str(e)[:500]}))\n")
+        env = dict(os.environ, PYTHONPATH=self.pythonpath)
+        p = subprocess.Popen(["/usr/bin/python3", "-c", prog], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             cwd=self.work, env=env, preexec_fn=default_stop_signals, text=True)
+        t_sig = None
+        if signals:
+            # Ctrl-C once the call is under way (the interpreter printed 'started').
+            line = p.stdout.readline()
+            if line.strip() == "started":
+                time.sleep(signals[0][0])
+                p.send_signal(signals[0][1])
+                t_sig = time.monotonic()
+        try:
+            out, err = p.communicate(timeout=limit if t_sig is None else HANG)
+        except subprocess.TimeoutExpired:
+            p.kill()
+            out, err = p.communicate()
+            return None, None, err, None
+        took = time.monotonic() - t_sig if t_sig is not None else None
+        outcome = None
+        for line in out.splitlines()[::-1]:
+            if line.startswith("{"):
+                outcome = json.loads(line)
+                break
+        return p.returncode, outcome, err, took
+
+    def gen_python_api(self):
+        r = self.rng
+        self.runs += 1
+        self.categories["python-api"] = self.categories.get("python-api", 0) + 1
+        if r.random() < 0.3:
+            name, code = r.choice(self.PY_LONG)
+            self.inputs.add(("python-long", code))
+            rc, outcome, err, took = self.python(code, signals=[(r.uniform(0.1, 1.5), signal.SIGINT)], limit=60)
+            full = ["python", code]
+            if rc is None:
+                self.find("Python ignored Ctrl-C", full, f"[python-api] still running {HANG} s after SIGINT")
+            elif outcome is None or outcome["outcome"] not in ("KeyboardInterrupt", "ok"):
+                self.find("Python Ctrl-C gave no KeyboardInterrupt", full, f"[python-api] rc {rc} {outcome} {err[-300:]}")
+            elif took is not None and took > LIVENESS and outcome["outcome"] == "KeyboardInterrupt":
+                self.slow_stops.append(took)
+                self.find("Python answered Ctrl-C late", full, f"[python-api] {took:.2f} s")
+            return
+        name, code = r.choice(self.PY_CASES)
+        self.inputs.add(("python", code))
+        rc, outcome, err, _ = self.python(code, limit=30)
+        full = ["python", code]
+        if rc is None:
+            self.find("Python call ran past its limit", full, "[python-api] killed after 30 s")
+        elif rc != 0 or outcome is None:
+            self.find("Python interpreter crashed", full, f"[python-api] rc {rc}: {err[-400:]}")
+        elif outcome["outcome"] not in ("ok", "ValueError", "TypeError", "FileNotFoundError"):
+            self.find(f"Python raised {outcome['outcome']}", full, f"[python-api] {outcome.get('message')}")
+        elif outcome["outcome"] == "ok" and name not in ("simulate",):
+            self.find("Python accepted a bad argument", full, "[python-api] returned normally")
+        elif outcome["outcome"] == "ValueError" and "\n" in outcome.get("message", ""):
+            self.find("Python message spans several lines", full, f"[python-api] {outcome['message']!r}")
+
+    # ---- two-writers ----
+    def wait_for(self, path, proc, seconds=20.0):
+        end = time.monotonic() + seconds
+        while time.monotonic() < end and proc.poll() is None:
+            if os.path.exists(path) and os.path.getsize(path) > 0:
+                return True
+            time.sleep(0.01)
+        return False
+
+    def gen_two_writers(self):
+        r = self.rng
+        self.runs += 1
+        self.categories["two-writers"] = self.categories.get("two-writers", 0) + 1
+        out = self.fresh(".h5")
+        what = r.choice(["same-out", "same-out-force", "resume-running", "two-resumes", "basin-resume-running"])
+        self.inputs.add(("two-writers", what))
+        if what.startswith("basin"):
+            long = ["basin", self.fig5, "--grid", "400,400", "--threads", "1", "--out", out]
+        else:
+            long = ["simulate", self.default, "--set", "run.periods=100000000", "--set", "run.samples_per_period=16",
+                    "--out", out]
+        full = [self.vibro, *long]
+        if what == "two-resumes":
+            first = subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
+                                     preexec_fn=default_stop_signals)
+            self.wait_for(out, first)
+            time.sleep(0.3)
+            first.send_signal(signal.SIGTERM)
+            first.communicate(timeout=HANG)
+            a = subprocess.Popen(full + ["--resume"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
+                                 preexec_fn=default_stop_signals)
+            b = subprocess.Popen(full + ["--resume"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
+                                 preexec_fn=default_stop_signals)
+            procs = [a, b]
+        else:
+            a = subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
+                                 preexec_fn=default_stop_signals)
+            if not self.wait_for(out, a):
+                a.kill()
+                a.communicate()
+                self.find("two-writers: the first run wrote nothing", full, f"[two-writers] {what}")
+                return
+            extra = {"same-out": [], "same-out-force": ["--force"], "resume-running": ["--resume"],
+                     "basin-resume-running": ["--resume"]}[what]
+            b = subprocess.Popen(full + extra, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
+                                 preexec_fn=default_stop_signals)
+            procs = [a, b]
+        # The second (or one of two concurrent resumes) must be refused at once.
+        time.sleep(r.uniform(0.2, 1.0))
+        for p in procs:
+            if p.poll() is None:
+                p.send_signal(signal.SIGTERM)
+        codes, errs = [], []
+        for p in procs:
+            try:
+                _, e = p.communicate(timeout=HANG)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                _, e = p.communicate()
+                self.find("hang ignoring SIGTERM", full, f"[two-writers] {what}")
+            codes.append(p.returncode)
+            errs.append(e.decode(errors="replace"))
+        refused = [i for i, c in enumerate(codes) if c == 2 and "in use" in errs[i]]
+        if len(refused) != 1:
+            self.find("a second writer was not refused", full + [f"({what})"],
+                      f"[two-writers] exits {codes}: {[e[-200:] for e in errs]}")
+        for i, c in enumerate(codes):
+            if c not in (0, 2, 130):
+                self.find(f"exit {c}", full + [f"({what})"], f"[two-writers] {errs[i][-300:]}")
+        try:
+            with h5py.File(out, "r") as f:
+                status = f.attrs.get("status")
+                status = status.decode() if isinstance(status, bytes) else status
+                if status not in ("interrupted", "ok"):
+                    self.find("two-writers: the file says neither ok nor interrupted", full, f"[two-writers] {status}")
+                for name in ("events/t", "section/t", "basin/labels"):
+                    if name in f:
+                        f[name][:]
+        except OSError as e:
+            self.find("two-writers: the file is unreadable", full + [f"({what})"], f"[two-writers] {e}")
+
+    # ---- full-disk ----
+    def mount_tmpfs(self):
+        d = self.fresh(".mnt")
+        os.mkdir(d)
+        p = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", d], capture_output=True)
+        return d if p.returncode == 0 else None
+
+    def gen_full_disk(self):
+        r = self.rng
+        if self.can_mount is False:
+            return False
+        d = self.mount_tmpfs()
+        self.can_mount = d is not None
+        if d is None:
+            return False
+        try:
+            out = os.path.join(d, "out.h5")
+            what = r.choice(["simulate", "simulate-samples", "basin", "sweep", "continue"])
+            argv = {
+                "simulate": ["simulate", self.default, "--set", "run.periods=3000000", "--out", out],
+                "simulate-samples": ["simulate", self.chain2, "--set", "run.periods=3000000", "--set",
+                                     "run.samples_per_period=256", "--out", out],
+                "basin": ["basin", self.fig5, "--grid", "300,300", "--threads", "1", "--out", out],
+                "sweep": ["sweep", self.fig5, "--param", "excitation.frequency", "--from", "1", "--to", "3",
+                          "--steps", "100000", "--out", out],
+                "continue": ["continue", os.path.join(self.scenes, "chain3.toml"), "--param", "excitation.frequency",
+                             "--to", "0.3", "--step", "1e-5", "--max-points", "1000000", "--out", out],
+            }[what]
+            if r.random() < 0.3:  # the disk nearly full before the run
+                with open(os.path.join(d, "filler"), "wb") as f:
+                    f.write(b"\0" * r.choice([2_900_000, 3_000_000, 3_145_000]))
+            rc, err = self.run("full-disk", argv, limit=40, out=None, key=what)
+            full = [self.vibro, *argv]
+            if rc == 3 and "space" not in err.lower():
+                self.find("full disk: exit 3 without saying so", full, f"[full-disk] {err[-300:]}")
+            if os.path.exists(out) and rc in (0, 3, 130):
+                try:
+                    with h5py.File(out, "r") as f:
+                        for name in ("events/t", "section/t", "samples/t", "basin/labels", "branch/value"):
+                            if name in f:
+                                f[name][:]
+                except OSError as e:
+                    self.find("full disk: the file kept is unreadable", full, f"[full-disk] exit {rc}: {e}")
+        finally:
+            subprocess.run(["umount", "-l", d], capture_output=True)
+        return True
+
+    def main(self, runs):
+        self.seeds_()
+        gens = {"from-branch": (0.22, self.gen_from_branch), "validate-input": (0.22, self.gen_validate_input),
+                "score-input": (0.22, self.gen_score_input), "python-api": (0.16, self.gen_python_api),
+                "two-writers": (0.09, self.gen_two_writers), "full-disk": (0.09, self.gen_full_disk)}
+        if self.only:
+            gens = {self.only: (1.0, gens[self.only][1])}
+        total = sum(w for w, _ in gens.values())
+        while self.runs < runs and self.time_left():
+            x = self.rng.random() * total
+            for name, (w, gen) in gens.items():
+                if x < w:
+                    if gen() is False:  # a surface this machine cannot reach (no tmpfs)
+                        gens.pop(name)
+                        total -= w
+                    break
+                x -= w
+            if self.runs % 100 == 0:
+                print(f"{self.runs} runs, {len(self.inputs)} distinct inputs, {len(self.findings)} findings",
+                      flush=True)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("vibro")
+    ap.add_argument("scenes")
+    ap.add_argument("scripts")
+    ap.add_argument("pythonpath")
+    ap.add_argument("--runs", type=int, default=2000)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--minutes", type=float, default=40)
+    ap.add_argument("--report", default="")
+    ap.add_argument("--only", default="", choices=[""] + CATEGORIES)
+    a = ap.parse_args()
+    work = tempfile.mkdtemp(prefix="vibro_surfaces_")
+    c = Surfaces(os.path.abspath(a.vibro), os.path.abspath(a.scenes), os.path.abspath(a.scripts),
+                 os.path.abspath(a.pythonpath), a.seed, time.monotonic() + 60 * a.minutes, work)
+    c.only = a.only
+    t0 = time.monotonic()
+    try:
+        c.main(a.runs)
+    finally:
+        for d in os.listdir(work):
+            if d.endswith(".mnt"):
+                subprocess.run(["umount", "-l", os.path.join(work, d)], capture_output=True)
+        shutil.rmtree(work, ignore_errors=True)
+    report = {
+        "runs": c.runs, "distinct_inputs": len(c.inputs), "minutes": round((time.monotonic() - t0) / 60, 1),
+        "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items())},
+        "exit2_located": f"{c.located[0]} of {c.located[1]}", "ok_files_checked_for_physics": c.physics_checked,
+        "tmpfs": c.can_mount, "stops_slower_than_1s": len(c.slow_stops),
+        "slowest_stop_s": round(max(c.slow_stops), 2) if c.slow_stops else None,
+        "findings": c.findings,
+    }
+    text = json.dumps(report, indent=1)
+    print(text)
+    if a.report:
+        with open(a.report, "w") as f:
+            f.write(text)
+    return 1 if c.findings else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
