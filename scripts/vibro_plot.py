@@ -348,25 +348,6 @@ def fill_stuck_states(f, tt, XX, VV):
             XX[rest, i] = np.interp(tt[rest], tt[known], XX[known, i])
             VV[rest, i] = np.interp(tt[rest], tt[known], VV[known, i])
     return XX, VV
-    t = f["samples/t"][:]
-    ys, yds, ms = f["samples/X"][:] @ w, f["samples/V"][:] @ w, f["samples/mode"][:]
-    k = np.clip(np.searchsorted(t, tt, side="right") - 1, 0, max(0, len(t) - 2))
-    both = missing & (ms[k] == 1) & (ms[np.minimum(k + 1, len(t) - 1)] == 1) & (len(t) > 1)
-    if both.any():
-        kb = k[both]
-        h = t[kb + 1] - t[kb]
-        u = (tt[both] - t[kb]) / h
-        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        y[both] = h00 * ys[kb] + h10 * h * yds[kb] + h01 * ys[kb + 1] + h11 * h * yds[kb + 1]
-        d00, d10, d01, d11 = (6 * u**2 - 6 * u) / h, 3 * u**2 - 4 * u + 1, (-6 * u**2 + 6 * u) / h, 3 * u**2 - 2 * u
-        yd[both] = d00 * ys[kb] + d10 * yds[kb] + d01 * ys[kb + 1] + d11 * yds[kb + 1]
-    rest = missing & ~both
-    if rest.any():
-        known_t = np.concatenate([tt[~missing], t])
-        order = np.argsort(known_t, kind="stable")
-        y[rest] = np.interp(tt[rest], known_t[order], np.concatenate([y[~missing], ys])[order])
-        yd[rest] = np.interp(tt[rest], known_t[order], np.concatenate([yd[~missing], yds])[order])
-    return y, yd
 
 
 def reaction(model, X, V, t):
