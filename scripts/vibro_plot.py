@@ -5,11 +5,14 @@ Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB 
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
 PREFIX_section; PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation, PREFIX_partition for a partition, PREFIX_basin for a basin study, PREFIX_sweep for
-a sweep (with a continuation branch overlaid by --overlay BRANCH.h5).
+a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
+coordinate than x_B (PREFIX_X2, PREFIX_q1); --title, --size and --font-size shape every picture
+for a paper; SVG text stays text.
 
 Free flights are drawn from the closed-form modal solution (docs/model.md §2, §7) evaluated
 densely between the stored samples and events, so curves are smooth whatever
-run.samples_per_period, and x_B reaches the stop exactly at every impact.
+run.samples_per_period, and x_B reaches the stop exactly at every impact; multi-DOF sticking
+phases, for coordinates other than x_B, from the exact sticking motion.
 """
 import argparse
 import os
