@@ -230,8 +230,9 @@ check("simulate with chattering: the chattering line", "chattering   200 accumul
       p.stdout)
 # s_A = Σ_i ψ_i(B) ψ_i(A) / m_i = (M⁻¹)_BA = 0 exactly for a lumped chain forced and stopped at
 # different masses (diagonal M).
-p = run("model", chain3)
-check("model chain3: s_A printed as 0", "s_A, s_B            0, 1\n" in p.stdout, p.stdout)
+for name in ("chain2.toml", "chain3.toml", "chain10_stiff.toml", "large/beam50.toml"):
+    p = run("model", os.path.join(scenes, name))
+    check(f"model {name}: s_A printed as 0 (lumped masses)", "s_A, s_B            0, 1\n" in p.stdout, p.stdout)
 # A plastic impact (r = 0) of a 2-DOF impact orbit: the saltation matrix is singular, so the
 # monodromy matrix has an exact multiplier 0 (computed as ~1e-18).
 p = run("orbit", os.path.join(scenes, "chain2.toml"), "--set", "stop.restitution=0", "--set", "excitation.frequency=2.0",
@@ -242,5 +243,9 @@ check("orbit with an exact zero multiplier: printed as 0 (|μ| = 0), no 1e-18",
 p = run("simulate", os.path.join(scenes, "fig08_preload.toml"), "--set", "stop.restitution=2.3")
 check("an input is echoed as given: 2.3, not 2.2999999999999998",
       p.returncode == 2 and "stop.restitution = 2.3:" in p.stderr and "2.29999" not in p.stderr, p.stderr)
+p = run("sweep", os.path.join(scenes, "fig08_preload.toml"), "--param", "stop.restitution", "--from", "0.3",
+        "--to", "2.3")
+check("a sweep bound is echoed as given: --to 2.3",
+      p.returncode == 2 and "--to 2.3 (--param stop.restitution)" in p.stderr and "2.29999" not in p.stderr, p.stderr)
 
 finish()
