@@ -38,12 +38,16 @@ PROBLEMS = [
      "chattering into sticking every period (Fig. 8, r = 0.75, preload)"),
     ("chatter_fast_1dof", "fig05_coexistence.toml", ["run.periods=20"], 1,
      "chattering into sticking at ω = 10 (Fig. 5, from rest on the stop)"),
-    ("r_near_one_1dof", "fig05_coexistence.toml", ["stop.restitution=0.9", "run.periods=20"], 1,
+    # A problem that changes the scene's values gets a title that says them (docs_test.py checks
+    # every title's r, omega and f against the keys).
+    ("r_near_one_1dof", "fig05_coexistence.toml",
+     ["stop.restitution=0.9", "run.periods=20", 'title="Fig. 5 forcing with r = 0.9 (near one), omega = 10, f = 1.1"'], 1,
      "r → 1: long chattering sequences into sticking (r = 0.9, 134 impacts each)"),
     ("grazing_near_1dof", "fig08_preload.toml",
      ["stop.position=-1.0", "stop.restitution=0.8", "excitation.frequency=0.5",
       "excitation.amplitude=0.750075", "initial.time=0.0", "initial.displacement=[0.0]",
-      "initial.velocity=[0.50005]", "run.periods=20"], 1,
+      "initial.velocity=[0.50005]", "run.periods=20",
+      'title="1-DOF clearance near grazing, r = 0.8, omega = 0.5, f = 0.750075"'], 1,
      "near grazing: the forced response 1 + 1e-4 times the clearance, first contacts at small speed"),
     ("clearance_plastic_1dof", "fig11_clearance.toml", ["run.periods=20"], 1,
      "clearance x0 = −1 with a plastic stop (Fig. 11, r = 0)"),

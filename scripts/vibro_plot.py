@@ -5,16 +5,20 @@ Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB 
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
 PREFIX_section; PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation, PREFIX_partition for a partition, PREFIX_basin for a basin study, PREFIX_sweep for
-a sweep (with a continuation branch overlaid by --overlay BRANCH.h5).
+a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
+coordinate than x_B (PREFIX_X2, PREFIX_q1); --title, --size and --font-size shape every picture
+for a paper; SVG text stays text.
 
 Free flights are drawn from the closed-form modal solution (docs/model.md §2, §7) evaluated
 densely between the stored samples and events, so curves are smooth whatever
-run.samples_per_period, and x_B reaches the stop exactly at every impact.
+run.samples_per_period, and x_B reaches the stop exactly at every impact; multi-DOF sticking
+phases, for coordinates other than x_B, from the exact sticking motion.
 """
 import argparse
 import os
 import re
 import sys
+import textwrap
 
 import h5py
 import matplotlib
@@ -45,9 +49,46 @@ def text(v):
     return v.decode() if isinstance(v, bytes) else str(v)
 
 
-def make_title(f, varied=(), width=78):
+# What the user chose for every picture (main() sets it from the options; docs/cli.md):
+# title None = the default two lines, "" = no title, else that text; size (W, H) in inches or None
+# = each picture's own size, trimmed to what it draws; font_size in points (matplotlib's 10 by
+# default, every other text size scales with it).
+OPTIONS = {"title": None, "size": None, "font_size": 10.0}
+
+
+def fs(points):
+    """A text size given for the default font size of 10 pt, scaled to --font-size."""
+    return points * OPTIONS["font_size"] / 10.0
+
+
+def figure(*args, figsize, **kwargs):
+    """plt.subplots at --size (laid out to fill exactly that size) or at the picture's own size."""
+    if OPTIONS["size"] is not None:
+        return plt.subplots(*args, figsize=OPTIONS["size"], layout="constrained", **kwargs)
+    return plt.subplots(*args, figsize=figsize, **kwargs)
+
+
+def set_title(ax, title, detail):
+    """The default title: the scene line (make_title) over what the picture shows; --title TEXT
+    replaces both lines, --title '' leaves the picture untitled."""
+    chosen = OPTIONS["title"]
+    if chosen == "":
+        return
+    ax.set_title(chosen if chosen is not None else f"{title}\n{detail}", fontsize=fs(9))
+
+
+def absolute_time(ax):
+    """Time ticks as the times themselves: no offset (+8.975e5) and no scientific notation."""
+    from matplotlib.ticker import ScalarFormatter
+    fmt = ScalarFormatter(useOffset=False)
+    fmt.set_scientific(False)
+    ax.xaxis.set_major_formatter(fmt)
+
+
+def make_title(f, varied=(), width=100):
     """First title line: the scene's title without the parameter values it quotes, then the
-    values as run, leaving out the varied parameters (their values are on an axis)."""
+    values as run, leaving out the varied parameters (their values are on an axis). A line longer
+    than width characters is wrapped, never cut."""
     scene = text(f.attrs["scene"])
     m = re.search(r'^title\s*=\s*(["\'])(.*)\1\s*$', scene, re.M)
     name = m.group(2) if m else os.path.basename(f.filename)
@@ -58,7 +99,7 @@ def make_title(f, varied=(), width=78):
               "excitation.amplitude": ma["amplitude"]}
     run = ", ".join(f"{PLAIN[k]} = {float(v):g}" for k, v in values.items() if k not in varied)
     line = f"{name}: {run}" if run else name
-    return line if len(line) <= width else line[: width - 1] + "…"
+    return textwrap.fill(line, width=width, break_long_words=False)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -102,8 +143,10 @@ def free_flight(model, X0, V0, t0, t):
 
 def dense_run(f, t_from, t_to, per_period=1500):
     # At most about 2·10⁵ points, however long the window.
-    """x_B, ẋ_B and the reaction a free state would need (R*, NaN while stuck) on a dense grid of
-    [t_from, t_to], from the stored samples and events; event points are included exactly."""
+    """x_B, ẋ_B, the reaction a free state would need (R*, NaN while stuck) and the modal state
+    X, Ẋ on a dense grid of [t_from, t_to], from the stored samples and events; event points are
+    included exactly. X, Ẋ are NaN where the motion is drawn on the stop (sticking, the tail of a
+    chattering sequence) and the file does not give them: 1-DOF states there are exact."""
     model = f["model"]
     c = model.attrs["contact_shape"]
     x0 = float(model.attrs["stop"])
@@ -120,13 +163,15 @@ def dense_run(f, t_from, t_to, per_period=1500):
     ev_vb = f["events/v_before"][:]
     kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
     one_dof = len(c) == 1
-    out_t, out_x, out_v, out_r = [], [], [], []
+    out_t, out_x, out_v, out_r, out_X, out_V = [], [], [], [], [], []
 
     def emit(tt, X, V):
         out_t.append(tt)
         out_x.append(X @ c)
         out_v.append(V @ c)
         out_r.append(reaction(model, X, V, tt))
+        out_X.append(np.atleast_2d(X))
+        out_V.append(np.atleast_2d(V))
 
     def emit_stop(tt, v=None):
         tt = np.atleast_1d(tt)
@@ -134,6 +179,12 @@ def dense_run(f, t_from, t_to, per_period=1500):
         out_x.append(np.full(len(tt), x0))
         out_v.append(np.zeros(len(tt)) if v is None else np.atleast_1d(v))
         out_r.append(np.full(len(tt), np.nan))
+        if one_dof:  # x_B = c_1 X_1: the modal state on the stop is known
+            out_X.append(np.full((len(tt), 1), x0 / c[0]))
+            out_V.append((out_v[-1] / c[0])[:, None])
+        else:
+            out_X.append(np.full((len(tt), len(c)), np.nan))
+            out_V.append(np.full((len(tt), len(c)), np.nan))
     for k in range(len(ts) - 1):
         a, b = ts[k], ts[k + 1]
         if b <= a:
@@ -173,8 +224,9 @@ def dense_run(f, t_from, t_to, per_period=1500):
     if len(ts):
         emit(np.array([ts[-1]]), Xs[-1:], Vs[-1:])
     if not out_t:
-        return np.array([]), np.array([]), np.array([]), np.array([])
+        return (np.array([]),) * 4 + (np.zeros((0, len(c))),) * 2
     tt, xx, vv, rr = (np.concatenate(v) for v in (out_t, out_x, out_v, out_r))
+    XX, VV = np.concatenate(out_X), np.concatenate(out_V)
     # The tail of a chattering sequence, from the impact at which its accumulation point was
     # predicted to that point, is drawn on the stop: its bounces are below what the prediction
     # resolves (docs/chattering.md), and the free flight from that impact would dip through it.
@@ -182,8 +234,123 @@ def dense_run(f, t_from, t_to, per_period=1500):
         if i > 0 and kinds[i - 1] == kind_of["impact"]:
             inside = (tt > ev_t[i - 1]) & (tt < ev_t[i])
             xx[inside], vv[inside], rr[inside] = x0, 0.0, np.nan
+            XX[inside] = x0 / c[0] if one_dof else np.nan
+            VV[inside] = 0.0 if one_dof else np.nan
     sel = (tt >= t_from) & (tt <= t_to)
-    return tt[sel], xx[sel], vv[sel], rr[sel]
+    return tt[sel], xx[sel], vv[sel], rr[sel], XX[sel], VV[sel]
+
+
+# ---------------------------------------------------------------------------------------------
+# The coordinate drawn by the time plot, the phase portrait and the section (--coordinate).
+
+def coordinate_choices(f):
+    """{name: (weights w on the modal X, math label)}: y = w·X. x_B, the modal X1..Xn (the
+    paper's X_i, numbered from 1 as `vibro model` does), and the physical q0..q(N-1) (numbered
+    from 0 as forcing_dof and contact_dof are) when the file stores the mode shapes: q = Ψ X
+    (docs/model.md §1.1)."""
+    a = f["model"].attrs
+    c = np.asarray(a["contact_shape"], dtype=float)
+    out = {"x_B": (c, "x_B")}
+    for i in range(len(c)):
+        w = np.zeros(len(c))
+        w[i] = 1.0
+        out[f"X{i + 1}"] = (w, f"X_{{{i + 1}}}")
+    if "mode_shapes" in a:
+        psi = np.asarray(a["mode_shapes"], dtype=float)
+        for j in range(psi.shape[0]):
+            out[f"q{j}"] = (psi[j], f"q_{{{j}}}")
+    return out
+
+
+def coordinate_error(f, name):
+    """None when the file can draw the coordinate `name`, else why not (one line)."""
+    choices = coordinate_choices(f)
+    if name in choices:
+        return None
+    n = len(f["model"].attrs["contact_shape"])
+    modal = "X1" if n == 1 else f"X1..X{n}"
+    if "mode_shapes" in f["model"].attrs:
+        N = f["model"].attrs["mode_shapes"].shape[0]
+        return f"expected x_B, {modal} (modal) or {'q0' if N == 1 else f'q0..q{N - 1}'} (physical)"
+    hint = (" (the file stores no mode shapes: its scene is in modal form, so there is no physical q)"
+            if re.fullmatch(r"q\d+", name) else "")
+    return f"expected x_B or {modal} (modal){hint}"
+
+
+def expm_batch(A):
+    """e^A for a stack of small matrices (m, d, d): scaling and squaring with a Taylor series of
+    degree 18 once the norm is at most 1/2 (truncation below 1e-22, relative)."""
+    norm = np.abs(A).sum(axis=2).max(axis=1).max(initial=0.0)
+    squarings = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
+    B = A / 2.0 ** squarings
+    E = np.broadcast_to(np.eye(A.shape[1]), A.shape).copy()
+    term = E.copy()
+    for k in range(1, 19):
+        term = term @ B / k
+        E = E + term
+    for _ in range(squarings):
+        E = E @ E
+    return E
+
+
+def stuck_generator(model):
+    """The generator of the sticking motion (docs/model.md §3, §7) on y = (X, Ẋ, sin ωt, cos ωt):
+    x_B = c·X stays at the stop and R is eq. (5) with the damping term, so that y(t + s) =
+    exp(s A) y(t) exactly, forward or backward."""
+    a = model.attrs
+    w, z = np.asarray(a["frequencies"], float), np.asarray(a["damping_ratios"], float)
+    TA, TB, c = (np.asarray(a[k], float) for k in ("forcing", "contact", "contact_shape"))
+    f, W, sA, sB = (float(a[k]) for k in ("amplitude", "frequency", "s_A", "s_B"))
+    n = len(w)
+    A = np.zeros((2 * n + 2, 2 * n + 2))
+    A[:n, n:2 * n] = np.eye(n)
+    A[n:2 * n, :n] = -np.diag(w * w) + np.outer(TB, c * w * w) / sB
+    A[n:2 * n, n:2 * n] = -np.diag(2 * z * w) + np.outer(TB, c * 2 * z * w) / sB
+    A[n:2 * n, 2 * n] = TA * f - TB * sA * f / sB
+    A[2 * n, 2 * n + 1] = W
+    A[2 * n + 1, 2 * n] = -W
+    return A
+
+
+def fill_stuck_states(f, tt, XX, VV):
+    """The modal state at the grid points that dense_run leaves without one (multi-DOF sticking,
+    drawn for x_B on the stop): propagated exactly by the sticking motion (stuck_generator) from
+    the stored sample of the same sticking phase, forward from the sample before or backward from
+    the sample after when no event lies between. Points between two events inside one sample step
+    (a short phase the samples do not see) are interpolated linearly between known states."""
+    XX, VV = XX.copy(), VV.copy()
+    missing = ~np.isfinite(XX).all(axis=1)
+    if not missing.any():
+        return XX, VV
+    t = f["samples/t"][:]
+    Xs, Vs, ms = f["samples/X"][:], f["samples/V"][:], f["samples/mode"][:]
+    ev_t = f["events/t"][:]
+    W = float(f["model"].attrs["frequency"])
+    n = Xs.shape[1]
+    A = stuck_generator(f["model"])
+    idx = np.nonzero(missing)[0]
+    k = np.clip(np.searchsorted(t, tt[idx], side="right") - 1, 0, len(t) - 1)
+    k1 = np.minimum(k + 1, len(t) - 1)
+    # Events strictly between the sample and the point decide which sample shares its phase.
+    ev_before = np.searchsorted(ev_t, tt[idx], side="left") - np.searchsorted(ev_t, t[k], side="right")
+    ev_after = np.searchsorted(ev_t, t[k1], side="left") - np.searchsorted(ev_t, tt[idx], side="right")
+    fwd = (ms[k] == 1) & (ev_before == 0)
+    bwd = ~fwd & (ms[k1] == 1) & (ev_after == 0)
+    for sel, anchor in ((fwd, k), (bwd, k1)):
+        if not sel.any():
+            continue
+        a = anchor[sel]
+        y0 = np.concatenate([Xs[a], Vs[a], np.sin(W * t[a])[:, None], np.cos(W * t[a])[:, None]], axis=1)
+        E = expm_batch(A[None] * (tt[idx[sel]] - t[a])[:, None, None])
+        y = np.einsum("mij,mj->mi", E, y0)
+        XX[idx[sel]], VV[idx[sel]] = y[:, :n], y[:, n:2 * n]
+    rest = idx[~fwd & ~bwd]
+    if len(rest):
+        known = np.isfinite(XX).all(axis=1)
+        for i in range(n):
+            XX[rest, i] = np.interp(tt[rest], tt[known], XX[known, i])
+            VV[rest, i] = np.interp(tt[rest], tt[known], VV[known, i])
+    return XX, VV
 
 
 def reaction(model, X, V, t):
@@ -248,7 +415,7 @@ def plot_basin(f, title, save):
     rgb[labels == -2] = (1, 1, 1)
     for k in range(n):
         rgb[labels == k] = matplotlib.colors.to_rgb(colour[k])
-    fig, ax = plt.subplots(figsize=(8.4, 5.2))
+    fig, ax = figure(figsize=(8.4, 5.2))
     xr, yr = b.attrs["x_range"], b.attrs["y_range"]
     ax.imshow(rgb, origin="lower", extent=(xr[0], xr[1], yr[0], yr[1]), aspect="auto",
               interpolation="nearest")
@@ -267,18 +434,21 @@ def plot_basin(f, title, save):
     unresolved = float(b.attrs["unresolved_fraction"])
     if unresolved > 0:
         handles.append(Patch(color=(0.85, 0.85, 0.85), label=f"unresolved: {100 * unresolved:.1f} %"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8,
-              frameon=False, title="attractor: basin share", title_fontsize=8)
+    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=fs(8),
+              frameon=False, title="attractor: basin share", title_fontsize=fs(8))
     names = {"x_B": "$x_B$", "v_B": "$\\dot x_B$"}
     ax.set_xlabel(f"initial {names.get(text(b.attrs['x']), text(b.attrs['x']))}")
     ax.set_ylabel(f"initial {names.get(text(b.attrs['y']), text(b.attrs['y']))}")
-    ax.set_title(f"{title}\nbasins of attraction, {labels.shape[1]} × {labels.shape[0]} initial states",
-                 fontsize=9)
+    set_title(ax, title, f"basins of attraction, {labels.shape[1]} × {labels.shape[0]} initial states")
     save(fig, "basin")
 
 
 BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising": "^",
-                       "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o"}
+                       "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o",
+                       "undetermined": "P"}
+# Colours of the kinds drawn on a sweep, in the order they first appear (Okabe–Ito, without the
+# blue and vermilion of the up and down sweeps).
+BIF_COLOURS = [OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4], OKABE_ITO[5], OKABE_ITO[7], OKABE_ITO[6]]
 
 
 def draw_branch(ax, f, y):
@@ -319,7 +489,7 @@ def plot_branch(f, title, save):
     has_sp = np.nanmax(sp, initial=0) > 0
     has_mu = np.isfinite(mu).any() and np.nanmax(np.where(np.isfinite(mu), mu, 0), initial=0) > 0
     rows = 2 if has_mu else 1
-    fig, axes = plt.subplots(rows, 1, figsize=(7.5, 6.2 if rows == 2 else 4.2), sharex=True, squeeze=False)
+    fig, axes = figure(rows, 1, figsize=(7.5, 6.2 if rows == 2 else 4.2), sharex=True, squeeze=False)
     ax1 = axes[0, 0]
     if has_sp:
         draw_branch(ax1, f, sp)
@@ -327,10 +497,10 @@ def plot_branch(f, title, save):
     else:
         draw_branch(ax1, f, b["x_B"][:])
         ax1.set_ylabel("$x_B$ at the section")
-    ax1.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax1.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     sym = SYMBOLS.get(param, param)
-    ax1.set_title(f"{title}\ncontinuation in ${sym}$ from {value[0]:g}, period {int(b.attrs['period'])}; "
-                  f"end: {text(b.attrs['end'])}", fontsize=9)
+    set_title(ax1, title, f"continuation in ${sym}$ from {value[0]:g}, period {int(b.attrs['period'])}; "
+                  f"end: {text(b.attrs['end'])}")
     if has_mu:
         ax2 = axes[1, 0]
         draw_branch(ax2, f, mu)
@@ -349,7 +519,7 @@ def plot_partition(f, title, save):
     xv1, xl, xv2 = p["crossing_value1"][:], p["crossing_level"][:], p["crossing_value2"][:]
     bv1, bv2 = p["boundary_value1"][:], p["boundary_value2"][:]
     bk = np.array([text(k) for k in p["boundary_kind"][:]])
-    fig, ax = plt.subplots(figsize=(8.4, 5.4))
+    fig, ax = figure(figsize=(8.4, 5.4))
     cmap = plt.get_cmap("viridis")
     levels = list(p.attrs["levels"])
     span2 = max(1e-300, np.ptp(np.concatenate([xv2, bv2])) if len(xv2) + len(bv2) else 1.0)
@@ -381,12 +551,12 @@ def plot_partition(f, title, save):
                 mec="k", mew=0.3, ms=5, ls="none", label=k)
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
-    ax.legend(unique.values(), unique.keys(), fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+    ax.legend(unique.values(), unique.keys(), fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0),
               frameon=False)
     ax.set_xlabel(axis_label(p1))
     ax.set_ylabel(axis_label(p2))
-    ax.set_title(f"{title}\ncurves of constant sticking fraction SP in the "
-                 f"(${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane", fontsize=9)
+    set_title(ax, title, f"curves of constant sticking fraction SP in the "
+                 f"(${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane")
     save(fig, "partition")
 
 
@@ -422,7 +592,7 @@ def plot_sweep(f, title, save, overlay):
     br = read_branch(overlay, param) if overlay else None
     has_sp = np.nanmax(np.where(np.isfinite(sp), sp, 0), initial=0) > 0 or br is not None
     rows = 2 if has_sp else 1
-    fig, axes = plt.subplots(rows, 1, figsize=(8.6, 6.6 if rows == 2 else 4.2), sharex=True, squeeze=False)
+    fig, axes = figure(rows, 1, figsize=(8.6, 6.6 if rows == 2 else 4.2), sharex=True, squeeze=False)
     ax1 = axes[0, 0]
     for sel, marker, color, name in ((up, "o", UP, "upward"), (~up, "x", DOWN, "downward")):
         if not sel.any():
@@ -441,26 +611,33 @@ def plot_sweep(f, title, save, overlay):
         ax2.plot([], [], "-", color=BRANCH, label="continuation, stable")
         if (~stable).any():
             ax2.plot([], [], "--", color=BRANCH, label="continuation, unstable")
-        for bv, bk in zip(br["bif_value"], br["bif_kind"]):
-            for ax in axes[:, 0]:
-                ax.axvline(bv, color=BIF, lw=0.8, ls=":")
-            y = b_sp[np.argmin(np.abs(v - bv))] if len(v) else 0.0  # nearest point (folds)
-            ax2.plot([bv], [y], "D", color=BIF, ms=6, label=f"{bk} ({bv:.7g})")
+        # One marker shape and colour, and one legend entry, per kind of bifurcation.
+        kinds = list(dict.fromkeys(br["bif_kind"]))
+        for j, kind in enumerate(kinds):
+            at = np.array([bv for bv, bk in zip(br["bif_value"], br["bif_kind"]) if bk == kind])
+            colour = BIF_COLOURS[j % len(BIF_COLOURS)]
+            for bv in at:
+                for ax in axes[:, 0]:
+                    ax.axvline(bv, color=colour, lw=0.8, ls=":")
+            y = [b_sp[np.argmin(np.abs(v - bv))] if len(v) else 0.0 for bv in at]  # nearest point (folds)
+            shown = ", ".join(f"{bv:.7g}" for bv in at[:3]) + (f", … ({len(at)} points)" if len(at) > 3 else "")
+            ax2.plot(at, y, BIFURCATION_MARKERS.get(kind, "o"), color=colour, ms=7, mec="k", mew=0.5,
+                     ls="none", label=f"{kind} ({shown})")
     sym = SYMBOLS.get(param, param)
     ax1.set_ylabel("$x_B(t_0 + kT)$")
-    ax1.set_title(f"{title}\nbrute-force sweep in ${sym}$, up and down", fontsize=9)
-    ax1.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+    set_title(ax1, title, f"brute-force sweep in ${sym}$, up and down")
+    ax1.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
     if has_sp:
         axes[1, 0].set_ylabel("sticking fraction")
-        axes[1, 0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        axes[1, 0].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
     axes[-1, 0].set_xlabel(axis_label(param))
     save(fig, "sweep")
 
 
-def plot_run(f, title, save, window):
-    """Time plots of a run with dense samples."""
+def plot_run(f, title, save, window, coordinate="x_B"):
+    """Time plots of a run with dense samples: the coordinate (x_B by default) against t, the
+    reaction, the phase portrait and the section of that coordinate."""
     model = f["model"]
-    c = model.attrs["contact_shape"]
     x0 = float(model.attrs["stop"])
     T = float(f.attrs["forcing_period"])
     status = text(f.attrs["status"])
@@ -471,7 +648,16 @@ def plot_run(f, title, save, window):
         print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
               file=sys.stderr)
         sys.exit(2)
-    tt, xx, vv, rstar = dense_run(f, t_from, t_to)
+    tt, xx, vv, rstar, XX, VV = dense_run(f, t_from, t_to)
+    on_xB = coordinate == "x_B"
+    w, sym = coordinate_choices(f)[coordinate]
+    if not on_xB:
+        XX, VV = fill_stuck_states(f, tt, XX, VV)
+        xx, vv = XX @ w, VV @ w
+    labels = model.attrs["dof_labels"] if "dof_labels" in model.attrs else []
+    what = ("contact displacement" if on_xB else
+            f"physical displacement {coordinate} ({text(labels[int(coordinate[1:])])})"
+            if coordinate.startswith("q") else f"modal coordinate {coordinate}")
     ev_t = f["events/t"][:]
     kinds = f["events/kind"][:]
     kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
@@ -496,27 +682,30 @@ def plot_run(f, title, save, window):
         for n, (a, b) in enumerate(sorted(spans)):
             ax.axvspan(a, b, color=STICK_SHADE, alpha=0.25, lw=0, label="sticking" if n == 0 else None)
 
-    fig, ax = plt.subplots(figsize=(9, 3.8))
-    ax.plot(tt, xx, lw=1, color=OKABE_ITO[0], label="$x_B$")
-    ax.axhline(x0, color="k", lw=1.2, label="stop $x_0$")
+    fig, ax = figure(figsize=(9, 3.8))
+    ax.plot(tt, xx, lw=1, color=OKABE_ITO[0], label=f"${sym}$")
+    if on_xB:
+        ax.axhline(x0, color="k", lw=1.2, label="stop $x_0$")
     shade_sticking(ax)
     imp = in_view & (kinds == kind_of["impact"])
     if imp.any():
-        ax.plot(ev_t[imp], np.full(imp.sum(), x0), "v", ms=3.5, color=OKABE_ITO[1],
-                label=f"impacts ({imp.sum()})")
+        # On x_B the impacts are on the stop; on another coordinate, on its curve.
+        yi = np.full(imp.sum(), x0) if on_xB else np.interp(ev_t[imp], tt, xx)
+        ax.plot(ev_t[imp], yi, "v", ms=3.5, color=OKABE_ITO[1], label=f"impacts ({imp.sum()})")
     ax.set_xlabel("$t$")
-    ax.set_ylabel("$x_B$")
+    ax.set_ylabel(f"${sym}$")
     ax.set_xlim(t_from, t_to)
-    ax.set_title(f"{title}\ncontact displacement, {span} ({status})", fontsize=9)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
-    save(fig, "xB")
+    absolute_time(ax)
+    set_title(ax, title, f"{what}, {span} ({status})")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
+    save(fig, "xB" if on_xB else coordinate)
 
     if sticks_at_all:
         ts = t[(t >= t_from) & (t <= t_to)]
         sel = (t >= t_from) & (t <= t_to)
         X, V, mode = f["samples/X"][sel], f["samples/V"][sel], f["samples/mode"][sel]
         R = reaction(model, X, V, ts)
-        fig, ax = plt.subplots(figsize=(9, 3.8))
+        fig, ax = figure(figsize=(9, 3.8))
         ax.plot(ts, np.where(mode == 1, R, np.nan), lw=1.6, color=OKABE_ITO[0], label="$R$ (on the stop)")
         ax.plot(tt, rstar, lw=0.8, ls="--", color="0.45", label="$R^*$ (reaction a free state would need)")
         ax.axhline(0, color="k", lw=0.8)
@@ -524,29 +713,31 @@ def plot_run(f, title, save, window):
         ax.set_xlabel("$t$")
         ax.set_ylabel("$R$")
         ax.set_xlim(t_from, t_to)
-        ax.set_title(f"{title}\ncontact reaction, {span}", fontsize=9)
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
+        absolute_time(ax)
+        set_title(ax, title, f"contact reaction, {span}")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
         save(fig, "reaction")
 
-    fig, ax = plt.subplots(figsize=(6.4, 5))
+    fig, ax = figure(figsize=(6.4, 5))
     ax.plot(xx, vv, lw=0.8, color=OKABE_ITO[0])
-    ax.axvline(x0, color="k", lw=1.2)
-    ax.set_xlabel("$x_B$")
-    ax.set_ylabel("$\\dot x_B$")
-    ax.set_title(f"{title}\nphase portrait, {span}", fontsize=9)
+    if on_xB:
+        ax.axvline(x0, color="k", lw=1.2)
+    ax.set_xlabel(f"${sym}$")
+    ax.set_ylabel(f"$\\dot {sym}$")
+    set_title(ax, title, f"phase portrait, {span}")
     save(fig, "phase")
 
     sX = f["section/X"][:]
     sV = f["section/V"][:]
-    sxB = (sX * c).sum(axis=1)
-    svB = (sV * c).sum(axis=1)
-    fig, ax = plt.subplots(figsize=(6.4, 5))
+    sxB = sX @ w
+    svB = sV @ w
+    fig, ax = figure(figsize=(6.4, 5))
     k = np.arange(len(sxB))
     sc = ax.scatter(sxB, svB, c=k, s=6, cmap="viridis")
     fig.colorbar(sc, ax=ax, label="period $k$")
-    ax.set_xlabel("$x_B(t_0 + kT)$")
-    ax.set_ylabel("$\\dot x_B(t_0 + kT)$")
-    ax.set_title(f"{title}\nstroboscopic section, {len(sxB)} periods", fontsize=9)
+    ax.set_xlabel(f"${sym}(t_0 + kT)$")
+    ax.set_ylabel(f"$\\dot {sym}(t_0 + kT)$")
+    set_title(ax, title, f"stroboscopic section, {len(sxB)} periods")
     save(fig, "section")
 
     if "orbit" in f:
@@ -554,7 +745,7 @@ def plot_run(f, title, save, window):
         re_, im = np.atleast_1d(re_), np.atleast_1d(im)
         if len(re_) == 0:
             return  # a superstable 1-DOF sticking orbit has no multipliers to draw
-        fig, ax = plt.subplots(figsize=(5.6, 5))
+        fig, ax = figure(figsize=(5.6, 5))
         th = np.linspace(0, 2 * np.pi, 400)
         ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
         ax.plot(re_, im, "o", color=OKABE_ITO[2] if stable else OKABE_ITO[1],
@@ -567,9 +758,26 @@ def plot_run(f, title, save, window):
         ax.axvline(0, color="0.7", lw=0.5)
         ax.set_xlabel("Re $\\mu$")
         ax.set_ylabel("Im $\\mu$")
-        ax.set_title(f"{title}\nperiod-{period} orbit: Floquet multipliers", fontsize=9)
-        ax.legend(loc="upper left", fontsize=8, framealpha=0.9)
+        set_title(ax, title, f"period-{period} orbit: Floquet multipliers")
+        ax.legend(loc="upper left", fontsize=fs(8), framealpha=0.9)
         save(fig, "multipliers")
+
+
+def parse_size(value):
+    """--size W,H: inches, or centimetres when both carry "cm" (8.5cm,6cm). Exit 2 otherwise."""
+    m = re.fullmatch(r"\s*([0-9.eE+-]+)\s*(cm)?\s*,\s*([0-9.eE+-]+)\s*(cm)?\s*", value)
+    try:
+        ok = m is not None and (m.group(2) == m.group(4))
+        w, h = (float(m.group(1)), float(m.group(3))) if ok else (0.0, 0.0)
+    except ValueError:
+        ok = False
+    if ok and m.group(2):
+        w, h = w / 2.54, h / 2.54
+    if not ok or not (0.5 <= w <= 100 and 0.5 <= h <= 100):
+        print(f"vibro plot: --size {value}: expected W,H in inches (3.5,2.6) or in centimetres "
+              "(8.5cm,6.5cm), each 0.5 to 100 inches", file=sys.stderr)
+        sys.exit(2)
+    return (w, h)
 
 
 def read_everything(path):
@@ -593,7 +801,20 @@ def main():
     ap.add_argument("--format", default="png", choices=["png", "pdf", "svg"])
     ap.add_argument("--dpi", type=int, default=150)
     ap.add_argument("--time-window", default=None, help="A,B: time plots show A ≤ t ≤ B")
+    ap.add_argument("--title", default=None, help="title of every picture ('' for none)")
+    ap.add_argument("--size", default=None, help="W,H in inches, or W,H with cm (8.5cm,6cm)")
+    ap.add_argument("--font-size", type=float, default=10.0, help="font size in points")
+    ap.add_argument("--coordinate", default="x_B", help="x_B, X1..Xn (modal) or q0..q(N-1) (physical)")
     args = ap.parse_args()
+    if args.size is not None:
+        OPTIONS["size"] = parse_size(args.size)
+    if not (np.isfinite(args.font_size) and 1 <= args.font_size <= 72):
+        print(f"vibro plot: --font-size {args.font_size:g}: expected a size in points, 1 to 72", file=sys.stderr)
+        sys.exit(2)
+    OPTIONS["title"], OPTIONS["font_size"] = args.title, args.font_size
+    # Editable text: SVG keeps <text> elements and PDF embeds TrueType fonts, not glyph outlines.
+    matplotlib.rcParams.update({"svg.fonttype": "none", "pdf.fonttype": 42, "ps.fonttype": 42,
+                                "font.size": args.font_size, "axes.formatter.useoffset": False})
     window = None
     if args.time_window:
         try:
@@ -611,7 +832,9 @@ def main():
         path = f"{prefix}_{suffix}.{args.format}"
         # No creation dates in PDF and SVG files: the same data give the same file.
         meta = {"pdf": {"CreationDate": None}, "svg": {"Date": None}}.get(args.format, {})
-        fig.savefig(path, dpi=args.dpi, bbox_inches="tight", metadata=meta)
+        # At --size the file is exactly that size; otherwise trimmed to what is drawn.
+        tight = {} if OPTIONS["size"] is not None else {"bbox_inches": "tight"}
+        fig.savefig(path, dpi=args.dpi, metadata=meta, **tight)
         written.append(path)
         plt.close(fig)
     # A corrupt file (a damaged compressed chunk that the HDF5 library reports cleanly) is bad
@@ -644,6 +867,13 @@ def draw(args, save, window):
             if g in f:
                 varied.add(text(f[g].attrs[attr]))
         title = make_title(f, varied)
+        if args.coordinate != "x_B":
+            why = coordinate_error(f, args.coordinate)
+            if why is None and len(f["samples/t"]) < 2:
+                why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
+            if why is not None:
+                print(f"vibro plot: --coordinate {args.coordinate}: {why}", file=sys.stderr)
+                sys.exit(2)
         if "basin" in f:
             plot_basin(f, title, save)
         if "branch" in f:
@@ -656,7 +886,7 @@ def draw(args, save, window):
             print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
             sys.exit(2)
         if len(f["samples/t"]) > 1:
-            plot_run(f, title, save, window)
+            plot_run(f, title, save, window, args.coordinate)
         elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):
             print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
 

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <exception>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -204,6 +205,15 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"png", "pdf", "svg"}));
   plot->add_option("--dpi", plot_dpi, "resolution of PNG files (default 150)")->check(CLI::Range(20, 2400));
   plot->add_option("--time-window", plot_window, "A,B: time plots show A <= t <= B (default: the last 5 periods)");
+  std::optional<std::string> plot_title;
+  std::string plot_size, plot_coordinate = "x_B";
+  double plot_font_size = 10;
+  plot->add_option("--title", plot_title, "title of every picture ('' for none; default: the scene's title, values and what is drawn)");
+  plot->add_option("--size", plot_size, "W,H of every picture in inches, or W,H with cm (8.5cm,6cm) (default: each picture's own)");
+  plot->add_option("--font-size", plot_font_size, "font size in points (default 10)")->check(CLI::Range(1.0, 72.0));
+  plot->add_option("--coordinate", plot_coordinate,
+                   "x_B | X1..Xn (modal) | q0..q(N-1) (physical, when the file stores mode shapes): "
+                   "drawn by the time plot, phase portrait and section (default x_B)");
 
   bool force = false;
   for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
@@ -250,6 +260,9 @@ int main(int argc, char** argv) {
         throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
       std::vector<std::string> options{"--format", plot_format, "--dpi", std::to_string(plot_dpi)};
       if (!plot_window.empty()) options.push_back("--time-window=" + plot_window);
+      if (plot_title) options.push_back("--title=" + *plot_title);
+      if (!plot_size.empty()) options.push_back("--size=" + plot_size);
+      options.insert(options.end(), {"--font-size", fmt::format("{}", plot_font_size), "--coordinate=" + plot_coordinate});
       return RunPlot(file_path, plot_prefix, plot_overlay, options);
     }
     if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");

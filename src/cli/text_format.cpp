@@ -2,12 +2,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
 namespace vibro::cli {
 
-std::string FormatMultipliers(const std::vector<std::complex<double>>& multipliers, int digits) {
+double SnapZero(double x, double scale) {
+  return std::abs(x) <= 64 * std::numeric_limits<double>::epsilon() * std::abs(scale) ? 0.0 : x;
+}
+
+std::string FormatMultipliers(const std::vector<std::complex<double>>& raw, int digits) {
+  double scale = 1.0;
+  for (const auto& m : raw) scale = std::max(scale, std::abs(m));
+  std::vector<std::complex<double>> multipliers;
+  for (const auto& m : raw)
+    multipliers.emplace_back(SnapZero(m.real(), scale) + 0.0, SnapZero(m.imag(), scale) + 0.0);  // + 0.0: no -0
   std::vector<bool> used(multipliers.size(), false);
   std::string out;
   const auto real_enough = [](std::complex<double> m) {

@@ -9,8 +9,16 @@
 
 namespace vibro::cli {
 
+// x, or 0 when x is within rounding of zero for a quantity of size `scale`: |x| ≤ 64 ε·scale.
+// `scale` is the size of what x was computed from (the terms of a sum, the entries of a matrix
+// whose eigenvalue x is), not of x itself: a sum of O(1) terms that cancels leaves O(ε) residue.
+double SnapZero(double x, double scale);
+
 // Floquet multipliers, conjugate pairs folded into one "a ± bi (|μ| = m)" entry. An imaginary
 // part within rounding of zero (|Im μ| ≤ 1e-12·max(1, |μ|)) is printed as a real multiplier.
+// Real and imaginary parts and moduli within rounding of zero print as 0 (SnapZero with the
+// scale max(1, largest |μ|): eigenvalues of the monodromy matrix are accurate to about ε times its
+// norm, which is at least its largest |μ|, and 1 for the O(1) entries of a contracting map).
 std::string FormatMultipliers(const std::vector<std::complex<double>>& multipliers, int digits = 6);
 
 // The attractor lines of `simulate`, `orbit` and the studies: kind, period, impacts per orbit

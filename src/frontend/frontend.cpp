@@ -57,7 +57,7 @@ Scene SceneAtOption(const SceneOrigin& origin, const std::string& key, double va
     return SceneWith(origin, key, value);
   } catch (const InputError& e) {
     std::vector<std::string> located;
-    for (const auto& m : e.messages()) located.push_back(fmt::format("{} {:.17g} (--param {}): {}", option, value, key, m));
+    for (const auto& m : e.messages()) located.push_back(fmt::format("{} {} (--param {}): {}", option, value, key, m));
     throw InputError(located);
   }
 }
@@ -178,7 +178,7 @@ RunResult SweepOutcome(const std::vector<SweepPoint>& sweep, const std::string& 
     const SweepPoint& p = sweep.back();
     r.status = p.status == ToString(RunStatus::kUndetermined) ? RunStatus::kUndetermined
                                                               : RunStatus::kNumericalFailure;
-    r.message = fmt::format("the sweep ended at {} = {:.17g}: {}", key, p.value, p.message);
+    r.message = fmt::format("the sweep ended at {} = {}: {}", key, p.value, p.message);
   }
   return r;
 }

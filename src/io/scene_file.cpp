@@ -22,6 +22,8 @@
 namespace vibro {
 namespace {
 
+std::string ShortestFloats(const std::string& text);
+
 // Limits applied before toml++ sees any text: its parser recurses on nesting and on the
 // components of dotted keys, so deep input would overflow the stack.
 constexpr size_t kMaxSceneBytes = 1 << 20;  // 1 MiB
@@ -199,15 +201,19 @@ class Reader {
     if (src.begin.line == 0) return path;
     return fmt::format("{}:{}:{}", path, src.begin.line, src.begin.column);
   }
+  // The value as the user wrote it, not toml++'s 17 digits: 2.3, never 2.2999999999999998.
   static std::string Show(const toml::node& n) {
     std::ostringstream os;
-    n.visit([&os](const auto& concrete) {
-      if constexpr (toml::is_string<decltype(concrete)>)
+    bool text = false;
+    n.visit([&os, &text](const auto& concrete) {
+      if constexpr (toml::is_string<decltype(concrete)>) {
         os << '"' << concrete.get() << '"';
-      else
+        text = true;
+      } else {
         os << concrete;
+      }
     });
-    return os.str();
+    return text ? os.str() : ShortestFloats(os.str());
   }
   void Report(const toml::node* n, const std::string& key, const std::string& what) {
     reported_.push_back(key);

@@ -210,4 +210,42 @@ with tempfile.TemporaryDirectory() as d:
     p = run("frobnicate")
     check("unknown command exit 2", p.returncode == 2, p.returncode)
 
+# Quiet, exact messages: only what applies is printed; zeros print as 0; inputs are echoed as given.
+chain3, fig05 = os.path.join(scenes, "chain3.toml"), os.path.join(scenes, "fig05_coexistence.toml")
+p = run("orbit", chain3)
+status = p.stdout.splitlines()[0] if p.stdout else ""
+check("orbit from the default start: status without a warning, the distance as information",
+      status == "status       converged" and "from start   distance 0.225 (after a transient of 200 periods)" in p.stdout,
+      p.stdout)
+p = run("orbit", fig05, "--set", "initial.time=0.51387", "--set", "initial.displacement=[1.0]",
+        "--set", "initial.velocity=[0.27569]")
+check("orbit from a chosen start it does not pass through: says so",
+      "converged at distance 0.119 from the start state" in p.stdout and "not one through it" in p.stdout, p.stdout)
+# Fig. 5 at r = 0.8, f = 3: impacts, one plastic-free stick and no accumulation point.
+p = run("simulate", fig05, "--set", "stop.restitution=0.8", "--set", "excitation.amplitude=3")
+check("simulate without a chattering sequence: no chattering line",
+      p.returncode == 0 and "0 accumulations" in p.stdout and "chattering" not in p.stdout, p.stdout)
+p = run("simulate", os.path.join(scenes, "default.toml"))
+check("simulate with chattering: the chattering line", "chattering   200 accumulation points predicted" in p.stdout,
+      p.stdout)
+# s_A = Σ_i ψ_i(B) ψ_i(A) / m_i = (M⁻¹)_BA = 0 exactly for a lumped chain forced and stopped at
+# different masses (diagonal M).
+for name in ("chain2.toml", "chain3.toml", "chain10_stiff.toml", "large/beam50.toml"):
+    p = run("model", os.path.join(scenes, name))
+    check(f"model {name}: s_A printed as 0 (lumped masses)", "s_A, s_B            0, 1\n" in p.stdout, p.stdout)
+# A plastic impact (r = 0) of a 2-DOF impact orbit: the saltation matrix is singular, so the
+# monodromy matrix has an exact multiplier 0 (computed as ~1e-18).
+p = run("orbit", os.path.join(scenes, "chain2.toml"), "--set", "stop.restitution=0", "--set", "excitation.frequency=2.0",
+        "--set", "excitation.amplitude=4", "--kind", "impact", "--period", "1")
+mu = next((l for l in p.stdout.splitlines() if l.startswith("multipliers")), "")
+check("orbit with an exact zero multiplier: printed as 0 (|μ| = 0), no 1e-18",
+      ", 0 (|μ| = 0)" in mu and "e-1" not in mu, mu)
+p = run("simulate", os.path.join(scenes, "fig08_preload.toml"), "--set", "stop.restitution=2.3")
+check("an input is echoed as given: 2.3, not 2.2999999999999998",
+      p.returncode == 2 and "stop.restitution = 2.3:" in p.stderr and "2.29999" not in p.stderr, p.stderr)
+p = run("sweep", os.path.join(scenes, "fig08_preload.toml"), "--param", "stop.restitution", "--from", "0.3",
+        "--to", "2.3")
+check("a sweep bound is echoed as given: --to 2.3",
+      p.returncode == 2 and "--to 2.3 (--param stop.restitution)" in p.stderr and "2.29999" not in p.stderr, p.stderr)
+
 finish()

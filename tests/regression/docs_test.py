@@ -7,7 +7,10 @@
                                        under it are the ones the script runs
     docs_test.py cli ROOT VIBRO        docs/cli.md lists, per command, exactly the options that
                                        `vibro COMMAND --help` shows
-    docs_test.py cpp ROOT EXAMPLE      docs/cpp.md shows examples/first.cpp and its real output
+    docs_test.py cpp ROOT EXAMPLE      docs/cpp.md shows examples/first.cpp and its real output,
+                                       and the find_package recipe tests/consumer builds
+    docs_test.py output ROOT VIBRO     every command of README.md and docs/*.md shown with its
+                                       output prints that output (rules in check_outputs)
 
 The truth is the file system, the script and the binary's own --help, never the docs themselves.
 """
@@ -164,6 +167,45 @@ def check_captions(root):
         expect(n in shown, f"docs/figures/{n} is shown nowhere in README.md or docs/")
 
 
+def check_titles(root):
+    """Every scene of data/scenes and data/benchmarks says in its title only what its keys hold:
+    r = …, omega (ω) = …, f = … and x0 = … against stop.restitution, excitation.frequency,
+    excitation.amplitude and stop.position; "preload" needs x0 > 0 and "clearance" x0 < 0. A
+    benchmark's stored run (NAME.h5) carries the same title."""
+    import glob
+    import tomllib
+    import h5py
+    keys = {"r": ("stop", "restitution"), "omega": ("excitation", "frequency"), "ω": ("excitation", "frequency"),
+            "f": ("excitation", "amplitude"), "x0": ("stop", "position")}
+    paths = sorted(glob.glob(os.path.join(root, "data", "scenes", "**", "*.toml"), recursive=True) +
+                   glob.glob(os.path.join(root, "data", "benchmarks", "*.toml")))
+    claims = 0
+    for path in paths:
+        rel = os.path.relpath(path, root)
+        with open(path, "rb") as f:
+            scene = tomllib.load(f)
+        title = scene.get("title", "")
+        for sym, value in re.findall(r"(?<![\w.])(r|omega|ω|f|x0)\s*=\s*([-+]?[0-9.]+(?:[eE][-+]?\d+)?)", title):
+            table, key = keys[sym]
+            actual = scene.get(table, {}).get(key)
+            claims += 1
+            expect(actual is not None and abs(float(value) - actual) <= 1e-9 * max(1.0, abs(actual)),
+                   f"{rel}: the title says {sym} = {value}, {table}.{key} is {actual}")
+        x0 = scene.get("stop", {}).get("position")
+        if "preload" in title:
+            expect(x0 is not None and x0 > 0, f"{rel}: the title says preload, stop.position is {x0}")
+        if "clearance" in title:
+            expect(x0 is not None and x0 < 0, f"{rel}: the title says clearance, stop.position is {x0}")
+        stored = os.path.splitext(path)[0] + ".h5"
+        if "benchmarks" in rel and os.path.exists(stored):
+            with h5py.File(stored, "r") as f:
+                text = f.attrs["scene"]
+            text = text.decode() if isinstance(text, bytes) else text
+            expect(tomllib.loads(text).get("title") == title, f"{os.path.relpath(stored, root)}: its stored scene's "
+                   f"title is not {rel}'s")
+    expect(len(paths) >= 20 and claims >= 40, f"titles checked: {len(paths)} scenes, {claims} claims")
+
+
 HELP_OPTION = re.compile(r"^\s+(?:-\w,\s*)?(--[a-z][a-z0-9-]*)", re.M)
 
 
@@ -205,6 +247,194 @@ def check_cpp(root, exe):
     quoted = [b for lang, b in blocks if lang == "" and b.startswith("t_end")]
     expect(len(quoted) == 1 and quoted[0] == p.stdout,
            f"docs/cpp.md quotes the example's output: {p.stdout!r}")
+    # The find_package recipe is the consumer project's, which consumer.install builds against an
+    # installed prefix: every CMake command of the recipe, with the consumer's names.
+    with open(os.path.join(root, "tests", "consumer", "CMakeLists.txt"), encoding="utf-8") as f:
+        consumer = [l.strip() for l in f.read().replace("release_phase", "my_tool").replace(
+            "vibro_consumer", "my_tool").splitlines() if l.strip() and not l.startswith("#")]
+    recipes = [b for lang, b in blocks if lang == "cmake" and "find_package" in b]
+    recipe = [l.split("#")[0].strip() for l in recipes[0].splitlines()] if recipes else []
+    expect(len(recipes) == 1 and [l for l in recipe if l] == consumer,
+           f"docs/cpp.md shows the find_package recipe of tests/consumer/CMakeLists.txt: {recipe} vs {consumer}")
+
+
+# --- docs_test.py output -------------------------------------------------------------------
+# Three ways a page shows what a command prints (fenced blocks):
+#  A. a transcript: a block whose first line starts with "$ ". Each "$ " line (with its "\"
+#     continuation lines) is a command, run by bash; the lines up to the next "$ " line are what
+#     it prints (stdout and stderr, as a terminal shows them). "$ echo $?" prints the previous
+#     command's exit status.
+#  B. a ```sh block holding exactly one `build/vibro ...` or `vibro ...` command, followed (blank
+#     lines between at most) by a plain ``` block: that command's output.
+#  C. a plain ``` block after the line `<!-- output of: COMMAND -->`.
+# A block whose info string says `file=NAME` (```toml file=bad.toml) is written to NAME first, for
+# the commands after it. `<!-- docs-output: skip REASON -->` before a block leaves it out (a hand
+# edit between commands); the reason is printed.
+# Comparison: the shown lines must be printed, in order; lines may be left out (a "..." line says
+# so), never changed. Numbers are compared as written, except those that legitimately vary: a
+# number followed by a time unit (s, ms, µs: timings) matches any number, and numbers below 1e-12
+# in magnitude on both sides (rounding residue: Newton residuals, errors at rounding level) match.
+# All commands of a page run in one scratch directory holding links to data/, scripts/ and
+# build/vibro, in page order.
+
+NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
+TIMING = re.compile(r"\s*(?:s|ms|µs)\b")
+
+
+def split_numbers(line):
+    """(texts, numbers): the line's text between numbers, and each number with whether a time
+    unit follows it."""
+    texts, numbers, pos = [], [], 0
+    for m in NUMBER.finditer(line):
+        # A number glued to letters or underscores is part of a word (fig08, x_0, 1e-6T): text.
+        if m.start() > 0 and (line[m.start() - 1].isalpha() or line[m.start() - 1] in "_."):
+            continue
+        texts.append(line[pos:m.start()])
+        numbers.append((m.group(0), TIMING.match(line, m.end()) is not None))
+        pos = m.end()
+    texts.append(line[pos:])
+    return texts, numbers
+
+
+def same_line(shown, printed):
+    st, sn = split_numbers(shown.rstrip())
+    pt, pn = split_numbers(printed.rstrip())
+    if st != pt or len(sn) != len(pn):
+        return False
+    for (a, timing), (b, _) in zip(sn, pn):
+        if a == b or timing:
+            continue
+        try:
+            x, y = float(a), float(b)
+        except ValueError:
+            return False
+        if not (abs(x) < 1e-12 and abs(y) < 1e-12):
+            return False
+    return True
+
+
+def shown_in(shown_lines, printed_lines):
+    """None when every shown line is printed, in order; else the first shown line that is not."""
+    j = 0
+    for line in shown_lines:
+        if line.strip() in ("...", "…"):
+            continue
+        while j < len(printed_lines) and not same_line(line, printed_lines[j]):
+            j += 1
+        if j == len(printed_lines):
+            return line
+        j += 1
+    return None
+
+
+def output_examples(path):
+    """The examples of a page, in order: ("file", name, text), ("run", [(command, shown lines)]),
+    ("skip", reason)."""
+    with open(path, encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    blocks, i = [], 0
+    while i < len(lines):
+        m = re.match(r"^```(.*)$", lines[i])
+        if not m:
+            i += 1
+            continue
+        j = i + 1
+        while j < len(lines) and not lines[j].startswith("```"):
+            j += 1
+        before = next((lines[k] for k in range(i - 1, -1, -1) if lines[k].strip()), "")
+        blocks.append({"info": m.group(1).strip(), "body": lines[i + 1:j], "start": i, "end": j,
+                       "before": before})
+        i = j + 1
+    out = []
+    for n, b in enumerate(blocks):
+        skip = re.match(r"^<!-- docs-output: skip (.*) -->$", b["before"])
+        named = re.search(r"\bfile=(\S+)", b["info"])
+        if named:
+            out.append(("file", named.group(1), "\n".join(b["body"]) + "\n"))
+            continue
+        body = b["body"]
+        if body and body[0].startswith("$ "):
+            if skip:
+                out.append(("skip", f"{os.path.basename(path)}:{b['start'] + 1}: {skip.group(1)}"))
+                continue
+            steps, k = [], 0
+            while k < len(body):
+                cmd = body[k][2:]
+                while cmd.endswith("\\") and k + 1 < len(body):
+                    k += 1
+                    cmd = cmd[:-1] + " " + body[k].strip()
+                k += 1
+                shown = []
+                while k < len(body) and not body[k].startswith("$ "):
+                    shown.append(body[k])
+                    k += 1
+                steps.append((cmd, shown))
+            out.append(("run", b["start"] + 1, steps))
+            continue
+        marker = re.match(r"^<!-- output of: (.*) -->$", b["before"])
+        if b["info"] == "" and marker:
+            out.append(("run", b["start"] + 1, [(marker.group(1), body)]))
+            continue
+        if b["info"] == "" and n > 0 and blocks[n - 1]["info"] == "sh" and \
+                all(not l.strip() for l in lines[blocks[n - 1]["end"] + 1:b["start"]]):
+            cmds = [c.split("#")[0].strip() for c in "\n".join(blocks[n - 1]["body"]).replace("\\\n", " ").splitlines()]
+            cmds = [c for c in cmds if c]
+            if len(cmds) == 1 and re.match(r"^(build/)?vibro ", cmds[0]):
+                out.append(("run", b["start"] + 1, [(cmds[0], body)]))
+    return out
+
+
+def check_outputs(root, vibro):
+    import tempfile
+    runs = skipped = 0
+    mutation_checked = False
+    for path in doc_files(root):
+        rel_doc = os.path.relpath(path, root)
+        examples = output_examples(path)
+        if not examples:
+            continue
+        with tempfile.TemporaryDirectory() as work:
+            for name in ("data", "scripts"):
+                os.symlink(os.path.join(os.path.abspath(root), name), os.path.join(work, name))
+            os.mkdir(os.path.join(work, "build"))
+            os.symlink(os.path.abspath(vibro), os.path.join(work, "build", "vibro"))
+            env = dict(os.environ, PATH=os.path.join(work, "build") + os.pathsep + os.environ.get("PATH", ""))
+            for ex in examples:
+                if ex[0] == "file":
+                    with open(os.path.join(work, ex[1]), "w", encoding="utf-8") as f:
+                        f.write(ex[2])
+                    continue
+                if ex[0] == "skip":
+                    skipped += 1
+                    print(f"note: not run: {ex[1]}")
+                    continue
+                _, line, steps = ex
+                rc = 0
+                for cmd, shown in steps:
+                    if cmd.strip() == "echo $?":
+                        printed = [str(rc)]
+                    else:
+                        p = subprocess.run(["bash", "-c", cmd], cwd=work, env=env, capture_output=True,
+                                           text=True, timeout=600)
+                        rc = p.returncode
+                        printed = (p.stdout + p.stderr).splitlines()
+                    runs += 1
+                    missing = shown_in(shown, printed)
+                    check(f"{rel_doc}:{line}: `{cmd}` prints what the page shows", missing is None,
+                          f"shown but not printed: {missing!r}\nprinted:\n" + "\n".join(printed))
+                    # The comparison can fail: the shown output with one digit changed must not pass.
+                    if missing is None and not mutation_checked:
+                        for n, l in enumerate(shown):
+                            m = re.search(r"\d", l)
+                            if m and l.strip() not in ("...", "…"):
+                                d = "1" if l[m.start()] != "1" else "2"
+                                changed = shown[:n] + [l[:m.start()] + d + l[m.end():]] + shown[n + 1:]
+                                check(f"{rel_doc}:{line}: a changed digit is seen", shown_in(changed, printed) is not None,
+                                      changed[n])
+                                mutation_checked = True
+                                break
+    check(f"the docs show commands with their output ({runs} commands run, {skipped} blocks skipped)",
+          runs >= 10 and mutation_checked, runs)
 
 
 def main():
@@ -212,8 +442,11 @@ def main():
     if what == "links":
         check_links(root)
         check_captions(root)
+        check_titles(root)
     elif what == "cli":
         check_cli(root, sys.argv[3])
+    elif what == "output":
+        check_outputs(root, sys.argv[3])
     elif what == "cpp":
         check_cpp(root, sys.argv[3])
     else:

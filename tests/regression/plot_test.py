@@ -66,7 +66,7 @@ with tempfile.TemporaryDirectory() as d:
         T = float(fc.attrs["forcing_period"])
         t_end = fc["samples/t"][-1]
         t0 = t_end - 3 * T
-        tt, xx, vv, _ = vibro_plot.dense_run(fc, t0, t_end)
+        tt, xx, vv, *_ = vibro_plot.dense_run(fc, t0, t_end)
         x0 = float(fc["model"].attrs["stop"])
         kinds = h5py.check_enum_dtype(fc["events/kind"].dtype)
         ev_t, ev_k = fc["events/t"][:], fc["events/kind"][:]
@@ -83,5 +83,118 @@ with tempfile.TemporaryDirectory() as d:
               -1e-12 <= xx.max() - peak_fine < 2e-5 * (peak_fine - x0) and
               peak_coarse_samples < peak_fine - 1e-4 * (peak_fine - x0),
               f"drawn {xx.max()!r}, 512 samples {peak_fine!r}, 8 samples {peak_coarse_samples!r}")
+
+    # --coordinate: a physical and a modal coordinate of the 3-DOF chain (sticking while masses 1
+    # and 2 move), drawn from 16 samples per period, against the engine's exact states sampled
+    # 512 times per period (q = Ψ X).
+    fine = simulate(d, "c3fine", "chain3.toml", "run.periods=10", "run.samples_per_period=512")
+    coarse = simulate(d, "c3coarse", "chain3.toml", "run.periods=10", "run.samples_per_period=16")
+    with h5py.File(fine) as ff, h5py.File(coarse) as fc:
+        T = float(fc.attrs["forcing_period"])
+        t_end = fc["samples/t"][-1]
+        t0 = t_end - 3 * T
+        tt, _, _, _, XX, VV = vibro_plot.dense_run(fc, t0, t_end)
+        choices = vibro_plot.coordinate_choices(fc)
+        check("chain3 offers x_B, X1..X3, q0..q2", sorted(choices) == ["X1", "X2", "X3", "q0", "q1", "q2", "x_B"],
+              sorted(choices))
+        tf = ff["samples/t"][:]
+        sel = (tf > t0) & (tf < t_end)
+        stuck = ff["samples/mode"][:][sel] == 1
+        XX, VV = vibro_plot.fill_stuck_states(fc, tt, XX, VV)
+        for name in ("q0", "q1", "X2"):
+            w, _ = choices[name]
+            y, yd = XX @ w, VV @ w
+            truth, truth_d = ff["samples/X"][:][sel] @ w, ff["samples/V"][:][sel] @ w
+            drawn, drawn_d = np.interp(tf[sel], tt, y), np.interp(tf[sel], tt, yd)
+            scale = np.abs(truth).max()
+            err = np.abs(drawn - truth) / scale
+            # The drawn points are exact; comparing at the fine samples' times interpolates
+            # linearly between them (1500 per period: about (ω·T/1500)²/8 ≈ 1e-6).
+            check(f"chain3 {name}: drawn within 1e-5 of the exact states, sticking phases included "
+                  f"({stuck.sum()} of {sel.sum()} stuck)", stuck.sum() > 100 and err.max() < 1e-5,
+                  f"worst {err.max():.3g} (free {err[~stuck].max():.3g}, stuck {err[stuck].max():.3g})")
+            check(f"chain3 {name}: its velocity too", np.abs(drawn_d - truth_d).max() < 1e-4 * np.abs(truth_d).max(),
+                  np.abs(drawn_d - truth_d).max())
+        # The sticking motion itself, at the fine samples' own times: exact to rounding.
+        ts = tf[sel][stuck]
+        Xf, Vf = vibro_plot.fill_stuck_states(fc, ts, np.full((len(ts), 3), np.nan), np.full((len(ts), 3), np.nan))
+        errs = max(np.abs(Xf - ff["samples/X"][:][sel][stuck]).max(), np.abs(Vf - ff["samples/V"][:][sel][stuck]).max())
+        check("chain3 sticking motion (exp of its generator) equals the engine's stuck states to 1e-10",
+              errs < 1e-10, errs)
+        psi = fc["model"].attrs["mode_shapes"]
+        check("q2 (contact DOF) is x_B", np.allclose(choices["q2"][0], choices["x_B"][0]) and np.allclose(psi[2], 1.0),
+              psi[2])
+
+    # `vibro plot` options (docs/cli.md): --size, --font-size, --title, --coordinate, editable SVG
+    # text, absolute time ticks, bifurcation kinds on a sweep overlay.
+    import re
+
+    def plot(h5, prefix, *options):
+        return subprocess.run([vibro, "plot", h5, "--out", os.path.join(d, prefix), *options],
+                              capture_output=True, text=True)
+
+    def svg_texts(path):
+        """The strings of the SVG's <text> elements (matplotlib writes them when svg.fonttype is
+        'none'; glyph paths otherwise)."""
+        with open(path) as fh:
+            svg = fh.read()
+        return [re.sub(r"<[^>]+>", "", m) for m in re.findall(r"<text[^>]*>(.*?)</text>", svg, re.S)]
+
+    c3 = simulate(d, "c3", "chain3.toml", "run.periods=10", "run.samples_per_period=64")
+    p = plot(c3, "c3a", "--format", "svg", "--size", "8.5cm,6cm", "--font-size", "7", "--coordinate", "q1",
+             "--title", "Mass 2 of the chain")
+    check("plot --size --coordinate q1: exit 0", p.returncode == 0, p.stderr)
+    q1 = os.path.join(d, "c3a_q1.svg")
+    texts = svg_texts(q1) if os.path.exists(q1) else []
+    with open(q1) as fh:
+        head = fh.read(2000)
+    size = re.search(r'width="([0-9.]+)pt" height="([0-9.]+)pt"', head)
+    check("--size 8.5cm,6cm: the picture is exactly 8.5 cm x 6 cm",
+          size and abs(float(size.group(1)) - 8.5 / 2.54 * 72) < 0.01 and abs(float(size.group(2)) - 6 / 2.54 * 72) < 0.01,
+          size and size.groups())
+    check("SVG text is editable: <text> elements with the title and tick labels",
+          "Mass 2 of the chain" in texts and len(texts) > 10, texts[:20])
+    check("--font-size 7: the SVG text is 7 pt", re.search(r"font: ?(?:[^;]*? )?7px|font-size: ?7px|font: 7px", open(q1).read())
+          is not None or "7px" in open(q1).read(), "no 7px text")
+    p = plot(c3, "c3b", "--format", "svg", "--title", "")
+    texts = svg_texts(os.path.join(d, "c3b_xB.svg"))
+    check("--title '': no title", p.returncode == 0 and not any("chain" in t or "contact displacement" in t for t in texts),
+          texts)
+    for bad, why in ((("--coordinate", "q3"), "q0..q2"), (("--coordinate", "X0"), "X1..X3"),
+                     (("--size", "4x3"), "W,H"), (("--size", "8.5cm,3"), "W,H")):
+        p = plot(c3, "bad", *bad)
+        made = [n for n in os.listdir(d) if n.startswith("bad")]
+        check(f"plot {' '.join(bad)}: exit 2, says why, writes nothing",
+              p.returncode == 2 and why in p.stderr and not made, (p.returncode, p.stderr, made))
+    fig08 = simulate(d, "late", "fig08_preload.toml", "run.periods=10", "initial.time=897500")
+    p = plot(fig08, "late", "--format", "svg", "--coordinate", "q0")
+    check("--coordinate q0 on a modal-form file: exit 2, no mode shapes stored",
+          p.returncode == 2 and "no mode shapes" in p.stderr, p.stderr)
+    p = plot(fig08, "late", "--format", "svg")
+    ticks = [t for t in svg_texts(os.path.join(d, "late_xB.svg")) if re.fullmatch(r"[0-9.−-]+", t.strip())]
+    offsets = [t for t in svg_texts(os.path.join(d, "late_xB.svg")) if re.search(r"^\s*\+|×|\de[+−-]?\d", t)]
+    check("absolute time ticks: 8975xx, no offset +8.975e5",
+          any(t.startswith("8975") for t in ticks) and not offsets, (ticks, offsets))
+
+    # A sweep over a continuation branch with five kinds of bifurcation: one legend entry each.
+    branch = os.path.join(d, "c2br.h5")
+    sweep = os.path.join(d, "c2sw.h5")
+    common = [os.path.join(scenes, "chain2.toml"), "--set", "stop.restitution=0.0", "--set", "excitation.frequency=0.4"]
+    p = subprocess.run([vibro, "continue", *common, "--set", "excitation.amplitude=1.0", "--param", "excitation.amplitude",
+                        "--to", "1.6", "--out", branch], capture_output=True, text=True)
+    check("chain2 continuation", p.returncode == 0, p.stderr)
+    p = subprocess.run([vibro, "sweep", *common, "--param", "excitation.amplitude", "--from", "1.0", "--to", "1.4",
+                        "--steps", "10", "--out", sweep], capture_output=True, text=True)
+    check("chain2 sweep", p.returncode == 0, p.stderr)
+    with h5py.File(branch) as f:
+        kinds = [vibro_plot.text(k) for k in f["bifurcations/kind"][:]]
+    p = plot(sweep, "c2", "--format", "svg", "--overlay", branch)
+    texts = svg_texts(os.path.join(d, "c2_sweep.svg"))
+    entries = {k: sum(t.startswith(k + " (") for t in texts) for k in set(kinds)}
+    check("sweep overlay: one legend entry per bifurcation kind",
+          p.returncode == 0 and len(set(kinds)) >= 4 and len(kinds) > len(set(kinds)) and all(n == 1 for n in entries.values()),
+          (kinds, entries))
+    check("sweep overlay: a marker shape per kind",
+          len({vibro_plot.BIFURCATION_MARKERS[k] for k in set(kinds)}) == len(set(kinds)), kinds)
 
 finish()
