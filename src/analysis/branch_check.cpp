@@ -38,16 +38,17 @@ std::optional<double> DistanceAtClaim(const System& sys, const Scene& scene, con
   if (!(std::abs(k - static_cast<double>(index)) < 1e-3)) return std::nullopt;
   index %= static_cast<long long>(o.period) * kSamples;
   struct Pick final : Observer {
-    long long want, at = 0;
+    double want = 0, off = std::numeric_limits<double>::infinity();
     Eigen::VectorXd X, V;
     void OnSample(const Sample& smp) override {
-      if (at++ == want) {
+      if (std::abs(smp.t - want) < off) {
+        off = std::abs(smp.t - want);
         X = smp.X;
         V = smp.V;
       }
     }
   } pick;
-  pick.want = index;
+  pick.want = o.section_time + static_cast<double>(index) * T / kSamples;
   Scene sc = scene;
   sc.initial_time = o.section_time;
   sc.run.periods = o.period;
@@ -57,7 +58,7 @@ std::optional<double> DistanceAtClaim(const System& sys, const Scene& scene, con
   opt.initial = &here;
   opt.observers = {&pick};
   const RunResult r = Simulate(sys, sc, opt);
-  if (r.status != RunStatus::kOk || pick.X.size() == 0) return std::nullopt;
+  if (r.status != RunStatus::kOk || pick.X.size() == 0 || !(pick.off <= 1e-6 * T)) return std::nullopt;
   std::vector<Eigen::VectorXd> orbit;
   Eigen::VectorXd z(2 * pick.X.size());
   z << pick.X, pick.V;
