@@ -183,6 +183,19 @@ with tempfile.TemporaryDirectory() as d:
     p = run("score", cscene, path, "--json")
     check("score: UTF-8 BOM dropped, equal times of an accumulation and its stick accepted",
           p.returncode == 0 and json.loads(p.stdout).get("agrees") is True, (p.returncode, p.stderr[-400:]))
+    # Rows split across the reader's 64 KiB blocks: the reference interleaved with comment lines
+    # of varied lengths (about 4 MB), CRLF line ends, no final line end: read as the plain file.
+    path = os.path.join(d, "padded.csv")
+    with open(os.path.join(bench, "chatter_1dof.csv"), encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    with open(path, "w", encoding="utf-8", newline="") as f:
+        for i, ln in enumerate(lines):
+            f.write("#" + "p" * ((i * 7919) % 5000) + "\r\n" + ln + ("\r\n" if i + 1 < len(lines) else ""))
+    check("padded CSV crosses many blocks", os.path.getsize(path) > (3 << 20), os.path.getsize(path))
+    p = run("score", cscene, path, "--json")
+    q = run("score", cscene, os.path.join(bench, "chatter_1dof.csv"), "--json")
+    check("score: a CSV read across blocks gives the plain file's result", p.returncode == 0
+          and p.stdout == q.stdout, (p.returncode, p.stderr[-300:]))
     t0 = time.time()
     try:
         p = run("score", cscene, "/dev/zero", timeout=60)
