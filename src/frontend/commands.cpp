@@ -160,6 +160,12 @@ ValidationJob PrepareValidationTable(const SceneOrigin& origin, const LoadedScen
       job.scenes.push_back(loaded.scene);
       continue;
     }
+    // The claims, as the CSV reader checks them (a table from elsewhere is held to the same).
+    if (p.period && !(*p.period >= 1 && *p.period <= 1000000))
+      problems.push_back(fmt::format("{}: period {} is not a whole number of forcing periods in [1, 1e6]", where(p),
+                                     *p.period));
+    if (p.sticking_fraction && !(*p.sticking_fraction >= 0 && *p.sticking_fraction <= 1))
+      problems.push_back(fmt::format("{}: sticking fraction {} is not in [0, 1]", where(p), *p.sticking_fraction));
     try {
       job.scenes.push_back(origin.Load({Assignment(a.param, p.value)}).scene);
     } catch (const InputError& e) {
