@@ -52,11 +52,15 @@ std::vector<std::string> EventTableProblems(const std::vector<TheirEvent>& their
     if (e.t < lo)
       problems.push_back(fmt::format("{}: time {:.17g} is before the scene's start, initial.time = {:.17g}", where(e),
                                      e.t, t_begin));
-    else if (e.t > hi)
+    else if (e.t > hi) {
+      const double needed = std::ceil((e.t - t_begin) / T);
       problems.push_back(fmt::format(
           "{}: time {:.17g} is after the end of the scene's run, t = {:.17g} (initial.time + run.periods·T, T = {:.10g}); "
-          "vibro runs the scene as given: set run.periods to cover the events (≥ {:.0f})",
-          where(e), e.t, t_end, T, std::min(1e300, std::ceil((e.t - t_begin) / T))));
+          "vibro runs the scene as given: {}",
+          where(e), e.t, t_end, T,
+          needed <= 1e12 ? fmt::format("set run.periods to cover the events (≥ {:.0f})", needed)
+                         : std::string("no scene runs that long (run.periods ≤ 1e12)")));
+    }
     if (previous && std::isfinite(previous->t)) {
       if (e.t < previous->t)
         problems.push_back(fmt::format("{}: time {:.17g} is earlier than the previous event's, {:.17g} ({}): events "
