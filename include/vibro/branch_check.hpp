@@ -37,19 +37,24 @@ struct CheckTolerances {
 
 struct PointCheck {
   double value = 0;
-  // "confirmed" | "no-orbit-near" | "period-differs" | "stability-differs" |
-  // "sticking-fraction-differs"
+  // "confirmed" | "no-orbit-near" | "undetermined" | "period-differs" | "stability-differs" |
+  // "sticking-fraction-differs". "undetermined": the simulation that checks a stable orbit ended
+  // undetermined or in a numerical failure (detail: its message), so nothing is claimed.
   std::string verdict;
   std::string detail;
   OrbitResult orbit;                       // vibro's orbit (status, period, multipliers, summary)
-  std::optional<double> distance;          // orbit.distance_from_start
+  // |z_claimed(t) − z_orbit(t)|∞ / (1 + |z_orbit(t)|∞) at the claim's own time t (and never less
+  // than orbit.distance_from_start): the distance of the state as given, not of where the motion
+  // from it goes.
+  std::optional<double> distance;
   std::optional<double> simulated_distance;  // stable orbits: distance after simulate_periods·q
 };
 
 // The modal start state of a claimed point in `scene` (the scene at the point's value). A state
 // below the stop by at most 1e-9·max(1, |x0|) (another tool's rounding) is put on the stop, and a
 // state on the stop moving into it is taken as the one just before an impact: the restitution law
-// is applied. Returns an empty `problem` or why the state is not admissible.
+// is applied. Returns an empty `problem` or why the state is not admissible, or not a state of the
+// scene at all (an entry beyond the bound of [initial], |value| ≤ 1e100, or |time|/T > 1e12).
 InitialOverride ClaimedStart(const System& system, const Scene& scene, const ClaimedPoint& point,
                              std::string& problem);
 

@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -11,10 +13,88 @@
 #include "vibro/system.hpp"
 
 namespace vibro {
+namespace {
+
+constexpr double kHugeEntry = 1e100;  // the bound of [initial] (docs/scenes.md)
+
+double RelativeDistance(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).cwiseAbs().maxCoeff() / (1.0 + b.cwiseAbs().maxCoeff());
+}
+
+// The orbit's samples at the claim's time t (modulo its period q·T): the orbit is simulated for
+// q periods from its section state with 1024 samples a period, a grid the claim's time lies on
+// (orbit_from_state.hpp puts the section at t + j·T/1024). Returns the distance of the claimed
+// state (as given, and as the start ClaimedStart makes of it) to the orbit's state at t, the
+// state just after an impact included when the orbit is on the stop moving into it there; empty
+// when t is not on the grid or the run fails.
+std::optional<double> DistanceAtClaim(const System& sys, const Scene& scene, const OrbitResult& o,
+                                      const std::vector<Eigen::VectorXd>& claimed, double t) {
+  constexpr int kSamples = 1024;
+  const double T = sys.period(), qT = o.period * T;
+  double tau = std::fmod(t - o.section_time, qT);
+  if (tau < 0) tau += qT;
+  const double k = tau / T * kSamples;
+  long long index = std::llround(k);
+  if (!(std::abs(k - static_cast<double>(index)) < 1e-3)) return std::nullopt;
+  index %= static_cast<long long>(o.period) * kSamples;
+  struct Pick final : Observer {
+    double want = 0, off = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd X, V;
+    void OnSample(const Sample& smp) override {
+      if (std::abs(smp.t - want) < off) {
+        off = std::abs(smp.t - want);
+        X = smp.X;
+        V = smp.V;
+      }
+    }
+  } pick;
+  pick.want = o.section_time + static_cast<double>(index) * T / kSamples;
+  Scene sc = scene;
+  sc.initial_time = o.section_time;
+  sc.run.periods = o.period;
+  sc.run.samples_per_period = kSamples;
+  const InitialOverride here{o.section_time, o.X, o.V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.observers = {&pick};
+  const RunResult r = Simulate(sys, sc, opt);
+  if (r.status != RunStatus::kOk || pick.X.size() == 0 || !(pick.off <= 1e-6 * T)) return std::nullopt;
+  std::vector<Eigen::VectorXd> orbit;
+  Eigen::VectorXd z(2 * pick.X.size());
+  z << pick.X, pick.V;
+  orbit.push_back(z);
+  const double gap = sys.ContactDisplacement(pick.X) - sys.stop();
+  if (std::abs(gap) <= 1e-9 * std::max(1.0, std::abs(sys.stop())) && sys.ContactVelocity(pick.V) < 0) {
+    Eigen::VectorXd after = pick.V;
+    sys.ApplyImpact(after, sys.restitution());
+    z << pick.X, after;
+    orbit.push_back(z);
+  }
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& a : claimed)
+    for (const auto& b : orbit) best = std::min(best, RelativeDistance(a, b));
+  return best;
+}
+
+}  // namespace
 
 InitialOverride ClaimedStart(const System& sys, const Scene& scene, const ClaimedPoint& p,
                              std::string& problem) {
   problem.clear();
+  // A state at all: finite, within the bounds of the scene's [initial] table.
+  const double T = sys.period();
+  for (const auto* v : {&p.displacement, &p.velocity})
+    for (Eigen::Index i = 0; i < v->size(); ++i)
+      if (!(std::abs((*v)[i]) <= kHugeEntry)) {
+        problem = fmt::format("{}_{} = {}: not a state of the scene (|value| ≤ {:g}, as for initial.{})",
+                              v == &p.displacement ? "displacement" : "velocity", i + 1, (*v)[i], kHugeEntry,
+                              v == &p.displacement ? "displacement" : "velocity");
+        return {p.time, Eigen::VectorXd::Zero(p.displacement.size()), Eigen::VectorXd::Zero(p.velocity.size())};
+      }
+  if (!(std::abs(p.time) / T <= 1e12)) {
+    problem = fmt::format("time = {}: not a time of the scene (|time|/T ≤ 1e12, as for initial.time)", p.time);
+    return {0.0, Eigen::VectorXd::Zero(p.displacement.size()), Eigen::VectorXd::Zero(p.velocity.size())};
+  }
   Scene at = scene;
   at.initial_time = p.time;
   at.initial_displacement = p.displacement;
@@ -55,10 +135,26 @@ PointCheck CheckPoint(const Scene& scene, const ClaimedPoint& p, OrbitKind kind,
     out.detail = o.message;
     return out;
   }
-  if (*o.distance_from_start > tol.distance) {
+  // The distance is measured from the state as claimed, at its own time: the start carried
+  // forward (orbit_from_state.hpp) may have been brought onto the orbit by the motion itself (a
+  // plastic impact, a sticking phase), which says nothing of the claim.
+  {
+    Scene at = scene;
+    at.initial_time = p.time;
+    at.initial_displacement = p.displacement;
+    at.initial_velocity = p.velocity;
+    const auto raw = sys.Initial(at);
+    Eigen::VectorXd a(2 * raw.X.size()), b(2 * start.X.size());
+    a << raw.X, raw.V;
+    b << start.X, start.V;
+    const auto d = DistanceAtClaim(sys, scene, o, {a, b}, p.time);
+    if (d) out.distance = std::max(*d, o.distance_from_start.value_or(0.0));
+  }
+  if (*out.distance > tol.distance) {
     out.verdict = "no-orbit-near";
-    out.detail = fmt::format("the nearest orbit Newton finds lies {:.3g} away (tolerance {:g})",
-                             *o.distance_from_start, tol.distance);
+    out.detail = fmt::format("the nearest orbit Newton finds lies {:.3g} from the claimed state at its time "
+                             "(tolerance {:g})",
+                             *out.distance, tol.distance);
     return out;
   }
   // A stable orbit is also confirmed by simulating from the orbit's section state (the claimed
@@ -76,6 +172,13 @@ PointCheck CheckPoint(const Scene& scene, const ClaimedPoint& p, OrbitKind kind,
     a << r.X, r.V;
     b << o.X, o.V;
     out.simulated_distance = (a - b).cwiseAbs().maxCoeff() / (1.0 + b.cwiseAbs().maxCoeff());
+    if (r.status == RunStatus::kUndetermined || r.status == RunStatus::kNumericalFailure) {
+      out.simulated_distance.reset();
+      out.verdict = "undetermined";
+      out.detail = fmt::format("the check simulation of {} periods from the orbit ended {}: {}", sc.run.periods,
+                               ToString(r.status), r.message);
+      return out;
+    }
     if (r.status != RunStatus::kOk || *out.simulated_distance > tol.distance) {
       out.verdict = "stability-differs";
       out.detail = fmt::format("Floquet multipliers say stable, but a simulation of {} periods from the "

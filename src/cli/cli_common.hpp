@@ -25,7 +25,7 @@
 inline constexpr int kExitInternal = 1;
 inline constexpr int kExitBadInput = 2;
 inline constexpr int kExitNumerical = 3;
-inline constexpr int kExitDisagree = 4;  // check, validate: the methods or the claims disagree
+inline constexpr int kExitDisagree = 4;  // check, validate, score: the methods, claims or runs disagree
 inline constexpr int kExitInterrupted = 130;
 
 // The exit code of a run's status.
@@ -103,7 +103,7 @@ struct ValidateArgs {
   double tolerance = 1e-6, sticking_tolerance = 1e-6;
   bool json = false;
 };
-int RunValidate(const ValidateArgs& args);  // exit code: 0, 4 when a point disagrees
+int RunValidate(const ValidateArgs& args);  // exit code: 0, 4 when a point is not confirmed
 
 // `vibro score SCENE EVENTS.csv` (cmd_score.cpp).
 struct ScoreArgs {
@@ -112,4 +112,4 @@ struct ScoreArgs {
   double window = 0.05, tolerance = 1e-6;
   bool json = false;
 };
-int RunScore(const ScoreArgs& args);
+int RunScore(const ScoreArgs& args);  // exit code: 0, 4 when the runs diverge beyond --tolerance

@@ -1,6 +1,6 @@
 // `vibro score SCENE EVENTS.csv`: another simulator's events against vibro's own run of the same
 // scene (docs/validation.md). The run and the scoring are frontend/commands.hpp's, shared with
-// Python's vibro.score.
+// Python's vibro.score. Exit 4 when the two runs diverge beyond --tolerance.
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
@@ -20,23 +20,35 @@ int RunScore(const ScoreArgs& a) {
     fmt::print("scene        {} (engine {}, chatter {}), T = {:.10g}, {} periods\n", a.scene,
                vibro::ToString(s.scene.run.engine), vibro::ToString(s.scene.run.chatter), rep.period,
                s.scene.run.periods);
-    fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>14} {:>14} {:>14}\n", "kind", "theirs", "vibro", "matched",
-               "in acc.", "max |dt|/T", "mean |dt|/T", "max |dv|/|v|");
-    for (const auto& k : rep.kinds)
-      fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>14.3e} {:>14.3e} {:>14}\n", vibro::ToString(k.kind), k.theirs,
-                 k.ours, k.matched, k.in_accumulation, k.max_time_error, k.mean_time_error,
+    fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>9} {:>14} {:>14} {:>14}\n", "kind", "theirs", "vibro", "matched",
+               "in acc.", "matched%", "max |dt|/T", "mean |dt|/T", "max |dv|/|v|");
+    for (const auto& k : rep.kinds) {
+      // Errors are over matched events only: none is printed where nothing matched.
+      const auto err = [&](double v) { return k.matched > 0 ? fmt::format("{:.3e}", v) : std::string("-"); };
+      fmt::print("{:<14} {:>8} {:>8} {:>8} {:>8} {:>9} {:>14} {:>14} {:>14}\n", vibro::ToString(k.kind), k.theirs,
+                 k.ours, k.matched, k.in_accumulation + k.ours_in_accumulation,
+                 !k.scored            ? std::string("unscored")
+                 : k.matched_fraction ? fmt::format("{:.1f}", 100.0 * *k.matched_fraction)
+                                      : std::string("-"),
+                 err(k.max_time_error), err(k.mean_time_error),
                  k.max_velocity_error ? fmt::format("{:.3e}", *k.max_velocity_error) : "-");
-    if (rep.divergence)
-      fmt::print("first divergence at t = {:.15g} ({}): {}{}\n", rep.divergence->t, vibro::ToString(rep.divergence->kind),
-                 rep.divergence->why,
-                 rep.divergence->ours_t ? fmt::format(" (vibro: t = {:.15g})", *rep.divergence->ours_t) : "");
-    else
-      fmt::print("no divergence: every event matched within {:g} T\n", a.tolerance);
+    }
+    if (rep.divergence) {
+      const auto& d = *rep.divergence;
+      fmt::print("first divergence at t = {:.15g} ({}, {}): {}{}\n", d.t, vibro::ToString(d.kind),
+                 d.side == "vibro" ? "vibro's event" : "their event", d.why,
+                 d.side == "theirs" && d.ours_t ? fmt::format(" (vibro: t = {:.15g})", *d.ours_t) : "");
+      fmt::print("verdict: diverges ({} of {} events matched; tolerance {:g} T)\n", rep.matched,
+                 rep.matched + rep.unmatched, a.tolerance);
+    } else {
+      fmt::print("verdict: agrees: every event of both runs matched within {:g} T ({} matched)\n", a.tolerance,
+                 rep.matched);
+    }
   }
   if (s.run.status == vibro::RunStatus::kInterrupted) return kExitInterrupted;
   if (s.run.status != vibro::RunStatus::kOk) {
     fmt::print(stderr, "vibro: vibro's own run stopped early: {}\n", s.run.message);
     return kExitNumerical;
   }
-  return 0;
+  return rep.agrees() ? 0 : kExitDisagree;
 }

@@ -16,7 +16,8 @@ int RunValidate(const ValidateArgs& a) {
   const vibro::frontend::SceneOrigin origin{a.scene, std::nullopt, a.scene, a.sets};
   const auto loaded = origin.Load();
   const vibro::frontend::ValidationSpec spec{a.csv, a.param, a.kind, a.period, a.tolerance, a.sticking_tolerance};
-  const auto job = vibro::frontend::PrepareValidation(origin, loaded, spec, vibro::frontend::Naming::kCli);
+  const auto job = vibro::frontend::PrepareValidation(origin, loaded, spec, vibro::frontend::Naming::kCli,
+                                                      &vibro::cli::StopFlag());
   std::unique_ptr<vibro::Hdf5Store> store;
   if (!a.out.empty())
     store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, vibro::System(loaded.scene)));
@@ -48,12 +49,18 @@ int RunValidate(const ValidateArgs& a) {
                  ok && o.summary.sticking_fraction ? fmt::format("{:.8f}", *o.summary.sticking_fraction) : "-",
                  c.detail);
     }
-    fmt::print("{} of {} points confirmed{}\n", checks.size() - static_cast<size_t>(result.disagreements),
-               checks.size(), result.disagreements ? fmt::format(", {} disagree", result.disagreements) : "");
+    fmt::print("{} of {} points confirmed{}{}\n",
+               checks.size() - static_cast<size_t>(result.disagreements + result.undetermined), checks.size(),
+               result.disagreements ? fmt::format(", {} disagree", result.disagreements) : "",
+               result.undetermined ? fmt::format(", {} undetermined", result.undetermined) : "");
   }
   if (result.interrupted) {
-    fmt::print(stderr, "vibro: interrupted after {} of {} points\n", checks.size(), job.claims.size());
+    if (job.interrupted)
+      fmt::print(stderr, "vibro: interrupted while the points were read and checked (after {} rows); none was "
+                 "computed\n", job.claims.size());
+    else
+      fmt::print(stderr, "vibro: interrupted after {} of {} points\n", checks.size(), job.claims.size());
     return kExitInterrupted;
   }
-  return result.disagreements > 0 ? kExitDisagree : 0;
+  return result.disagreements + result.undetermined > 0 ? kExitDisagree : 0;
 }

@@ -130,6 +130,19 @@ class Automaton {
     return R::to_double(S(t0_) + S(static_cast<double>(c.period)) * period_ + c.offset);
   }
   Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
+  // What may resolve an undetermined sequence: quad precision only where it runs (not in quad
+  // already, not damped sticking of two or more modes, which it has no closed form for).
+  std::string UndeterminedHint() const {
+    const auto& damping = sys_.constrained().damping;
+    const bool damped_sticking = damping.size() > 0 && damping.cwiseAbs().maxCoeff() > 0;
+    if (std::is_same_v<S, double> && !damped_sticking)
+      return fmt::format("Use run.precision = \"quad\"{}, or move the parameter",
+                         cvode_ ? " with run.engine = \"exact\"" : "");
+    return damped_sticking && std::is_same_v<S, double>
+               ? "Move the parameter (run.precision = \"quad\" has no closed form for damped sticking of two or "
+                 "more modes)"
+               : "Move the parameter";
+  }
   S ContactSpeedFloor() const {
     // Rounding floor of ẋ_B = Σ c_i Ẋ_i (docs/model.md §5.4).
     return S(1000) * Eps<S>() * m_.shape.cwiseProduct(V_).cwiseAbs().sum();
@@ -533,13 +546,12 @@ bool Automaton<S>::OnContact() {
               "chattering sequence undetermined at this precision: its impacts reached speed "
               "{:.3g} ({} floor) near t = {:.17g} before its accumulation point could be "
               "predicted within run.chatter_tolerance = {:.3g} T (last prediction tried: ε = {:.3g}, "
-              "estimated error at least {:.3g} T{}; reaction {:.3g}). Use run.precision = \"quad\"{}, or "
-              "move the parameter",
+              "estimated error at least {:.3g} T{}; reaction {:.3g}). {}",
               R::to_double(-v_minus), unresolved ? "CVODE's √rtol resolution" : "the rounding",
               AbsTime(clock_), R::to_double(chatter_tol_ / period_),
               R::to_double(last_tail_.epsilon), R::to_double(last_tail_.error / period_),
               last_jump_failure_.empty() ? "" : ", but the jump could not be taken: " + last_jump_failure_,
-              R::to_double(Rc), cvode_ ? " with run.engine = \"exact\"" : ""),
+              R::to_double(Rc), UndeterminedHint()),
           RunStatus::kUndetermined);
     }
   }

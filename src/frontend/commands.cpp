@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "vibro/branch_csv.hpp"
+#include "vibro/child_process.hpp"
 #include "vibro/events_csv.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
@@ -91,8 +92,10 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
 
 }  // namespace
 
-ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& a,
-                                Naming naming) {
+namespace {
+
+// The options of a validation, before any file is read (InputError).
+void CheckValidationSpec(const LoadedScene& loaded, const ValidationSpec& a, Naming naming) {
   const auto opt = [&](const char* o) { return OptionName(naming, o); };
   if (!SceneNumber(loaded.text_as_run, a.param)) {
     const bool element = a.param.find('[') != std::string::npos;
@@ -105,31 +108,93 @@ ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& lo
                                   opt("--param"), a.param, how)});
   }
   std::vector<std::string> problems;
-  if (!(a.tolerance > 0))
-    problems.push_back(fmt::format("{} {}: expected a positive number", opt("--tolerance"), a.tolerance));
-  if (!(a.sticking_tolerance > 0))
-    problems.push_back(
-        fmt::format("{} {}: expected a positive number", opt("--sticking-tolerance"), a.sticking_tolerance));
+  if (!(a.tolerance > 0 && std::isfinite(a.tolerance)))
+    problems.push_back(fmt::format("{} {}: expected a finite positive number", opt("--tolerance"), a.tolerance));
+  if (!(a.sticking_tolerance > 0 && std::isfinite(a.sticking_tolerance)))
+    problems.push_back(fmt::format("{} {}: expected a finite positive number", opt("--sticking-tolerance"),
+                                   a.sticking_tolerance));
   if (a.period < 0) problems.push_back(fmt::format("{} {}: expected Q ≥ 1", opt("--period"), a.period));
   if (!problems.empty()) throw InputError(problems);
-  const int n = loaded.scene.physical ? static_cast<int>(loaded.scene.physical->mass.rows())
-                                      : static_cast<int>(loaded.scene.modal->frequencies.size());
+}
+
+}  // namespace
+
+int ClaimedStateSize(const LoadedScene& loaded) {
+  return loaded.scene.physical ? static_cast<int>(loaded.scene.physical->mass.rows())
+                               : static_cast<int>(loaded.scene.modal->frequencies.size());
+}
+
+ValidationJob PrepareValidationTable(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& a,
+                                     std::vector<ClaimedPoint> claims,
+                                     const std::function<std::string(const ClaimedPoint&)>& where, Naming naming,
+                                     const std::atomic<bool>* stop) {
+  CheckValidationSpec(loaded, a, naming);
+  const int n = ClaimedStateSize(loaded);
+  std::vector<std::string> problems;
   ValidationJob job;
-  job.claims = ReadBranchCsv(a.csv, n);
-  // Every row's scene and state before anything is computed or written (bad input).
-  for (const auto& p : job.claims) {
+  job.claims = std::move(claims);
+  if (job.claims.empty()) throw InputError({"no points to validate"});
+  // Every row's scene and state before anything is computed or written (bad input). A stop
+  // request ends the preparation (rows are read at about 10 000 a second): the job is then
+  // interrupted, with the rows prepared so far.
+  for (size_t i = 0; i < job.claims.size(); ++i) {
+    if (problems.size() >= 20) {
+      problems.push_back("stopped checking the points after 20 problems");
+      break;
+    }
+    if (stop && stop->load()) {
+      if (!problems.empty()) break;
+      job.interrupted = true;
+      job.claims.resize(job.scenes.size());
+      return job;
+    }
+    const ClaimedPoint& p = job.claims[i];
+    if (p.displacement.size() != n || p.velocity.size() != n) {
+      problems.push_back(fmt::format("{}: the state has {} displacements and {} velocities, the scene {} entries",
+                                     where(p), p.displacement.size(), p.velocity.size(), n));
+      job.scenes.push_back(loaded.scene);
+      continue;
+    }
+    if (!std::isfinite(p.value)) {
+      problems.push_back(fmt::format("{}: value {} is not a finite number", where(p), p.value));
+      job.scenes.push_back(loaded.scene);
+      continue;
+    }
+    // The claims, as the CSV reader checks them (a table from elsewhere is held to the same).
+    if (p.period && !(*p.period >= 1 && *p.period <= 1000000))
+      problems.push_back(fmt::format("{}: period {} is not a whole number of forcing periods in [1, 1e6]", where(p),
+                                     *p.period));
+    if (p.sticking_fraction && !(*p.sticking_fraction >= 0 && *p.sticking_fraction <= 1))
+      problems.push_back(fmt::format("{}: sticking fraction {} is not in [0, 1]", where(p), *p.sticking_fraction));
     try {
       job.scenes.push_back(origin.Load({Assignment(a.param, p.value)}).scene);
     } catch (const InputError& e) {
-      for (const auto& m : e.messages()) problems.push_back(fmt::format("{}:{}: value {}: {}", a.csv, p.line, p.value, m));
+      for (const auto& m : e.messages()) problems.push_back(fmt::format("{}: value {}: {}", where(p), p.value, m));
+      job.scenes.push_back(loaded.scene);
       continue;
     }
     std::string why;
     ClaimedStart(System(job.scenes.back()), job.scenes.back(), p, why);
-    if (!why.empty()) problems.push_back(fmt::format("{}:{}: {}", a.csv, p.line, why));
+    if (!why.empty()) problems.push_back(fmt::format("{}: {}", where(p), why));
   }
   if (!problems.empty()) throw InputError(problems);
   return job;
+}
+
+ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& a,
+                                Naming naming, const std::atomic<bool>* stop) {
+  CheckValidationSpec(loaded, a, naming);
+  std::vector<ClaimedPoint> claims;
+  try {
+    claims = ReadBranchCsv(a.csv, ClaimedStateSize(loaded));
+  } catch (const Interrupted&) {  // a stop request while the file is read: no point prepared
+    ValidationJob job;
+    job.interrupted = true;
+    return job;
+  }
+  return PrepareValidationTable(
+      origin, loaded, a, std::move(claims),
+      [&a](const ClaimedPoint& p) { return fmt::format("{}:{}", a.csv, p.line); }, naming, stop);
 }
 
 Validation RunValidation(const ValidationJob& job, const ValidationSpec& spec, const std::atomic<bool>* stop,
@@ -138,13 +203,22 @@ Validation RunValidation(const ValidationJob& job, const ValidationSpec& spec, c
   tol.distance = spec.tolerance;
   tol.sticking_fraction = spec.sticking_tolerance;
   Validation v;
-  for (size_t i = 0; i < job.claims.size(); ++i) {
+  v.interrupted = job.interrupted;
+  for (size_t i = 0; i < job.claims.size() && !v.interrupted; ++i) {
     if (stop && stop->load()) {
       v.interrupted = true;
       break;
     }
-    v.checks.push_back(CheckPoint(job.scenes[i], job.claims[i], spec.kind, spec.period, tol));
-    if (v.checks.back().verdict != "confirmed") ++v.disagreements;
+    PointCheck c = CheckPoint(job.scenes[i], job.claims[i], spec.kind, spec.period, tol);
+    // A check cut short by the stop request (its runs end interrupted) is no verdict.
+    if (stop && stop->load()) {
+      v.interrupted = true;
+      break;
+    }
+    v.checks.push_back(std::move(c));
+    const std::string& verdict = v.checks.back().verdict;
+    if (verdict == "undetermined") ++v.undetermined;
+    else if (verdict != "confirmed") ++v.disagreements;
     if (progress) progress(i + 1, job.claims.size());
   }
   return v;
@@ -156,7 +230,8 @@ void FinishValidation(Hdf5Store& store, const ValidationJob& job, const Validati
   r.status = v.interrupted ? RunStatus::kInterrupted : RunStatus::kOk;
   r.message = v.interrupted ? fmt::format("interrupted after {} of {} points, {} disagree", v.checks.size(),
                                           job.claims.size(), v.disagreements)
-                            : fmt::format("{} of {} points disagree", v.disagreements, v.checks.size());
+                            : fmt::format("{} of {} points disagree, {} undetermined", v.disagreements,
+                                          v.checks.size(), v.undetermined);
   store.Finish(r, Attractor{});
 }
 
@@ -169,23 +244,26 @@ struct EventLog final : Observer {
 };
 }  // namespace
 
-Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double window, double tolerance,
-                       const std::atomic<bool>* stop, Naming naming) {
+Scoring ScoreEventTable(const LoadedScene& loaded, const std::vector<TheirEvent>& theirs,
+                        const std::function<std::string(const TheirEvent&)>& where, double window, double tolerance,
+                        const std::atomic<bool>* stop, Naming naming) {
   std::vector<std::string> problems;
-  if (!(window > 0))
-    problems.push_back(fmt::format("{} {}: expected a positive number", OptionName(naming, "--window"), window));
-  if (!(tolerance > 0))
-    problems.push_back(fmt::format("{} {}: expected a positive number", OptionName(naming, "--tolerance"), tolerance));
+  if (!(window > 0 && std::isfinite(window)))
+    problems.push_back(fmt::format("{} {}: expected a finite positive number", OptionName(naming, "--window"), window));
+  if (!(tolerance > 0 && std::isfinite(tolerance)))
+    problems.push_back(
+        fmt::format("{} {}: expected a finite positive number", OptionName(naming, "--tolerance"), tolerance));
   if (!problems.empty()) throw InputError(problems);
-  const auto theirs = ReadEventsCsv(csv);
   Scoring s;
   s.scene = loaded.scene;
+  s.scene.run.samples_per_period = 0;
   const System sys(s.scene);
   const double T = sys.period();
-  // Long enough to cover their last event.
-  const double span = theirs.back().t - s.scene.initial_time;
-  s.scene.run.periods = std::max<long long>(1, static_cast<long long>(std::ceil(span / T + window)) + 1);
-  s.scene.run.samples_per_period = 0;
+  // vibro runs the whole scene, and their events must lie within it (bad input otherwise).
+  const double t_end = s.scene.initial_time + static_cast<double>(s.scene.run.periods) * T;
+  problems = EventTableProblems(theirs, s.scene.initial_time, t_end, T, window, where);
+  if (theirs.empty()) problems.push_back("no events to score");
+  if (!problems.empty()) throw InputError(problems);
   EventLog log;
   SimulationOptions opt;
   opt.observers = {&log};
@@ -194,8 +272,17 @@ Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double
   ScoreOptions so;
   so.window = window;
   so.tolerance = tolerance;
+  so.t_end = t_end;
   s.report = ScoreEvents(log.events, theirs, T, so);
   return s;
+}
+
+Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double window, double tolerance,
+                       const std::atomic<bool>* stop, Naming naming) {
+  const auto theirs = ReadEventsCsv(csv);
+  return ScoreEventTable(
+      loaded, theirs, [&csv](const TheirEvent& e) { return fmt::format("{}:{}", csv, e.line); }, window, tolerance,
+      stop, naming);
 }
 
 // ---- partition ----

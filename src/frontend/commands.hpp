@@ -34,16 +34,31 @@ struct ValidationSpec {
   double tolerance = 1e-6, sticking_tolerance = 1e-6;
 };
 // The claimed points with the scene at each point's value, all checked before anything is
-// computed or written (InputError with csv:line for each bad row).
+// computed or written (InputError naming each bad row). `interrupted`: a stop request ended the
+// preparation; `claims` and `scenes` hold the rows prepared until then.
 struct ValidationJob {
   std::vector<ClaimedPoint> claims;
   std::vector<Scene> scenes;
+  bool interrupted = false;
 };
+// The number of entries of a claimed state (displacement_1..n): the scene's DOFs (physical form)
+// or listed modes (modal form).
+int ClaimedStateSize(const LoadedScene& loaded);
+// An in-memory branch table (a CSV read by ReadBranchCsv, or arrays from Python): the options,
+// then every row (its value a valid scene, its state one vibro can start from: ClaimedStart);
+// where(point) names a row in messages. `stop` is polled between rows.
+ValidationJob PrepareValidationTable(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& spec,
+                                     std::vector<ClaimedPoint> claims,
+                                     const std::function<std::string(const ClaimedPoint&)>& where, Naming naming,
+                                     const std::atomic<bool>* stop = nullptr);
+// The same from spec.csv (rows named FILE:LINE); a stop request while it is read gives an
+// interrupted job with no claims.
 ValidationJob PrepareValidation(const SceneOrigin& origin, const LoadedScene& loaded, const ValidationSpec& spec,
-                                Naming naming);
+                                Naming naming, const std::atomic<bool>* stop = nullptr);
 struct Validation {
   std::vector<PointCheck> checks;  // the points checked, in order (fewer when interrupted)
-  int disagreements = 0;
+  int disagreements = 0;  // verdicts other than confirmed and undetermined
+  int undetermined = 0;   // verdicts undetermined (the check could not be made)
   bool interrupted = false;
 };
 // Checks the points in order; `stop` is polled between points; progress(done, total) after each.
@@ -54,11 +69,18 @@ void FinishValidation(Hdf5Store& store, const ValidationJob& job, const Validati
 
 // ---- score: another simulator's events against vibro's run of the same scene ----
 struct Scoring {
-  Scene scene;  // as run: long enough to cover their last event, no dense samples
+  Scene scene;  // as run: the whole scene (run.periods as given), no dense samples
   ScoreReport report;
   RunResult run;  // vibro's own run (status kInterrupted when stopped)
 };
-// Reads the events CSV, checks window and tolerance (> 0), runs the scene and scores.
+// An in-memory event table (a CSV read by ReadEventsCsv, or arrays from Python): checks window
+// and tolerance (finite, > 0) and the table (EventTableProblems: finite, in time order, within the
+// scene's run; where(e) names a row in messages), all before anything runs (InputError); then
+// runs the whole scene and scores.
+Scoring ScoreEventTable(const LoadedScene& loaded, const std::vector<TheirEvent>& theirs,
+                        const std::function<std::string(const TheirEvent&)>& where, double window, double tolerance,
+                        const std::atomic<bool>* stop, Naming naming);
+// The same from an events CSV (rows named FILE:LINE).
 Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double window, double tolerance,
                        const std::atomic<bool>* stop, Naming naming);
 

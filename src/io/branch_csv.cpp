@@ -3,36 +3,18 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
-#include <fstream>
 #include <map>
-#include <sstream>
+#include <optional>
 
 #include <fmt/format.h>
 
+#include "io/csv_text.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro {
-namespace {
-
-std::vector<std::string> SplitCells(const std::string& line) {
-  std::vector<std::string> cells;
-  std::string cell;
-  std::stringstream ss(line);
-  while (std::getline(ss, cell, ',')) {
-    const auto a = cell.find_first_not_of(" \t\r\"");
-    const auto b = cell.find_last_not_of(" \t\r\"");
-    cells.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
-  }
-  if (!line.empty() && line.back() == ',') cells.emplace_back();
-  return cells;
-}
-
-}  // namespace
 
 std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
-  std::ifstream in(path);
-  if (!in) throw InputError({fmt::format("{}: cannot open the branch file", path)});
+  CsvText in(path, "branch");
   std::vector<std::string> problems;
   std::vector<ClaimedPoint> points;
   std::map<std::string, size_t> column;  // name → index
@@ -43,11 +25,11 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
   const auto where = [&](size_t c) {
     return fmt::format("{}:{}:{}{}", path, number, c + 1, c < names.size() ? " (" + names[c] + ")" : "");
   };
-  while (std::getline(in, line)) {
-    ++number;
+  while (problems.size() < kCsvMaxProblems && in.Next(line)) {
+    number = in.number();
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    const auto cells = SplitCells(line);
+    const auto cells = SplitCsvCells(line);
     if (!header) {
       header = true;
       names = cells;
@@ -124,7 +106,9 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
     }
     points.push_back(std::move(p));
   }
-  if (!header) problems.push_back(fmt::format("{}: no header row (value,time,displacement_1,...)", path));
+  if (problems.size() >= kCsvMaxProblems)
+    problems.push_back(fmt::format("{}: stopped reading after {} problems", path, kCsvMaxProblems));
+  else if (!header) problems.push_back(fmt::format("{}: no header row (value,time,displacement_1,...)", path));
   else if (points.empty() && problems.empty()) problems.push_back(fmt::format("{}: no points after the header", path));
   if (!problems.empty()) throw InputError(problems);
   return points;

@@ -1,21 +1,18 @@
 // Another simulator's events as CSV (see include/vibro/events_csv.hpp).
 #include "vibro/events_csv.hpp"
 
-#include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 
 #include <fmt/format.h>
 
+#include "io/csv_text.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro {
 
 std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError({fmt::format("{}: cannot open the events file", path)});
+  CsvText in(path, "events");
   static const std::map<std::string, EventKind> kKinds = {
       {"impact", EventKind::kImpact},   {"1", EventKind::kImpact},
       {"accumulation", EventKind::kAccumulation}, {"2", EventKind::kAccumulation},
@@ -24,30 +21,28 @@ std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
       {"grazing", EventKind::kGrazing}, {"5", EventKind::kGrazing}};
   std::vector<std::string> problems, names;
   std::vector<TheirEvent> out;
-  int ct = -1, ck = -1, cv = -1, number = 0;
+  int ct = -1, ck = -1, cv = -1;
   std::string line;
   bool header = false;
-  while (std::getline(in, line)) {
-    ++number;
+  while (problems.size() < kCsvMaxProblems && in.Next(line)) {
+    const int number = in.number();
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    std::vector<std::string> cells;
-    std::stringstream ss(line);
-    for (std::string c; std::getline(ss, c, ',');) {
-      const auto a = c.find_first_not_of(" \t\r\""), b = c.find_last_not_of(" \t\r\"");
-      cells.push_back(a == std::string::npos ? "" : c.substr(a, b - a + 1));
-    }
+    const std::vector<std::string> cells = SplitCsvCells(line);
     if (!header) {
       header = true;
       names = cells;
       for (size_t i = 0; i < cells.size(); ++i) {
         const int k = static_cast<int>(i);
-        if (cells[i] == "t") ct = k;
-        else if (cells[i] == "kind") ck = k;
-        else if (cells[i] == "velocity") cv = k;
-        else
+        int* column = cells[i] == "t" ? &ct : cells[i] == "kind" ? &ck : cells[i] == "velocity" ? &cv : nullptr;
+        if (!column)
           problems.push_back(fmt::format("{}:{}:{}: unknown column '{}' (expected t, kind and optionally velocity)",
                                          path, number, i + 1, cells[i]));
+        else if (*column >= 0)
+          problems.push_back(fmt::format("{}:{}:{}: column '{}' given twice (first as column {})", path, number,
+                                         i + 1, cells[i], *column + 1));
+        else
+          *column = k;
       }
       if (ct < 0) problems.push_back(fmt::format("{}:{}: missing column 't'", path, number));
       if (ck < 0) problems.push_back(fmt::format("{}:{}: missing column 'kind'", path, number));
@@ -86,10 +81,13 @@ std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
     if (cv >= 0) e.velocity = num(cv, false);
     out.push_back(e);
   }
-  if (!header) problems.push_back(fmt::format("{}: no header row (t,kind[,velocity])", path));
+  if (problems.size() >= kCsvMaxProblems)
+    problems.push_back(fmt::format("{}: stopped reading after {} problems", path, kCsvMaxProblems));
+  else if (!header) problems.push_back(fmt::format("{}: no header row (t,kind[,velocity])", path));
   else if (out.empty() && problems.empty()) problems.push_back(fmt::format("{}: no events after the header", path));
   if (!problems.empty()) throw InputError(problems);
-  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
+  // Time order and the scene's span are checked by ScoreEventTable (score.hpp): the rows stay
+  // in the file's order.
   return out;
 }
 

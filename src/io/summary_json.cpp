@@ -117,22 +117,33 @@ std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
   j["period"] = r.period;
   j["engine"] = ToString(scene.run.engine);
   j["chatter"] = ToString(scene.run.chatter);
-  j["max_time_error"] = r.max_time_error;
+  j["agrees"] = r.agrees();
+  j["matched"] = r.matched;
+  j["unmatched"] = r.unmatched;
+  j["max_time_error"] = r.matched > 0 ? nlohmann::json(r.max_time_error) : nlohmann::json(nullptr);
   j["max_velocity_error"] = OrNull(r.max_velocity_error);
   auto kinds = nlohmann::json::array();
-  for (const auto& k : r.kinds)
+  for (const auto& k : r.kinds) {
+    const auto matched_only = [&](double v) { return k.matched > 0 ? nlohmann::json(v) : nlohmann::json(nullptr); };
     kinds.push_back({{"kind", ToString(k.kind)},
                      {"theirs", k.theirs},
                      {"ours", k.ours},
                      {"matched", k.matched},
+                     {"matched_fraction", OrNull(k.matched_fraction)},
+                     {"scored", k.scored},
                      {"in_accumulation", k.in_accumulation},
-                     {"max_time_error", k.max_time_error},
-                     {"mean_time_error", k.mean_time_error},
+                     {"ours_in_accumulation", k.ours_in_accumulation},
+                     {"unmatched_theirs", k.unmatched_theirs},
+                     {"unmatched_ours", k.unmatched_ours},
+                     {"max_time_error", matched_only(k.max_time_error)},
+                     {"mean_time_error", matched_only(k.mean_time_error)},
                      {"max_velocity_error", OrNull(k.max_velocity_error)}});
+  }
   j["kinds"] = kinds;
   if (r.divergence)
     j["first_divergence"] = {{"t", r.divergence->t},
                              {"kind", ToString(r.divergence->kind)},
+                             {"side", r.divergence->side},
                              {"why", r.divergence->why},
                              {"ours_t", OrNull(r.divergence->ours_t)}};
   else
@@ -143,7 +154,7 @@ std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
 std::string ValidationJson(const std::vector<PointCheck>& checks) {
   nlohmann::json j;
   auto points = nlohmann::json::array();
-  int disagreements = 0;
+  int disagreements = 0, undetermined = 0;
   for (const auto& c : checks) {
     const bool ok = c.orbit.status == "converged";
     auto mu = nlohmann::json::array();
@@ -158,10 +169,12 @@ std::string ValidationJson(const std::vector<PointCheck>& checks) {
                       {"sticking_fraction", ok ? OrNull(c.orbit.summary.sticking_fraction) : nlohmann::json(nullptr)},
                       {"kind", ok ? nlohmann::json(c.orbit.summary.kind) : nlohmann::json(nullptr)},
                       {"simulated_distance", OrNull(c.simulated_distance)}});
-    if (c.verdict != "confirmed") ++disagreements;
+    if (c.verdict == "undetermined") ++undetermined;
+    else if (c.verdict != "confirmed") ++disagreements;
   }
   j["points"] = points;
   j["disagreements"] = disagreements;
+  j["undetermined"] = undetermined;
   return j.dump();
 }
 
