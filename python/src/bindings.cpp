@@ -89,6 +89,9 @@ PyScene LoadPyScene(SceneOrigin origin) {
 std::atomic<bool> g_sigint{false};
 extern "C" void OnSigint(int) { g_sigint.store(true); }
 
+// Constructed with the GIL held (before the computation releases it): a SIGINT that came before
+// the handler was installed (while the scene was read or the output file created) went to
+// Python's handler and is found by PyErr_CheckSignals, after the installation, so none is lost.
 class SigintGuard {
  public:
   explicit SigintGuard(bool install) : installed_(install) {
@@ -100,6 +103,10 @@ class SigintGuard {
     sigaction(SIGINT, &action, &previous_);
     previous_flag_ = vibro::ProcessStopFlag();
     vibro::SetProcessStopFlag(&g_sigint);
+    if (PyErr_CheckSignals() != 0) {  // raised by Python's handler: a stop request, reported as one
+      PyErr_Clear();
+      g_sigint.store(true);
+    }
   }
   ~SigintGuard() {
     if (!installed_) return;
@@ -187,8 +194,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
   std::string json;
   bool interrupted = false;
   {
-    py::gil_scoped_release release;
     SigintGuard guard(handle_sigint);
+    py::gil_scoped_release release;
     vibro::SimulationOptions options;
     options.observers = {&attractor_recorder, &recorder};
     if (lyapunov) options.observers.push_back(&*lyapunov);
@@ -239,8 +246,8 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   req.guess_velocity = guess_velocity;
   const vibro::System sys(s.loaded.scene);
   CreateStore(out, HeaderOf(s.loaded, sys)).reset();  // fail early
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto orbit = vibro::SolveOrbit(sys, s.loaded.scene, req);
   if (guard.interrupted()) {
     if (!out.empty()) std::remove(out.c_str());
@@ -272,8 +279,8 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
   req.orbit.kind = KindOf(kind);
   const vibro::System sys(s.loaded.scene);
   auto store = CreateStore(out, HeaderOf(s.loaded, sys));  // fails early
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   req.stop_requested = guard.flag();
   auto branch = vibro::Continue(req);
   branch.param = key;
@@ -317,8 +324,8 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
   vibro::StudyResult study;
   bool interrupted = false;
   {
-    py::gil_scoped_release release;
     SigintGuard guard(handle_sigint);
+    py::gil_scoped_release release;
     vibro::StudyOptions opt;
     opt.threads = static_cast<int>(threads);
     opt.stop_requested = guard.flag();
@@ -366,8 +373,8 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
   req.steps = static_cast<int>(steps);
   req.record = static_cast<int>(record);
   req.both_ways = !one_way;
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto sweep = vibro::Sweep(req, guard.flag());
   const bool interrupted = guard.interrupted();
   if (store) {
@@ -381,8 +388,8 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
 std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
   const vibro::System sys(s.loaded.scene);
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto report = vibro::CrossCheck(sys, s.loaded.scene);
   if (guard.interrupted()) return {"", true};
   return {vibro::CheckJson(report), false};
@@ -409,8 +416,8 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
                     [](const vibro::ClaimedPoint& p) { return fmt::format("branch row {}", p.line); }, kPython)
               : vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto result = vibro::frontend::RunValidation(job, spec, guard.flag());
   if (store) vibro::frontend::FinishValidation(*store, job, result);
   return {vibro::ValidationJson(result.checks), result.interrupted};
@@ -427,8 +434,8 @@ std::tuple<std::string, bool, std::string, std::string> Score(
   if (!t) CheckPaths({{"events", &csv}});
   std::optional<std::vector<vibro::TheirEvent>> table;
   if (t) table = vibro::frontend::EventTable(*t, kind, velocity);
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto r = table ? vibro::frontend::ScoreEventTable(
                              s.loaded, *table,
                              [](const vibro::TheirEvent& e) { return fmt::format("events row {}", e.line); }, window,
@@ -455,8 +462,8 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
   spec.threads = threads;
   auto req = vibro::frontend::PartitionRequestFor(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   req.stop_requested = guard.flag();
   const auto columns = vibro::Partition(req);
   const bool interrupted = guard.interrupted();
