@@ -204,6 +204,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
     const auto result = vibro::Simulate(sys, loaded.scene, options);
     const auto attractor = attractor_recorder.Classify();
     if (store) store->Finish(result, attractor);
+    store.reset();  // closed without the GIL
     std::optional<vibro::LyapunovSpectrum> spectrum;
     if (lyapunov) spectrum = lyapunov->Spectrum();
     json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr);
@@ -290,6 +291,7 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
     r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     r.message = branch.end;
     store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
+    store.reset();  // closed without the GIL
   }
   return {vibro::BranchJson(branch), branch.status == "interrupted"};
 }
@@ -340,6 +342,7 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
     study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
     if (store) {
       vibro::frontend::FinishStudy(*store, study, study_grid, interrupted);
+      store.reset();  // closed without the GIL
     }
   }
   py::dict d;
@@ -381,6 +384,7 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
     store->WriteSweep(sweep, {key, from, to, req.steps, req.record, !one_way});
     store->Finish(vibro::frontend::SweepOutcome(sweep, key, interrupted),
                   sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+    store.reset();  // closed without the GIL
   }
   return {vibro::SweepJson(sweep), interrupted};
 }
@@ -420,6 +424,7 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
   py::gil_scoped_release release;
   const auto result = vibro::frontend::RunValidation(job, spec, guard.flag());
   if (store) vibro::frontend::FinishValidation(*store, job, result);
+  store.reset();  // closed without the GIL
   return {vibro::ValidationJson(result.checks), result.interrupted};
 }
 
@@ -468,6 +473,7 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
   const auto columns = vibro::Partition(req);
   const bool interrupted = guard.interrupted();
   if (store) vibro::frontend::FinishPartition(*store, spec, columns, interrupted);
+  store.reset();  // closed without the GIL
   return {vibro::PartitionJson(params[0], params[1], levels, columns), interrupted};
 }
 
