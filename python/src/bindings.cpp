@@ -409,10 +409,15 @@ std::string Info(const std::string& path) {
 // The branch is the CSV file `csv`, or `columns` (frontend/tables.hpp) when given.
 using Columns = std::map<std::string, std::vector<double>>;
 std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::optional<Columns>& columns,
-                                      const std::string& param, const std::string& kind, int period, double tolerance,
-                                      double sticking_tolerance, const std::string& out, bool handle_sigint) {
+                                      const std::string& param, const std::string& kind, long long period,
+                                      double tolerance, double sticking_tolerance, const std::string& out,
+                                      bool handle_sigint) {
   if (!columns) CheckPaths({{"branch", &csv}});
-  const vibro::frontend::ValidationSpec spec{csv, param, KindOf(kind), period, tolerance, sticking_tolerance};
+  std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
+  vibro::frontend::CheckInteger(kPython, "--period", period, vibro::frontend::kPeriodLimit, problems);
+  vibro::frontend::ThrowIfAny(problems);
+  const vibro::frontend::ValidationSpec spec{csv,      param, KindOf(kind), static_cast<int>(period), tolerance,
+                                             sticking_tolerance};
   const auto job =
       columns ? vibro::frontend::PrepareValidationTable(
                     s.origin, s.loaded, spec,

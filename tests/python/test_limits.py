@@ -47,6 +47,9 @@ CASES = [
     (lambda s: vibro.sweep(s, AMPLITUDE, 1.0, 1.2, steps=10 ** 30), "steps "),  # beyond 64 bits: not a TypeError
     (lambda s: vibro.sweep(s, AMPLITUDE, 1.0, 1.2, steps=2.5), "steps 2.5: expected an integer, got float"),
     (lambda s: vibro.continue_(s, AMPLITUDE, to="far"), "to 'far': expected a number, got str"),
+    (lambda s: vibro.validate(s, {"value": [1.2], "time": [0.0], "displacement_1": [1.1], "velocity_1": [0.0]},
+                              AMPLITUDE, period=2 ** 40), "period 1099511627776: expected an integer in [0, 4096]"),
+    (lambda s: vibro.attractors(s, seed=-1), "seed -1: expected an integer in [0, 2^63 - 1)"),
 ]
 
 
