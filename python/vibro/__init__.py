@@ -127,8 +127,9 @@ def _int(name, value):
         value = int(value)
     if isinstance(value, bool) or not isinstance(value, (int, _np.integer)):
         raise ValueError(f"{name} {value!r}: expected an integer, got {type(value).__name__}")
-    # Beyond 64 bits: kept out of range (the module names the limit) instead of a TypeError.
-    return max(-(2 ** 63 - 1), min(2 ** 63 - 1, int(value)))
+    if not -2 ** 63 < int(value) < 2 ** 63:  # every limit is far inside; the module checks those
+        raise ValueError(f"{name} {int(value)}: expected a 64-bit integer (and within the limit of {name})")
+    return int(value)
 
 
 def _seed(value):

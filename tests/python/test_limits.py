@@ -44,7 +44,8 @@ CASES = [
     (lambda s: vibro.orbit(s, impacts=2 ** 21), "impacts 2097152: expected an integer in [0, 1048576]"),
     (lambda s: vibro.orbit(s, transient=-5), "transient -5: expected an integer ≥ 0"),
     (lambda s: vibro.orbit(s, guess=(1.0, math.nan)), "guess 1,nan: expected finite numbers"),
-    (lambda s: vibro.sweep(s, AMPLITUDE, 1.0, 1.2, steps=10 ** 30), "steps "),  # beyond 64 bits: not a TypeError
+    (lambda s: vibro.sweep(s, AMPLITUDE, 1.0, 1.2, steps=10 ** 30),  # beyond 64 bits: not a TypeError
+     "steps 1000000000000000000000000000000: expected a 64-bit integer"),
     (lambda s: vibro.sweep(s, AMPLITUDE, 1.0, 1.2, steps=2.5), "steps 2.5: expected an integer, got float"),
     (lambda s: vibro.continue_(s, AMPLITUDE, to="far"), "to 'far': expected a number, got str"),
     (lambda s: vibro.validate(s, {"value": [1.2], "time": [0.0], "displacement_1": [1.1], "velocity_1": [0.0]},
