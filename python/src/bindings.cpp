@@ -3,15 +3,24 @@
 // the same JSON text as `--json` (src/io/summary_json.cpp), which python/vibro/__init__.py turns
 // into dicts and numpy arrays.
 //
-// Every computation releases the GIL. When called from Python's main thread, SIGINT (Ctrl-C) is
-// routed to the library's stop flag for the duration of the call: the run stops cleanly at its
-// next check, everything is written to the output file, and the result says "interrupted" (the
-// Python layer then raises KeyboardInterrupt). Python's own handler is restored afterwards.
+// Every computation and every HDF5 call releases the GIL (a file's calls are serialised by the
+// library, src/io, and must never wait for the GIL). When called from Python's main thread, SIGINT
+// (Ctrl-C) is routed to the library's stop flag for the duration of the call, also as the process's
+// stop flag (vibro/stop_request.hpp) that every run polls, those deep inside an orbit solve or a
+// cross-check too: the run stops cleanly at its next check, everything is written to the output
+// file, and the result says "interrupted" (the Python layer then raises KeyboardInterrupt).
+// Python's own handler is restored afterwards.
+//
+// Arguments are checked as the command line checks its options (frontend/limits.hpp: the same
+// limits, named as Python's keyword arguments); tables may be given as columns of numbers instead
+// of CSV files (frontend/tables.hpp).
 #include <signal.h>
 
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -26,6 +35,8 @@
 
 #include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
+#include "frontend/limits.hpp"
+#include "frontend/tables.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
@@ -35,6 +46,7 @@
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/stop_request.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
@@ -45,6 +57,22 @@ namespace {
 
 using vibro::frontend::HeaderOf;
 using vibro::frontend::SceneOrigin;
+constexpr auto kPython = vibro::frontend::Naming::kPython;
+
+// File names of the arguments: refused with a NUL (frontend::CheckPath).
+void CheckPaths(std::initializer_list<std::pair<const char*, const std::string*>> paths) {
+  std::vector<std::string> problems;
+  for (const auto& [name, path] : paths) vibro::frontend::CheckPath(kPython, name, *path, problems);
+  vibro::frontend::ThrowIfAny(problems);
+}
+
+// Creates the output file `out` (nothing when empty) without the GIL.
+std::unique_ptr<vibro::Hdf5Store> CreateStore(const std::string& out, const vibro::StoreHeader& header) {
+  if (out.empty()) return nullptr;
+  CheckPaths({{"out", &out}});
+  py::gil_scoped_release release;
+  return vibro::Hdf5Store::Create(out, header);
+}
 
 // A scene as loaded: where it came from (to re-derive it with one key changed) and as run.
 struct PyScene {
@@ -61,6 +89,9 @@ PyScene LoadPyScene(SceneOrigin origin) {
 std::atomic<bool> g_sigint{false};
 extern "C" void OnSigint(int) { g_sigint.store(true); }
 
+// Constructed with the GIL held (before the computation releases it): a SIGINT that came before
+// the handler was installed (while the scene was read or the output file created) went to
+// Python's handler and is found by PyErr_CheckSignals, after the installation, so none is lost.
 class SigintGuard {
  public:
   explicit SigintGuard(bool install) : installed_(install) {
@@ -70,9 +101,17 @@ class SigintGuard {
     action.sa_handler = OnSigint;
     sigemptyset(&action.sa_mask);
     sigaction(SIGINT, &action, &previous_);
+    previous_flag_ = vibro::ProcessStopFlag();
+    vibro::SetProcessStopFlag(&g_sigint);
+    if (PyErr_CheckSignals() != 0) {  // raised by Python's handler: a stop request, reported as one
+      PyErr_Clear();
+      g_sigint.store(true);
+    }
   }
   ~SigintGuard() {
-    if (installed_) sigaction(SIGINT, &previous_, nullptr);
+    if (!installed_) return;
+    vibro::SetProcessStopFlag(previous_flag_);
+    sigaction(SIGINT, &previous_, nullptr);
   }
   SigintGuard(const SigintGuard&) = delete;
   SigintGuard& operator=(const SigintGuard&) = delete;
@@ -83,6 +122,7 @@ class SigintGuard {
  private:
   bool installed_;
   struct sigaction previous_ = {};
+  const std::atomic<bool>* previous_flag_ = nullptr;
   std::atomic<bool> never_{false};
 };
 
@@ -150,13 +190,12 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
   std::optional<vibro::LyapunovObserver> lyapunov;
   if (loaded.scene.run.lyapunov) lyapunov.emplace(sys, loaded.scene);
   Recorder recorder(sys.dof());
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  auto store = CreateStore(out, HeaderOf(loaded, sys));
   std::string json;
   bool interrupted = false;
   {
-    py::gil_scoped_release release;
     SigintGuard guard(handle_sigint);
+    py::gil_scoped_release release;
     vibro::SimulationOptions options;
     options.observers = {&attractor_recorder, &recorder};
     if (lyapunov) options.observers.push_back(&*lyapunov);
@@ -165,6 +204,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
     const auto result = vibro::Simulate(sys, loaded.scene, options);
     const auto attractor = attractor_recorder.Classify();
     if (store) store->Finish(result, attractor);
+    store.reset();  // closed without the GIL
     std::optional<vibro::LyapunovSpectrum> spectrum;
     if (lyapunov) spectrum = lyapunov->Spectrum();
     json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr);
@@ -192,30 +232,39 @@ vibro::OrbitKind KindOf(const std::string& kind) {
   throw vibro::InputError({fmt::format("kind {}: expected \"auto\", \"sticking\" or \"impact\"", kind)});
 }
 
-std::string Orbit(const PyScene& s, const std::string& kind, int period, int impacts,
-                  std::optional<double> guess_phase, std::optional<double> guess_velocity,
-                  const std::string& out, int transient) {
+// The JSON of the orbit, and whether a stop request cut the solve short (then `out` is removed, as
+// the command line removes it: an orbit is found whole or not at all).
+std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, long long period, long long impacts,
+                                   std::optional<double> guess_phase, std::optional<double> guess_velocity,
+                                   const std::string& out, long long transient, bool handle_sigint) {
+  vibro::frontend::CheckOrbitOptions(kPython, period, impacts, transient, guess_phase, guess_velocity);
   vibro::OrbitRequest req;
   req.kind = KindOf(kind);
-  req.transient_periods = transient;
-  req.period = period;
-  req.impacts = impacts;
+  req.transient_periods = static_cast<int>(transient);
+  req.period = static_cast<int>(period);
+  req.impacts = static_cast<int>(impacts);
   req.guess_phase = guess_phase;
   req.guess_velocity = guess_velocity;
   const vibro::System sys(s.loaded.scene);
-  if (!out.empty()) vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, sys)).reset();  // fail early
+  CreateStore(out, HeaderOf(s.loaded, sys)).reset();  // fail early
+  SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
   const auto orbit = vibro::SolveOrbit(sys, s.loaded.scene, req);
+  if (guard.interrupted()) {
+    if (!out.empty()) std::remove(out.c_str());
+    return {"", true};
+  }
   // As the CLI: a failed solve still ends the file, with its status and message (never "running").
   if (!out.empty() && orbit.status == "converged") vibro::frontend::WriteOrbit(out, s.loaded, sys, orbit);
   else if (!out.empty()) vibro::frontend::WriteOrbitFailure(out, s.loaded, sys, orbit);
-  return vibro::OrbitJson(orbit, req.kind);
+  return {vibro::OrbitJson(orbit, req.kind), false};
 }
 
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,
-                                            double step, int max_points, int period,
+                                            double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
                                             bool handle_sigint) {
+  vibro::frontend::CheckContinuationOptions(kPython, to, step, max_points, period, 0);
   const auto from = vibro::SceneNumber(s.loaded.text_as_run, key);
   if (!from)
     throw vibro::InputError({fmt::format("param {}: not a numeric key of the scene (give it in the "
@@ -226,14 +275,13 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
   req.from = *from;
   req.to = to;
   req.step = step;
-  req.max_points = max_points;
-  req.orbit.period = period;
+  req.max_points = static_cast<int>(max_points);
+  req.orbit.period = static_cast<int>(period);
   req.orbit.kind = KindOf(kind);
   const vibro::System sys(s.loaded.scene);
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, sys));  // fails early
-  py::gil_scoped_release release;
+  auto store = CreateStore(out, HeaderOf(s.loaded, sys));  // fails early
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   req.stop_requested = guard.flag();
   auto branch = vibro::Continue(req);
   branch.param = key;
@@ -243,43 +291,45 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
     r.status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
     r.message = branch.end;
     store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
+    store.reset();  // closed without the GIL
   }
   return {vibro::BranchJson(branch), branch.status == "interrupted"};
 }
 
 py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::string& y,
                const std::vector<double>& x_range, const std::vector<double>& y_range,
-               const std::vector<int>& grid, long long samples, unsigned long long seed, int threads,
+               const std::vector<long long>& grid, long long samples, unsigned long long seed, long long threads,
                bool full_periods, const std::string& out, bool handle_sigint) {
   const auto& loaded = s.loaded;
   const vibro::System sys(loaded.scene);
-  std::vector<std::string> problems;
-  for (const auto& [opt, name] : {std::pair{"x", x}, std::pair{"y", y}})
-    if (auto p = vibro::CheckCoordinate(sys, name); !p.empty())
-      problems.push_back(fmt::format("{} {}: {}", opt, name, p));
-  const auto cx = vibro::frontend::StudyCoordinate(sys, x, x_range, "x_range", problems);
-  const auto cy = vibro::frontend::StudyCoordinate(sys, y, y_range, "y_range", problems);
-  if (basin && (grid.size() != 2 || grid[0] < 1 || grid[1] < 1))
-    problems.push_back("grid: expected (NX, NY) with NX, NY ≥ 1");
-  if (!basin && samples < 1) problems.push_back("samples: expected N ≥ 1");
-  if (!problems.empty()) throw vibro::InputError(problems);
-  const auto points = basin ? vibro::GridPoints(cx, cy, grid[0], grid[1])
-                            : vibro::RandomPoints(cx, cy, samples, seed);
-  const vibro::Hdf5Store::StudyGrid study_grid{cx, cy, basin ? grid[0] : static_cast<int>(points.size()),
-                                               basin ? grid[1] : 1, !full_periods};
+  vibro::frontend::StudySpec spec;
+  spec.x = x;
+  spec.y = y;
+  spec.x_range = x_range;
+  spec.y_range = y_range;
+  spec.grid = grid;
+  spec.samples = samples;
+  spec.threads = threads;
+  const auto axes = vibro::frontend::CheckStudyOptions(sys, spec, basin, kPython);
+  const vibro::Coordinate& cx = axes.x;
+  const vibro::Coordinate& cy = axes.y;
+  const int nx = basin ? static_cast<int>(grid[0]) : 0, ny = basin ? static_cast<int>(grid[1]) : 0;
+  const auto points = basin ? vibro::GridPoints(cx, cy, nx, ny) : vibro::RandomPoints(cx, cy, samples, seed);
+  const vibro::Hdf5Store::StudyGrid study_grid{cx, cy, basin ? nx : static_cast<int>(points.size()),
+                                               basin ? ny : 1, !full_periods};
   std::vector<vibro::CellResult> cells(points.size());
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty()) {
-    store = vibro::Hdf5Store::Create(out, HeaderOf(loaded, sys));
+  auto store = CreateStore(out, HeaderOf(loaded, sys));
+  if (store) {
+    py::gil_scoped_release release;
     store->BeginStudy(study_grid);
   }
   vibro::StudyResult study;
   bool interrupted = false;
   {
-    py::gil_scoped_release release;
     SigintGuard guard(handle_sigint);
+    py::gil_scoped_release release;
     vibro::StudyOptions opt;
-    opt.threads = threads;
+    opt.threads = static_cast<int>(threads);
     opt.stop_requested = guard.flag();
     if (full_periods) opt.settle_remainder = 0;
     if (!full_periods) opt.known = vibro::KnownOrbits(sys, loaded.scene, cx, cy, opt);
@@ -292,6 +342,7 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
     study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
     if (store) {
       vibro::frontend::FinishStudy(*store, study, study_grid, interrupted);
+      store.reset();  // closed without the GIL
     }
   }
   py::dict d;
@@ -313,66 +364,93 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
 }
 
 std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key, double from, double to,
-                                        int steps, int record, bool one_way, const std::string& out,
+                                        long long steps, long long record, bool one_way, const std::string& out,
                                         bool handle_sigint) {
-  std::vector<std::string> problems;
-  if (steps < 1) problems.push_back(fmt::format("steps {}: expected N ≥ 1", steps));
-  if (record < 1) problems.push_back(fmt::format("record {}: expected K ≥ 1", record));
-  if (!problems.empty()) throw vibro::InputError(problems);
+  vibro::frontend::CheckSweepOptions(kPython, from, to, steps, record);
   for (double v : {from, to}) vibro::frontend::SceneWith(s.origin, key, v);
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty())
-    store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
   vibro::SweepRequest req;
   req.scene_at = [&](double v) { return vibro::frontend::SceneWith(s.origin, key, v); };
   req.from = from;
   req.to = to;
-  req.steps = steps;
-  req.record = record;
+  req.steps = static_cast<int>(steps);
+  req.record = static_cast<int>(record);
   req.both_ways = !one_way;
-  py::gil_scoped_release release;
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto sweep = vibro::Sweep(req, guard.flag());
   const bool interrupted = guard.interrupted();
   if (store) {
-    store->WriteSweep(sweep, {key, from, to, steps, record, !one_way});
+    store->WriteSweep(sweep, {key, from, to, req.steps, req.record, !one_way});
     store->Finish(vibro::frontend::SweepOutcome(sweep, key, interrupted),
                   sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+    store.reset();  // closed without the GIL
   }
   return {vibro::SweepJson(sweep), interrupted};
 }
 
-std::string Check(const PyScene& s) {
+// The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
+std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
   const vibro::System sys(s.loaded.scene);
+  SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
-  return vibro::CheckJson(vibro::CrossCheck(sys, s.loaded.scene));
+  const auto report = vibro::CrossCheck(sys, s.loaded.scene);
+  if (guard.interrupted()) return {"", true};
+  return {vibro::CheckJson(report), false};
 }
 
-std::string Info(const std::string& path) { return vibro::StoredRunJson(vibro::ReadStoredRun(path)); }
+std::string Info(const std::string& path) {
+  CheckPaths({{"path", &path}});
+  py::gil_scoped_release release;
+  return vibro::StoredRunJson(vibro::ReadStoredRun(path));
+}
 
 // vibro validate: a branch from another tool, point by point (frontend/commands.hpp).
-std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::string& param,
-                                      const std::string& kind, int period, double tolerance,
-                                      double sticking_tolerance, const std::string& out, bool handle_sigint) {
-  const vibro::frontend::ValidationSpec spec{csv, param, KindOf(kind), period, tolerance, sticking_tolerance};
-  const auto job = vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, vibro::frontend::Naming::kPython);
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
-  py::gil_scoped_release release;
+// The branch is the CSV file `csv`, or `columns` (frontend/tables.hpp) when given.
+using Columns = std::map<std::string, std::vector<double>>;
+std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::optional<Columns>& columns,
+                                      const std::string& param, const std::string& kind, long long period,
+                                      double tolerance, double sticking_tolerance, const std::string& out,
+                                      bool handle_sigint) {
+  if (!columns) CheckPaths({{"branch", &csv}});
+  std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
+  vibro::frontend::CheckInteger(kPython, "--period", period, vibro::frontend::kPeriodLimit, problems);
+  vibro::frontend::ThrowIfAny(problems);
+  const vibro::frontend::ValidationSpec spec{csv,      param, KindOf(kind), static_cast<int>(period), tolerance,
+                                             sticking_tolerance};
+  const auto job =
+      columns ? vibro::frontend::PrepareValidationTable(
+                    s.origin, s.loaded, spec,
+                    vibro::frontend::BranchTable(*columns, vibro::frontend::ClaimedStateSize(s.loaded)),
+                    [](const vibro::ClaimedPoint& p) { return fmt::format("branch row {}", p.line); }, kPython)
+              : vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, kPython);
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   const auto result = vibro::frontend::RunValidation(job, spec, guard.flag());
   if (store) vibro::frontend::FinishValidation(*store, job, result);
+  store.reset();  // closed without the GIL
   return {vibro::ValidationJson(result.checks), result.interrupted};
 }
 
 // vibro score: another simulator's events against vibro's run (frontend/commands.hpp). Returns
 // the JSON, whether it was interrupted, and vibro's own run status and message.
-std::tuple<std::string, bool, std::string, std::string> Score(const PyScene& s, const std::string& csv,
-                                                              double window, double tolerance, bool handle_sigint) {
-  py::gil_scoped_release release;
+// The events are the CSV file `csv`, or the columns t, kind and velocity (frontend/tables.hpp)
+// when `t` is given.
+std::tuple<std::string, bool, std::string, std::string> Score(
+    const PyScene& s, const std::string& csv, const std::optional<std::vector<double>>& t,
+    const std::vector<std::string>& kind, const std::optional<std::vector<double>>& velocity, double window,
+    double tolerance, bool handle_sigint) {
+  if (!t) CheckPaths({{"events", &csv}});
+  std::optional<std::vector<vibro::TheirEvent>> table;
+  if (t) table = vibro::frontend::EventTable(*t, kind, velocity);
   SigintGuard guard(handle_sigint);
-  const auto r = vibro::frontend::ScoreEventsCsv(s.loaded, csv, window, tolerance, guard.flag(),
-                                                 vibro::frontend::Naming::kPython);
+  py::gil_scoped_release release;
+  const auto r = table ? vibro::frontend::ScoreEventTable(
+                             s.loaded, *table,
+                             [](const vibro::TheirEvent& e) { return fmt::format("events row {}", e.line); }, window,
+                             tolerance, guard.flag(), kPython)
+                       : vibro::frontend::ScoreEventsCsv(s.loaded, csv, window, tolerance, guard.flag(), kPython);
   return {vibro::ScoreJson(r.report, r.scene), r.run.status == vibro::RunStatus::kInterrupted,
           vibro::ToString(r.run.status), r.run.message};
 }
@@ -380,8 +458,8 @@ std::tuple<std::string, bool, std::string, std::string> Score(const PyScene& s, 
 // vibro partition: curves of constant sticking fraction in a parameter plane.
 std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<std::string>& params,
                                             const std::vector<double>& range1, const std::vector<double>& range2,
-                                            const std::vector<double>& levels, int steps1,
-                                            std::optional<double> from2, int period, int threads,
+                                            const std::vector<double>& levels, long long steps1,
+                                            std::optional<double> from2, long long period, long long threads,
                                             const std::string& out, bool handle_sigint) {
   vibro::frontend::PartitionSpec spec;
   spec.params = params;
@@ -392,15 +470,15 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
   spec.from2 = from2;
   spec.period = period;
   spec.threads = threads;
-  auto req = vibro::frontend::PartitionRequestFor(s.origin, s.loaded, spec, vibro::frontend::Naming::kPython);
-  std::unique_ptr<vibro::Hdf5Store> store;
-  if (!out.empty()) store = vibro::Hdf5Store::Create(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
-  py::gil_scoped_release release;
+  auto req = vibro::frontend::PartitionRequestFor(s.origin, s.loaded, spec, kPython);
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
   SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
   req.stop_requested = guard.flag();
   const auto columns = vibro::Partition(req);
   const bool interrupted = guard.interrupted();
   if (store) vibro::frontend::FinishPartition(*store, spec, columns, interrupted);
+  store.reset();  // closed without the GIL
   return {vibro::PartitionJson(params[0], params[1], levels, columns), interrupted};
 }
 

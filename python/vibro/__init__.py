@@ -12,7 +12,9 @@ keeps what was written to ``out`` and then raises ``KeyboardInterrupt``.
 """
 import json as _json
 import math as _math
+import os as _os
 import threading as _threading
+from collections.abc import Mapping as _Mapping
 
 import numpy as _np
 
@@ -21,8 +23,26 @@ from . import _vibro
 __version__ = _vibro.version
 git_commit = _vibro.git_commit
 
-#: Event kinds as stored in ``events["kind"]`` and in HDF5 files (the enum of /events/kind).
-EVENT_KINDS = {1: "impact", 2: "accumulation", 3: "stick", 4: "release", 5: "grazing"}
+class _EventKinds(dict):
+    """int → name, as a dict; a name gives its int too (``EVENT_KINDS["release"] == 4``)."""
+
+    def __missing__(self, key):
+        if isinstance(key, str):
+            for code, name in self.items():
+                if name == key:
+                    return code
+        raise KeyError(key)
+
+    def __contains__(self, key):
+        return dict.__contains__(self, key) or (isinstance(key, str) and key in self.values())
+
+    def get(self, key, default=None):
+        return self[key] if key in self else default
+
+
+#: Event kinds as stored in ``events["kind"]`` and in HDF5 files (the enum of /events/kind):
+#: ``EVENT_KINDS[4] == "release"`` and ``EVENT_KINDS["release"] == 4``.
+EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "release", 5: "grazing"})
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
@@ -97,7 +117,52 @@ class Scene:
 def load_scene(path, set=None):
     """Reads and validates a scene file. ``set`` overrides keys, e.g.
     ``{"excitation.amplitude": 2.5, "run.engine": "exact"}`` (like ``--set KEY=VALUE``)."""
-    return Scene(_vibro.load_scene(str(path), _overrides(set)))
+    return Scene(_vibro.load_scene(_path("path", path), _overrides(set)))
+
+
+def _int(name, value):
+    """An integer argument (int, numpy integer, or a float of integral value); its range is checked
+    by the C++ module, as the command line checks it."""
+    if isinstance(value, (float, _np.floating)) and _math.isfinite(value) and float(value).is_integer():
+        value = int(value)
+    if isinstance(value, bool) or not isinstance(value, (int, _np.integer)):
+        raise ValueError(f"{name} {value!r}: expected an integer, got {type(value).__name__}")
+    if not -2 ** 63 < int(value) < 2 ** 63:  # every limit is far inside; the module checks those
+        raise ValueError(f"{name} {int(value)}: expected a 64-bit integer (and within the limit of {name})")
+    return int(value)
+
+
+def _seed(value):
+    seed = _int("seed", value)
+    if not 0 <= seed < 2 ** 63 - 1:
+        raise ValueError(f"seed {value!r}: expected an integer in [0, 2^63 - 1)")
+    return seed
+
+
+def _float(name, value):
+    """A number argument (nan and inf are refused by the C++ module where the command line
+    refuses them)."""
+    if isinstance(value, bool):
+        raise ValueError(f"{name} {value!r}: expected a number, got bool")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} {value!r}: expected a number, got {type(value).__name__}") from None
+
+
+def _path(name, value):
+    """A file name argument: str or os.PathLike (bytes are refused: names are text)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, _os.PathLike):
+        v = _os.fspath(value)
+        if isinstance(v, str):
+            return v
+    raise ValueError(f"{name} {value!r}: expected a file name (str or os.PathLike), got {type(value).__name__}")
+
+
+def _out(value):
+    return "" if value is None else _path("out", value)
 
 
 def _scene(scene):
@@ -170,7 +235,7 @@ def simulate(scene, out=None, force=False):
     """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file (``force``:
     replace a vibro file of another scene or command)."""
     _invoke("simulate", scene, out=out, force=force)
-    r = _vibro.simulate(_scene(scene), str(out) if out else "", _main_thread())
+    r = _vibro.simulate(_scene(scene), _out(out), _main_thread())
     if r["interrupted"]:
         raise _interrupted("simulation", out)
     return SimulationResult(_json.loads(r["json"]), _events_array(r["events"]), _rows_array(r["samples"]),
@@ -185,12 +250,16 @@ def orbit(scene, kind="auto", period=0, impacts=0, guess=None, out=None, force=F
             transient=transient)
     phase = velocity = None
     if guess is not None:
-        if isinstance(guess, (tuple, list)):
-            phase, velocity = (float(guess[0]), float(guess[1])) if len(guess) > 1 else (float(guess[0]), None)
-        else:
-            phase = float(guess)
-    return _json.loads(_vibro.orbit(_scene(scene), kind, int(period), int(impacts), phase, velocity,
-                                    str(out) if out else "", int(transient)))
+        g = [guess] if _np.ndim(guess) == 0 else list(_np.ravel(guess)) if isinstance(guess, _np.ndarray) else guess
+        if not isinstance(g, (list, tuple)) or not 1 <= len(g) <= 2:
+            raise ValueError(f"guess {guess!r}: expected PHASE or (PHASE, VELOCITY)")
+        phase = _float("guess", g[0])
+        velocity = _float("guess", g[1]) if len(g) > 1 else None
+    text, interrupted = _vibro.orbit(_scene(scene), kind, _int("period", period), _int("impacts", impacts), phase,
+                                     velocity, _out(out), _int("transient", transient), _main_thread())
+    if interrupted:
+        raise _interrupted("orbit search", None)
+    return _json.loads(text)
 
 
 def _branch_table(points):
@@ -207,9 +276,9 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     structured array (value, sticking_fraction, stable) of the branch points."""
     _invoke("continue", scene, param=param, to=to, step=step, max_points=max_points, period=period, kind=kind,
             out=out, force=force)
-    text, interrupted = _vibro.continue_branch(_scene(scene), param, float(to), float(step),
-                                               int(max_points), int(period), kind,
-                                               str(out) if out else "", _main_thread())
+    text, interrupted = _vibro.continue_branch(_scene(scene), param, _float("to", to), _float("step", step),
+                                               _int("max_points", max_points), _int("period", period), kind,
+                                               _out(out), _main_thread())
     if interrupted:
         raise _interrupted("continuation", out)
     d = _json.loads(text)
@@ -221,9 +290,12 @@ def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, f
     _invoke("basin" if basin else "attractors", scene, x=x, y=y, x_range=x_range, y_range=y_range,
             **({"grid": tuple(grid), "out": out, "force": force} if basin else {"samples": samples, "seed": seed}),
             threads=threads, full_periods=full_periods)
-    r = _vibro.study(_scene(scene), basin, x, y, list(x_range or []), list(y_range or []),
-                     list(grid), int(samples), int(seed), int(threads), bool(full_periods),
-                     str(out) if out else "", _main_thread())
+    if _np.ndim(grid) != 1:
+        raise ValueError(f"grid {grid!r}: expected (NX, NY)")
+    r = _vibro.study(_scene(scene), basin, x, y, [_float("x_range", v) for v in (x_range or [])],
+                     [_float("y_range", v) for v in (y_range or [])], [_int("grid", n) for n in grid],
+                     _int("samples", samples), _seed(seed), _int("threads", threads), bool(full_periods),
+                     _out(out), _main_thread())
     if r["interrupted"]:
         raise _interrupted("basin study" if basin else "attractor study", out)
     d = _json.loads(r["json"])
@@ -258,8 +330,9 @@ def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None,
     """Brute-force bifurcation diagram by simulation, up then down (``vibro sweep --json``)."""
     _invoke("sweep", scene, param=param, from_=from_, to=to, steps=steps, record=record, one_way=one_way,
             out=out, force=force)
-    text, interrupted = _vibro.sweep(_scene(scene), param, float(from_), float(to), int(steps),
-                                     int(record), bool(one_way), str(out) if out else "", _main_thread())
+    text, interrupted = _vibro.sweep(_scene(scene), param, _float("from_", from_), _float("to", to),
+                                     _int("steps", steps), _int("record", record), bool(one_way), _out(out),
+                                     _main_thread())
     if interrupted:
         raise _interrupted("sweep", out)
     return _json.loads(text)
@@ -267,12 +340,15 @@ def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None,
 
 def check(scene):
     """Cross-checks the exact engine, CVODE and the Poincaré solver (``vibro check --json``)."""
-    return _json.loads(_vibro.check(_scene(scene)))
+    text, interrupted = _vibro.check(_scene(scene), _main_thread())
+    if interrupted:
+        raise _interrupted("cross-check", None)
+    return _json.loads(text)
 
 
 def info(path):
     """What a vibro HDF5 file holds (``vibro info --json``)."""
-    return _json.loads(_vibro.info(str(path)))
+    return _json.loads(_vibro.info(_path("path", path)))
 
 
 def _records(rows, fields):
@@ -287,18 +363,86 @@ def _text_width(rows, name):
     return "U%d" % max([1] + [len(r.get(name) or "") for r in rows])
 
 
+_TABLE_TYPES = ("a file name (str or os.PathLike), a numpy structured array, a dict of 1-D arrays, a 2-D array "
+                "with columns=[...], or a pandas DataFrame")
+
+
+def _columns(name, table, columns):
+    """A table given as arrays: a dict column name → 1-D numpy array (None for a file name).
+
+    Accepted: a numpy structured array (a field of shape (n,), such as ``displacement``, gives the
+    columns ``displacement_1..n``), a mapping of names to 1-D arrays, a 2-D array with ``columns``
+    naming its columns, or a DataFrame-like object (``.columns`` and ``.to_numpy()``)."""
+    if isinstance(table, (str, _os.PathLike)):
+        if columns is not None:
+            raise ValueError(f"columns: only for a 2-D array {name}, not a file name")
+        return None
+    plain = isinstance(table, (list, tuple)) or (isinstance(table, _np.ndarray) and table.dtype.names is None)
+    if columns is not None and not plain:
+        raise ValueError(f"columns: only for a 2-D array {name}; a {type(table).__name__} names its own columns")
+    if isinstance(table, _np.ndarray) and table.dtype.names is not None:
+        if table.ndim != 1:
+            raise ValueError(f"{name}: expected a 1-D structured array, got shape {table.shape}")
+        d = {}
+        for field in table.dtype.names:
+            a = table[field]
+            if a.ndim == 2:
+                for i in range(a.shape[1]):
+                    d[f"{field}_{i + 1}"] = a[:, i]
+            else:
+                d[field] = a
+    elif isinstance(table, _Mapping):
+        d = {str(k): _np.asarray(v) for k, v in table.items()}
+    elif hasattr(table, "columns") and hasattr(table, "to_numpy"):
+        d = {str(c): _np.asarray(table[c].to_numpy()) for c in table.columns}
+    elif isinstance(table, (_np.ndarray, list, tuple)):
+        a = _np.asarray(table)
+        if a.ndim != 2:
+            raise ValueError(f"{name}: expected {_TABLE_TYPES}; got an array of shape {a.shape}")
+        if columns is None or len(columns) != a.shape[1]:
+            raise ValueError(f"{name}: a 2-D array of {a.shape[1]} columns needs their names: columns=[...] "
+                             f"with {a.shape[1]} names" + ("" if columns is None else f" (got {len(columns)})"))
+        d = {str(c): a[:, j] for j, c in enumerate(columns)}
+    else:
+        raise ValueError(f"{name}: expected {_TABLE_TYPES}; got {type(table).__name__}")
+    for k, v in d.items():
+        if v.ndim != 1:
+            raise ValueError(f"{name} column {k!r}: expected a 1-D array, got shape {v.shape}")
+    return d
+
+
+def _numbers(name, column, values):
+    """A numeric column as float64 (booleans as 0/1)."""
+    if values.dtype.kind not in "biuf":
+        raise ValueError(f"{name} column {column!r}: expected numbers, got an array of dtype {values.dtype}")
+    return values.astype(_np.float64)
+
+
+def _shown(table):
+    """How a table argument is recorded in a file's provenance: its file name, or what it was."""
+    if isinstance(table, (str, _os.PathLike)):
+        return str(table)
+    return f"<{type(table).__name__} of {len(table) if hasattr(table, '__len__') else '?'} rows>"
+
+
 def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticking_tolerance=1e-6, out=None,
-             force=False):
+             force=False, columns=None):
     """Confirms or refutes, point by point, a branch of periodic orbits computed by another tool
-    (``vibro validate --json``). ``branch`` is the CSV file (value, time, displacement_1..n,
-    velocity_1..n[, period, stable, sticking_fraction]) and ``param`` the scene key its value column
-    sets. Besides the keys of the JSON, the dict holds ``table``: a structured array with one row per
-    point (value, verdict, distance, period (−1: none), stable (−1: none), sticking_fraction,
-    simulated_distance; NaN for null floats)."""
-    _invoke("validate", scene, branch=str(branch), param=param, kind=kind, period=period, tolerance=tolerance,
+    (``vibro validate --json``). ``branch`` is the CSV file, or the same table as arrays (a numpy
+    structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame), with
+    the columns value, time, displacement_1..n, velocity_1..n (or fields ``displacement`` and
+    ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim);
+    ``param`` is the scene key its value column sets. Besides the keys of the JSON, the dict holds
+    ``table``: a structured array with one row per point (value, verdict, distance, period (−1:
+    none), stable (−1: none), sticking_fraction, simulated_distance; NaN for null floats)."""
+    _invoke("validate", scene, branch=_shown(branch), param=param, kind=kind, period=period, tolerance=tolerance,
             sticking_tolerance=sticking_tolerance, out=out, force=force)
-    text, interrupted = _vibro.validate(_scene(scene), str(branch), param, kind, int(period), float(tolerance),
-                                        float(sticking_tolerance), str(out) if out else "", _main_thread())
+    cols = _columns("branch", branch, columns)
+    if cols is not None:
+        cols = {k: _numbers("branch", k, v) for k, v in cols.items()}
+    text, interrupted = _vibro.validate(_scene(scene), "" if cols is not None else _path("branch", branch), cols,
+                                        param, kind, _int("period", period), _float("tolerance", tolerance),
+                                        _float("sticking_tolerance", sticking_tolerance), _out(out), _main_thread())
     if interrupted:
         raise _interrupted("validation", out)
     d = _json.loads(text)
@@ -309,16 +453,46 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
     return d
 
 
-def score(scene, events, window=0.05, tolerance=1e-6):
+def _event_columns(cols):
+    """t, kind (as text: a name or its number 1..5) and velocity (or None) of an events table given
+    as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they are: their
+    ``v_before`` is the velocity just before the event."""
+    names = set(cols)
+    if names == {"t", "kind", "x_B", "v_before", "v_after"}:  # vibro's own events
+        cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"]}
+        names = set(cols)
+    for k in sorted(names - {"t", "kind", "velocity"}):
+        raise ValueError(f"events: unknown column {k!r} (expected t, kind and optionally velocity)")
+    for k in ("t", "kind"):
+        if k not in names:
+            raise ValueError(f"events: missing column {k!r} (expected t, kind and optionally velocity)")
+    kind = cols["kind"]
+    if kind.dtype.kind in "biuf":
+        kinds = [str(int(k)) if _math.isfinite(k) and float(k).is_integer() else repr(float(k)) for k in kind]
+    elif kind.dtype.kind in "USO":
+        kinds = [k.decode() if isinstance(k, bytes) else str(k) for k in kind]
+    else:
+        raise ValueError(f"events column 'kind': expected names or numbers 1..5, got an array of dtype {kind.dtype}")
+    velocity = _numbers("events", "velocity", cols["velocity"]) if "velocity" in cols else None
+    return _numbers("events", "t", cols["t"]), kinds, velocity
+
+
+def score(scene, events, window=0.05, tolerance=1e-6, columns=None):
     """Scores another simulator's events against vibro's run of the scene (``vibro score --json``).
-    ``events`` is the CSV file (t, kind[, velocity]). Besides the keys of the JSON, the dict holds
+    ``events`` is the CSV file (t, kind[, velocity]), or the same table as arrays (a numpy
+    structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame; kind as
+    names or as the numbers of :data:`EVENT_KINDS`; velocity NaN: not given), or vibro's own
+    ``simulate(...).events``. Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per event kind (kind, theirs, ours, matched,
     in_accumulation, max_time_error, mean_time_error, max_velocity_error (NaN: none)), and
     ``vibro_run``: the status and message of vibro's own run ("ok" unless it stopped early, when
     the command line exits 3)."""
-    _invoke("score", scene, events=str(events), window=window, tolerance=tolerance)
-    text, interrupted, status, message = _vibro.score(_scene(scene), str(events), float(window), float(tolerance),
-                                                      _main_thread())
+    _invoke("score", scene, events=_shown(events), window=window, tolerance=tolerance)
+    cols = _columns("events", events, columns)
+    t, kinds, velocity = _event_columns(cols) if cols is not None else (None, [], None)
+    text, interrupted, status, message = _vibro.score(_scene(scene), "" if cols is not None else _path("events", events),
+                                                      t, kinds, velocity, _float("window", window),
+                                                      _float("tolerance", tolerance), _main_thread())
     if interrupted:
         raise _interrupted("scoring run", None)
     d = _json.loads(text)
@@ -343,10 +517,10 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     _invoke("partition", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2),
             sticking_fraction=tuple(levels), steps1=steps1, from2=from2, period=period, threads=threads, out=out,
             force=force)
-    text, interrupted = _vibro.partition(_scene(scene), [str(p) for p in params], [float(v) for v in range1],
-                                         [float(v) for v in range2], levels, int(steps1),
-                                         None if from2 is None else float(from2), int(period), int(threads),
-                                         str(out) if out else "", _main_thread())
+    text, interrupted = _vibro.partition(_scene(scene), [str(p) for p in params],
+                                         [_float("range1", v) for v in range1], [_float("range2", v) for v in range2],
+                                         levels, _int("steps1", steps1), None if from2 is None else _float("from2", from2),
+                                         _int("period", period), _int("threads", threads), _out(out), _main_thread())
     if interrupted:
         raise _interrupted("partition", out)
     d = _json.loads(text)

@@ -19,6 +19,8 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
                 const std::string& key, double to, double step, int max_points,
                 vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
                 long long restart_point) {
+  vibro::frontend::CheckContinuationOptions(vibro::frontend::Naming::kCli, to, step, max_points, orbit.period,
+                                            orbit.transient_periods);
   if (!restart_file.empty()) {
     // Restart from a stored point: its parameter value, period and section state (Newton from
     // there, no transient).

@@ -12,6 +12,8 @@
 
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,
              const vibro::OrbitRequest& req, const std::string& out) {
+  vibro::frontend::CheckOrbitOptions(vibro::frontend::Naming::kCli, req.period, req.impacts, req.transient_periods,
+                                     req.guess_phase, req.guess_velocity);
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early

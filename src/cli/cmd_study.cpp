@@ -20,23 +20,19 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                     const StudyArgs& args, bool basin) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
-  std::vector<std::string> problems;
-  for (const auto& [opt, name] : {std::pair{"--x", args.x}, std::pair{"--y", args.y}})
-    if (auto p = vibro::CheckCoordinate(sys, name); !p.empty())
-      problems.push_back(fmt::format("{} {}: {}", opt, name, p));
-  const auto range = [&](const std::vector<double>& r, const std::string& name, const char* opt) {
-    return vibro::frontend::StudyCoordinate(sys, name, r, opt, problems);
-  };
-  const auto cx = range(args.x_range, args.x, "--x-range");
-  const auto cy = range(args.y_range, args.y, "--y-range");
-  if (basin && (args.grid.size() != 2 || args.grid[0] < 1 || args.grid[1] < 1))
-    problems.push_back("--grid: expected NX,NY with NX, NY ≥ 1");
-  else if (basin && static_cast<long long>(args.grid[0]) * args.grid[1] > (1LL << 24))
-    problems.push_back(fmt::format("--grid {},{}: at most {} cells (2^24) in one study", args.grid[0],
-                                   args.grid[1], 1LL << 24));
-  if (!basin && args.samples < 1) problems.push_back("--samples: expected N ≥ 1");
-  if (args.resume && args.out.empty()) problems.push_back("--resume needs --out FILE.h5 (the study to continue)");
-  if (!problems.empty()) throw vibro::InputError(problems);
+  if (args.resume && args.out.empty())
+    throw vibro::InputError({"--resume needs --out FILE.h5 (the study to continue)"});
+  vibro::frontend::StudySpec spec;
+  spec.x = args.x;
+  spec.y = args.y;
+  spec.x_range = args.x_range;
+  spec.y_range = args.y_range;
+  spec.grid.assign(args.grid.begin(), args.grid.end());
+  spec.samples = args.samples;
+  spec.threads = args.threads;
+  const auto axes = vibro::frontend::CheckStudyOptions(sys, spec, basin, vibro::frontend::Naming::kCli);
+  const vibro::Coordinate& cx = axes.x;
+  const vibro::Coordinate& cy = axes.y;
   const auto points = basin ? vibro::GridPoints(cx, cy, args.grid[0], args.grid[1])
                             : vibro::RandomPoints(cx, cy, args.samples, args.seed);
   const vibro::Hdf5Store::StudyGrid grid{cx, cy, basin ? args.grid[0] : static_cast<int>(points.size()),

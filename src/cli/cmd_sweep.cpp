@@ -18,10 +18,7 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
              const std::string& key, double from, double to, int steps, int record, bool one_way,
              const std::string& out) {
   const auto loaded = vibro::LoadScene(path, sets);
-  std::vector<std::string> problems;
-  if (steps < 1) problems.push_back(fmt::format("--steps {}: expected N ≥ 1", steps));
-  if (record < 1) problems.push_back(fmt::format("--record {}: expected K ≥ 1", record));
-  if (!problems.empty()) throw vibro::InputError(problems);
+  vibro::frontend::CheckSweepOptions(vibro::frontend::Naming::kCli, from, to, steps, record);
   // Both ends must be valid values of the key (bad input before any computation).
   const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
   for (const auto& [v, option] : {std::pair{from, "--from"}, std::pair{to, "--to"}})

@@ -17,6 +17,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/stop_signals.hpp"
 #include "frontend/frontend.hpp"
+#include "frontend/limits.hpp"
 #include "vibro/child_process.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
@@ -43,6 +44,9 @@ std::string ShellQuoted(const std::string& arg) {
   for (char c : arg) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return q + "'";
 }
+
+// An integer option's range (frontend/limits.hpp: the same limits Python's arguments are held to).
+CLI::Range InRange(vibro::frontend::IntLimit limit) { return CLI::Range(limit.lo, limit.hi); }
 
 }  // namespace
 
@@ -82,8 +86,8 @@ int main(int argc, char** argv) {
   orbit->add_option("--transient", orbit_req.transient_periods,
                     "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
       ->check(CLI::NonNegativeNumber);
-  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")->check(CLI::Range(0, 4096));
-  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")->check(CLI::Range(0, 1 << 20));
+  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
+  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")->check(InRange(vibro::frontend::kImpactsLimit));
   orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
   std::string orbit_out;
   orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
@@ -96,8 +100,8 @@ int main(int argc, char** argv) {
   cont->add_option("--param", cont_param, "the numeric scene key to vary, e.g. excitation.amplitude")->required();
   cont->add_option("--to", cont_to, "end value of the parameter")->check(kFinite)->required();
   cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)")->check(kFinite);
-  cont->add_option("--max-points", cont_points, "most points on the branch")->check(CLI::Range(1, 1 << 24));
-  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)")->check(CLI::Range(0, 4096));
+  cont->add_option("--max-points", cont_points, "most points on the branch")->check(InRange(vibro::frontend::kMaxPointsLimit));
+  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
   std::string cont_kind = "auto", cont_out, cont_from;
   long long cont_point = -1;
   int cont_transient = 200;
@@ -117,13 +121,13 @@ int main(int argc, char** argv) {
     cmd->add_option("--y", study_args.y, "second coordinate (default v_B)");
     cmd->add_option("--x-range", study_args.x_range, "A,B")->check(kFinite)->delimiter(',')->expected(2);
     cmd->add_option("--y-range", study_args.y_range, "C,D")->check(kFinite)->delimiter(',')->expected(2);
-    cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)")->check(CLI::Range(0, 4096));
+    cmd->add_option("--threads", study_args.threads, "worker threads (default: all cores)")->check(InRange(vibro::frontend::kThreadsLimit));
     cmd->add_flag("--full-periods", study_args.full_periods,
                   "run every cell for run.periods periods (no early stop when it settles)");
   }
-  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)")->check(CLI::Range(1LL, 1LL << 24));
+  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)")->check(InRange(vibro::frontend::kSamplesLimit));
   attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
-  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->check(CLI::Range(1, 1 << 16))->delimiter(',')->expected(2);
+  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->check(InRange(vibro::frontend::kGridLimit))->delimiter(',')->expected(2);
   basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
   basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
   CLI::App* partition = app.add_subcommand(
@@ -133,13 +137,13 @@ int main(int argc, char** argv) {
   double part_from2 = 0;
   partition->add_option("--params", part.spec.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
   partition->add_option("--range1", part.spec.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--steps1", part.spec.steps1, "steps of KEY1 (default 20: 21 columns)")->check(CLI::Range(1, 1 << 16));
+  partition->add_option("--steps1", part.spec.steps1, "steps of KEY1 (default 20: 21 columns)")->check(InRange(vibro::frontend::kSteps1Limit));
   partition->add_option("--range2", part.spec.range2, "C,D: range of KEY2 (each column is continued in it)")->check(kFinite)
       ->delimiter(',')->required();
   auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)")->check(kFinite);
   partition->add_option("--sticking-fraction", part.spec.levels, "S1,S2,...: levels to trace")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--period", part.spec.period, "period of the sticking orbits (default: from a transient)")->check(CLI::Range(0, 4096));
-  partition->add_option("--threads", part.spec.threads, "threads (default: all cores)")->check(CLI::Range(0, 4096));
+  partition->add_option("--period", part.spec.period, "period of the sticking orbits (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
+  partition->add_option("--threads", part.spec.threads, "threads (default: all cores)")->check(InRange(vibro::frontend::kThreadsLimit));
   partition->add_option("--out", part.out, "write the partition to HDF5");
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
   add_scene_options(sweep);
@@ -150,8 +154,8 @@ int main(int argc, char** argv) {
   sweep->add_option("--param", sweep_param, "numeric scene key to vary")->required();
   sweep->add_option("--from", sweep_from, "first value")->check(kFinite)->required();
   sweep->add_option("--to", sweep_to, "last value")->check(kFinite)->required();
-  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)")->check(CLI::Range(1, 1 << 22));
-  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)")->check(CLI::Range(1, 1 << 16));
+  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)")->check(InRange(vibro::frontend::kSweepStepsLimit));
+  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)")->check(InRange(vibro::frontend::kRecordLimit));
   sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
   std::string sweep_out;
   sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");

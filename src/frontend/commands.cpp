@@ -16,13 +16,6 @@
 
 namespace vibro::frontend {
 
-std::string OptionName(Naming naming, const std::string& cli_option) {
-  if (naming == Naming::kCli) return cli_option;
-  std::string name = cli_option.substr(cli_option.find_first_not_of('-'));
-  std::replace(name.begin(), name.end(), '-', '_');
-  return name;
-}
-
 std::string NotANumericKey(const std::string& option, const std::string& key) {
   const std::string near = NearestSceneKey(key);
   if (!near.empty() && near != key) return fmt::format("{} {}: not a scene key; did you mean {}?", option, key, near);
@@ -114,6 +107,7 @@ void CheckValidationSpec(const LoadedScene& loaded, const ValidationSpec& a, Nam
     problems.push_back(fmt::format("{} {}: expected a finite positive number", opt("--sticking-tolerance"),
                                    a.sticking_tolerance));
   if (a.period < 0) problems.push_back(fmt::format("{} {}: expected Q ≥ 1", opt("--period"), a.period));
+  else CheckInteger(naming, "--period", a.period, kPeriodLimit, problems);
   if (!problems.empty()) throw InputError(problems);
 }
 
@@ -296,7 +290,9 @@ PartitionRequest PartitionRequestFor(const SceneOrigin& origin, const LoadedScen
     problems.push_back(opt("--range1") + ": expected A,B with A < B");
   if (a.range2.size() != 2 || !(a.range2[0] < a.range2[1]))
     problems.push_back(opt("--range2") + ": expected C,D with C < D");
-  if (a.steps1 < 1) problems.push_back(opt("--steps1") + ": expected N ≥ 1");
+  CheckInteger(naming, "--steps1", a.steps1, kSteps1Limit, problems);
+  CheckInteger(naming, "--period", a.period, kPeriodLimit, problems);
+  CheckInteger(naming, "--threads", a.threads, kThreadsLimit, problems);
   if (a.levels.empty()) problems.push_back(opt("--sticking-fraction") + ": expected S1,S2,... in (0, 1)");
   for (double s : a.levels)
     if (!(s > 0 && s < 1)) problems.push_back(fmt::format("{} {}: not in (0, 1)", opt("--sticking-fraction"), s));
@@ -317,7 +313,9 @@ PartitionRequest PartitionRequestFor(const SceneOrigin& origin, const LoadedScen
     at.sets.push_back(Assignment(key1, v1));
     return SceneWith(at, key2, v2);
   };
-  for (int i = 0; i <= a.steps1; ++i) req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * i / a.steps1);
+  for (long long i = 0; i <= a.steps1; ++i)
+    req.values1.push_back(a.range1[0] + (a.range1[1] - a.range1[0]) * static_cast<double>(i) /
+                                            static_cast<double>(a.steps1));
   // The corners of range1 at the start value must be valid scenes (bad input before anything is
   // written); values of KEY2 outside its valid range just end a column's branch.
   for (double v1 : {a.range1[0], a.range1[1]}) req.scene_at(v1, *start2);
@@ -325,8 +323,8 @@ PartitionRequest PartitionRequestFor(const SceneOrigin& origin, const LoadedScen
   req.lo2 = a.range2[0];
   req.hi2 = a.range2[1];
   req.levels = a.levels;
-  req.orbit.period = a.period;
-  req.threads = a.threads;
+  req.orbit.period = static_cast<int>(a.period);
+  req.threads = static_cast<int>(a.threads);
   return req;
 }
 

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "frontend/frontend.hpp"
+#include "frontend/limits.hpp"
 #include "vibro/branch_check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -19,10 +20,6 @@
 
 namespace vibro::frontend {
 
-// How options are named in messages: "--sticking-fraction" (command line) or "sticking_fraction"
-// (Python keyword arguments).
-enum class Naming { kCli, kPython };
-std::string OptionName(Naming naming, const std::string& cli_option);
 // The message for a KEY the scene has no number at, with the nearest known key.
 std::string NotANumericKey(const std::string& option, const std::string& key);
 
@@ -88,7 +85,7 @@ Scoring ScoreEventsCsv(const LoadedScene& loaded, const std::string& csv, double
 struct PartitionSpec {
   std::vector<std::string> params;             // KEY1, KEY2
   std::vector<double> range1, range2, levels;  // A,B of KEY1; C,D of KEY2; sticking fractions
-  int steps1 = 20, period = 0, threads = 0;
+  long long steps1 = 20, period = 0, threads = 0;  // checked against limits.hpp's limits
   std::optional<double> from2;  // where each column starts (default: the scene's KEY2)
 };
 // Checks `spec` against the scene and builds the request: columns at KEY1 = A + (B − A)·i/steps1,

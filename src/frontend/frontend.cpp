@@ -7,12 +7,18 @@
 
 #include <fmt/format.h>
 
+#include "frontend/limits.hpp"
 #include "vibro/scene_toml.hpp"
 #include "vibro/simulator.hpp"
 
 namespace vibro::frontend {
 
 LoadedScene SceneOrigin::Load(const std::vector<std::string>& more_sets) const {
+  if (!text) {
+    std::vector<std::string> problems;
+    CheckPath(Naming::kCli, "scene", path, problems);
+    ThrowIfAny(problems);
+  }
   std::vector<std::string> all = sets;
   all.insert(all.end(), more_sets.begin(), more_sets.end());
   return text ? ParseScene(*text, source, all) : LoadScene(path, all);

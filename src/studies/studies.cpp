@@ -76,7 +76,9 @@ std::string CheckCoordinate(const System& sys, const std::string& name) {
   if (name == "x_B" || name == "v_B") return {};
   if (name.size() >= 2 && (name[0] == 'X' || name[0] == 'V') &&
       std::all_of(name.begin() + 1, name.end(), [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); })) {
-    const int i = std::stoi(name.substr(1));
+    // Compared as text first: an index of more digits than any DOF count would overflow stoi.
+    const auto digits = name.find_first_not_of('0', 1);
+    const int i = digits == std::string::npos ? 0 : name.size() - digits > 6 ? -1 : std::stoi(name.substr(1));
     if (i >= 1 && i <= sys.dof()) return {};
     return "modal index out of range: 1 ≤ i ≤ " + std::to_string(sys.dof());
   }
