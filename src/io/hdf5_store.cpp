@@ -177,9 +177,15 @@ Hdf5Store::~Hdf5Store() = default;
 std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const StoreHeader& h,
                                              double flush_interval) {
   h5::Silence();
+  // One writer per file: an existing file is locked before it is examined, a new one as it is made.
+  store::FileLock lock = store::FileLock::Acquire(path, false);
   bool existed = false;
   store::CheckReplaceable(path, h, existed);  // never clobber what is not ours
+  bool created = false;
+  if (!lock.held()) lock = store::FileLock::Acquire(path, true, &created);
+  if (created) existed = false;
   auto impl = std::make_unique<Impl>();
+  impl->lock = std::move(lock);
   impl->path = path;
   impl->header = h;
   impl->flush_interval = flush_interval;
@@ -282,6 +288,9 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
 
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
                                              StoredRun& stored, double flush_interval) {
+  h5::Silence();
+  // One writer per file: held from before the file is read until the resumed run closes it.
+  store::FileLock lock = store::FileLock::Acquire(path, false);
   stored = ReadStoredRun(path, 4 * h.max_period + 2);  // what the attractor recorder keeps
   if (stored.scene_text != h.scene_text)
     throw InputError({fmt::format(
@@ -352,6 +361,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
     store.Finish(r, a);
   });
   auto impl = prepare(path);
+  impl->lock = std::move(lock);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "io/file_lock.hpp"
 #include "io/h5_file.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
@@ -72,6 +73,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
 namespace vibro {
 
 struct Hdf5Store::Impl {
+  store::FileLock lock;  // first member, released last: held until the file is closed
   std::string path;
   StoreHeader header;
   h5::Handle file, events, samples, section, checkpoint;
