@@ -18,6 +18,7 @@
 #include "cli/stop_signals.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/child_process.hpp"
+#include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -299,6 +300,9 @@ int main(int argc, char** argv) {
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
                e.messages().size());
     return kExitBadInput;
+  } catch (const vibro::WriteError& e) {  // full disk, I/O error: the file keeps its last flush
+    fmt::print(stderr, "vibro: {}; the file keeps what was written up to its last flush\n", e.what());
+    return kExitNumerical;
   } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
     fmt::print(stderr, "vibro: {}; nothing was written\n", e.what());
     return kExitInterrupted;

@@ -1,13 +1,19 @@
 // The HDF5 C API behind h5_file.hpp. The one file of vibro that includes it.
 #include "io/h5_file.hpp"
 
+#include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <mutex>
+#include <set>
 #include <stdexcept>
 #include <type_traits>
 
 #include <fmt/format.h>
 #include <hdf5.h>
+
+#include "vibro/hdf5_store.hpp"
 
 namespace vibro::h5 {
 
@@ -28,6 +34,73 @@ hid_t Check(hid_t id, const std::string& what) {
 }
 void CheckStatus(herr_t status, const std::string& what) {
   if (status < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+}
+
+// Files a write failed on (the ids of their open files, never closed and so never reused): never
+// written or closed again (Close).
+std::mutex g_failed_mutex;
+std::set<hid_t> g_failed_files;
+std::atomic<bool> g_any_failed{false};
+
+// The id of the open file `obj` belongs to (one per H5Fcreate/H5Fopen, shared by all its
+// objects); false for objects of no file (types, property lists).
+bool FileNumber(hid_t obj, hid_t& number) {
+  if (H5Iget_type(obj) == H5I_FILE) {
+    number = obj;
+    return true;
+  }
+  const hid_t file = H5Iget_file_id(obj);  // the file's id, one more reference to it
+  if (file < 0) return false;
+  number = file;
+  H5Idec_ref(file);  // back to the count before (the file stays open)
+  return true;
+}
+
+// The system's reason for the failure just reported, from HDF5's error stack (its file driver
+// pushes "... errno = 28, error message = 'No space left on device' ..."): strerror's text with a
+// lower-case first letter, or "" when the stack names no errno.
+std::string SystemReason() {
+  int err = 0;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_DOWNWARD,
+      [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
+        const char* p = e->desc ? std::strstr(e->desc, "errno = ") : nullptr;
+        if (p == nullptr) return 0;
+        *static_cast<int*>(out) = std::atoi(p + 8);
+        return 1;  // the deepest one is enough
+      },
+      &err);
+  if (err <= 0) return "";
+  std::string text = std::strerror(err);
+  if (!text.empty() && text[0] >= 'A' && text[0] <= 'Z') text[0] = static_cast<char>(text[0] - 'A' + 'a');
+  return text;
+}
+
+void MarkFileFailed(hid_t obj) {
+  hid_t number = -1;
+  if (!FileNumber(obj, number)) return;
+  const std::lock_guard<std::mutex> hold(g_failed_mutex);
+  g_failed_files.insert(number);
+  g_any_failed.store(true);
+}
+
+// A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why.
+void CheckWrite(herr_t status, hid_t obj, const std::string& what) {
+  if (status >= 0) return;
+  const int err = errno;
+  std::string reason = SystemReason();
+  if (reason.empty()) reason = err != 0 ? std::strerror(err) : fmt::format("HDF5 could not write {}", what);
+  char name[4096] = "the output file";
+  if (H5Fget_name(obj, name, sizeof name) < 0) std::strcpy(name, "the output file");
+  MarkFileFailed(obj);
+  throw WriteError(fmt::format("{} writing {}", reason, name));
+}
+
+// No chunk cache: a Column's rows reach the file when written (see Column in h5_file.hpp).
+Handle NoChunkCache() {
+  Handle dapl(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
+  H5Pset_chunk_cache(dapl.get(), 0, 0, H5D_CHUNK_CACHE_W0_DEFAULT);
+  return dapl;
 }
 
 Handle StringMemType() {
@@ -78,8 +151,22 @@ Type Type::Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members
   return {std::move(t), 1};
 }
 
+void Close(Id id, Closer closer) {
+  if (g_any_failed.load()) {
+    hid_t number = -1;
+    if (FileNumber(id, number)) {
+      const std::lock_guard<std::mutex> hold(g_failed_mutex);
+      if (g_failed_files.count(number)) return;  // left open: a close would write to it
+    }
+  }
+  closer(id);
+}
+
 void Silence() {
   static const bool once = [] {
+    // No library clean-up at exit: it would close (and so write) a file a write failed on. vibro
+    // closes every file it opens itself.
+    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     return true;
   }();
@@ -107,7 +194,16 @@ Handle OpenFile(const std::string& path, bool write) {
   return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
 }
 
-void FlushFile(Id file) { CheckStatus(H5Fflush(file, H5F_SCOPE_LOCAL), "flush"); }
+void FlushFile(Id file) { CheckWrite(H5Fflush(file, H5F_SCOPE_LOCAL), file, "flush"); }
+
+Size MetadataBytes(Id file) {
+  size_t max_size = 0, min_clean = 0, cur_size = 0;
+  int entries = 0;
+  if (H5Fget_mdc_size(file, &max_size, &min_clean, &cur_size, &entries) < 0) return 16u << 20;
+  return cur_size;
+}
+
+void MarkFailed(Id file) { MarkFileFailed(file); }
 
 // ---- Links and groups ----
 
@@ -191,7 +287,7 @@ Handle NewAttr(Id obj, const std::string& name, hid_t file_type, const std::vect
 template <class T>
 void WriteScalar(Id obj, const std::string& name, T value, const Type& type) {
   Handle a = NewAttr(obj, name, type.file(), {});
-  CheckStatus(H5Awrite(a.get(), type.memory(), &value), name);
+  CheckWrite(H5Awrite(a.get(), type.memory(), &value), obj, name);
 }
 
 template <class T>
@@ -209,7 +305,7 @@ void WriteString(Id obj, const std::string& name, const std::string& value) {
   const Type type = Type::String();
   Handle a = NewAttr(obj, name, type.file(), {});
   const char* p = value.c_str();
-  CheckStatus(H5Awrite(a.get(), type.memory(), &p), name);
+  CheckWrite(H5Awrite(a.get(), type.memory(), &p), obj, name);
 }
 
 void WriteDouble(Id obj, const std::string& name, double value) { WriteScalar(obj, name, value, Type::F64()); }
@@ -226,7 +322,7 @@ void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v,
   const std::vector<hsize_t> dims =
       cols > 1 ? std::vector<hsize_t>{v.size() / cols, cols} : std::vector<hsize_t>{v.size()};
   Handle a = NewAttr(obj, name, H5T_IEEE_F64LE, dims);
-  if (!v.empty()) CheckStatus(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
+  if (!v.empty()) CheckWrite(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), obj, name);
 }
 
 void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v) {
@@ -234,7 +330,7 @@ void WriteStringArray(Id obj, const std::string& name, const std::vector<std::st
   for (const auto& x : v) p.push_back(x.c_str());
   const Type type = Type::String();
   Handle a = NewAttr(obj, name, type.file(), {v.size()});
-  if (!v.empty()) CheckStatus(H5Awrite(a.get(), type.memory(), p.data()), name);
+  if (!v.empty()) CheckWrite(H5Awrite(a.get(), type.memory(), p.data()), obj, name);
 }
 
 std::string ReadString(Id obj, const std::string& name) {
@@ -295,7 +391,7 @@ void WriteDataset(Id loc, const std::string& name, const Type& type, const void*
                   name),
             H5Dclose);
   if (!d.empty() && d[0] > 0)
-    CheckStatus(H5Dwrite(ds.get(), type.memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+    CheckWrite(H5Dwrite(ds.get(), type.memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), loc, name);
 }
 
 void WriteStrings(Id loc, const std::string& name, const std::vector<std::string>& v) {
@@ -374,7 +470,7 @@ Column::Column(Id group, const std::string& name, const Type& type, Size cols)
   H5Pset_shuffle(dcpl.get());
   H5Pset_deflate(dcpl.get(), kDeflate);
   dset_ = Handle(Check(H5Dcreate2(group, name.c_str(), type.file(), space.get(), H5P_DEFAULT, dcpl.get(),
-                                  H5P_DEFAULT),
+                                  NoChunkCache().get()),
                        name),
                  H5Dclose);
 }
@@ -384,7 +480,7 @@ Column Column::Open(Id group, const std::string& name, const Type& type, Size co
   c.mem_type_ = Handle(H5Tcopy(type.memory()), H5Tclose);
   c.elem_size_ = type.size();
   c.name_ = name;
-  c.dset_ = Handle(Check(H5Dopen2(group, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  c.dset_ = Handle(Check(H5Dopen2(group, name.c_str(), NoChunkCache().get()), name), H5Dclose);
   Handle space(Check(H5Dget_space(c.dset_.get()), name), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
   if (rank != (cols > 0 ? 2 : 1))
@@ -409,11 +505,12 @@ void Column::Flush() {
   if (n == 0) return;
   const int rank = cols_ > 0 ? 2 : 1;
   const hsize_t dims[2] = {rows_ + n, cols_}, start[2] = {rows_, 0}, count[2] = {n, cols_};
-  CheckStatus(H5Dset_extent(dset_.get(), dims), "extend");
+  CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
   Handle fs(H5Dget_space(dset_.get()), H5Sclose);
   H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
   Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
-  CheckStatus(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), "write");
+  CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), dset_.get(),
+             name_);
   rows_ += n;
   buf_.clear();
 }
@@ -421,7 +518,7 @@ void Column::Flush() {
 void Column::Truncate(Size rows) {
   buf_.clear();
   const hsize_t dims[2] = {rows, cols_};
-  CheckStatus(H5Dset_extent(dset_.get(), dims), "truncate");
+  CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;
 }
 

@@ -109,6 +109,8 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
     if (ok) {
       try {
         changes(copy);
+      } catch (const WriteError&) {
+        code = 0;  // no room for the trial (a full /tmp) says nothing about the file
       } catch (const InputError& e) {
         // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
         code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;

@@ -163,12 +163,27 @@ void Hdf5Store::Impl::Close() {
 
 void Hdf5Store::Impl::Flush() {
   const auto t0 = std::chrono::steady_clock::now();
+  // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
+  // then, when there is room for it, the metadata that makes them part of the file.
   for (h5::Column* c : Columns()) c->Flush();
   WriteCheckpoint();
+  CheckRoom();
   h5::FlushFile(file.get());
   last_flush = std::chrono::steady_clock::now();
   ++stats.flushes;
   stats.flush_seconds += std::chrono::duration<double>(last_flush - t0).count();
+}
+
+void Hdf5Store::Impl::CheckRoom() {
+  // A metadata flush that may not fit is not started: a half-written one could spoil the
+  // consistent state of the last flush, which the file then keeps (status "running", as after a
+  // kill: --resume continues it).
+  const double bytes = static_cast<double>(h5::MetadataBytes(file.get())) + 256.0 * 1024;
+  struct statvfs vfs {};
+  if (statvfs(path.c_str(), &vfs) != 0) return;
+  if (static_cast<double>(vfs.f_bavail) * static_cast<double>(vfs.f_frsize) >= bytes) return;
+  h5::MarkFailed(file.get());
+  throw WriteError(fmt::format("no space left on device writing {}", path));
 }
 
 Hdf5Store::Hdf5Store(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -327,6 +342,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
       impl->last_checkpoint = *stored.checkpoint;
       h5::WriteString(impl->file.get(), "status", "running");
       impl->Flush();
+    } catch (const WriteError&) {
+      throw;
     } catch (const std::exception& e) {
       throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
     }

@@ -92,6 +92,7 @@ struct Hdf5Store::Impl {
   void OpenGroups();
   void OpenColumns();
   void MaybeFlush();
+  void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
   void WriteCheckpoint();
   std::vector<h5::Column*> Columns();
   void Close();

@@ -279,6 +279,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
     impl->Flush();
   } catch (const InputError&) {
     throw;
+  } catch (const WriteError&) {
+    throw;
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
