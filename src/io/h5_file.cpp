@@ -1,6 +1,9 @@
 // The HDF5 C API behind h5_file.hpp. The one file of vibro that includes it.
 #include "io/h5_file.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <cerrno>
 #include <cstdlib>
@@ -79,9 +82,21 @@ std::string SystemReason() {
 void MarkFileFailed(hid_t obj) {
   hid_t number = -1;
   if (!FileNumber(obj, number)) return;
-  const std::lock_guard<std::mutex> hold(g_failed_mutex);
-  g_failed_files.insert(number);
-  g_any_failed.store(true);
+  {
+    const std::lock_guard<std::mutex> hold(g_failed_mutex);
+    if (!g_failed_files.insert(number).second) return;
+    g_any_failed.store(true);
+  }
+  // The file's descriptor now reads /dev/null: whatever the library still does with this file
+  // (a close at exit) cannot reach its bytes.
+  void* handle = nullptr;
+  if (H5Fget_vfd_handle(number, H5P_DEFAULT, &handle) >= 0 && handle != nullptr) {
+    const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (null_fd >= 0) {
+      dup2(null_fd, *static_cast<int*>(handle));
+      close(null_fd);
+    }
+  }
 }
 
 // A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why.
@@ -164,9 +179,6 @@ void Close(Id id, Closer closer) {
 
 void Silence() {
   static const bool once = [] {
-    // No library clean-up at exit: it would close (and so write) a file a write failed on. vibro
-    // closes every file it opens itself.
-    H5dont_atexit();
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     return true;
   }();
@@ -290,10 +302,19 @@ void WriteScalar(Id obj, const std::string& name, T value, const Type& type) {
   CheckWrite(H5Awrite(a.get(), type.memory(), &value), obj, name);
 }
 
+// An attribute of one element (scalar or of shape (1)): an array read into one value would
+// overrun it.
+void RequireOneElement(hid_t a, const std::string& name) {
+  Handle space(Check(H5Aget_space(a), name), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n != 1) throw std::runtime_error(fmt::format("attribute {}: expected one value, found {}", name, n));
+}
+
 template <class T>
 std::optional<T> ReadScalar(Id obj, const std::string& name, hid_t mem_type) {
   if (!HasAttr(obj, name)) return std::nullopt;
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  RequireOneElement(a.get(), name);
   T v{};
   CheckStatus(H5Aread(a.get(), mem_type, &v), name);
   return v;
@@ -336,6 +357,10 @@ void WriteStringArray(Id obj, const std::string& name, const std::vector<std::st
 std::string ReadString(Id obj, const std::string& name) {
   if (!HasAttr(obj, name)) return {};
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  RequireOneElement(a.get(), name);
+  Handle stored(Check(H5Aget_type(a.get()), name), H5Tclose);
+  if (H5Tget_class(stored.get()) != H5T_STRING)
+    throw std::runtime_error(fmt::format("attribute {}: expected a string", name));
   Handle type = StringMemType();
   char* p = nullptr;
   CheckStatus(H5Aread(a.get(), type.get(), &p), name);
@@ -356,7 +381,10 @@ std::vector<double> ReadDoubles(Id obj, const std::string& name) {
   if (!HasAttr(obj, name)) return {};
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
   Handle space(H5Aget_space(a.get()), H5Sclose);
-  std::vector<double> v(static_cast<size_t>(H5Sget_simple_extent_npoints(space.get())));
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0 || n > (hssize_t{1} << 24))  // an attribute is small (the object header holds it)
+    throw std::runtime_error(fmt::format("attribute {}: {} values", name, n));
+  std::vector<double> v(static_cast<size_t>(n));
   if (!v.empty()) CheckStatus(H5Aread(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
   return v;
 }
@@ -432,6 +460,36 @@ bool IsStringDataset(Id loc, const std::string& name) {
   Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
   Handle type(H5Dget_type(d.get()), H5Tclose);
   return H5Tget_class(type.get()) == H5T_STRING;
+}
+
+Class DatasetClass(Id loc, const std::string& name) {
+  if (!Exists(loc, name)) return Class::kOther;
+  Handle d(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d) return Class::kOther;
+  Handle type(H5Dget_type(d.get()), H5Tclose);
+  switch (H5Tget_class(type.get())) {
+    case H5T_STRING: return Class::kString;
+    case H5T_INTEGER: return Class::kInteger;
+    case H5T_FLOAT: return Class::kFloat;
+    default: return Class::kOther;
+  }
+}
+
+std::vector<double> ReadDatasetRow(Id loc, const std::string& name, Size row) {
+  Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle space(Check(H5Dget_space(d.get()), name), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank != 1 && rank != 2) throw std::runtime_error(fmt::format("dataset {} has rank {}", name, rank));
+  hsize_t dims[2] = {0, 1};
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  if (row >= dims[0] || dims[1] == 0 || dims[1] > (1u << 16))
+    throw std::runtime_error(fmt::format("dataset {}: no row {}", name, row));
+  const hsize_t start[2] = {row, 0}, count[2] = {1, dims[1]};
+  CheckStatus(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), name);
+  Handle mem(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  std::vector<double> v(static_cast<size_t>(rank == 2 ? dims[1] : 1));
+  CheckStatus(H5Dread(d.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, v.data()), name);
+  return v;
 }
 
 std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name) {
@@ -535,6 +593,20 @@ void Column::Read(Size first, Size n, void* out) const {
   CheckStatus(H5Dread(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, out), "read");
 }
 
+void Column::ReadAllRows() const {
+  const Size row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  const Size block = std::max<Size>(1, (Size{8} << 20) / row_bytes);
+  std::vector<unsigned char> buf(static_cast<size_t>(std::min(block, std::max<Size>(rows_, 1)) * row_bytes));
+  for (Size first = 0; first < rows_; first += block) {
+    try {
+      Read(first, std::min(block, rows_ - first), buf.data());
+    } catch (const std::runtime_error&) {
+      throw std::runtime_error(fmt::format("dataset {}: rows from {} cannot be read (a damaged chunk)", name_, first));
+    }
+    // Variable-length elements (none in the tables) would need reclaiming here.
+  }
+}
+
 // ---- A full read, for the child process of a contained first read ----
 
 namespace {
@@ -592,11 +664,24 @@ herr_t ProbeObject(hid_t root, const char* name, const H5O_info_t* info, void* m
 
 }  // namespace
 
-bool ReadEverything(const std::string& path, double max_bytes) {
+bool ReadEverything(const std::string& path, double max_bytes, const std::vector<std::string>& only) {
   Silence();
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!file) return false;
-  return H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, &max_bytes, H5O_INFO_BASIC) >= 0;
+  if (only.empty())
+    return H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, &max_bytes, H5O_INFO_BASIC) >= 0;
+  for (const auto& name : only) {
+    // Each link of the path in turn (H5Oget_info_by_name on a path through a missing group fails).
+    bool there = true;
+    for (size_t slash = name.find('/', 1); there; slash = name.find('/', slash + 1)) {
+      there = H5Lexists(file.get(), name.substr(0, slash).c_str(), H5P_DEFAULT) > 0;
+      if (slash == std::string::npos) break;
+    }
+    H5O_info_t info;
+    if (!there || H5Oget_info_by_name2(file.get(), name.c_str(), &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0) continue;
+    if (ProbeObject(file.get(), name.c_str(), &info, &max_bytes) < 0) return false;
+  }
+  return true;
 }
 
 }  // namespace vibro::h5

@@ -141,6 +141,11 @@ std::vector<std::string> DatasetNames(Id loc);  // the datasets linked from loc,
 // Shape of dataset `name`; nullopt when it is missing or not a dataset.
 std::optional<std::vector<Size>> DatasetShape(Id loc, const std::string& name);
 bool IsStringDataset(Id loc, const std::string& name);
+// The element class of dataset `name` (kOther when it is missing or not a dataset).
+Class DatasetClass(Id loc, const std::string& name);
+// Row `row` of the numeric dataset `name` of rank 1 (one value) or 2 (a row), as float64: only
+// that row is read. Throws runtime_error when the row is beyond the dataset or the read fails.
+std::vector<double> ReadDatasetRow(Id loc, const std::string& name, Size row);
 std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name);  // converted to float64
 std::vector<std::string> ReadDatasetStrings(Id loc, const std::string& name);
 
@@ -178,6 +183,9 @@ class Column {
   void Truncate(Size rows);
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
   void Read(Size first, Size n, void* out) const;
+  // Reads every row once, in blocks: a damaged compressed chunk fails here (runtime_error naming
+  // the dataset) instead of in a reader of the file later.
+  void ReadAllRows() const;
 
  private:
   Handle dset_;
@@ -192,6 +200,8 @@ class Column {
 // Reads every attribute and every dataset (up to `max_bytes` each) of the file at `path`, for a
 // child process that tests whether the library survives the file. False when an object fails
 // cleanly; a corrupt file may crash the caller instead (that is what the child is for).
-bool ReadEverything(const std::string& path, double max_bytes);
+// With `only`, just those objects (absolute paths): a dataset with its attributes, a group's
+// attributes; a missing one is skipped (the caller's own read reports it).
+bool ReadEverything(const std::string& path, double max_bytes, const std::vector<std::string>& only = {});
 
 }  // namespace vibro::h5

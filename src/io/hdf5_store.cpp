@@ -135,9 +135,13 @@ void Hdf5Store::Impl::WriteCheckpoint() {
   h5::WriteDouble(g, "chatter_last_speed", c.chatter_last_speed);
   h5::WriteInt(g, "sample_index", c.sample_index);
   WriteCounts(g, c.counts);
+  h5::WriteInt(g, "chatter_accumulations_predicted", c.chatter_predicted);
+  h5::WriteInt(g, "chatter_impacts_followed", c.chatter_followed);
+  h5::WriteDouble(g, "chatter_max_estimated_error", c.chatter_max_error);
   h5::WriteInt(g, "events", static_cast<long long>(cp_events));
   h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));
   h5::WriteInt(g, "sections", static_cast<long long>(cp_sections));
+  checkpoint_on_disk = true;  // at the end of this flush
 }
 
 std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
@@ -252,6 +256,9 @@ void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
   m.cp_events = m.ev.t.rows();
   m.cp_samples = m.sa.t.rows();
   m.cp_sections = m.se.t.rows();
+  // The first checkpoint (the start state) reaches the disk at once: a run killed in its first
+  // second can be resumed too.
+  if (!m.checkpoint_on_disk) m.Flush();
 }
 
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
@@ -354,6 +361,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   // Damage that only a later write meets (a corrupt chunk index or heap) is refused now too.
   store::ProbeWrite(path, [&](const std::string& copy) {
     auto trial = prepare(copy);
+    // Every row the resumed file keeps is read once: a flipped bit in a compressed chunk is
+    // refused now, not found by a reader of a file that ends "ok".
+    for (h5::Column* col : trial->Columns()) col->ReadAllRows();
     const Checkpoint& c = *trial->last_checkpoint;
     const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
     const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
