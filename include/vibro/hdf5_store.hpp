@@ -12,6 +12,7 @@
 
 #include <memory>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,14 @@
 #include "vibro/studies.hpp"
 
 namespace vibro {
+
+// A write to an output file failed (no space left on device, an I/O error): what() is one line,
+// "<the system's reason> writing FILE; ...". The file keeps what its last flush wrote (readable,
+// resumable) and is not written again by this process. The CLI exits 3.
+class WriteError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 struct StoreHeader {
   std::string scene_text;  // the scene as run (TOML)

@@ -72,6 +72,10 @@ struct Checkpoint {
   double chatter_last_speed;   // |ẋ_B⁻| of the last impact
   long long sample_index;      // next dense-sample index
   EventCounts counts;          // events so far
+  // The chattering treatment so far (RunResult::chatter), so that a resumed run reports the
+  // whole run: sequences ended by a prediction, impacts followed, largest estimated error / T.
+  long long chatter_predicted = 0, chatter_followed = 0;
+  double chatter_max_error = 0;
 };
 
 // For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and

@@ -34,6 +34,23 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     orbit.period = pt.period;
   }
   const auto loaded = vibro::LoadScene(path, sets);
+  if (!restart_file.empty()) {
+    // The stored state must be one this scene can start from, as [initial] is checked.
+    const vibro::System at(loaded.scene);
+    const auto& X = orbit.start->X;
+    const auto& V = orbit.start->V;
+    if (X.size() != at.dof())
+      throw vibro::InputError({fmt::format("--from {}: /branch/X has {} columns (modal coordinates), the scene "
+                                           "has {} mode(s): a branch of another scene",
+                                           restart_file, X.size(), at.dof())});
+    const double xB = at.ContactDisplacement(X), vB = at.ContactVelocity(V);
+    const double x0 = loaded.scene.stop_position;
+    const double tol = 1e-12 * std::max(1.0, std::abs(x0));
+    if (xB < x0 - tol || (std::abs(xB - x0) <= tol && vB < 0))
+      throw vibro::InputError({fmt::format("--from {}: /branch/X of point {}: expected an admissible state "
+                                           "x_B ≥ x0 (moving away on the stop), found x_B = {}, ẋ_B = {}, x0 = {}",
+                                           restart_file, restart_point, xB, vB, x0)});
+  }
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
     throw vibro::InputError({key.find('[') == std::string::npos

@@ -85,6 +85,8 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
     const vibro::cli::FinalWrite writing;
     vibro::frontend::FinishStudy(*store, study, grid, interrupted);
     store.reset();
+  } catch (const vibro::WriteError&) {  // full disk: exit 3 (main)
+    throw;
   } catch (const std::runtime_error& e) {  // a resumed file whose damage shows only when written
     fmt::print(stderr, "vibro: cannot write the study to {}: {}; the cells computed are in its /basin/cells\n",
                args.out, e.what());

@@ -5,6 +5,7 @@
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement ·
 // 130 interrupted.
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
 #include "vibro/child_process.hpp"
+#include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -47,6 +49,20 @@ std::string ShellQuoted(const std::string& arg) {
 
 // An integer option's range (frontend/limits.hpp: the same limits Python's arguments are held to).
 CLI::Range InRange(vibro::frontend::IntLimit limit) { return CLI::Range(limit.lo, limit.hi); }
+
+// A message on one line: control characters that came with the input (a newline inside a --set
+// value or a file name) are shown escaped.
+std::string OneLine(const std::string& m) {
+  std::string out;
+  for (const char c : m) {
+    if (c == '\n') out += "\\n";
+    else if (c == '\r') out += "\\r";
+    else if (c == '\t') out += "\\t";
+    else if (static_cast<unsigned char>(c) < 0x20 || c == 0x7f) out += fmt::format("\\x{:02x}", static_cast<unsigned char>(c));
+    else out += c;
+  }
+  return out;
+}
 
 }  // namespace
 
@@ -299,15 +315,21 @@ int main(int argc, char** argv) {
                          cont_from, cont_point);
     }
   } catch (const vibro::InputError& e) {
-    for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", m);
+    for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", OneLine(m));
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
                e.messages().size());
     return kExitBadInput;
+  } catch (const vibro::WriteError& e) {  // full disk, I/O error: the file keeps its last flush
+    fmt::print(stderr, "vibro: {}; the file keeps what was written up to its last flush\n", OneLine(e.what()));
+    // Out at once: the HDF5 library's clean-up at exit would close the failed file's handles,
+    // which vibro leaves open on purpose (and it has crashed doing so).
+    std::fflush(nullptr);
+    std::_Exit(kExitNumerical);
   } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
-    fmt::print(stderr, "vibro: {}; nothing was written\n", e.what());
+    fmt::print(stderr, "vibro: {}; nothing was written\n", OneLine(e.what()));
     return kExitInterrupted;
   } catch (const std::exception& e) {
-    fmt::print(stderr, "vibro: internal error: {}\n", e.what());
+    fmt::print(stderr, "vibro: internal error: {}\n", OneLine(e.what()));
     return kExitInternal;
   }
   return kExitInternal;

@@ -662,6 +662,9 @@ void Automaton<S>::Checkpointed() {
   cp.chatter_last_speed = R::to_double(chatter_last_);
   cp.sample_index = sample_index_;
   cp.counts = result_.counts;
+  cp.chatter_predicted = result_.chatter.accumulations_predicted;
+  cp.chatter_followed = result_.chatter.impacts_followed;
+  cp.chatter_max_error = result_.chatter.max_estimated_error;
   for (auto* o : opt_.observers) o->OnCheckpoint(cp);
 }
 
@@ -682,6 +685,7 @@ RunResult Automaton<S>::Run() {
     chatter_last_ = cp.chatter_last_speed;
     sample_index_ = cp.sample_index;
     result_.counts = cp.counts;
+    result_.chatter = {cp.chatter_predicted, cp.chatter_followed, cp.chatter_max_error};
   } else {
     ClassifyInitialState();
     if (!opt_.observers.empty()) {

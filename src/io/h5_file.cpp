@@ -1,13 +1,22 @@
 // The HDF5 C API behind h5_file.hpp. The one file of vibro that includes it.
 #include "io/h5_file.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <atomic>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <mutex>
+#include <set>
 #include <stdexcept>
 #include <type_traits>
 
 #include <fmt/format.h>
 #include <hdf5.h>
+
+#include "vibro/hdf5_store.hpp"
 
 namespace vibro::h5 {
 
@@ -28,6 +37,85 @@ hid_t Check(hid_t id, const std::string& what) {
 }
 void CheckStatus(herr_t status, const std::string& what) {
   if (status < 0) throw std::runtime_error(fmt::format("HDF5: {} failed", what));
+}
+
+// Files a write failed on (the ids of their open files, never closed and so never reused): never
+// written or closed again (Close).
+std::mutex g_failed_mutex;
+std::set<hid_t> g_failed_files;
+std::atomic<bool> g_any_failed{false};
+
+// The id of the open file `obj` belongs to (one per H5Fcreate/H5Fopen, shared by all its
+// objects); false for objects of no file (types, property lists).
+bool FileNumber(hid_t obj, hid_t& number) {
+  if (H5Iget_type(obj) == H5I_FILE) {
+    number = obj;
+    return true;
+  }
+  const hid_t file = H5Iget_file_id(obj);  // the file's id, one more reference to it
+  if (file < 0) return false;
+  number = file;
+  H5Idec_ref(file);  // back to the count before (the file stays open)
+  return true;
+}
+
+// The system's reason for the failure just reported, from HDF5's error stack (its file driver
+// pushes "... errno = 28, error message = 'No space left on device' ..."): strerror's text with a
+// lower-case first letter, or "" when the stack names no errno.
+std::string SystemReason() {
+  int err = 0;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_DOWNWARD,
+      [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
+        const char* p = e->desc ? std::strstr(e->desc, "errno = ") : nullptr;
+        if (p == nullptr) return 0;
+        *static_cast<int*>(out) = std::atoi(p + 8);
+        return 1;  // the deepest one is enough
+      },
+      &err);
+  if (err <= 0) return "";
+  std::string text = std::strerror(err);
+  if (!text.empty() && text[0] >= 'A' && text[0] <= 'Z') text[0] = static_cast<char>(text[0] - 'A' + 'a');
+  return text;
+}
+
+void MarkFileFailed(hid_t obj) {
+  hid_t number = -1;
+  if (!FileNumber(obj, number)) return;
+  {
+    const std::lock_guard<std::mutex> hold(g_failed_mutex);
+    if (!g_failed_files.insert(number).second) return;
+    g_any_failed.store(true);
+  }
+  // The file's descriptor now reads /dev/null: whatever the library still does with this file
+  // (a close at exit) cannot reach its bytes.
+  void* handle = nullptr;
+  if (H5Fget_vfd_handle(number, H5P_DEFAULT, &handle) >= 0 && handle != nullptr) {
+    const int null_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (null_fd >= 0) {
+      dup2(null_fd, *static_cast<int*>(handle));
+      close(null_fd);
+    }
+  }
+}
+
+// A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why.
+void CheckWrite(herr_t status, hid_t obj, const std::string& what) {
+  if (status >= 0) return;
+  const int err = errno;
+  std::string reason = SystemReason();
+  if (reason.empty()) reason = err != 0 ? std::strerror(err) : fmt::format("HDF5 could not write {}", what);
+  char name[4096] = "the output file";
+  if (H5Fget_name(obj, name, sizeof name) < 0) std::strcpy(name, "the output file");
+  MarkFileFailed(obj);
+  throw WriteError(fmt::format("{} writing {}", reason, name));
+}
+
+// No chunk cache: a Column's rows reach the file when written (see Column in h5_file.hpp).
+Handle NoChunkCache() {
+  Handle dapl(H5Pcreate(H5P_DATASET_ACCESS), H5Pclose);
+  H5Pset_chunk_cache(dapl.get(), 0, 0, H5D_CHUNK_CACHE_W0_DEFAULT);
+  return dapl;
 }
 
 Handle StringMemType() {
@@ -78,6 +166,17 @@ Type Type::Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members
   return {std::move(t), 1};
 }
 
+void Close(Id id, Closer closer) {
+  if (g_any_failed.load()) {
+    hid_t number = -1;
+    if (FileNumber(id, number)) {
+      const std::lock_guard<std::mutex> hold(g_failed_mutex);
+      if (g_failed_files.count(number)) return;  // left open: a close would write to it
+    }
+  }
+  closer(id);
+}
+
 void Silence() {
   static const bool once = [] {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
@@ -107,7 +206,16 @@ Handle OpenFile(const std::string& path, bool write) {
   return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
 }
 
-void FlushFile(Id file) { CheckStatus(H5Fflush(file, H5F_SCOPE_LOCAL), "flush"); }
+void FlushFile(Id file) { CheckWrite(H5Fflush(file, H5F_SCOPE_LOCAL), file, "flush"); }
+
+Size MetadataBytes(Id file) {
+  size_t max_size = 0, min_clean = 0, cur_size = 0;
+  int entries = 0;
+  if (H5Fget_mdc_size(file, &max_size, &min_clean, &cur_size, &entries) < 0) return 16u << 20;
+  return cur_size;
+}
+
+void MarkFailed(Id file) { MarkFileFailed(file); }
 
 // ---- Links and groups ----
 
@@ -191,13 +299,22 @@ Handle NewAttr(Id obj, const std::string& name, hid_t file_type, const std::vect
 template <class T>
 void WriteScalar(Id obj, const std::string& name, T value, const Type& type) {
   Handle a = NewAttr(obj, name, type.file(), {});
-  CheckStatus(H5Awrite(a.get(), type.memory(), &value), name);
+  CheckWrite(H5Awrite(a.get(), type.memory(), &value), obj, name);
+}
+
+// An attribute of one element (scalar or of shape (1)): an array read into one value would
+// overrun it.
+void RequireOneElement(hid_t a, const std::string& name) {
+  Handle space(Check(H5Aget_space(a), name), H5Sclose);
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n != 1) throw std::runtime_error(fmt::format("attribute {}: expected one value, found {}", name, n));
 }
 
 template <class T>
 std::optional<T> ReadScalar(Id obj, const std::string& name, hid_t mem_type) {
   if (!HasAttr(obj, name)) return std::nullopt;
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  RequireOneElement(a.get(), name);
   T v{};
   CheckStatus(H5Aread(a.get(), mem_type, &v), name);
   return v;
@@ -209,7 +326,7 @@ void WriteString(Id obj, const std::string& name, const std::string& value) {
   const Type type = Type::String();
   Handle a = NewAttr(obj, name, type.file(), {});
   const char* p = value.c_str();
-  CheckStatus(H5Awrite(a.get(), type.memory(), &p), name);
+  CheckWrite(H5Awrite(a.get(), type.memory(), &p), obj, name);
 }
 
 void WriteDouble(Id obj, const std::string& name, double value) { WriteScalar(obj, name, value, Type::F64()); }
@@ -226,7 +343,7 @@ void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v,
   const std::vector<hsize_t> dims =
       cols > 1 ? std::vector<hsize_t>{v.size() / cols, cols} : std::vector<hsize_t>{v.size()};
   Handle a = NewAttr(obj, name, H5T_IEEE_F64LE, dims);
-  if (!v.empty()) CheckStatus(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
+  if (!v.empty()) CheckWrite(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), obj, name);
 }
 
 void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v) {
@@ -234,12 +351,16 @@ void WriteStringArray(Id obj, const std::string& name, const std::vector<std::st
   for (const auto& x : v) p.push_back(x.c_str());
   const Type type = Type::String();
   Handle a = NewAttr(obj, name, type.file(), {v.size()});
-  if (!v.empty()) CheckStatus(H5Awrite(a.get(), type.memory(), p.data()), name);
+  if (!v.empty()) CheckWrite(H5Awrite(a.get(), type.memory(), p.data()), obj, name);
 }
 
 std::string ReadString(Id obj, const std::string& name) {
   if (!HasAttr(obj, name)) return {};
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
+  RequireOneElement(a.get(), name);
+  Handle stored(Check(H5Aget_type(a.get()), name), H5Tclose);
+  if (H5Tget_class(stored.get()) != H5T_STRING)
+    throw std::runtime_error(fmt::format("attribute {}: expected a string", name));
   Handle type = StringMemType();
   char* p = nullptr;
   CheckStatus(H5Aread(a.get(), type.get(), &p), name);
@@ -260,7 +381,10 @@ std::vector<double> ReadDoubles(Id obj, const std::string& name) {
   if (!HasAttr(obj, name)) return {};
   Handle a(Check(H5Aopen(obj, name.c_str(), H5P_DEFAULT), name), H5Aclose);
   Handle space(H5Aget_space(a.get()), H5Sclose);
-  std::vector<double> v(static_cast<size_t>(H5Sget_simple_extent_npoints(space.get())));
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0 || n > (hssize_t{1} << 24))  // an attribute is small (the object header holds it)
+    throw std::runtime_error(fmt::format("attribute {}: {} values", name, n));
+  std::vector<double> v(static_cast<size_t>(n));
   if (!v.empty()) CheckStatus(H5Aread(a.get(), H5T_NATIVE_DOUBLE, v.data()), name);
   return v;
 }
@@ -295,7 +419,7 @@ void WriteDataset(Id loc, const std::string& name, const Type& type, const void*
                   name),
             H5Dclose);
   if (!d.empty() && d[0] > 0)
-    CheckStatus(H5Dwrite(ds.get(), type.memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), name);
+    CheckWrite(H5Dwrite(ds.get(), type.memory(), H5S_ALL, H5S_ALL, H5P_DEFAULT, data), loc, name);
 }
 
 void WriteStrings(Id loc, const std::string& name, const std::vector<std::string>& v) {
@@ -338,6 +462,36 @@ bool IsStringDataset(Id loc, const std::string& name) {
   return H5Tget_class(type.get()) == H5T_STRING;
 }
 
+Class DatasetClass(Id loc, const std::string& name) {
+  if (!Exists(loc, name)) return Class::kOther;
+  Handle d(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose);
+  if (!d) return Class::kOther;
+  Handle type(H5Dget_type(d.get()), H5Tclose);
+  switch (H5Tget_class(type.get())) {
+    case H5T_STRING: return Class::kString;
+    case H5T_INTEGER: return Class::kInteger;
+    case H5T_FLOAT: return Class::kFloat;
+    default: return Class::kOther;
+  }
+}
+
+std::vector<double> ReadDatasetRow(Id loc, const std::string& name, Size row) {
+  Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  Handle space(Check(H5Dget_space(d.get()), name), H5Sclose);
+  const int rank = H5Sget_simple_extent_ndims(space.get());
+  if (rank != 1 && rank != 2) throw std::runtime_error(fmt::format("dataset {} has rank {}", name, rank));
+  hsize_t dims[2] = {0, 1};
+  H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+  if (row >= dims[0] || dims[1] == 0 || dims[1] > (1u << 16))
+    throw std::runtime_error(fmt::format("dataset {}: no row {}", name, row));
+  const hsize_t start[2] = {row, 0}, count[2] = {1, dims[1]};
+  CheckStatus(H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), name);
+  Handle mem(H5Screate_simple(rank, count, nullptr), H5Sclose);
+  std::vector<double> v(static_cast<size_t>(rank == 2 ? dims[1] : 1));
+  CheckStatus(H5Dread(d.get(), H5T_NATIVE_DOUBLE, mem.get(), space.get(), H5P_DEFAULT, v.data()), name);
+  return v;
+}
+
 std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name) {
   Handle d(Check(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), name), H5Dclose);
   Handle space(H5Dget_space(d.get()), H5Sclose);
@@ -374,7 +528,7 @@ Column::Column(Id group, const std::string& name, const Type& type, Size cols)
   H5Pset_shuffle(dcpl.get());
   H5Pset_deflate(dcpl.get(), kDeflate);
   dset_ = Handle(Check(H5Dcreate2(group, name.c_str(), type.file(), space.get(), H5P_DEFAULT, dcpl.get(),
-                                  H5P_DEFAULT),
+                                  NoChunkCache().get()),
                        name),
                  H5Dclose);
 }
@@ -384,7 +538,7 @@ Column Column::Open(Id group, const std::string& name, const Type& type, Size co
   c.mem_type_ = Handle(H5Tcopy(type.memory()), H5Tclose);
   c.elem_size_ = type.size();
   c.name_ = name;
-  c.dset_ = Handle(Check(H5Dopen2(group, name.c_str(), H5P_DEFAULT), name), H5Dclose);
+  c.dset_ = Handle(Check(H5Dopen2(group, name.c_str(), NoChunkCache().get()), name), H5Dclose);
   Handle space(Check(H5Dget_space(c.dset_.get()), name), H5Sclose);
   const int rank = H5Sget_simple_extent_ndims(space.get());
   if (rank != (cols > 0 ? 2 : 1))
@@ -409,11 +563,12 @@ void Column::Flush() {
   if (n == 0) return;
   const int rank = cols_ > 0 ? 2 : 1;
   const hsize_t dims[2] = {rows_ + n, cols_}, start[2] = {rows_, 0}, count[2] = {n, cols_};
-  CheckStatus(H5Dset_extent(dset_.get(), dims), "extend");
+  CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
   Handle fs(H5Dget_space(dset_.get()), H5Sclose);
   H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
   Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
-  CheckStatus(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), "write");
+  CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, buf_.data()), dset_.get(),
+             name_);
   rows_ += n;
   buf_.clear();
 }
@@ -421,7 +576,7 @@ void Column::Flush() {
 void Column::Truncate(Size rows) {
   buf_.clear();
   const hsize_t dims[2] = {rows, cols_};
-  CheckStatus(H5Dset_extent(dset_.get(), dims), "truncate");
+  CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;
 }
 
@@ -436,6 +591,20 @@ void Column::Read(Size first, Size n, void* out) const {
   H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
   Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
   CheckStatus(H5Dread(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, out), "read");
+}
+
+void Column::ReadAllRows() const {
+  const Size row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  const Size block = std::max<Size>(1, (Size{8} << 20) / row_bytes);
+  std::vector<unsigned char> buf(static_cast<size_t>(std::min(block, std::max<Size>(rows_, 1)) * row_bytes));
+  for (Size first = 0; first < rows_; first += block) {
+    try {
+      Read(first, std::min(block, rows_ - first), buf.data());
+    } catch (const std::runtime_error&) {
+      throw std::runtime_error(fmt::format("dataset {}: rows from {} cannot be read (a damaged chunk)", name_, first));
+    }
+    // Variable-length elements (none in the tables) would need reclaiming here.
+  }
 }
 
 // ---- A full read, for the child process of a contained first read ----
@@ -495,11 +664,24 @@ herr_t ProbeObject(hid_t root, const char* name, const H5O_info_t* info, void* m
 
 }  // namespace
 
-bool ReadEverything(const std::string& path, double max_bytes) {
+bool ReadEverything(const std::string& path, double max_bytes, const std::vector<std::string>& only) {
   Silence();
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!file) return false;
-  return H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, &max_bytes, H5O_INFO_BASIC) >= 0;
+  if (only.empty())
+    return H5Ovisit2(file.get(), H5_INDEX_NAME, H5_ITER_NATIVE, ProbeObject, &max_bytes, H5O_INFO_BASIC) >= 0;
+  for (const auto& name : only) {
+    // Each link of the path in turn (H5Oget_info_by_name on a path through a missing group fails).
+    bool there = true;
+    for (size_t slash = name.find('/', 1); there; slash = name.find('/', slash + 1)) {
+      there = H5Lexists(file.get(), name.substr(0, slash).c_str(), H5P_DEFAULT) > 0;
+      if (slash == std::string::npos) break;
+    }
+    H5O_info_t info;
+    if (!there || H5Oget_info_by_name2(file.get(), name.c_str(), &info, H5O_INFO_BASIC, H5P_DEFAULT) < 0) continue;
+    if (ProbeObject(file.get(), name.c_str(), &info, &max_bytes) < 0) return false;
+  }
+  return true;
 }
 
 }  // namespace vibro::h5

@@ -4,6 +4,8 @@
 //
 // Errors: a failed call that vibro needs throws std::runtime_error("HDF5: <what> failed"); the
 // Try*/Has* functions return an empty handle or false instead, for the optional parts of a file.
+// A failed write or flush (full disk, I/O error) throws vibro::WriteError naming the system's
+// reason and the file, and marks the file failed: nothing is written to it again (see Close).
 #pragma once
 
 #include <algorithm>
@@ -21,10 +23,16 @@ namespace vibro::h5 {
 using Id = std::int64_t;     // hid_t
 using Size = std::uint64_t;  // hsize_t
 
+using Closer = int (*)(Id);  // herr_t (*)(hid_t)
+// Closes `id` with `closer`, unless it belongs to a file that a write failed on (see WriteError in
+// vibro/hdf5_store.hpp): such a file is never touched again, not even by a close (which would
+// flush half of a state over the last consistent one); its handles are left open.
+void Close(Id id, Closer closer);
+
 // Owns one hid_t and closes it with the matching H5?close.
 class Handle {
  public:
-  using Closer = int (*)(Id);  // herr_t (*)(hid_t)
+  using Closer = h5::Closer;
   Handle() = default;
   Handle(Id id, Closer closer) : id_(id), closer_(closer) {}
   Handle(Handle&& o) noexcept : id_(o.id_), closer_(o.closer_) { o.id_ = -1; }
@@ -43,7 +51,7 @@ class Handle {
   Id get() const { return id_; }
   explicit operator bool() const { return id_ >= 0; }
   void Reset() {
-    if (id_ >= 0 && closer_) closer_(id_);
+    if (id_ >= 0 && closer_) Close(id_, closer_);
     id_ = -1;
   }
 
@@ -87,6 +95,10 @@ Handle CreateFile(const std::string& path);
 // Opens `path` read-only, or read-write with the store's cache settings. Empty on failure.
 Handle OpenFile(const std::string& path, bool write);
 void FlushFile(Id file);
+// The bytes of metadata a flush of `file` writes at most (the metadata cache's current size).
+Size MetadataBytes(Id file);
+// Marks `file` failed as a failed write does (Close): it is never written or closed again.
+void MarkFailed(Id file);
 
 // ---- Links and groups ----
 bool Exists(Id loc, const std::string& path);
@@ -129,12 +141,18 @@ std::vector<std::string> DatasetNames(Id loc);  // the datasets linked from loc,
 // Shape of dataset `name`; nullopt when it is missing or not a dataset.
 std::optional<std::vector<Size>> DatasetShape(Id loc, const std::string& name);
 bool IsStringDataset(Id loc, const std::string& name);
+// The element class of dataset `name` (kOther when it is missing or not a dataset).
+Class DatasetClass(Id loc, const std::string& name);
+// Row `row` of the numeric dataset `name` of rank 1 (one value) or 2 (a row), as float64: only
+// that row is read. Throws runtime_error when the row is beyond the dataset or the read fails.
+std::vector<double> ReadDatasetRow(Id loc, const std::string& name, Size row);
 std::vector<double> ReadDatasetDoubles(Id loc, const std::string& name);  // converted to float64
 std::vector<std::string> ReadDatasetStrings(Id loc, const std::string& name);
 
 // ---- Extendible tables ----
 // A chunked, deflated dataset of `cols` columns (cols = 0: one-dimensional) that grows by rows
-// buffered in memory and written at Flush.
+// buffered in memory and written at Flush. It has no chunk cache: Flush writes the rows' chunks
+// to the file at once, so that a file's flush (FlushFile) writes metadata only.
 class Column {
  public:
   static constexpr Size kAnyCols = ~Size{0};
@@ -150,6 +168,7 @@ class Column {
   Size cols() const { return cols_; }
   Size rows() const { return rows_ + pending(); }
   Size pending() const { return buf_.size() / (elem_size_ * std::max<Size>(cols_, 1)); }
+  Size pending_bytes() const { return buf_.size(); }
 
   template <class T>
   void Push(const T& v) {
@@ -164,6 +183,9 @@ class Column {
   void Truncate(Size rows);
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
   void Read(Size first, Size n, void* out) const;
+  // Reads every row once, in blocks: a damaged compressed chunk fails here (runtime_error naming
+  // the dataset) instead of in a reader of the file later.
+  void ReadAllRows() const;
 
  private:
   Handle dset_;
@@ -178,6 +200,8 @@ class Column {
 // Reads every attribute and every dataset (up to `max_bytes` each) of the file at `path`, for a
 // child process that tests whether the library survives the file. False when an object fails
 // cleanly; a corrupt file may crash the caller instead (that is what the child is for).
-bool ReadEverything(const std::string& path, double max_bytes);
+// With `only`, just those objects (absolute paths): a dataset with its attributes, a group's
+// attributes; a missing one is skipped (the caller's own read reports it).
+bool ReadEverything(const std::string& path, double max_bytes, const std::vector<std::string>& only = {});
 
 }  // namespace vibro::h5

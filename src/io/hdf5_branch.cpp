@@ -119,29 +119,79 @@ void Hdf5Store::WriteBranch(const Branch& b) {
 }
 
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {
-  const H5Table t = ReadTable(path, "/branch");
-  const auto* value = t.Find("value");
-  const auto* t0 = t.Find("section_time");
-  const auto* X = t.Find("X");
-  const auto* V = t.Find("V");
-  if (!value || !t0 || !X || !V || X->dims.size() != 2)
-    throw InputError({fmt::format("{}: /branch holds no orbit states (section_time, X, V): written by an "
-                                  "older vibro; compute the branch again with vibro continue --out",
-                                  path)});
+  h5::Silence();
+  // Only what a restart needs is read (never the event strings): first in a child, which a
+  // damaged file may crash without harm, then here, row k alone, every value checked.
+  const std::vector<std::string> needed{"/branch", "/branch/value", "/branch/section_time", "/branch/X",
+                                        "/branch/V"};
+  store::ProbeInChild(path, needed);
+  const h5::Handle file = h5::OpenFile(path, false);
+  if (!file) throw store::CannotOpen(path);
+  const auto bad = [&](const std::string& what, const std::string& expected) {
+    return InputError({fmt::format("{}: {}: expected {}", path, what, expected)});
+  };
+  const h5::Handle g = h5::TryOpenGroup(file.get(), "/branch");
+  if (!g) throw InputError({fmt::format("{}: no group /branch in this file (not a continuation branch)", path)});
+  for (const char* name : {"section_time", "X", "V"})
+    if (!h5::DatasetShape(g.get(), name))
+      throw InputError({fmt::format("{}: /branch holds no orbit states (section_time, X, V): written by an "
+                                    "older vibro; compute the branch again with vibro continue --out",
+                                    path)});
+  // Shapes and types before anything is read: N points (value, section_time) and (N, n) states.
+  constexpr h5::Size kMaxPoints = h5::Size{1} << 24;  // continue --max-points at most
+  constexpr h5::Size kMaxModes = 4096;
+  for (const char* name : {"value", "section_time", "X", "V"}) {
+    const h5::Class c = h5::DatasetClass(g.get(), name);
+    if (c != h5::Class::kFloat && c != h5::Class::kInteger)
+      throw bad(fmt::format("/branch/{}", name), "a numeric dataset (float64)");
+  }
+  const auto value = *h5::DatasetShape(g.get(), "value");
+  if (value.size() != 1 || value[0] == 0 || value[0] > kMaxPoints)
+    throw bad("/branch/value", fmt::format("one dimension of 1 to {} points", kMaxPoints));
+  const h5::Size n_points = value[0];
+  if (*h5::DatasetShape(g.get(), "section_time") != std::vector<h5::Size>{n_points})
+    throw bad("/branch/section_time", fmt::format("shape ({}), as /branch/value", n_points));
+  const auto X = *h5::DatasetShape(g.get(), "X");
+  if (X.size() != 2 || X[0] != n_points || X[1] == 0 || X[1] > kMaxModes)
+    throw bad("/branch/X", fmt::format("shape ({}, n) with 1 ≤ n ≤ {} (a row per point of /branch/value)",
+                                       n_points, kMaxModes));
+  if (*h5::DatasetShape(g.get(), "V") != X)
+    throw bad("/branch/V", fmt::format("shape ({}, {}), as /branch/X", X[0], X[1]));
+  // Attributes: the parameter's name and the period, in range.
+  if (h5::AttrClass(g.get(), "param") != h5::Class::kString)
+    throw bad("/branch attribute param", "a string (the scene key the branch varies)");
+  if (h5::AttrClass(g.get(), "period") != h5::Class::kInteger)
+    throw bad("/branch attribute period", "an integer 1 to 4096");
   StoredBranchPoint p;
-  p.points = static_cast<long long>(value->data.size());
+  p.points = static_cast<long long>(n_points);
   if (k < 0 || k >= p.points)
     throw InputError({fmt::format("--point {}: {} holds points 0 to {}", k, path, p.points - 1)});
-  for (const auto& [name, text] : t.text)
-    if (name == "param") p.param = text;
-  for (const auto& [name, v] : t.integers)
-    if (name == "period") p.period = static_cast<int>(v);
-  const auto i = static_cast<size_t>(k);
-  p.value = value->data[i];
-  p.section_time = t0->data[i];
-  const size_t n = X->dims[1];
-  p.X = Eigen::Map<const Eigen::VectorXd>(X->data.data() + i * n, static_cast<Eigen::Index>(n));
-  p.V = Eigen::Map<const Eigen::VectorXd>(V->data.data() + i * n, static_cast<Eigen::Index>(n));
+  try {
+    p.param = h5::ReadString(g.get(), "param");
+    const auto period = h5::ReadInt(g.get(), "period");
+    if (!period || *period < 1 || *period > 4096)
+      throw bad("/branch attribute period", fmt::format("an integer 1 to 4096, found {}", period.value_or(0)));
+    p.period = static_cast<int>(*period);
+    const auto row = static_cast<h5::Size>(k);
+    p.value = h5::ReadDatasetRow(g.get(), "value", row)[0];
+    p.section_time = h5::ReadDatasetRow(g.get(), "section_time", row)[0];
+    const auto x = h5::ReadDatasetRow(g.get(), "X", row), v = h5::ReadDatasetRow(g.get(), "V", row);
+    p.X = Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
+    p.V = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError({fmt::format("{}: /branch point {} cannot be read: {}", path, k, e.what())});
+  }
+  const auto finite = [&](const std::string& what, double x) {
+    if (!std::isfinite(x)) throw bad(fmt::format("{} of point {}", what, k), fmt::format("a finite number, found {}", x));
+  };
+  finite("/branch/value", p.value);
+  finite("/branch/section_time", p.section_time);
+  for (Eigen::Index i = 0; i < p.X.size(); ++i) {
+    finite(fmt::format("/branch/X[{}]", i), p.X[i]);
+    finite(fmt::format("/branch/V[{}]", i), p.V[i]);
+  }
   return p;
 }
 

@@ -51,7 +51,7 @@ InputError CannotOpen(const std::string& path) {
   return InputError({fmt::format("{}: not an HDF5 file (or one damaged beyond opening)", name)});
 }
 
-void ProbeInChild(const std::string& path) {
+void ProbeInChild(const std::string& path, const std::vector<std::string>& only) {
   std::fflush(nullptr);
   const pid_t pid = fork();
   if (pid < 0) return;  // no child: vibro's own checked reads follow
@@ -63,7 +63,7 @@ void ProbeInChild(const std::string& path) {
     // A read that failed for want of memory (the limit above) would make vibro's own read ask for
     // the same: status kOutOfMemory.
     errno = 0;
-    const bool read = h5::ReadEverything(path, kProbeBytes);
+    const bool read = h5::ReadEverything(path, kProbeBytes, only);
     _exit(!read && errno == ENOMEM ? kOutOfMemory : 0);
   }
   // A stop request ends the wait (the child is killed): nothing was read or written.
@@ -109,6 +109,8 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
     if (ok) {
       try {
         changes(copy);
+      } catch (const WriteError&) {
+        code = 0;  // no room for the trial (a full /tmp) says nothing about the file
       } catch (const InputError& e) {
         // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
         code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;

@@ -100,6 +100,13 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       c.counts.sticks = *h5::ReadInt(g, "sticks");
       c.counts.releases = *h5::ReadInt(g, "releases");
       c.counts.grazings = *h5::ReadInt(g, "grazings");
+      // Absent in files written before the checkpoint carried them (0: counted from the resume).
+      c.chatter_predicted = h5::ReadInt(g, "chatter_accumulations_predicted").value_or(0);
+      c.chatter_followed = h5::ReadInt(g, "chatter_impacts_followed").value_or(0);
+      c.chatter_max_error = h5::ReadDouble(g, "chatter_max_estimated_error").value_or(0.0);
+      if (c.chatter_predicted < 0 || c.chatter_followed < 0 || !std::isfinite(c.chatter_max_error) ||
+          c.chatter_max_error < 0)
+        bad("chatter counts");
       cp_events = static_cast<h5::Size>(*h5::ReadInt(g, "events"));
       cp_sections = static_cast<h5::Size>(*h5::ReadInt(g, "sections"));
       const auto cp_samples = *h5::ReadInt(g, "samples");
@@ -175,7 +182,10 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
     if (h5::Exists(f, "/attractor")) {
       const h5::Handle ag = h5::OpenGroup(f, "/attractor");
       out.attractor.kind = h5::ReadString(ag.get(), "kind");
-      if (auto p = h5::ReadInt(ag.get(), "period")) out.attractor.period = static_cast<int>(*p);
+      if (auto p = h5::ReadInt(ag.get(), "period")) {
+        if (*p < 1 || *p > (1 << 20)) throw std::runtime_error(fmt::format("/attractor period {} out of range", *p));
+        out.attractor.period = static_cast<int>(*p);
+      }
       if (auto p = h5::ReadInt(ag.get(), "impacts_per_period")) out.attractor.impacts_per_period = *p;
       out.attractor.sticking_fraction = h5::ReadDouble(ag.get(), "sticking_fraction");
       const auto ph = h5::ReadDoubles(ag.get(), "stick_phases");

@@ -135,9 +135,13 @@ void Hdf5Store::Impl::WriteCheckpoint() {
   h5::WriteDouble(g, "chatter_last_speed", c.chatter_last_speed);
   h5::WriteInt(g, "sample_index", c.sample_index);
   WriteCounts(g, c.counts);
+  h5::WriteInt(g, "chatter_accumulations_predicted", c.chatter_predicted);
+  h5::WriteInt(g, "chatter_impacts_followed", c.chatter_followed);
+  h5::WriteDouble(g, "chatter_max_estimated_error", c.chatter_max_error);
   h5::WriteInt(g, "events", static_cast<long long>(cp_events));
   h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));
   h5::WriteInt(g, "sections", static_cast<long long>(cp_sections));
+  checkpoint_on_disk = true;  // at the end of this flush
 }
 
 std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
@@ -163,12 +167,27 @@ void Hdf5Store::Impl::Close() {
 
 void Hdf5Store::Impl::Flush() {
   const auto t0 = std::chrono::steady_clock::now();
+  // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
+  // then, when there is room for it, the metadata that makes them part of the file.
   for (h5::Column* c : Columns()) c->Flush();
   WriteCheckpoint();
+  CheckRoom();
   h5::FlushFile(file.get());
   last_flush = std::chrono::steady_clock::now();
   ++stats.flushes;
   stats.flush_seconds += std::chrono::duration<double>(last_flush - t0).count();
+}
+
+void Hdf5Store::Impl::CheckRoom() {
+  // A metadata flush that may not fit is not started: a half-written one could spoil the
+  // consistent state of the last flush, which the file then keeps (status "running", as after a
+  // kill: --resume continues it).
+  const double bytes = static_cast<double>(h5::MetadataBytes(file.get())) + 256.0 * 1024;
+  struct statvfs vfs {};
+  if (statvfs(path.c_str(), &vfs) != 0) return;
+  if (static_cast<double>(vfs.f_bavail) * static_cast<double>(vfs.f_frsize) >= bytes) return;
+  h5::MarkFailed(file.get());
+  throw WriteError(fmt::format("no space left on device writing {}", path));
 }
 
 Hdf5Store::Hdf5Store(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -177,9 +196,15 @@ Hdf5Store::~Hdf5Store() = default;
 std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const StoreHeader& h,
                                              double flush_interval) {
   h5::Silence();
+  // One writer per file: an existing file is locked before it is examined, a new one as it is made.
+  store::FileLock lock = store::FileLock::Acquire(path, false);
   bool existed = false;
   store::CheckReplaceable(path, h, existed);  // never clobber what is not ours
+  bool created = false;
+  if (!lock.held()) lock = store::FileLock::Acquire(path, true, &created);
+  if (created) existed = false;
   auto impl = std::make_unique<Impl>();
+  impl->lock = std::move(lock);
   impl->path = path;
   impl->header = h;
   impl->flush_interval = flush_interval;
@@ -231,6 +256,9 @@ void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
   m.cp_events = m.ev.t.rows();
   m.cp_samples = m.sa.t.rows();
   m.cp_sections = m.se.t.rows();
+  // The first checkpoint (the start state) reaches the disk at once: a run killed in its first
+  // second can be resumed too.
+  if (!m.checkpoint_on_disk) m.Flush();
 }
 
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
@@ -282,6 +310,9 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
 
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
                                              StoredRun& stored, double flush_interval) {
+  h5::Silence();
+  // One writer per file: held from before the file is read until the resumed run closes it.
+  store::FileLock lock = store::FileLock::Acquire(path, false);
   stored = ReadStoredRun(path, 4 * h.max_period + 2);  // what the attractor recorder keeps
   if (stored.scene_text != h.scene_text)
     throw InputError({fmt::format(
@@ -318,6 +349,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
       impl->last_checkpoint = *stored.checkpoint;
       h5::WriteString(impl->file.get(), "status", "running");
       impl->Flush();
+    } catch (const WriteError&) {
+      throw;
     } catch (const std::exception& e) {
       throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
     }
@@ -328,6 +361,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
   // Damage that only a later write meets (a corrupt chunk index or heap) is refused now too.
   store::ProbeWrite(path, [&](const std::string& copy) {
     auto trial = prepare(copy);
+    // Every row the resumed file keeps is read once: a flipped bit in a compressed chunk is
+    // refused now, not found by a reader of a file that ends "ok".
+    for (h5::Column* col : trial->Columns()) col->ReadAllRows();
     const Checkpoint& c = *trial->last_checkpoint;
     const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
     const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
@@ -352,6 +388,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
     store.Finish(r, a);
   });
   auto impl = prepare(path);
+  impl->lock = std::move(lock);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "io/file_lock.hpp"
 #include "io/h5_file.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
@@ -60,9 +61,10 @@ void CheckReplaceable(const std::string& path, const StoreHeader& header, bool& 
 // The refusal of a file that HDF5 cannot open, saying why: no such file (an empty name is shown
 // as ''), a directory, not readable, or not an HDF5 file (hdf5_probe.cpp).
 InputError CannotOpen(const std::string& path);
-// A contained first read of a file given to vibro (hdf5_probe.cpp): the whole file is read once
-// by a child process; InputError when that child crashes.
-void ProbeInChild(const std::string& path);
+// A contained first read of a file given to vibro (hdf5_probe.cpp): the whole file (or the
+// objects `only`, absolute paths) is read once by a child process; InputError when that child
+// crashes.
+void ProbeInChild(const std::string& path, const std::vector<std::string>& only = {});
 // Before a resume changes a file, `changes` are made to a copy in a child process; InputError
 // when the copy cannot take them.
 void ProbeWrite(const std::string& path, const std::function<void(const std::string&)>& changes);
@@ -72,6 +74,7 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
 namespace vibro {
 
 struct Hdf5Store::Impl {
+  store::FileLock lock;  // first member, released last: held until the file is closed
   std::string path;
   StoreHeader header;
   h5::Handle file, events, samples, section, checkpoint;
@@ -79,6 +82,7 @@ struct Hdf5Store::Impl {
   store::StateTable sa, se;
   std::optional<Checkpoint> last_checkpoint;
   h5::Size cp_events = 0, cp_samples = 0, cp_sections = 0;  // rows at the last checkpoint
+  bool checkpoint_on_disk = false;  // a checkpoint has been flushed
   double flush_interval = 1.0;
   std::chrono::steady_clock::time_point last_flush;
   unsigned calls = 0;
@@ -90,6 +94,7 @@ struct Hdf5Store::Impl {
   void OpenGroups();
   void OpenColumns();
   void MaybeFlush();
+  void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
   void WriteCheckpoint();
   std::vector<h5::Column*> Columns();
   void Close();

@@ -157,6 +157,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
                                                   const StudyGrid& grid, std::vector<CellResult>& cells,
                                                   double flush_interval) {
   h5::Silence();
+  // One writer per file: held from before the file is read until the resumed study closes it.
+  store::FileLock lock = store::FileLock::Acquire(path, false);
   const StoredRun stored = ReadStoredRun(path);
   if (stored.scene_text != h.scene_text)
     throw InputError({fmt::format(
@@ -277,6 +279,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
     impl->Flush();
   } catch (const InputError&) {
     throw;
+  } catch (const WriteError&) {
+    throw;
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }
@@ -317,6 +321,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
     store.Finish(r, none);
   });
   auto impl = prepare(path);
+  impl->lock = std::move(lock);
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

@@ -213,7 +213,20 @@ class Reader {
         os << concrete;
       }
     });
-    return text ? os.str() : ShortestFloats(os.str());
+    // On one line: toml++ writes a nested array over several lines; a newline and its indent go
+    // (a space after a comma).
+    const std::string written = os.str();
+    if (text) return written;  // a string as written (the CLI shows a newline in it escaped)
+    std::string out;
+    for (size_t i = 0; i < written.size(); ++i) {
+      if (written[i] != '\n') {
+        out += written[i];
+        continue;
+      }
+      while (i + 1 < written.size() && (written[i + 1] == ' ' || written[i + 1] == '\t')) ++i;
+      if (!out.empty() && out.back() == ',') out += ' ';
+    }
+    return ShortestFloats(out);
   }
   void Report(const toml::node* n, const std::string& key, const std::string& what) {
     reported_.push_back(key);

@@ -2,7 +2,9 @@
 // reported against its key.
 #include "vibro/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -173,6 +175,13 @@ std::vector<InputIssue> Validate(const Scene& s) {
   if (s.physical) {
     CheckMagnitude(s.physical->mass.reshaped(), "structure.mass", c);
     CheckMagnitude(s.physical->stiffness.reshaped(), "structure.stiffness", c);
+    // A mass or stiffness below kTiny (a subnormal one) makes ω² = k/m overflow or vanish.
+    for (const auto& [M, key] : {std::pair{&s.physical->mass, "structure.mass"},
+                                 std::pair{&s.physical->stiffness, "structure.stiffness"}})
+      for (Eigen::Index i = 0; i < std::min(M->rows(), M->cols()); ++i)
+        c.Require(!((*M)(i, i) > 0) || (*M)(i, i) >= kTiny, key, Show(*M),
+                  fmt::format("diagonal entries ≥ {:g} (entry ({}, {}) is {:g}; ω² = k/m must be representable)",
+                              kTiny, i, i, (*M)(i, i)));
   }
   c.Require(n_listed <= kMaxModes, "structure", std::to_string(n_listed),
             fmt::format("at most {} modes or DOFs (the model's matrices are n×n)", kMaxModes));
