@@ -265,6 +265,22 @@ TEST(QuadDampedSticking, ClosedFormMatchesTaylorFlow) {
   Scene s4 = Chain(4, 1.0, 0.5, 0.8, 1.0);
   s4.damping_ratios = Eigen::Vector4d(0.01, 0.05, 0.2, 0.4);
   ExpectMatchesTaylor(s4, "4-DOF chain, unequal damping");
+  // A star (mass B tied to three equal masses): the constrained pulsation 1 is triple, and so are
+  // the eigenvalues of G with equal damping ratios (a repeated, non-defective eigenvalue); unequal
+  // ratios split them.
+  for (const Eigen::Vector4d& zeta : {Eigen::Vector4d(0.05, 0.05, 0.05, 0.05),
+                                     Eigen::Vector4d(0.05, 0.02, 0.08, 0.05)}) {
+    Scene star;
+    Eigen::MatrixXd K(4, 4);
+    K << 4, -1, -1, -1, -1, 1, 0, 0, -1, 0, 1, 0, -1, 0, 0, 1;
+    star.physical = PhysicalStructureSpec{Eigen::MatrixXd::Identity(4, 4), K, 1, 0};
+    star.damping_ratios = zeta;
+    star.stop_position = 0.5;
+    star.amplitude = 2.0;
+    star.frequency = 0.7;
+    ASSERT_NEAR(System(star).constrained().frequencies[0], System(star).constrained().frequencies[2], 1e-12);
+    ExpectMatchesTaylor(star, zeta[1] == zeta[2] ? "star, triple eigenvalue" : "star, split eigenvalues");
+  }
   // 49 constrained modes, ω'_max ≈ 1000 (G spans six decades): the Taylor steps are 1/4 of the
   // fastest period, so only short times.
   ExpectMatchesTaylor(LoadScene(std::string(VIBRO_SCENES_DIR) + "/large/beam50.toml", {}).scene,
