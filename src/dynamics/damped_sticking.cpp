@@ -15,7 +15,7 @@ std::complex<double> Expm1(std::complex<double> z) {
 
 }  // namespace
 
-DampedSticking::DampedSticking(const System& sys) : sys_(sys) {
+DampedStickingT<double>::DampedStickingT(const System& sys) : sys_(sys) {
   const auto& cm = sys.constrained();
   k_ = cm.frequencies.size();
   if (k_ == 0) return;

@@ -77,7 +77,10 @@ class ExactEngineT final : public PropagatorT<S> {
   mutable std::vector<ModeSample> samples_;     // scratch of the probes (no allocation per probe)
   S reaction_forcing_;                       // (s_A/s_B) f
   bool damped_sticking_ = false;             // non-proportional damping in the constrained modes
-  DampedSticking damped_;                    // its closed form (docs/model.md §7), double only
+  // Its closed form (docs/model.md §7): DampedStickingT<Quad> is declared in
+  // dynamics/damped_sticking_quad.hpp, which the quad instantiation includes
+  // (dynamics/exact_engine_quad.hpp).
+  DampedStickingT<S> damped_;
 
   // Current segment.
   Mode mode_ = Mode::kFree;
@@ -212,9 +215,7 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
     // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (docs/model.md §4.2).
     xi0_ = m_.stick_left * s.X;
     dxi0_ = m_.stick_left * s.V;
-    if constexpr (std::is_same_v<S, double>) {
-      if (damped_sticking_) damped_.Begin(xi0_, dxi0_, phase_);
-    }
+    if (damped_sticking_) damped_.Begin(xi0_, dxi0_, phase_);
   }
 }
 
@@ -319,23 +320,21 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
 
 template <class S>
 SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool detect_events) {
-  if constexpr (std::is_same_v<S, double>) {
-    if (damped_sticking_ && !damped_.ok())
+  if (damped_sticking_ && !damped_.ok()) {
+    if constexpr (std::is_same_v<S, double>)
       return {SegmentEnd::kFailure, 0.0,
               "the damped constrained system is defective (critically damped constrained mode): "
               "no closed form; change structure.damping_ratios slightly, or use run.engine = "
               "\"cvode\""};
-  } else {
-    if (damped_sticking_)
+    else
       return {SegmentEnd::kFailure, S(0),
-              "run.precision = \"quad\" has no closed form for damped sticking of two or more "
-              "modes; use run.precision = \"double\""};
+              "the damped constrained system is defective (critically damped constrained mode, or "
+              "eigenvectors that do not refine to quad precision): no closed form; change "
+              "structure.damping_ratios slightly"};
   }
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
   const auto probe = [this](const S& u, const S& H, const S& rest) -> ProbeT<S> {
-    if constexpr (std::is_same_v<S, double>) {
-      if (damped_sticking_) return damped_.ReactionProbe(u);
-    }
+    if (damped_sticking_) return damped_.ReactionProbe(u);
     return ReactionProbe(u, H, rest);
   };
   S w(0);
@@ -382,11 +381,9 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   const auto k_count = static_cast<Eigen::Index>(stick_modes_.size());
   Vec xi(k_count), dxi(k_count);
   bool done = false;
-  if constexpr (std::is_same_v<S, double>) {
-    if (damped_sticking_) {
-      damped_.Evaluate(sigma, xi, dxi);
-      done = true;
-    }
+  if (damped_sticking_) {
+    damped_.Evaluate(sigma, xi, dxi);
+    done = true;
   }
   const ForcingTrigT<S> fw(omega_, sigma);
   for (Eigen::Index k = 0; k < k_count && !done; ++k) {

@@ -1,8 +1,7 @@
 #include "dynamics/simulate_quad.hpp"
 
 #include "dynamics/automaton.hpp"
-#include "dynamics/exact_engine.hpp"
-#include "dynamics/quad.hpp"
+#include "dynamics/exact_engine_quad.hpp"
 
 namespace vibro::detail {
 

@@ -9,7 +9,7 @@
 #include "dynamics/cvode_engine.hpp"
 #include "dynamics/engine_factory.hpp"
 #include "dynamics/exact_engine.hpp"
-#include "dynamics/quad.hpp"
+#include "dynamics/exact_engine_quad.hpp"
 #include "support.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/scene_file.hpp"
