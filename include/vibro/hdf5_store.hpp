@@ -100,6 +100,13 @@ class Hdf5Store final : public Observer {
   // Throws InputError when the file holds another scene or no checkpoint.
   static std::unique_ptr<Hdf5Store> Resume(const std::string& path, const StoreHeader& header,
                                            StoredRun& stored, double flush_interval = 1.0);
+  // Opens `path` to extend the run it holds, finished or not, to header.periods periods in all
+  // (vibro simulate --extend): as Resume, but the file's scene may differ from header.scene_text
+  // in run.periods alone, which must grow; a finished run is taken up at its final checkpoint.
+  // The file's scene, periods and provenance become the header's. Throws InputError when the
+  // scenes differ otherwise, or the run ended in a numerical failure or undetermined.
+  static std::unique_ptr<Hdf5Store> Extend(const std::string& path, const StoreHeader& header,
+                                           StoredRun& stored, double flush_interval = 1.0);
   ~Hdf5Store() override;
 
   void OnEvent(const Event& e) override;
@@ -175,6 +182,8 @@ class Hdf5Store final : public Observer {
  private:
   struct Impl;
   explicit Hdf5Store(std::unique_ptr<Impl> impl);
+  static std::unique_ptr<Hdf5Store> Continue(const std::string& path, const StoreHeader& header,
+                                             StoredRun& stored, double flush_interval, bool extend);
   std::unique_ptr<Impl> impl_;
 };
 

@@ -41,9 +41,9 @@ using vibro::frontend::NotANumericKey;
 // `vibro model SCENE` (cmd_model.cpp).
 int RunModel(const std::string& path, const std::vector<std::string>& sets, bool json);
 
-// `vibro simulate SCENE [--out FILE [--resume]]` (cmd_simulate.cpp).
+// `vibro simulate SCENE [--out FILE [--resume | --extend N]]` (cmd_simulate.cpp); extend 0: none.
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume);
+                const std::string& out, bool resume, long long extend);
 
 // `vibro orbit SCENE` (cmd_orbit.cpp).
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,

@@ -1,4 +1,6 @@
-// `vibro simulate SCENE [--out FILE.h5 [--resume]]`: one run and its attractor (docs/cli.md).
+// `vibro simulate SCENE [--out FILE.h5 [--resume | --extend N]]`: one run and its attractor
+// (docs/cli.md). A resumed or extended run continues from the file's last checkpoint and writes
+// the same bits as an uninterrupted run of its total length.
 #include <memory>
 #include <optional>
 
@@ -16,8 +18,14 @@
 #include "vibro/system.hpp"
 
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume) {
-  const auto loaded = vibro::LoadScene(path, sets);
+                const std::string& out, bool resume, long long extend) {
+  if ((resume || extend > 0) && out.empty())
+    throw vibro::InputError({fmt::format("{} needs --out FILE.h5 (the file to continue)",
+                                         extend > 0 ? "--extend" : "--resume")});
+  // An extension runs the scene for the stored periods plus `extend` (the file's run.periods
+  // becomes that total).
+  const auto loaded = extend > 0 ? vibro::frontend::ExtendedScene(vibro::LoadScene(path, sets), out, extend, "--extend")
+                                 : vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
@@ -28,10 +36,10 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
 
   std::unique_ptr<vibro::Hdf5Store> store;
   vibro::StoredRun stored;
-  if (resume && out.empty()) throw vibro::InputError({"--resume needs --out FILE.h5 (the file to continue)"});
   if (!out.empty()) {
-    if (resume) {
-      store = vibro::Hdf5Store::Resume(out, vibro::frontend::HeaderOf(loaded, sys), stored);
+    if (resume || extend > 0) {
+      const auto header = vibro::frontend::HeaderOf(loaded, sys);
+      store = extend > 0 ? vibro::Hdf5Store::Extend(out, header, stored) : vibro::Hdf5Store::Resume(out, header, stored);
       options.resume_from = &*stored.checkpoint;
       // Give the classification the history it would have had.
       for (size_t i = 0; i < stored.tail_section_clocks.size(); ++i) {
@@ -57,9 +65,11 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   const auto attractor = recorder.Classify();
   std::optional<vibro::LyapunovSpectrum> spectrum;
   if (lyapunov) spectrum = lyapunov->Spectrum();
+  vibro::Hdf5Store::Stats written;
   if (store) {
     const vibro::cli::FinalWrite writing;
     store->Finish(result, attractor);
+    written = store->stats();
     store.reset();
   }
 
@@ -93,9 +103,10 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  vibro::ToString(loaded.scene.run.method), "SUNDIALS 6.4", loaded.scene.run.rtol,
                  loaded.scene.run.atol, result.solver.steps, result.solver.rhs_evals,
                  result.solver.root_evals, result.solver.reinits);
-    if (store)
-      fmt::print("output       {}{} ({} flushes, {:.3f} s writing)\n", out, resume ? " (resumed)" : "",
-                 store->stats().flushes, store->stats().flush_seconds);
+    if (!out.empty())
+      fmt::print("output       {}{} ({} flushes, {:.3f} s writing)\n", out,
+                 extend > 0 ? fmt::format(" (extended by {} periods)", extend) : resume ? " (resumed)" : "",
+                 written.flushes, written.flush_seconds);
   }
   if (result.status != vibro::RunStatus::kOk)
     fmt::print(stderr, "vibro: {}: {}\n", vibro::ToString(result.status), result.message);

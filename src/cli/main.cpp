@@ -92,6 +92,10 @@ int main(int argc, char** argv) {
   bool resume = false;
   simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
   simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
+  long long extend = 0;
+  simulate->add_option("--extend", extend,
+                       "continue the run stored in --out (finished or interrupted) for N more periods")
+      ->check(CLI::Range(1LL, 1LL << 53));
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
   add_scene_options(orbit);
@@ -255,7 +259,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*model) return RunModel(scene_path, sets, json);
-    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume);
+    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend);
     if (*info) return RunInfo(file_path, json);
     if (*orbit) {
       orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact

@@ -117,6 +117,30 @@ StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
   return h;
 }
 
+LoadedScene ExtendedScene(const LoadedScene& given, const std::string& path, long long more, const char* option) {
+  const StoredRun stored = ReadStoredRun(path);
+  const auto refuse = [&](const std::string& why) {
+    return InputError({fmt::format("{}: cannot extend ({} {}): {}", path, option, more, why)});
+  };
+  if (!stored.checkpoint) throw refuse("the file holds no checkpoint (not a run of vibro simulate --out)");
+  if (stored.status == ToString(RunStatus::kNumericalFailure) || stored.status == ToString(RunStatus::kUndetermined))
+    throw refuse(fmt::format("its run ended with status {} ({}); a continuation would meet the same end",
+                             stored.status, stored.message));
+  long long held = 0;
+  try {
+    held = ParseScene(stored.scene_text, path + " (attribute scene)").scene.run.periods;
+  } catch (const InputError& e) {
+    throw refuse("the scene it holds does not parse: " + e.messages().front());
+  }
+  constexpr long long kMostPeriods = 1LL << 53;  // the range of run.periods (docs/scenes.md)
+  if (more < 1 || more > kMostPeriods - held)
+    throw refuse(fmt::format("expected 1 ≤ N ≤ {} (the run holds {} periods; run.periods ≤ 2^53)",
+                             kMostPeriods - held, held));
+  // The given scene with run.periods = the new total; the store checks that nothing else differs.
+  LoadedScene total = ParseScene(given.text_as_run, given.source, {fmt::format("run.periods={}", held + more)});
+  return total;
+}
+
 Coordinate StudyCoordinate(const System& sys, const std::string& name, const std::vector<double>& r,
                            const char* option, std::vector<std::string>& problems) {
   if (r.size() == 2) {

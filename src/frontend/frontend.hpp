@@ -59,6 +59,13 @@ void SetInvocation(Invocation invocation);
 // every default resolved).
 StoreHeader HeaderOf(const LoadedScene& loaded, const System& system);
 
+// The scene of a run stored in `path` (vibro simulate --out) extended by `more` periods: `given`
+// with run.periods = the stored run's periods + more (what the store's Resume with `extend`
+// takes). InputError, naming `option` ("--extend" or "extend"), when the file cannot be read, its
+// scene differs from `given` in anything but run.periods, it holds no checkpoint or its run ended
+// in a numerical failure (an extension would meet it again).
+LoadedScene ExtendedScene(const LoadedScene& given, const std::string& path, long long more, const char* option);
+
 // A study's coordinate over `range` (A,B with A < B), or its default range when `range` is empty:
 // x_B from the stop over two stop distances, velocities over ±2 ω_1 max(1, |x0|). Problems are
 // appended to `problems` with `option` (e.g. "--x-range") named.

@@ -54,6 +54,12 @@ void CheckReplaceable(const std::string& path, const StoreHeader& h, bool& exist
         scene != h.scene_text ? "another scene" : "another command")});
 }
 
+void WriteExtension(h5::Id f, const StoreHeader& h) {
+  for (const auto& [name, value] : h.provenance) h5::WriteString(f, name, value);
+  h5::WriteString(f, "scene", h.scene_text);
+  h5::WriteInt(f, "periods", h.periods);
+}
+
 void WriteHeader(h5::Id f, const StoreHeader& h) {
   h5::WriteString(f, "vibro_version", VIBRO_VERSION);
   h5::WriteString(f, "git_commit", VIBRO_GIT_COMMIT);

@@ -8,6 +8,7 @@
 #include <sys/statvfs.h>
 
 #include <cstdio>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -97,6 +98,21 @@ void WriteCounts(h5::Id where, const EventCounts& counts) {
   h5::WriteInt(where, "sticks", counts.sticks);
   h5::WriteInt(where, "releases", counts.releases);
   h5::WriteInt(where, "grazings", counts.grazings);
+}
+
+// What to say when a resume is refused because the scenes differ: when they differ in run.periods
+// alone (`stored` is the file's), how to resume the stored run or extend it; else nothing.
+std::string PeriodsHint(const std::string& stored, const std::string& given, const std::string& path) {
+  try {
+    const auto held = ParseScene(stored, path);
+    if (ParseScene(stored, path, {"run.periods=1"}).text_as_run != ParseScene(given, path, {"run.periods=1"}).text_as_run)
+      return "";
+    return fmt::format(" (only run.periods differs: the file's run is for {} periods; resume it with --set "
+                       "run.periods={}, or continue it for N more periods with --extend N)",
+                       held.scene.run.periods, held.scene.run.periods);
+  } catch (const InputError&) {
+    return "";
+  }
 }
 
 }  // namespace
@@ -310,21 +326,51 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
 
 std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const StoreHeader& h,
                                              StoredRun& stored, double flush_interval) {
+  return Continue(path, h, stored, flush_interval, false);
+}
+
+std::unique_ptr<Hdf5Store> Hdf5Store::Extend(const std::string& path, const StoreHeader& h,
+                                             StoredRun& stored, double flush_interval) {
+  return Continue(path, h, stored, flush_interval, true);
+}
+
+std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const StoreHeader& h,
+                                               StoredRun& stored, double flush_interval, bool extend) {
   h5::Silence();
   // One writer per file: held from before the file is read until the resumed run closes it.
   store::FileLock lock = store::FileLock::Acquire(path, false);
   stored = ReadStoredRun(path, 4 * h.max_period + 2);  // what the attractor recorder keeps
-  if (stored.scene_text != h.scene_text)
+  const char* verb = extend ? "extend" : "resume";
+  if (extend) {
+    // The file's scene with the new total must be the given one (which has it already).
+    std::optional<LoadedScene> held;
+    try {
+      held = ParseScene(stored.scene_text, path, {fmt::format("run.periods={}", h.periods)});
+    } catch (const InputError&) {
+    }
+    const bool longer = held && ParseScene(stored.scene_text, path).scene.run.periods < h.periods;
+    if (!held || held->text_as_run != h.scene_text)
+      throw InputError({fmt::format(
+          "{}: cannot extend: the file holds a different scene (or different --set overrides) than "
+          "the one given, apart from run.periods; extend with the scene of the stored run",
+          path)});
+    if (!longer) throw InputError({fmt::format("{}: cannot extend: the total must exceed the stored run.periods", path)});
+    if (stored.status == ToString(RunStatus::kNumericalFailure) || stored.status == ToString(RunStatus::kUndetermined))
+      throw InputError({fmt::format("{}: cannot extend: its run ended with status {}", path, stored.status)});
+  } else if (stored.scene_text != h.scene_text) {
     throw InputError({fmt::format(
         "{}: cannot resume: the file holds a different scene (or different --set overrides) "
-        "than the one given; resume with exactly the scene of the interrupted run",
-        path)});
+        "than the one given; resume with exactly the scene of the interrupted run{}",
+        path, PeriodsHint(stored.scene_text, h.scene_text, path))});
+  }
   if (!stored.checkpoint)
-    throw InputError({fmt::format("{}: cannot resume: the file holds no checkpoint", path)});
-  if (stored.status == "ok")
-    throw InputError({fmt::format("{}: nothing to resume: the run finished (status ok)", path)});
+    throw InputError({fmt::format("{}: cannot {}: the file holds no checkpoint", path, verb)});
+  if (stored.status == "ok" && !extend)
+    throw InputError({fmt::format("{}: nothing to resume: the run finished (status ok; --extend N "
+                                  "continues it for N more periods)",
+                                  path)});
   if (stored.checkpoint->X.size() != h.dof)
-    throw InputError({fmt::format("{}: cannot resume: the checkpoint has {} coordinates, the scene {}", path,
+    throw InputError({fmt::format("{}: cannot {}: the checkpoint has {} coordinates, the scene {}", path, verb,
                                   stored.checkpoint->X.size(), h.dof)});
   // Opens `file_path` and makes every change a resume makes before the run goes on; done first on
   // a copy (ProbeWrite), so that a file that cannot take them is refused unchanged.
@@ -347,12 +393,13 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Resume(const std::string& path, const Stor
       for (h5::Column* c : impl->sa.All()) c->Truncate(impl->cp_samples);
       for (h5::Column* c : impl->se.All()) c->Truncate(impl->cp_sections);
       impl->last_checkpoint = *stored.checkpoint;
+      if (extend) store::WriteExtension(impl->file.get(), h);
       h5::WriteString(impl->file.get(), "status", "running");
       impl->Flush();
     } catch (const WriteError&) {
       throw;
     } catch (const std::exception& e) {
-      throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
+      throw InputError({fmt::format("{}: cannot {}: {}", path, verb, e.what())});
     }
     return impl;
   };

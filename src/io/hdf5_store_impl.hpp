@@ -54,6 +54,9 @@ struct CellTable {
 
 // The root attributes and /model of a new file (provenance, the scene, the model).
 void WriteHeader(h5::Id file, const StoreHeader& header);
+// What an extension (Hdf5Store::Extend) changes in the header: the scene, periods and the
+// provenance attributes become those of the run as extended.
+void WriteExtension(h5::Id file, const StoreHeader& header);
 // Refuses (InputError) to replace at `path` anything but a vibro file of the same scene and
 // command (any vibro file with header.force). Nothing is changed.
 void CheckReplaceable(const std::string& path, const StoreHeader& header, bool& existed);
