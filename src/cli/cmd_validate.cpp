@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
+#include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
 #include "frontend/commands.hpp"
 #include "vibro/summary_json.hpp"
@@ -22,10 +24,11 @@ int RunValidate(const ValidateArgs& a) {
   if (!a.out.empty())
     store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, vibro::System(loaded.scene)));
 
+  std::optional<vibro::cli::Progress> progress(std::in_place, "points", a.json);
   const auto result = vibro::frontend::RunValidation(job, spec, &vibro::cli::StopFlag(), [&](size_t done, size_t total) {
-    if (!a.json) fmt::print(stderr, "\r{} of {} points", done, total);
+    progress->Update(static_cast<long long>(done), static_cast<long long>(total));
   });
-  if (!a.json) fmt::print(stderr, "\n");
+  progress.reset();
   if (store) {
     const vibro::cli::FinalWrite writing;
     vibro::frontend::FinishValidation(*store, job, result);

@@ -1,5 +1,10 @@
-// Progress of long commands on stderr: shown only when stderr is a terminal and the command
-// prints text (not --json); never moves backwards; redrawn at most every 0.2 s; thread-safe.
+// Progress of long commands on stderr, only when the command prints text (not --json); never
+// moves backwards; thread-safe.
+//   - stderr a terminal: a bar redrawn in place (\r) at most every 0.2 s, with the rate and the
+//     time left, ended by a newline;
+//   - stderr a file or pipe (a log): whole lines, at most one every kLineSeconds, the first one
+//     after kLineSeconds (a short command writes none); when one was written, a last line with
+//     the state reached and the time taken.
 #pragma once
 
 #include <chrono>
@@ -12,22 +17,31 @@ namespace vibro::cli {
 
 class Progress {
  public:
+  static constexpr double kLineSeconds = 5.0;
+
   Progress(std::string label, bool json);
-  ~Progress();  // ends the line if anything was drawn
+  ~Progress();  // ends the bar's line, or writes the last line of a log
   Progress(const Progress&) = delete;
   Progress& operator=(const Progress&) = delete;
 
-  bool active() const { return active_; }
-  // done of total units; calls with a smaller `done` than already shown are ignored.
+  bool active() const { return style_ != Style::kOff; }
+  // done of total units; calls with a smaller `done` than already seen are ignored.
   void Update(long long done, long long total, const std::string& note = "");
 
  private:
+  enum class Style { kOff, kBar, kLines };
+  using Clock = std::chrono::steady_clock;
+  // "42% (420 / 1000), 35.2/s, 16 s left" from the state seen (mutex held).
+  std::string State(Clock::time_point now, bool final) const;
+
   std::string label_;
-  bool active_;
+  Style style_;
   std::mutex mutex_;
-  long long shown_ = -1;
-  bool drawn_ = false;
-  std::chrono::steady_clock::time_point last_{};
+  long long done_ = -1, total_ = 0;  // the latest state seen
+  std::string note_;
+  long long first_done_ = -1;  // the first state seen, and when: the rate counts from there
+  Clock::time_point first_{}, last_{};
+  bool drawn_ = false;  // anything written
 };
 
 // Period-by-period progress of a simulation (the stroboscopic section is reached once a period).
