@@ -204,6 +204,10 @@ std::string BranchJson(const Branch& b) {
   for (const auto& x : b.bifurcations)
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["bifurcations"] = bif;
+  auto rel = nlohmann::json::array();
+  for (const auto& x : b.relabels)
+    rel.push_back({{"value", x.value}, {"from", x.from}, {"to", x.to}, {"detail", x.detail}, {"bracket", x.bracket}});
+  j["relabels"] = rel;
   j["end"] = b.end;
   j["quad_evaluations"] = b.quad_evaluations;
   return j.dump();
