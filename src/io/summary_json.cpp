@@ -34,6 +34,11 @@ nlohmann::json AttractorObject(const Attractor& a) {
     j["impact_phases"] = a.impact_phases;
     j["impact_velocities"] = a.impact_velocities;
   }
+  if (a.searched_period) {
+    j["searched_period"] = *a.searched_period;
+    j["recurrence_period"] = OrNull(a.recurrence_period);
+    j["recurrence_distance"] = OrNull(a.recurrence_distance);
+  }
   return j;
 }
 
@@ -109,6 +114,7 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   j["residual"] = o.residual;
   j["section_time"] = o.section_time;
   j["attractor_kind"] = o.summary.kind;
+  j["quad_evaluations"] = o.quad_evaluations;
   return j.dump();
 }
 
