@@ -30,9 +30,21 @@ struct Attractor {
   // Contact velocity just before each impact of one period, and the phases of the impacts
   // (impact-periodic orbits).
   std::vector<double> impact_phases, impact_velocities;
+  // "not-periodic" from a recorder: the longest period p the classification tried (run.max_period,
+  // or less on a record shorter than 3p + 1 periods), so that no period is claimed beyond it.
+  std::optional<int> searched_period;
+  // "not-periodic", when the record allows: the stroboscopic section repeats with this period,
+  // longer than searched_period (every one of the last two windows of p section points within
+  // run.period_tolerance of the window before, not decaying), to the relative distance below.
+  // The kind stays "not-periodic": the events of so long a window are not kept, and a run with
+  // run.max_period ≥ recurrence_period classifies the orbit.
+  std::optional<int> recurrence_period;
+  std::optional<double> recurrence_distance;
 };
 
-// Observer that keeps the last 2·max_period + 2 periods of section points and events.
+// Observer that keeps the last 4·max_period + 2 periods of section points and events, and the
+// section points alone of the last 3·kRecurrenceMax + 1 periods (a period longer than max_period
+// is then found by recurrence of the section, Attractor::recurrence_period).
 class AttractorRecorder final : public Observer {
  public:
   AttractorRecorder(const System& system, const Scene& scene);
@@ -63,12 +75,24 @@ class AttractorRecorder final : public Observer {
   double Phase(const Clock& c, int p) const;  // ωt mod 2π p
   double Difference(size_t i, size_t j) const;  // |z_i − z_j|∞ / (1 + max |z|∞); ∞ if modes differ
 
+  // The recurrence search of a not-periodic record (Attractor::recurrence_period).
+  void FindRecurrence(Attractor& a) const;
+
   const System& sys_;
   double phase0_;
   int max_period_;
   double tolerance_;
   std::deque<Section> sections_;
   std::deque<Event> events_;
+  // Ring of the last section points (2n values and the mode each), oldest at ring_next_ once full;
+  // it grows with the record, so a short run allocates only what it records.
+  std::vector<double> ring_;
+  std::vector<Mode> ring_mode_;
+  size_t ring_next_ = 0;
+
+ public:
+  // Longest period the recurrence of the section can find.
+  static constexpr int kRecurrenceMax = 1024;
 };
 
 }  // namespace vibro

@@ -13,7 +13,8 @@
 // (orbit_probe.hpp): sticking-lost (a sticking phase shrinks to zero: the branch ends), rising
 // (R gains a zero inside a sticking phase), sticking-entry (R vanishes at the landing), grazing
 // (a free flight touches the stop tangentially), or "non-smooth" when none of them does. The
-// branch goes on through the point when the orbit exists on the other side.
+// branch goes on through the point when the orbit exists on the other side. A signature change
+// that only regroups a chattering sequence is no bifurcation: it is kept in Branch::relabels.
 #pragma once
 
 #include <atomic>
@@ -71,6 +72,17 @@ struct Bifurcation {
   double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
 };
 
+// A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering
+// sequence regrouped (the impact where its tail of decreasing speeds starts moved by one, e.g.
+// CR → CRI), the same events in the same order and no test quantity vanishing. Located like a
+// non-smooth point; the branch goes on through it.
+struct Relabel {
+  double value;
+  std::string from, to;  // the signatures before and after (orbit_probe.hpp)
+  std::string detail;
+  double bracket = 0;
+};
+
 // Where the sticking fraction crosses a requested level (located by bisection like the
 // smooth bifurcations).
 struct LevelCrossing {
@@ -83,6 +95,7 @@ struct Branch {
   int period = 0;
   std::vector<BranchPoint> points;
   std::vector<Bifurcation> bifurcations;
+  std::vector<Relabel> relabels;  // signature changes that are no bifurcation
   std::vector<LevelCrossing> crossings;
   std::string end;  // why the branch stopped
   // Map evaluations done in quad precision because the double engine left a chattering sequence

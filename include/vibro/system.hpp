@@ -99,6 +99,20 @@ class System {
     bool sticking;
   };
   InitialState Initial(const Scene& scene) const;
+  // Which tolerance decides "on the stop" for an initial state (docs/scenes.md): a state within
+  // rounding of the stop is on it. Rounding of x_B = Σ c_i X_i (and of a physical-to-modal
+  // conversion before it) is a few ulps of its terms, so
+  //   displacement: 0 < x_B − x0 ≤ kStopUlps·ε·(|x0| + Σ|c_i X_i|)  → projected onto the stop,
+  //   velocity, on the stop: |ẋ_B| ≤ kStopUlps·ε·Σ|c_i Ẋ_i|          → projected to rest (ẋ_B ≤ 0),
+  // "on the stop" meaning x_B − x0 in [−BelowStopTolerance(), StopTolerance(X)].
+  // Initial() applies both to the default and to a given state; beyond them a state keeps its
+  // values (a gap above, a contact velocity into the stop, which the scene's check refuses).
+  static constexpr double kStopUlps = 32;
+  double StopTolerance(const Eigen::VectorXd& X) const;
+  double RestTolerance(const Eigen::VectorXd& V) const;
+  // How far below the stop a given state may lie and still be taken as on it (1e-12 of
+  // max(1, |x0|)): the engines project it onto the stop; farther below it is refused.
+  double BelowStopTolerance() const;
 
  private:
   void BuildConstrained();

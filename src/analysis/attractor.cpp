@@ -30,6 +30,57 @@ void AttractorRecorder::OnSection(const Sample& s) {
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
+
+  // The ring of section points for the recurrence search: only when it can see further than
+  // max_period (three windows of a period beyond it).
+  if (max_period_ >= kRecurrenceMax) return;
+  const auto m = static_cast<size_t>(sections_.back().z.size());
+  const size_t capacity = 3 * static_cast<size_t>(kRecurrenceMax) + 1;
+  if (ring_mode_.size() < capacity) {
+    ring_.insert(ring_.end(), sections_.back().z.data(), sections_.back().z.data() + m);
+    ring_mode_.push_back(s.mode);
+  } else {
+    std::copy(sections_.back().z.data(), sections_.back().z.data() + m, ring_.begin() + static_cast<long>(ring_next_ * m));
+    ring_mode_[ring_next_] = s.mode;
+    ring_next_ = (ring_next_ + 1) % capacity;
+  }
+}
+
+void AttractorRecorder::FindRecurrence(Attractor& a) const {
+  const size_t n = ring_mode_.size();
+  if (n == 0) return;
+  const size_t m = ring_.size() / n;
+  // Section point j periods before the last one (j < n).
+  const auto at = [&](size_t j) { return (ring_next_ + n - 1 - j) % n; };
+  const auto distance = [&](size_t i, size_t j) {  // relative, as Difference
+    const size_t a_ = at(i), b = at(j);
+    if (ring_mode_[a_] != ring_mode_[b]) return std::numeric_limits<double>::infinity();
+    double d = 0, amax = 0;
+    for (size_t k = 0; k < m; ++k) {
+      const double x = ring_[a_ * m + k], y = ring_[b * m + k];
+      d = std::max(d, std::abs(x - y));
+      amax = std::max({amax, std::abs(x), std::abs(y)});
+    }
+    return d / (1.0 + amax);
+  };
+  const int first = *a.searched_period + 1;
+  for (int p = first; p <= kRecurrenceMax && 3 * static_cast<size_t>(p) < n; ++p) {
+    const auto q = static_cast<size_t>(p);
+    if (!(distance(0, q) <= tolerance_)) continue;  // cheap rejection of most p
+    // The last two windows each repeat the window before (2p differences), without a decaying
+    // transient (the rule of Classify on two windows).
+    double d[2] = {0, 0};
+    for (size_t w = 0; w < 2 && d[0] <= tolerance_; ++w)
+      for (size_t j = 0; j < q && d[w] <= tolerance_; ++j) d[w] = std::max(d[w], distance(j + w * q, j + (w + 1) * q));
+    if (!(d[0] <= tolerance_ && d[1] <= tolerance_)) continue;
+    if (d[0] < d[1] && d[0] > 1e-3 * tolerance_) {
+      const double l = d[0] / d[1];
+      if (d[0] * l / (1 - l) > tolerance_) continue;
+    }
+    a.recurrence_period = p;
+    a.recurrence_distance = std::max(d[0], d[1]);
+    return;
+  }
 }
 
 double AttractorRecorder::Phase(const Clock& c, int p) const {
@@ -283,6 +334,7 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     if (per_orbit < -1e-12 * p * T || per_orbit > (1 + 1e-12) * p * T) {
       Attractor none;
       none.sticking_fraction = stuck / (p * T);
+      none.searched_period = std::min<int>(max_period_, static_cast<int>((n - 1) / 3));
       return none;  // not periodic: a period-p window cannot hold more than pT on the stop
     }
     stuck = std::clamp(per_orbit, 0.0, p * T);
@@ -295,6 +347,9 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   if (period == 0) {
     a.kind = "not-periodic";
     a.sticking_fraction = always_stuck ? 1.0 : stuck / (p * T);
+    // The periods tried: up to max_period, on a record long enough for three windows of each.
+    a.searched_period = std::min<int>(max_period_, static_cast<int>((n - 1) / 3));
+    FindRecurrence(a);
     return a;
   }
   a.period = period;

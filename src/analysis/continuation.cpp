@@ -228,8 +228,11 @@ bool Sticks(const Point& a) { return a.probe.signature.find_first_of("CPS") != s
 
 bool SameFamily(const Point& a, const Point& b) { return a.probe.signature == b.probe.signature; }
 
+long Count(const std::string& s, char c) { return std::count(s.begin(), s.end(), c); }
+
 // The non-smooth bifurcation between `lo` (on the branch) and `hi` (past it, if the orbit goes
-// on): named by the probe quantity that vanishes there (docs/model.md §5.7, orbit_probe.hpp).
+// on): named by the probe quantity that vanishes there (docs/model.md §5.7, orbit_probe.hpp), or
+// "relabel" when only the grouping of a chattering sequence changed (no bifurcation).
 std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* hi) {
   const auto both = [&](double OrbitProbe::*q) {
     return std::min(lo.probe.*q, hi ? hi->probe.*q : OrbitProbe::kNone);
@@ -273,6 +276,15 @@ std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* 
                                      [](const auto& a, const auto& b) { return a.value < b.value; });
   if (best->value < 1e-3)
     return {best->kind, fmt::format("{} (test quantity {:.1e}); {}", best->what, best->value, change)};
+  // The same events grouped differently (orbit_probe.hpp, coarse_signature): the impact that
+  // starts a chattering sequence's tail of decreasing speeds moved by one, as two of its impacts
+  // swapped which is faster. Nothing of the orbit changes there: not a bifurcation.
+  if (hi && lo.probe.coarse_signature == hi->probe.coarse_signature)
+    return {"relabel", fmt::format("a chattering sequence is regrouped: its tail of decreasing impact "
+                                   "speeds now starts one impact {} (no event appears or vanishes; "
+                                   "smallest test quantity: {} {:.1e}); {}",
+                                   Count(hi->probe.signature, 'I') > Count(lo.probe.signature, 'I') ? "later" : "earlier",
+                                   best->kind, best->value, change)};
   return {"non-smooth", fmt::format("the event sequence changes and no test quantity vanishes "
                                     "(smallest: {} {:.1e}); {}", best->kind, best->value, change)};
 }
@@ -551,6 +563,19 @@ Branch Continue(const ContinuationRequest& req) {
       // The boundary lies between cur and its predictor at arclength hi.
       const double at = cur.y[n2] + 0.5 * hi * t[n2], bracket = hi * std::abs(t[n2]);
       if (moved) record(cur);
+      if (kind == "relabel") {  // bookkeeping: recorded as such, and the branch goes on
+        br.relabels.push_back({at, cur.probe.signature, past->probe.signature, detail, bracket});
+        t = Tangent(past->eval, t);
+        cur = *past;
+        section_fresh = false;
+        record(cur);
+        ds = std::max(ds, 1e-3 * std::abs(span));
+        if (cur.probe.section_margin < 0.3 && !move_section()) {
+          br.end = "could not move the section away from an event";
+          return Finish(br, p);
+        }
+        continue;
+      }
       // Past cur the map could not be evaluated because a chattering sequence stayed undetermined
       // (CVODE, or beyond quad too): the bisection found where this precision gives out, which
       // need not be where the motion changes. Say so rather than name a bifurcation there.

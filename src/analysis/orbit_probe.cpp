@@ -60,6 +60,20 @@ std::string Canonical(const std::string& s) {
   return best;
 }
 
+// The signature with the isolated impacts just before a chattering sequence merged into it.
+std::string Coarse(std::string s) {
+  for (bool merged = true; merged && s.size() > 1;) {
+    merged = false;
+    for (size_t i = 0; i < s.size(); ++i)
+      if (s[i] == 'I' && s[(i + 1) % s.size()] == 'C') {
+        s.erase(i, 1);
+        merged = true;
+        break;
+      }
+  }
+  return Canonical(s);
+}
+
 // Minimum of the parabola through three equally spaced values with y1 the smallest.
 double ParabolaMin(double y0, double y1, double y2) {
   const double curvature = y2 - 2.0 * y1 + y0;
@@ -137,6 +151,7 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
   }
   flush(pending.size());
   p.signature = Canonical(tokens);
+  p.coarse_signature = Coarse(p.signature);
 
   // 2. Sticking phases and free flights (the orbit starts free at the section).
   struct Interval {

@@ -31,6 +31,12 @@ struct OrbitProbe {
   // C chattering sequence ending on the stop (impacts + accumulation + stick), P plastic impact
   // into sticking, I isolated impact, G grazing touch, S other start of sticking, R release.
   std::string signature;
+  // The signature with every isolated impact that leads into a chattering sequence counted in the
+  // sequence (each "IC" read as "C", cyclically). Where a sequence's tail starts (its first impact
+  // of a run of decreasing speeds) is bookkeeping: an impact appears or vanishes only at a grazing,
+  // whose test quantity vanishes. Two signatures with the same coarse signature are one sequence
+  // of events, grouped differently.
+  std::string coarse_signature;
   int sticking_phases = 0;
   static constexpr double kNone = std::numeric_limits<double>::infinity();
   double shortest_stick = kNone;      // duration / (qT)

@@ -228,6 +228,15 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   return {r.X, r.V, tracker.jacobian(), tracker.singular(), r.status};
 }
 
+namespace {
+
+// Whether a run of `scene` left undetermined by double can be redone in quad: the exact engine.
+bool QuadDecides(const Scene& scene) {
+  return scene.run.precision == Precision::kDouble && scene.run.engine == Engine::kExact;
+}
+
+}  // namespace
+
 void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   const int q = out.period;
   Scene sc = scene;
@@ -235,13 +244,23 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   sc.run.periods = 3 * q;
   sc.run.samples_per_period = 0;
   sc.run.max_period = q;
-  AttractorRecorder rec(sys, sc);
   const InitialOverride here{out.section_time, out.X, out.V};
-  SimulationOptions opt;
-  opt.initial = &here;
-  opt.observers = {&rec};
-  Simulate(sys, sc, opt);
-  out.summary = rec.Classify();
+  const auto classify = [&](const Scene& at) {
+    AttractorRecorder rec(sys, at);
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.observers = {&rec};
+    const RunStatus status = Simulate(sys, at, opt).status;
+    out.summary = rec.Classify();
+    return status;
+  };
+  // Near the end of a sticking branch double may leave a chattering sequence of the orbit
+  // undetermined: the exact engine then decides it in quad precision, as the map does.
+  if (classify(sc) == RunStatus::kUndetermined && QuadDecides(sc)) {
+    sc.run.precision = Precision::kQuad;
+    classify(sc);
+    ++out.quad_evaluations;
+  }
   Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(out.monodromy.cast<std::complex<double>>());
   std::vector<std::complex<double>> mu(es.eigenvalues().data(),
                                        es.eigenvalues().data() + es.eigenvalues().size());
@@ -264,6 +283,15 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
   MapValue m;
   for (int it = 0; it <= req.max_iterations; ++it) {
     m = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q);
+    // Near the end of a sticking branch the double engine's chattering tails can reach the
+    // rounding floor of ẋ_B before their accumulation point is predicted (docs/chattering.md):
+    // that evaluation is redone with the quad engine, as continuation does.
+    if (m.status == RunStatus::kUndetermined && QuadDecides(scene)) {
+      Scene quad = scene;
+      quad.run.precision = Precision::kQuad;
+      m = StroboscopicMap(sys, quad, t0, z.head(n), z.tail(n), q);
+      ++out.quad_evaluations;
+    }
     if (m.status != RunStatus::kOk) {
       out.message = "the map evaluation failed (numerical failure of the simulation)";
       break;

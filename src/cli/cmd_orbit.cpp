@@ -38,6 +38,7 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     if (orbit.distance_from_start)
       fmt::print("from start   distance {:.3g} ({})\n", *orbit.distance_from_start,
                  req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)
+                 : req.guess_phase         ? "Newton started at the guess"
                                            : "Newton started at the start state");
     PrintAttractor(orbit.summary, loaded.scene.restitution);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
@@ -45,16 +46,28 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                                      : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
                                                                    : "-");
     fmt::print("stable       {}\n", !converged ? "-" : orbit.stable ? "yes" : "no");
+    if (orbit.quad_evaluations > 0)
+      fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
+                 "leaves undetermined)\n", orbit.quad_evaluations);
   }
   if (!converged) {
     const bool sticking = req.kind == vibro::OrbitKind::kSticking, impact = req.kind == vibro::OrbitKind::kImpact;
     std::string hint = "vibro: try ";
     if (sticking && orbit.reached == "impact-periodic") hint += "--kind impact (the attractor has impacts and no sticking), ";
     if (impact && orbit.reached == "sticking-periodic") hint += "--kind sticking (the attractor sticks), ";
-    hint += req.transient_periods > 0
-                ? "--guess PHASE[,VELOCITY], --period Q, or --transient 0 from a state on the orbit "
-                  "([initial], or --set initial.time=T --set initial.displacement=[...] --set initial.velocity=[...])"
-                : "--period Q, another start state, or --transient N to start Newton after N periods";
+    // What applies to this attempt, the cheapest first: from a transient, Newton from a state on
+    // the orbit (--transient 0) or from a guess; from a guess or a start state, another one or a
+    // transient after it.
+    if (req.transient_periods > 0)
+      hint += "--transient 0 from a state on the orbit ([initial], or --set initial.time=T --set "
+              "initial.displacement=[...] --set initial.velocity=[...]), --guess PHASE[,VELOCITY] "
+              "(Newton starts there), or --period Q";
+    else if (req.guess_phase)
+      hint += "--period Q, another --guess PHASE,VELOCITY, or --transient N to start Newton after N "
+              "periods from the guess";
+    else
+      hint += "--period Q, another start state, --guess PHASE[,VELOCITY], or --transient N to start "
+              "Newton after N periods";
     fmt::print(stderr, "{}\n", hint);
   }
   return converged ? 0 : kExitNumerical;

@@ -108,7 +108,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
   orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")->check(InRange(vibro::frontend::kImpactsLimit));
-  orbit->add_option("--guess", orbit_guess, "PHASE[,VELOCITY]: start of the transient (ωt, contact velocity)");
+  orbit->add_option("--guess", orbit_guess,
+                    "PHASE[,VELOCITY]: Newton starts on the stop leaving at ωt = PHASE with contact velocity VELOCITY (with --transient N: after N periods from there)");
   std::string orbit_out;
   orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
 
@@ -276,6 +277,8 @@ int main(int argc, char** argv) {
         if (!std::isfinite(*orbit_req.guess_phase) ||
             (orbit_req.guess_velocity && !std::isfinite(*orbit_req.guess_velocity)))
           throw vibro::InputError({"--guess " + orbit_guess + ": expected finite numbers (no nan or inf)"});
+        // A guess is where Newton starts: no transient unless one is asked for.
+        if (orbit->count("--transient") == 0) orbit_req.transient_periods = 0;
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
     }

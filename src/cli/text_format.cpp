@@ -53,8 +53,15 @@ std::string AttractorText(const Attractor& a, double restitution, const std::str
   if (a.impacts_per_period)
     s += fmt::format(", {} impact{} per orbit period", *a.impacts_per_period,
                      *a.impacts_per_period == 1 ? "" : "s");
+  if (a.searched_period)
+    s += *a.searched_period > 0 ? fmt::format(" (no period ≤ {}, run.max_period)", *a.searched_period)
+                                : std::string(" (too short a record to search a period)");
   if (a.sticking_fraction) s += fmt::format(", sticking fraction {:.6f}", *a.sticking_fraction);
   s += "\n";
+  if (a.recurrence_period)
+    s += fmt::format("{}recurrence   the section repeats with period {} (to {:.1e}): rerun with "
+                     "--set run.max_period={} to classify it\n",
+                     indent, *a.recurrence_period, a.recurrence_distance.value_or(0.0), *a.recurrence_period);
   if (!a.stick_phases.empty() || a.impact_phases.empty()) {
     std::string p;
     for (const auto& [b, e] : a.stick_phases) p += fmt::format("{}[{:.6f}, {:.6f}]", p.empty() ? "" : " ", b, e);

@@ -732,7 +732,8 @@ RunResult Automaton<S>::Run() {
     if (seg.end == SegmentEnd::kFailure) {
       if (StopPolled()) continue;  // reported as an interruption at the top of the loop
       Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),
-                       mode_ == Mode::kFree ? "free flight" : "sticking"));
+                       mode_ == Mode::kFree ? "free flight" : "sticking"),
+           seg.undetermined ? RunStatus::kUndetermined : RunStatus::kNumericalFailure);
       break;
     }
     p.Evaluate(seg.sigma, X_, V_);

@@ -478,6 +478,18 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
                           "time {:.6g} without completing it (the tolerances cannot be met: raise "
                           "run.atol or run.rtol)",
                           Impl::kRhsPerStep, t_prev)};
+    // A root at and very near the start of a free flight: the gap vanishes to CVODE's resolution
+    // over its first step, as after an impact whose speed is at the √rtol floor of a chattering
+    // sequence. Whether that contact ends the sequence is not decided at this precision.
+    if (flag == CV_ILL_INPUT && m.mode == Mode::kFree && m.last_error.find("very near") != std::string::npos) {
+      SegmentResult undecided{SegmentEnd::kFailure, t_prev,
+                              fmt::format("the contact after an impact is not resolved at local time {:.6g} "
+                                          "(CVODE {}: {}): a chattering sequence is undetermined at this "
+                                          "precision; use run.engine = \"exact\" or move the parameter",
+                                          t_prev, FlagName(flag), m.last_error)};
+      undecided.undetermined = true;
+      return undecided;
+    }
     if (flag < 0)
       return {SegmentEnd::kFailure, t_prev,
               fmt::format("CVODE {} at local time {:.6g}{}; {}", FlagName(flag), t_prev,

@@ -61,6 +61,10 @@ struct SegmentResultT {
   // kFailure because a stop request (SIGINT/SIGTERM) was seen inside the segment: the run is
   // interrupted, not failed; everything up to sigma is valid.
   bool stopped = false;
+  // kFailure because the contact cannot be resolved at the engine's precision (CVODE: the gap
+  // vanishes at and very near the start of a flight, a chattering tail at its resolution floor):
+  // the run is undetermined there (docs/chattering.md), not a numerical failure.
+  bool undetermined = false;
 };
 
 // Called with local-time stretches [lo, hi] on which Evaluate() is valid (exact engine: the whole

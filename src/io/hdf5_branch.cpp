@@ -116,6 +116,22 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
   bt.strings = {{"kind", kind}, {"detail", detail}};
   WriteTable("/bifurcations", bt);
+
+  // Signature changes that are no bifurcation (continuation.hpp, Relabel).
+  H5Table rt;
+  std::vector<double> rv, rb;
+  std::vector<std::string> from, to, rdetail;
+  for (const auto& x : b.relabels) {
+    rv.push_back(x.value);
+    rb.push_back(x.bracket);
+    from.push_back(x.from);
+    to.push_back(x.to);
+    rdetail.push_back(x.detail);
+  }
+  rt.arrays.push_back({"value", {rv.size()}, rv});
+  rt.arrays.push_back({"bracket", {rb.size()}, rb});
+  rt.strings = {{"from", from}, {"to", to}, {"detail", rdetail}};
+  WriteTable("/relabels", rt);
 }
 
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {

@@ -188,6 +188,9 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       }
       if (auto p = h5::ReadInt(ag.get(), "impacts_per_period")) out.attractor.impacts_per_period = *p;
       out.attractor.sticking_fraction = h5::ReadDouble(ag.get(), "sticking_fraction");
+      if (auto p = h5::ReadInt(ag.get(), "searched_period")) out.attractor.searched_period = static_cast<int>(*p);
+      if (auto p = h5::ReadInt(ag.get(), "recurrence_period")) out.attractor.recurrence_period = static_cast<int>(*p);
+      out.attractor.recurrence_distance = h5::ReadDouble(ag.get(), "recurrence_distance");
       const auto ph = h5::ReadDoubles(ag.get(), "stick_phases");
       for (size_t i = 0; i + 1 < ph.size(); i += 2) out.attractor.stick_phases.emplace_back(ph[i], ph[i + 1]);
       out.attractor.impact_phases = h5::ReadDoubles(ag.get(), "impact_phases");

@@ -305,10 +305,15 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   h5::Handle g = h5::OpenOrCreateGroup(f, "/attractor");
   h5::WriteString(g.get(), "kind", a.kind);
   // Null values of the JSON summary are absent attributes.
-  for (const char* k : {"period", "impacts_per_period", "sticking_fraction"}) h5::DeleteAttr(g.get(), k);
+  for (const char* k : {"period", "impacts_per_period", "sticking_fraction", "searched_period",
+                        "recurrence_period", "recurrence_distance"})
+    h5::DeleteAttr(g.get(), k);
   if (a.period) h5::WriteInt(g.get(), "period", *a.period);
   if (a.impacts_per_period) h5::WriteInt(g.get(), "impacts_per_period", *a.impacts_per_period);
   if (a.sticking_fraction) h5::WriteDouble(g.get(), "sticking_fraction", *a.sticking_fraction);
+  if (a.searched_period) h5::WriteInt(g.get(), "searched_period", *a.searched_period);
+  if (a.recurrence_period) h5::WriteInt(g.get(), "recurrence_period", *a.recurrence_period);
+  if (a.recurrence_distance) h5::WriteDouble(g.get(), "recurrence_distance", *a.recurrence_distance);
   std::vector<double> phases;
   for (const auto& [s, e] : a.stick_phases) {
     phases.push_back(s);

@@ -34,6 +34,11 @@ nlohmann::json AttractorObject(const Attractor& a) {
     j["impact_phases"] = a.impact_phases;
     j["impact_velocities"] = a.impact_velocities;
   }
+  if (a.searched_period) {
+    j["searched_period"] = *a.searched_period;
+    j["recurrence_period"] = OrNull(a.recurrence_period);
+    j["recurrence_distance"] = OrNull(a.recurrence_distance);
+  }
   return j;
 }
 
@@ -109,6 +114,7 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   j["residual"] = o.residual;
   j["section_time"] = o.section_time;
   j["attractor_kind"] = o.summary.kind;
+  j["quad_evaluations"] = o.quad_evaluations;
   return j.dump();
 }
 
@@ -204,6 +210,10 @@ std::string BranchJson(const Branch& b) {
   for (const auto& x : b.bifurcations)
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["bifurcations"] = bif;
+  auto rel = nlohmann::json::array();
+  for (const auto& x : b.relabels)
+    rel.push_back({{"value", x.value}, {"from", x.from}, {"to", x.to}, {"detail", x.detail}, {"bracket", x.bracket}});
+  j["relabels"] = rel;
   j["end"] = b.end;
   j["quad_evaluations"] = b.quad_evaluations;
   return j.dump();

@@ -257,11 +257,13 @@ std::vector<InputIssue> Validate(const Scene& s) {
     const double xB = sys.ContactDisplacement(init.X);
     const double vB = sys.ContactVelocity(init.V);
     const double x0 = s.stop_position;
-    const double tol = 1e-12 * std::max(1.0, std::abs(x0));
-    c.Require(xB >= x0 - tol, "initial.displacement", Show(s.initial_displacement),
+    // Initial() has taken a state within rounding of the stop onto it, and at rest there
+    // (System::StopTolerance, RestTolerance; docs/scenes.md).
+    const double below = sys.BelowStopTolerance();
+    c.Require(xB >= x0 - below, "initial.displacement", Show(s.initial_displacement),
               fmt::format("admissible initial state x_B ≥ x0 (x_B = {}, x0 = {})", xB, x0));
-    if (std::abs(xB - x0) <= tol)
-      c.Require(vB >= 0, "initial.velocity", Show(s.initial_velocity),
+    if (xB - x0 <= sys.StopTolerance(init.X) && xB >= x0 - below)
+      c.Require(vB >= -sys.RestTolerance(init.V), "initial.velocity", Show(s.initial_velocity),
                 fmt::format("admissible initial state: on the stop (x_B = x0) the contact "
                             "velocity must not point into it (ẋ_B = {} < 0)",
                             vB));

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 
@@ -194,6 +195,45 @@ Eigen::VectorXd System::ModalFromPhysical(const Eigen::VectorXd& q) const {
   return X;
 }
 
+double System::StopTolerance(const Eigen::VectorXd& X) const {
+  return kStopUlps * std::numeric_limits<double>::epsilon() *
+         (std::abs(x0_) + shape_.cwiseProduct(X).cwiseAbs().sum());
+}
+
+double System::BelowStopTolerance() const { return 1e-12 * std::max(1.0, std::abs(x0_)); }
+
+double System::RestTolerance(const Eigen::VectorXd& V) const {
+  return kStopUlps * std::numeric_limits<double>::epsilon() * shape_.cwiseProduct(V).cwiseAbs().sum();
+}
+
+namespace {
+
+// Moves X along T_B (which changes x_B only) until x_B ≤ x0 in double: the projection
+// X − T_B(x_B − x0)/s_B rounds to within an ulp or two of x0, on either side; the engines take a
+// state above the stop, however little, as a free flight (docs/scenes.md).
+void OntoStop(const Eigen::VectorXd& shape, const Eigen::VectorXd& contact, double s_B, double x0,
+              Eigen::VectorXd& X) {
+  double step = 0;
+  for (int k = 0; k < 64 && shape.dot(X) > x0; ++k) {
+    const double gap = shape.dot(X) - x0;
+    X -= contact * ((gap + step) / s_B);
+    step = step == 0 ? std::numeric_limits<double>::epsilon() * (std::abs(x0) + gap) : 2 * step;
+  }
+}
+
+// The same for ẋ_B: until ẋ_B ≤ 0.
+void ToRest(const Eigen::VectorXd& shape, const Eigen::VectorXd& contact, double s_B, Eigen::VectorXd& V) {
+  double step = 0;
+  for (int k = 0; k < 64 && shape.dot(V) != 0.0; ++k) {
+    const double v = shape.dot(V);
+    if (v < 0 && step > 0) break;  // at rest to rounding, not moving off the stop
+    V -= contact * ((v + step) / s_B);
+    step = step == 0 ? std::numeric_limits<double>::epsilon() * (std::abs(v) + 1e-300) : 2 * step;
+  }
+}
+
+}  // namespace
+
 System::InitialState System::Initial(const Scene& scene) const {
   InitialState s{scene.initial_time, Eigen::VectorXd::Zero(dof()), Eigen::VectorXd::Zero(dof()),
                  false};
@@ -201,6 +241,7 @@ System::InitialState System::Initial(const Scene& scene) const {
     if (x0_ > 0) {
       // Static pressed equilibrium (docs/model.md §4.2, constant term): at rest on the stop.
       s.X = x0_ * static_shape_;
+      OntoStop(shape_, contact_, s_B_, x0_, s.X);  // x0·T_B/s_B may round above the stop
       s.sticking = true;
     }
     return s;
@@ -214,6 +255,14 @@ System::InitialState System::Initial(const Scene& scene) const {
   };
   if (scene.initial_displacement.size() > 0) s.X = select(scene.initial_displacement);
   if (scene.initial_velocity.size() > 0) s.V = select(scene.initial_velocity);
+  // Within rounding of the stop: on it, and at rest there (the tolerances of StopTolerance and
+  // RestTolerance). States farther off keep their values.
+  const double gap = ContactDisplacement(s.X) - x0_;
+  if (gap > 0 && gap <= StopTolerance(s.X)) OntoStop(shape_, contact_, s_B_, x0_, s.X);
+  const double at = ContactDisplacement(s.X) - x0_;
+  const bool on_stop = at <= StopTolerance(s.X) && at >= -BelowStopTolerance();
+  const double v = ContactVelocity(s.V);
+  if (on_stop && v != 0.0 && std::abs(v) <= RestTolerance(s.V)) ToRest(shape_, contact_, s_B_, s.V);
   return s;
 }
 

@@ -3,9 +3,11 @@
 // orbit, and the multipliers against the decay of the transient and the CVODE engine.
 #include <cmath>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "support.hpp"
+#include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -206,6 +208,33 @@ TEST(Poincare, MultipliersMatchTheTransientDecayAndTheCvodeMap) {
   double lead = 0;
   for (Eigen::Index i = 0; i < es.eigenvalues().size(); ++i) lead = std::max(lead, std::abs(es.eigenvalues()[i]));
   EXPECT_NEAR(lead, rho, 1e-3);
+}
+
+
+TEST(Poincare, OrbitNearTheEndOfStickingTakesTheQuadFallbackAndIsAFixedPointOfTheQuadMap) {
+  // Issue 24 item 7: the 2-DOF chain at ω = 0.8, 1e-10 and 1e-11 below the end of its sticking
+  // branch (f_max = 1.2062880835761711, located by continuation with quad evaluations). Double
+  // leaves the chattering tails undetermined there; the orbit solver redoes those evaluations in
+  // quad and converges. Independent truth: the quad engine's map returns the orbit's section
+  // point to itself.
+  const double f_max = 1.2062880835761711;
+  for (double df : {1e-10, 1e-11}) {
+    SCOPED_TRACE(df);
+    const Scene sc = LoadScene(std::string(VIBRO_SCENES_DIR) + "/chain2.toml",
+                               {"run.samples_per_period=0", fmt::format("excitation.amplitude={:.17g}", f_max - df)})
+                         .scene;
+    const System sys(sc);
+    const OrbitResult o = SolveOrbit(sys, sc, OrbitRequest{});
+    ASSERT_EQ(o.status, "converged") << o.message;
+    EXPECT_GT(o.quad_evaluations, 0);
+    EXPECT_EQ(o.summary.kind, "sticking-periodic");
+    EXPECT_GT(o.summary.sticking_fraction.value_or(0), 0.0);
+    Scene quad = sc;
+    quad.run.precision = Precision::kQuad;
+    const MapValue m = StroboscopicMap(sys, quad, o.section_time, o.X, o.V, o.period);
+    ASSERT_EQ(m.status, RunStatus::kOk);
+    EXPECT_LT(std::max((m.X - o.X).cwiseAbs().maxCoeff(), (m.V - o.V).cwiseAbs().maxCoeff()), 1e-10);
+  }
 }
 
 }  // namespace

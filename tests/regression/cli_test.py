@@ -259,4 +259,64 @@ p = run("sweep", os.path.join(scenes, "fig08_preload.toml"), "--param", "stop.re
 check("a sweep bound is echoed as given: --to 2.3",
       p.returncode == 2 and "--to 2.3 (--param stop.restitution)" in p.stderr and "2.29999" not in p.stderr, p.stderr)
 
+# Issue 24: the edges a user reaches.
+tests_scenes = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scenes")
+chain2 = os.path.join(scenes, "chain2.toml")
+# --guess starts Newton at the guess: Fig. 5's unstable one-impact orbit from its exact impact
+# state (phase, ẋ_B after the impact) converges to that state (a 200-period transient from there
+# reaches the sticking orbit instead).
+phase, v_after = 5.138714103028858, 0.2756851049583854
+p = run("orbit", os.path.join(scenes, "fig05_coexistence.toml"), "--kind", "impact", "--guess",
+        f"{phase!r},{v_after!r}", "--json")
+check("orbit --guess converges at the guess", p.returncode == 0, p.stdout + p.stderr)
+if p.returncode == 0:
+    j = json.loads(p.stdout)
+    check("orbit --guess: the unstable impact orbit through the guess",
+          j["status"] == "converged" and j["stable"] is False and len(j["impact_phases"]) == 1
+          and abs(j["impact_phases"][0] - phase) < 1e-9
+          and abs(j["impact_velocities"][0] + v_after / 0.75) < 1e-9, p.stdout)
+# A refused attempt after a transient suggests --transient 0 first.
+p = run("orbit", chain2, "--kind", "impact", "--transient", "20")
+check("orbit hint: --transient 0 first", p.returncode != 0 and "--transient 0" in p.stderr
+      and p.stderr.index("--transient 0") < p.stderr.index("--guess"), p.stderr)
+# A release state of the chain with a rounding residue ẋ_B = −2.8e-17 is at rest on the stop;
+# moving into the stop (−1e-9) it stays refused.
+for vB, code in (("-2.8e-17", 0), ("-1e-9", 2)):
+    p = run("simulate", chain2, "--json", "--set", "initial.displacement=[0.4375, 1.0]",
+            "--set", f"initial.velocity=[0.6251, {vB}]", "--set", "run.periods=2")
+    check(f"initial state on the stop with ẋ_B = {vB}: exit {code}", p.returncode == code, p.stderr)
+# The default start at rest on the stop sticks from t = 0 (it rounded 1 ulp above the stop).
+p = run("simulate", os.path.join(tests_scenes, "modal3_preload.toml"), "--json")
+# Over its one period: the stick at t = 0, the release, one impact at 9.8 (no chattering sequence
+# at t = 6.4e-9 any more).
+check("modal 3-DOF preload: sticks from t = 0",
+      p.returncode == 0 and json.loads(p.stdout)["counts"] == {"impacts": 1, "accumulations": 0, "sticks": 1,
+                                                               "releases": 1, "grazings": 0},
+      p.stdout + p.stderr)
+# A long period is found by recurrence of the section, the search limit said.
+p = run("simulate", os.path.join(tests_scenes, "damped3_clearance.toml"), "--json", "--set",
+        "excitation.amplitude=0.5", "--set", "excitation.frequency=0.7", "--set", "run.periods=100000",
+        "--set", "run.samples_per_period=0")
+if p.returncode == 0:
+    a = json.loads(p.stdout)["attractor"]
+    check("period 136 by recurrence", a["kind"] == "not-periodic" and a["searched_period"] == 32
+          and a["recurrence_period"] == 136 and a["recurrence_distance"] < 1e-10, a)
+else:
+    check("simulate damped 3-DOF 1e5 periods", False, p.stderr)
+# Near the end of sticking (f_max = 1.2062880835761711 for the chain at ω = 0.8): orbit takes
+# the quad fallback; CVODE at rtol 1e-12 ends undetermined (exit 3), not numerical-failure.
+f_max = 1.2062880835761711
+for df in (1e-10, 1e-11):
+    p = run("orbit", chain2, "--json", "--set", f"excitation.amplitude={f_max - df!r}")
+    j = json.loads(p.stdout) if p.stdout else {}
+    check(f"orbit at f_max - {df}: converged with quad evaluations",
+          p.returncode == 0 and j.get("status") == "converged" and j.get("quad_evaluations", 0) > 0,
+          p.stdout + p.stderr)
+for df in (-1e-8, 1e-8):
+    p = run("simulate", chain2, "--json", "--set", f"excitation.amplitude={f_max + df!r}",
+            "--set", 'run.engine="cvode"', "--set", "run.rtol=1e-12", "--set", "run.samples_per_period=0")
+    j = json.loads(p.stdout) if p.stdout else {}
+    check(f"cvode at f_max {df:+g}: undetermined", p.returncode == 3 and j.get("status") == "undetermined",
+          p.stdout + p.stderr)
+
 finish()

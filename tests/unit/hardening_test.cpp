@@ -407,5 +407,42 @@ TEST(Hardening, Chain2StickingFractionIsAWindowAverage) {
   EXPECT_NEAR(*a.sticking_fraction, stuck / (hi - lo), 1e-9) << a.kind << " period " << a.period.value_or(0);
 }
 
+
+TEST(Hardening, LongPeriodIsFoundByRecurrenceNotCalledChaos) {
+  // Issue 24 item 2: the damped 3-DOF clearance chain at f = 0.5, ω = 0.7 settles, within 10⁵
+  // periods, on an orbit of period 136, beyond run.max_period = 32. The classification must say
+  // how far it searched and find the period by recurrence of the section; the kind stays
+  // "not-periodic". Independent truth: the logged section points themselves (no shorter return)
+  // and the full classification with run.max_period = 136.
+  auto loaded = LoadScene(std::string(VIBRO_TEST_SCENES_DIR) + "/damped3_clearance.toml",
+                          {"excitation.amplitude=0.5", "excitation.frequency=0.7", "run.periods=100000",
+                           "run.samples_per_period=0"});
+  const Scene& scene = loaded.scene;
+  const System sys(scene);
+  const test::Outcome run = test::Simulate(scene);
+  ASSERT_EQ(run.result.status, RunStatus::kOk);
+  const Attractor& a = run.attractor;
+  EXPECT_EQ(a.kind, "not-periodic");
+  EXPECT_EQ(a.searched_period.value_or(0), 32);
+  ASSERT_TRUE(a.recurrence_period.has_value());
+  EXPECT_EQ(*a.recurrence_period, 136);
+  EXPECT_LT(a.recurrence_distance.value_or(1), 1e-10);
+  // The section points: the last one returns after 136 periods to 1e-10 and after no fewer.
+  const auto& z = run.log.sections;
+  const auto dist = [&](size_t i, size_t j) {
+    return std::max((z[i].X - z[j].X).cwiseAbs().maxCoeff(), (z[i].V - z[j].V).cwiseAbs().maxCoeff());
+  };
+  const size_t N = z.size() - 1;
+  for (size_t p = 1; p < 136; ++p) EXPECT_GT(dist(N, N - p), 1e-6) << p;
+  EXPECT_LT(dist(N, N - 136), 1e-10);
+  // With the search reaching 136 the classification describes the orbit.
+  Scene longer = scene;
+  longer.run.max_period = 136;
+  const test::Outcome full = test::Simulate(longer);
+  EXPECT_EQ(full.attractor.kind, "sticking-periodic");
+  EXPECT_EQ(full.attractor.period.value_or(0), 136);
+  EXPECT_FALSE(full.attractor.searched_period.has_value());
+}
+
 }  // namespace
 }  // namespace vibro

@@ -4,9 +4,12 @@
 #include <cmath>
 #include <random>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "vibro/scene_file.hpp"
+#include "vibro/observer.hpp"
+#include "vibro/simulator.hpp"
 
 namespace vibro {
 namespace {
@@ -243,6 +246,55 @@ TEST(System, DefaultInitialStateIsTheStaticPreloadEquilibrium) {
   EXPECT_FALSE(origin.sticking);
   EXPECT_EQ(origin.X.norm(), 0.0);
   EXPECT_FALSE(clearance.static_reaction().has_value());
+}
+
+
+TEST(System, DefaultStartAtRestOnTheStopIsOnItAndSticksFromTheStart) {
+  // Issue 24 item 4: a random modal 3-DOF preload scene whose static equilibrium x0·T_B/s_B rounds
+  // to 1 ulp above the stop. The truth sticks from t = 0: R(0) is the static reaction x0/δ > 0
+  // (sin ωt = 0 at t = 0), so the run must stick at t = 0 and release next, with no impact before.
+  const auto loaded = LoadScene(std::string(VIBRO_TEST_SCENES_DIR) + "/modal3_preload.toml");
+  const Scene& scene = loaded.scene;
+  const System sys(scene);
+  const auto init = sys.Initial(scene);
+  const double xB = sys.ContactDisplacement(init.X);
+  EXPECT_LE(xB, scene.stop_position);
+  EXPECT_GE(xB, scene.stop_position - sys.StopTolerance(init.X));
+  ASSERT_TRUE(sys.static_reaction().has_value());
+  EXPECT_GT(sys.Reaction(init.X, init.V, 0.0), 0.0);
+  struct First final : Observer {
+    std::vector<Event> events;
+    void OnEvent(const Event& e) override { events.push_back(e); }
+  } log;
+  SimulationOptions opt;
+  opt.observers = {&log};
+  const RunResult r = Simulate(sys, scene, opt);
+  ASSERT_EQ(r.status, RunStatus::kOk) << r.message;
+  ASSERT_GE(log.events.size(), 2u);
+  EXPECT_EQ(log.events[0].kind, EventKind::kStick) << "first event at t = " << log.events[0].t;
+  EXPECT_EQ(log.events[0].t, 0.0);
+  EXPECT_EQ(log.events[1].kind, EventKind::kRelease) << "second event at t = " << log.events[1].t;
+  EXPECT_GT(log.events[1].t, 1e-3);
+}
+
+TEST(System, GivenStateWithinRoundingOfTheStopIsOnItAndAtRest) {
+  // Issue 24 item 5: a state of the 2-DOF chain (physical form) on the stop whose contact velocity
+  // is a rounding residue (ẋ_B = −2.8e-17) is accepted as at rest on the stop; one moving into the
+  // stop (−1e-9) or below it (1e-9) stays refused.
+  const std::string path = std::string(VIBRO_SCENES_DIR) + "/chain2.toml";
+  const auto with = [&](double qB, double vB) {
+    return LoadScene(path, {"initial.displacement=[0.4375, " + fmt::format("{:.17g}", qB) + "]",
+                            "initial.velocity=[0.6251, " + fmt::format("{:.17g}", vB) + "]"});
+  };
+  const auto loaded = with(1.0, -2.8e-17);
+  const System sys(loaded.scene);
+  const auto init = sys.Initial(loaded.scene);
+  EXPECT_LE(std::abs(sys.ContactDisplacement(init.X) - 1.0), sys.StopTolerance(init.X));
+  EXPECT_LE(sys.ContactVelocity(init.V), 0.0);
+  EXPECT_GE(sys.ContactVelocity(init.V), -sys.RestTolerance(init.V));
+  for (double vB : {2.8e-17, 0.0}) EXPECT_NO_THROW(with(1.0, vB));
+  EXPECT_THROW(with(1.0, -1e-9), InputError);
+  EXPECT_THROW(with(1.0 - 1e-9, 0.0), InputError);
 }
 
 }  // namespace
