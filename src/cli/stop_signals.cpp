@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 
 #include "vibro/stop_request.hpp"
@@ -76,6 +77,13 @@ void InstallStopHandlers() {
   // Every run polls the flag, also those started deep inside another computation (an orbit
   // solve inside a continuation, the orbits of a study's classes).
   SetProcessStopFlag(&g_stop);
+  // For scripts and tests that send stop requests: a signal sent before this point ends the
+  // process by the default action (no exit 130, nothing kept), so they wait for this line
+  // (printed once, at the first installation).
+  static std::atomic<bool> announced{false};
+  if (const char* ready = std::getenv("VIBRO_SIGNAL_READY");
+      ready != nullptr && *ready != '\0' && !announced.exchange(true))
+    Say("vibro: ready for stop requests\n");
 }
 
 namespace {

@@ -21,7 +21,9 @@ namespace vibro::cli {
 const std::atomic<bool>& StopFlag();
 bool StopRequested();
 
-// Installs the SIGINT/SIGTERM handlers for the rest of the process.
+// Installs the SIGINT/SIGTERM handlers for the rest of the process; then, when the environment
+// variable VIBRO_SIGNAL_READY is set (not empty), prints "vibro: ready for stop requests" on
+// stderr (docs/reliability.md).
 void InstallStopHandlers();
 
 // While alive, signals only set the flag: the file being written is never cut short.

@@ -41,6 +41,24 @@ LIVENESS = 10.0  # seconds from the signal to the exit, at most (a loaded machin
 LIVENESS_CHILD = 1.5  # a stop during a child's wait: vibro promises a second
 
 
+def marker_written(marker):
+    """The shim writes the stuck process's id and a newline just after creating the marker."""
+    try:
+        with open(marker) as f:
+            return f.read().endswith("\n")
+    except FileNotFoundError:
+        return False
+
+
+def children(pid):
+    """The process ids of pid's children."""
+    try:
+        return [int(c) for t in os.listdir(f"/proc/{pid}/task")
+                for c in open(f"/proc/{pid}/task/{t}/children").read().split()]
+    except (FileNotFoundError, ProcessLookupError):
+        return []
+
+
 def start_stuck(name, args, hang):
     """Starts vibro with the shim (`hang`: its VIBRO_TEST_HANG_* setting) and waits until the call
     that never returns has begun. Returns the process and the id of the process that is stuck in
@@ -50,11 +68,10 @@ def start_stuck(name, args, hang):
     env = dict(os.environ, LD_PRELOAD=shim, VIBRO_TEST_HANG_MARKER=marker, **hang)
     p = subprocess.Popen([vibro, *args], env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                          text=True, cwd=tmp)
-    deadline = time.monotonic() + 60
-    while not os.path.exists(marker) and p.poll() is None and time.monotonic() < deadline:
+    deadline = time.monotonic() + 300  # a loaded machine
+    while not marker_written(marker) and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.02)
-    time.sleep(0.05)  # the marker's content is written just after it is created
-    began = os.path.exists(marker)
+    began = marker_written(marker)
     check(f"{name}: the call that never returns began", began, f"exit {p.poll()}")
     if not began:
         p.kill()
@@ -151,7 +168,9 @@ stop_child_wait("info, its test read", ["info", done], {"VIBRO_TEST_HANG_READ": 
 # the shim does not reach): SIGTERM while it draws; its pictures are removed.
 p = subprocess.Popen([vibro, "plot", done, "--out", os.path.join(tmp, "pic")],
                      stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-time.sleep(0.8)  # the Python child is importing matplotlib or drawing (about 3 s in all)
+deadline = time.monotonic() + 300  # until the Python child runs (drawing takes about 3 s)
+while not children(p.pid) and p.poll() is None and time.monotonic() < deadline:
+    time.sleep(0.01)
 t0 = time.monotonic()
 p.send_signal(signal.SIGTERM)
 _, err = p.communicate(timeout=30)

@@ -116,7 +116,7 @@ with tempfile.TemporaryDirectory() as d:
     for sig, code, label in ((signal.SIGINT, 130, "SIGINT"), (signal.SIGTERM, 130, "SIGTERM")):
         path = os.path.join(d, f"{label}.h5")
         proc = start("simulate", default, *long_sets, "--out", path)
-        wait_for_rows(path, proc, 20)
+        wait_for_rows(path, proc, 300)
         proc.send_signal(sig)
         _, err = proc.communicate(timeout=60)
         check(f"{label}: exit {code}", proc.returncode == code, (proc.returncode, err))
@@ -134,7 +134,7 @@ with tempfile.TemporaryDirectory() as d:
 
     path = os.path.join(d, "killed.h5")
     proc = start("simulate", default, *long_sets, "--out", path)
-    wait_for_rows(path, proc, 20)
+    wait_for_rows(path, proc, 300)
     time.sleep(0.3)
     t_kill = time.time()
     proc.kill()

@@ -142,7 +142,7 @@ with tempfile.TemporaryDirectory() as d:
     for sig, code, label in ((signal.SIGINT, 130, "SIGINT"), (signal.SIGKILL, -9, "SIGKILL")):
         path = os.path.join(d, f"{label}.h5")
         proc = start("basin", fig5, *grid, "--threads", "1", "--out", path)
-        flushed = wait_for_cells(path, proc, 60)
+        flushed = wait_for_cells(path, proc, 300)
         proc.send_signal(sig)
         out, err = proc.communicate(timeout=120)
         check(f"{label}: cells flushed before the signal", flushed)
@@ -176,7 +176,7 @@ with tempfile.TemporaryDirectory() as d:
     check("resume of a finished study: exit 2", p.returncode == 2 and "nothing to resume" in p.stderr, p.stderr)
     half = os.path.join(d, "half.h5")
     proc = start("basin", fig5, *grid, "--threads", "1", "--out", half)
-    wait_for_cells(half, proc, 60)
+    wait_for_cells(half, proc, 300)
     proc.send_signal(signal.SIGINT)
     proc.communicate(timeout=120)
     p = run("basin", fig5, *grid_args(nxy="100,160"), "--out", half, "--resume")
