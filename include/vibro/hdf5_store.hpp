@@ -30,7 +30,14 @@ namespace vibro {
 // resumable) and is not written again by this process. The CLI exits 3.
 class WriteError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  // from_system: the system said why (ENOSPC, EIO, ...); false when HDF5 failed without a system
+  // error, which on a file being resumed means the file itself is damaged (bad input, exit 2).
+  explicit WriteError(const std::string& what, bool from_system = true)
+      : std::runtime_error(what), from_system_(from_system) {}
+  bool from_system() const { return from_system_; }
+
+ private:
+  bool from_system_;
 };
 
 struct StoreHeader {

@@ -489,13 +489,13 @@ PYBIND11_MODULE(_vibro, m) {
   m.attr("version") = VIBRO_VERSION;
   m.attr("git_commit") = VIBRO_GIT_COMMIT;
 
-  // Bad input (scene, option, file): ValueError with every located message, one per line.
+  // Bad input (scene, option, file): ValueError with every located message, on one line ("; ").
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const vibro::InputError& e) {
       std::string text;
-      for (const auto& msg : e.messages()) text += (text.empty() ? "" : "\n") + msg;
+      for (const auto& msg : e.messages()) text += (text.empty() ? "" : "; ") + msg;
       PyErr_SetString(PyExc_ValueError, text.c_str());
     }
   });

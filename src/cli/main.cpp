@@ -325,7 +325,10 @@ int main(int argc, char** argv) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", OneLine(m));
     fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
                e.messages().size());
-    return kExitBadInput;
+    // Out at once, as after a failed write: an output file that could not be made on a full disk
+    // leaves HDF5 handles that its clean-up at exit must not touch (it crashed doing so).
+    std::fflush(nullptr);
+    std::_Exit(kExitBadInput);
   } catch (const vibro::WriteError& e) {  // full disk, I/O error: the file keeps its last flush
     fmt::print(stderr, "vibro: {}; the file keeps what was written up to its last flush\n", OneLine(e.what()));
     // Out at once: the HDF5 library's clean-up at exit would close the failed file's handles,

@@ -104,11 +104,12 @@ void CheckWrite(herr_t status, hid_t obj, const std::string& what) {
   if (status >= 0) return;
   const int err = errno;
   std::string reason = SystemReason();
+  const bool from_system = !reason.empty() || err != 0;
   if (reason.empty()) reason = err != 0 ? std::strerror(err) : fmt::format("HDF5 could not write {}", what);
   char name[4096] = "the output file";
   if (H5Fget_name(obj, name, sizeof name) < 0) std::strcpy(name, "the output file");
   MarkFileFailed(obj);
-  throw WriteError(fmt::format("{} writing {}", reason, name));
+  throw WriteError(fmt::format("{} writing {}", reason, name), from_system);
 }
 
 // No chunk cache: a Column's rows reach the file when written (see Column in h5_file.hpp).

@@ -109,8 +109,10 @@ void ProbeWrite(const std::string& path, const std::function<void(const std::str
     if (ok) {
       try {
         changes(copy);
-      } catch (const WriteError&) {
-        code = 0;  // no room for the trial (a full /tmp) says nothing about the file
+      } catch (const WriteError& e) {
+        // No room for the trial (a full /tmp) says nothing about the file; HDF5 failing to write
+        // without a system error (a damaged chunk index met by a truncation) is the file's damage.
+        code = e.from_system() ? 0 : 3;
       } catch (const InputError& e) {
         // "cannot resume: <HDF5 failure>" is the file's damage; other refusals are the input's.
         code = std::string(e.what()).find("HDF5") != std::string::npos ? 3 : 0;

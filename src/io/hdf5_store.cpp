@@ -401,8 +401,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
       if (extend) store::WriteExtension(impl->file.get(), h);
       h5::WriteString(impl->file.get(), "status", "running");
       impl->Flush();
-    } catch (const WriteError&) {
-      throw;
+    } catch (const WriteError& e) {
+      if (e.from_system()) throw;  // a full disk: exit 3, as during the run
+      throw InputError({fmt::format("{}: cannot {}: {}", path, verb, e.what())});
     } catch (const std::exception& e) {
       throw InputError({fmt::format("{}: cannot {}: {}", path, verb, e.what())});
     }

@@ -279,8 +279,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
     impl->Flush();
   } catch (const InputError&) {
     throw;
-  } catch (const WriteError&) {
-    throw;
+  } catch (const WriteError& e) {
+    if (e.from_system()) throw;  // a full disk: exit 3, as during the run
+    throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: cannot resume: {}", path, e.what())});
   }

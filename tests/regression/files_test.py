@@ -267,6 +267,18 @@ if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", mnt], captu
         check("tmpfs 3 MiB: basin exit 3", r.returncode == 3 and "no space left on device" in r.stderr,
               f"{r.returncode} {r.stderr[-400:]}")
         check("tmpfs 3 MiB: basin file readable", read_all(path) == "", read_all(path))
+        os.remove(path)
+        # Full before the run starts (the surfaces campaign: exit 2 printed, then SIGSEGV in HDF5's
+        # clean-up at exit): refused, no crash, nothing left.
+        with open(os.path.join(mnt, "filler"), "wb") as f:
+            f.write(b"\0" * 3_000_000)
+        for cmd in (["simulate", default, "--set", "run.periods=200000"],
+                    ["sweep", fig5, "--param", "excitation.frequency", "--from", "1", "--to", "3", "--steps", "50"]):
+            path = os.path.join(mnt, "full.h5")
+            r = run(*cmd, "--out", path)
+            check(f"tmpfs full at the start: {cmd[0]} exit 2, no crash, nothing left",
+                  r.returncode == 2 and "no space left on device" in r.stderr and not os.path.exists(path),
+                  f"{r.returncode} {r.stderr[-400:]}")
     finally:
         subprocess.run(["umount", mnt])
 else:
