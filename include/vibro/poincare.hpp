@@ -85,6 +85,9 @@ struct OrbitResult {
   // none when no orbit converged.
   std::optional<double> distance_from_start;
   std::string reached;  // no-orbit after a transient: the kind of attractor it reached
+  // no-orbit because the simulation from the start was undetermined (a chattering sequence that
+  // cannot be decided at the run's precision): nothing is known of an orbit there.
+  bool undetermined = false;
   // Map evaluations and orbit simulations redone in quad precision because double left a
   // chattering sequence undetermined (exact engine, near the end of a sticking branch).
   int quad_evaluations = 0;

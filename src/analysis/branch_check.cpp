@@ -131,7 +131,7 @@ PointCheck CheckPoint(const Scene& scene, const ClaimedPoint& p, OrbitKind kind,
   const OrbitResult& o = out.orbit;
   out.distance = o.distance_from_start;
   if (o.status != "converged") {
-    out.verdict = "no-orbit-near";
+    out.verdict = o.undetermined ? "undetermined" : "no-orbit-near";
     out.detail = o.message;
     return out;
   }

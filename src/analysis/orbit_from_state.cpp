@@ -104,6 +104,7 @@ OrbitResult OrbitFromState(const System& sys, const Scene& scene, const InitialO
   const auto& rows = trace.rows;
   if (rows.size() < static_cast<size_t>(kSamples)) {
     out.status = "no-orbit";
+    out.undetermined = run.status == RunStatus::kUndetermined;
     out.message = "the simulation from the start state failed: " + run.message;
     return out;
   }

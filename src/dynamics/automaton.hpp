@@ -130,18 +130,13 @@ class Automaton {
     return R::to_double(S(t0_) + S(static_cast<double>(c.period)) * period_ + c.offset);
   }
   Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
-  // What may resolve an undetermined sequence: quad precision only where it runs (not in quad
-  // already, not damped sticking of two or more modes, which it has no closed form for).
+  // What may resolve an undetermined sequence: quad precision where it is not already in use (it
+  // runs every scene the double engine runs, damped sticking of several modes included).
   std::string UndeterminedHint() const {
-    const auto& damping = sys_.constrained().damping;
-    const bool damped_sticking = damping.size() > 0 && damping.cwiseAbs().maxCoeff() > 0;
-    if (std::is_same_v<S, double> && !damped_sticking)
+    if (std::is_same_v<S, double>)
       return fmt::format("Use run.precision = \"quad\"{}, or move the parameter",
                          cvode_ ? " with run.engine = \"exact\"" : "");
-    return damped_sticking && std::is_same_v<S, double>
-               ? "Move the parameter (run.precision = \"quad\" has no closed form for damped sticking of two or "
-                 "more modes)"
-               : "Move the parameter";
+    return "Move the parameter";
   }
   S ContactSpeedFloor() const {
     // Rounding floor of ẋ_B = Σ c_i Ẋ_i (docs/model.md §5.4).
