@@ -640,19 +640,24 @@ def main():
         c.main(a.runs)
     finally:
         shutil.rmtree(work, ignore_errors=True)
+    return write_report(c, t0, a.report, {"signals_before_the_program_loaded": c.before_main})
+
+
+def write_report(c, t0, path, extra):
+    """Prints the campaign's report (and writes it to `path`); 1 when there are findings."""
     report = {
         "runs": c.runs, "distinct_inputs": len(c.inputs), "minutes": round((time.monotonic() - t0) / 60, 1),
         "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items())},
         "exit2_located": f"{c.located[0]} of {c.located[1]}", "ok_files_checked_for_physics": c.physics_checked,
         "stops_slower_than_1s": len(c.slow_stops),
-        "signals_before_the_program_loaded": c.before_main,
         "slowest_stop_s": round(max(c.slow_stops), 2) if c.slow_stops else None,
+        **extra,
         "findings": c.findings,
     }
     text = json.dumps(report, indent=1)
     print(text)
-    if a.report:
-        with open(a.report, "w") as f:
+    if path:
+        with open(path, "w") as f:
             f.write(text)
     return 1 if c.findings else 0
 

@@ -49,7 +49,7 @@ import h5py
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from campaign import Campaign, default_stop_signals, HANG, LIVENESS  # noqa: E402
+from campaign import Campaign, default_stop_signals, write_report, HANG, LIVENESS  # noqa: E402
 
 CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk"]
 
@@ -606,20 +606,7 @@ def main():
             if d.endswith(".mnt"):
                 subprocess.run(["umount", "-l", os.path.join(work, d)], capture_output=True)
         shutil.rmtree(work, ignore_errors=True)
-    report = {
-        "runs": c.runs, "distinct_inputs": len(c.inputs), "minutes": round((time.monotonic() - t0) / 60, 1),
-        "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items())},
-        "exit2_located": f"{c.located[0]} of {c.located[1]}", "ok_files_checked_for_physics": c.physics_checked,
-        "tmpfs": c.can_mount, "stops_slower_than_1s": len(c.slow_stops),
-        "slowest_stop_s": round(max(c.slow_stops), 2) if c.slow_stops else None,
-        "findings": c.findings,
-    }
-    text = json.dumps(report, indent=1)
-    print(text)
-    if a.report:
-        with open(a.report, "w") as f:
-            f.write(text)
-    return 1 if c.findings else 0
+    return write_report(c, t0, a.report, {"tmpfs": c.can_mount})
 
 
 if __name__ == "__main__":
