@@ -106,7 +106,7 @@ class Surfaces(Campaign):
         self.seed_files = s
 
     # ---- from-branch ----
-    def damaged_branch(self):
+    def damaged_branch(self, point):
         """A copy of a seed branch with one damage; returns (path, what, valid) where valid is
         False when the damage makes the file one vibro must refuse, None when it cannot tell."""
         r = self.rng
@@ -157,8 +157,9 @@ class Surfaces(Campaign):
                     b.create_dataset("value", shape=(r.choice([2 ** 31, 2 ** 34, 2 ** 40]),), dtype="f8",
                                      chunks=(1024,), compression="gzip")
                 elif what == "nan-state":
+                    # In the row that --point asks for: --from reads that row alone.
                     X = b["X"][:]
-                    X[r.randrange(n), 0] = r.choice([np.nan, np.inf, -np.inf])
+                    X[min(point, n - 1) if point >= 0 else 0, 0] = r.choice([np.nan, np.inf, -np.inf])
                     replace("X", X)
                 elif what == "missing-X":
                     del b[r.choice(["X", "V", "value", "section_time"])]
@@ -166,8 +167,8 @@ class Surfaces(Campaign):
 
     def gen_from_branch(self):
         r = self.rng
-        path, what, valid = self.damaged_branch()
         point = r.choice([0, 1, 5, 7, 8, 1000, -1])
+        path, what, valid = self.damaged_branch(point)
         out = self.fresh(".h5")
         argv = ["continue", self.default, "--from", path, "--point", str(point), "--param", "excitation.amplitude",
                 "--to", "1.26", "--max-points", "3", "--out", out]

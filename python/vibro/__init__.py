@@ -574,8 +574,11 @@ def read(path):
     root, e.g. ``read("run.h5")["events"]["t"]``, ``read("b.h5")["branch"]["events"]`` (an array of
     ``str``, where h5py alone gives ``bytes``) and ``read("run.h5").attrs["scene"]``. Meant for the
     result groups (branches, studies, sweeps, orbits); for long runs read ``/samples`` with h5py
-    directly, slice by slice."""
+    directly, slice by slice. A file that is not a readable vibro file raises ValueError, as
+    ``vibro info`` refuses it (its test read runs first, in a child process)."""
     import h5py
+
+    info(path)
 
     def group(g):
         items = {}

@@ -101,3 +101,10 @@ def test_sigint_gives_keyboard_interrupt_and_readable_file(tmp_path):
         assert (t[1:] >= t[:-1]).all()
     info = vibro.info(out)
     assert info["status"] == "interrupted" and info["rows"]["events"] == n
+
+
+def test_read_of_a_file_that_is_not_hdf5_is_a_value_error():
+    # The surfaces campaign: h5py's OSError reached the caller; read() now refuses as `vibro info`
+    # does, naming the file.
+    with pytest.raises(ValueError, match="/dev/zero"):
+        vibro.read("/dev/zero")
