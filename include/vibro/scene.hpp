@@ -36,6 +36,18 @@ struct PhysicalStructureSpec {
   int contact_dof = 0;        // index of B in [0, N)
 };
 
+// One rigid unilateral contact of the physical form (docs/contacts.md): the gap
+// g = σ (wᵀq − d) ≥ 0, w = e_dof (a stop on one DOF) or e_dof − e_partner (an impact pair: the gap is on
+// q_dof − q_partner), σ = +1 for a stop below (wᵀq ≥ d), −1 above (wᵀq ≤ d).
+enum class Side { kBelow, kAbove };
+struct ContactSpec {
+  int dof = 0;
+  int partner = -1;  // −1: a stop on `dof`; else the other DOF of an impact pair
+  Side side = Side::kBelow;
+  double position = 0;     // d
+  double restitution = 0;  // r ∈ [0, 1]
+};
+
 enum class Engine { kExact, kCvode };
 enum class ChatterTreatment { kAccumulation, kThreshold, kNone };
 enum class CvodeMethod { kAdams, kBdf };
@@ -75,6 +87,9 @@ struct Scene {
 
   double stop_position = 1.0;  // x0
   double restitution = 0.75;   // r
+  // The [[contact]] tables (physical form), in file order. Empty: the one-contact [stop] shorthand
+  // (stop_position, restitution, physical->contact_dof), which Contacts() returns as m = 1.
+  std::vector<ContactSpec> contacts;
 
   double amplitude = 0.0;  // f
   double frequency = 1.0;  // ω
@@ -91,6 +106,11 @@ struct Scene {
 // Every violated constraint of the scene (empty when valid). Includes the checks that need the
 // structural model (positive definiteness, T_B,i > 0, admissible initial state).
 std::vector<InputIssue> Validate(const Scene& scene);
+
+// The contacts of a scene in physical form: its [[contact]] tables, or the [stop] as one contact
+// below at physical->contact_dof. Empty for the modal form (one contact, given by its modal data).
+std::vector<ContactSpec> Contacts(const Scene& scene);
+const char* ToString(Side s);
 
 const char* ToString(Engine e);
 const char* ToString(ChatterTreatment c);

@@ -33,6 +33,25 @@ struct ConstrainedModes {
   Eigen::MatrixXd damping;
 };
 
+// One contact of the model (docs/contacts.md): its gap g_j = c_jᵀX − e_j ≥ 0 in the modal
+// coordinates of the System (MODEL (M2): c_j = σ_j Ψᵀw_j, e_j = σ_j d_j), T_j = μ⁻¹c_j the modal
+// projection of a unit contact force, and what sticking on it alone needs: the constrained modes
+// with contact j held (docs/model.md §4.2 with c → c_j). Contact 0 is the contact the modes are
+// scaled to (unit c_0 on every mode it sees), so that for one contact every formula is the single
+// stop's.
+struct ContactModel {
+  ContactSpec spec;             // as written (modal form: dof = partner = −1, side below)
+  Eigen::VectorXd shape;        // c_j, (n)
+  Eigen::VectorXd contact;      // T_j, (n)
+  double stop = 0;              // e_j: the contact is closed at c_jᵀX = e_j
+  double restitution = 0;       // r_j
+  double s_A = 0;               // c_jᵀT_A
+  double s_B = 0;               // W_jj = c_jᵀT_j = 1/(effective mass of contact j)
+  double flexibility = 0;       // Σ c_j,i T_j,i / ω_i²
+  Eigen::VectorXd static_shape; // v0/(c_jᵀv0), v0 = Ω⁻¹T_j: at rest on contact j at e_j = 1
+  ConstrainedModes constrained;
+};
+
 class System {
  public:
   // Builds the model of a scene. Precondition: Validate(scene) is empty (throws
@@ -65,6 +84,12 @@ class System {
   const Eigen::VectorXd& static_shape() const { return static_shape_; }
 
   const ConstrainedModes& constrained() const { return constrained_; }
+
+  // The m contacts, in scene order (contact 0 is the one the accessors above describe).
+  int contact_count() const { return static_cast<int>(contacts_.size()); }
+  const std::vector<ContactModel>& contacts() const { return contacts_; }
+  // Delassus matrix W_jk = c_jᵀT_k (MODEL §11.1.3), (m, m).
+  const Eigen::MatrixXd& delassus() const { return delassus_; }
 
   // Physical form only: mode shapes ψ_i (columns, unit component at B for contact modes), (N, n).
   const Eigen::MatrixXd& mode_shapes() const { return mode_shapes_; }
@@ -116,6 +141,8 @@ class System {
 
  private:
   void BuildConstrained();
+  void BuildContacts(const Scene& scene);
+  Eigen::VectorXd ModalMassesOfScaling() const;
 
   bool physical_ = false;
   bool damped_ = false;
@@ -129,6 +156,8 @@ class System {
   Eigen::VectorXd modal_masses_;
   Eigen::MatrixXd mass_;    // physical M (physical form), for ModalFromPhysical
   std::vector<int> kept_;   // modal form: indices of the kept modes in the scene's lists
+  std::vector<ContactModel> contacts_;
+  Eigen::MatrixXd delassus_;
 };
 
 }  // namespace vibro

@@ -95,7 +95,7 @@ std::string PreScan(std::string_view text, const std::string& source) {
   return {};
 }
 
-enum class Kind { kNumber, kInteger, kString, kBoolean, kNumberArray, kMatrix, kTable };
+enum class Kind { kNumber, kInteger, kString, kBoolean, kNumberArray, kMatrix, kTable, kTableArray };
 
 // Every key a scene may hold (docs/scenes.md lists each with its default and constraint).
 const std::map<std::string, Kind>& Schema() {
@@ -114,6 +114,12 @@ const std::map<std::string, Kind>& Schema() {
       {"stop", Kind::kTable},
       {"stop.position", Kind::kNumber},
       {"stop.restitution", Kind::kNumber},
+      {"contact", Kind::kTableArray},
+      {"contact.dof", Kind::kInteger},
+      {"contact.dofs", Kind::kNumberArray},
+      {"contact.side", Kind::kString},
+      {"contact.position", Kind::kNumber},
+      {"contact.restitution", Kind::kNumber},
       {"excitation", Kind::kTable},
       {"excitation.amplitude", Kind::kNumber},
       {"excitation.frequency", Kind::kNumber},
@@ -165,17 +171,21 @@ std::string LastComponent(const std::string& path) {
 std::string Suggest(const std::string& path) {
   const std::string leaf = LastComponent(path);
   std::string best;
-  size_t best_d = std::max<size_t>(2, path.size() / 3) + 1;
+  size_t best_d = std::max<size_t>(2, path.size() / 3) + 1, best_full = 0;
   for (const auto& [known, kind] : Schema()) {
     (void)kind;
-    size_t d = std::min(EditDistance(path, known), EditDistance(leaf, LastComponent(known)) + 1);
+    const size_t full = EditDistance(path, known);
+    size_t d = std::min(full, EditDistance(leaf, LastComponent(known)) + 1);
     // A shortened key (`structure.damping` for `structure.damping_ratios`) is a near miss too.
     const std::string known_leaf = LastComponent(known);
     if (leaf.size() >= 4 && known_leaf.rfind(leaf, 0) == 0 &&
         path.substr(0, path.size() - leaf.size()) == known.substr(0, known.size() - known_leaf.size()))
       d = std::min<size_t>(d, 1);
-    if (d < best_d) {
+    // Ties (the same leaf in two tables: stop.restitution, contact.restitution) go to the
+    // closer whole key.
+    if (d < best_d || (d == best_d && !best.empty() && full < best_full)) {
       best_d = d;
+      best_full = full;
       best = known;
     }
   }
@@ -252,6 +262,17 @@ class Reader {
           CheckKeys(*sub, path);
         else
           Report(&node, path, "expected a table [" + path + "]");
+      }
+      if (it->second == Kind::kTableArray) {
+        const auto* arr = node.as_array();
+        bool tables = arr != nullptr && !arr->empty();
+        if (arr)
+          for (const auto& e : *arr) tables = tables && e.is_table();
+        if (!tables) {
+          Report(&node, path, "expected an array of tables [[" + path + "]]");
+          continue;
+        }
+        for (const auto& e : *arr) CheckKeys(*e.as_table(), path);
       }
     }
   }
@@ -605,14 +626,15 @@ LoadedScene Build(toml::table root, const std::string& source,
               "give either the modal form (frequencies, forcing, contact) or the physical form "
               "(mass, stiffness, forcing_dof, contact_dof), not both");
   } else if (physical_keys) {
-    for (const char* k : {"structure.mass", "structure.stiffness", "structure.forcing_dof",
-                          "structure.contact_dof"})
+    for (const char* k : {"structure.mass", "structure.stiffness", "structure.forcing_dof"})
       rd.Require(k);
+    if (!rd.Find("contact")) rd.Require("structure.contact_dof");
     PhysicalStructureSpec p;
     auto M = rd.Matrix("structure.mass");
     auto K = rd.Matrix("structure.stiffness");
     auto a = rd.Integer("structure.forcing_dof", -kMaxIndex, kMaxIndex);
-    auto b = rd.Integer("structure.contact_dof", -kMaxIndex, kMaxIndex);
+    auto b = rd.Find("contact") ? std::optional<long long>(0)
+                                : rd.Integer("structure.contact_dof", -kMaxIndex, kMaxIndex);
     if (M && K && a && b) {
       p.mass = *M;
       p.stiffness = *K;
@@ -636,8 +658,53 @@ LoadedScene Build(toml::table root, const std::string& source,
       s.modes = static_cast<int>(*m);
   }
 
-  rd.Require("stop.position");
-  rd.Require("stop.restitution");
+  // One contact ([stop], the shorthand) or several ([[contact]] tables), never both.
+  const toml::array* contact_tables = rd.Find("contact") ? rd.Find("contact")->as_array() : nullptr;
+  if (contact_tables && rd.Find("stop")) {
+    rd.Report(rd.Find("stop"), "stop",
+              "give either [stop] (one contact) or [[contact]] tables, not both");
+  } else if (contact_tables) {
+    if (s.physical && rd.Find("structure.contact_dof"))
+      rd.Report(rd.Find("structure.contact_dof"), "structure.contact_dof",
+                "belongs to the [stop] shorthand: with [[contact]] tables each contact names its DOF");
+    for (size_t j = 0; j < contact_tables->size() && contact_tables->get(j)->is_table(); ++j) {
+      const std::string at = fmt::format("contact[{}]", j);
+      ContactSpec k;
+      const bool one = rd.Find(at + ".dof") != nullptr, two = rd.Find(at + ".dofs") != nullptr;
+      if (one == two)
+        rd.messages().push_back(fmt::format(
+            "{}: {}: give dof = B (a stop on DOF B) or dofs = [B, A] (an impact pair, the gap on "
+            "q_B − q_A), exactly one of them",
+            rd.Where(rd.Find(at)), at));
+      if (auto v = rd.Integer(at + ".dof", -kMaxIndex, kMaxIndex)) k.dof = static_cast<int>(*v);
+      if (two) {
+        const toml::node* n = rd.Find(at + ".dofs");
+        const auto* a = n->as_array();
+        bool ok = a && a->size() == 2;
+        for (size_t i = 0; ok && i < 2; ++i) {
+          const auto* in = a->get(i)->as_integer();
+          ok = in && in->get() >= -kMaxIndex && in->get() <= kMaxIndex;
+        }
+        if (!ok) {
+          rd.Report(n, at + ".dofs", "two whole numbers [B, A]: the gap is on q_B − q_A");
+        } else {
+          k.dof = static_cast<int>(a->get(0)->as_integer()->get());
+          k.partner = static_cast<int>(a->get(1)->as_integer()->get());
+          if (k.partner < 0) k.partner = -2;  // out of range, reported by Validate
+        }
+      }
+      for (const char* leaf : {"side", "position", "restitution"}) rd.Require(at + "." + leaf);
+      if (auto v = rd.String(at + ".side", {"below", "above"}))
+        k.side = *v == "below" ? Side::kBelow : Side::kAbove;
+      if (auto v = rd.Number(at + ".position")) k.position = *v;
+      if (auto v = rd.Number(at + ".restitution")) k.restitution = *v;
+      s.contacts.push_back(k);
+    }
+    if (s.physical && !s.contacts.empty()) s.physical->contact_dof = s.contacts.front().dof;
+  } else {
+    rd.Require("stop.position");
+    rd.Require("stop.restitution");
+  }
   if (auto v = rd.Number("stop.position")) s.stop_position = *v;
   if (auto v = rd.Number("stop.restitution")) s.restitution = *v;
   rd.Require("excitation.amplitude");

@@ -47,14 +47,24 @@ std::string ResolvedSceneToml(const Scene& sc) {
     s += fmt::format("frequencies = {}\nforcing = {}\ncontact = {}\n", Vector(sc.modal->frequencies),
                      Vector(sc.modal->forcing), Vector(sc.modal->contact));
   } else if (sc.physical) {
-    s += fmt::format("mass = {}\nstiffness = {}\nforcing_dof = {}\ncontact_dof = {}\n",
-                     Matrix(sc.physical->mass), Matrix(sc.physical->stiffness), sc.physical->forcing_dof,
-                     sc.physical->contact_dof);
+    s += fmt::format("mass = {}\nstiffness = {}\nforcing_dof = {}\n", Matrix(sc.physical->mass),
+                     Matrix(sc.physical->stiffness), sc.physical->forcing_dof);
+    if (sc.contacts.empty()) s += fmt::format("contact_dof = {}\n", sc.physical->contact_dof);
     if (sc.modes > 0) s += fmt::format("modes = {}\n", sc.modes);
   }
   if (sc.damping_ratios.size() > 0) s += fmt::format("damping_ratios = {}\n", Vector(sc.damping_ratios));
-  s += fmt::format("\n[stop]\nposition = {}\nrestitution = {}\n", Number(sc.stop_position),
-                   Number(sc.restitution));
+  if (sc.contacts.empty())
+    s += fmt::format("\n[stop]\nposition = {}\nrestitution = {}\n", Number(sc.stop_position),
+                     Number(sc.restitution));
+  for (const ContactSpec& k : sc.contacts) {
+    s += "\n[[contact]]\n";
+    if (k.partner >= 0)
+      s += fmt::format("dofs = [{}, {}]\n", k.dof, k.partner);
+    else
+      s += fmt::format("dof = {}\n", k.dof);
+    s += fmt::format("side = \"{}\"\nposition = {}\nrestitution = {}\n", ToString(k.side),
+                     Number(k.position), Number(k.restitution));
+  }
   s += fmt::format("\n[excitation]\namplitude = {}\nfrequency = {}\n", Number(sc.amplitude),
                    Number(sc.frequency));
   s += fmt::format("\n[initial]\ntime = {}\n", Number(sc.initial_time));

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+#include <tuple>
 #include <utility>
 
 #include <fmt/format.h>
@@ -115,6 +119,66 @@ void CheckMagnitude(double v, const std::string& key, Checker& c) {
   c.Require(std::abs(v) <= kHuge, key, Show(v), fmt::format("|value| ≤ {:g} (its square must be representable)", kHuge));
 }
 
+// The [[contact]] tables (docs/contacts.md): indices, restitution, no two dependent contacts
+// (MODEL §11.1.3: the same direction σw twice, or a two-sided stop without clearance).
+void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {
+  if (s.contacts.empty()) return;
+  if (!s.physical) {
+    c.Require(false, "contact", "",
+              "[[contact]] tables need the physical form (mass, stiffness, forcing_dof); the modal "
+              "form has one contact, its [stop]");
+    return;
+  }
+  const auto key = [](size_t j, const char* leaf) { return fmt::format("contact[{}].{}", j, leaf); };
+  const auto N = static_cast<int>(n_dofs);
+  bool indices_ok = true;
+  for (size_t j = 0; j < s.contacts.size(); ++j) {
+    const ContactSpec& k = s.contacts[j];
+    const bool pair = k.partner >= 0 || k.partner < -1;
+    const std::string dof_key = key(j, pair ? "dofs" : "dof");
+    const bool in = k.dof >= 0 && k.dof < N && (!pair || (k.partner >= 0 && k.partner < N));
+    c.Require(in, dof_key, pair ? fmt::format("[{}, {}]", k.dof, k.partner) : std::to_string(k.dof),
+              fmt::format("DOF indices in [0, {})", N));
+    c.Require(!pair || k.dof != k.partner, dof_key, fmt::format("[{}, {}]", k.dof, k.partner),
+              "an impact pair joins two different DOFs");
+    indices_ok = indices_ok && in && (!pair || k.dof != k.partner);
+    c.Require(k.restitution >= 0 && k.restitution <= 1, key(j, "restitution"), Show(k.restitution),
+              "0 ≤ r ≤ 1");
+    CheckMagnitude(k.position, key(j, "position"), c);
+  }
+  if (s.contacts.size() > 1 && s.run.engine == Engine::kCvode)
+    c.Require(false, "run.engine", "\"cvode\"",
+              "run.engine = \"exact\" with several contacts (CVODE runs one contact)");
+  if (!indices_ok) return;
+  // Directions σw as sparse pairs (+1 at one DOF, −1 at another or none), for comparison.
+  const auto direction = [](const ContactSpec& k) {
+    const int sg = k.side == Side::kBelow ? 1 : -1;
+    return std::tuple{k.dof, k.partner, sg};
+  };
+  for (size_t j = 0; j < s.contacts.size(); ++j)
+    for (size_t k = j + 1; k < s.contacts.size(); ++k) {
+      const auto [bj, aj, sj] = direction(s.contacts[j]);
+      const auto [bk, ak, sk] = direction(s.contacts[k]);
+      // Same line: the same DOF set; the same orientation or the opposite one.
+      int same = 0;  // +1 same direction, −1 opposite, 0 independent
+      if (bj == bk && aj == ak) same = sj == sk ? 1 : -1;
+      else if (aj >= 0 && bj == ak && aj == bk) same = sj == sk ? -1 : 1;
+      if (same == 1)
+        c.Require(false, key(k, "side"), fmt::format("\"{}\"", ToString(s.contacts[k].side)),
+                  fmt::format("two contacts on one side of the same {} (contact {} and {}) are "
+                              "dependent: keep one (the Delassus matrix is singular)",
+                              aj >= 0 ? "pair" : "DOF", j, k));
+      if (same == -1) {
+        // σ_k w_k = −σ_j w_j: g_j + g_k = −(σ_j d_j + σ_k d_k), the clearance.
+        const double clearance = -(sj * s.contacts[j].position + sk * s.contacts[k].position);
+        c.Require(clearance > 0, key(k, "position"), Show(s.contacts[k].position),
+                  fmt::format("a positive clearance between the two sides of contact {} and {} "
+                              "(here {}): below must lie under above",
+                              j, k, clearance));
+      }
+    }
+}
+
 }  // namespace
 
 std::vector<InputIssue> Validate(const Scene& s) {
@@ -186,6 +250,8 @@ std::vector<InputIssue> Validate(const Scene& s) {
   c.Require(n_listed <= kMaxModes, "structure", std::to_string(n_listed),
             fmt::format("at most {} modes or DOFs (the model's matrices are n×n)", kMaxModes));
 
+  CheckContacts(s, n_listed, c);
+
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");
   // The absolute times written (t0 + k·T + offset, one double) must resolve every sample: their
@@ -251,7 +317,41 @@ std::vector<InputIssue> Validate(const Scene& s) {
   if (!c.empty()) return c.Take();
 
   // The structure is consistent: check what needs the model.
-  const System sys(s);
+  std::optional<System> built;
+  try {
+    built.emplace(s);
+  } catch (const std::invalid_argument& e) {
+    c.Require(false, s.modes > 0 ? "structure.modes" : "contact", s.modes > 0 ? std::to_string(s.modes) : "",
+              fmt::format("every contact sees a kept mode ({})", e.what()));
+    return c.Take();
+  }
+  const System& sys = *built;
+  if (!s.contacts.empty()) {
+    // Every gap of the initial state (the default one included) open or closed, never violated.
+    const auto init = sys.Initial(s);
+    for (int j = 0; j < sys.contact_count(); ++j) {
+      const ContactModel& k = sys.contacts()[static_cast<size_t>(j)];
+      const double g = k.shape.dot(init.X) - k.stop;
+      const double scale = std::abs(k.stop) + k.shape.cwiseProduct(init.X).cwiseAbs().sum();
+      const double tol = System::kStopUlps * std::numeric_limits<double>::epsilon() * scale;
+      const double below = 1e-12 * std::max(1.0, std::abs(k.stop));
+      c.Require(g >= -below, has_x ? "initial.displacement" : fmt::format("contact[{}].position", j),
+                has_x ? Show(s.initial_displacement) : Show(k.spec.position),
+                fmt::format("admissible initial state: the gap of contact {} is {} < 0{}", j, g,
+                            has_x ? "" : " at the default state (give initial.displacement and "
+                                         "initial.velocity)"));
+      if (has_v && g <= tol && g >= -below) {
+        const double v = k.shape.dot(init.V);
+        c.Require(v >= -System::kStopUlps * std::numeric_limits<double>::epsilon() *
+                           k.shape.cwiseProduct(init.V).cwiseAbs().sum(),
+                  "initial.velocity", Show(s.initial_velocity),
+                  fmt::format("admissible initial state: on contact {} its gap velocity must not "
+                              "point into it ({} < 0)",
+                              j, v));
+      }
+    }
+    return c.Take();
+  }
   if (has_x && has_v) {
     const auto init = sys.Initial(s);
     const double xB = sys.ContactDisplacement(init.X);
@@ -270,6 +370,15 @@ std::vector<InputIssue> Validate(const Scene& s) {
   }
   return c.Take();
 }
+
+std::vector<ContactSpec> Contacts(const Scene& scene) {
+  if (!scene.contacts.empty()) return scene.contacts;
+  if (!scene.physical) return {};
+  return {ContactSpec{scene.physical->contact_dof, -1, Side::kBelow, scene.stop_position,
+                      scene.restitution}};
+}
+
+const char* ToString(Side s) { return s == Side::kBelow ? "below" : "above"; }
 
 const char* ToString(Engine e) { return e == Engine::kExact ? "exact" : "cvode"; }
 const char* ToString(ChatterTreatment c) {

@@ -28,6 +28,13 @@ std::vector<int> LowestModes(const Eigen::VectorXd& omega, int keep) {
 System::System(const Scene& scene) {
   x0_ = scene.stop_position;
   r_ = scene.restitution;
+  // [[contact]] tables: contact 0 takes the place of the [stop] (e_0 = σ_0 d_0).
+  const ContactSpec* first = scene.contacts.empty() ? nullptr : &scene.contacts.front();
+  const double sigma0 = first && first->side == Side::kAbove ? -1.0 : 1.0;
+  if (first) {
+    x0_ = sigma0 * first->position;
+    r_ = first->restitution;
+  }
   f_ = scene.amplitude;
   w_ = scene.frequency;
   period_ = 2.0 * M_PI / w_;
@@ -73,7 +80,13 @@ System::System(const Scene& scene) {
       Eigen::VectorXd phi = eig.eigenvectors().col(k);
       omega_[i] = all_omega[k];
       if (scene.damping_ratios.size() > 0) zeta_[i] = scene.damping_ratios[k];
-      const double phiB = phi[p.contact_dof];
+      // The component the first contact sees, σ_0 w_0ᵀφ (w_0 = e_B for a [stop]).
+      double phiB = phi[p.contact_dof];
+      if (first) {
+        phiB = phi[first->dof];
+        if (first->partner >= 0) phiB -= phi[first->partner];
+        phiB *= sigma0;
+      }
       if (std::abs(phiB) > kNodeTolerance * phi.cwiseAbs().maxCoeff()) {
         // Step 2-3: unit component at B, T_A = ψ(A)/m, T_B = 1/m.
         const Eigen::VectorXd psi = phi / phiB;
@@ -103,14 +116,20 @@ System::System(const Scene& scene) {
   const Eigen::VectorXd v0 = contact_.cwiseQuotient(omega_.cwiseAbs2());
   static_shape_ = v0 / flexibility_;
   BuildConstrained();
+  BuildContacts(scene);
 }
 
-void System::BuildConstrained() {
-  // docs/model.md §4.2 in mass-weighted form: the constrained modes solve (μΩ − λμ) v = c R̂, cᵀv = 0,
-  // μ_i = 1/T_B,i (contact modes) or 1 (modes with a node at B). With N an orthonormal basis of
-  // {cᵀX = 0}, v = N y and (NᵀμΩN) y = λ (NᵀμN) y is a symmetric-definite problem.
+namespace {
+
+// docs/model.md §4.2 for the contact (c, T) in mass-weighted form: the constrained modes solve
+// (μΩ − λμ) v = c R̂, cᵀv = 0, μ_i the modal masses of the scaling. With N an orthonormal basis of
+// {cᵀX = 0}, v = N y and (NᵀμΩN) y = λ (NᵀμN) y is a symmetric-definite problem.
+ConstrainedModes Constrained(const Eigen::VectorXd& omega_, const Eigen::VectorXd& zeta_,
+                             const Eigen::VectorXd& forcing_, const Eigen::VectorXd& mu,
+                             const Eigen::VectorXd& shape_, const Eigen::VectorXd& contact_,
+                             double s_A_, double s_B_, const Eigen::VectorXd& static_shape_) {
   const auto n = omega_.size();
-  auto& cm = constrained_;
+  ConstrainedModes cm;
   if (n < 2) {
     cm.frequencies.resize(0);
     cm.vectors.resize(n, 0);
@@ -118,11 +137,9 @@ void System::BuildConstrained() {
     cm.modal_forcing.resize(0);
     cm.reaction.resize(0);
     cm.damping.resize(0, 0);
-    return;
+    return cm;
   }
-  Eigen::VectorXd mu(n);
-  for (Eigen::Index i = 0; i < n; ++i) mu[i] = shape_[i] > 0 ? 1.0 / contact_[i] : 1.0;
-  // Orthonormal basis of the null space of cᵀ: Householder reflection of c/|c| onto e_0.
+  // Orthonormal basis of the null space of cᵀ.
   const Eigen::MatrixXd ct = shape_.transpose();
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(ct, Eigen::ComputeFullV);
   const Eigen::MatrixXd N = svd.matrixV().rightCols(n - 1);
@@ -147,6 +164,69 @@ void System::BuildConstrained() {
   const Eigen::MatrixXd Pi =
       Eigen::MatrixXd::Identity(n, n) - contact_ * shape_.transpose() / s_B_;
   cm.damping = cm.left * Pi * D.asDiagonal() * cm.vectors;
+  return cm;
+}
+
+}  // namespace
+
+// Modal masses of the scaling: 1/T_B,i for a mode the contact sees (unit component at B), 1 for a
+// mass-normalised mode with a node at B.
+Eigen::VectorXd System::ModalMassesOfScaling() const {
+  const auto n = omega_.size();
+  Eigen::VectorXd mu(n);
+  for (Eigen::Index i = 0; i < n; ++i) mu[i] = shape_[i] > 0 ? 1.0 / contact_[i] : 1.0;
+  return mu;
+}
+
+void System::BuildConstrained() {
+  constrained_ = Constrained(omega_, zeta_, forcing_, ModalMassesOfScaling(), shape_, contact_,
+                             s_A_, s_B_, static_shape_);
+}
+
+void System::BuildContacts(const Scene& scene) {
+  // Contact 0 is the contact of the scaling: the accessors' data.
+  ContactModel c0;
+  const auto specs = Contacts(scene);
+  if (!specs.empty()) c0.spec = specs.front();
+  else c0.spec = ContactSpec{-1, -1, Side::kBelow, x0_, r_};
+  c0.shape = shape_;
+  c0.contact = contact_;
+  c0.stop = x0_;
+  c0.restitution = r_;
+  c0.s_A = s_A_;
+  c0.s_B = s_B_;
+  c0.flexibility = flexibility_;
+  c0.static_shape = static_shape_;
+  c0.constrained = constrained_;
+  contacts_.push_back(std::move(c0));
+  const Eigen::VectorXd mu = ModalMassesOfScaling();
+  for (size_t j = 1; j < specs.size(); ++j) {
+    const ContactSpec& sp = specs[j];
+    const double sigma = sp.side == Side::kBelow ? 1.0 : -1.0;
+    ContactModel c;
+    c.spec = sp;
+    Eigen::VectorXd w = mode_shapes_.row(sp.dof).transpose();
+    if (sp.partner >= 0) w -= mode_shapes_.row(sp.partner).transpose();
+    c.shape = sigma * w;  // c_j,i = σ_j w_jᵀψ_i
+    c.contact = c.shape.cwiseQuotient(mu);
+    c.stop = sigma * sp.position;
+    c.restitution = sp.restitution;
+    c.s_A = c.shape.dot(forcing_);
+    c.s_B = c.shape.dot(c.contact);
+    if (!(c.s_B > 0.0))
+      throw std::invalid_argument("contact " + std::to_string(j) + " sees no kept mode (W_jj = 0)");
+    const Eigen::VectorXd v0 = c.contact.cwiseQuotient(omega_.cwiseAbs2());
+    c.flexibility = c.shape.dot(v0);
+    c.static_shape = v0 / c.flexibility;
+    c.constrained = Constrained(omega_, zeta_, forcing_, mu, c.shape, c.contact, c.s_A, c.s_B,
+                                c.static_shape);
+    contacts_.push_back(std::move(c));
+  }
+  const auto m = static_cast<Eigen::Index>(contacts_.size());
+  delassus_.resize(m, m);
+  for (Eigen::Index j = 0; j < m; ++j)
+    for (Eigen::Index k = 0; k < m; ++k)
+      delassus_(j, k) = contacts_[static_cast<size_t>(j)].shape.dot(contacts_[static_cast<size_t>(k)].contact);
 }
 
 std::optional<double> System::static_reaction() const {
