@@ -8,6 +8,8 @@
 
 #include <cstdint>
 
+#include <vector>
+
 #include <Eigen/Dense>
 
 namespace vibro {
@@ -34,6 +36,7 @@ struct Clock {
 
 struct EventCounts {
   long long impacts = 0, accumulations = 0, sticks = 0, releases = 0, grazings = 0;
+  long long simultaneous = 0;  // impacts of two or more contacts at one instant (docs/contacts.md)
 };
 
 // Work done by a numerical integrator (CVODE engine; zero for the exact engine).
@@ -47,8 +50,10 @@ struct Event {
   Clock clock;
   double t;         // absolute time t0 + period·T + offset (for output; less accurate)
   double x_B;       // contact displacement at the event
-  double v_before;  // ẋ_B just before
+  double v_before;  // ẋ_B just before (several contacts: the gap velocity ġ_j of the contact)
   double v_after;   // ẋ_B just after
+  int contact = 0;  // 0-based index of the [[contact]] table (0 for the [stop])
+  bool simultaneous = false;  // an impact of this contact together with another (impact LCP)
 };
 
 struct Sample {
@@ -76,6 +81,12 @@ struct Checkpoint {
   // whole run: sequences ended by a prediction, impacts followed, largest estimated error / T.
   long long chatter_predicted = 0, chatter_followed = 0;
   double chatter_max_error = 0;
+  // Several contacts (docs/contacts.md): the contact of `mode`/`gap`/`start_kind` (held, or the
+  // flight's start contact), every contact's gap and flight start, and the counts per contact.
+  int contact = 0;
+  std::vector<double> gaps;
+  std::vector<int> start_kinds;
+  std::vector<EventCounts> contact_counts;
 };
 
 // For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and

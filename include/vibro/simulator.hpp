@@ -73,6 +73,7 @@ struct RunResult {
   Clock end;            // time reached
   double t_end = 0;
   EventCounts counts;
+  std::vector<EventCounts> contact_counts;  // per contact, in [[contact]] order (one for [stop])
   Eigen::VectorXd X, V;  // final state
   Mode mode = Mode::kFree;
   SolverStats solver;  // CVODE work (engine "cvode")

@@ -107,7 +107,16 @@ class Automaton {
         chatter_tol_(S(cvode_ ? std::max(ChatterTolerance(scene.run), scene.run.rtol)
                               : ChatterTolerance(scene.run)) *
                      model.period) {
-    if (model.stick_frequencies.size() == 0) resting_ = std::make_unique<RestingStick<S>>(model);
+    for (int j = 1; j < sys.contact_count(); ++j) others_.emplace_back(sys, j);
+    models_.push_back(&model);
+    for (const ModelT<S>& o : others_) models_.push_back(&o);
+    if (model.stick_frequencies.size() == 0)
+      for (const ModelT<S>* k : models_) resting_all_.push_back(std::make_unique<RestingStick<S>>(*k));
+    counts_.resize(models_.size());
+    if (multi()) {
+      gaps_.assign(models_.size(), S(0));
+      starts_.assign(models_.size(), FlightStart::kGeneric);
+    }
     const auto poll = [this] { return StopPolled(); };
     engine_->SetStopPoll(poll);
     if (opt.initial) {
@@ -125,6 +134,18 @@ class Automaton {
   RunResult Run();
 
  private:
+  bool multi() const { return models_.size() > 1; }
+  const ModelT<S>& M(int j) const { return *models_[static_cast<size_t>(j)]; }
+  // The one-DOF resting flow of the held contact (no constrained mode), or null.
+  PropagatorT<S>* Resting() const {
+    return resting_all_.empty() ? nullptr : resting_all_[static_cast<size_t>(active_)].get();
+  }
+  // Several contacts: every gap from the propagator after a segment (the start contact's without
+  // cancellation), and what follows an event at contact k.
+  void UpdateGaps(PropagatorT<S>& p, const S& sigma);
+  bool OnContactMulti(int k);
+  bool ImpactWhileHeld(int k);
+  bool SimultaneousImpact(const std::vector<int>& Z);
   S Phase(const ClockT<S>& c) const { return phase0_ + m_.w * c.offset; }
   double AbsTime(const ClockT<S>& c) const {
     return R::to_double(S(t0_) + S(static_cast<double>(c.period)) * period_ + c.offset);
@@ -140,7 +161,7 @@ class Automaton {
   }
   S ContactSpeedFloor() const {
     // Rounding floor of ẋ_B = Σ c_i Ẋ_i (docs/model.md §5.4).
-    return S(1000) * Eps<S>() * m_.shape.cwiseProduct(V_).cwiseAbs().sum();
+    return S(1000) * Eps<S>() * M(active_).shape.cwiseProduct(V_).cwiseAbs().sum();
   }
   // Observers see doubles: a view of a state vector (no copy for double).
   const Eigen::VectorXd& D(const Vec& v, Eigen::VectorXd& tmp) const {
@@ -156,7 +177,8 @@ class Automaton {
            (process_stop_ && process_stop_->load(std::memory_order_relaxed));
   }
 
-  void Emit(EventKind kind, const S& v_before, const S& v_after);
+  void Emit(EventKind kind, const S& v_before, const S& v_after, int contact = -1,
+            bool simultaneous = false);
   void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb);
   void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
   void AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
@@ -166,6 +188,7 @@ class Automaton {
   void Depart(FlightStart how);
   bool OnContact();
   bool TryAccumulation(const S& reaction);
+  bool TailClearOfOtherContacts(const S& delta);
   void Checkpointed();
   bool Fail(std::string message, RunStatus status = RunStatus::kNumericalFailure);
 
@@ -185,7 +208,13 @@ class Automaton {
   const SimulationOptions& opt_;
   const std::atomic<bool>* process_stop_ = ProcessStopFlag();  // vibro/stop_request.hpp
   std::unique_ptr<PropagatorT<S>> engine_;
-  std::unique_ptr<PropagatorT<S>> resting_;
+  std::vector<ModelT<S>> others_;              // contacts 1..m−1 (docs/contacts.md)
+  std::vector<const ModelT<S>*> models_;       // every contact's model; models_[0] = &m_
+  std::vector<std::unique_ptr<PropagatorT<S>>> resting_all_;  // one DOF: resting on each contact
+  int active_ = 0;              // sticking: the held contact; free flight: the start contact
+  std::vector<S> gaps_;         // several contacts: every gap (0 for the held one)
+  std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
+  std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
   S phase0_{0};
@@ -205,6 +234,10 @@ class Automaton {
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
   S chatter_first_{0}, chatter_last_{0};
+  // Several contacts: a chattering sequence at one contact while another sticks (ImpactWhileHeld).
+  static constexpr int kHeldChatterImpacts = 64;
+  int held_chatter_ = 0, held_chatter_contact_ = -1;
+  double held_chatter_t_ = 0;
   TailPrediction<S> last_tail_;  // the last prediction tried in the current sequence
   std::string last_jump_failure_;  // why the engine could not take the last jump tried (CVODE)
   bool project_samples_ = false;
@@ -214,18 +247,7 @@ class Automaton {
   RunResult result_;
 };
 
-template <class S>
-void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after) {
-  grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
-  CheckEventClock();
-  Event e{kind,
-          ToClock(clock_),
-          AbsTime(clock_),
-          R::to_double(m_.ContactDisplacement(X_)),
-          R::to_double(v_before),
-          R::to_double(v_after)};
-  if (kind != EventKind::kImpact && kind != EventKind::kGrazing) e.x_B = sys_.stop();
-  auto& c = result_.counts;
+inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
   switch (kind) {
     case EventKind::kImpact: ++c.impacts; break;
     case EventKind::kAccumulation: ++c.accumulations; break;
@@ -233,6 +255,28 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after) {
     case EventKind::kRelease: ++c.releases; break;
     case EventKind::kGrazing: ++c.grazings; break;
   }
+  if (simultaneous) ++c.simultaneous;
+}
+
+template <class S>
+void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int contact,
+                        bool simultaneous) {
+  if (contact < 0) contact = active_;
+  const ModelT<S>& m = M(contact);
+  grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
+  CheckEventClock();
+  Event e{kind,
+          ToClock(clock_),
+          AbsTime(clock_),
+          R::to_double(m.side * m.ContactDisplacement(X_)),
+          R::to_double(v_before),
+          R::to_double(v_after),
+          contact,
+          simultaneous};
+  if (kind != EventKind::kImpact && kind != EventKind::kGrazing) e.x_B = R::to_double(m.side * m.x0);
+  Count(result_.counts, kind, simultaneous);
+  // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
+  if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
   for (auto* o : opt_.observers) o->OnEvent(e);
 }
 
@@ -240,7 +284,7 @@ template <class S>
 void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb) {
   if (opt_.observers.empty()) return;
   const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
-                0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(m_.ContactVelocity(Vb))};
+                0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(M(active_).ContactVelocity(Vb))};
   for (auto* o : opt_.observers) o->OnReset(r);
 }
 
@@ -256,15 +300,16 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (sigma > hi || k > run_.periods) break;
     if (sigma <= lo) continue;
     p.Evaluate(sigma, Xs_, Vs_);
-    if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
-      CheckFreeGap(m_.ContactDisplacement(Xs_) - m_.x0, Xs_,
-                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight");
+      for (const ModelT<S>* c : models_)
+        CheckFreeGap(c->ContactDisplacement(Xs_) - c->x0, Xs_,
+                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight");
     const Sample s{{k, 0.0},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_),
                    D(Xs_, dx_),
                    D(Vs_, dv_),
-                   R::to_double(m_.ContactDisplacement(Xs_)),
+                   R::to_double(m_.side * m_.ContactDisplacement(Xs_)),
                    mode_};
     for (auto* o : opt_.observers) o->OnSection(s);
   }
@@ -278,15 +323,16 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (sigma < lo) continue;
     if (k >= run_.periods) break;  // the end state is section row `periods`, not a sample
     p.Evaluate(sigma, Xs_, Vs_);
-    if (project_samples_) m_.ProjectOntoStop(Xs_, Vs_);
+    if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
-      CheckFreeGap(m_.ContactDisplacement(Xs_) - m_.x0, Xs_,
-                   R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight");
+      for (const ModelT<S>* c : models_)
+        CheckFreeGap(c->ContactDisplacement(Xs_) - c->x0, Xs_,
+                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight");
     const Sample s{{k, R::to_double(off)},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off),
                    D(Xs_, dx_),
                    D(Vs_, dv_),
-                   R::to_double(m_.ContactDisplacement(Xs_)),
+                   R::to_double(m_.side * m_.ContactDisplacement(Xs_)),
                    mode_};
     for (auto* o : opt_.observers) o->OnSample(s);
   }
@@ -313,22 +359,83 @@ void Automaton<S>::AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_
 
 template <class S>
 void Automaton<S>::EnterSticking(StickStart how) {
-  m_.ProjectOntoStop(X_, V_);
+  M(active_).ProjectOntoStop(X_, V_);
   gap_ = 0;
+  if (multi()) {
+    gaps_[static_cast<size_t>(active_)] = 0;
+    for (size_t j = 0; j < models_.size(); ++j)
+      if (static_cast<int>(j) != active_) gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+  }
   mode_ = Mode::kSticking;
   stick_start_ = how;
   chatter_first_ = chatter_last_ = 0;
+  held_chatter_ = 0;
 }
 
 template <class S>
 void Automaton<S>::Depart(FlightStart how) {
   mode_ = Mode::kFree;
   flight_start_ = how;
+  held_chatter_ = 0;
+  if (multi()) starts_[static_cast<size_t>(active_)] = how;
 }
 
 // A state on the stop at rest (or the start of a run): stick, leave, or decide with Ṙ.
 template <class S>
 void Automaton<S>::ClassifyInitialState() {
+  if (multi()) {
+    // Several contacts: which gaps are closed (within the rounding of the initial state, as
+    // System::StopTolerance for one contact); one closed contact is classified as the single stop
+    // is, on its own model; none starts a free flight.
+    int on = -1, closed = 0;
+    for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+      const ModelT<S>& c = M(j);
+      const S g = c.ContactDisplacement(X_) - c.x0;
+      const S tol = S(System::kStopUlps) * Eps<S>() *
+                    (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
+      gaps_[static_cast<size_t>(j)] = g;
+      starts_[static_cast<size_t>(j)] = FlightStart::kGeneric;
+      if (g <= tol) {
+        on = j;
+        ++closed;
+      }
+    }
+    if (closed > 1) {
+      violation_ = "the initial state closes two contacts at once (sticking on two contacts is not "
+                   "implemented, docs/contacts.md): start with at most one closed gap";
+      return;
+    }
+    if (closed == 0) {
+      active_ = 0;
+      gap_ = gaps_[0];
+      Depart(FlightStart::kGeneric);
+      return;
+    }
+    active_ = on;
+    const ModelT<S>& m = M(on);
+    gap_ = 0;
+    gaps_[static_cast<size_t>(on)] = 0;
+    X_ -= m.contact * ((m.ContactDisplacement(X_) - m.x0) / m.s_B);
+    if (m.ContactVelocity(V_) > 0) {
+      Depart(FlightStart::kAfterImpact);
+      return;
+    }
+    V_ -= m.contact * (m.ContactVelocity(V_) / m.s_B);
+    const S phase = Phase(clock_);
+    const S Rc = m.Reaction(X_, V_, phase);
+    if (Rc > 0) {
+      EnterSticking(StickStart::kGeneric);
+    } else if (Rc < 0) {
+      m.ProjectOntoStop(X_, V_);
+      Depart(FlightStart::kDeparture);
+    } else if (m.ReactionRate(X_, V_, phase) >= 0) {
+      EnterSticking(StickStart::kRising);
+    } else {
+      m.ProjectOntoStop(X_, V_);
+      Depart(FlightStart::kAfterRelease);
+    }
+    return;
+  }
   // Any positive gap is a free flight; a state at (or, by the rounding of a physical-to-modal
   // conversion, within validation tolerance inside) the stop is on it.
   // The decision is taken on the double state, whatever S: the quad engine solves the problem
@@ -420,7 +527,7 @@ void Automaton<S>::CheckSegment(const ClockT<S>& from, const S& sigma) {
   if (mode_ == Mode::kFree) {
     CheckFreeGap(gap_, X_, AbsTime(clock_), "the state at the end of a flight");
   } else {
-    const S off = m_.ContactDisplacement(X_) - m_.x0;
+    const S off = M(active_).ContactDisplacement(X_) - M(active_).x0;
     if (R::abs(off) > GapTolerance(X_))
       violation_ = fmt::format("sticking state off the stop: x_B − x0 = {:.3g} at t = {:.17g} "
                                "(tolerance {:.3g})",
@@ -451,8 +558,9 @@ bool Automaton<S>::Guarded() {
 // just taken, when the prediction's estimated error is within the run's target.
 template <class S>
 bool Automaton<S>::TryAccumulation(const S& reaction) {
+  const ModelT<S>& m = multi() ? M(active_) : m_;
   const S phase_k = Phase(clock_);
-  const TailPrediction<S> tail = PredictTail<S>(m_, X_, V_, phase_k, chatter_tol_);
+  const TailPrediction<S> tail = PredictTail<S>(m, X_, V_, phase_k, chatter_tol_);
   last_tail_ = tail;
   last_jump_failure_.clear();
   if (!tail.accepted) {
@@ -472,10 +580,15 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   Vec X, V;
   engine_->Evaluate(delta, X, V);
   const Vec X_end = X, V_end = V;
-  m_.ProjectOntoStop(X, V);
+  m.ProjectOntoStop(X, V);
   ClockT<S> end = clock_;
   AdvanceClock(end, delta, period_ - clock_.offset);
-  if (!(m_.Reaction(X, V, Phase(end)) > 0)) {  // the sequence would not complete: follow it
+  if (!(m.Reaction(X, V, Phase(end)) > 0)) {  // the sequence would not complete: follow it
+    ++result_.chatter.impacts_followed;
+    return false;
+  }
+  // Several contacts (MODEL §11.6): the tail holds only if every other gap stays open over it.
+  if (multi() && !TailClearOfOtherContacts(delta)) {
     ++result_.chatter.impacts_followed;
     return false;
   }
@@ -500,7 +613,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
   if (!opt_.observers.empty()) {
     Eigen::VectorXd a, b, c, d, xe, ve;
-    const Eigen::VectorXd grad = DeltaGradient<S>(m_, X_k, V_k, phase_k, tail);
+    const Eigen::VectorXd grad = DeltaGradient<S>(m, X_k, V_k, phase_k, tail);
     const Reset jump{ResetKind::kAccumulation, R::to_double(phase_k), D(X_k, a), D(V_k, b),
                      D(X_, c), D(V_, d), R::to_double(delta), R::to_double(reaction),
                      &grad, &D(X_end, xe), &D(V_end, ve)};
@@ -510,6 +623,11 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   Emit(EventKind::kAccumulation, S(0), S(0));
   mode_ = Mode::kSticking;
   stick_start_ = StickStart::kGeneric;
+  if (multi()) {
+    for (size_t j = 0; j < models_.size(); ++j)
+      gaps_[j] = static_cast<int>(j) == active_ ? S(0) : models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+    starts_.assign(models_.size(), FlightStart::kGeneric);
+  }
   chatter_first_ = chatter_last_ = 0;
   Emit(EventKind::kStick, S(0), S(0));
   return true;
@@ -518,13 +636,14 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
 // Free flight reached g = 0 at the current state.
 template <class S>
 bool Automaton<S>::OnContact() {
+  const ModelT<S>& m = multi() ? M(active_) : m_;
   // Snap the contact coordinate onto the stop (docs/model.md §8).
-  X_ -= m_.contact * ((m_.ContactDisplacement(X_) - m_.x0) / m_.s_B);
+  X_ -= m.contact * ((m.ContactDisplacement(X_) - m.x0) / m.s_B);
   gap_ = 0;
   const S phase = Phase(clock_);
-  const S v_minus = m_.ContactVelocity(V_);
+  const S v_minus = m.ContactVelocity(V_);
   const S floor = ContactSpeedFloor();
-  const S r = m_.r;
+  const S r = m.r;
   const bool accumulating = run_.chatter == ChatterTreatment::kAccumulation && r > 0 && r < 1;
 
   // CVODE cannot resolve impact speeds below √rtol of the sequence's first one: a sequence that
@@ -534,7 +653,7 @@ bool Automaton<S>::OnContact() {
   const bool unresolved = cvode_ && accumulating && chatter_last_ > 0 &&
                           -v_minus < S(resolution_ratio_) * chatter_first_;
   if (accumulating && chatter_last_ > 0 && (touch || unresolved)) {
-    const S Rc = m_.Reaction(X_, V_, phase);
+    const S Rc = m.Reaction(X_, V_, phase);
     if (Rc > 0) {
       return Fail(
           fmt::format(
@@ -552,7 +671,7 @@ bool Automaton<S>::OnContact() {
   }
   if (touch) {
     // Tangential touch (docs/model.md §2.1): no impact.
-    const S Rc = m_.Reaction(X_, V_, phase);
+    const S Rc = m.Reaction(X_, V_, phase);
     Xb_ = X_;
     Vb_ = V_;
     const Vec& Xb = Xb_;
@@ -563,8 +682,8 @@ bool Automaton<S>::OnContact() {
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, S(0), S(0));
     } else {
-      m_.ProjectOntoStop(X_, V_);
-      const S rate = m_.ReactionRate(X_, V_, phase);
+      m.ProjectOntoStop(X_, V_);
+      const S rate = m.ReactionRate(X_, V_, phase);
       if (Rc < 0) {
         Depart(FlightStart::kDeparture);
         NotifyReset(ResetKind::kGrazing, Xb, Vb);
@@ -596,9 +715,9 @@ bool Automaton<S>::OnContact() {
     Vb_ = V_;
     const Vec& Xb = Xb_;
     const Vec& Vb = Vb_;
-    m_.ProjectOntoStop(X_, V_);
+    m.ProjectOntoStop(X_, V_);
     Emit(EventKind::kImpact, v_minus, S(0));
-    const S Rc = m_.Reaction(X_, V_, phase);
+    const S Rc = m.Reaction(X_, V_, phase);
     if (Rc > 0) {
       EnterSticking(StickStart::kGeneric);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
@@ -607,7 +726,7 @@ bool Automaton<S>::OnContact() {
       chatter_first_ = chatter_last_ = 0;
       Depart(FlightStart::kDeparture);
       NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
-    } else if (m_.ReactionRate(X_, V_, phase) > 0) {
+    } else if (m.ReactionRate(X_, V_, phase) > 0) {
       EnterSticking(StickStart::kRising);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, S(0), S(0));
@@ -622,16 +741,16 @@ bool Automaton<S>::OnContact() {
   // Restitution (the paper's eq. (12)).
   Vb_ = V_;
   const Vec& Vb = Vb_;
-  m_.ApplyImpact(V_, r);
-  const S Rc = m_.Reaction(X_, V_, phase);
+  m.ApplyImpact(V_, r);
+  const S Rc = m.Reaction(X_, V_, phase);
   NotifyReset(ResetKind::kImpact, X_, Vb);
-  Emit(EventKind::kImpact, v_minus, m_.ContactVelocity(V_));
+  Emit(EventKind::kImpact, v_minus, m.ContactVelocity(V_));
   if (accumulating && Rc > 0) {
     if (TryAccumulation(Rc)) return true;
   }
   if (run_.chatter == ChatterTreatment::kNone && Rc > 0) {
     // Impacts followed one by one: stop once the next flight is below the resolution.
-    const S next_flight = S(2) * r * speed / (m_.s_B * Rc);
+    const S next_flight = S(2) * r * speed / (m.s_B * Rc);
     if (r * speed <= floor || next_flight <= S(4) * Eps<S>() * period_)
       return Fail(fmt::format(
           "chattering: impacts accumulate near t = {:.17g} and cannot be followed one by one "
@@ -640,6 +759,263 @@ bool Automaton<S>::OnContact() {
           AbsTime(clock_), R::to_double(r * speed), R::to_double(next_flight)));
   }
   Depart(FlightStart::kAfterImpact);
+  return true;
+}
+
+// Several contacts (docs/contacts.md) ------------------------------------------------------------
+
+template <class S>
+void Automaton<S>::UpdateGaps(PropagatorT<S>& p, const S& sigma) {
+  const bool resting = &p != engine_.get();
+  for (size_t j = 0; j < models_.size(); ++j) {
+    const int jj = static_cast<int>(j);
+    if (mode_ == Mode::kSticking && jj == active_)
+      gaps_[j] = S(0);
+    else if (resting)
+      gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;  // constant at rest
+    else
+      gaps_[j] = p.GapOf(jj, sigma);
+  }
+  if (mode_ == Mode::kFree) gap_ = gaps_[static_cast<size_t>(active_)];
+}
+
+// Whether the free flow over a chattering tail at the active contact keeps every other gap open
+// (certified search of their first roots over [0, Δ∞], the tail's own contact left out).
+template <class S>
+bool Automaton<S>::TailClearOfOtherContacts(const S& delta) {
+  std::vector<FlightStart> starts = starts_;
+  starts[static_cast<size_t>(active_)] = FlightStart::kAfterImpact;
+  engine_->Begin({Mode::kFree, Phase(clock_), clock_.offset, X_, V_, S(0), FlightStart::kAfterImpact,
+                  StickStart::kGeneric, active_, &gaps_, &starts, active_});
+  const auto r = engine_->Advance(delta, true, {});
+  return r.end == SegmentEnd::kLimit;
+}
+
+// W_jk = c_jᵀT_k between two contacts, 0 when it is within the rounding of the model's (double)
+// mode shapes, whatever S: contacts on different masses of a diagonal mass matrix are decoupled
+// (MODEL §11.10), and a rounding-level coupling would push a held contact off its stop.
+template <class S>
+static S DelassusOffDiagonal(const ModelT<S>& a, const ModelT<S>& b) {
+  const S w = a.shape.dot(b.contact);
+  const S scale = Real<S>::sqrt(a.s_B * b.s_B);
+  return Real<S>::abs(w) <= S(64 * std::numeric_limits<double>::epsilon()) * scale ? S(0) : w;
+}
+
+// Gap acceleration g_k'' under the flow with contact `held` stuck: c_kᵀ Π Ẍ_free, Π = I − T cᵀ/s.
+template <class S>
+static S HeldGapAcceleration(const ModelT<S>& held, const ModelT<S>& k, const typename ModelT<S>::Vec& X,
+                             const typename ModelT<S>::Vec& V, const S& phase) {
+  using Vec = typename ModelT<S>::Vec;
+  const Vec acc = -k.omega.cwiseAbs2().cwiseProduct(X) -
+                  S(2) * k.zeta.cwiseProduct(k.omega).cwiseProduct(V) +
+                  k.forcing * (k.f * Real<S>::sin(phase));
+  const Vec held_acc = acc - held.contact * (held.shape.dot(acc) / held.s_B);
+  return k.shape.dot(held_acc);
+}
+
+template <class S>
+bool Automaton<S>::OnContactMulti(int k) {
+  if (mode_ == Mode::kSticking) return ImpactWhileHeld(k);
+  // Contacts closed at the same instant, within the rounding of their gaps and a window of a few
+  // ulps of the period at their closing speed (MODEL §11.2.3): one impact LCP (§11.4).
+  std::vector<int> Z{k};
+  const S window = S(64) * Eps<S>() * period_;
+  for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+    if (j == k) continue;
+    const ModelT<S>& c = M(j);
+    const S v = c.ContactVelocity(V_);
+    const S tol = S(System::kStopUlps) * Eps<S>() *
+                      (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum()) +
+                  window * R::abs(v);
+    if (gaps_[static_cast<size_t>(j)] <= tol && v <= S(0)) Z.push_back(j);
+  }
+  if (Z.size() > 1) return SimultaneousImpact(Z);
+  if (k != active_) chatter_first_ = chatter_last_ = 0;  // a sequence is at one contact
+  active_ = k;
+  for (size_t j = 0; j < starts_.size(); ++j) starts_[j] = FlightStart::kGeneric;
+  return OnContact();
+}
+
+// A free contact k closes while contact j = active_ sticks: the impact LCP on {j, k} (MODEL §11.4.2).
+template <class S>
+bool Automaton<S>::ImpactWhileHeld(int k) {
+  const int j = active_;
+  const ModelT<S>& mj = M(j);
+  const ModelT<S>& mk = M(k);
+  X_ -= mk.contact * ((mk.ContactDisplacement(X_) - mk.x0) / mk.s_B);  // snap g_k to 0
+  mj.ProjectOntoStop(X_, V_);
+  gaps_[static_cast<size_t>(k)] = 0;
+  const S phase = Phase(clock_);
+  const S v_minus = mk.ContactVelocity(V_);
+  const S floor = S(1000) * Eps<S>() * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
+  const auto two_stuck = [&](const char* what) {
+    return Fail(fmt::format("contact {} {} at t = {:.17g} while contact {} sticks: sticking on two "
+                            "contacts at once is not implemented (docs/contacts.md). Move the "
+                            "parameter, or change a restitution",
+                            k, what, AbsTime(clock_), j),
+                RunStatus::kUndetermined);
+  };
+  if (!(v_minus < -floor)) {
+    // Tangential arrival: it leaves only if the held flow pulls it off.
+    Emit(EventKind::kGrazing, v_minus, v_minus, k);
+    if (HeldGapAcceleration(mj, mk, X_, V_, phase) > 0) {
+      starts_[static_cast<size_t>(k)] = FlightStart::kDeparture;
+      return true;
+    }
+    return two_stuck("arrives tangentially");
+  }
+  const S Wjj(mj.s_B), Wkk(mk.s_B), Wjk = DelassusOffDiagonal(mj, mk);
+  const S rk = mk.r;
+  // P_j = 0 first: contact k alone, and j's velocity after it.
+  S Pk = -(S(1) + rk) * v_minus / Wkk, Pj(0);
+  const S vj_after = Wjk * Pk;
+  const S tiny = S(64) * Eps<S>() * (R::abs(Wjk * Pk) + S(1e-300));
+  Vb_ = V_;
+  if (vj_after > tiny) {
+    // Contact j is pushed off the stop (liftoff, reported as its release with the speed after).
+    V_ += mk.contact * Pk;
+    NotifyReset(ResetKind::kImpact, X_, Vb_);
+    Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
+    Emit(EventKind::kRelease, S(0), mj.ContactVelocity(V_), j);
+    mode_ = Mode::kFree;
+    gaps_[static_cast<size_t>(j)] = 0;
+    starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+    if (rk == S(0)) return two_stuck("lands plastically");
+    active_ = k;
+    gap_ = 0;
+    flight_start_ = FlightStart::kAfterImpact;
+    starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+    chatter_first_ = chatter_last_ = 0;
+    return true;
+  }
+  // j stays: both impulses from the 2×2 law (W P = −(1 + R) v⁻ with v_j⁻ = 0).
+  const S det = Wjj * Wkk - Wjk * Wjk;
+  Pk = -(S(1) + rk) * v_minus * Wjj / det;
+  Pj = (S(1) + rk) * v_minus * Wjk / det;
+  V_ += mk.contact * Pk + mj.contact * Pj;
+  mj.ProjectOntoStop(X_, V_);
+  NotifyReset(ResetKind::kImpact, X_, Vb_);
+  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
+  if (rk == S(0)) return two_stuck("lands plastically");
+  // A chattering sequence at k while j sticks ends with both stuck: followed until it cannot be.
+  const S speed = -v_minus;
+  // A run of impacts of decreasing speed with flights far shorter than the period is such a
+  // sequence: after kHeldChatterImpacts of them the run ends undetermined, never guessed.
+  const double now = AbsTime(clock_);
+  const bool converging = chatter_last_ > 0 && speed < chatter_last_ && k == held_chatter_contact_ &&
+                          now - held_chatter_t_ < 1e-2 * R::to_double(period_);
+  held_chatter_ = converging ? held_chatter_ + 1 : 0;
+  held_chatter_contact_ = k;
+  held_chatter_t_ = now;
+  if ((converging && rk * speed <= floor) || held_chatter_ >= kHeldChatterImpacts)
+    return two_stuck(converging && rk * speed <= floor
+                         ? "chatters to rest"
+                         : "chatters toward rest (a chattering sequence of shrinking flights)");
+  chatter_last_ = speed;
+  starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+  const S Rj = mj.Reaction(X_, V_, phase);
+  if (!(Rj > 0)) {
+    Depart(FlightStart::kDeparture);
+    gap_ = 0;
+    gaps_[static_cast<size_t>(j)] = 0;
+  }
+  return true;
+}
+
+// Two or more contacts close at one instant (free flight): the impact LCP (I2) of MODEL §11.4,
+// W_ZZ P + (I + R) v⁻ = w, 0 ≤ P ⊥ w ≥ 0, solved by enumerating the index sets (W_ZZ is positive
+// definite for independent contacts, so exactly one set fits).
+template <class S>
+bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
+  using Mat = typename ModelT<S>::Mat;
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  Mat W(z, z);
+  Vec vm(z), q(z);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const ModelT<S>& ma = M(Z[static_cast<size_t>(a)]);
+    X_ -= ma.contact * ((ma.ContactDisplacement(X_) - ma.x0) / ma.s_B);
+    vm[a] = ma.ContactVelocity(V_);
+    q[a] = (S(1) + ma.r) * vm[a];
+    for (Eigen::Index b = 0; b < z; ++b) {
+      const ModelT<S>& mb = M(Z[static_cast<size_t>(b)]);
+      W(a, b) = a == b ? ma.s_B : DelassusOffDiagonal(ma, mb);
+    }
+  }
+  Vec P = Vec::Zero(z);
+  bool solved = false;
+  for (unsigned mask = 1; mask < (1u << z) && !solved; ++mask) {
+    std::vector<Eigen::Index> act;
+    for (Eigen::Index a = 0; a < z; ++a)
+      if (mask & (1u << a)) act.push_back(a);
+    const auto na = static_cast<Eigen::Index>(act.size());
+    Mat Wa(na, na);
+    Vec qa(na);
+    for (Eigen::Index a = 0; a < na; ++a) {
+      qa[a] = -q[act[static_cast<size_t>(a)]];
+      for (Eigen::Index b = 0; b < na; ++b) Wa(a, b) = W(act[static_cast<size_t>(a)], act[static_cast<size_t>(b)]);
+    }
+    const Vec Pa = Wa.fullPivLu().solve(qa);
+    Vec Pt = Vec::Zero(z);
+    for (Eigen::Index a = 0; a < na; ++a) Pt[act[static_cast<size_t>(a)]] = Pa[a];
+    const Vec w = W * Pt + q;
+    bool ok = true;
+    for (Eigen::Index a = 0; a < z; ++a) {
+      const S scale = R::abs(q[a]) + S(1e-300);
+      if (Pt[a] < -S(64) * Eps<S>() * scale || w[a] < -S(64) * Eps<S>() * scale) ok = false;
+    }
+    if (ok) {
+      P = Pt.cwiseMax(S(0));
+      solved = true;
+    }
+  }
+  if (!solved)
+    return Fail(fmt::format("simultaneous impact of {} contacts at t = {:.17g}: the impact law has no "
+                            "solution (dependent contacts)",
+                            Z.size(), AbsTime(clock_)));
+  Vb_ = V_;
+  for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
+  NotifyReset(ResetKind::kImpact, X_, Vb_);
+  std::vector<int> resting;
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const int j = Z[static_cast<size_t>(a)];
+    const ModelT<S>& mj = M(j);
+    const S vp = mj.ContactVelocity(V_);
+    Emit(EventKind::kImpact, vm[a], vp, j, true);
+    gaps_[static_cast<size_t>(j)] = 0;
+    const S floor = S(1000) * Eps<S>() * mj.shape.cwiseProduct(V_).cwiseAbs().sum();
+    if (vp > floor) {
+      starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+      active_ = j;
+    } else {
+      resting.push_back(j);
+    }
+  }
+  chatter_first_ = chatter_last_ = 0;
+  mode_ = Mode::kFree;
+  if (resting.size() > 1)
+    return Fail(fmt::format("{} contacts come to rest together at t = {:.17g}: sticking on two "
+                            "contacts at once is not implemented (docs/contacts.md)",
+                            resting.size(), AbsTime(clock_)),
+                RunStatus::kUndetermined);
+  if (resting.size() == 1) {
+    // One contact at rest (r = 0): stick or leave as the single stop (docs/model.md §4.4).
+    const int j = resting.front();
+    active_ = j;
+    const ModelT<S>& mj = M(j);
+    const S phase = Phase(clock_);
+    const S Rc = mj.Reaction(X_, V_, phase);
+    if (Rc > 0 || (Rc == 0 && mj.ReactionRate(X_, V_, phase) > 0)) {
+      EnterSticking(Rc > 0 ? StickStart::kGeneric : StickStart::kRising);
+      for (size_t i = 0; i < starts_.size(); ++i)
+        if (static_cast<int>(i) != j && starts_[i] != FlightStart::kAfterImpact) starts_[i] = FlightStart::kGeneric;
+      Emit(EventKind::kStick, S(0), S(0), j);
+      return true;
+    }
+    mj.ProjectOntoStop(X_, V_);
+    Depart(Rc < 0 ? FlightStart::kDeparture : FlightStart::kAfterRelease);
+  }
+  gap_ = 0;
+  flight_start_ = starts_[static_cast<size_t>(active_)];
   return true;
 }
 
@@ -660,6 +1036,14 @@ void Automaton<S>::Checkpointed() {
   cp.chatter_predicted = result_.chatter.accumulations_predicted;
   cp.chatter_followed = result_.chatter.impacts_followed;
   cp.chatter_max_error = result_.chatter.max_estimated_error;
+  cp.contact = active_;
+  if (multi()) cp.contact_counts = counts_;
+  cp.gaps.resize(gaps_.size());
+  cp.start_kinds.resize(starts_.size());
+  for (size_t j = 0; j < gaps_.size(); ++j) {
+    cp.gaps[j] = R::to_double(gaps_[j]);
+    cp.start_kinds[j] = static_cast<int>(starts_[j]);
+  }
   for (auto* o : opt_.observers) o->OnCheckpoint(cp);
 }
 
@@ -681,11 +1065,26 @@ RunResult Automaton<S>::Run() {
     sample_index_ = cp.sample_index;
     result_.counts = cp.counts;
     result_.chatter = {cp.chatter_predicted, cp.chatter_followed, cp.chatter_max_error};
+    active_ = cp.contact >= 0 && cp.contact < static_cast<int>(models_.size()) ? cp.contact : 0;
+    if (cp.contact_counts.size() == counts_.size()) counts_ = cp.contact_counts;
+    else if (counts_.size() == 1) counts_[0] = cp.counts;
+    if (multi()) {
+      if (cp.gaps.size() == gaps_.size() && cp.start_kinds.size() == starts_.size()) {
+        for (size_t j = 0; j < gaps_.size(); ++j) {
+          gaps_[j] = S(cp.gaps[j]);
+          starts_[j] = static_cast<FlightStart>(cp.start_kinds[j]);
+        }
+      } else {  // a checkpoint without them: the gaps of its state
+        for (size_t j = 0; j < gaps_.size(); ++j)
+          gaps_[j] = (mode_ == Mode::kSticking && static_cast<int>(j) == active_)
+                         ? S(0) : models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+      }
+    }
   } else {
     ClassifyInitialState();
     if (!opt_.observers.empty()) {
       const Sample s{ToClock(clock_), t0_, D(X_, dx_), D(V_, dv_),
-                     R::to_double(m_.ContactDisplacement(X_)), mode_};
+                     R::to_double(m_.side * m_.ContactDisplacement(X_)), mode_};
       for (auto* o : opt_.observers) o->OnSection(s);
       if (run_.samples_per_period > 0) {
         for (auto* o : opt_.observers) o->OnSample(s);
@@ -711,8 +1110,9 @@ RunResult Automaton<S>::Run() {
       break;
     }
     const S to_boundary = period_ - clock_.offset;
-    PropagatorT<S>& p = (mode_ == Mode::kSticking && resting_) ? *resting_ : *engine_;
-    p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_});
+    PropagatorT<S>& p = (mode_ == Mode::kSticking && Resting()) ? *Resting() : *engine_;
+    p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
+             multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
     const ClockT<S> from = clock_;
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).
@@ -732,7 +1132,10 @@ RunResult Automaton<S>::Run() {
       break;
     }
     p.Evaluate(seg.sigma, X_, V_);
-    if (mode_ == Mode::kFree) gap_ = p.Gap(seg.sigma);
+    if (multi())
+      UpdateGaps(p, seg.sigma);
+    else if (mode_ == Mode::kFree)
+      gap_ = p.Gap(seg.sigma);
     if (!opt_.observers.empty()) {
       for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma)});
     }
@@ -749,11 +1152,12 @@ RunResult Automaton<S>::Run() {
     if (seg.end == SegmentEnd::kLimit) {
       if (mode_ == Mode::kFree) flight_start_ = FlightStart::kGeneric;
       if (mode_ == Mode::kSticking) stick_start_ = StickStart::kGeneric;
+      if (multi()) starts_.assign(models_.size(), FlightStart::kGeneric);
       Checkpointed();
       continue;
     }
     if (seg.end == SegmentEnd::kContact) {
-      if (!OnContact()) break;
+      if (!(multi() ? OnContactMulti(seg.contact) : OnContact())) break;
       if (grazing_streak_ > 1000) {
         Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}: the contact is "
                          "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
@@ -766,8 +1170,9 @@ RunResult Automaton<S>::Run() {
     }
     // Release candidate: R reached 0 on the stop.
     const S phase = Phase(clock_);
-    if (m_.ReactionRate(X_, V_, phase) < 0 || resting_) {
-      m_.ProjectOntoStop(X_, V_);
+    const ModelT<S>& held = M(active_);
+    if (held.ReactionRate(X_, V_, phase) < 0 || Resting()) {
+      held.ProjectOntoStop(X_, V_);
       NotifyReset(ResetKind::kRelease, X_, V_);
       Emit(EventKind::kRelease, S(0), S(0));
       Depart(FlightStart::kAfterRelease);
@@ -782,6 +1187,8 @@ RunResult Automaton<S>::Run() {
   result_.X = X_.template cast<double>();
   result_.V = V_.template cast<double>();
   result_.mode = mode_;
+  if (multi()) result_.contact_counts = counts_;
+  else result_.contact_counts = {result_.counts};
   result_.solver = engine_->stats();
   return result_;
 }

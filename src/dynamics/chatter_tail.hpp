@@ -73,9 +73,9 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
     const S w2 = o.nu * o.nu, tz = S(2) * o.zeta * o.nu;
     const S acc = -w2 * X[i] - tz * W[i] + o.F * sp;
     const S jerk = -w2 * W[i] - tz * acc + o.F * m.w * cp;
-    r2 += w2 * acc + tz * jerk;
+    r2 += m.shape[i] * (w2 * acc + tz * jerk);
     const auto b = Bounds<S>(o, m.w, Amplitude<S>(o, X[i], W[i]) + R::abs(o.F) * H);
-    M3 += w2 * b.d3 + tz * b.d4;
+    M3 += R::abs(m.shape[i]) * (w2 * b.d3 + tz * b.d4);
   }
   r2 /= m.s_B;
   M3 /= m.s_B;

@@ -15,13 +15,14 @@ std::complex<double> Expm1(std::complex<double> z) {
 
 }  // namespace
 
-DampedStickingT<double>::DampedStickingT(const System& sys) : sys_(sys) {
-  const auto& cm = sys.constrained();
+DampedStickingT<double>::DampedStickingT(const System& sys, int contact) : sys_(sys), contact_(contact) {
+  const ContactModel& km = sys.contacts()[static_cast<size_t>(contact)];
+  const auto& cm = km.constrained;
   k_ = cm.frequencies.size();
   if (k_ == 0) return;
   omega_ = sys.frequency();
-  kappa_f_ = sys.s_A() / sys.s_B() * sys.amplitude();
-  R_static_ = sys.stop() / sys.flexibility();
+  kappa_f_ = km.s_A / km.s_B * sys.amplitude();
+  R_static_ = km.stop / km.flexibility;
   G_ = Eigen::MatrixXd::Zero(2 * k_, 2 * k_);
   G_.topRightCorner(k_, k_).setIdentity();
   G_.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(cm.frequencies.cwiseAbs2().asDiagonal());
@@ -41,7 +42,7 @@ DampedStickingT<double>::DampedStickingT(const System& sys) : sys_(sys) {
   q_ = A.fullPivLu().solve(h_.cast<std::complex<double>>());
   rho_ = cm.reaction;
   const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
-  rho_v_ = cm.vectors.transpose() * sys.contact_shape().cwiseProduct(D) / sys.s_B();
+  rho_v_ = cm.vectors.transpose() * km.shape.cwiseProduct(D) / km.s_B;
   Eigen::VectorXd rt(2 * k_);
   rt << rho_, rho_v_;
   rq_ = rt.cast<std::complex<double>>().dot(q_);  // dot conjugates its first argument: rt is real
@@ -72,7 +73,7 @@ void DampedSticking::Evaluate(double sigma, Eigen::VectorXd& xi, Eigen::VectorXd
 Probe DampedSticking::ReactionProbe(double sigma) const {
   Eigen::VectorXd xi, eta;
   Evaluate(sigma, xi, eta);
-  const auto& cm = sys_.constrained();
+  const auto& cm = sys_.contacts()[static_cast<size_t>(contact_)].constrained;
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
   const Eigen::VectorXd F = h_.tail(k_);
@@ -89,6 +90,29 @@ Probe DampedSticking::ReactionProbe(double sigma) const {
   for (Eigen::Index j = 0; j < 2 * k_; ++j) {
     const double l = std::abs(lambda_[j]);
     M += std::abs(rw_[j]) * std::abs(c0_[j] * std::exp(lambda_[j] * sigma)) * l * l * l;
+  }
+  p.M = M * (1.0 + 1e-9);
+  return p;
+}
+
+Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const {
+  Eigen::VectorXd xi, eta;
+  Evaluate(sigma, xi, eta);
+  const auto& cm = sys_.contacts()[static_cast<size_t>(contact_)].constrained;
+  const double s = std::sin(phase_ + omega_ * sigma);
+  const Eigen::VectorXd F = h_.tail(k_);
+  const Eigen::VectorXd acc = -cm.frequencies.cwiseAbs2().cwiseProduct(xi) - cm.damping * eta + F * s;
+  Probe p{};
+  p.jet.g = base + w.dot(xi);
+  p.jet.g1 = w.dot(eta);
+  p.jet.g2 = w.dot(acc);
+  // |d³g/dσ³| ≤ Σ_j |wᵀW_j| |c_j e^{λ_j σ}| |λ_j|³ + |wᵀq| ω³ (the ξ rows of W and q).
+  const Eigen::VectorXcd ww = (w.transpose().cast<std::complex<double>>() * W_.topRows(k_)).transpose();
+  const std::complex<double> wq = w.cast<std::complex<double>>().dot(q_.head(k_));
+  double M = std::abs(wq) * omega_ * omega_ * omega_;
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) {
+    const double l = std::abs(lambda_[j]);
+    M += std::abs(ww[j]) * std::abs(c0_[j] * std::exp(lambda_[j] * sigma)) * l * l * l;
   }
   p.M = M * (1.0 + 1e-9);
   return p;

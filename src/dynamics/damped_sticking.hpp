@@ -25,7 +25,8 @@ class DampedStickingT;
 template <>
 class DampedStickingT<double> {
  public:
-  explicit DampedStickingT(const System& system);
+  // Sticking on contact `contact` alone (docs/contacts.md).
+  explicit DampedStickingT(const System& system, int contact = 0);
 
   // Whether G could be diagonalised (false for a defective G, e.g. exactly critical damping).
   bool ok() const { return ok_; }
@@ -37,9 +38,13 @@ class DampedStickingT<double> {
   // Reaction R = R_st + ρᵀξ + ρ_vᵀξ̇ − κ f sin and its two derivatives at σ, with a bound on
   // |R'''| valid for every σ' ≥ σ (the homogeneous modes decay, Re λ ≤ 0).
   Probe ReactionProbe(double sigma) const;
+  // g = base + wᵀξ (another contact's gap while this one is held, docs/contacts.md) and its two
+  // derivatives at σ, with a bound on |d³g/dσ³| valid for every σ' ≥ σ, as ReactionProbe.
+  Probe LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const;
 
  private:
   const System& sys_;
+  int contact_ = 0;
   bool ok_ = false;
   Eigen::Index k_ = 0;
   double omega_ = 0, kappa_f_ = 0, R_static_ = 0;

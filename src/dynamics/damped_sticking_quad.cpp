@@ -37,17 +37,18 @@ Quad MaxAbs(const CMat& A) {
 
 }  // namespace
 
-DampedStickingT<Quad>::DampedStickingT(const System& sys) {
-  const auto& cm = sys.constrained();
+DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
+  const ContactModel& km = sys.contacts()[static_cast<size_t>(contact)];
+  const auto& cm = km.constrained;
   k_ = cm.frequencies.size();
   // Undamped sticking needs none of this (the engine's own closed form, dynamics/oscillator.hpp).
   if (k_ == 0 || cm.damping.size() == 0 || cm.damping.cwiseAbs().maxCoeff() == 0) return;
   const Eigen::Index m = 2 * k_;
   // The same data as the quad model (dynamics/model_t.hpp): the double structure converted exactly.
   omega_ = Quad(sys.frequency());
-  const Quad f(sys.amplitude()), s_B(sys.s_B());
-  kappa_f_ = Quad(sys.s_A()) / s_B * f;
-  R_static_ = Quad(sys.stop()) / Quad(sys.flexibility());
+  const Quad f(sys.amplitude()), s_B(km.s_B);
+  kappa_f_ = Quad(km.s_A) / s_B * f;
+  R_static_ = Quad(km.stop) / Quad(km.flexibility);
   damping_ = cm.damping.cast<Quad>();
   const Vec nu = cm.frequencies.cast<Quad>();
   w2_ = nu.cwiseProduct(nu);
@@ -112,7 +113,7 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys) {
   rho_ = cm.reaction.cast<Quad>();
   const Vec zeta = sys.damping().cast<Quad>(), om = sys.omega().cast<Quad>();
   const Vec D = Quad(2) * zeta.cwiseProduct(om);
-  rho_v_ = cm.vectors.cast<Quad>().transpose() * sys.contact_shape().cast<Quad>().cwiseProduct(D) /
+  rho_v_ = cm.vectors.cast<Quad>().transpose() * km.shape.cast<Quad>().cwiseProduct(D) /
            s_B;
   rq_ = C(0);
   rw_ = CVec::Zero(m);
@@ -170,6 +171,27 @@ ProbeT<Quad> DampedStickingT<Quad>::ReactionProbe(const Quad& sigma) const {
   for (Eigen::Index j = 0; j < 2 * k_; ++j) {
     const Quad l = Abs(lambda_[j]);
     M += Abs(rw_[j]) * Abs(c0_[j] * Exp(lambda_[j] * sigma)) * l * l * l;
+  }
+  p.M = M * (Quad(1) + Quad(1e-9));
+  return p;
+}
+
+ProbeT<Quad> DampedStickingT<Quad>::LinearProbe(const Vec& w, const Quad& base, const Quad& sigma) const {
+  Vec xi, eta;
+  Evaluate(sigma, xi, eta);
+  Quad s, c;
+  R::sincos(phase_ + omega_ * sigma, s, c);
+  const Vec acc = -w2_.cwiseProduct(xi) - damping_ * eta + F_ * s;
+  ProbeT<Quad> p{{base + w.dot(xi), w.dot(eta), w.dot(acc)}, Quad(0)};
+  // |d³g/dσ³| ≤ Σ_j |wᵀW_j| |c_j e^{λ_j σ}| |λ_j|³ + |wᵀq| ω³ (the ξ rows of W and q).
+  C wq(0);
+  for (Eigen::Index i = 0; i < k_; ++i) wq += w[i] * q_[i];
+  Quad M = Abs(wq) * omega_ * omega_ * omega_;
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) {
+    C wj(0);
+    for (Eigen::Index i = 0; i < k_; ++i) wj += w[i] * W_(i, j);
+    const Quad l = Abs(lambda_[j]);
+    M += Abs(wj) * Abs(c0_[j] * Exp(lambda_[j] * sigma)) * l * l * l;
   }
   p.M = M * (Quad(1) + Quad(1e-9));
   return p;

@@ -27,7 +27,7 @@ class DampedStickingT<Quad> {
   using CVec = Eigen::Matrix<C, Eigen::Dynamic, 1>;
   using CMat = Eigen::Matrix<C, Eigen::Dynamic, Eigen::Dynamic>;
 
-  explicit DampedStickingT(const System& system);
+  explicit DampedStickingT(const System& system, int contact = 0);
 
   // Whether G could be diagonalised to quad rounding (false for a defective G, e.g. exactly
   // critical damping, or eigenpairs that would not refine).
@@ -38,6 +38,8 @@ class DampedStickingT<Quad> {
   void Evaluate(const Quad& sigma, Vec& xi, Vec& dxi) const;
   // R and its two derivatives at σ, with a bound on |R'''| valid for every σ' ≥ σ.
   ProbeT<Quad> ReactionProbe(const Quad& sigma) const;
+  // g = base + wᵀξ and its two derivatives, with a bound on |d³g/dσ³| (as the double twin's).
+  ProbeT<Quad> LinearProbe(const Vec& w, const Quad& base, const Quad& sigma) const;
 
   // The refined decomposition, for tests: eigenvalues λ_j, and the residual
   // max |G W − W Λ| / (max|G| · max|W|) after refinement (of the order of the quad rounding unit).

@@ -23,6 +23,7 @@ class ExactEngineT final : public PropagatorT<S> {
  public:
   using Vec = typename ModelT<S>::Vec;
 
+  // `model` is contact 0's; the engine builds the others' from the system (docs/contacts.md).
   ExactEngineT(const System& system, const ModelT<S>& model);
 
   void Begin(const SegmentStartT<S>& start) override;
@@ -30,11 +31,19 @@ class ExactEngineT final : public PropagatorT<S> {
                             const StretchCallbackT<S>& on_stretch) override;
   void Evaluate(S sigma, Vec& X, Vec& V) const override;
   S Gap(S sigma) const override;
+  S GapOf(int j, S sigma) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
   // `rest` (root_finder.hpp, AddFarBound). Public for tests.
-  ProbeT<S> GapProbe(const S& sigma, const S& H, const S& rest = S(0)) const;
+  ProbeT<S> GapProbe(const S& sigma, const S& H, const S& rest = S(0)) const {
+    return GapProbe(start_contact_, sigma, H, rest);
+  }
+  // The same for contact j (free flight).
+  ProbeT<S> GapProbe(int j, const S& sigma, const S& H, const S& rest) const;
+  // kWeighted: general c_i; else every c_i is 0 or 1 (contact 0), without the products.
+  template <bool kWeighted>
+  ProbeT<S> GapProbeOf(int j, const S& sigma, const S& H, const S& rest) const;
   // Reaction R and its derivatives, with a bound on |R'''| (sticking, n ≥ 2), likewise.
   ProbeT<S> ReactionProbe(const S& sigma, const S& H, const S& rest = S(0)) const;
 
@@ -52,6 +61,22 @@ class ExactEngineT final : public PropagatorT<S> {
   };
 
  private:
+  // What the engine keeps per contact: its model, the far-bound data of its gap, and sticking on
+  // it alone (constrained modes, reaction), with the gaps of the other contacts while it is held:
+  // g_k = held_base[k] + Σ_m held_weights[k]_m ξ_m (MODEL §11.5.1 with S = {j}).
+  struct ContactData {
+    const ModelT<S>* m = nullptr;
+    std::vector<ModeFar> free_far;
+    std::vector<OscillatorT<S>> stick_modes;
+    std::vector<ModeFar> stick_far;
+    std::vector<int> stick_order;
+    S reaction_forcing{0}, static_reaction{0};
+    std::vector<Vec> held_weights;
+    std::vector<S> held_base;
+  };
+  // Gap of contact k (not held) during sticking on the current contact, with its jet and bound.
+  ProbeT<S> HeldGapProbe(int k, const S& sigma, const S& H) const;
+
   SegmentResultT<S> AdvanceFree(const S& sigma_max, bool detect_events);
   SegmentResultT<S> AdvanceSticking(const S& sigma_max, bool detect_events);
   template <class ProbeFn>
@@ -68,19 +93,24 @@ class ExactEngineT final : public PropagatorT<S> {
                    const S& H, const S& rest) const;
 
   const ModelT<S>& m_;
+  std::vector<ModelT<S>> others_;  // contacts 1..m−1
+  std::vector<ContactData> contacts_;
+  int start_contact_ = 0;          // free flight: the contact of flight_start_; sticking: the held one
+  std::vector<S> gap0s_;           // free flight: every contact's gap at σ = 0
+  std::vector<FlightStart> starts_;  // every contact's start kind
+  int skip_ = -1;                  // contact left out of the search
   S omega_;
   S h_cap_;  // largest root-search step (the bounds grow with the step)
   std::vector<OscillatorT<S>> free_modes_;   // ω_i, ζ_i, T_A,i f
-  std::vector<OscillatorT<S>> stick_modes_;  // ω'_k, 0, l_kᵀF_c f
-  std::vector<ModeFar> free_far_, stick_far_;
-  std::vector<int> free_order_, stick_order_;  // mode indices, fastest first
+  std::vector<int> free_order_;                 // mode indices, fastest first
   mutable std::vector<ModeSample> samples_;     // scratch of the probes (no allocation per probe)
-  S reaction_forcing_;                       // (s_A/s_B) f
   bool damped_sticking_ = false;             // non-proportional damping in the constrained modes
   // Its closed form (docs/model.md §7): DampedStickingT<Quad> is declared in
   // dynamics/damped_sticking_quad.hpp, which the quad instantiation includes
   // (dynamics/exact_engine_quad.hpp).
-  DampedStickingT<S> damped_;
+  std::vector<DampedStickingT<S>> damped_;  // per contact
+  DampedStickingT<S>& Damped() { return damped_[static_cast<size_t>(start_contact_)]; }
+  const DampedStickingT<S>& Damped() const { return damped_[static_cast<size_t>(start_contact_)]; }
 
   // Current segment.
   Mode mode_ = Mode::kFree;
@@ -89,7 +119,6 @@ class ExactEngineT final : public PropagatorT<S> {
   Vec X0_, V0_;     // free flight start
   Vec xi0_, dxi0_;  // sticking start, constrained modal coordinates
   S gap0_{0};
-  S static_reaction_{0};  // x0 / flexibility
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
 };
@@ -107,17 +136,25 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
     : m_(m),
       omega_(m.w),
       damped_sticking_(sys.constrained().damping.size() > 0 &&
-                       sys.constrained().damping.cwiseAbs().maxCoeff() > 0),
-      damped_(sys) {
+                       sys.constrained().damping.cwiseAbs().maxCoeff() > 0) {
+  damped_.reserve(static_cast<size_t>(sys.contact_count()));
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const auto& d = sys.contacts()[static_cast<size_t>(j)].constrained.damping;
+    if (j > 0 && d.size() > 0 && d.cwiseAbs().maxCoeff() > 0) damped_sticking_ = true;
+    damped_.emplace_back(sys, j);
+  }
+  for (int j = 1; j < sys.contact_count(); ++j) others_.emplace_back(sys, j);
+  contacts_.resize(static_cast<size_t>(sys.contact_count()));
+  for (size_t j = 0; j < contacts_.size(); ++j) contacts_[j].m = j == 0 ? &m : &others_[j - 1];
   for (int i = 0; i < m.dof(); ++i)
     free_modes_.push_back({m.omega[i], m.zeta[i], m.forcing[i] * m.f});
-  for (Eigen::Index k = 0; k < m.stick_frequencies.size(); ++k)
-    stick_modes_.push_back({m.stick_frequencies[k], S(0), m.stick_forcing[k] * m.f});
   h_cap_ = StepCap<S>(m);
-  reaction_forcing_ = m.s_A / m.s_B * m.f;
-  static_reaction_ = m.x0 / m.flexibility;
+  for (const ModelT<S>& o : others_) {
+    const S h = StepCap<S>(o);
+    if (h < h_cap_) h_cap_ = h;
+  }
   const auto far_of = [&](const std::vector<OscillatorT<S>>& modes, const auto& weight,
-                          std::vector<ModeFar>& far, std::vector<int>& order) {
+                          std::vector<ModeFar>& far, std::vector<int>* order) {
     for (size_t i = 0; i < modes.size(); ++i) {
       const OscillatorT<S>& o = modes[i];
       const S d = o.nu * o.nu - omega_ * omega_, e = S(2) * o.zeta * o.nu * omega_;
@@ -126,17 +163,45 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
       far.push_back(eligible ? ModeFar{o.F * d / den, -o.F * e / den,
                                        Real<S>::abs(o.F) / Real<S>::sqrt(den), true}
                              : ModeFar{S(0), S(0), S(0), false});
-      order.push_back(static_cast<int>(i));
+      if (order) order->push_back(static_cast<int>(i));
     }
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-      return modes[static_cast<size_t>(a)].nu > modes[static_cast<size_t>(b)].nu;
-    });
+    if (order)
+      std::stable_sort(order->begin(), order->end(), [&](int a, int b) {
+        return modes[static_cast<size_t>(a)].nu > modes[static_cast<size_t>(b)].nu;
+      });
   };
-  far_of(free_modes_, [&](size_t i) { return m.shape[static_cast<Eigen::Index>(i)]; }, free_far_,
-         free_order_);
-  far_of(stick_modes_, [&](size_t k) { return m.stick_reaction[static_cast<Eigen::Index>(k)]; },
-         stick_far_, stick_order_);
-  samples_.resize(std::max(free_modes_.size(), stick_modes_.size()));
+  far_of(free_modes_, [&](size_t) { return S(1); }, contacts_[0].free_far, &free_order_);
+  size_t stick_max = 0;
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    ContactData& cd = contacts_[j];
+    const ModelT<S>& mj = *cd.m;
+    if (j > 0) {
+      cd.free_far.clear();
+      far_of(free_modes_, [&](size_t i) { return mj.shape[static_cast<Eigen::Index>(i)]; },
+             cd.free_far, nullptr);
+    } else {
+      cd.free_far.clear();
+      far_of(free_modes_, [&](size_t i) { return m.shape[static_cast<Eigen::Index>(i)]; },
+             cd.free_far, nullptr);
+    }
+    for (Eigen::Index k = 0; k < mj.stick_frequencies.size(); ++k)
+      cd.stick_modes.push_back({mj.stick_frequencies[k], S(0), mj.stick_forcing[k] * mj.f});
+    far_of(cd.stick_modes, [&](size_t k) { return mj.stick_reaction[static_cast<Eigen::Index>(k)]; },
+           cd.stick_far, &cd.stick_order);
+    cd.reaction_forcing = mj.s_A / mj.s_B * mj.f;
+    cd.static_reaction = mj.x0 / mj.flexibility;
+    stick_max = std::max(stick_max, cd.stick_modes.size());
+    // Gaps of the other contacts while j is held: X = e_j·static_shape_j + V_j ξ.
+    cd.held_weights.resize(contacts_.size());
+    cd.held_base.resize(contacts_.size());
+    for (size_t k = 0; k < contacts_.size(); ++k) {
+      if (k == j) continue;
+      const ModelT<S>& mk = k == 0 ? m : others_[k - 1];
+      cd.held_weights[k] = mj.stick_vectors.transpose() * mk.shape;
+      cd.held_base[k] = mj.x0 * mk.shape.dot(mj.static_shape) - mk.x0;
+    }
+  }
+  samples_.resize(std::max(free_modes_.size(), stick_max));
 }
 
 template <class S>
@@ -208,61 +273,119 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
   gap0_ = s.gap;
   flight_start_ = s.flight_start;
   stick_start_ = s.stick_start;
+  start_contact_ = s.contact;
+  skip_ = s.skip;
+  if (contacts_.size() > 1) {
+    if (s.starts) starts_ = *s.starts;
+    else starts_.assign(contacts_.size(), FlightStart::kGeneric);
+    starts_[static_cast<size_t>(start_contact_)] = s.flight_start;
+    gap0s_.resize(contacts_.size());
+    for (size_t j = 0; j < contacts_.size(); ++j)
+      gap0s_[j] = s.gaps ? (*s.gaps)[j] : contacts_[j].m->ContactDisplacement(s.X) - contacts_[j].m->x0;
+    gap0s_[static_cast<size_t>(start_contact_)] = s.gap;
+  }
   if (mode_ == Mode::kFree) {
     X0_ = s.X;
     V0_ = s.V;
   } else {
-    // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (docs/model.md §4.2).
-    xi0_ = m_.stick_left * s.X;
-    dxi0_ = m_.stick_left * s.V;
-    if (damped_sticking_) damped_.Begin(xi0_, dxi0_, phase_);
+    // ξ = L X (L v0 = 0), ξ̇ = L Ẋ (docs/model.md §4.2), in the modes of the held contact.
+    const ModelT<S>& h = *contacts_[static_cast<size_t>(start_contact_)].m;
+    xi0_ = h.stick_left * s.X;
+    dxi0_ = h.stick_left * s.V;
+    if (damped_sticking_) Damped().Begin(xi0_, dxi0_, phase_);
   }
 }
 
 template <class S>
-ProbeT<S> ExactEngineT<S>::GapProbe(const S& sigma, const S& H, const S& rest) const {
+ProbeT<S> ExactEngineT<S>::GapProbe(int j, const S& sigma, const S& H, const S& rest) const {
+  return contacts_[static_cast<size_t>(j)].m->unit_shape ? GapProbeOf<false>(j, sigma, H, rest)
+                                                         : GapProbeOf<true>(j, sigma, H, rest);
+}
+
+template <class S>
+template <bool kWeighted>
+ProbeT<S> ExactEngineT<S>::GapProbeOf(int j, const S& sigma, const S& H, const S& rest) const {
   using R = Real<S>;
-  const auto& c = m_.shape;
+  const ContactData& cd = contacts_[static_cast<size_t>(j)];
+  const auto& c = cd.m->shape;
   const ForcingTrigT<S> fw(omega_, sigma);
   const S s_forcing = fw.SinPhase(trig_);
   const bool far = rest > H;
   const S c_forcing = far ? fw.CosPhase(trig_) : S(0);
-  ProbeT<S> p{{gap0_, S(0), S(0)}, S(0)};
+  const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(j)] : gap0_;
+  ProbeT<S> p{{g0, S(0), S(0)}, S(0)};
   S dq_sum(0);
   for (size_t i = 0; i < free_modes_.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
-    if (c[ii] == S(0)) continue;
+    const S ci = c[ii];
+    if (ci == S(0)) continue;
     const OscillatorT<S>& o = free_modes_[i];
     const auto st = Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma, fw);
     const S x = X0_[ii] + st.dq;
     const S acc = -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v + o.F * s_forcing;
     const S A = Amplitude<S>(o, x, st.v);
-    dq_sum += st.dq;
-    p.jet.g1 += st.v;
-    p.jet.g2 += acc;
-    p.M += Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    if constexpr (kWeighted) {
+      dq_sum += ci * st.dq;
+      p.jet.g1 += ci * st.v;
+      p.jet.g2 += ci * acc;
+      p.M += R::abs(ci) * Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    } else {  // c_i = 1
+      dq_sum += st.dq;
+      p.jet.g1 += st.v;
+      p.jet.g2 += acc;
+      p.M += Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    }
     if (far) {
-      const ModeFar& mf = free_far_[i];
+      const ModeFar& mf = cd.free_far[i];
       samples_[i] = {x, st.v, acc, A,
-                     mf.eligible ? Loss(o, mf, S(1), x, st.v, s_forcing, c_forcing) : S(0), false};
+                     mf.eligible ? Loss(o, mf, ci, x, st.v, s_forcing, c_forcing) : S(0), false};
     }
   }
   p.jet.g += dq_sum;
   p.M *= BoundMargin<S>();
   if (far && p.jet.g > 0)
-    AddFarBound(p, free_modes_, free_far_, free_order_, nullptr, {S(0), S(0), S(0)}, S(0), H, rest);
+    AddFarBound(p, free_modes_, cd.free_far, free_order_, &c, {S(0), S(0), S(0)}, S(0), H, rest);
+  return p;
+}
+
+// g_k = base + Σ w_m ξ_m while the current contact is held (undamped constrained modes).
+template <class S>
+ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const {
+  using R = Real<S>;
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const Vec& w = cd.held_weights[static_cast<size_t>(k)];
+  // Modal damping: the damped constrained flow's closed form (docs/model.md §7).
+  if (damped_sticking_) return Damped().LinearProbe(w, cd.held_base[static_cast<size_t>(k)], sigma);
+  const ForcingTrigT<S> fw(omega_, sigma);
+  ProbeT<S> p{{cd.held_base[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
+  const S sf = fw.SinPhase(trig_);
+  for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
+    const auto qq = static_cast<Eigen::Index>(q);
+    if (w[qq] == S(0)) continue;
+    const OscillatorT<S>& o = cd.stick_modes[q];
+    const auto st = Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
+    const S xi = xi0_[qq] + st.dq;
+    const S acc = -o.nu * o.nu * xi + o.F * sf;
+    p.jet.g += w[qq] * xi;
+    p.jet.g1 += w[qq] * st.v;
+    p.jet.g2 += w[qq] * acc;
+    p.M += R::abs(w[qq]) * Bounds<S>(o, omega_, Amplitude<S>(o, xi, st.v) + R::abs(o.F) * H).d3;
+  }
+  p.M *= BoundMargin<S>();
   return p;
 }
 
 template <class S>
 ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H, const S& rest) const {
   using R = Real<S>;
-  const auto& rho = m_.stick_reaction;
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto& rho = cd.m->stick_reaction;
+  const auto& stick_modes_ = cd.stick_modes;
   const ForcingTrigT<S> fw(omega_, sigma);
   const S sf = fw.SinPhase(trig_), cf = fw.CosPhase(trig_);
-  const JetT<S> base{static_reaction_ - reaction_forcing_ * sf, -reaction_forcing_ * omega_ * cf,
-                     reaction_forcing_ * omega_ * omega_ * sf};
-  const S base_M = R::abs(reaction_forcing_) * omega_ * omega_ * omega_;
+  const JetT<S> base{cd.static_reaction - cd.reaction_forcing * sf, -cd.reaction_forcing * omega_ * cf,
+                     cd.reaction_forcing * omega_ * omega_ * sf};
+  const S base_M = R::abs(cd.reaction_forcing) * omega_ * omega_ * omega_;
   ProbeT<S> p{base, base_M};
   const bool far = rest > H;
   for (size_t k = 0; k < stick_modes_.size(); ++k) {
@@ -277,14 +400,14 @@ ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H, const S& re
     p.jet.g2 += rho[kk] * acc;
     p.M += R::abs(rho[kk]) * Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
     if (far) {
-      const ModeFar& mf = stick_far_[k];
+      const ModeFar& mf = cd.stick_far[k];
       samples_[k] = {xi, st.v, acc, A,
                      mf.eligible ? Loss(o, mf, rho[kk], xi, st.v, sf, cf) : S(0), false};
     }
   }
   p.M *= BoundMargin<S>();
   if (far && p.jet.g > 0)
-    AddFarBound(p, stick_modes_, stick_far_, stick_order_, &rho, base, base_M * BoundMargin<S>(),
+    AddFarBound(p, stick_modes_, cd.stick_far, cd.stick_order, &rho, base, base_M * BoundMargin<S>(),
                 H, rest);
   return p;
 }
@@ -293,7 +416,8 @@ template <class S>
 S ExactEngineT<S>::FlightWindow() const {
   // docs/model.md §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
   if (flight_start_ == FlightStart::kGeneric) return S(0);
-  return CertifiedWindow<S>(flight_start_, StartJet<S>(m_, X0_, V0_, phase_, h_cap_), h_cap_);
+  const ModelT<S>& m = contacts_.size() == 1 ? m_ : *contacts_[static_cast<size_t>(start_contact_)].m;
+  return CertifiedWindow<S>(flight_start_, StartJet<S>(m, X0_, V0_, phase_, h_cap_), h_cap_);
 }
 
 template <class S>
@@ -311,16 +435,38 @@ SegmentResultT<S> ExactEngineT<S>::Search(const ProbeFn& probe, const S& from, c
 template <class S>
 SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_events) {
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
-  const S w = FlightWindow();
-  if (w >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
-  return Search([this](const S& u, const S& H, const S& rest) { return GapProbe(u, H, rest); }, w,
-                sigma_max,
-                SegmentEnd::kContact);
+  if (contacts_.size() == 1) {
+    const S w = FlightWindow();
+    if (w >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
+    return Search([this](const S& u, const S& H, const S& rest) { return GapProbe(0, u, H, rest); },
+                  w, sigma_max, SegmentEnd::kContact);
+  }
+  // Several gaps (MODEL §11.2.3): the first certified root over all contacts; each search ends at
+  // the best root so far. The start contact divides out its known zero; the others start generic.
+  SegmentResultT<S> best{SegmentEnd::kLimit, sigma_max, {}};
+  for (int j = 0; j < static_cast<int>(contacts_.size()); ++j) {
+    if (j == skip_) continue;
+    const FlightStart start = starts_[static_cast<size_t>(j)];
+    const S w = start == FlightStart::kGeneric
+                    ? S(0)
+                    : CertifiedWindow<S>(start, StartJet<S>(*contacts_[static_cast<size_t>(j)].m, X0_, V0_,
+                                                            phase_, h_cap_),
+                                         h_cap_);
+    if (w >= best.sigma) continue;
+    auto r = Search([this, j](const S& u, const S& H, const S& rest) { return GapProbe(j, u, H, rest); },
+                    w, best.sigma, SegmentEnd::kContact);
+    if (r.end == SegmentEnd::kFailure) return r;
+    if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
+      best = r;
+      best.contact = j;
+    }
+  }
+  return best;
 }
 
 template <class S>
 SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool detect_events) {
-  if (damped_sticking_ && !damped_.ok()) {
+  if (damped_sticking_ && !Damped().ok()) {
     if constexpr (std::is_same_v<S, double>)
       return {SegmentEnd::kFailure, 0.0,
               "the damped constrained system is defective (critically damped constrained mode): "
@@ -334,7 +480,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
   }
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
   const auto probe = [this](const S& u, const S& H, const S& rest) -> ProbeT<S> {
-    if (damped_sticking_) return damped_.ReactionProbe(u);
+    if (damped_sticking_) return Damped().ReactionProbe(u);
     return ReactionProbe(u, H, rest);
   };
   S w(0);
@@ -350,8 +496,39 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
       w = p.M > 0 ? cap(S(3) * p.jet.g2 / p.M) : h_cap_;
     }
   }
-  if (w >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
-  return Search(probe, w, sigma_max, SegmentEnd::kRelease);
+  SegmentResultT<S> best{SegmentEnd::kLimit, sigma_max, {}};
+  if (w < sigma_max) {
+    best = Search(probe, w, sigma_max, SegmentEnd::kRelease);
+    if (best.end == SegmentEnd::kFailure) return best;
+  }
+  best.contact = start_contact_;
+  // The other contacts' gaps under the held flow (MODEL §11.5.4: a free contact hits while this
+  // one sticks). A gap the held flow cannot change (zero weights, e.g. the other side of a
+  // one-DOF clearance) has no root.
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  for (int k = 0; k < static_cast<int>(contacts_.size()); ++k) {
+    const Vec& hw = cd.held_weights[static_cast<size_t>(k)];
+    if (k == start_contact_ || k == skip_ || hw.size() == 0 || hw.cwiseAbs().maxCoeff() == S(0))
+      continue;
+    // A gap that starts at zero (an impact or a departure at this contact while the other was
+    // held) divides out its known zero as a flight does (docs/model.md §2.1).
+    S wk(0);
+    const FlightStart start = starts_[static_cast<size_t>(k)];
+    if (start == FlightStart::kAfterImpact || start == FlightStart::kDeparture) {
+      const ProbeT<S> p0 = HeldGapProbe(k, S(0), h_cap_);
+      const FlightJetT<S> jet{p0.jet.g1, p0.jet.g2, S(0), p0.M, S(0)};
+      wk = CertifiedWindow<S>(start, jet, h_cap_);
+    }
+    if (wk >= best.sigma) continue;
+    auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },
+                    wk, best.sigma, SegmentEnd::kContact);
+    if (r.end == SegmentEnd::kFailure) return r;
+    if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
+      best = r;
+      best.contact = k;
+    }
+  }
+  return best;
 }
 
 template <class S>
@@ -378,28 +555,36 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
     }
     return;
   }
-  const auto k_count = static_cast<Eigen::Index>(stick_modes_.size());
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto k_count = static_cast<Eigen::Index>(cd.stick_modes.size());
   Vec xi(k_count), dxi(k_count);
   bool done = false;
   if (damped_sticking_) {
-    damped_.Evaluate(sigma, xi, dxi);
+    Damped().Evaluate(sigma, xi, dxi);
     done = true;
   }
   const ForcingTrigT<S> fw(omega_, sigma);
   for (Eigen::Index k = 0; k < k_count && !done; ++k) {
     const auto st =
-        Flow<S>(stick_modes_[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma, fw);
+        Flow<S>(cd.stick_modes[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma, fw);
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;
   }
-  X = m_.x0 * m_.static_shape + m_.stick_vectors * xi;
-  V = m_.stick_vectors * dxi;
+  X = cd.m->x0 * cd.m->static_shape + cd.m->stick_vectors * xi;
+  V = cd.m->stick_vectors * dxi;
 }
 
 template <class S>
 S ExactEngineT<S>::Gap(S sigma) const {
   if (mode_ != Mode::kFree) return S(0);
-  return GapProbe(sigma, S(0)).jet.g;
+  return GapProbe(start_contact_, sigma, S(0), S(0)).jet.g;
+}
+
+template <class S>
+S ExactEngineT<S>::GapOf(int j, S sigma) const {
+  if (mode_ == Mode::kFree) return GapProbe(j, sigma, S(0), S(0)).jet.g;
+  if (j == start_contact_) return S(0);
+  return HeldGapProbe(j, sigma, S(0)).jet.g;
 }
 
 extern template class ExactEngineT<double>;

@@ -19,9 +19,11 @@ struct FlightJetT {
 };
 using FlightJet = FlightJetT<double>;
 
-template <class S>
-FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
-                       const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
+// kWeighted: the gap is Σ c_i X_i with general c_i (a contact other than the scaling's, whose
+// c_i are 0 or 1: docs/contacts.md).
+template <class S, bool kWeighted>
+[[gnu::always_inline]] inline FlightJetT<S> StartJetOf(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
+                         const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
   const S sp = Real<S>::sin(phase), cp = Real<S>::cos(phase);
   FlightJetT<S> j{S(0), S(0), S(0), S(0), S(0)};
   for (int i = 0; i < m.dof(); ++i) {
@@ -29,17 +31,33 @@ FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
     const OscillatorT<S> o{m.omega[i], m.zeta[i], m.forcing[i] * m.f};
     const S tz = S(2) * o.zeta * o.nu;
     const S acc = -o.nu * o.nu * X[i] - tz * V[i] + o.F * sp;
-    j.g1 += V[i];
-    j.g2 += acc;
-    j.g3 += -o.nu * o.nu * V[i] - tz * acc + o.F * m.w * cp;
+    const S jerk = -o.nu * o.nu * V[i] - tz * acc + o.F * m.w * cp;
     const auto b = Bounds<S>(o, m.w, Amplitude<S>(o, X[i], V[i]) + Real<S>::abs(o.F) * H);
-    j.M3 += b.d3;
-    j.M4 += b.d4;
+    if constexpr (kWeighted) {
+      const S c = m.shape[i];
+      j.g1 += c * V[i];
+      j.g2 += c * acc;
+      j.g3 += c * jerk;
+      j.M3 += Real<S>::abs(c) * b.d3;
+      j.M4 += Real<S>::abs(c) * b.d4;
+    } else {
+      j.g1 += V[i];
+      j.g2 += acc;
+      j.g3 += jerk;
+      j.M3 += b.d3;
+      j.M4 += b.d4;
+    }
   }
   const S margin = S(1) + S(1e-9);  // rounding of the evaluated jets
   j.M3 *= margin;
   j.M4 *= margin;
   return j;
+}
+
+template <class S>
+[[gnu::always_inline]] inline FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
+                       const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
+  return m.unit_shape ? StartJetOf<S, false>(m, X, V, phase, H) : StartJetOf<S, true>(m, X, V, phase, H);
 }
 
 // σ_w ≤ H with no root of g in (0, σ_w): after an impact g(σ)/σ ≥ g' + g''σ/2 − M3σ²/6; after a

@@ -16,43 +16,59 @@ struct ModelT {
   using Vec = Eigen::Matrix<S, Eigen::Dynamic, 1>;
   using Mat = Eigen::Matrix<S, Eigen::Dynamic, Eigen::Dynamic>;
 
-  explicit ModelT(const System& sys)
+  // The model seen by contact j (docs/contacts.md): its gap c_jᵀX − e_j, its impact law and the
+  // flow with it held. j = 0 is the single stop's model, to the bit.
+  explicit ModelT(const System& sys, int j = 0)
+      : ModelT(sys, sys.contacts()[static_cast<size_t>(j)]) {}
+
+  ModelT(const System& sys, const ContactModel& k)
       : omega(sys.omega().cast<S>()),
         forcing(sys.forcing().cast<S>()),
-        contact(sys.contact().cast<S>()),
-        shape(sys.contact_shape().cast<S>()),
+        contact(k.contact.cast<S>()),
+        shape(k.shape.cast<S>()),
         zeta(sys.damping().cast<S>()),
         damped(sys.damped()),
-        s_A(sys.s_A()),
-        s_B(sys.s_B()),
-        x0(sys.stop()),
-        r(sys.restitution()),
+        s_A(k.s_A),
+        s_B(k.s_B),
+        x0(k.stop),
+        r(k.restitution),
         f(sys.amplitude()),
         w(sys.frequency()),
         period(S(2) * Real<S>::pi() / S(sys.frequency())),
-        flexibility(sys.flexibility()),
-        static_shape(sys.static_shape().cast<S>()),
-        stick_frequencies(sys.constrained().frequencies.cast<S>()),
-        stick_vectors(sys.constrained().vectors.cast<S>()),
-        stick_left(sys.constrained().left.cast<S>()),
-        stick_forcing(sys.constrained().modal_forcing.cast<S>()),
-        stick_reaction(sys.constrained().reaction.cast<S>()) {
-    for (Eigen::Index i = 0; i < omega.size(); ++i)
+        flexibility(k.flexibility),
+        static_shape(k.static_shape.cast<S>()),
+        stick_frequencies(k.constrained.frequencies.cast<S>()),
+        stick_vectors(k.constrained.vectors.cast<S>()),
+        stick_left(k.constrained.left.cast<S>()),
+        stick_forcing(k.constrained.modal_forcing.cast<S>()),
+        stick_reaction(k.constrained.reaction.cast<S>()),
+        side(k.spec.side == Side::kAbove ? S(-1) : S(1)) {
+    for (Eigen::Index i = 0; i < omega.size(); ++i) {
       contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
+      if (shape[i] != S(0) && shape[i] != S(1)) unit_shape = false;
+    }
     contact_stiffness /= s_B;
   }
 
   int dof() const { return static_cast<int>(omega.size()); }
 
-  S ContactDisplacement(const Vec& X) const { return shape.dot(X); }
-  S ContactVelocity(const Vec& V) const { return shape.dot(V); }
+  // Inlined on the hot paths of every event (their callers grew with several contacts).
+  [[gnu::always_inline]] S ContactDisplacement(const Vec& X) const { return shape.dot(X); }
+  [[gnu::always_inline]] S ContactVelocity(const Vec& V) const { return shape.dot(V); }
 
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (the paper's eq. (5); docs/model.md §7).
-  S Reaction(const Vec& X, const Vec& V, const S& phase) const {
+  [[gnu::always_inline]] S Reaction(const Vec& X, const Vec& V, const S& phase) const {
     S elastic(0);
-    for (Eigen::Index i = 0; i < X.size(); ++i) {
-      if (shape[i] == S(0)) continue;
-      elastic += omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i];
+    if (unit_shape) {  // the contact of the scaling (every c_i is 0 or 1): no products by c_i
+      for (Eigen::Index i = 0; i < X.size(); ++i) {
+        if (shape[i] == S(0)) continue;
+        elastic += omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i];
+      }
+    } else {
+      for (Eigen::Index i = 0; i < X.size(); ++i) {
+        if (shape[i] == S(0)) continue;
+        elastic += shape[i] * (omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i]);
+      }
     }
     return (elastic - s_A * f * Real<S>::sin(phase)) / s_B;
   }
@@ -90,6 +106,8 @@ struct ModelT {
   Mat stick_left;         // l_kᵀ (rows)
   Vec stick_forcing;      // l_kᵀ F_c
   Vec stick_reaction;     // ρ_k
+  S side{1};               // σ: the physical coordinate wᵀq is σ·cᵀX (docs/contacts.md)
+  bool unit_shape = true;  // every c_i is 0 or 1 (contact 0, the contact of the scaling)
   S contact_stiffness{0};  // ω_c² = Σ c_i T_B,i ω_i² / s_B, the stiffness the contact point sees
 };
 

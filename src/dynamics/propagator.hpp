@@ -6,6 +6,7 @@
 #include <atomic>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -37,9 +38,20 @@ struct SegmentStartT {
   S offset;      // clock offset at σ = 0 (time since the start of the period)
   const Vec& X;  // modal state at σ = 0
   const Vec& V;
-  S gap;         // x_B − x0 at σ = 0 (free flight; 0 on the stop)
-  FlightStart flight_start;
+  S gap;         // x_B − x0 at σ = 0 (free flight; 0 on the stop) of contact `contact`
+  FlightStart flight_start;  // of contact `contact`; every other contact starts generic
   StickStart stick_start;
+  // Several contacts (docs/contacts.md): sticking, the held contact; free flight, the contact the
+  // flight starts from (flight_start and gap are its own).
+  int contact = 0;
+  // Free flight with several contacts: every contact's gap c_jᵀX − e_j at σ = 0 (gap[contact] is
+  // `gap`); null with one contact.
+  const std::vector<S>* gaps = nullptr;
+  // ... and every contact's flight start (the same kinds; `flight_start` is starts[contact]).
+  // While sticking, the start of the other contacts' gaps under the held flow.
+  const std::vector<FlightStart>* starts = nullptr;
+  // A contact left out of the search (the contact of a chattering tail: its flow dips below).
+  int skip = -1;
 };
 
 enum class SegmentEnd {
@@ -61,6 +73,8 @@ struct SegmentResultT {
   // kFailure because a stop request (SIGINT/SIGTERM) was seen inside the segment: the run is
   // interrupted, not failed; everything up to sigma is valid.
   bool stopped = false;
+  // Which contact's guard ended the segment (kContact: its gap reached 0; kRelease: its reaction).
+  int contact = 0;
   // kFailure because the contact cannot be resolved at the engine's precision (CVODE: the gap
   // vanishes at and very near the start of a flight, a chattering tail at its resolution floor):
   // the run is undetermined there (docs/chattering.md), not a numerical failure.
@@ -86,6 +100,9 @@ class PropagatorT {
   virtual void Evaluate(S sigma, Vec& X, Vec& V) const = 0;
   // Free flight: x_B − x0 at sigma without cancellation (increments from the start).
   virtual S Gap(S sigma) const = 0;
+  // The gap of contact j at sigma (free flight: without cancellation from its start value;
+  // sticking: of a contact that is not held). Gap(σ) is GapOf(start contact, σ).
+  virtual S GapOf(int j, S sigma) const { return j == 0 ? Gap(sigma) : S(0); }
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
   // Polled inside long root searches and stepping loops: true stops the segment with a failure
