@@ -188,7 +188,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sig
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder attractor_recorder(sys, loaded.scene);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  if (loaded.scene.run.lyapunov) lyapunov.emplace(sys, loaded.scene);
+  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
+  if (loaded.scene.run.lyapunov && sys.contact_count() == 1) lyapunov.emplace(sys, loaded.scene);
   Recorder recorder(sys.dof());
   auto store = CreateStore(out, HeaderOf(loaded, sys));
   std::string json;
@@ -237,6 +238,7 @@ vibro::OrbitKind KindOf(const std::string& kind) {
 std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, long long period, long long impacts,
                                    std::optional<double> guess_phase, std::optional<double> guess_velocity,
                                    const std::string& out, long long transient, bool handle_sigint) {
+  vibro::frontend::RequireOneContact(s.loaded, "orbit");
   vibro::frontend::CheckOrbitOptions(kPython, period, impacts, transient, guess_phase, guess_velocity);
   vibro::OrbitRequest req;
   req.kind = KindOf(kind);
@@ -264,6 +266,7 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
                                             bool handle_sigint) {
+  vibro::frontend::RequireOneContact(s.loaded, "continue");
   vibro::frontend::CheckContinuationOptions(kPython, to, step, max_points, period, 0);
   const auto from = vibro::SceneNumber(s.loaded.text_as_run, key);
   if (!from)
@@ -391,6 +394,7 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
 
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
 std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
+  vibro::frontend::RequireOneContact(s.loaded, "check");
   const vibro::System sys(s.loaded.scene);
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
@@ -412,6 +416,7 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
                                       const std::string& param, const std::string& kind, long long period,
                                       double tolerance, double sticking_tolerance, const std::string& out,
                                       bool handle_sigint) {
+  vibro::frontend::RequireOneContact(s.loaded, "validate");
   if (!columns) CheckPaths({{"branch", &csv}});
   std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
   vibro::frontend::CheckInteger(kPython, "--period", period, vibro::frontend::kPeriodLimit, problems);
@@ -461,6 +466,7 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
                                             const std::vector<double>& levels, long long steps1,
                                             std::optional<double> from2, long long period, long long threads,
                                             const std::string& out, bool handle_sigint) {
+  vibro::frontend::RequireOneContact(s.loaded, "partition");
   vibro::frontend::PartitionSpec spec;
   spec.params = params;
   spec.range1 = range1;

@@ -325,6 +325,12 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
 
 OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest& req) {
   OrbitResult out;
+  if (sys.contact_count() > 1) {
+    // The Poincaré map's tangent and saltation matrices are those of one contact (docs/contacts.md,
+    // "What works with several contacts").
+    out.message = "periodic orbits of scenes with several contacts are not implemented (docs/contacts.md)";
+    return out;
+  }
   const double T = sys.period(), w = sys.frequency();
   const auto n = sys.dof();
 

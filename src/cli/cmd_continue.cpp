@@ -34,6 +34,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     orbit.period = pt.period;
   }
   const auto loaded = vibro::LoadScene(path, sets);
+  vibro::frontend::RequireOneContact(loaded, "continue");
   if (!restart_file.empty()) {
     // The stored state must be one this scene can start from, as [initial] is checked.
     const vibro::System at(loaded.scene);

@@ -15,6 +15,7 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::frontend::CheckOrbitOptions(vibro::frontend::Naming::kCli, req.period, req.impacts, req.transient_periods,
                                      req.guess_phase, req.guess_velocity);
   const auto loaded = vibro::LoadScene(path, sets);
+  vibro::frontend::RequireOneContact(loaded, "orbit");
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early
   // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.

@@ -21,6 +21,7 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
                  const PartitionArgs& a) {
   const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
   const auto loaded = origin.Load();
+  vibro::frontend::RequireOneContact(loaded, "partition");
   // Progress: columns started (each column asks for scenes at its own value of KEY1).
   vibro::cli::Progress progress("columns", json);
   std::mutex seen_mutex;

@@ -31,7 +31,9 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  if (loaded.scene.run.lyapunov) options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
+  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
+  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+    options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
 
   std::unique_ptr<vibro::Hdf5Store> store;
@@ -88,6 +90,18 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     fmt::print("events       {} impacts, {} accumulations, {} sticks, {} releases, {} grazings\n",
                result.counts.impacts, result.counts.accumulations, result.counts.sticks,
                result.counts.releases, result.counts.grazings);
+    if (result.contact_counts.size() > 1) {
+      const auto specs = vibro::Contacts(loaded.scene);
+      for (size_t j = 0; j < result.contact_counts.size() && j < specs.size(); ++j) {
+        const auto& c = result.contact_counts[j];
+        const auto& k = specs[j];
+        const std::string q = k.partner >= 0 ? fmt::format("q{} - q{}", k.dof, k.partner) : fmt::format("q{}", k.dof);
+        fmt::print("  contact {}  {} {} {}: {} impacts ({} simultaneous), {} accumulations, {} sticks, "
+                   "{} releases, {} grazings\n",
+                   j, q, k.side == vibro::Side::kBelow ? ">=" : "<=", k.position,
+                   c.impacts, c.simultaneous, c.accumulations, c.sticks, c.releases, c.grazings);
+      }
+    }
     // Only when a sequence chattered: impacts followed while no prediction was good enough are
     // those of every ordinary impact run too.
     if (result.chatter.accumulations_predicted > 0)

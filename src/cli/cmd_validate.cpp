@@ -17,6 +17,7 @@
 int RunValidate(const ValidateArgs& a) {
   const vibro::frontend::SceneOrigin origin{a.scene, std::nullopt, a.scene, a.sets};
   const auto loaded = origin.Load();
+  vibro::frontend::RequireOneContact(loaded, "validate");
   const vibro::frontend::ValidationSpec spec{a.csv, a.param, a.kind, a.period, a.tolerance, a.sticking_tolerance};
   const auto job = vibro::frontend::PrepareValidation(origin, loaded, spec, vibro::frontend::Naming::kCli,
                                                       &vibro::cli::StopFlag());

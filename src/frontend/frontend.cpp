@@ -13,6 +13,16 @@
 
 namespace vibro::frontend {
 
+void RequireOneContact(const LoadedScene& loaded, const char* command) {
+  const size_t m = loaded.scene.contacts.size();
+  if (m <= 1) return;
+  throw InputError({fmt::format(
+      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (periodic orbits, their "
+      "stability and continuation with several contacts are not implemented yet); simulate, "
+      "attractors, basin, sweep and score take them (docs/contacts.md)",
+      loaded.source, m, command)});
+}
+
 LoadedScene SceneOrigin::Load(const std::vector<std::string>& more_sets) const {
   if (!text) {
     std::vector<std::string> problems;

@@ -107,6 +107,31 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       if (c.chatter_predicted < 0 || c.chatter_followed < 0 || !std::isfinite(c.chatter_max_error) ||
           c.chatter_max_error < 0)
         bad("chatter counts");
+      // Several contacts (absent for one contact): the held or start contact, gaps, starts, counts.
+      if (auto k = h5::ReadInt(g, "contact")) {
+        c.contact = static_cast<int>(*k);
+        c.gaps = h5::ReadDoubles(g, "gaps");
+        const auto starts = h5::ReadDoubles(g, "start_kinds");
+        const auto counts = h5::ReadDoubles(g, "contact_counts");
+        const size_t m = c.gaps.size();
+        if (m < 2 || m > 1024 || *k < 0 || static_cast<size_t>(*k) >= m || starts.size() != m ||
+            counts.size() != 6 * m)
+          bad("contact, gaps, start_kinds, contact_counts (one per contact)");
+        for (double x : c.gaps)
+          if (!std::isfinite(x)) bad("gaps");
+        for (double x : starts) {
+          if (!(x >= 0 && x <= 8) || x != std::floor(x)) bad("start_kinds");
+          c.start_kinds.push_back(static_cast<int>(x));
+        }
+        for (double x : counts)
+          if (!(x >= 0 && x <= 9.0e15) || x != std::floor(x)) bad("contact_counts");
+        for (size_t j = 0; j < m; ++j) {
+          const double* r = counts.data() + 6 * j;
+          c.contact_counts.push_back({static_cast<long long>(r[0]), static_cast<long long>(r[1]),
+                                      static_cast<long long>(r[2]), static_cast<long long>(r[3]),
+                                      static_cast<long long>(r[4]), static_cast<long long>(r[5])});
+        }
+      }
       cp_events = static_cast<h5::Size>(*h5::ReadInt(g, "events"));
       cp_sections = static_cast<h5::Size>(*h5::ReadInt(g, "sections"));
       const auto cp_samples = *h5::ReadInt(g, "samples");
@@ -173,8 +198,15 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       events.xB.Read(first_ev, n_ev, xB.data());
       events.v_before.Read(first_ev, n_ev, vb.data());
       events.v_after.Read(first_ev, n_ev, va.data());
+      std::vector<std::int32_t> contact(n_ev, 0);
+      std::vector<std::int8_t> simultaneous(n_ev, 0);
+      if (events.has_contact) {
+        events.contact.Read(first_ev, n_ev, contact.data());
+        events.simultaneous.Read(first_ev, n_ev, simultaneous.data());
+      }
       for (h5::Size i = 0; i < n_ev; ++i)
-        out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i]});
+        out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i],
+                                   contact[i], simultaneous[i] != 0});
     }
 
     // Studies and branches (and their files since provenance was stored) have no /attractor.

@@ -37,6 +37,9 @@ void EventTable::Create(h5::Id g) {
   xB = h5::Column(g, "x_B", h5::Type::F64(), 0);
   v_before = h5::Column(g, "v_before", h5::Type::F64(), 0);
   v_after = h5::Column(g, "v_after", h5::Type::F64(), 0);
+  contact = h5::Column(g, "contact", h5::Type::I32(), 0);
+  simultaneous = h5::Column(g, "simultaneous", h5::Type::I8(), 0);
+  has_contact = true;
 }
 
 void EventTable::Open(h5::Id g) {
@@ -48,6 +51,11 @@ void EventTable::Open(h5::Id g) {
   xB = h5::Column::Open(g, "x_B", h5::Type::F64());
   v_before = h5::Column::Open(g, "v_before", h5::Type::F64());
   v_after = h5::Column::Open(g, "v_after", h5::Type::F64());
+  has_contact = h5::Exists(g, "contact");
+  if (has_contact) {
+    contact = h5::Column::Open(g, "contact", h5::Type::I32());
+    simultaneous = h5::Column::Open(g, "simultaneous", h5::Type::I8());
+  }
 }
 
 void EventTable::Push(const Event& e) {
@@ -58,6 +66,10 @@ void EventTable::Push(const Event& e) {
   xB.Push(e.x_B);
   v_before.Push(e.v_before);
   v_after.Push(e.v_after);
+  if (has_contact) {
+    contact.Push(static_cast<std::int32_t>(e.contact));
+    simultaneous.Push(static_cast<std::int8_t>(e.simultaneous ? 1 : 0));
+  }
 }
 
 void StateTable::Create(h5::Id g, h5::Size n) {
@@ -154,6 +166,19 @@ void Hdf5Store::Impl::WriteCheckpoint() {
   h5::WriteInt(g, "chatter_accumulations_predicted", c.chatter_predicted);
   h5::WriteInt(g, "chatter_impacts_followed", c.chatter_followed);
   h5::WriteDouble(g, "chatter_max_estimated_error", c.chatter_max_error);
+  if (!c.gaps.empty()) {
+    // Several contacts (docs/contacts.md): the held or start contact, every gap and flight start,
+    // and the counts per contact (rows of impacts, accumulations, sticks, releases, grazings,
+    // simultaneous).
+    h5::WriteInt(g, "contact", c.contact);
+    h5::WriteDoubles(g, "gaps", c.gaps);
+    h5::WriteDoubles(g, "start_kinds", std::vector<double>(c.start_kinds.begin(), c.start_kinds.end()));
+    std::vector<double> counts;
+    for (const EventCounts& k : c.contact_counts)
+      for (long long v : {k.impacts, k.accumulations, k.sticks, k.releases, k.grazings, k.simultaneous})
+        counts.push_back(static_cast<double>(v));
+    h5::WriteDoubles(g, "contact_counts", counts, 6);
+  }
   h5::WriteInt(g, "events", static_cast<long long>(cp_events));
   h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));
   h5::WriteInt(g, "sections", static_cast<long long>(cp_sections));
@@ -284,6 +309,15 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   h5::WriteString(f, "message", r.message);
   h5::WriteDouble(f, "t_end", r.t_end);
   WriteCounts(f, r.counts);
+  if (r.contact_counts.size() > 1) {
+    // Several contacts: one row per contact (impacts, accumulations, sticks, releases, grazings,
+    // simultaneous), docs/output.md.
+    std::vector<double> rows;
+    for (const EventCounts& k : r.contact_counts)
+      for (long long v : {k.impacts, k.accumulations, k.sticks, k.releases, k.grazings, k.simultaneous})
+        rows.push_back(static_cast<double>(v));
+    h5::WriteDoubles(f, "contact_counts", rows, 6);
+  }
   h5::WriteInt(f, "chatter_accumulations_predicted", r.chatter.accumulations_predicted);
   h5::WriteInt(f, "chatter_impacts_followed", r.chatter.impacts_followed);
   h5::WriteDouble(f, "chatter_max_estimated_error", r.chatter.max_estimated_error);

@@ -21,12 +21,19 @@ namespace vibro::store {
 h5::Type EventKindType();
 
 // /events: one row per event.
+// /events/contact and /events/simultaneous (docs/contacts.md) are absent from files written before
+// several contacts: such a file keeps its seven columns when resumed.
 struct EventTable {
-  h5::Column t, period, offset, kind, xB, v_before, v_after;
+  h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
+  bool has_contact = false;
   void Create(h5::Id g);
   void Open(h5::Id g);
   void Push(const Event& e);
-  std::vector<h5::Column*> All() { return {&t, &period, &offset, &kind, &xB, &v_before, &v_after}; }
+  std::vector<h5::Column*> All() {
+    std::vector<h5::Column*> all{&t, &period, &offset, &kind, &xB, &v_before, &v_after};
+    if (has_contact) all.insert(all.end(), {&contact, &simultaneous});
+    return all;
+  }
 };
 
 // /samples and /section: one row per state.

@@ -59,6 +59,16 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                  {"sticks", r.counts.sticks},
                  {"releases", r.counts.releases},
                  {"grazings", r.counts.grazings}};
+  // Per contact, in [[contact]] order (one entry for a [stop]), docs/contacts.md.
+  auto contacts = nlohmann::json::array();
+  for (const EventCounts& c : r.contact_counts)
+    contacts.push_back({{"impacts", c.impacts},
+                        {"accumulations", c.accumulations},
+                        {"sticks", c.sticks},
+                        {"releases", c.releases},
+                        {"grazings", c.grazings},
+                        {"simultaneous", c.simultaneous}});
+  j["contacts"] = contacts;
   j["attractor"] = AttractorObject(a);
   j["precision"] = ToString(scene.run.precision);
   j["chattering"] = {{"accumulations_predicted", r.chatter.accumulations_predicted},
