@@ -156,7 +156,8 @@ stop(resumed)
 import json  # noqa: E402
 
 chat = os.path.join(tmp, "chatter.h5")
-chat_run = ["simulate", default, "--set", "run.periods=30000", "--json", "--out", chat]
+# Long enough (several seconds) for a checkpoint past period 0 (flushed every second) before the end.
+chat_run = ["simulate", default, "--set", "run.periods=150000", "--json", "--out", chat]
 r = run(*chat_run, "--force")
 whole = json.loads(r.stdout)["chattering"] if r.returncode == 0 else {}
 os.remove(chat)
