@@ -198,17 +198,16 @@ class ProgressRelay {
   std::shared_ptr<py::error_already_set> error_;
 };
 
-// Period-by-period progress of one run (the section is reached once a period), from `first` (the
-// period a resumed run starts at) to `periods`.
+// Period-by-period progress of one run (the section is reached once a period): the section's
+// period of the run's `periods` (a resumed run starts at its checkpoint's).
 class PeriodRelay final : public vibro::Observer {
  public:
-  PeriodRelay(ProgressRelay& relay, long long periods, long long first)
-      : relay_(relay), periods_(periods), seen_(first - 1) {}
-  void OnSection(const vibro::Sample& /*sample*/) override { relay_.Update(++seen_, periods_); }
+  PeriodRelay(ProgressRelay& relay, long long periods) : relay_(relay), periods_(periods) {}
+  void OnSection(const vibro::Sample& sample) override { relay_.Update(sample.clock.period, periods_); }
 
  private:
   ProgressRelay& relay_;
-  long long periods_, seen_;
+  long long periods_;
 };
 
 // Events, dense samples and section points of a run, kept in memory for numpy.
@@ -294,7 +293,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   bool interrupted = false;
   SigintGuard guard(handle_sigint);
   ProgressRelay relay(progress, guard);
-  PeriodRelay periods(relay, loaded.scene.run.periods, output->first_period());
+  PeriodRelay periods(relay, loaded.scene.run.periods);
   if (relay.active()) options.observers.push_back(&periods);
   {
     py::gil_scoped_release release;

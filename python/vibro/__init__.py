@@ -198,7 +198,7 @@ def _progress(progress, what, unit):
         except ImportError:
             raise ValueError("progress=True: needs the tqdm package (Debian: python3-tqdm; pip: tqdm); "
                              "or give a callable progress(done, total)") from None
-        bar = tqdm(desc=f"vibro {what}", unit=unit, dynamic_ncols=True)
+        bar = tqdm(desc=f"vibro {what}", unit=unit, dynamic_ncols=True, delay=0.5)  # nothing for a short call
 
         def report(done, total):
             if bar.total != total:

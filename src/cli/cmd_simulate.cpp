@@ -36,8 +36,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, options);
 
   std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
-  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods,
-                                     output->first_period());
+  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods);
   if (progress->active()) options.observers.push_back(&periods);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   progress.reset();

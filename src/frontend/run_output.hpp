@@ -46,8 +46,6 @@ class RunOutput {
   RunOutput& operator=(const RunOutput&) = delete;
 
   Hdf5Store* store() { return store_.get(); }
-  // The period the run starts at: the checkpoint's (0 for a new run).
-  long long first_period() const { return stored_.checkpoint ? stored_.checkpoint->clock.period : 0; }
   // Writes the run's end (Hdf5Store::Finish) and closes the file; returns its write statistics.
   Hdf5Store::Stats Finish(const RunResult& result, const Attractor& attractor);
 
