@@ -480,7 +480,7 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
   SigintGuard guard(handle_sigint);
   ProgressRelay relay(progress, guard);
   // Progress: one scene per run of the sweep, up and (unless one_way) down, as the command line.
-  const long long runs = (steps + 1LL) * (one_way ? 1 : 2);
+  const long long runs = steps + 1LL + (one_way ? 0 : steps);  // the way back skips the top
   long long scenes = 0;
   req.scene_at = [&](double v) {
     relay.Update(scenes++, runs);

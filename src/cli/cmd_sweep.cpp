@@ -29,7 +29,7 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::SweepRequest req;
   // Progress: one scene per run of the sweep, up and (unless --one-way) down.
   vibro::cli::Progress progress("sweep", json);
-  const long long runs = (steps + 1LL) * (one_way ? 1 : 2);
+  const long long runs = steps + 1LL + (one_way ? 0 : steps);  // the way back skips the top
   std::atomic<long long> scenes{0};
   req.scene_at = [&](double v) {
     progress.Update(scenes++, runs, fmt::format("{} = {:.8g}", key, v));
