@@ -186,11 +186,25 @@ def _main_thread():
     return _threading.current_thread() is _threading.main_thread()
 
 
+def _in_notebook():
+    """Whether Python runs in a Jupyter kernel (where a call shows a progress bar by default)."""
+    import sys
+    shell = sys.modules.get("IPython")
+    try:
+        ip = shell.get_ipython() if shell else None
+    except Exception:  # noqa: BLE001 (an IPython without a running shell)
+        return False
+    return ip is not None and type(ip).__name__ == "ZMQInteractiveShell"
+
+
 def _progress(progress, what, unit):
     """The callable the C++ module reports progress(done, total) to (None: no report) and what closes
-    it afterwards. ``progress`` is None or False (no report), True (a tqdm bar: a widget in a
-    notebook, text on a terminal; tqdm.auto) or a callable."""
-    if progress is None or progress is False:
+    it afterwards. ``progress`` is False (no report), True (a tqdm bar: a widget in a notebook, text
+    on a terminal; tqdm.auto), a callable, or None: a bar in a Jupyter notebook, nothing in a
+    script."""
+    if progress is None:
+        progress = _in_notebook()
+    if progress is False:
         return None, lambda: None
     if progress is True:
         try:
@@ -278,9 +292,9 @@ def simulate(scene, out=None, force=False, resume=False, extend=None, progress=N
     N more periods (``--extend N``; the scene is the stored one with ``run.periods`` the new
     total). Either way the file ends with the same bits as an uninterrupted run of its total
     length; the result's arrays hold the part this call computed, its summary the whole run's
-    attractor. ``progress``: True for a progress bar (tqdm; a widget in a notebook) or a callable
-    ``progress(done, total)`` called with the periods done, at most ten times a second and once
-    at the end."""
+    attractor. ``progress``: True for a progress bar (tqdm; a widget in a notebook), False for
+    none, or a callable ``progress(done, total)`` called with the periods done, at most ten times a
+    second and once at the end; None (the default) shows a bar in a Jupyter notebook only."""
     _invoke("simulate", scene, out=out, force=force, **({"resume": True} if resume else {}),
             **({"extend": extend} if extend is not None else {}))
     if not isinstance(resume, (bool, _np.bool_)):

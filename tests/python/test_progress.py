@@ -80,13 +80,19 @@ def test_studies_and_sweeps_report_from_their_threads_with_the_gil():
     assert len(s["points"]) == 9
 
 
-def test_no_progress_by_default_and_a_bar_on_request(capfd):
+def test_no_progress_by_default_in_a_script_and_a_bar_on_request_or_in_a_notebook(capfd, monkeypatch):
     scene = vibro.load_scene(FIG8, set={"run.periods": 40000, "run.samples_per_period": 4})
+    assert not vibro._in_notebook()
     vibro.simulate(scene)
     assert capfd.readouterr().err == ""
     vibro.simulate(scene, progress=True)
     err = capfd.readouterr().err
     assert "vibro simulate" in err and "40000/40000" in err and "period/s" in err, err
+    monkeypatch.setattr(vibro, "_in_notebook", lambda: True)  # the default in a Jupyter kernel
+    vibro.simulate(scene)
+    assert "40000/40000" in capfd.readouterr().err
+    vibro.simulate(scene, progress=False)
+    assert capfd.readouterr().err == ""
 
 
 def test_a_bad_progress_argument_is_a_value_error():
