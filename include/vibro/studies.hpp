@@ -117,7 +117,7 @@ struct StudyOptions {
   std::vector<KnownOrbit> known;
   // Labelling: the Lyapunov exponents of each attractor and of the first not-periodic cell
   // (FoundAttractor::lyapunov, StudyResult::unresolved_lyapunov), when the scene's run.lyapunov
-  // is on too.
+  // is on too and no stop is requested (an interrupted study has none).
   bool lyapunov = true;
 };
 

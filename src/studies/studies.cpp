@@ -13,6 +13,7 @@
 
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/stop_request.hpp"
 
 namespace vibro {
 namespace {
@@ -427,8 +428,10 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
   out.inadmissible_fraction = static_cast<double>(inadmissible) / N;
   out.pending_fraction = static_cast<double>(pending) / N;
   // 4. Lyapunov exponents of each attractor, from its first cell's final state, and of the first
-  //    not-periodic cell (deterministic: they depend only on `cells`).
-  if (opt.lyapunov && scene.run.lyapunov) {
+  //    not-periodic cell (deterministic: they depend only on `cells`). None for a study being
+  //    stopped (its resumption measures them).
+  const auto stopping = [](const std::atomic<bool>* flag) { return flag && flag->load(); };
+  if (opt.lyapunov && scene.run.lyapunov && !stopping(opt.stop_requested) && !stopping(ProcessStopFlag())) {
     std::vector<size_t> from(out.attractors.size() + 1, cells.size());  // the last: not-periodic
     for (size_t i = 0; i < cells.size(); ++i) {
       const int l = out.labels[i];

@@ -129,9 +129,13 @@ def test_basin_resume_equals_an_uninterrupted_study(tmp_path):
         vibro.basin(scene, grid=(40, 30), threads=1, out=path, progress=stop_after(1))
     with h5py.File(path, "r") as f:
         assert f.attrs["status"] == "interrupted"
+        assert (f["basin/labels"][()] == -3).any()
+        # An interrupted study measures no Lyapunov exponents; its resumption does.
+        assert (f["attractors/chaotic"][()] == -1).all()
     resumed = vibro.basin(scene, grid=(40, 30), threads=1, out=path, resume=True)
     assert np.array_equal(resumed["labels"], whole["labels"])
     assert resumed["attractors"] == whole["attractors"]
+    assert all("lyapunov_exponents" in a for a in resumed["attractors"])
     with h5py.File(ref, "r") as a, h5py.File(path, "r") as b:
         assert np.array_equal(a["basin/labels"][()], b["basin/labels"][()])
         for k in a["attractors"]:
