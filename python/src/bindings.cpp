@@ -287,7 +287,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   std::optional<vibro::frontend::RunOutput> output;
   {
     py::gil_scoped_release release;
-    output.emplace(out, loaded, sys, how, attractor_recorder, options);
+    output.emplace(out, loaded, sys, how, attractor_recorder, options, kPython);
   }
   std::string json;
   bool interrupted = false;

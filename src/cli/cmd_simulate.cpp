@@ -33,7 +33,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   if (loaded.scene.run.lyapunov) options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).
-  std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, options);
+  std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, options,
+                                                   vibro::frontend::Naming::kCli);
 
   std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
   vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods);

@@ -1,6 +1,10 @@
 // Opening a run's or a study's output to create, resume or extend it (run_output.hpp).
 #include "frontend/run_output.hpp"
 
+#include <string>
+#include <utility>
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "frontend/frontend.hpp"
@@ -10,6 +14,38 @@ namespace vibro::frontend {
 namespace {
 // "--out FILE.h5" or "out=FILE.h5".
 std::string OutOption(Naming naming) { return naming == Naming::kCli ? "--out FILE.h5" : "out=FILE.h5"; }
+
+// Every occurrence of `from` in `text` replaced by `to`.
+std::string Replaced(std::string text, const std::string& from, const std::string& to) {
+  for (size_t at = text.find(from); at != std::string::npos; at = text.find(from, at + to.size()))
+    text.replace(at, from.size(), to);
+  return text;
+}
+
+// The refusals of Hdf5Store::Resume, Extend and ResumeStudy (src/io) name the command line's
+// options; from Python they name its arguments: --set KEY=VALUE → set={"KEY": VALUE}, --extend N
+// → extend=N, --set overrides → set= overrides, --x-range → x_range, ...
+InputError InTermsOf(Naming naming, const InputError& e) {
+  if (naming == Naming::kCli) return e;
+  std::vector<std::string> messages;
+  for (std::string m : e.messages()) {
+    m = Replaced(m, "--set overrides", "set= overrides");
+    for (size_t at = m.find("--set "); at != std::string::npos; at = m.find("--set ", at + 1)) {
+      const size_t eq = m.find('=', at), end = m.find_first_of(",;) ", eq);
+      if (eq == std::string::npos) break;
+      const std::string key = m.substr(at + 6, eq - at - 6);
+      const std::string value = m.substr(eq + 1, end == std::string::npos ? std::string::npos : end - eq - 1);
+      m.replace(at, (end == std::string::npos ? m.size() : end) - at, fmt::format("set={{\"{}\": {}}}", key, value));
+    }
+    // The options of a study's grid (ResumeStudy), longest first.
+    for (const auto& [cli, python] : {std::pair{"--extend N", "extend=N"}, {"--x-range", "x_range"},
+                                      {"--y-range", "y_range"}, {"--full-periods", "full_periods"},
+                                      {"--grid", "grid"}, {"--x ", "x "}, {"--y ", "y "}})
+      m = Replaced(m, cli, python);
+    messages.push_back(m);
+  }
+  return InputError(messages);
+}
 }  // namespace
 
 LoadedScene SceneToRun(const LoadedScene& given, const std::string& out, const RunContinuation& how, Naming naming) {
@@ -26,13 +62,18 @@ LoadedScene SceneToRun(const LoadedScene& given, const std::string& out, const R
 }
 
 RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const System& sys,
-                     const RunContinuation& how, AttractorRecorder& recorder, SimulationOptions& options) {
+                     const RunContinuation& how, AttractorRecorder& recorder, SimulationOptions& options,
+                     Naming naming) {
   if (out.empty()) return;
   const auto header = HeaderOf(loaded, sys);
   if (!how.resume && !how.extend) {
     store_ = Hdf5Store::Create(out, header);
   } else {
-    store_ = how.extend ? Hdf5Store::Extend(out, header, stored_) : Hdf5Store::Resume(out, header, stored_);
+    try {
+      store_ = how.extend ? Hdf5Store::Extend(out, header, stored_) : Hdf5Store::Resume(out, header, stored_);
+    } catch (const InputError& e) {
+      throw InTermsOf(naming, e);
+    }
     options.resume_from = &*stored_.checkpoint;
     // Give the classification the history it would have had.
     for (size_t i = 0; i < stored_.tail_section_clocks.size(); ++i) {
@@ -65,7 +106,11 @@ std::unique_ptr<Hdf5Store> OpenStudyOutput(const std::string& out, const StoreHe
                                            std::vector<CellResult>& cells, Naming naming) {
   CheckStudyResume(out, resume, naming);
   if (out.empty()) return nullptr;
-  if (resume) return Hdf5Store::ResumeStudy(out, header, grid, cells);
+  if (resume) try {
+      return Hdf5Store::ResumeStudy(out, header, grid, cells);
+    } catch (const InputError& e) {
+      throw InTermsOf(naming, e);
+    }
   auto store = Hdf5Store::Create(out, header);
   store->BeginStudy(grid);
   return store;

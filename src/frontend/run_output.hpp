@@ -39,9 +39,10 @@ class RunOutput {
   // Creates `out` (nothing when empty), or opens it to resume or extend: the stored run's
   // checkpoint becomes options.resume_from, and the stored tail of sections and events is
   // given to `recorder` (the classification sees the history it would have had). Appends the
-  // store to options.observers. Throws InputError as Hdf5Store::Create, Resume and Extend do.
+  // store to options.observers. Throws InputError as Hdf5Store::Create, Resume and Extend do,
+  // their options named as `naming` writes them.
   RunOutput(const std::string& out, const LoadedScene& loaded, const System& system, const RunContinuation& how,
-            AttractorRecorder& recorder, SimulationOptions& options);
+            AttractorRecorder& recorder, SimulationOptions& options, Naming naming);
   RunOutput(const RunOutput&) = delete;
   RunOutput& operator=(const RunOutput&) = delete;
 

@@ -132,6 +132,8 @@ def test_basin_resume_equals_an_uninterrupted_study(tmp_path):
         assert (f["basin/labels"][()] == -3).any()
         # An interrupted study measures no Lyapunov exponents; its resumption does.
         assert (f["attractors/chaotic"][()] == -1).all()
+    with pytest.raises(ValueError, match="cannot resume: grid is 40,30 in the file but 40,31 here"):
+        vibro.basin(scene, grid=(40, 31), threads=1, out=path, resume=True)
     resumed = vibro.basin(scene, grid=(40, 30), threads=1, out=path, resume=True)
     assert np.array_equal(resumed["labels"], whole["labels"])
     assert resumed["attractors"] == whole["attractors"]
@@ -154,7 +156,7 @@ def test_refusals_name_the_argument_and_leave_the_file(tmp_path):
         (dict(out=path, extend=0), "(extend 0): expected 1 ≤ N"),
         (dict(out=path, extend=2.5), "extend 2.5: expected an integer"),
         (dict(out=path, resume="yes"), "resume 'yes': expected True or False"),
-        (dict(out=path, resume=True), "nothing to resume"),
+        (dict(out=path, resume=True), "nothing to resume: the run finished (status ok; extend=N continues it"),
         (dict(out=str(tmp_path / "none.h5"), extend=5), "no such file"),
     ]
     for kwargs, message in cases:
@@ -163,7 +165,12 @@ def test_refusals_name_the_argument_and_leave_the_file(tmp_path):
         assert message in str(e.value), (kwargs, str(e.value))
     with pytest.raises(ValueError) as e:
         vibro.simulate(scene.with_({"excitation.amplitude": 1.3}), out=path, extend=5)
-    assert "different scene" in str(e.value)
+    assert "different scene (or different set= overrides)" in str(e.value)
+    # The store's refusals name Python's arguments, not the command line's options.
+    with pytest.raises(ValueError) as e:
+        vibro.simulate(scene.with_({"run.periods": 80}), out=path, resume=True)
+    assert ('resume it with set={"run.periods": 50}, or continue it for N more periods with extend=N'
+            in str(e.value)) and "--" not in str(e.value), str(e.value)
     with pytest.raises(ValueError) as e:
         vibro.basin(scene, grid=(4, 4), resume=True)
     assert "resume needs out=FILE.h5 (the study to continue)" in str(e.value)
