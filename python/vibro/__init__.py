@@ -197,6 +197,21 @@ def _in_notebook():
     return ip is not None and type(ip).__name__ == "ZMQInteractiveShell"
 
 
+def _bar_class():
+    """tqdm's bar as tqdm.auto chooses it: a widget in a notebook with ipywidgets, else text (on
+    stderr, in a notebook's output too). Chosen here because tqdm.auto warns in a notebook without
+    ipywidgets before it falls back to text."""
+    if _in_notebook():
+        try:
+            import ipywidgets  # noqa: F401
+            from tqdm.notebook import tqdm
+            return tqdm
+        except ImportError:
+            pass
+    from tqdm.std import tqdm
+    return tqdm
+
+
 def _progress(progress, what, unit):
     """The callable the C++ module reports progress(done, total) to (None: no report) and what closes
     it afterwards. ``progress`` is False (no report), True (a tqdm bar: a widget in a notebook, text
@@ -208,7 +223,7 @@ def _progress(progress, what, unit):
         return None, lambda: None
     if progress is True:
         try:
-            from tqdm.auto import tqdm
+            tqdm = _bar_class()
         except ImportError:
             raise ValueError("progress=True: needs the tqdm package (Debian: python3-tqdm; pip: tqdm); "
                              "or give a callable progress(done, total)") from None
