@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "vibro/attractor.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/system.hpp"
 
@@ -69,6 +70,9 @@ struct FoundAttractor {
   double basin_fraction_error = 0;  // binomial standard error √(p(1−p)/N)
   std::vector<double> example;      // the first initial state (coordinate values) that reached it
   ClassOrbit orbit;                 // the solved orbit (when StudyOptions::solve_orbits)
+  // Lyapunov exponents of a run of run.periods periods from the final state of the class's first
+  // cell (StudyOptions::lyapunov and run.lyapunov; none otherwise).
+  std::optional<LyapunovSpectrum> lyapunov;
 };
 
 struct StudyResult {
@@ -80,6 +84,11 @@ struct StudyResult {
   double inadmissible_fraction = 0;
   double pending_fraction = 0;
   long long cells = 0;
+  // The exponents of the motion of the first cell that settled on no periodic attractor (a run of
+  // run.periods periods from its final state), and that cell's initial state: whether what the
+  // unresolved cells reach is chaotic. None when no cell is not-periodic (or exponents are off).
+  std::optional<LyapunovSpectrum> unresolved_lyapunov;
+  std::vector<double> unresolved_example;
 };
 
 // A stable periodic orbit known before a study starts: a cell whose section point comes within
@@ -106,6 +115,10 @@ struct StudyOptions {
   // Stable orbits a cell may stop at (see KnownOrbit); empty: none. Must be the same for every
   // cell, thread and process (e.g. from KnownOrbits below), so that the answer is too.
   std::vector<KnownOrbit> known;
+  // Labelling: the Lyapunov exponents of each attractor and of the first not-periodic cell
+  // (FoundAttractor::lyapunov, StudyResult::unresolved_lyapunov), when the scene's run.lyapunov
+  // is on too and no stop is requested (an interrupted study has none).
+  bool lyapunov = true;
 };
 
 // The stable orbits found by a pilot study on an 8 × 8 grid over the two coordinates (cells run
@@ -155,6 +168,7 @@ struct SweepPoint {
   std::vector<double> x_B, v_B;  // contact displacement and velocity at the last section points
   std::string status = "ok";     // the run's status (ToString(RunStatus))
   std::string message;           // why the run failed (status other than "ok")
+  std::optional<LyapunovSpectrum> lyapunov;  // of the run (run.lyapunov), none for a failed run
 };
 struct SweepRequest {
   std::function<Scene(double)> scene_at;

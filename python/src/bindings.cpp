@@ -16,12 +16,15 @@
 // of CSV files (frontend/tables.hpp).
 #include <signal.h>
 
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <tuple>
@@ -36,12 +39,14 @@
 #include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
+#include "frontend/run_output.hpp"
 #include "frontend/tables.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/distribute.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
@@ -116,14 +121,93 @@ class SigintGuard {
   SigintGuard(const SigintGuard&) = delete;
   SigintGuard& operator=(const SigintGuard&) = delete;
 
-  const std::atomic<bool>* flag() const { return installed_ ? &g_sigint : &never_; }
-  bool interrupted() const { return installed_ && g_sigint.load(); }
+  const std::atomic<bool>* flag() const { return installed_ ? &g_sigint : &local_; }
+  bool interrupted() const { return flag()->load(); }
+  // Stops the computation as a Ctrl-C would (a progress callback that raised: ProgressRelay).
+  void RequestStop() { (installed_ ? g_sigint : local_).store(true); }
 
  private:
   bool installed_;
   struct sigaction previous_ = {};
   const std::atomic<bool>* previous_flag_ = nullptr;
-  std::atomic<bool> never_{false};
+  std::atomic<bool> local_{false};  // the stop flag off the main thread (no SIGINT routed)
+};
+
+// Progress reported to a Python callable progress(done, total) from any thread of a computation
+// (the GIL released): at most every kInterval seconds, the GIL taken for the call, the calls of
+// several threads serialised (a thread finding another one calling skips its report). An
+// exception raised by the callable stops the computation (as Ctrl-C does) and is raised again by
+// Finish(), after one last report of the state reached, with the GIL held.
+class ProgressRelay {
+ public:
+  static constexpr double kInterval = 0.1;  // at most ten calls a second
+
+  ProgressRelay(py::object callback, SigintGuard& guard) : callback_(std::move(callback)), guard_(guard) {}
+  ProgressRelay(const ProgressRelay&) = delete;
+  ProgressRelay& operator=(const ProgressRelay&) = delete;
+
+  bool active() const { return !callback_.is_none(); }
+
+  // done of total units; called without the GIL.
+  void Update(long long done, long long total) {
+    if (!active()) return;
+    std::unique_lock lock(mutex_, std::try_to_lock);
+    if (!lock.owns_lock()) return;
+    if (done <= done_ && total == total_) return;  // never backwards
+    done_ = std::max(done, done_);
+    total_ = total;
+    const auto now = Clock::now();
+    if (failed_ || std::chrono::duration<double>(now - last_).count() < kInterval) return;
+    last_ = now;
+    Call();
+  }
+
+  // The last report (the state reached), with the GIL held; raises the callback's exception.
+  void Finish() {
+    if (!active()) return;
+    if (!failed_ && done_ >= 0) {
+      py::gil_scoped_release release;  // Call() takes it, as from a worker thread
+      std::lock_guard lock(mutex_);
+      Call();
+    }
+    if (error_) {
+      std::shared_ptr<py::error_already_set> error = std::move(error_);
+      throw *error;
+    }
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  // mutex_ held, GIL not held.
+  void Call() {
+    py::gil_scoped_acquire gil;
+    try {
+      callback_(done_, total_);
+    } catch (py::error_already_set& e) {
+      error_ = std::make_shared<py::error_already_set>(std::move(e));
+      failed_ = true;
+      guard_.RequestStop();
+    }
+  }
+  py::object callback_;
+  SigintGuard& guard_;
+  std::mutex mutex_;
+  long long done_ = -1, total_ = 0;
+  Clock::time_point last_ = Clock::now();
+  bool failed_ = false;
+  std::shared_ptr<py::error_already_set> error_;
+};
+
+// Period-by-period progress of one run (the section is reached once a period): the section's
+// period of the run's `periods` (a resumed run starts at its checkpoint's).
+class PeriodRelay final : public vibro::Observer {
+ public:
+  PeriodRelay(ProgressRelay& relay, long long periods) : relay_(relay), periods_(periods) {}
+  void OnSection(const vibro::Sample& sample) override { relay_.Update(sample.clock.period, periods_); }
+
+ private:
+  ProgressRelay& relay_;
+  long long periods_;
 };
 
 // Events, dense samples and section points of a run, kept in memory for numpy.
@@ -183,37 +267,53 @@ std::string Model(const PyScene& s) {
   return vibro::ModelJson(sys);
 }
 
-py::dict SimulateScene(const PyScene& s, const std::string& out, bool handle_sigint) {
-  const auto& loaded = s.loaded;
+// vibro simulate [--out FILE [--resume | --extend N]] (src/cli/cmd_simulate.cpp): the scene, the
+// output and its checks are the command line's (frontend/run_output.hpp).
+py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, std::optional<long long> extend,
+                       const py::object& progress, bool handle_sigint) {
+  if (!out.empty()) CheckPaths({{"out", &out}});
+  const vibro::frontend::RunContinuation how{resume, extend};
+  const auto loaded = [&] {
+    py::gil_scoped_release release;  // an extension reads the file
+    return vibro::frontend::SceneToRun(s.loaded, out, how, kPython);
+  }();
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder attractor_recorder(sys, loaded.scene);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-  if (loaded.scene.run.lyapunov && sys.contact_count() == 1) lyapunov.emplace(sys, loaded.scene);
   Recorder recorder(sys.dof());
-  auto store = CreateStore(out, HeaderOf(loaded, sys));
+  vibro::SimulationOptions options;
+  options.observers = {&attractor_recorder, &recorder};
+  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
+  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+    options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
+  std::optional<vibro::frontend::RunOutput> output;
+  {
+    py::gil_scoped_release release;
+    output.emplace(out, loaded, sys, how, attractor_recorder, options, kPython);
+  }
   std::string json;
   bool interrupted = false;
+  SigintGuard guard(handle_sigint);
+  ProgressRelay relay(progress, guard);
+  PeriodRelay periods(relay, loaded.scene.run.periods);
+  if (relay.active()) options.observers.push_back(&periods);
   {
-    SigintGuard guard(handle_sigint);
     py::gil_scoped_release release;
-    vibro::SimulationOptions options;
-    options.observers = {&attractor_recorder, &recorder};
-    if (lyapunov) options.observers.push_back(&*lyapunov);
-    if (store) options.observers.push_back(store.get());
     options.stop_requested = guard.flag();
     const auto result = vibro::Simulate(sys, loaded.scene, options);
     const auto attractor = attractor_recorder.Classify();
-    if (store) store->Finish(result, attractor);
-    store.reset();  // closed without the GIL
+    output->Finish(result, attractor);
+    output.reset();  // closed without the GIL
     std::optional<vibro::LyapunovSpectrum> spectrum;
     if (lyapunov) spectrum = lyapunov->Spectrum();
     json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr);
     interrupted = result.status == vibro::RunStatus::kInterrupted;
   }
+  relay.Finish();
   py::dict d;
   d["json"] = json;
   d["interrupted"] = interrupted;
+  d["periods"] = loaded.scene.run.periods;  // the run's total (an extension's new total)
   py::dict events;
   events["t"] = Array(recorder.event_t);
   events["kind"] = Array(recorder.event_kind);
@@ -302,8 +402,10 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
 py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::string& y,
                const std::vector<double>& x_range, const std::vector<double>& y_range,
                const std::vector<long long>& grid, long long samples, unsigned long long seed, long long threads,
-               bool full_periods, const std::string& out, bool handle_sigint) {
+               bool full_periods, const std::string& out, bool resume, const py::object& progress,
+               bool handle_sigint) {
   const auto& loaded = s.loaded;
+  vibro::frontend::CheckStudyResume(out, resume, kPython);
   const vibro::System sys(loaded.scene);
   vibro::frontend::StudySpec spec;
   spec.x = x;
@@ -321,19 +423,23 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
   const vibro::Hdf5Store::StudyGrid study_grid{cx, cy, basin ? nx : static_cast<int>(points.size()),
                                                basin ? ny : 1, !full_periods};
   std::vector<vibro::CellResult> cells(points.size());
-  auto store = CreateStore(out, HeaderOf(loaded, sys));
-  if (store) {
+  if (!out.empty()) CheckPaths({{"out", &out}});
+  std::unique_ptr<vibro::Hdf5Store> store;
+  {
+    const auto header = HeaderOf(loaded, sys);
     py::gil_scoped_release release;
-    store->BeginStudy(study_grid);
+    store = vibro::frontend::OpenStudyOutput(out, header, study_grid, resume, cells, kPython);
   }
   vibro::StudyResult study;
   bool interrupted = false;
+  SigintGuard guard(handle_sigint);
+  ProgressRelay relay(progress, guard);
   {
-    SigintGuard guard(handle_sigint);
     py::gil_scoped_release release;
     vibro::StudyOptions opt;
     opt.threads = static_cast<int>(threads);
     opt.stop_requested = guard.flag();
+    if (relay.active()) opt.progress = [&relay](long long done, long long total) { relay.Update(done, total); };
     if (full_periods) opt.settle_remainder = 0;
     if (!full_periods) opt.known = vibro::KnownOrbits(sys, loaded.scene, cx, cy, opt);
     const vibro::Distribution dist;  // one process (not started by mpirun)
@@ -342,12 +448,14 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
                              if (store) store->WriteCells(batch, cells);
                            });
     interrupted = guard.interrupted();
+    opt.progress = nullptr;
     study = vibro::LabelCells(sys, loaded.scene, points, cells, opt);
     if (store) {
       vibro::frontend::FinishStudy(*store, study, study_grid, interrupted);
       store.reset();  // closed without the GIL
     }
   }
+  relay.Finish();
   py::dict d;
   d["json"] = vibro::StudyJson(study, cx, cy);
   d["interrupted"] = interrupted;
@@ -368,28 +476,42 @@ py::dict Study(const PyScene& s, bool basin, const std::string& x, const std::st
 
 std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key, double from, double to,
                                         long long steps, long long record, bool one_way, const std::string& out,
-                                        bool handle_sigint) {
+                                        const py::object& progress, bool handle_sigint) {
   vibro::frontend::CheckSweepOptions(kPython, from, to, steps, record);
   for (double v : {from, to}) vibro::frontend::SceneWith(s.origin, key, v);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
   vibro::SweepRequest req;
-  req.scene_at = [&](double v) { return vibro::frontend::SceneWith(s.origin, key, v); };
+  SigintGuard guard(handle_sigint);
+  ProgressRelay relay(progress, guard);
+  // Progress: one scene per run of the sweep, up and (unless one_way) down, as the command line.
+  const long long runs = steps + 1LL + (one_way ? 0 : steps);  // the way back skips the top
+  long long scenes = 0;
+  req.scene_at = [&](double v) {
+    relay.Update(scenes++, runs);
+    return vibro::frontend::SceneWith(s.origin, key, v);
+  };
   req.from = from;
   req.to = to;
   req.steps = static_cast<int>(steps);
   req.record = static_cast<int>(record);
   req.both_ways = !one_way;
-  SigintGuard guard(handle_sigint);
-  py::gil_scoped_release release;
-  const auto sweep = vibro::Sweep(req, guard.flag());
-  const bool interrupted = guard.interrupted();
-  if (store) {
-    store->WriteSweep(sweep, {key, from, to, req.steps, req.record, !one_way});
-    store->Finish(vibro::frontend::SweepOutcome(sweep, key, interrupted),
-                  sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
-    store.reset();  // closed without the GIL
+  std::string json;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    const auto sweep = vibro::Sweep(req, guard.flag());
+    interrupted = guard.interrupted();
+    relay.Update(static_cast<long long>(sweep.size()), runs);
+    if (store) {
+      store->WriteSweep(sweep, {key, from, to, req.steps, req.record, !one_way});
+      store->Finish(vibro::frontend::SweepOutcome(sweep, key, interrupted),
+                    sweep.empty() ? vibro::Attractor{} : sweep.back().attractor);
+      store.reset();  // closed without the GIL
+    }
+    json = vibro::SweepJson(sweep);
   }
-  return {vibro::SweepJson(sweep), interrupted};
+  relay.Finish();
+  return {json, interrupted};
 }
 
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
@@ -415,7 +537,7 @@ using Columns = std::map<std::string, std::vector<double>>;
 std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::optional<Columns>& columns,
                                       const std::string& param, const std::string& kind, long long period,
                                       double tolerance, double sticking_tolerance, const std::string& out,
-                                      bool handle_sigint) {
+                                      const py::object& progress, bool handle_sigint) {
   vibro::frontend::RequireOneContact(s.loaded, "validate");
   if (!columns) CheckPaths({{"branch", &csv}});
   std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
@@ -431,10 +553,17 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
               : vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
   SigintGuard guard(handle_sigint);
-  py::gil_scoped_release release;
-  const auto result = vibro::frontend::RunValidation(job, spec, guard.flag());
-  if (store) vibro::frontend::FinishValidation(*store, job, result);
-  store.reset();  // closed without the GIL
+  ProgressRelay relay(progress, guard);
+  vibro::frontend::Validation result;
+  {
+    py::gil_scoped_release release;
+    result = vibro::frontend::RunValidation(job, spec, guard.flag(), [&relay](size_t done, size_t total) {
+      relay.Update(static_cast<long long>(done), static_cast<long long>(total));
+    });
+    if (store) vibro::frontend::FinishValidation(*store, job, result);
+    store.reset();  // closed without the GIL
+  }
+  relay.Finish();
   return {vibro::ValidationJson(result.checks), result.interrupted};
 }
 

@@ -186,6 +186,73 @@ def _main_thread():
     return _threading.current_thread() is _threading.main_thread()
 
 
+def _in_notebook():
+    """Whether Python runs in a Jupyter kernel (where a call shows a progress bar by default)."""
+    import sys
+    shell = sys.modules.get("IPython")
+    try:
+        ip = shell.get_ipython() if shell else None
+    except Exception:  # noqa: BLE001 (an IPython without a running shell)
+        return False
+    return ip is not None and type(ip).__name__ == "ZMQInteractiveShell"
+
+
+def _bar_class():
+    """tqdm's bar as tqdm.auto chooses it: a widget in a notebook with ipywidgets, else text (on
+    stderr, in a notebook's output too). Chosen here because tqdm.auto warns in a notebook without
+    ipywidgets before it falls back to text."""
+    if _in_notebook():
+        try:
+            import ipywidgets  # noqa: F401
+            from tqdm.notebook import tqdm
+            return tqdm
+        except ImportError:
+            pass
+    from tqdm.std import tqdm
+    return tqdm
+
+
+def _progress(progress, what, unit):
+    """The callable the C++ module reports progress(done, total) to (None: no report) and what closes
+    it afterwards. ``progress`` is False (no report), True (a tqdm bar: a widget in a notebook, text
+    on a terminal; tqdm.auto), a callable, or None: a bar in a Jupyter notebook, nothing in a
+    script."""
+    if progress is None:
+        progress = _in_notebook()
+    if progress is False:
+        return None, lambda: None
+    if progress is True:
+        try:
+            tqdm = _bar_class()
+        except ImportError:
+            raise ValueError("progress=True: needs the tqdm package (Debian: python3-tqdm; pip: tqdm); "
+                             "or give a callable progress(done, total)") from None
+        bar = tqdm(desc=f"vibro {what}", unit=unit, dynamic_ncols=True, delay=0.5)  # nothing for a short call
+
+        def report(done, total):
+            if bar.total != total:
+                bar.total = total
+            if done > bar.n:
+                bar.update(done - bar.n)
+            else:
+                bar.refresh()
+
+        return report, bar.close
+    if callable(progress):
+        return progress, lambda: None
+    raise ValueError(f"progress {progress!r}: expected True, False, None or a callable progress(done, total), "
+                     f"got {type(progress).__name__}")
+
+
+def _with_progress(progress, what, unit, call):
+    """call(callback) with the progress report of ``progress``, closed afterwards whatever happens."""
+    report, close = _progress(progress, what, unit)
+    try:
+        return call(report)
+    finally:
+        close()
+
+
 def _interrupted(what, out):
     kept = f"; {out} keeps everything computed so far" if out else ""
     return KeyboardInterrupt(f"vibro: {what} interrupted{kept}")
@@ -231,11 +298,26 @@ class SimulationResult:
                 f"{len(self.events)} events, {len(self.samples)} samples)")
 
 
-def simulate(scene, out=None, force=False):
+def simulate(scene, out=None, force=False, resume=False, extend=None, progress=None):
     """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file (``force``:
-    replace a vibro file of another scene or command)."""
-    _invoke("simulate", scene, out=out, force=force)
-    r = _vibro.simulate(_scene(scene), _out(out), _main_thread())
+    replace a vibro file of another scene or command).
+
+    ``resume=True`` takes up the interrupted run stored in ``out`` at its last checkpoint
+    (``--resume``); ``extend=N`` continues the run stored in ``out``, finished or interrupted, for
+    N more periods (``--extend N``; the scene is the stored one with ``run.periods`` the new
+    total). Either way the file ends with the same bits as an uninterrupted run of its total
+    length; the result's arrays hold the part this call computed, its summary the whole run's
+    attractor. ``progress``: True for a progress bar (tqdm; a widget in a notebook), False for
+    none, or a callable ``progress(done, total)`` called with the periods done, at most ten times a
+    second and once at the end; None (the default) shows a bar in a Jupyter notebook only."""
+    _invoke("simulate", scene, out=out, force=force, **({"resume": True} if resume else {}),
+            **({"extend": extend} if extend is not None else {}))
+    if not isinstance(resume, (bool, _np.bool_)):
+        raise ValueError(f"resume {resume!r}: expected True or False, got {type(resume).__name__}")
+    ext = None if extend is None else _int("extend", extend)
+    core = _scene(scene)
+    r = _with_progress(progress, "simulate", "period",
+                       lambda report: _vibro.simulate(core, _out(out), bool(resume), ext, report, _main_thread()))
     if r["interrupted"]:
         raise _interrupted("simulation", out)
     return SimulationResult(_json.loads(r["json"]), _events_array(r["events"]), _rows_array(r["samples"]),
@@ -289,16 +371,21 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     return d
 
 
-def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, full_periods, out, force=False):
+def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, full_periods, out, force=False,
+           resume=False, progress=None):
     _invoke("basin" if basin else "attractors", scene, x=x, y=y, x_range=x_range, y_range=y_range,
             **({"grid": tuple(grid), "out": out, "force": force} if basin else {"samples": samples, "seed": seed}),
-            threads=threads, full_periods=full_periods)
+            threads=threads, full_periods=full_periods, **({"resume": True} if resume else {}))
     if _np.ndim(grid) != 1:
         raise ValueError(f"grid {grid!r}: expected (NX, NY)")
-    r = _vibro.study(_scene(scene), basin, x, y, [_float("x_range", v) for v in (x_range or [])],
-                     [_float("y_range", v) for v in (y_range or [])], [_int("grid", n) for n in grid],
-                     _int("samples", samples), _seed(seed), _int("threads", threads), bool(full_periods),
-                     _out(out), _main_thread())
+    if not isinstance(resume, (bool, _np.bool_)):
+        raise ValueError(f"resume {resume!r}: expected True or False, got {type(resume).__name__}")
+    args = (_scene(scene), basin, x, y, [_float("x_range", v) for v in (x_range or [])],
+            [_float("y_range", v) for v in (y_range or [])], [_int("grid", n) for n in grid],
+            _int("samples", samples), _seed(seed), _int("threads", threads), bool(full_periods), _out(out),
+            bool(resume))
+    r = _with_progress(progress, "basin" if basin else "attractors", "cell",
+                       lambda report: _vibro.study(*args, report, _main_thread()))
     if r["interrupted"]:
         raise _interrupted("basin study" if basin else "attractor study", out)
     d = _json.loads(r["json"])
@@ -306,21 +393,27 @@ def _study(scene, basin, x, y, x_range, y_range, grid, samples, seed, threads, f
 
 
 def attractors(scene, x="x_B", y="v_B", x_range=None, y_range=None, samples=200, seed=1, threads=0,
-               full_periods=False):
-    """Coexisting attractors from random initial states (``vibro attractors --json``)."""
-    d, _ = _study(scene, False, x, y, x_range, y_range, (1, 1), samples, seed, threads, full_periods, None)
+               full_periods=False, progress=None):
+    """Coexisting attractors from random initial states (``vibro attractors --json``). ``progress``:
+    True for a progress bar, or a callable ``progress(done, total)`` (cells), as for :func:`simulate`."""
+    d, _ = _study(scene, False, x, y, x_range, y_range, (1, 1), samples, seed, threads, full_periods, None,
+                  progress=progress)
     return d
 
 
 def basin(scene, x="x_B", y="v_B", x_range=None, y_range=None, grid=(64, 64), threads=0,
-          full_periods=False, out=None, force=False):
+          full_periods=False, out=None, force=False, resume=False, progress=None):
     """Basins of attraction over two initial-state coordinates (``vibro basin --json``).
 
     Besides the keys of the JSON, the dict holds ``labels`` (ny, nx) int32: the attractor index of
     each cell (−1 unresolved, −2 inadmissible, −3 not computed), and ``x``, ``y``: the cell
     centres (nx,) and (ny,), and ``extent`` = (x_from, x_to, y_from, y_to) for ``imshow``.
+    ``resume=True`` computes only the cells missing from the interrupted study in ``out``
+    (``--resume``). ``progress``: True for a progress bar, or a callable ``progress(done, total)``
+    (cells computed by this call), as for :func:`simulate`.
     """
-    d, r = _study(scene, True, x, y, x_range, y_range, grid, 1, 1, threads, full_periods, out, force)
+    d, r = _study(scene, True, x, y, x_range, y_range, grid, 1, 1, threads, full_periods, out, force, resume,
+                  progress)
     nx, ny = r["nx"], r["ny"]
     d["labels"] = _np.asarray(r["labels"], dtype=_np.int32).reshape(ny, nx)
     d["x"] = _np.asarray(r["x"])[:nx]
@@ -329,13 +422,16 @@ def basin(scene, x="x_B", y="v_B", x_range=None, y_range=None, grid=(64, 64), th
     return d
 
 
-def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None, force=False):
-    """Brute-force bifurcation diagram by simulation, up then down (``vibro sweep --json``)."""
+def sweep(scene, param, from_, to, steps=50, record=16, one_way=False, out=None, force=False, progress=None):
+    """Brute-force bifurcation diagram by simulation, up then down (``vibro sweep --json``).
+    ``progress``: True for a progress bar, or a callable ``progress(done, total)`` (runs), as for
+    :func:`simulate`."""
     _invoke("sweep", scene, param=param, from_=from_, to=to, steps=steps, record=record, one_way=one_way,
             out=out, force=force)
-    text, interrupted = _vibro.sweep(_scene(scene), param, _float("from_", from_), _float("to", to),
-                                     _int("steps", steps), _int("record", record), bool(one_way), _out(out),
-                                     _main_thread())
+    args = (_scene(scene), param, _float("from_", from_), _float("to", to), _int("steps", steps),
+            _int("record", record), bool(one_way), _out(out))
+    text, interrupted = _with_progress(progress, "sweep", "run", lambda report: _vibro.sweep(*args, report,
+                                                                                            _main_thread()))
     if interrupted:
         raise _interrupted("sweep", out)
     return _json.loads(text)
@@ -429,7 +525,7 @@ def _shown(table):
 
 
 def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticking_tolerance=1e-6, out=None,
-             force=False, columns=None):
+             force=False, columns=None, progress=None):
     """Confirms or refutes, point by point, a branch of periodic orbits computed by another tool
     (``vibro validate --json``). ``branch`` is the CSV file, or the same table as arrays (a numpy
     structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame), with
@@ -437,15 +533,19 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
     ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim);
     ``param`` is the scene key its value column sets. Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per point (value, verdict, distance, period (−1:
-    none), stable (−1: none), sticking_fraction, simulated_distance; NaN for null floats)."""
+    none), stable (−1: none), sticking_fraction, simulated_distance; NaN for null floats).
+    ``progress``: True for a progress bar, or a callable ``progress(done, total)`` (points), as for
+    :func:`simulate`."""
     _invoke("validate", scene, branch=_shown(branch), param=param, kind=kind, period=period, tolerance=tolerance,
             sticking_tolerance=sticking_tolerance, out=out, force=force)
     cols = _columns("branch", branch, columns)
     if cols is not None:
         cols = {k: _numbers("branch", k, v) for k, v in cols.items()}
-    text, interrupted = _vibro.validate(_scene(scene), "" if cols is not None else _path("branch", branch), cols,
-                                        param, kind, _int("period", period), _float("tolerance", tolerance),
-                                        _float("sticking_tolerance", sticking_tolerance), _out(out), _main_thread())
+    args = (_scene(scene), "" if cols is not None else _path("branch", branch), cols, param, kind,
+            _int("period", period), _float("tolerance", tolerance), _float("sticking_tolerance", sticking_tolerance),
+            _out(out))
+    text, interrupted = _with_progress(progress, "validate", "point",
+                                       lambda report: _vibro.validate(*args, report, _main_thread()))
     if interrupted:
         raise _interrupted("validation", out)
     d = _json.loads(text)

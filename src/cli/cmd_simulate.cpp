@@ -9,6 +9,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
+#include "frontend/run_output.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/lyapunov.hpp"
@@ -19,13 +20,11 @@
 
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
                 const std::string& out, bool resume, long long extend) {
-  if ((resume || extend > 0) && out.empty())
-    throw vibro::InputError({fmt::format("{} needs --out FILE.h5 (the file to continue)",
-                                         extend > 0 ? "--extend" : "--resume")});
-  // An extension runs the scene for the stored periods plus `extend` (the file's run.periods
-  // becomes that total).
-  const auto loaded = extend > 0 ? vibro::frontend::ExtendedScene(vibro::LoadScene(path, sets), out, extend, "--extend")
-                                 : vibro::LoadScene(path, sets);
+  vibro::frontend::RunContinuation how;
+  how.resume = resume;
+  if (extend > 0) how.extend = extend;
+  const auto loaded =
+      vibro::frontend::SceneToRun(vibro::LoadScene(path, sets), out, how, vibro::frontend::Naming::kCli);
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
@@ -35,32 +34,12 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
-
-  std::unique_ptr<vibro::Hdf5Store> store;
-  vibro::StoredRun stored;
-  if (!out.empty()) {
-    if (resume || extend > 0) {
-      const auto header = vibro::frontend::HeaderOf(loaded, sys);
-      store = extend > 0 ? vibro::Hdf5Store::Extend(out, header, stored) : vibro::Hdf5Store::Resume(out, header, stored);
-      options.resume_from = &*stored.checkpoint;
-      // Give the classification the history it would have had.
-      for (size_t i = 0; i < stored.tail_section_clocks.size(); ++i) {
-        const auto& c = stored.tail_section_clocks[i];
-        recorder.OnSection({c, loaded.scene.initial_time + static_cast<double>(c.period) * sys.period(),
-                            stored.tail_section_X[i], stored.tail_section_V[i],
-                            sys.ContactDisplacement(stored.tail_section_X[i]),
-                            stored.tail_section_modes[i]});
-      }
-      for (const auto& e : stored.tail_events) recorder.OnEvent(e);
-    } else {
-      store = vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys));
-    }
-    options.observers.push_back(store.get());
-  }
+  // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).
+  std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, options,
+                                                   vibro::frontend::Naming::kCli);
 
   std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
-  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods,
-                                     stored.checkpoint ? stored.checkpoint->clock.period : 0);
+  vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods);
   if (progress->active()) options.observers.push_back(&periods);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   progress.reset();
@@ -68,12 +47,11 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   std::optional<vibro::LyapunovSpectrum> spectrum;
   if (lyapunov) spectrum = lyapunov->Spectrum();
   vibro::Hdf5Store::Stats written;
-  if (store) {
+  if (output->store()) {
     const vibro::cli::FinalWrite writing;
-    store->Finish(result, attractor);
-    written = store->stats();
-    store.reset();
+    written = output->Finish(result, attractor);
   }
+  output.reset();
 
   if (json) {
     fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr));

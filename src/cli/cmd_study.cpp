@@ -9,6 +9,7 @@
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
 #include "cli/text_format.hpp"
+#include "frontend/run_output.hpp"
 #include "vibro/distribute.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
@@ -20,8 +21,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                     const StudyArgs& args, bool basin) {
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
-  if (args.resume && args.out.empty())
-    throw vibro::InputError({"--resume needs --out FILE.h5 (the study to continue)"});
+  vibro::frontend::CheckStudyResume(args.out, args.resume, vibro::frontend::Naming::kCli);
   vibro::frontend::StudySpec spec;
   spec.x = args.x;
   spec.y = args.y;
@@ -45,12 +45,8 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   std::optional<vibro::InputError> file_problem;
   if (dist.root() && !args.out.empty()) {
     try {
-      if (args.resume) {
-        store = vibro::Hdf5Store::ResumeStudy(args.out, vibro::frontend::HeaderOf(loaded, sys), grid, cells);
-      } else {
-        store = vibro::Hdf5Store::Create(args.out, vibro::frontend::HeaderOf(loaded, sys));
-        store->BeginStudy(grid);
-      }
+      store = vibro::frontend::OpenStudyOutput(args.out, vibro::frontend::HeaderOf(loaded, sys), grid, args.resume,
+                                               cells, vibro::frontend::Naming::kCli);
     } catch (const vibro::InputError& e) {
       file_problem = e;
     } catch (const std::exception& e) {  // every rank must hear of it (no rank left waiting)
@@ -107,10 +103,15 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
                  a.orbit.stable ? (*a.orbit.stable ? ", stable" : ", unstable") : "",
                  mu.empty() ? "" : ", multipliers " + mu,
                  a.orbit.merged > 1 ? fmt::format(" ({} cell classes merged)", a.orbit.merged) : "");
+      if (a.lyapunov) fmt::print("{}", vibro::cli::LyapunovText(*a.lyapunov, "  "));
     }
     fmt::print("unresolved fraction {:.4f}, inadmissible fraction {:.4f}{}\n", study.unresolved_fraction,
                study.inadmissible_fraction,
                study.pending_fraction > 0 ? fmt::format(", not computed {:.4f}", study.pending_fraction) : "");
+    if (study.unresolved_lyapunov)
+      fmt::print("unresolved: the first not-periodic cell, from ({}, {}) = ({:.6g}, {:.6g}):\n{}", cx.name, cy.name,
+                 study.unresolved_example[0], study.unresolved_example[1],
+                 vibro::cli::LyapunovText(*study.unresolved_lyapunov, "  "));
   }
   if (interrupted) fmt::print(stderr, "vibro: interrupted; {}\n", args.out.empty() ? "results so far printed" : "continue with --resume");
   return interrupted ? kExitInterrupted : 0;

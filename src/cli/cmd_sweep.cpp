@@ -8,6 +8,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
+#include "cli/text_format.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/studies.hpp"
@@ -28,7 +29,7 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::SweepRequest req;
   // Progress: one scene per run of the sweep, up and (unless --one-way) down.
   vibro::cli::Progress progress("sweep", json);
-  const long long runs = (steps + 1LL) * (one_way ? 1 : 2);
+  const long long runs = steps + 1LL + (one_way ? 0 : steps);  // the way back skips the top
   std::atomic<long long> scenes{0};
   req.scene_at = [&](double v) {
     progress.Update(scenes++, runs, fmt::format("{} = {:.8g}", key, v));
@@ -51,11 +52,15 @@ int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool
   if (json) {
     fmt::print("{}\n", vibro::SweepJson(sweep));
   } else {
-    fmt::print("{:>16} {:>5} {:>20} {:>7} {:>12}\n", key, "dir", "attractor", "period", "SP");
+    // lambda_1: the largest Lyapunov exponent per unit time (run.lyapunov); chaotic: positive
+    // beyond its 95 % interval.
+    fmt::print("{:>16} {:>5} {:>20} {:>7} {:>12} {:>11} {:>7}\n", key, "dir", "attractor", "period", "SP",
+               "lambda_1", "chaotic");
     for (const auto& p : sweep)
-      fmt::print("{:>16.10g} {:>5} {:>20} {:>7} {:>12.8f}\n", p.value, p.upward ? "up" : "down",
+      fmt::print("{:>16.10g} {:>5} {:>20} {:>7} {:>12.8f} {:>11} {:>7}\n", p.value, p.upward ? "up" : "down",
                  p.attractor.kind, p.attractor.period ? std::to_string(*p.attractor.period) : "-",
-                 p.attractor.sticking_fraction.value_or(0.0));
+                 p.attractor.sticking_fraction.value_or(0.0), vibro::cli::LargestExponentCell(p.lyapunov),
+                 !p.lyapunov || !p.lyapunov->undefined.empty() ? "-" : p.lyapunov->chaotic() ? "yes" : "no");
   }
   if (outcome.status == vibro::RunStatus::kNumericalFailure || outcome.status == vibro::RunStatus::kUndetermined)
     fmt::print(stderr, "vibro: {}\n", outcome.message);

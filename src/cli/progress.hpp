@@ -44,18 +44,17 @@ class Progress {
   bool drawn_ = false;  // anything written
 };
 
-// Period-by-period progress of a simulation (the stroboscopic section is reached once a period).
+// Period-by-period progress of a simulation (the stroboscopic section is reached once a period):
+// the section's period of the run's `periods` (a resumed run starts at its checkpoint's, whose
+// section is not reported again).
 class PeriodProgress final : public Observer {
  public:
-  // first: the period the run starts at (a resumed run starts at its checkpoint).
-  PeriodProgress(Progress& progress, long long periods, long long first = 0)
-      : progress_(progress), periods_(periods), seen_(first - 1) {}
-  void OnSection(const Sample& /*sample*/) override { progress_.Update(++seen_, periods_); }
+  PeriodProgress(Progress& progress, long long periods) : progress_(progress), periods_(periods) {}
+  void OnSection(const Sample& sample) override { progress_.Update(sample.clock.period, periods_); }
 
  private:
   Progress& progress_;
   long long periods_;
-  long long seen_;  // sections seen so far; the first is the starting state
 };
 
 }  // namespace vibro::cli

@@ -76,4 +76,28 @@ std::string AttractorText(const Attractor& a, double restitution, const std::str
   return s;
 }
 
+std::string LyapunovText(const LyapunovSpectrum& s, const std::string& indent) {
+  if (!s.undefined.empty()) return fmt::format("{}lyapunov     none: {}\n", indent, s.undefined);
+  std::string list;
+  for (size_t i = 0; i < s.exponents.size(); ++i) {
+    const double e = s.exponents[i];
+    list += list.empty() ? "" : ", ";
+    if (!std::isfinite(e))
+      list += "-inf";
+    else if (i < s.ci.size())
+      list += fmt::format("{:.4g} ± {:.2g}", e, 0.5 * (s.ci[i].second - s.ci[i].first));
+    else
+      list += fmt::format("{:.4g}", e);
+  }
+  return fmt::format("{}lyapunov     {} per unit time ({} periods{}){}\n", indent, list, s.periods,
+                     s.singular_periods ? fmt::format(", {} left out for a grazing", s.singular_periods) : "",
+                     s.chaotic() ? ": chaotic" : "");
+}
+
+std::string LargestExponentCell(const std::optional<LyapunovSpectrum>& s) {
+  if (!s || !s->undefined.empty() || s->exponents.empty()) return "-";
+  if (!std::isfinite(s->exponents.front())) return "-inf";
+  return fmt::format("{:.4g}", s->exponents.front());
+}
+
 }  // namespace vibro::cli

@@ -2,10 +2,12 @@
 #pragma once
 
 #include <complex>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "vibro/attractor.hpp"
+#include "vibro/lyapunov.hpp"
 
 namespace vibro::cli {
 
@@ -25,5 +27,12 @@ std::string FormatMultipliers(const std::vector<std::complex<double>>& multiplie
 // period, sticking fraction, stick phases, and for impact orbits each impact's phase with the
 // contact velocity before and after it (after = −r·before, the impact law, docs/model.md §3).
 std::string AttractorText(const Attractor& attractor, double restitution, const std::string& indent = "");
+
+// The line "lyapunov     λ1 ± h1, ... per unit time (N periods)[: chaotic]" of `simulate` and the
+// studies (−inf for a direction collapsed by sticking; "none: why" without exponents).
+std::string LyapunovText(const LyapunovSpectrum& spectrum, const std::string& indent = "");
+
+// The largest exponent as a table cell: "λ1" (a sweep's column), "-inf", or "-" without exponents.
+std::string LargestExponentCell(const std::optional<LyapunovSpectrum>& spectrum);
 
 }  // namespace vibro::cli

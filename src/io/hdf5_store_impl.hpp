@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -13,9 +14,24 @@
 #include "io/file_lock.hpp"
 #include "io/h5_file.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/lyapunov.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro::store {
+
+// The Lyapunov columns of a row of /attractors or /sweep: the largest exponent and its 95 %
+// interval (−∞ for a direction collapsed by sticking, NaN when there are no exponents), and
+// chaotic: 1 positive beyond its interval, 0 not, −1 no exponents.
+struct LyapunovColumns {
+  double largest, low, high;
+  std::int8_t chaotic;
+};
+inline LyapunovColumns LyapunovRow(const std::optional<LyapunovSpectrum>& s) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!s || !s->undefined.empty() || s->exponents.empty()) return {nan, nan, nan, -1};
+  const auto ci = s->ci.empty() ? std::pair{nan, nan} : s->ci.front();
+  return {s->exponents.front(), ci.first, ci.second, static_cast<std::int8_t>(s->chaotic() ? 1 : 0)};
+}
 
 // The int8 enum of /events/kind.
 h5::Type EventKindType();

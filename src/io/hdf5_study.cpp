@@ -82,9 +82,15 @@ void WriteAttractorTable(h5::Id f, const StudyResult& st) {
   std::vector<std::int32_t> period, merged, count, offset;
   std::vector<std::int64_t> impacts;
   std::vector<std::int8_t> stable;
-  std::vector<double> sp, frac, err, residual, mu, lead;
+  std::vector<double> sp, frac, err, residual, mu, lead, lyap, lyap_lo, lyap_hi;
+  std::vector<std::int8_t> chaotic;
   std::vector<std::string> kinds, status;
   for (const auto& a : st.attractors) {
+    const store::LyapunovColumns c = store::LyapunovRow(a.lyapunov);
+    lyap.push_back(c.largest);
+    lyap_lo.push_back(c.low);
+    lyap_hi.push_back(c.high);
+    chaotic.push_back(c.chaotic);
     period.push_back(a.attractor.period ? *a.attractor.period : -1);
     impacts.push_back(a.attractor.impacts_per_period ? *a.attractor.impacts_per_period : -1);
     sp.push_back(a.attractor.sticking_fraction.value_or(nan));
@@ -121,6 +127,17 @@ void WriteAttractorTable(h5::Id f, const StudyResult& st) {
   h5::WriteDataset(g, "multiplier_offset", h5::Type::I32(), offset.data(), {n});
   h5::WriteDataset(g, "floquet_multipliers", h5::Type::F64(), mu.data(), {mu.size() / 2, 2});
   h5::WriteColumn(g, "leading_multiplier", lead);
+  // The Lyapunov exponents of each attractor (vibro extension): the largest, its 95 % interval,
+  // and chaotic (1 when the largest is positive beyond its interval, 0 when not, −1 no exponents).
+  h5::WriteDataset(g, "lyapunov_max", h5::Type::F64(), lyap.data(), {n});
+  h5::WriteDataset(g, "lyapunov_max_ci_low", h5::Type::F64(), lyap_lo.data(), {n});
+  h5::WriteDataset(g, "lyapunov_max_ci_high", h5::Type::F64(), lyap_hi.data(), {n});
+  h5::WriteDataset(g, "chaotic", h5::Type::I8(), chaotic.data(), {n});
+  if (st.unresolved_lyapunov) {
+    const store::LyapunovColumns u = store::LyapunovRow(st.unresolved_lyapunov);
+    h5::WriteDouble(g, "unresolved_lyapunov_max", u.largest);
+    h5::WriteInt(g, "unresolved_chaotic", u.chaotic);
+  }
   h5::WriteInt(g, "rows", static_cast<long long>(n));
 }
 

@@ -14,8 +14,15 @@ void Hdf5Store::WriteSweep(const std::vector<SweepPoint>& sweep, const SweepSpec
   std::vector<std::int32_t> period;
   std::vector<std::int64_t> impacts;
   std::vector<std::string> kind;
+  std::vector<double> lyap, lyap_lo, lyap_hi;
+  std::vector<std::int8_t> chaotic;
   for (h5::Size i = 0; i < n; ++i) {
     const SweepPoint& p = sweep[i];
+    const store::LyapunovColumns c = store::LyapunovRow(p.lyapunov);
+    lyap.push_back(c.largest);
+    lyap_lo.push_back(c.low);
+    lyap_hi.push_back(c.high);
+    chaotic.push_back(c.chaotic);
     value.push_back(p.value);
     up.push_back(p.upward ? 1 : 0);
     kind.push_back(p.attractor.kind);
@@ -36,6 +43,10 @@ void Hdf5Store::WriteSweep(const std::vector<SweepPoint>& sweep, const SweepSpec
   h5::WriteDataset(gg, "period", h5::Type::I32(), period.data(), {n});
   h5::WriteDataset(gg, "impacts_per_period", h5::Type::I64(), impacts.data(), {n});
   h5::WriteDataset(gg, "sticking_fraction", h5::Type::F64(), sp.data(), {n});
+  h5::WriteDataset(gg, "lyapunov_max", h5::Type::F64(), lyap.data(), {n});
+  h5::WriteDataset(gg, "lyapunov_max_ci_low", h5::Type::F64(), lyap_lo.data(), {n});
+  h5::WriteDataset(gg, "lyapunov_max_ci_high", h5::Type::F64(), lyap_hi.data(), {n});
+  h5::WriteDataset(gg, "chaotic", h5::Type::I8(), chaotic.data(), {n});
   h5::WriteDataset(gg, "x_B", h5::Type::F64(), xB.data(), {n, rec});
   h5::WriteDataset(gg, "v_B", h5::Type::F64(), vB.data(), {n, rec});
   h5::WriteString(gg, "param", spec.param);

@@ -47,6 +47,21 @@ nlohmann::json AttractorObject(const Attractor& a) {
 // A finite number, or JSON null for ±∞ (Lyapunov exponents of collapsed directions).
 nlohmann::json FiniteOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
+// The keys of a Lyapunov spectrum (docs/output.md): lyapunov_exponents (largest first, per unit
+// time, null for −∞), lyapunov_ci, lyapunov_periods, [lyapunov_singular_periods],
+// [lyapunov_undefined], chaotic.
+void AddLyapunov(nlohmann::json& j, const LyapunovSpectrum& ly) {
+  auto exponents = nlohmann::json::array(), ci = nlohmann::json::array();
+  for (double e : ly.exponents) exponents.push_back(FiniteOrNull(e));
+  for (const auto& [lo, hi] : ly.ci) ci.push_back({FiniteOrNull(lo), FiniteOrNull(hi)});
+  j["lyapunov_exponents"] = exponents;
+  j["lyapunov_ci"] = ci;
+  j["lyapunov_periods"] = ly.periods;
+  if (ly.singular_periods) j["lyapunov_singular_periods"] = ly.singular_periods;
+  if (!ly.undefined.empty()) j["lyapunov_undefined"] = ly.undefined;
+  j["chaotic"] = ly.chaotic();
+}
+
 std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly) {
   nlohmann::json j;
   j["status"] = ToString(r.status);
@@ -82,17 +97,7 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                    {"jac_evals", r.solver.jac_evals},
                    {"error_test_failures", r.solver.error_test_failures},
                    {"reinits", r.solver.reinits}};
-  if (ly) {
-    auto exponents = nlohmann::json::array(), ci = nlohmann::json::array();
-    for (double e : ly->exponents) exponents.push_back(FiniteOrNull(e));
-    for (const auto& [lo, hi] : ly->ci) ci.push_back({FiniteOrNull(lo), FiniteOrNull(hi)});
-    j["lyapunov_exponents"] = exponents;
-    j["lyapunov_ci"] = ci;
-    j["lyapunov_periods"] = ly->periods;
-    if (ly->singular_periods) j["lyapunov_singular_periods"] = ly->singular_periods;
-    if (!ly->undefined.empty()) j["lyapunov_undefined"] = ly->undefined;
-    j["chaotic"] = ly->chaotic();
-  }
+  if (ly) AddLyapunov(j, *ly);
   return j.dump();
 }
 
@@ -262,6 +267,7 @@ std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordina
     o["floquet_multipliers"] = mu;
     o["stable"] = a.orbit.stable ? nlohmann::json(*a.orbit.stable) : nlohmann::json(nullptr);
     o["merged_classes"] = a.orbit.merged;
+    if (a.lyapunov) AddLyapunov(o, *a.lyapunov);
     list.push_back(o);
   }
   j["attractors"] = list;
@@ -269,6 +275,12 @@ std::string StudyJson(const StudyResult& st, const Coordinate& x, const Coordina
   j["inadmissible_fraction"] = st.inadmissible_fraction;
   j["not_computed_fraction"] = st.pending_fraction;
   j["cells"] = st.cells;
+  if (st.unresolved_lyapunov) {
+    nlohmann::json u;
+    u["example_initial_state"] = {{x.name, st.unresolved_example.at(0)}, {y.name, st.unresolved_example.at(1)}};
+    AddLyapunov(u, *st.unresolved_lyapunov);
+    j["unresolved_lyapunov"] = u;
+  }
   return j.dump();
 }
 
@@ -285,6 +297,7 @@ std::string SweepJson(const std::vector<SweepPoint>& sweep) {
       o["status"] = p.status;
       o["message"] = p.message;
     }
+    if (p.lyapunov) AddLyapunov(o, *p.lyapunov);
     pts.push_back(o);
   }
   j["points"] = pts;

@@ -13,6 +13,7 @@
 
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
+#include "vibro/stop_request.hpp"
 
 namespace vibro {
 namespace {
@@ -165,6 +166,29 @@ class SettleWatch final : public Observer {
   std::atomic<bool> stop_{false};
   int reason_ = 0, last_near_ = -1;
 };
+
+// The Lyapunov exponents of a run of scene.run.periods periods from a cell's final state `z` at
+// t0 + periods·T (a state on the stop re-enters through the automaton's classification of a
+// state on the stop, as a sweep's next run). A run that does not end ok has none, and says why.
+LyapunovSpectrum LyapunovFrom(const System& sys, const Scene& scene, const CellResult& c) {
+  Scene sc = scene;
+  sc.run.samples_per_period = 0;
+  const auto n = c.z.size() / 2;
+  InitialOverride start{scene.initial_time + static_cast<double>(c.periods) * sys.period(), c.z.head(n),
+                        c.z.tail(n)};
+  if (sys.ContactDisplacement(start.X) <= sys.stop())
+    start.X -= sys.contact() * ((sys.ContactDisplacement(start.X) - sys.stop()) / sys.s_B());
+  LyapunovObserver ly(sys, sc);
+  SimulationOptions so;
+  so.initial = &start;
+  so.observers = {&ly};
+  const RunResult r = Simulate(sys, sc, so);
+  if (r.status == RunStatus::kOk) return ly.Spectrum();
+  LyapunovSpectrum none;
+  none.undefined = std::string("the run that measures them ended ") + ToString(r.status) +
+                   (r.message.empty() ? std::string() : ": " + r.message);
+  return none;
+}
 
 // Section points and modes of one period (q sections) from a state at time t.
 struct SectionLog final : Observer {
@@ -329,7 +353,7 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
       if (SameAttractor(out.attractors[k].attractor, c.attractor)) label = static_cast<int>(k);
     if (label < 0) {
       label = static_cast<int>(out.attractors.size());
-      out.attractors.push_back({c.attractor, 0, 0, 0, {points[i].first, points[i].second}, {}});
+      out.attractors.push_back({c.attractor, 0, 0, 0, {points[i].first, points[i].second}, {}, {}});
       first_cell.push_back(i);
     }
     out.labels[i] = label;
@@ -403,6 +427,26 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
   out.unresolved_fraction = static_cast<double>(unresolved) / N;
   out.inadmissible_fraction = static_cast<double>(inadmissible) / N;
   out.pending_fraction = static_cast<double>(pending) / N;
+  // 4. Lyapunov exponents of each attractor, from its first cell's final state, and of the first
+  //    not-periodic cell (deterministic: they depend only on `cells`). None for a study being
+  //    stopped (its resumption measures them).
+  const auto stopping = [](const std::atomic<bool>* flag) { return flag && flag->load(); };
+  if (opt.lyapunov && scene.run.lyapunov && sys.contact_count() == 1 && !stopping(opt.stop_requested) &&
+      !stopping(ProcessStopFlag())) {
+    std::vector<size_t> from(out.attractors.size() + 1, cells.size());  // the last: not-periodic
+    for (size_t i = 0; i < cells.size(); ++i) {
+      const int l = out.labels[i];
+      if (l >= 0 && from[static_cast<size_t>(l)] == cells.size()) from[static_cast<size_t>(l)] = i;
+      if (l == -1 && from.back() == cells.size() && cells[i].state == State::kClassified) from.back() = i;
+    }
+    std::vector<std::optional<LyapunovSpectrum>> spectra(from.size());
+    tbb::parallel_for(size_t{0}, from.size(), [&](size_t k) {
+      if (from[k] < cells.size()) spectra[k] = LyapunovFrom(sys, scene, cells[from[k]]);
+    });
+    for (size_t k = 0; k < out.attractors.size(); ++k) out.attractors[k].lyapunov = std::move(spectra[k]);
+    out.unresolved_lyapunov = std::move(spectra.back());
+    if (out.unresolved_lyapunov) out.unresolved_example = {points[from.back()].first, points[from.back()].second};
+  }
   return out;
 }
 
@@ -412,6 +456,7 @@ std::vector<KnownOrbit> KnownOrbits(const System& sys, const Scene& scene, const
   opt.known.clear();
   opt.progress = nullptr;
   opt.solve_orbits = true;
+  opt.lyapunov = false;
   if (opt.settle_remainder <= 0) opt.settle_remainder = 1e-9;
   const auto pts = GridPoints(a, b, 8, 8);
   std::vector<CellResult> cells(pts.size());
@@ -507,12 +552,15 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
     const System sys(sc);
     AttractorRecorder rec(sys, sc);
     SectionTail tail(static_cast<size_t>(req.record), sys);
+    std::optional<LyapunovObserver> lyapunov;
     SimulationOptions opt;
     if (state) {
       state->time = sc.initial_time;  // phase kept: every run starts at the same forcing phase
       opt.initial = &*state;
     }
     opt.observers = {&rec, &tail};
+    // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
+    if (sc.run.lyapunov && sys.contact_count() == 1) opt.observers.push_back(&lyapunov.emplace(sys, sc));
     opt.stop_requested = stop;  // a run of many periods stops within the second too
     const RunResult r = Simulate(sys, sc, opt);
     if (r.status == RunStatus::kInterrupted) break;  // cut short: nothing to classify
@@ -520,7 +568,8 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
     // an attractor of a motion that was never computed to the end).
     const bool ok = r.status == RunStatus::kOk;
     out.push_back({values[i], i < up, ok ? rec.Classify() : Attractor{}, tail.x, tail.v,
-                   ToString(r.status), ok ? std::string() : r.message});
+                   ToString(r.status), ok ? std::string() : r.message,
+                   ok && lyapunov ? std::optional(lyapunov->Spectrum()) : std::nullopt});
     if (!ok) break;
     // The next run continues from this one's final state, at a whole number of periods later.
     state = InitialOverride{sc.initial_time, r.X, r.V};

@@ -191,6 +191,9 @@ with tempfile.TemporaryDirectory() as d:
     check("no such file: nothing created", not os.path.exists(os.path.join(d, "none.h5")))
     p = run("simulate", fig8, "--out", done, "--extend", "0")
     check("--extend 0: exit 2", p.returncode == 2, p.stderr)
+    p = run("simulate", fig8, "--out", done, "--resume", "--extend", "10")
+    check("--resume with --extend: exit 2", p.returncode == 2 and "--resume and --extend: give one" in p.stderr,
+          p.stderr)
     exact = ["--set", 'run.engine="exact"']
     p = run("simulate", fig8, *exact, "--set", "run.periods=750", "--out", done, "--resume")
     check("--resume of a finished run points to --extend",
