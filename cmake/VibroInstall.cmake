@@ -10,6 +10,9 @@ install(TARGETS vibro EXPORT vibroTargets
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(DIRECTORY include/vibro DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS vibro_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+if(VIBRO_MPI)  # beside libvibro, where src/studies/distribute.cpp looks for it
+  install(TARGETS vibro_mpi LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+endif()
 install(PROGRAMS scripts/vibro_plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro)
 install(DIRECTORY data/scenes DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro FILES_MATCHING PATTERN "*.toml")
 

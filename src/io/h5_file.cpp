@@ -1,4 +1,5 @@
-// The HDF5 C API behind h5_file.hpp. The one file of vibro that includes it.
+// The HDF5 C API behind h5_file.hpp. The one file of vibro that uses it (through io/hdf5_api.hpp,
+// which loads the library at first use).
 #include "io/h5_file.hpp"
 
 #include <fcntl.h>
@@ -14,8 +15,8 @@
 #include <type_traits>
 
 #include <fmt/format.h>
-#include <hdf5.h>
 
+#include "io/hdf5_api.hpp"
 #include "vibro/hdf5_store.hpp"
 
 namespace vibro::h5 {
