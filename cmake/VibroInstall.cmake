@@ -1,5 +1,5 @@
 # `cmake --install build --prefix P`: the shared library, the public headers, the command line,
-# the plot tool, the CSV tools (P/bin/vibro-branch-to-csv, P/bin/vibro-events-to-csv), the shipped
+# the plot tool, the CSV tools (P/bin/vibro-branch-to-csv, vibro-events-to-csv, vibro-auto-to-csv), the shipped
 # scenes and the reference problems (P/share/vibro/scenes, P/share/vibro/benchmarks), and a CMake
 # package so that `find_package(vibro)` gives the target vibro::vibro.
 include(CMakePackageConfigHelpers)
@@ -16,10 +16,11 @@ if(VIBRO_MPI)  # beside libvibro, where src/studies/distribute.cpp looks for it
 endif()
 install(PROGRAMS scripts/vibro_plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro)
 install(DIRECTORY data/scenes DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro FILES_MATCHING PATTERN "*.toml")
-# What docs/validation.md has users run: the CSV exporters for `vibro validate` and `vibro score`
+# What docs/validation.md has users run: the CSV converters for `vibro validate` and `vibro score`
 # (scripts/*_to_csv.py in a checkout), and the reference problems `vibro score` compares with.
 install(PROGRAMS scripts/branch_to_csv.py DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME vibro-branch-to-csv)
 install(PROGRAMS scripts/events_to_csv.py DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME vibro-events-to-csv)
+install(PROGRAMS scripts/auto_to_csv.py DESTINATION ${CMAKE_INSTALL_BINDIR} RENAME vibro-auto-to-csv)
 install(DIRECTORY data/benchmarks DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro)
 
 set(VIBRO_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/vibro)

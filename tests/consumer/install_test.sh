@@ -70,6 +70,8 @@ rows=$(($(wc -l <"$work/branch.csv") - 1))
   { echo "FAIL: vibro validate did not confirm vibro's own branch:" >&2; cat "$work/validate.txt" >&2; exit 1; }
 grep -q "^$rows of $rows points confirmed" "$work/validate.txt" ||
   { echo "FAIL: not all $rows rows confirmed: $(tail -1 "$work/validate.txt")" >&2; exit 1; }
+"$prefix/bin/vibro-auto-to-csv" --help >/dev/null ||
+  { echo "FAIL: vibro-auto-to-csv --help" >&2; exit 1; }
 bench=$prefix/share/vibro/benchmarks
 for name in chain_3dof two_flights_1dof; do
   "$prefix/bin/vibro-events-to-csv" "$bench/$name.h5" | cmp -s - "$bench/$name.csv" ||
