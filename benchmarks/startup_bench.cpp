@@ -6,6 +6,7 @@
 // reported time is vibro's CPU per process (manual time); `over_bare_ms` is the mean of vibro's
 // CPU minus /bin/true's, pair by pair. Target (issue "start-up"): within 5 ms of /bin/true for
 // every command that needs no MPI. What is loaded and why: docs/performance.md, "Start-up".
+// VIBRO_STARTUP_CLI=/path/to/vibro measures another build (an older one, for a before/after).
 #include <spawn.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -13,6 +14,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -59,16 +61,21 @@ void Startup(benchmark::State& state, const std::vector<std::string>& command) {
   state.counters["bare_ms"] = 1e3 * bare_total / n;
 }
 
+std::string Cli() {
+  const char* other = std::getenv("VIBRO_STARTUP_CLI");
+  return other != nullptr && *other != '\0' ? other : VIBRO_CLI;
+}
+
 void BM_BareProcess(benchmark::State& state) {
   for (auto _ : state) state.SetIterationTime(ChildCpuSeconds({"/bin/true"}));
 }
 BENCHMARK(BM_BareProcess)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
-void BM_VibroVersion(benchmark::State& state) { Startup(state, {VIBRO_CLI, "--version"}); }
+void BM_VibroVersion(benchmark::State& state) { Startup(state, {Cli(), "--version"}); }
 BENCHMARK(BM_VibroVersion)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_VibroSimulate20Periods(benchmark::State& state) {
-  Startup(state, {VIBRO_CLI, "simulate", std::string(VIBRO_SCENES_DIR) + "/fig08_preload.toml",
+  Startup(state, {Cli(), "simulate", std::string(VIBRO_SCENES_DIR) + "/fig08_preload.toml",
                   "--set", "run.periods=20"});
 }
 BENCHMARK(BM_VibroSimulate20Periods)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(2.0);

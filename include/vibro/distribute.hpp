@@ -1,7 +1,7 @@
 // Distribution of a study's cells over processes: MPI when vibro is built with the CMake option
 // VIBRO_MPI and started by mpirun, one process otherwise (the same calls, without messages).
 // OpenMPI is loaded (dlopen of the plugin libvibro_mpi.so, whose src/studies/mpi_plugin.cpp is the
-// only file that includes mpi.h) by the first Distribution of a process started by mpirun, and by
+// only file that includes the MPI header) by the first Distribution of a process started by mpirun, and by
 // no other process.
 //
 // Cells are independent, so they are split deterministically (cell batch[i] goes to rank

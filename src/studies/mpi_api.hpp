@@ -1,5 +1,5 @@
 // The MPI calls a distributed study makes, as a table of C entry points. The table is exported by
-// the plugin libvibro_mpi.so (src/studies/mpi_plugin.cpp, the only file that includes mpi.h) and
+// the plugin libvibro_mpi.so (src/studies/mpi_plugin.cpp, the only file that includes the MPI header) and
 // loaded by src/studies/distribute.cpp only in a process started by mpirun: every other vibro
 // process (`vibro --version`, `vibro simulate`, a basin on threads) never maps OpenMPI
 // (docs/performance.md, "Start-up").
