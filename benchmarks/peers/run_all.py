@@ -15,9 +15,9 @@ included; the mean of REPEAT processes, each a few ms), for the peers the Python
 set-up included, interpreter and imports not). startup_s is vibro's fixed cost per process
 (loading, the scene: docs/performance.md, "Start-up"; timed without --out, as the peers write no
 file): the work of P periods is
-taken as the extra CPU of P more periods in steady running, (cpu(11 P) − cpu(P))/10, from REPEAT
-processes of each (a difference of 10 P periods, well above the spread of a few-ms process), and
-startup_s = cpu(P) minus that work.
+taken as the CPU of P more periods in steady running, (cpu(101 P) − cpu(P))/100, from REPEAT
+processes of each (a difference of 100 P periods, far above the spread of a few-ms process even on
+the scenes whose 20 periods take 30 µs), and startup_s = cpu(P) minus that work.
 cpu_ratio = cpu_s / cpu_s of vibro's exact engine with default settings on the same scene (its
 whole process); cpu_ratio_work = cpu_s / the work of that engine alone (start-up excluded), the
 measure that compares like with like, since the peers' times exclude their interpreter's start-up.
@@ -55,6 +55,7 @@ SCENES = [
 ]
 LAST = 5  # periods over which the sticking fraction is measured
 REPEAT = 10  # vibro processes per setting whose CPU is averaged (a run is a few ms)
+LONGER = 101  # the longer runs that measure vibro's work per period, in multiples of --periods
 WALL = 20.0  # seconds after which a peer run that has not finished is stopped ("gave up")
 
 
@@ -116,14 +117,14 @@ def measure(p, ref, kind, arg, vibro):
 
 def vibro_cpu(vibro, p, sets):
     """(CPU of one whole `vibro simulate` process, its start-up): means over REPEAT processes of
-    p.periods periods and of 11·p.periods, in turn (A B A B ...) so that both see the same
+    p.periods periods and of LONGER·p.periods, in turn (A B A B ...) so that both see the same
     machine. They write no HDF5 file (the events stay in memory, as the peers' do)."""
     whole, longer = [], []
     for _ in range(REPEAT):
         whole.append(run_vibro(vibro, p.scene, p.periods, sets, read=False, out=False).cpu)
-        longer.append(run_vibro(vibro, p.scene, 11 * p.periods, sets, read=False, out=False).cpu)
+        longer.append(run_vibro(vibro, p.scene, LONGER * p.periods, sets, read=False, out=False).cpu)
     cpu = float(np.mean(whole))
-    work = max(0.0, (float(np.mean(longer)) - cpu) / 10)
+    work = max(0.0, (float(np.mean(longer)) - cpu) / (LONGER - 1))
     return cpu, cpu - work
 
 
