@@ -75,14 +75,17 @@ struct Hdf5Api {
 // VIBRO_HDF5_LIBRARY is the soname of the library the headers belong to (CMakeLists.txt), so the
 // table and the declarations it is checked against are of one HDF5 release.
 inline Hdf5Api LoadHdf5() {
+  // RTLD_GLOBAL, and each entry looked up in the global scope (RTLD_DEFAULT): the resolution a
+  // linked libhdf5 would get, so that a preloaded library that wraps an HDF5 call (LD_PRELOAD, as
+  // the tests' hang shim does) still comes first and finds the real one with RTLD_NEXT.
   // RTLD_NODELETE: HDF5's atexit handlers stay valid however the handle is treated.
-  void* lib = dlopen(VIBRO_HDF5_LIBRARY, RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+  void* lib = dlopen(VIBRO_HDF5_LIBRARY, RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
   if (lib == nullptr)
     throw std::runtime_error(std::string("cannot load the HDF5 library " VIBRO_HDF5_LIBRARY ": ") +
                              dlerror());
   Hdf5Api api{};
   auto entry = [&](const char* name) {
-    void* p = dlsym(lib, name);
+    void* p = dlsym(RTLD_DEFAULT, name);
     if (p == nullptr)
       throw std::runtime_error(std::string("the HDF5 library " VIBRO_HDF5_LIBRARY " lacks ") + name);
     return p;
