@@ -58,16 +58,17 @@ class VibroRun:
         return stick_intervals(*self.events)
 
 
-def run_vibro(vibro, scene, periods, sets=(), samples=0, read=True, model=False):
+def run_vibro(vibro, scene, periods, sets=(), samples=0, read=True, model=False, out=None):
     """Runs `vibro simulate SCENE --json` with run.periods, run.samples_per_period and the
     overrides `sets` (list of "key=value"); returns a VibroRun. The CPU time is that of the child
-    process (user + system), so it includes start-up (~20 ms). With read=True the HDF5 file is
-    written to a temporary directory and its events and section are read back."""
+    process (user + system), so it includes start-up (a few ms: docs/performance.md, "Start-up").
+    With read=True the HDF5 file is written to a temporary directory and its events and section
+    are read back; out=True writes it without reading it back."""
     with tempfile.TemporaryDirectory() as d:
         h5 = os.path.join(d, "run.h5")
         cmd = [vibro, "simulate", scene_path(scene), "--json",
                "--set", f"run.periods={periods}", "--set", f"run.samples_per_period={samples}"]
-        if read:
+        if read if out is None else out:  # out=True: write the file without reading it back
             cmd += ["--out", h5]
         for s in sets:
             cmd += ["--set", s]

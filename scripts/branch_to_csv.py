@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """A branch stored by `vibro continue --out FILE.h5` as the CSV `vibro validate` reads.
 
-    scripts/branch_to_csv.py BRANCH.h5 [OUT.csv]
+    scripts/branch_to_csv.py BRANCH.h5 [OUT.csv]     (in a checkout)
+    vibro-branch-to-csv BRANCH.h5 [OUT.csv]     (installed by `cmake --install`)
 
 Columns: value, time (the section time of each point), displacement_1..n and velocity_1..n in the
 scene's [initial] convention (physical DOFs q, q_dot for a physical scene, modal X, V otherwise),

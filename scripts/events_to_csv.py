@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The events of a run stored by `vibro simulate --out FILE.h5` as the CSV `vibro score` reads.
 
-    scripts/events_to_csv.py RUN.h5 [OUT.csv]
+    scripts/events_to_csv.py RUN.h5 [OUT.csv]     (in a checkout)
+    vibro-events-to-csv RUN.h5 [OUT.csv]     (installed by `cmake --install`)
 
 Columns t, kind, velocity (contact velocity just before the event), 17 significant digits.
 Writes to stdout without OUT.csv. Exit 2 when the file holds no events.

@@ -11,8 +11,16 @@ against vibro's exact engine with chatter_switch = 1e-9 (the reference), three w
     Moreau–Jean the share of steps with a positive contact impulse) minus the reference's;
   * state_error: the largest difference of the modal displacements and velocities at t_end.
 cpu_s is the CPU time of one run: for vibro the whole `vibro simulate` process (start-up
-included), for the peers the Python call (model set-up included, interpreter and imports not).
-cpu_ratio = cpu_s / cpu_s of vibro's exact engine with default settings on the same scene.
+included; the mean of REPEAT processes, each a few ms), for the peers the Python call (model
+set-up included, interpreter and imports not). startup_s is vibro's fixed cost per process
+(loading, the scene: docs/performance.md, "Start-up"; timed without --out, as the peers write no
+file): the work of P periods is
+taken as the CPU of P more periods in steady running, (cpu(101 P) − cpu(P))/100, from REPEAT
+processes of each (a difference of 100 P periods, far above the spread of a few-ms process even on
+the scenes whose 20 periods take 30 µs), and startup_s = cpu(P) minus that work.
+cpu_ratio = cpu_s / cpu_s of vibro's exact engine with default settings on the same scene (its
+whole process); cpu_ratio_work = cpu_s / the work of that engine alone (start-up excluded), the
+measure that compares like with like, since the peers' times exclude their interpreter's start-up.
 
 Usage: /usr/bin/python3 benchmarks/peers/run_all.py [--vibro build/vibro] [--out docs/peers]
        [--periods 20] [--scenes a.toml,b.toml] [--quick]
@@ -46,6 +54,8 @@ SCENES = [
     ("3-DOF chain (r = 0)", "chain3.toml"),
 ]
 LAST = 5  # periods over which the sticking fraction is measured
+REPEAT = 10  # vibro processes per setting whose CPU is averaged (a run is a few ms)
+LONGER = 101  # the longer runs that measure vibro's work per period, in multiples of --periods
 WALL = 20.0  # seconds after which a peer run that has not finished is stopped ("gave up")
 
 
@@ -86,10 +96,11 @@ def measure(p, ref, kind, arg, vibro):
     if kind == "vibro":
         r = run_vibro(vibro, p.scene, p.periods, arg)
         if not r.ok:
-            return [], float("nan"), None, r.cpu, f"exit {r.returncode}: {r.stderr.strip()[:120]}", None
+            return [], float("nan"), None, (r.cpu, float("nan")), f"exit {r.returncode}: {r.stderr.strip()[:120]}", None
         sp = sticking_fraction(r.stick_intervals(), t0, t1)
         counts = r.summary["counts"] if r.summary else {}
-        return r.milestones(12), sp, end_state_vibro(r, p.t_end), r.cpu, r.summary["status"], counts.get("impacts")
+        return (r.milestones(12), sp, end_state_vibro(r, p.t_end), vibro_cpu(vibro, p, arg),
+                r.summary["status"], counts.get("impacts"))
     if kind == "scipy":
         res = scipy_peer.run(p, **arg)
     elif kind == "mj":
@@ -101,7 +112,20 @@ def measure(p, ref, kind, arg, vibro):
         sp = res.sp_steps if ok else float("nan")
     else:
         sp = sticking_fraction(stick_intervals(res.times, res.kinds), t0, t1) if ok else float("nan")
-    return res.times[:12], sp, res.end, res.cpu, res.status, res.impacts if kind != "mj" else None
+    return res.times[:12], sp, res.end, (res.cpu, float("nan")), res.status, res.impacts if kind != "mj" else None
+
+
+def vibro_cpu(vibro, p, sets):
+    """(CPU of one whole `vibro simulate` process, its start-up): means over REPEAT processes of
+    p.periods periods and of LONGER·p.periods, in turn (A B A B ...) so that both see the same
+    machine. They write no HDF5 file (the events stay in memory, as the peers' do)."""
+    whole, longer = [], []
+    for _ in range(REPEAT):
+        whole.append(run_vibro(vibro, p.scene, p.periods, sets, read=False, out=False).cpu)
+        longer.append(run_vibro(vibro, p.scene, LONGER * p.periods, sets, read=False, out=False).cpu)
+    cpu = float(np.mean(whole))
+    work = max(0.0, (float(np.mean(longer)) - cpu) / (LONGER - 1))
+    return cpu, cpu - work
 
 
 def main():
@@ -129,23 +153,25 @@ def main():
         ref_ms = ref.milestones(12)
         ref_sp = sticking_fraction(ref.stick_intervals(), p.t_end - LAST * p.T, p.t_end)
         ref_end = end_state_vibro(ref, p.t_end)
-        base_cpu = None
+        base_cpu = base_work = None
         print(f"== {label} ({scene}, {p.n} mode(s), {p.periods} periods, reference SP {ref_sp:.6f})", flush=True)
         for engine, setting, (kind, arg) in settings(p, args.quick):
-            ms, sp, end, cpu, status, impacts = measure(p, ref, kind, arg, args.vibro)
+            ms, sp, end, (cpu, startup), status, impacts = measure(p, ref, kind, arg, args.vibro)
             if base_cpu is None:
-                base_cpu = cpu
+                base_cpu, base_work = cpu, cpu - startup
             err = milestone_error(ms, ref_ms, p.T)
             sp_err = abs(sp - ref_sp) if not math.isnan(sp) else float("nan")
             st_err = float("nan")
             if end is not None and ref_end is not None:
                 st_err = float(max(np.max(np.abs(end[0] - ref_end[0])), np.max(np.abs(end[1] - ref_end[1]))))
             rows.append({"scene": label, "scene_file": scene, "engine": engine, "setting": setting,
-                         "cpu_s": fmt(cpu, ".4f"), "cpu_ratio": fmt(cpu / base_cpu, ".3g"),
+                         "cpu_s": fmt(cpu, ".5f"), "startup_s": fmt(startup, ".5f"),
+                         "cpu_ratio": fmt(cpu / base_cpu, ".3g"), "cpu_ratio_work": fmt(cpu / base_work, ".3g"),
                          "event_error": fmt(err, ".2e"), "n_milestones": min(len(ms), len(ref_ms)),
                          "sp": fmt(sp, ".6f"), "sp_error": fmt(sp_err, ".2e"), "state_error": fmt(st_err, ".2e"),
                          "impacts": "" if impacts is None else impacts, "status": status})
-            print(f"  {engine:22s} {setting:62s} cpu {cpu:8.3f} s (x{cpu / base_cpu:8.3g})  event {err:8.1e}"
+            print(f"  {engine:22s} {setting:62s} cpu {cpu:8.4f} s (x{cpu / base_cpu:8.3g}, work x{cpu / base_work:8.3g})"
+                  f"  event {err:8.1e}"
                   f"  SP {sp_err:8.1e}  state {st_err:8.1e}  {status}", flush=True)
     write_csv(rows, args.out + ".csv")
     print(args.out + ".csv")
@@ -171,6 +197,13 @@ def plot(rows, labels, path):
                 if pts:
                     ax.loglog([x for x, _ in pts], [y for _, y in pts], marker, ms=8, color=color,
                               mfc=color if filled else "none", linestyle="none")
+        # vibro's exact engine once more at its work alone (start-up excluded, as for the peers).
+        work = [(float(r["cpu_s"]) - float(r["startup_s"]), max(float(r["event_error"]), 1e-17)) for r in rows
+                if r["scene"] == label and r["engine"] == "vibro exact" and r.get("startup_s") not in (None, "", "nan")
+                and float(r["cpu_s"]) > float(r["startup_s"])]
+        if work:
+            ax.loglog([x for x, _ in work], [y for _, y in work], "*", ms=9, color="k", mfc="none",
+                      linestyle="none")
         ax.set_title(label, fontsize=9)
         ax.set_xlabel("CPU time per run [s]")
         ax.set_ylabel("stick/release time error / T")
@@ -178,6 +211,8 @@ def plot(rows, labels, path):
     leg = axes.flat[len(labels)]
     for engine, (marker, color) in STYLE.items():
         leg.plot([], [], marker, color=color, ms=8, linestyle="none", label=engine)
+    leg.plot([], [], "*", color="k", mfc="none", ms=9, linestyle="none",
+             label="vibro exact, work alone\n(start-up excluded)")
     leg.plot([], [], "o", color="gray", mfc="none", ms=8, linestyle="none",
              label="hollow: failed or gave up\n(error over the events reached;\nnot drawn if none after t = 0)")
     leg.legend(loc="center", fontsize=9)

@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """The table of docs/peers.md from docs/peers.csv (one run of run_all.py), in Markdown on stdout:
 one row per engine and setting, one column per scene, each cell
-"stick/release time error / T (CPU time ÷ that of vibro's exact engine on the same scene)", or
+"stick/release time error / T (×A, ×B)", where A is the CPU time ÷ that of a whole process of
+vibro's exact engine on the same scene (start-up included) and B the CPU time ÷ that engine's work
+alone (start-up excluded, as the peers' times exclude their interpreter's), or
 "gave up at t = …" / "fails at t = …" for runs that did not reach t_end, "—" where the setting
 does not apply.
 
@@ -54,14 +56,21 @@ def ratio(x):
     return f"{v:.2g}" if v < 100 else f"{v:.0f}"
 
 
+def ratios(r):
+    """(×A, ×B); only ×A for a CSV from before cpu_ratio_work."""
+    if r.get("cpu_ratio_work"):
+        return f"(×{ratio(r['cpu_ratio'])}, ×{ratio(r['cpu_ratio_work'])})"
+    return f"(×{ratio(r['cpu_ratio'])})"
+
+
 def cell(r):
     s = r["status"]
     if s == "ok":
-        return f"{number(r['event_error'])} (×{ratio(r['cpu_ratio'])})"
+        return f"{number(r['event_error'])} {ratios(r)}"
     m = re.search(r"t = ([0-9.e+-]+)", s)
     t = f"{float(m.group(1)):.3g}" if m else "?"
     what = "gave up" if s.startswith("gave up") else "fails"
-    return f"{what} at t = {t} (×{ratio(r['cpu_ratio'])})"
+    return f"{what} at t = {t} {ratios(r)}"
 
 
 def main():

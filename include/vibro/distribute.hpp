@@ -1,6 +1,8 @@
 // Distribution of a study's cells over processes: MPI when vibro is built with the CMake option
 // VIBRO_MPI and started by mpirun, one process otherwise (the same calls, without messages).
-// The only file that includes mpi.h is src/studies/distribute.cpp.
+// OpenMPI is loaded (dlopen of the plugin libvibro_mpi.so, whose src/studies/mpi_plugin.cpp is the
+// only file that includes the MPI header) by the first Distribution of a process started by mpirun, and by
+// no other process.
 //
 // Cells are independent, so they are split deterministically (cell batch[i] goes to rank
 // i mod size) and their results gathered on rank 0, which alone labels them and writes the
@@ -16,6 +18,8 @@
 #include "vibro/scene.hpp"
 #include "vibro/studies.hpp"
 #include "vibro/system.hpp"
+
+struct VibroMpiApi;  // src/studies/mpi_api.hpp
 
 namespace vibro {
 
@@ -43,6 +47,7 @@ class Distribution {
  private:
   int rank_ = 0, size_ = 1;
   bool joined_ = false;
+  const VibroMpiApi* mpi_ = nullptr;  // the plugin's entry points, under mpirun only
 };
 
 // Computes the root's pending cells (state kPending) in batches of about a second of work, split

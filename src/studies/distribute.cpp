@@ -1,13 +1,17 @@
-// Cells of a study over MPI ranks (VIBRO_MPI) or one process. The only file that includes mpi.h.
+// Cells of a study over MPI ranks (VIBRO_MPI) or one process. OpenMPI is reached through the
+// plugin libvibro_mpi.so (studies/mpi_api.hpp), loaded only when mpirun started this process.
 #include "vibro/distribute.hpp"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <stdexcept>
+#include <string>
 
 #ifdef VIBRO_MPI
-#include <mpi.h>
+#include <dlfcn.h>
+
+#include "studies/mpi_api.hpp"
 #endif
 
 namespace vibro {
@@ -22,7 +26,33 @@ bool LaunchedByMpirun() {
 }
 
 void MpiCheck(int rc, const char* what) {
-  if (rc != MPI_SUCCESS) throw std::runtime_error(std::string("MPI: ") + what + " failed");
+  if (rc != 0) throw std::runtime_error(std::string("MPI: ") + what + " failed");
+}
+
+// The plugin beside the object this code is in (libvibro.so: build/ in the build tree, lib/ once
+// installed), or in ../lib of it (a program linked with a static libvibro, installed in bin/).
+// RTLD_GLOBAL: OpenMPI's own components, which it dlopens in turn, resolve their symbols against
+// libmpi and libopen-pal.
+const VibroMpiApi* LoadMpi() {
+  Dl_info self{};
+  std::string dir;
+  if (dladdr(reinterpret_cast<void*>(&LaunchedByMpirun), &self) != 0 && self.dli_fname != nullptr) {
+    const std::string object = self.dli_fname;
+    const auto slash = object.rfind('/');
+    if (slash != std::string::npos) dir = object.substr(0, slash + 1);
+  }
+  std::string path = dir + VIBRO_MPI_PLUGIN, tried = path;
+  void* plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
+  if (plugin == nullptr && !dir.empty()) {
+    path = dir + "../" VIBRO_LIBDIR "/" VIBRO_MPI_PLUGIN;
+    tried += " or " + path;
+    plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
+  }
+  if (plugin == nullptr)
+    throw std::runtime_error("MPI: cannot load " + tried + ", which a run under mpirun needs: " + dlerror());
+  auto* api = reinterpret_cast<const VibroMpiApi* (*)()>(dlsym(plugin, "vibro_mpi_api"));
+  if (api == nullptr) throw std::runtime_error("MPI: " + path + " lacks vibro_mpi_api");
+  return api();
 }
 #endif
 
@@ -39,30 +69,24 @@ bool Distribution::Built() {
 Distribution::Distribution() {
 #ifdef VIBRO_MPI
   if (!LaunchedByMpirun()) return;
-  int initialized = 0;
-  MPI_Initialized(&initialized);
-  if (!initialized) {
-    int provided = 0;
-    // Only the main thread talks to MPI; oneTBB workers compute cells.
-    MpiCheck(MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
-    joined_ = true;
-  }
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  mpi_ = LoadMpi();
+  int joined = 0;
+  MpiCheck(mpi_->join(&joined, &rank_, &size_), "MPI_Init_thread");
+  joined_ = joined != 0;
 #endif
 }
 
 Distribution::~Distribution() {
 #ifdef VIBRO_MPI
-  if (joined_) MPI_Finalize();
+  if (joined_) mpi_->finalize();
 #endif
 }
 
 bool Distribution::Any(bool flag) const {
 #ifdef VIBRO_MPI
   if (size_ > 1) {
-    int in = flag ? 1 : 0, out = 0;
-    MpiCheck(MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_LOR, MPI_COMM_WORLD), "MPI_Allreduce");
+    int out = 0;
+    MpiCheck(mpi_->any(flag ? 1 : 0, &out), "MPI_Allreduce");
     return out != 0;
   }
 #endif
@@ -71,7 +95,7 @@ bool Distribution::Any(bool flag) const {
 
 long long Distribution::Broadcast(long long value) const {
 #ifdef VIBRO_MPI
-  if (size_ > 1) MpiCheck(MPI_Bcast(&value, 1, MPI_LONG_LONG, 0, MPI_COMM_WORLD), "MPI_Bcast");
+  if (size_ > 1) MpiCheck(mpi_->broadcast(&value, 1), "MPI_Bcast");
 #endif
   return value;
 }
@@ -83,8 +107,7 @@ void Distribution::Broadcast(std::vector<std::size_t>& values) const {
   auto n = static_cast<long long>(v.size());
   n = Broadcast(n);
   v.resize(static_cast<std::size_t>(n));
-  MpiCheck(MPI_Bcast(v.data(), static_cast<int>(n), MPI_UNSIGNED_LONG_LONG, 0, MPI_COMM_WORLD),
-           "MPI_Bcast");
+  MpiCheck(mpi_->broadcast_unsigned(v.data(), static_cast<int>(n)), "MPI_Bcast");
   values.assign(v.begin(), v.end());
 #else
   (void)values;
@@ -100,7 +123,7 @@ void Distribution::GatherCells(const std::vector<std::size_t>& batch,
     PackCell(cells[batch[i]], mine);
   int count = static_cast<int>(mine.size());
   std::vector<int> counts(static_cast<std::size_t>(size_)), offsets(static_cast<std::size_t>(size_));
-  MpiCheck(MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, MPI_COMM_WORLD), "MPI_Gather");
+  MpiCheck(mpi_->gather_count(count, counts.data()), "MPI_Gather");
   std::vector<double> all;
   if (root()) {
     int total = 0;
@@ -110,8 +133,7 @@ void Distribution::GatherCells(const std::vector<std::size_t>& batch,
     }
     all.resize(static_cast<std::size_t>(total));
   }
-  MpiCheck(MPI_Gatherv(mine.data(), count, MPI_DOUBLE, all.data(), counts.data(), offsets.data(),
-                       MPI_DOUBLE, 0, MPI_COMM_WORLD),
+  MpiCheck(mpi_->gather_doubles(mine.data(), count, all.data(), counts.data(), offsets.data()),
            "MPI_Gatherv");
   if (!root()) return;
   for (int r = 1; r < size_; ++r) {
