@@ -1,0 +1,214 @@
+"""Several contacts against independent truths (docs/contacts_reference.md).
+
+(a) The two truths agree with each other: the closed forms of the symmetric two-sided 1-DOF
+    oscillator (tests/reference/contacts/closed_forms.py, 50 digits) against the event-driven
+    mpmath reference (tests/reference/contacts/reference.py, 40 digits), impact phases and speeds
+    to 1e-12, the lower limit of the sticking orbits to 1e-10.
+(b) vibro's events on the five shipped contact scenes (data/scenes/contacts_*.toml), in double and
+    in quad precision, against the stored reference events
+    (tests/reference/contacts/reference_events/), every event within 1e-10 T.
+(c) The stored reference events are what reference.py computes (first periods re-run).
+
+Neither truth shares code with vibro's C++. ctest runs this file as python.contacts_reference
+with VIBRO_CLI set to the built `vibro`.
+"""
+import os
+import subprocess
+import sys
+
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
+CONTACTS = os.path.join(ROOT, "tests", "reference", "contacts")
+sys.path.insert(0, CONTACTS)
+
+import mpmath as mp  # noqa: E402
+
+import closed_forms as cf  # noqa: E402
+import compare  # noqa: E402
+import reference  # noqa: E402
+
+CLI = os.environ.get("VIBRO_CLI", "")
+SCENES = os.environ.get("VIBRO_SCENES", os.path.join(ROOT, "data", "scenes"))
+FIVE = ["contacts_two_sided_1dof", "contacts_preload_clearance_1dof", "contacts_chain2",
+        "contacts_impact_pair", "contacts_beam3"]
+
+TWO_SIDED = """
+[structure]
+mass = [[1.0]]
+stiffness = [[{k}]]
+forcing_dof = 0
+[[contact]]
+dof = 0
+side = "below"
+position = {lo}
+restitution = {r}
+[[contact]]
+dof = 0
+side = "above"
+position = {hi}
+restitution = {r}
+[excitation]
+amplitude = {a}
+frequency = {w}
+"""
+
+
+def two_sided_sim(w1, a, D, r, w, t0, x0, v0):
+    """The reference on x'' + w1^2 x = a sin(w t) between stops at -D and +D (unit mass), started
+    at (t0, x0, v0) given to full precision (a TOML float would round them to 16 digits)."""
+    text = TWO_SIDED.format(k=repr(float(w1) ** 2), lo=-float(D), hi=float(D), r=float(r), a=float(a), w=float(w))
+    sc = reference.Scene("two-sided", text)
+    # the closed forms take the parameters as the same binary floats
+    sc.t0, sc.q0, sc.v0 = t0, [x0], [v0]
+    return reference.Simulation(sc)
+
+
+def mpf_params(*xs):
+    return [mp.mpf(float(x)) for x in xs]
+
+
+@pytest.fixture(autouse=True)
+def precision():
+    mp.mp.dps = 40
+    yield
+
+
+# ---------------------------------------------------------------------------------------------
+# (a) closed forms against the event-driven reference
+
+
+@pytest.mark.parametrize("params", [(1, 1, 1, 0.8, 2.5), (1, 2, 1, 0.8, 3), (1.3, 1.5, 0.5, 0.6, 2),
+                                    (1, 0.6, 1, 0.8, 0.9)])
+def test_symmetric_impact_orbits_agree(params):
+    """Every orbit of (T2) that is admissible is followed by the reference for 3 periods: impacts
+    alternate between the stops every T/2 with arrival speed V and rebound r V."""
+    w1, a, D, r, w = mpf_params(*params)
+    orbits = cf.symmetric_orbits(w1, a, D, r, w)
+    assert orbits, "no orbit of (T2)"
+    if params == (1, 1, 1, 0.8, 2.5):   # the published values (15 digits)
+        assert abs(orbits[0].V - mp.mpf("1.79902274247141")) < 1e-14
+        assert abs(orbits[1].V - mp.mpf("1.24820079806749")) < 1e-14
+    half = mp.pi / w
+    for o in orbits:
+        if not cf.admissible(o):
+            continue
+        sim = two_sided_sim(w1, a, D, r, w, o.phi / w, D, -r * o.V)
+        events = sim.run(3)[:5]    # the 6th impact falls on the end of the run (t0 + 3T)
+        assert [e[1] for e in events] == ["impact"] * 5
+        for k, (t, kind, j, vb, va, _) in enumerate(events):
+            assert j == k % 2                              # below (0), then above (1), ...
+            assert abs(t - (o.phi / w + (k + 1) * half)) < 1e-12 * 2 * half
+            assert abs(vb + o.V) < 1e-12 and abs(va - r * o.V) < 1e-12   # gap velocities
+
+
+@pytest.mark.parametrize("params", [(1, 8, 1, 0, 4)])
+def test_leave_orbits_agree(params):
+    """r = 0 without sticking: each plastic impact leaves at once (no stick event)."""
+    w1, a, D, r, w = mpf_params(*params)
+    orbits = [o for o in cf.symmetric_orbits(w1, a, D, r, w) if cf.admissible(o)]
+    assert orbits
+    half = mp.pi / w
+    for o in orbits:
+        events = two_sided_sim(w1, a, D, r, w, o.phi / w, D, mp.mpf(0)).run(3)[:5]
+        impacts = [e for e in events if e[1] == "impact"]
+        assert len(impacts) == 5
+        for k, (t, kind, j, vb, va, _) in enumerate(impacts):
+            assert abs(t - (o.phi / w + (k + 1) * half)) < 1e-12 * 2 * half
+            assert abs(vb + o.V) < 1e-12 and abs(va) < 1e-30
+
+
+@pytest.mark.parametrize("params", [(1, 10, 1, 1.4), (1, 5, 1, 0.8)])
+def test_sticking_orbit_agrees(params):
+    """r = 0 with sticking (T3): released at phi_r, lands after s_l with speed |x'(s_l)|, sticks,
+    released again half a period later on the other stop."""
+    w1, a, D, w = mpf_params(*params)
+    so = cf.sticking_orbit(w1, a, D, w)
+    assert so.lam_l > 0 and so.SP > 0
+    half = mp.pi / w
+    t_rel = so.phi_r / w
+    sim = two_sided_sim(w1, a, D, 0, w, t_rel - half / 4, D, mp.mpf(0))   # stuck on the upper stop
+    events = sim.run(2)
+    kinds = [(e[1], e[2]) for e in events]
+    assert kinds[:5] == [("stick", 1), ("release", 1), ("impact", 0), ("stick", 0), ("release", 0)]
+    assert abs(events[1][0] - t_rel) < 1e-12 * 2 * half
+    assert abs(events[2][0] - (t_rel + so.s_l)) < 1e-12 * 2 * half
+    assert abs(events[2][3] - so.v_l) < 1e-12       # lower stop: gap velocity = x'
+    assert abs(events[4][0] - (t_rel + half)) < 1e-12 * 2 * half
+    sp = (events[4][0] - events[3][0]) / half
+    assert abs(sp - so.SP) < 1e-12
+
+
+def test_lower_limit_and_its_sign_trap():
+    """(T4) at omega = 1.4: at a_lim (1 + 1e-6) the reference's sticking proportion equals the
+    closed form's (about 5.6e-7) to 1e-10, and at a_lim (1 - 1e-6) the landing comes after the
+    next release phase (SP < 0: no sticking on landing at that phase). For omega = 0.8 (cot < 0)
+    (T4) is flagged invalid and its value is not a limit: there the flight lands before T/2."""
+    w1, D, w = mpf_params(1, 1, 1.4)
+    a_lim, valid = cf.lower_limit(w1, D, w)
+    assert valid and abs(a_lim - mp.mpf("1.20604795195716")) < 1e-14
+    half = mp.pi / w
+    above = cf.sticking_orbit(w1, a_lim * (1 + mp.mpf("1e-6")), D, w)
+    below = cf.sticking_orbit(w1, a_lim * (1 - mp.mpf("1e-6")), D, w)
+    assert 0 < above.SP < 1e-6 and -1e-6 < below.SP < 0
+    for so, a in ((above, a_lim * (1 + mp.mpf("1e-6"))), (below, a_lim * (1 - mp.mpf("1e-6")))):
+        t_rel = so.phi_r / w
+        sc = reference.Scene("two-sided", TWO_SIDED.format(k=1.0, lo=-1.0, hi=1.0, r=0.0, a=1.0, w=1.4))
+        sc.f = a                  # the amplitude to full precision
+        sc.t0, sc.q0, sc.v0 = t_rel - half / 4, [D], [mp.mpf(0)]
+        ev = reference.Simulation(sc).run(1)
+        assert [(e[1], e[2]) for e in ev[:3]] == [("stick", 1), ("release", 1), ("impact", 0)]
+        assert abs(ev[2][0] - (t_rel + so.s_l)) < 1e-12 * 2 * half
+        if so is above:
+            assert (ev[3][1], ev[3][2], ev[4][1]) == ("stick", 0, "release")
+            assert abs((ev[4][0] - ev[3][0]) / half - so.SP) < 1e-10
+    a_sp, valid = cf.lower_limit(w1, D, mp.mpf(0.8))
+    assert not valid
+    trap = cf.sticking_orbit(w1, a_sp, D, mp.mpf(0.8))
+    assert trap.s_l < mp.pi / mp.mpf(0.8) - mp.mpf("0.1")   # not landing at T/2: spurious
+
+
+# ---------------------------------------------------------------------------------------------
+# (b) vibro against the reference on the shipped scenes
+
+
+@pytest.mark.parametrize("precision", ["double", "quad"])
+@pytest.mark.parametrize("name", FIVE)
+def test_vibro_events_match_reference(name, precision, tmp_path):
+    if not CLI:
+        pytest.fail("VIBRO_CLI is not set: run the tests through ctest (python.contacts_reference)")
+    scene = os.path.join(SCENES, name + ".toml")
+    out = tmp_path / (name + ".h5")
+    args = [CLI, "simulate", scene, "--out", str(out)]
+    if precision == "quad":
+        args += ["--set", 'run.precision="quad"']
+    p = subprocess.run(args, capture_output=True, text=True, timeout=1800)
+    assert p.returncode == 0, f"vibro simulate {name} ({precision}) exited {p.returncode}: {p.stderr}"
+    import h5py
+    with h5py.File(out, "r") as f:
+        assert "contact" in f["events"], "/events/contact is missing (several contacts need it)"
+    events, T, status = compare.read_h5(str(out))
+    assert status == "ok"
+    ref = compare.read_csv(os.path.join(CONTACTS, "reference_events", name + ".csv"))
+    res = compare.compare(ref, events, T, tol=1e-10)
+    assert res.ok, str(res)
+    # every non-chattering reference event was matched
+    assert res.matched + res.skipped_ref + res.skipped_kinds == len(ref)
+
+
+# ---------------------------------------------------------------------------------------------
+# (c) the stored reference events are reproducible
+
+
+@pytest.mark.parametrize("name,periods", [("contacts_two_sided_1dof", 2), ("contacts_chain2", 2),
+                                          ("contacts_impact_pair", 3)])
+def test_stored_reference_is_reproduced(name, periods):
+    sc = reference.Scene(os.path.join(SCENES, name + ".toml"))
+    sim = reference.Simulation(sc)
+    fresh = sim.run(periods)
+    stored = compare.read_csv(os.path.join(CONTACTS, "reference_events", name + ".csv"))
+    assert len(fresh) > 0
+    for e, s in zip(fresh, stored):
+        assert (e[1], e[2]) == (s.kind, s.contact)
+        assert abs(float(e[0]) - s.t) <= 4e-16 * abs(s.t)
