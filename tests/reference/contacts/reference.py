@@ -599,6 +599,7 @@ class Simulation:
         self.tail_target = tail_target
         self.vscale = mp.mpf(1)
         self.stats = {"tails": 0, "impacts": 0}
+        self.last_impact, self.cascade = None, 0
 
     # tolerances
     def vtol(self):
@@ -678,8 +679,28 @@ class Simulation:
             eta, etad, _ = m.project(sorted(S), eta, etad)
         return S, orders, eta, etad
 
+    def gtol(self):
+        m = self.model
+        return mp.mpf(10) ** (-(mp.mp.dps - 12)) * (1 + max(abs(x) for x in m.e + [mp.mpf(1)]))
+
     def step(self, t, t_end, eta, etad, S, orders):
         m = self.model
+        # a free contact at zero gap that no event has classified (e.g. touched by a flight of
+        # zero length in a cascade): separating, closing, or resting
+        orders = dict(orders)
+        for j in range(m.m):
+            if j in S or orders.get(j, 0) or m.gap(j, eta) > self.gtol():
+                continue
+            v = m.gapvel(j, etad)
+            if v > self.vtol():
+                orders[j] = 1
+            elif v < -self.vtol():
+                return self.impact(t, t_end, [j], eta, etad, S)
+            elif dot(m.c[j], m.free_acc(t, eta, etad)) > 0 and not S:
+                orders[j] = 2
+            else:
+                S2, orders, eta, etad = self.enter(t, sorted(S) + [j], S, orders, eta, etad)
+                return t, eta, etad, S2, orders
         flow = m.flow(S)
         ph = Phase(flow, t, eta, etad)
         Sl = sorted(S)
@@ -750,10 +771,23 @@ class Simulation:
 
     def impact(self, t, t_end, closing, eta, etad, S):
         m = self.model
-        Z = sorted(set(closing) | S)
+        # the impact LCP acts on every contact at zero gap that is closing or resting
+        resting = [j for j in range(m.m) if j not in S and j not in closing
+                   and abs(m.gap(j, eta)) <= self.gtol() and abs(m.gapvel(j, etad)) <= self.vtol()]
+        Z = sorted(set(closing) | S | set(resting))
+        # alternating impacts of several contacts accumulating at one instant: not decided
+        last = self.last_impact
+        if last is not None and set(closing) != last[1] and t - last[0] < self.model.T * mp.mpf("1e-9"):
+            self.cascade += 1
+            if self.cascade > 3:
+                raise Undetermined(f"contacts {sorted(set(closing) | last[1])} chattering to one accumulation "
+                                   f"point near t = {mp.nstr(t, 17)}")
+        else:
+            self.cascade = 0
+        self.last_impact = (t, set(closing))
         vm = [m.gapvel(j, etad) for j in Z]
         for idx, j in enumerate(Z):
-            if j in S:
+            if j in S or j in resting:
                 vm[idx] = mp.mpf(0)
         WZ = [[m.W[j][k] for k in Z] for j in Z]
         q = [(1 + m.r[j]) * vm[idx] for idx, j in enumerate(Z)]
@@ -861,10 +895,12 @@ def main(argv=None):
     ap.add_argument("--out", default="-")
     ap.add_argument("--dps", type=int, default=40)
     ap.add_argument("--periods", type=int, default=None)
+    ap.add_argument("--tail-target", default="1e-25",
+                    help="accumulation rule: largest estimated error of a predicted accumulation time, / T")
     args = ap.parse_args(argv)
     mp.mp.dps = args.dps
     try:
-        sim = Simulation(Scene(args.scene))
+        sim = Simulation(Scene(args.scene), tail_target=mp.mpf(args.tail_target))
         events = sim.run(args.periods)
     except (SceneError, KeyError) as e:
         print(f"{args.scene}: {e}", file=sys.stderr)
