@@ -169,6 +169,44 @@ def test_lower_limit_and_its_sign_trap():
     assert trap.s_l < mp.pi / mp.mpf(0.8) - mp.mpf("0.1")   # not landing at T/2: spurious
 
 
+PAIR_OR_STOP = """
+[structure]
+mass = {M}
+stiffness = {K}
+forcing_dof = 0
+[[contact]]
+{dofs}
+side = "below"
+position = -0.5
+restitution = 0.8
+[excitation]
+amplitude = 1.0
+frequency = 1.5
+[initial]
+displacement = {q}
+velocity = {q}
+"""
+
+
+def test_impact_pair_with_a_heavy_partner_becomes_a_fixed_stop():
+    """A pair q_0 - q_1 >= -0.5 whose partner (mass m_b on its own spring, natural frequency 2,
+    unforced, at rest; with frequency 1 the gap would obey the 1-DOF equation exactly) is very heavy converges to the fixed stop q_0 >= -0.5 at the rate 1/m_b: the reduced mass
+    1/(1 + 1/m_b) and the partner's recoil P/m_b are both O(1/m_b)."""
+    stop = reference.Simulation(reference.Scene("stop", PAIR_OR_STOP.format(
+        M="[[1.0]]", K="[[1.0]]", dofs="dof = 0", q="[0.0]"))).run(6)
+    assert len(stop) >= 5 and all(e[1] == "impact" for e in stop)
+    errors = []
+    for mb in (1e3, 1e4, 1e5):
+        pair = reference.Simulation(reference.Scene("pair", PAIR_OR_STOP.format(
+            M=f"[[1.0, 0.0], [0.0, {mb!r}]]", K=f"[[1.0, 0.0], [0.0, {4 * mb!r}]]", dofs="dofs = [0, 1]",
+            q="[0.0, 0.0]"))).run(6)
+        assert [(e[1], e[2]) for e in pair] == [(e[1], e[2]) for e in stop]
+        errors.append(max(abs(a[0] - b[0]) + abs(a[3] - b[3]) for a, b in zip(pair, stop)))
+    for coarse, fine in zip(errors, errors[1:]):
+        assert 8 < coarse / fine < 12.5, errors       # O(1/m_b)
+    assert errors[-1] < 1e-3
+
+
 # ---------------------------------------------------------------------------------------------
 # (b) vibro against the reference on the shipped scenes
 
