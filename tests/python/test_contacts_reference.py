@@ -8,10 +8,14 @@
     in quad precision, against the stored reference events
     (tests/reference/contacts/reference_events/), every event within 1e-10 T.
 (c) The stored reference events are what reference.py computes (first periods re-run).
+(d) The reference against vibro's single-stop engine (quad): the random scenes with one contact on
+    one DOF, rewritten with the [stop] shorthand (a stop above mirrored: q -> -q, the forcing
+    shifted by half a period), every event within 1e-12 T.
 
 Neither truth shares code with vibro's C++. ctest runs this file as python.contacts_reference
 with VIBRO_CLI set to the built `vibro`.
 """
+import math
 import os
 import subprocess
 import sys
@@ -250,3 +254,62 @@ def test_stored_reference_is_reproduced(name, periods):
     for e, s in zip(fresh, stored):
         assert (e[1], e[2]) == (s.kind, s.contact)
         assert abs(float(e[0]) - s.t) <= 4e-16 * abs(s.t)
+
+
+# ---------------------------------------------------------------------------------------------
+# (d) the reference against vibro's single-stop engine
+
+
+def as_stop_scene(doc):
+    """A scene with one [[contact]] on one DOF as the [stop] shorthand, and the time shift of its
+    events: a stop above (q_b <= d) is the stop below -d of the mirrored system q -> -q, whose
+    forcing f sin(w t) changes sign, i.e. is the original forcing half a period later."""
+    (c,) = doc["contact"]
+    st, ex = doc["structure"], doc["excitation"]
+    mirror = c["side"] == "above"
+    half = math.pi / ex["frequency"]
+    q, v = doc["initial"]["displacement"], doc["initial"]["velocity"]
+    if mirror:
+        q, v = [-x for x in q], [-x for x in v]
+    lines = ["[structure]", f"mass = {st['mass']!r}", f"stiffness = {st['stiffness']!r}",
+             f"forcing_dof = {st['forcing_dof']}", f"contact_dof = {c['dof']}"]
+    if "damping_ratios" in st:
+        lines.append(f"damping_ratios = {st['damping_ratios']!r}")
+    lines += ["[stop]", f"position = {(-c['position'] if mirror else c['position'])!r}",
+              f"restitution = {c['restitution']!r}",
+              "[excitation]", f"amplitude = {ex['amplitude']!r}", f"frequency = {ex['frequency']!r}",
+              "[initial]", f"time = {(half if mirror else 0.0)!r}", f"displacement = {q!r}", f"velocity = {v!r}",
+              "[run]", f"periods = {doc['run']['periods']}", 'precision = "quad"', ""]
+    return "\n".join(lines), (half if mirror else 0.0)
+
+
+def test_reference_matches_single_stop_vibro_on_random_scenes(tmp_path):
+    if not CLI:
+        pytest.fail("VIBRO_CLI is not set: run the tests through ctest (python.contacts_reference)")
+    import random_scenes
+    import tomllib
+    random_scenes.main([str(tmp_path), "--count", "100", "--seed", "1"])
+    checked = events = 0
+    for i in range(100):
+        path = tmp_path / f"random_{i:03d}.toml"
+        doc = tomllib.loads(path.read_text())
+        if len(doc["contact"]) != 1 or "dof" not in doc["contact"][0]:
+            continue
+        text, shift = as_stop_scene(doc)
+        stop = tmp_path / f"stop_{i:03d}.toml"
+        stop.write_text(text)
+        out = tmp_path / f"stop_{i:03d}.h5"
+        p = subprocess.run([CLI, "simulate", str(stop), "--out", str(out)], capture_output=True, text=True,
+                           timeout=600)
+        assert p.returncode == 0, p.stderr
+        other, T, status = compare.read_h5(str(out))
+        assert status == "ok"
+        for e in other:
+            e.t -= shift
+        sim = reference.Simulation(reference.Scene(str(path)))
+        ref = [compare.Event(float(t), kind, j, float(vb), float(va)) for t, kind, j, vb, va, _ in sim.run()]
+        res = compare.compare(ref, other, T, tol=1e-12)
+        assert res.ok, f"random_{i:03d}: {res}"
+        checked += 1
+        events += res.matched
+    assert checked >= 20 and events >= 200, (checked, events)
