@@ -849,7 +849,20 @@ class Simulation:
         lam = solve(WZ, [-dot(m.c[i], a0) for i in Zk])
         if min(lam) <= 0:
             return None
-        Dinf = D0 * (1 + eps / 3)
+        # damping: each impact reverses the gap velocity and with it the damping force on the
+        # gap, g'' = A - beta g' (beta = u.D u / c_k.u, u = N N^T c_k the direction of the
+        # impulse with S held); summed over the tail this shortens it by r beta D0^2 / 2 beyond
+        # what eps (computed from the third derivative at the impact, which contains -beta a) holds
+        if ph.flow.k:
+            Nt = transpose(ph.flow.N)
+            u = [dot(row, [dot(col, m.c[k]) for col in Nt]) for row in ph.flow.N]
+        else:
+            u = [mp.mpf(0)] * m.n
+        cu = dot(m.c[k], u)
+        beta = mp.fsum(m.D[i] * u[i] ** 2 for i in range(m.n)) / cu if cu else mp.mpf(0)
+        if beta * D0 > mp.mpf("0.1"):
+            return None
+        Dinf = D0 * (1 + eps / 3) - r * beta * D0 ** 2 / 2
         if t + 4 * Dinf >= t_end:
             return None
         # every other gap and every reaction of S certified free of roots on [t, t + 4 Dinf]
