@@ -600,6 +600,7 @@ class Simulation:
         self.vscale = mp.mpf(1)
         self.stats = {"tails": 0, "impacts": 0}
         self.last_impact, self.cascade = None, 0
+        self.tail_damping = True      # False: the tail without its damping term (diagnostics)
 
     # tolerances
     def vtol(self):
@@ -862,7 +863,7 @@ class Simulation:
         beta = mp.fsum(m.D[i] * u[i] ** 2 for i in range(m.n)) / cu if cu else mp.mpf(0)
         if beta * D0 > mp.mpf("0.1"):
             return None
-        Dinf = D0 * (1 + eps / 3) - r * beta * D0 ** 2 / 2
+        Dinf = D0 * (1 + eps / 3) - (r * beta * D0 ** 2 / 2 if self.tail_damping else 0)
         if t + 4 * Dinf >= t_end:
             return None
         # every other gap and every reaction of S certified free of roots on [t, t + 4 Dinf]
@@ -910,10 +911,13 @@ def main(argv=None):
     ap.add_argument("--periods", type=int, default=None)
     ap.add_argument("--tail-target", default="1e-25",
                     help="accumulation rule: largest estimated error of a predicted accumulation time, / T")
+    ap.add_argument("--tail-without-damping", action="store_true",
+                    help="diagnostics: leave the damping term out of the accumulation tail")
     args = ap.parse_args(argv)
     mp.mp.dps = args.dps
     try:
         sim = Simulation(Scene(args.scene), tail_target=mp.mpf(args.tail_target))
+        sim.tail_damping = not args.tail_without_damping
         events = sim.run(args.periods)
     except (SceneError, KeyError) as e:
         print(f"{args.scene}: {e}", file=sys.stderr)
