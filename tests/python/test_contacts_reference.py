@@ -211,6 +211,86 @@ def test_impact_pair_with_a_heavy_partner_becomes_a_fixed_stop():
     assert errors[-1] < 1e-3
 
 
+CRADLE = """
+[structure]
+mass = [[1.0, 0.0], [0.0, 1.0]]
+stiffness = [[1.0, 0.0], [0.0, 1.0]]
+forcing_dof = 0
+[[contact]]
+dof = 0
+side = "below"
+position = 0.1
+restitution = 0.5
+[[contact]]
+dofs = [1, 0]
+side = "below"
+position = 0.0
+restitution = 0.8
+[excitation]
+amplitude = 0.0
+frequency = 0.37
+"""
+
+
+def impact_of(text, q, qd, S, closing):
+    """One impact of the reference from a given physical state: returns (q', events, S after)."""
+    sim = reference.Simulation(reference.Scene("impact", text))
+    m = sim.model
+    eta, etad = m.to_modal([mp.mpf(x) for x in q]), m.to_modal([mp.mpf(x) for x in qd])
+    t, eta, etad, S2, _ = sim.impact(mp.mpf(0), mp.mpf(10), closing, eta, etad, set(S))
+    qd_after = [reference.dot(row, etad) for row in m.Phi]
+    return qd_after, sim.events, S2
+
+
+def test_cradle_impact_lcp_with_a_resting_contact():
+    """Mass 0 rests on its (preloaded) stop, mass 1 falls on it with pair velocity -1
+    (r = 0.5 stop, 0.8 pair). The generalised Newton law by hand: mass 0 held, so the pair's
+    effective mass is m_1 = 1: P_pair = 1.8, the stop answers with P_stop = 1.8, mass 0 stays at
+    rest and stuck, mass 1 leaves with 0.8 (energy loss 0.18). Free mass 0 (not on its stop): the
+    pair's reduced mass 1/2 gives q' = (-0.9, -0.1), still v+ = -r v- on the pair."""
+    r2 = mp.mpf(0.8)     # the binary double of the scene's 0.8
+    qd, events, S = impact_of(CRADLE, [0.1, 0.1], [0.0, -1.0], {0}, [1])
+    assert abs(qd[0]) < 1e-35 and abs(qd[1] - r2) < 1e-35
+    assert S == {0}
+    (t, kind, j, vb, va, sim) = events[0]
+    assert (kind, j, sim) == ("impact", 1, False) and abs(vb + 1) < 1e-35 and abs(va - r2) < 1e-35
+    assert all(e[1] != "liftoff" for e in events)
+    qd, events, S = impact_of(CRADLE, [0.5, 0.5], [0.0, -1.0], set(), [1])
+    assert abs(qd[0] + (1 + r2) / 2) < 1e-35 and abs(qd[1] + 1 - (1 + r2) / 2) < 1e-35
+
+
+def test_simultaneous_impact_of_two_coupled_pairs():
+    """Three masses, pairs (1, 0) and (2, 1) (W = [[2, -1], [-1, 2]]), both closing at once with
+    v- = -2.1941, r = 0.5: by symmetry P = (1 + r)|v-| / (2 - 1) = 3.29115 on each pair, v+ = -r v-;
+    both events flagged simultaneous."""
+    text = """
+[structure]
+mass = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+stiffness = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
+forcing_dof = 1
+[[contact]]
+dofs = [1, 0]
+side = "below"
+position = 0.0
+restitution = 0.5
+[[contact]]
+dofs = [2, 1]
+side = "below"
+position = 0.0
+restitution = 0.5
+[excitation]
+amplitude = 0.0
+frequency = 0.37
+"""
+    v = mp.mpf("2.1941")
+    qd, events, S = impact_of(text, [0, 0, 0], [v, 0, -v], set(), [0, 1])
+    P = (1 + mp.mpf("0.5")) * v
+    assert abs(qd[0] - (v - P)) < 1e-35 and abs(qd[1]) < 1e-35 and abs(qd[2] - (-v + P)) < 1e-35
+    assert [(e[1], e[2], e[5]) for e in events] == [("impact", 0, True), ("impact", 1, True)]
+    for e in events:
+        assert abs(e[3] + v) < 1e-35 and abs(e[4] - v / 2) < 1e-35
+
+
 # ---------------------------------------------------------------------------------------------
 # (b) vibro against the reference on the shipped scenes
 
