@@ -291,16 +291,65 @@ frequency = 0.37
         assert abs(e[3] + v) < 1e-35 and abs(e[4] - v / 2) < 1e-35
 
 
+def test_coupled_chattering_against_the_held_pair_as_one_dof():
+    """tests/reference/contacts/scenes/contacts_coupled_chatter.toml: once the pair contact 0
+    (q_0 - q_1 <= d) sticks, x = q_0 with q_1 = x - d is a 1-DOF system of mass m_0 + m_1 (the pair's
+    reactions cancel in the sum of the two equations), and the stop on DOF 0 is a stop on x with
+    v+ = -r v-. Integrated from the reference's state at the stick with mpmath's Taylor solver and
+    a damping matrix built here, its impacts agree with the reference's (impact LCPs on both
+    contacts) to 1e-25."""
+    path = os.path.join(CONTACTS, "scenes", "contacts_coupled_chatter.toml")
+    sc = reference.Scene(path)
+    sim = reference.Simulation(sc)
+    m = sim.model
+    t, (eta, etad), S, orders = sc.t0, sim.initial_state(), set(), {}
+    while not (sim.events and sim.events[-1][1:3] == ("stick", 0)):
+        t, eta, etad, S, orders = sim.step(t, t + 10, eta, etad, S, orders)
+    x, v = reference.dot(m.Phi[0], eta), reference.dot(m.Phi[0], etad)
+    t_stick = t
+    while len([e for e in sim.events if e[0] > t_stick and e[1] == "impact"]) < 4:
+        t, eta, etad, S, orders = sim.step(t, t + 10, eta, etad, S, orders)
+    impacts = [e for e in sim.events if e[0] > t_stick and e[1] == "impact"][:4]
+    assert all(e[2] == 1 for e in impacts)
+    Mm = mp.matrix(sc.M)
+    Km = mp.matrix(sc.K)
+    Mh = mp.diag([1 / mp.sqrt(Mm[i, i]) for i in range(2)])
+    E, Q = mp.eigsy(Mh * Km * Mh)
+    Cm = mp.zeros(2, 2)
+    for k, i in enumerate(sorted(range(2), key=lambda i: E[i])):
+        mphi = Mm * (Mh * Q[:, i])
+        Cm += 2 * sc.zeta[k] * mp.sqrt(E[i]) * mphi * mphi.T
+    d, x0, r = sc.contacts[0].d, sc.contacts[1].d, sc.contacts[1].r
+    total = Mm[0, 0] + Mm[1, 1]
+
+    def rhs(tt, y):
+        F = -(Km * mp.matrix([y[0], y[0] - d])) - (Cm * mp.matrix([y[1], y[1]]))
+        return [y[1], (F[0] + F[1] + sc.f * mp.sin(sc.omega * tt)) / total]
+
+    with mp.workdps(34):
+        tt, y = t_stick, [x, v]
+        for e in impacts:
+            sol = mp.odefun(rhs, tt, y, tol=mp.mpf(10) ** -32)
+            tk = mp.findroot(lambda s: sol(s)[0] - x0, e[0])
+            xk, vk = sol(tk)
+            assert abs(tk - e[0]) < 1e-25 and abs(vk - e[3]) < 1e-25
+            tt, y = tk, [x0, -r * vk]
+
+
 # ---------------------------------------------------------------------------------------------
 # (b) vibro against the reference on the shipped scenes
 
 
 @pytest.mark.parametrize("precision", ["double", "quad"])
-@pytest.mark.parametrize("name", FIVE)
+@pytest.mark.parametrize("name", FIVE + ["contacts_coupled_chatter"])
 def test_vibro_events_match_reference(name, precision, tmp_path):
+    """The five shipped scenes, and tests/reference/contacts/scenes/contacts_coupled_chatter.toml
+    (a stop chattering while a coupled pair is held: impact LCPs on two contacts)."""
     if not CLI:
         pytest.fail("VIBRO_CLI is not set: run the tests through ctest (python.contacts_reference)")
     scene = os.path.join(SCENES, name + ".toml")
+    if not os.path.exists(scene):
+        scene = os.path.join(CONTACTS, "scenes", name + ".toml")
     out = tmp_path / (name + ".h5")
     args = [CLI, "simulate", scene, "--out", str(out)]
     if precision == "quad":

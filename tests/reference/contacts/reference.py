@@ -598,7 +598,7 @@ class Simulation:
         self.window = m.T * mp.mpf(10) ** (-(mp.mp.dps - 20))
         self.tail_target = tail_target
         self.vscale = mp.mpf(1)
-        self.stats = {"tails": 0, "impacts": 0}
+        self.stats = {"tails": 0, "impacts": 0, "coupled": 0}
         self.last_impact, self.cascade = None, 0
         self.tail_damping = True      # False: the tail without its damping term (diagnostics)
 
@@ -793,6 +793,8 @@ class Simulation:
         WZ = [[m.W[j][k] for k in Z] for j in Z]
         q = [(1 + m.r[j]) * vm[idx] for idx, j in enumerate(Z)]
         P, _, _ = lcp(WZ, q, self.vscale * mp.mpf(10) ** (-(mp.mp.dps - 12)))
+        if any(abs(m.W[a][b]) > mp.mpf("1e-20") and P[ia] > 0 and P[ib] > 0 for ia, a in enumerate(Z) for ib, b in enumerate(Z) if a != b):
+            self.stats["coupled"] += 1      # an impulse shared by coupled contacts (a true LCP)
         for idx, j in enumerate(Z):
             for i in range(m.n):
                 etad[i] += m.c[j][i] * P[idx]
@@ -929,8 +931,8 @@ def main(argv=None):
         write_csv(events, "/dev/stdout")
     else:
         write_csv(events, args.out)
-    print(f"{len(events)} events, {sim.stats['impacts']} impacts, {sim.stats['tails']} accumulation tails",
-          file=sys.stderr)
+    print(f"{len(events)} events, {sim.stats['impacts']} impacts, {sim.stats['tails']} accumulation tails, "
+          f"{sim.stats['coupled']} impacts with impulses on coupled contacts", file=sys.stderr)
     return 0
 
 
