@@ -859,6 +859,84 @@ def main():
         print(w)
 
 
+def scene_contacts(f):
+    """The [[contact]] tables of the run's scene (empty for a [stop] scene)."""
+    import tomllib
+    try:
+        return tomllib.loads(text(f.attrs["scene"])).get("contact", [])
+    except (KeyError, tomllib.TOMLDecodeError):
+        return []
+
+
+def plot_gaps(f, title, save, window, contacts):
+    """Several contacts (docs/contacts.md): every gap g_j = σ_j (w_jᵀq − d_j) against t, one panel
+    per contact, from the stored samples (exact states) and the contact's own events (g_j = 0 at
+    its impacts and while it sticks); sticking on that contact shaded, impacts marked."""
+    T = float(f.attrs["forcing_period"])
+    status = text(f.attrs["status"])
+    t = f["samples/t"][:]
+    t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
+    t_from, t_to = max(t_from, t[0]), min(t_to, t[-1])
+    if t_to <= t_from:
+        print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
+              file=sys.stderr)
+        sys.exit(2)
+    X = f["samples/X"][:]
+    phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, X.shape[1])
+    q = X @ phi.T  # physical q = Φ X
+    ev_t, kinds, ev_c = f["events/t"][:], f["events/kind"][:], f["events/contact"][:]
+    kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+    m = len(contacts)
+    fig, axes = figure(m, 1, figsize=(9, 1.2 + 1.5 * m), sharex=True, squeeze=False)
+    if fig.get_layout_engine() is None:
+        fig.set_layout_engine("constrained")
+    for j, (c, ax) in enumerate(zip(contacts, axes[:, 0])):
+        dofs = c.get("dofs", [c.get("dof", 0)])
+        w = np.zeros(q.shape[1])
+        w[int(dofs[0])] = 1.0
+        if len(dofs) > 1:
+            w[int(dofs[1])] = -1.0
+        sigma = 1.0 if c.get("side", "below") == "below" else -1.0
+        g = sigma * (q @ w - float(c["position"]))
+        mine = ev_c == j
+        zero_t = ev_t[mine & np.isin(kinds, [kind_of["impact"], kind_of["accumulation"], kind_of["stick"],
+                                            kind_of["release"], kind_of["grazing"]])]
+        tt = np.concatenate([t, zero_t])
+        gg = np.concatenate([g, np.zeros(len(zero_t))])
+        order = np.argsort(tt, kind="stable")
+        tt, gg = tt[order], gg[order]
+        sel = (tt >= t_from) & (tt <= t_to)
+        ax.plot(tt[sel], gg[sel], lw=1, color=OKABE_ITO[j % 7])
+        ax.axhline(0, color="k", lw=1.0)
+        sticks = ev_t[mine & (kinds == kind_of["stick"])]
+        releases = ev_t[mine & (kinds == kind_of["release"])]
+        drawn = 0
+        for s0 in sticks:
+            later = releases[releases > s0]
+            e = later[0] if len(later) else t_to
+            if e >= t_from and s0 <= t_to:
+                ax.axvspan(max(s0, t_from), min(e, t_to), color=STICK_SHADE, alpha=0.25, lw=0,
+                           label="sticking" if drawn == 0 else None)
+                drawn += 1
+        imp = mine & (kinds == kind_of["impact"]) & (ev_t >= t_from) & (ev_t <= t_to)
+        if imp.any():
+            ax.plot(ev_t[imp], np.zeros(imp.sum()), "v", ms=3.5, color=OKABE_ITO[1],
+                    label=f"impacts ({imp.sum()})")
+        where = f"q{dofs[0]}" + (f" − q{dofs[1]}" if len(dofs) > 1 else "")
+        rel = "≥" if sigma > 0 else "≤"
+        ax.set_ylabel(f"$g_{j}$")
+        ax.set_title(f"contact {j}: {where} {rel} {c['position']:g}, r = {c.get('restitution', 0):g}",
+                     fontsize=fs(9), loc="left")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
+    ax = axes[-1, 0]
+    ax.set_xlabel("$t$")
+    ax.set_xlim(t_from, t_to)
+    absolute_time(ax)
+    fig.suptitle(f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})", fontsize=fs(10))
+    save(fig, "gaps")
+
+
 def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
         varied = set()
@@ -885,7 +963,14 @@ def draw(args, save, window):
         elif args.overlay:
             print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
             sys.exit(2)
-        if len(f["samples/t"]) > 1:
+        contacts = scene_contacts(f)
+        if len(contacts) > 1 and len(f["samples/t"]) > 1:
+            if args.coordinate != "x_B":
+                print(f"vibro plot: --coordinate {args.coordinate}: a run with several contacts is drawn as "
+                      "its gaps (PREFIX_gaps, docs/contacts.md)", file=sys.stderr)
+                sys.exit(2)
+            plot_gaps(f, title, save, window, contacts)
+        elif len(f["samples/t"]) > 1:
             plot_run(f, title, save, window, args.coordinate)
         elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):
             print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)

@@ -220,6 +220,8 @@ class Recorder final : public vibro::Observer {
     event_x_B.push_back(e.x_B);
     event_v_before.push_back(e.v_before);
     event_v_after.push_back(e.v_after);
+    event_contact.push_back(static_cast<std::int32_t>(e.contact));
+    event_simultaneous.push_back(e.simultaneous ? 1 : 0);
   }
   void OnSample(const vibro::Sample& s) override { samples.Add(s); }
   void OnSection(const vibro::Sample& s) override { section.Add(s); }
@@ -238,6 +240,8 @@ class Recorder final : public vibro::Observer {
   int dof_;
   std::vector<double> event_t, event_x_B, event_v_before, event_v_after;
   std::vector<std::int8_t> event_kind;
+  std::vector<std::int32_t> event_contact;  // the [[contact]] index (docs/contacts.md)
+  std::vector<std::uint8_t> event_simultaneous;
   Rows samples, section;
 };
 
@@ -320,6 +324,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   events["x_B"] = Array(recorder.event_x_B);
   events["v_before"] = Array(recorder.event_v_before);
   events["v_after"] = Array(recorder.event_v_after);
+  events["contact"] = Array(recorder.event_contact);
+  events["simultaneous"] = Array(recorder.event_simultaneous);
   d["events"] = events;
   d["samples"] = RowsDict(recorder.samples, sys.dof());
   d["section"] = RowsDict(recorder.section, sys.dof());

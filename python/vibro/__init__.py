@@ -265,7 +265,7 @@ def model(scene):
 
 def _events_array(e):
     a = _np.empty(len(e["t"]), dtype=[("t", "f8"), ("kind", "i1"), ("x_B", "f8"), ("v_before", "f8"),
-                                      ("v_after", "f8")])
+                                      ("v_after", "f8"), ("contact", "i4"), ("simultaneous", "?")])
     for k in a.dtype.names:
         a[k] = e[k]
     return a
@@ -284,7 +284,8 @@ class SimulationResult:
     """What :func:`simulate` returns.
 
     - ``summary``: the dict of ``vibro simulate --json`` (status, engine, t_end, counts, attractor);
-    - ``events``: structured array, fields t, kind (:data:`EVENT_KINDS`), x_B, v_before, v_after;
+    - ``events``: structured array, fields t, kind (:data:`EVENT_KINDS`), x_B, v_before, v_after, contact (the
+      ``[[contact]]`` index, docs/contacts.md), simultaneous;
     - ``samples``: structured array of the dense output, fields t, X (n,), V (n,), x_B, mode;
     - ``section``: the stroboscopic section (t0 + kT), same fields as ``samples``.
     """
@@ -561,7 +562,8 @@ def _event_columns(cols):
     as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they are: their
     ``v_before`` is the velocity just before the event."""
     names = set(cols)
-    if names == {"t", "kind", "x_B", "v_before", "v_after"}:  # vibro's own events
+    own = {"t", "kind", "x_B", "v_before", "v_after"}
+    if names == own or names == own | {"contact", "simultaneous"}:  # vibro's own events (a run or a file)
         cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"]}
         names = set(cols)
     for k in sorted(names - {"t", "kind", "velocity"}):

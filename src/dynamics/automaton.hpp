@@ -847,7 +847,8 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   gaps_[static_cast<size_t>(k)] = 0;
   const S phase = Phase(clock_);
   const S v_minus = mk.ContactVelocity(V_);
-  const S floor = S(1000) * Eps<S>() * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
+  // The held flow's constrained modes are double data whatever S: its rounding floor is double's.
+  const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
   const auto two_stuck = [&](const char* what) {
     return Fail(fmt::format("contact {} {} at t = {:.17g} while contact {} sticks: sticking on two "
                             "contacts at once is not implemented (docs/contacts.md). Move the "
@@ -902,9 +903,9 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   // A run of impacts of decreasing speed with flights far shorter than the period is such a
   // sequence: after kHeldChatterImpacts of them the run ends undetermined, never guessed.
   const double now = AbsTime(clock_);
-  const bool converging = chatter_last_ > 0 && speed < chatter_last_ && k == held_chatter_contact_ &&
-                          now - held_chatter_t_ < 1e-2 * R::to_double(period_);
-  held_chatter_ = converging ? held_chatter_ + 1 : 0;
+  const bool short_flight = k == held_chatter_contact_ && now - held_chatter_t_ < 1e-2 * R::to_double(period_);
+  const bool converging = short_flight && chatter_last_ > 0 && speed < chatter_last_;
+  held_chatter_ = short_flight ? held_chatter_ + 1 : 0;
   held_chatter_contact_ = k;
   held_chatter_t_ = now;
   if ((converging && rk * speed <= floor) || held_chatter_ >= kHeldChatterImpacts)

@@ -456,6 +456,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
     auto r = Search([this, j](const S& u, const S& H, const S& rest) { return GapProbe(j, u, H, rest); },
                     w, best.sigma, SegmentEnd::kContact);
     if (r.end == SegmentEnd::kFailure) return r;
+    if (r.end == SegmentEnd::kContact && r.sigma < S(0)) r.sigma = S(0);  // a root within rounding of the start
     if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
       best = r;
       best.contact = j;
@@ -523,6 +524,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
     auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },
                     wk, best.sigma, SegmentEnd::kContact);
     if (r.end == SegmentEnd::kFailure) return r;
+    if (r.end == SegmentEnd::kContact && r.sigma < S(0)) r.sigma = S(0);  // a root within rounding of the start
     if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
       best = r;
       best.contact = k;
