@@ -1,0 +1,170 @@
+// `vibro prove`: the model as exact decimals, the orbit to prove (from the Poincaré solver), the
+// proof by kind, and the certificate (prove.hpp, docs/prove.md).
+#include "vibro/prove.hpp"
+
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "proof/proof_common.hpp"
+#include "vibro/observer.hpp"
+#include "vibro/orbit_from_state.hpp"
+
+namespace vibro {
+namespace {
+
+using proof::Json;
+
+// The shortest decimal that reads back as the double: the parameter the theorem is about (for a
+// scene written in decimals, the decimal the user wrote).
+std::string Decimal(double x) { return fmt::format("{}", x); }
+
+proof::IntervalModel ModelOf(const System& sys) {
+  std::vector<std::string> omega, forcing, contact, shape;
+  for (int i = 0; i < sys.dof(); ++i) {
+    omega.push_back(Decimal(sys.omega()(i)));
+    forcing.push_back(Decimal(sys.forcing()(i)));
+    contact.push_back(Decimal(sys.contact()(i)));
+    shape.push_back(Decimal(sys.contact_shape()(i)));
+  }
+  return proof::IntervalModel::FromDecimals(omega, forcing, contact, shape, Decimal(sys.stop()),
+                                            Decimal(sys.restitution()), Decimal(sys.amplitude()),
+                                            Decimal(sys.frequency()));
+}
+
+Json ModelJson(const proof::IntervalModel& m) {
+  return {{"frequencies", m.omega_text}, {"forcing", m.forcing_text},   {"contact", m.contact_text},
+          {"shape", m.shape_text},       {"stop", m.stop_text},         {"restitution", m.restitution_text},
+          {"amplitude", m.amplitude_text}, {"frequency", m.frequency_text}};
+}
+
+// The impacts of one period of an orbit (time, state just after), as the simulator meets them.
+class ImpactRecorder final : public Observer {
+ public:
+  void OnEvent(const Event& e) override {
+    if (e.kind == EventKind::kImpact) times.push_back(e.t);
+    else if (e.kind != EventKind::kGrazing) other = ToString(e.kind);
+    else grazing = true;
+  }
+  void OnReset(const Reset& r) override {
+    if (r.kind == ResetKind::kImpact) {
+      X.push_back(r.X_after);
+      V.push_back(r.V_after);
+    }
+  }
+  std::vector<double> times;
+  std::vector<Eigen::VectorXd> X, V;
+  std::string other;
+  bool grazing = false;
+};
+
+struct Found {
+  std::string failure;  // "" when an impacting orbit was found
+  bool sticking = false;
+  proof::ImpactGuess guess;
+};
+
+Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest& request) {
+  Found f;
+  OrbitRequest req;
+  req.kind = request.kind;
+  req.period = request.period;
+  req.transient_periods = request.start ? 0 : request.transient_periods;
+  req.start = request.start;
+  const auto orbit = SolveOrbit(sys, scene, req);
+  if (orbit.status != "converged") {
+    f.failure = "the Poincaré solver found no orbit to prove (" + orbit.status +
+                (orbit.message.empty() ? "" : ": " + orbit.message) + ")";
+    return f;
+  }
+  if (orbit.summary.kind == "sticking-periodic") {
+    f.sticking = true;
+    return f;
+  }
+  Scene one = scene;
+  one.run.periods = orbit.period;
+  one.run.samples_per_period = 0;
+  one.run.lyapunov = false;
+  const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+  ImpactRecorder rec;
+  SimulationOptions opt;
+  opt.observers = {&rec};
+  opt.initial = &start;
+  const auto run = Simulate(sys, one, opt);
+  if (run.status != RunStatus::kOk) f.failure = "the orbit found could not be followed over one period: " + run.message;
+  else if (!rec.other.empty()) f.failure = "the orbit found has a " + rec.other + " event: it is not an impacting orbit";
+  else if (rec.grazing) f.failure = "the orbit found grazes the stop: a grazing orbit cannot be proven";
+  else if (rec.times.empty() || rec.times.size() != rec.X.size()) f.failure = "the orbit found has no impact";
+  if (!f.failure.empty()) return f;
+  // Impact 0 first in time; the rest follow it within one period.
+  f.guess.period = orbit.period;
+  f.guess.times = rec.times;
+  f.guess.X = rec.X;
+  f.guess.V = rec.V;
+  return f;
+}
+
+}  // namespace
+
+ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
+  if (system.damped())
+    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
+  const proof::Deadline deadline(request.time_limit);
+  const auto model = ModelOf(system);
+  proof::Outcome outcome;
+  std::string kind;
+  const bool one_dof_plastic = system.dof() == 1 && system.restitution() == 0 && system.contact_shape()(0) == 1;
+  const auto sticking = [&]() {
+    kind = "sticking";
+    if (one_dof_plastic) {
+      outcome = proof::ProveSticking1Dof(model, request, deadline);
+    } else {
+      outcome.reason = system.restitution() > 0
+                           ? "sticking orbits with chattering (r > 0) are not proven by this version: the "
+                             "accumulation point needs a rigorous remainder bound (docs/prove.md)"
+                           : "sticking orbits of a model with more than one mode are not proven by this version "
+                             "(docs/prove.md)";
+    }
+  };
+  if (request.kind == OrbitKind::kSticking) {
+    sticking();
+  } else if (request.kind == OrbitKind::kAuto && one_dof_plastic) {
+    sticking();  // r = 0, one mode: every impact is plastic, an orbit with impacts sticks or departs
+  } else {
+    const auto found = FindImpactOrbit(system, scene, request);
+    if (found.sticking && request.kind == OrbitKind::kAuto) {
+      sticking();
+    } else {
+      kind = "impact";
+      if (found.sticking) outcome.reason = "the orbit found sticks: it is not an impacting orbit (try --kind sticking)";
+      else if (!found.failure.empty()) outcome.reason = found.failure;
+      else if (system.restitution() == 0) outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
+      else outcome = proof::ProveImpactOrbit(model, found.guess, request, deadline);
+    }
+  }
+  ProofResult result;
+  result.proven = outcome.proven;
+  result.reason = outcome.reason;
+  Json summary = {{"verdict", outcome.proven ? "proven" : "not-proven"}, {"reason", outcome.reason}, {"kind", kind}};
+  for (const auto& [key, value] : outcome.summary.items()) summary[key] = value;
+  if (!summary.contains("period")) summary["period"] = request.period > 0 ? Json(request.period) : Json(nullptr);
+  for (const char* key : {"sequence", "events", "multipliers"})
+    if (!summary.contains(key)) summary[key] = Json::array();
+  if (!summary.contains("section")) summary["section"] = nullptr;
+  if (!summary.contains("stability")) summary["stability"] = "undecided";
+  result.summary_json = summary.dump();
+  Json cert = {{"format", "vibro-proof-certificate/1"},
+               {"verdict", summary["verdict"]},
+               {"reason", outcome.reason},
+               {"kind", kind},
+               {"period", summary["period"]},
+               {"model", ModelJson(model)},
+               {"libraries", proof::LibraryVersions()},
+               {"precision_bits", 128},
+               {"summary", summary}};
+  for (const auto& [key, value] : outcome.certificate.items()) cert[key] = value;
+  result.certificate_json = cert.dump(1);
+  return result;
+}
+
+}  // namespace vibro
