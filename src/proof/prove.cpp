@@ -2,6 +2,7 @@
 // proof by kind, and the certificate (prove.hpp, docs/prove.md).
 #include "vibro/prove.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -98,6 +99,10 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   if (!f.failure.empty()) return f;
   // Impact 0 first in time; the rest follow it within one period.
   f.guess.period = orbit.period;
+  // The forcing is T-periodic: shifted by whole periods, impact 0 falls in [0, T) (small times keep
+  // the box, relative to 1 + |t|, narrow).
+  const double shift = std::floor(rec.times.front() / sys.period()) * sys.period();
+  for (double& t : rec.times) t -= shift;
   f.guess.times = rec.times;
   f.guess.X = rec.X;
   f.guess.V = rec.V;

@@ -1,0 +1,499 @@
+#!/usr/bin/env python3
+"""Independent checker of a `vibro prove` certificate (docs/prove.md).
+
+Re-verifies every inequality of the certificate from the certificate alone, with mpmath's interval
+arithmetic (mpmath.iv, 128 bits). It shares no code with the C++ prover: the closed forms of the
+flight, the impact law and the reaction, the Krawczyk operator, the positivity of the gap and of
+the reaction, and the monodromy are written again here from the model (the paper's eqs (5),
+(10)-(14); docs/model.md §2-§5).
+
+    vibro_check_proof.py CERT.json [--json]
+
+Exit 0: the certificate proves what it claims. Exit 1: it does not (the first failure is printed).
+Exit 2: the file is not a certificate.
+"""
+import json
+import sys
+
+from mpmath import iv, mp, mpf
+
+iv.prec = 128
+mp.prec = 128
+
+
+class Rejected(Exception):
+    pass
+
+
+def lo(x):
+    return mpf(x._mpi_[0])
+
+
+def hi(x):
+    return mpf(x._mpi_[1])
+
+
+def ilo(x):
+    return iv.mpf(lo(x))
+
+
+def ihi(x):
+    return iv.mpf(hi(x))
+
+
+def positive(x):
+    return (x > 0) is True
+
+
+def negative(x):
+    return (x < 0) is True
+
+
+def point(v):
+    return iv.mpf(float(v))  # a double of the certificate, exactly
+
+
+def hull(a, b):
+    return iv.mpf([float(a), float(b)])
+
+
+def pair(p):
+    return hull(p[0], p[1])
+
+
+def overlaps(x, p):
+    """The certificate's enclosure p = [lo, hi] meets the checker's x."""
+    return not (hi(x) < mpf(float(p[0])) or lo(x) > mpf(float(p[1])))
+
+
+# ---- Forward differentiation over intervals (the Krawczyk test needs J over the whole box) ----
+
+class D:
+    """A value and its gradient, both intervals; an empty gradient is a constant."""
+
+    def __init__(self, v, g=None):
+        self.v = v if isinstance(v, type(iv.mpf(0))) else iv.mpf(v)
+        self.g = g or {}
+
+    @staticmethod
+    def lift(x):
+        return x if isinstance(x, D) else D(x)
+
+    def __add__(self, o):
+        o = D.lift(o)
+        g = dict(self.g)
+        for k, d in o.g.items():
+            g[k] = g[k] + d if k in g else d
+        return D(self.v + o.v, g)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return D(-self.v, {k: -d for k, d in self.g.items()})
+
+    def __sub__(self, o):
+        return self + (-D.lift(o))
+
+    def __rsub__(self, o):
+        return D.lift(o) - self
+
+    def __mul__(self, o):
+        o = D.lift(o)
+        g = {k: d * o.v for k, d in self.g.items()}
+        for k, d in o.g.items():
+            g[k] = g[k] + self.v * d if k in g else self.v * d
+        return D(self.v * o.v, g)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, o):
+        o = D.lift(o)
+        inv = 1 / o.v
+        return self * D(inv, {k: -d * inv * inv for k, d in o.g.items()})
+
+    def __rtruediv__(self, o):
+        return D.lift(o) / self
+
+
+def dsin(x):
+    if isinstance(x, D):
+        c = iv.cos(x.v)
+        return D(iv.sin(x.v), {k: c * d for k, d in x.g.items()})
+    return iv.sin(x)
+
+
+def dcos(x):
+    if isinstance(x, D):
+        s = -iv.sin(x.v)
+        return D(iv.cos(x.v), {k: s * d for k, d in x.g.items()})
+    return iv.cos(x)
+
+
+# ---- The model ---------------------------------------------------------------------------------
+
+class Model:
+    def __init__(self, m):
+        try:
+            self.w_i = [iv.mpf(t) for t in m["frequencies"]]
+            self.TA = [iv.mpf(t) for t in m["forcing"]]
+            self.TB = [iv.mpf(t) for t in m["contact"]]
+            self.c = [iv.mpf(t) for t in m["shape"]]
+            self.x0 = iv.mpf(m["stop"])
+            self.r = iv.mpf(m["restitution"])
+            self.f = iv.mpf(m["amplitude"])
+            self.w = iv.mpf(m["frequency"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise Rejected(f"model: {e}")
+        self.n = len(self.w_i)
+        self.sA = sum((ci * ti for ci, ti in zip(self.c, self.TA)), iv.mpf(0))
+        self.sB = sum((ci * ti for ci, ti in zip(self.c, self.TB)), iv.mpf(0))
+        self.T = 2 * iv.pi / self.w
+
+    def flight(self, t0, X, V, s):
+        """Closed-form free flight from (t0, X, V) over s (eqs (13)-(14)): X(t0+s), V(t0+s), as D."""
+        L = D.lift
+        t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
+        w = L(self.w)
+        Xo, Vo = [], []
+        ws0, wc0 = dsin(w * t0), dcos(w * t0)
+        ws1, wc1 = dsin(w * (t0 + s)), dcos(w * (t0 + s))
+        for i in range(self.n):
+            wi = L(self.w_i[i])
+            amp = L(self.TA[i] * self.f / (self.w_i[i] ** 2 - self.w ** 2))
+            A = X[i] - amp * ws0
+            B = (V[i] - amp * w * wc0) / wi
+            ci, si = dcos(wi * s), dsin(wi * s)
+            Xo.append(amp * ws1 + A * ci + B * si)
+            Vo.append(amp * w * wc1 - A * wi * si + B * wi * ci)
+        return Xo, Vo
+
+    def contact(self, X):
+        out = D(0)
+        for ci, xi in zip(self.c, X):
+            out = D.lift(xi) * D(ci) + out
+        return out
+
+    def impact(self, V):
+        p = self.contact(V) * D(-(1 + self.r) / self.sB)
+        return [D.lift(V[i]) + p * D(self.TB[i]) for i in range(self.n)]
+
+    def contact_acceleration(self, t, X):
+        a = self.sA * self.f * iv.sin(self.w * t)
+        for i in range(self.n):
+            a = a - self.c[i] * self.w_i[i] ** 2 * X[i]
+        return a
+
+    def derivative_bound(self, t0, X, V, order):
+        """max |d^order/ds^order of c.X(t0+s)|: sum of amplitudes times pulsation^order."""
+        total, forced = iv.mpf(0), iv.mpf(0)
+        for i in range(self.n):
+            wi = self.w_i[i]
+            amp = self.TA[i] * self.f / (wi * wi - self.w * self.w)
+            A = X[i] - amp * iv.sin(self.w * t0)
+            B = (V[i] - amp * self.w * iv.cos(self.w * t0)) / wi
+            total += abs(self.c[i]) * wi ** order * iv.sqrt(A * A + B * B)
+            forced += self.c[i] * amp
+        return total + abs(forced) * self.w ** order
+
+
+# ---- Bookkeeping: every inequality the certificate lists must be recomputed here ---------------
+
+class Book:
+    def __init__(self, cert):
+        self.listed = {}
+        for e in cert.get("inequalities", []):
+            self.listed.setdefault((e["name"], e["where"]), []).append(e)
+        self.done = set()
+
+    def check(self, holds, name, where, x):
+        key = (name, where)
+        if key not in self.listed:
+            raise Rejected(f"the certificate does not list '{name}' at {where}")
+        for e in self.listed[key]:
+            if not overlaps(x, e["enclosure"]):
+                raise Rejected(f"{name} at {where}: the certificate's enclosure {e['enclosure']} misses the checker's {x}")
+            if not e.get("holds", False):
+                raise Rejected(f"{name} at {where}: the certificate itself says it fails")
+        if not holds:
+            raise Rejected(f"{name} at {where} does not hold: checker's enclosure {x}")
+        self.done.add(key)
+
+    def finish(self):
+        missing = [k for k in self.listed if k not in self.done]
+        if missing:
+            raise Rejected(f"inequalities the checker could not recompute: {missing[:3]}")
+
+
+def positive_pieces(pieces, a, b, value, slope, what):
+    """f > 0 on [a, b]: the pieces are contiguous, cover [a, b], and on each the mean-value form
+    f(c) + f'(I)(I - c) lies above 0."""
+    if not pieces:
+        raise Rejected(f"{what}: no pieces")
+    if mpf(float(pieces[0][0])) > a:
+        raise Rejected(f"{what}: the pieces start after {a}")
+    if mpf(float(pieces[-1][1])) < b:
+        raise Rejected(f"{what}: the pieces end before {b}")
+    for k, (p0, p1) in enumerate(pieces):
+        if k > 0 and float(pieces[k - 1][1]) != float(p0):
+            raise Rejected(f"{what}: a hole between pieces {k - 1} and {k}")
+        if not float(p0) < float(p1):
+            raise Rejected(f"{what}: piece {k} is empty")
+        c = point((float(p0) + float(p1)) / 2)
+        I = hull(p0, p1)
+        f = value(c) + slope(I) * (I - c)
+        if not positive(f):
+            raise Rejected(f"{what}: not positive on [{p0}, {p1}]: {f}")
+
+
+# ---- Impacting orbits --------------------------------------------------------------------------
+
+def check_impact(cert, m, book):
+    q = int(cert["period"])
+    names = cert["unknowns"]
+    u = [float(x) for x in cert["midpoint"]]
+    box = cert["box"]
+    C = cert["preconditioner"]
+    N = len(u)
+    n = m.n
+    if N % (2 * n + 1) or len(box) != N or len(C) != N or any(len(r) != N for r in C):
+        raise Rejected("the box, midpoint and preconditioner do not fit the model")
+    count = N // (2 * n + 1)
+    qT = q * m.T
+
+    def unpack(vec, j):
+        b = j * (2 * n + 1)
+        return vec[b], vec[b + 1:b + 1 + n], vec[b + 1 + n:b + 1 + 2 * n]
+
+    def residual(vec):
+        out = []
+        for j in range(count):
+            k = (j + 1) % count
+            t, X, V = unpack(vec, j)
+            tn, Xn, Vn = unpack(vec, k)
+            if j == count - 1:
+                tn = tn + qT
+            Xe, Ve = m.flight(t, X, V, tn - t)
+            Vp = m.impact(Ve)
+            out.append(m.contact(X) - m.x0)
+            out += [Xe[i] - Xn[i] for i in range(n)]
+            out += [Vp[i] - Vn[i] for i in range(n)]
+        return out
+
+    # Krawczyk: K = u - C F(u) + (I - C J(U))(U - u) inside the open box.
+    lo_, hi_ = [float(b[0]) for b in box], [float(b[1]) for b in box]
+    if any(not (lo_[p] < u[p] < hi_[p]) for p in range(N)):
+        raise Rejected("the midpoint is not inside the box")
+    U = [hull(lo_[p], hi_[p]) for p in range(N)]
+    F = [r.v for r in residual([point(x) for x in u])]
+    R = residual([D(U[p], {p: iv.mpf(1)}) for p in range(N)])
+    J = [[r.g.get(l, iv.mpf(0)) for l in range(N)] for r in R]
+    for p in range(N):
+        k = point(u[p])
+        for l in range(N):
+            k -= point(C[p][l]) * F[l]
+            row = iv.mpf(1 if p == l else 0)
+            for j in range(N):
+                row -= point(C[p][j]) * J[j][l]
+            k += row * (U[l] - point(u[l]))
+        inside = lo(k) > lo_[p] and hi(k) < hi_[p]
+        book.check(inside, "krawczyk", names[p], k)
+
+    # No contact between the impacts; the monodromy along the way.
+    flights = cert["flights"]
+    if len(flights) != count:
+        raise Rejected("one flight per impact expected")
+    M = [[iv.mpf(1 if i == j else 0) for j in range(2 * n)] for i in range(2 * n)]
+    for j in range(count):
+        k = (j + 1) % count
+        t, X, V = unpack(U, j)
+        tn = unpack(U, k)[0] + (qT if j == count - 1 else 0)
+        S = tn - t
+        Xe, Ve = m.flight(t, X, V, S)
+        a, vm = m.contact(V).v, m.contact(Ve).v
+        M2 = m.derivative_bound(t, X, V, 2)
+        where = f"flight {j} (impact {j} to impact {k})"
+        book.check(positive(S), "duration", where, S)
+        book.check(positive(a), "contact velocity after impact", where, a)
+        book.check(negative(vm), "contact velocity before impact", where, vm)
+        book.check(hi(M2) < mpf("inf"), "second-derivative bound", where, M2)
+        fl = flights[j]
+        ws, we = point(fl["start_window"]), point(fl["end_window"])
+        a_low, b_low = point(fl["velocity_after_lower"]), point(fl["speed_before_lower"])
+        if not (hi(a_low) <= lo(a) and hi(b_low) <= lo(-vm)):
+            raise Rejected(f"{where}: the certificate's velocity bounds are not below the checker's enclosures")
+        start = a_low - M2 * ws / 2   # g(s) >= s (a - M2 s/2) on (0, ws]
+        end = b_low - M2 * we / 2     # g(S - σ) >= σ (b - M2 σ/2) on (0, we]
+        book.check(positive(start) and positive(ws), "start window a - M2 ws/2", where, start)
+        book.check(positive(end) and positive(we), "end window b - M2 we/2", where, end)
+        top = hi(ihi(S) - we)
+        if lo(ws) < top:
+            positive_pieces(fl["pieces"], lo(ws), top,
+                            lambda s: m.contact(m.flight(t, X, V, s)[0]).v - m.x0,
+                            lambda s: m.contact(m.flight(t, X, V, s)[1]).v, f"gap on {where}")
+        # Flight and saltation matrices (docs/model.md §5.6).
+        Phi = [[iv.mpf(0)] * (2 * n) for _ in range(2 * n)]
+        for i in range(n):
+            c, s = iv.cos(m.w_i[i] * S), iv.sin(m.w_i[i] * S)
+            Phi[i][i], Phi[i][n + i], Phi[n + i][i], Phi[n + i][n + i] = c, s / m.w_i[i], -m.w_i[i] * s, c
+        aB = m.contact_acceleration(tn, [x.v for x in Xe])
+        Sal = [[iv.mpf(0)] * (2 * n) for _ in range(2 * n)]
+        for i in range(n):
+            for l in range(n):
+                pr = (1 if i == l else 0) - (1 + m.r) * m.TB[i] * m.c[l] / m.sB
+                Sal[i][l] = pr
+                Sal[n + i][n + l] = pr
+                Sal[n + i][l] = (1 + m.r) * aB * m.TB[i] * m.c[l] / (m.sB * vm)
+        M = matmul(Sal, matmul(Phi, M))
+    check_spectrum(cert, M)
+
+
+def matmul(A, B):
+    return [[sum((A[i][k] * B[k][j] for k in range(len(B))), iv.mpf(0)) for j in range(len(B[0]))] for i in range(len(A))]
+
+
+def check_spectrum(cert, M):
+    claim = cert["summary"].get("stability", "undecided")
+    listed = cert["summary"].get("multipliers", [])
+    for i, row in enumerate(cert.get("monodromy", [])):
+        for j, e in enumerate(row):
+            if not overlaps(M[i][j], e):
+                raise Rejected(f"monodromy[{i}][{j}]: the certificate's {e} misses the checker's {M[i][j]}")
+    if claim == "undecided":
+        return
+    if len(M) != 2:
+        raise Rejected(f"stability '{claim}' of a {len(M)} x {len(M)} monodromy: this checker re-verifies 2 x 2 only")
+    tr, det = M[0][0] + M[1][1], M[0][0] * M[1][1] - M[0][1] * M[1][0]
+    disc = tr * tr - 4 * det
+    if positive(disc):
+        r = iv.sqrt(disc)
+        mods = [((tr + r) / 2) ** 2, ((tr - r) / 2) ** 2]
+        found = [((tr + r) / 2, iv.mpf(0)), ((tr - r) / 2, iv.mpf(0))]
+    elif negative(disc):
+        mods = [det, det]
+        im = iv.sqrt(-disc) / 2
+        found = [(tr / 2, im), (tr / 2, -im)]
+    else:
+        raise Rejected(f"stability '{claim}' claimed but the discriminant {disc} is not separated from 0")
+    for (re, im), e in zip(found, listed):
+        if not (overlaps(re, e["re"]) and overlaps(im, e["im"])):
+            raise Rejected(f"multiplier {e} misses the checker's {re} + i {im}")
+    if claim == "stable" and not all(hi(x) < 1 for x in mods):
+        raise Rejected(f"'stable' claimed, |multiplier|^2 in {mods}")
+    if claim == "unstable" and not any(lo(x) > 1 for x in mods):
+        raise Rejected(f"'unstable' claimed, |multiplier|^2 in {mods}")
+
+
+# ---- One-DOF sticking orbits with r = 0 --------------------------------------------------------
+
+def check_sticking(cert, m, book):
+    if m.n != 1 or not (lo(m.r) == 0 and hi(m.r) == 0):
+        raise Rejected("a sticking certificate needs one mode and r = 0")
+    w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
+    rel = "release"
+    ratio = w1s * x0 / kappa
+    book.check(positive(kappa) or negative(kappa), "forcing T_A f", rel, kappa)
+    book.check(positive(1 - abs(ratio)), "1 - |omega_1^2 x0/(T_A f)|", rel, 1 - abs(ratio))
+    # φ1 from the certificate's enclosure P: sin is monotonic on P and sin(P) brackets the ratio.
+    P = pair(cert["release"]["phase"])
+    half = iv.pi / 2
+    if positive(kappa):
+        ok = lo(P) > hi(-half) and hi(P) < lo(half) and hi(iv.sin(lo(P))) < lo(ratio) and lo(iv.sin(hi(P))) > hi(ratio)
+    else:
+        ok = lo(P) > hi(half) and hi(P) < lo(3 * half) and lo(iv.sin(lo(P))) > hi(ratio) and hi(iv.sin(hi(P))) < lo(ratio)
+    if not ok:
+        raise Rejected(f"the release phase {P} does not enclose the root of the reaction")
+    tr = P / w
+    rate = -(kappa * w * iv.cos(P)) / TB
+    book.check(negative(rate), "reaction rate", rel, rate)
+    fl = "flight from the release"
+    flight = cert["flight"]
+    X0, V0 = [x0], [iv.mpf(0)]
+    gap = lambda s: m.contact(m.flight(tr, X0, V0, s)[0]).v - x0
+    slope = lambda s: m.contact(m.flight(tr, X0, V0, s)[1]).v
+    g3 = kappa * w * iv.cos(P)
+    M4 = m.derivative_bound(tr, X0, V0, 4)
+    book.check(positive(g3), "third derivative of the gap", fl, g3)
+    book.check(hi(M4) < mpf("inf"), "fourth-derivative bound", fl, M4)
+    ws = point(flight["start_window"])
+    g3_low = point(flight["third_derivative_lower"])
+    if not hi(g3_low) <= lo(g3):
+        raise Rejected("the certificate's bound on g''' is not below the checker's enclosure")
+    margin = g3_low / 6 - M4 * ws / 24   # g(s)/s³ >= g'''/6 - M4 s/24 on (0, ws]
+    book.check(positive(margin) and positive(ws), "start window g'''/6 - M4 ws/24", fl, margin)
+    s0 = float(flight["landing_center"])
+    Slo, Shi = (float(x) for x in flight["landing_box"])
+    S = hull(Slo, Shi)
+    land = "landing"
+    gp = slope(S)
+    Nw = point(s0) - gap(point(s0)) / gp
+    book.check(negative(gp), "contact velocity at the landing", land, gp)
+    book.check(lo(Nw) > Slo and hi(Nw) < Shi, "interval Newton", land, Nw)
+    book.check(positive(S.a - ws), "landing after the start window", land, S.a - ws)
+    positive_pieces(flight["pieces"], lo(ws), mpf(Slo), gap, slope, "gap on the flight from the release")
+    tL = tr + Nw
+    R_land = (w1s * x0 - kappa * iv.sin(w * tL)) / TB
+    book.check(positive(R_land), "reaction at the landing", land, R_land)
+    turns = Nw / m.T
+    st = cert["sticking"]
+    k = int(st["periods"])
+    book.check(lo(turns) > k - 1 and hi(turns) < k, "landing time / T", land, turns)
+    if int(cert["period"]) != k:
+        raise Rejected("the period is not the number of turns to the next release")
+    M2R = abs(kappa) * w * w / TB
+    we = point(st["end_window"])
+    rate_low = point(st["rate_lower"])
+    if not hi(rate_low) <= lo(-rate):
+        raise Rejected("the certificate's bound on -R' is not below the checker's enclosure")
+    end = rate_low - M2R * we / 2
+    book.check(positive(end) and positive(we), "end window b - M2 we/2", "sticking phase", end)
+    top = hi(ihi(k * m.T) - we)
+    if Slo < top:
+        positive_pieces(st["pieces"], mpf(Slo), top,
+                        lambda tau: (w1s * x0 - kappa * iv.sin(w * (tr + tau))) / TB,
+                        lambda tau: -(kappa * w * iv.cos(w * (tr + tau))) / TB, "reaction over the sticking phase")
+
+
+def check(cert):
+    if cert.get("format") != "vibro-proof-certificate/1":
+        raise ValueError("not a vibro proof certificate (format)")
+    if cert.get("verdict") != "proven":
+        raise Rejected("the certificate claims no proof (verdict: %s)" % cert.get("verdict"))
+    m = Model(cert["model"])
+    book = Book(cert)
+    kind = cert.get("kind")
+    if kind == "impact":
+        check_impact(cert, m, book)
+    elif kind == "sticking":
+        check_sticking(cert, m, book)
+    else:
+        raise Rejected(f"unknown kind {kind!r}")
+    book.finish()
+    return len(book.done)
+
+
+def main(argv):
+    args = [a for a in argv[1:] if a != "--json"]
+    as_json = "--json" in argv[1:]
+    if len(args) != 1:
+        print(__doc__, file=sys.stderr)
+        return 2
+    try:
+        with open(args[0]) as fh:
+            cert = json.load(fh)
+        count = check(cert)
+        verdict, reason = "confirmed", f"{count} inequalities recomputed and verified"
+        code = 0
+    except (OSError, ValueError) as e:
+        print(f"vibro_check_proof: {args[0]}: {e}", file=sys.stderr)
+        return 2
+    except (Rejected, KeyError, TypeError, IndexError, ZeroDivisionError) as e:
+        verdict, reason, code = "rejected", f"{type(e).__name__}: {e}" if not isinstance(e, Rejected) else str(e), 1
+    if as_json:
+        print(json.dumps({"verdict": verdict, "reason": reason}))
+    else:
+        print(f"{verdict}: {reason}")
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
