@@ -11,6 +11,8 @@ install(TARGETS vibro EXPORT vibroTargets
 install(DIRECTORY include/vibro DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS vibro_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(PROGRAMS scripts/vibro_plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro)
+# The independent checker of `vibro prove` certificates (docs/prove.md), on the PATH beside vibro.
+install(PROGRAMS scripts/vibro_check_proof.py DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY data/scenes DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro FILES_MATCHING PATTERN "*.toml")
 
 set(VIBRO_CMAKE_DIR ${CMAKE_INSTALL_LIBDIR}/cmake/vibro)
