@@ -361,7 +361,7 @@ def check_spectrum(cert, M):
     if claim == "undecided":
         return
     if len(M) != 2:
-        raise Rejected(f"stability '{claim}' of a {len(M)} x {len(M)} monodromy: this checker re-verifies 2 x 2 only")
+        return check_spectrum_general(claim, listed, M)
     tr, det = M[0][0] + M[1][1], M[0][0] * M[1][1] - M[0][1] * M[1][0]
     disc = tr * tr - 4 * det
     if positive(disc):
@@ -377,6 +377,87 @@ def check_spectrum(cert, M):
     for (re, im), e in zip(found, listed):
         if not (overlaps(re, e["re"]) and overlaps(im, e["im"])):
             raise Rejected(f"multiplier {e} misses the checker's {re} + i {im}")
+    if claim == "stable" and not all(hi(x) < 1 for x in mods):
+        raise Rejected(f"'stable' claimed, |multiplier|^2 in {mods}")
+    if claim == "unstable" and not any(lo(x) > 1 for x in mods):
+        raise Rejected(f"'unstable' claimed, |multiplier|^2 in {mods}")
+
+
+def check_spectrum_general(claim, listed, M):
+    """Every eigenvalue of every matrix in the interval matrix M, each enclosed by Krawczyk's test on
+    the eigenpair equations (A − λ)v = 0, v_k = 1 (real form, λ = a + ib, v = x + iy), around the
+    approximate eigenpairs (numpy, not part of the proof). Disjoint boxes, as many as the dimension:
+    all eigenvalues are enclosed."""
+    import numpy as np
+    n = len(M)
+    mid = np.array([[float(mp.mpf((lo(x) + hi(x)) / 2)) for x in row] for row in M])
+    values, vectors = np.linalg.eig(mid)
+    boxes = []
+    for e in range(n):
+        lam, vec = values[e], vectors[:, e]
+        k = int(np.argmax(np.abs(vec)))
+        vec = vec / vec[k]
+        free = [j for j in range(n) if j != k]
+        z0 = [lam.real, lam.imag] + [vec[j].real for j in free] + [vec[j].imag for j in free]
+        size = len(z0)
+
+        def unpack(z):
+            x = [iv.mpf(1) if j == k else None for j in range(n)]
+            y = [iv.mpf(0) if j == k else None for j in range(n)]
+            for i, j in enumerate(free):
+                x[j], y[j] = z[2 + i], z[2 + len(free) + i]
+            return z[0], z[1], x, y
+
+        def F(z):
+            a, b, x, y = unpack(z)
+            re = [sum((M[i][j] * x[j] for j in range(n)), iv.mpf(0)) - a * x[i] + b * y[i] for i in range(n)]
+            im = [sum((M[i][j] * y[j] for j in range(n)), iv.mpf(0)) - a * y[i] - b * x[i] for i in range(n)]
+            return re + im
+
+        def J(z):
+            a, b, x, y = unpack(z)
+            rows = []
+            for part in (0, 1):
+                for i in range(n):
+                    row = [-x[i], y[i]] if part == 0 else [-y[i], -x[i]]
+                    for j in free:  # d/dx_j
+                        row.append((M[i][j] - (a if i == j else 0)) if part == 0 else (-b if i == j else iv.mpf(0)))
+                    for j in free:  # d/dy_j
+                        row.append((b if i == j else iv.mpf(0)) if part == 0 else (M[i][j] - (a if i == j else 0)))
+                    rows.append(row)
+            return rows
+
+        Fz = F([iv.mpf(v) for v in z0])
+        for scale in (1e-9, 1e-7, 1e-5, 1e-3):  # boxes from tight to wide, as the enclosure of M allows
+            rad = [scale * (1 + abs(v)) for v in z0]
+            Z = [iv.mpf([z0[p] - rad[p], z0[p] + rad[p]]) for p in range(size)]
+            Jz = J(Z)
+            C = np.linalg.inv(np.array([[float(mp.mpf((lo(x) + hi(x)) / 2)) for x in row] for row in Jz]))
+            inside = True
+            for p in range(size):
+                kz = iv.mpf(z0[p])
+                for l in range(size):
+                    kz -= iv.mpf(float(C[p][l])) * Fz[l]
+                    row = iv.mpf(1 if p == l else 0)
+                    for j in range(size):
+                        row -= iv.mpf(float(C[p][j])) * Jz[j][l]
+                    kz += row * (Z[l] - iv.mpf(z0[l]))
+                inside = inside and lo(kz) > lo(Z[p]) and hi(kz) < hi(Z[p])
+            if inside:
+                break
+        if not inside:
+            raise Rejected(f"stability '{claim}': the eigenvalue near {lam} could not be enclosed")
+        boxes.append((Z[0], Z[1]))
+    for i in range(n):
+        for j in range(i):
+            apart = hi(boxes[i][0]) < lo(boxes[j][0]) or hi(boxes[j][0]) < lo(boxes[i][0]) or \
+                hi(boxes[i][1]) < lo(boxes[j][1]) or hi(boxes[j][1]) < lo(boxes[i][1])
+            if not apart:
+                raise Rejected(f"stability '{claim}': two eigenvalue enclosures overlap")
+    mods = [a * a + b * b for a, b in boxes]
+    for e in listed:
+        if not any(overlaps(a, e["re"]) and overlaps(b, e["im"]) for a, b in boxes):
+            raise Rejected(f"multiplier {e} is not one of the checker's enclosures")
     if claim == "stable" and not all(hi(x) < 1 for x in mods):
         raise Rejected(f"'stable' claimed, |multiplier|^2 in {mods}")
     if claim == "unstable" and not any(lo(x) > 1 for x in mods):

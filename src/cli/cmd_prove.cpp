@@ -16,16 +16,10 @@ int RunProve(const std::string& path, const std::vector<std::string>& sets, bool
   const vibro::System sys(loaded.scene);
   vibro::ProofRequest req = args.request;
   if (!args.from.empty()) {
-    const auto table = vibro::ReadTable(args.from, "/orbit");
-    const auto* X = table.Find("X");
-    const auto* V = table.Find("V");
-    const auto* t = table.Find("section_time");
-    if (X == nullptr || V == nullptr || t == nullptr || t->data.size() != 1 ||
-        X->data.size() != static_cast<std::size_t>(sys.dof()) || V->data.size() != X->data.size())
-      throw vibro::InputError({args.from + ": /orbit: expected section_time, X and V of " + std::to_string(sys.dof()) +
-                               " modes (a file of `vibro orbit --out` for this scene)"});
-    req.start = vibro::InitialOverride{t->data[0], Eigen::Map<const Eigen::VectorXd>(X->data.data(), sys.dof()),
-                                       Eigen::Map<const Eigen::VectorXd>(V->data.data(), sys.dof())};
+    req.start = vibro::ReadOrbitSection(args.from);
+    if (req.start->X.size() != sys.dof())
+      throw vibro::InputError({args.from + ": /orbit: an orbit of " + std::to_string(req.start->X.size()) +
+                               " modes, the scene has " + std::to_string(sys.dof())});
   }
   vibro::ProofResult result;
   try {

@@ -161,6 +161,21 @@ for label, extra in runs.items():
     code, v = check(path)
     expect(code == 0 and v["verdict"] == "confirmed", f"checker confirms Fig. 5 {label} ({v})")
 
+# ---- The 2-DOF chain (physical scene, modes from M and K): impacting orbits, 4 x 4 monodromy ----
+for amp, expected_impacts in (("3", 3), ("5", 6)):
+    path = os.path.join(TMP, f"chain2_{amp}.json")
+    code, s, err = prove("chain2.toml", "--kind", "impact", "--set", f"excitation.amplitude={amp}", out=path)
+    expect(code == 0 and s["verdict"] == "proven", f"chain2 f = {amp}: proven (exit {code}: {s and s['reason']})")
+    if code == 0:
+        expect(len(s["sequence"]) == expected_impacts, f"chain2 f = {amp}: {expected_impacts} impacts ({s['sequence']})")
+        expect(s["box_width"] <= 1e-10, f"chain2 f = {amp}: box width {s['box_width']} <= 1e-10")
+        expect(len(s["multipliers"]) == 4 and s["stability"] in ("stable", "unstable"),
+               f"chain2 f = {amp}: four multipliers, stability decided ({s['stability']})")
+        code, v = check(path)
+        expect(code == 0 and v["verdict"] == "confirmed", f"checker confirms chain2 f = {amp} ({v})")
+        flip = "unstable" if s["stability"] == "stable" else "stable"
+        checked_mutant(json.load(open(path)), lambda c: c["summary"].__setitem__("stability", flip), f"chain2_{amp}_{flip}")
+
 # ---- Mutations: the checker rejects altered numbers; a moved orbit is not proven in the box -----
 if "stable" in certs:
     cert = json.load(open(certs["stable"]))
