@@ -19,6 +19,8 @@
 
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
@@ -39,9 +41,26 @@ struct ProofRequest {
   double time_limit = 60.0;   // seconds; the proof ends "not proven" past it
 };
 
+// A closed interval [lo, hi] with outward-rounded ends.
+struct Enclosure {
+  double lo = 0, hi = 0;
+};
+
+struct ProvenEvent {
+  std::string kind;          // "impact", "release", "stick"
+  Enclosure phase;           // ωt mod 2π
+  Enclosure velocity_before; // ẋ_B just before
+};
+
 struct ProofResult {
   bool proven = false;
   std::string reason;            // not proven: which inequality failed, where; proven: what holds
+  std::string kind;              // "impact" or "sticking" ("" when no proof was attempted)
+  int period = 0;                // forcing periods (0 when unknown)
+  std::vector<ProvenEvent> events;                      // one period, in time order
+  std::vector<std::pair<Enclosure, Enclosure>> multipliers;  // (re, im) of each Floquet multiplier
+  std::string stability = "undecided";  // "stable" | "unstable" | "undecided"
+  double box_width = 0;          // widest side of the box the orbit is proven in
   std::string summary_json;      // the `vibro prove --json` object (docs/prove.md)
   std::string certificate_json;  // the certificate (docs/prove.md), empty when nothing was attempted
 };

@@ -35,10 +35,18 @@ int RunProve(const std::string& path, const std::vector<std::string>& sets, bool
   if (json) {
     fmt::print("{}\n", result.summary_json);
   } else {
+    const auto range = [](const vibro::Enclosure& e) { return fmt::format("[{:.12g}, {:.12g}]", e.lo, e.hi); };
     fmt::print("verdict      {}\n", result.proven ? "proven" : "not proven");
     fmt::print("reason       {}\n", result.reason);
+    if (result.proven) {
+      fmt::print("period       {} ({} orbit, box width {:.1e})\n", result.period, result.kind, result.box_width);
+      for (const auto& e : result.events)
+        fmt::print("event        {:<8} phase {}  velocity before {}\n", e.kind, range(e.phase), range(e.velocity_before));
+      for (const auto& [re, im] : result.multipliers) fmt::print("multiplier   {} + i {}\n", range(re), range(im));
+      if (result.multipliers.empty()) fmt::print("multipliers  none (one-DOF sticking orbit)\n");
+      fmt::print("stability    {}\n", result.stability);
+    }
     if (!args.out.empty()) fmt::print("certificate  {} (check it: vibro_check_proof.py {})\n", args.out, args.out);
-    if (result.proven) fmt::print("summary      {}\n", result.summary_json);
   }
   return result.proven ? 0 : kExitDisagree;
 }

@@ -158,6 +158,14 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
   if (!summary.contains("section")) summary["section"] = nullptr;
   if (!summary.contains("stability")) summary["stability"] = "undecided";
   result.summary_json = summary.dump();
+  result.kind = kind;
+  if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
+  const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
+  for (const auto& e : summary["events"])
+    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"])});
+  for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
+  result.stability = summary["stability"].get<std::string>();
+  if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
   Json cert = {{"format", "vibro-proof-certificate/1"},
                {"verdict", summary["verdict"]},
                {"reason", outcome.reason},
