@@ -486,38 +486,62 @@ def check_sticking(cert, m, book):
     tr = P / w
     rate = -(kappa * w * iv.cos(P)) / TB
     book.check(negative(rate), "reaction rate", rel, rate)
-    fl = "flight from the release"
-    flight = cert["flight"]
+    reaction = lambda t: (w1s * x0 - kappa * iv.sin(w * t)) / TB
     X0, V0 = [x0], [iv.mpf(0)]
-    gap = lambda s: m.contact(m.flight(tr, X0, V0, s)[0]).v - x0
-    slope = lambda s: m.contact(m.flight(tr, X0, V0, s)[1]).v
-    g3 = kappa * w * iv.cos(P)
-    M4 = m.derivative_bound(tr, X0, V0, 4)
-    book.check(positive(g3), "third derivative of the gap", fl, g3)
-    book.check(hi(M4) < mpf("inf"), "fourth-derivative bound", fl, M4)
-    ws = point(flight["start_window"])
-    g3_low = point(flight["third_derivative_lower"])
-    if not hi(g3_low) <= lo(g3):
-        raise Rejected("the certificate's bound on g''' is not below the checker's enclosure")
-    margin = g3_low / 6 - M4 * ws / 24   # g(s)/s³ >= g'''/6 - M4 s/24 on (0, ws]
-    book.check(positive(margin) and positive(ws), "start window g'''/6 - M4 ws/24", fl, margin)
-    s0 = float(flight["landing_center"])
-    Slo, Shi = (float(x) for x in flight["landing_box"])
-    S = hull(Slo, Shi)
-    land = "landing"
-    gp = slope(S)
-    Nw = point(s0) - gap(point(s0)) / gp
-    book.check(negative(gp), "contact velocity at the landing", land, gp)
-    book.check(lo(Nw) > Slo and hi(Nw) < Shi, "interval Newton", land, Nw)
-    book.check(positive(S.a - ws), "landing after the start window", land, S.a - ws)
-    positive_pieces(flight["pieces"], lo(ws), mpf(Slo), gap, slope, "gap on the flight from the release")
-    tL = tr + Nw
-    R_land = (w1s * x0 - kappa * iv.sin(w * tL)) / TB
-    book.check(positive(R_land), "reaction at the landing", land, R_land)
-    turns = Nw / m.T
+    flights = cert["flights"]
+    if not flights:
+        raise Rejected("no flight")
+    t, tL = tr, None
+    for k, flight in enumerate(flights):
+        fl, land = f"flight {k}", f"landing {k}"
+        gap = lambda s, t=t: m.contact(m.flight(t, X0, V0, s)[0]).v - x0
+        slope = lambda s, t=t: m.contact(m.flight(t, X0, V0, s)[1]).v
+        ws = point(flight["start_window"])
+        if k == 0:
+            if flight.get("start") != "release":
+                raise Rejected("the first flight starts at the release")
+            g3 = kappa * w * iv.cos(w * t)   # third derivative of x at rest on the stop
+            M4 = m.derivative_bound(t, X0, V0, 4)
+            book.check(positive(g3), "third derivative of the gap", fl, g3)
+            book.check(hi(M4) < mpf("inf"), "fourth-derivative bound", fl, M4)
+            g3_low = point(flight["third_derivative_lower"])
+            if not hi(g3_low) <= lo(g3):
+                raise Rejected(f"{fl}: the certificate's bound on g''' is not below the checker's enclosure")
+            margin = g3_low / 6 - M4 * ws / 24   # g(s)/s^3 >= g'''/6 - M4 s/24 on (0, ws]
+            book.check(positive(margin) and positive(ws), "start window g'''/6 - M4 ws/24", fl, margin)
+        else:
+            if flight.get("start") != "departure":
+                raise Rejected(f"{fl} starts at a departure")
+            g2 = kappa * iv.sin(w * t) - w1s * x0   # x'' at rest on the stop = -T_B R > 0
+            M3 = m.derivative_bound(t, X0, V0, 3)
+            book.check(positive(g2), "second derivative of the gap", fl, g2)
+            book.check(hi(M3) < mpf("inf"), "third-derivative bound", fl, M3)
+            g2_low = point(flight["second_derivative_lower"])
+            if not hi(g2_low) <= lo(g2):
+                raise Rejected(f"{fl}: the certificate's bound on g'' is not below the checker's enclosure")
+            margin = g2_low / 2 - M3 * ws / 6    # g(s)/s^2 >= g''/2 - M3 s/6 on (0, ws]
+            book.check(positive(margin) and positive(ws), "start window g''/2 - M3 ws/6", fl, margin)
+        s0 = float(flight["landing_center"])
+        Slo, Shi = (float(x) for x in flight["landing_box"])
+        S = hull(Slo, Shi)
+        gp = slope(S)
+        Nw = point(s0) - gap(point(s0)) / gp
+        book.check(negative(gp), "contact velocity at the landing", land, gp)
+        book.check(lo(Nw) > Slo and hi(Nw) < Shi, "interval Newton", land, Nw)
+        book.check(positive(S.a - ws), "landing after the start window", land, S.a - ws)
+        positive_pieces(flight["pieces"], lo(ws), mpf(Slo), gap, slope, f"gap on {fl}")
+        tL = t + Nw
+        R_land = reaction(tL)
+        if k == len(flights) - 1:
+            book.check(positive(R_land), "reaction at the landing", land, R_land)
+            landing_low = Slo + (t - tr)  # the sticking phase starts in this box (as t - t_r)
+        else:
+            book.check(negative(R_land), "reaction at the landing", land, R_land)
+            t = tL
+    turns = (tL - tr) / m.T
     st = cert["sticking"]
     k = int(st["periods"])
-    book.check(lo(turns) > k - 1 and hi(turns) < k, "landing time / T", land, turns)
+    book.check(lo(turns) > k - 1 and hi(turns) < k, "landing time / T", "sticking phase", turns)
     if int(cert["period"]) != k:
         raise Rejected("the period is not the number of turns to the next release")
     M2R = abs(kappa) * w * w / TB
@@ -528,9 +552,9 @@ def check_sticking(cert, m, book):
     end = rate_low - M2R * we / 2
     book.check(positive(end) and positive(we), "end window b - M2 we/2", "sticking phase", end)
     top = hi(ihi(k * m.T) - we)
-    if Slo < top:
-        positive_pieces(st["pieces"], mpf(Slo), top,
-                        lambda tau: (w1s * x0 - kappa * iv.sin(w * (tr + tau))) / TB,
+    if lo(landing_low) < top:
+        positive_pieces(st["pieces"], lo(landing_low), top,
+                        lambda tau: reaction(tr + tau),
                         lambda tau: -(kappa * w * iv.cos(w * (tr + tau))) / TB, "reaction over the sticking phase")
 
 

@@ -2,12 +2,15 @@
 //
 // On the stop the reaction is R(t) = (ω_1² x0 − κ sin ωt)/T_B, κ = T_A f (the paper's eq. (5) with n = 1).
 // The body leaves where R falls through zero: sin φ1 = ω_1² x0/κ with κ cos φ1 > 0 (docs/model.md §4.4),
-// t_r = φ1/ω, from rest at x0. Then:
-//   1. the flight from (t_r, x0, 0) keeps g > 0 until a landing s* that interval Newton encloses
-//      (g(s)/s³ ≥ g'''(0)/6 − M4 s/24 near the release, docs/model.md §2.1; subdivision after);
-//   2. the landing is transversal (g' < 0) and R > 0 there: the plastic impact sticks;
-//   3. R > 0 from the landing until t_r + kT, k = ⌈s*/T⌉, where the body is released again from the
-//      same state: the orbit has period kT.
+// t_r = φ1/ω, from rest at x0. Then, flight after flight:
+//   1. the flight from rest at x0 keeps g > 0 until a landing s* that interval Newton encloses
+//      (near its start g(s)/s³ ≥ g'''(0)/6 − M4 s/24 after the release, g(s)/s² ≥ g''(0)/2 − M3 s/6
+//      after a departure, docs/model.md §2.1; subdivision after);
+//   2. the landing is transversal (g' < 0); the plastic impact leaves the body at rest on the stop,
+//      where R > 0 makes it stick (done) and R < 0 makes it depart at once with g'' = −T_B R > 0
+//      (the next flight: Fig. 10 of the paper has two);
+//   3. R > 0 from the last landing until t_r + kT, k = ⌈(t_landing − t_r)/T⌉, where the body is
+//      released again from the same state: the orbit has period kT.
 #include <algorithm>
 #include <cmath>
 
@@ -16,6 +19,10 @@
 #include "proof/proof_common.hpp"
 
 namespace vibro::proof {
+
+namespace {
+constexpr int kMaxFlights = 20;
+}
 
 Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Deadline& deadline) {
   Outcome out;
@@ -38,80 +45,130 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   const Interval rate = -(kappa * w * Cos(phi1)) / TB;  // Ṙ at the release
   if (!ledger.Check(rate.Negative(), "reaction rate", rel, rate, "< 0")) return finish("");
   out.certificate["release"] = {{"phase", Pair(phi1)}, {"time", Pair(tr)}, {"reaction_rate", Pair(rate)}};
+  const auto reaction = [&](const Interval& t) { return (w1s * mdl.stop - kappa * Sin(w * t)) / TB; };
 
-  // 1. The flight from rest at the release.
+  Json events = Json::array(), sequence = Json::array({"release"}), flights = Json::array();
+  events.push_back({{"kind", "release"}, {"time", Pair(tr)}, {"phase", Pair(Phase(mdl, tr))}, {"velocity_before", {0.0, 0.0}}});
+  const double top = std::max(w.hi(), mdl.omega[0].hi()), T = mdl.period.mid();
   const std::vector<Interval> X0{mdl.stop}, V0{Interval(0.0)};
-  const auto gap = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, tr, X0, V0, s).X) - mdl.stop; };
-  const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, tr, X0, V0, s).V); };
-  const Interval g3 = kappa * w * Cos(phi1);  // x_B''' at the release: −ω_1²·0 + κ ω cos φ1
-  const Interval M4 = DerivativeBound(mdl, tr, X0, V0, 4);
-  const std::string fl = "flight from the release";
-  if (!ledger.Check(g3.Positive(), "third derivative of the gap", fl, g3, "> 0") ||
-      !ledger.Check(M4.finite(), "fourth-derivative bound", fl, M4, "finite"))
-    return finish("");
-  // Lower bounds a little below the enclosures (a checker's wider enclosure still validates them).
-  const double g3_low = g3.lo() * (1 - 1e-9);
-  const double ws = 2 * g3_low / M4.hi();
-  const Interval start_margin = Interval(g3_low) / Interval(6.0) - M4 * Interval(ws) / Interval(24.0);
-  if (!ledger.Check(start_margin.Positive(), "start window g'''/6 - M4 ws/24", fl, start_margin, "> 0"))
-    return finish("");
-  // The landing, approximately: the first sign change of g after the window, then bisection.
-  const double top = std::max(w.hi(), mdl.omega[0].hi()), step = 0.05 / top, T = mdl.period.mid();
-  double a = ws, b = ws;
-  bool found = false;
-  while (b < 1000 * T) {
-    a = b;
-    b = a + step;
-    if (gap(Interval(b)).mid() < 0) {
-      found = true;
-      break;
+  Interval t = tr, tL, gp;
+  double landing_low = 0;  // lower end of the last landing box, as t − t_r
+  bool stuck = false;
+  for (int k = 0; k < kMaxFlights && !stuck; ++k) {
+    const bool from_release = k == 0;
+    const std::string fl = fmt::format("flight {}", k), land = fmt::format("landing {}", k);
+    const auto gap = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X0, V0, s).X) - mdl.stop; };
+    const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X0, V0, s).V); };
+    Json flight = {{"start", from_release ? "release" : "departure"}};
+    double ws = 0;
+    if (from_release) {
+      // g = g' = g'' = 0, g''' = κ ω cos ωt (x''' at rest: −ω_1²·0 + κ ω cos ωt).
+      const Interval g3 = kappa * w * Cos(w * t);
+      const Interval M4 = DerivativeBound(mdl, t, X0, V0, 4);
+      if (!ledger.Check(g3.Positive(), "third derivative of the gap", fl, g3, "> 0") ||
+          !ledger.Check(M4.finite(), "fourth-derivative bound", fl, M4, "finite"))
+        return finish("");
+      // Lower bounds a little below the enclosures (a checker's wider enclosure still validates them).
+      const double g3_low = g3.lo() * (1 - 1e-9);
+      ws = 2 * g3_low / M4.hi();
+      const Interval margin = Interval(g3_low) / Interval(6.0) - M4 * Interval(ws) / Interval(24.0);
+      if (!ledger.Check(margin.Positive(), "start window g'''/6 - M4 ws/24", fl, margin, "> 0")) return finish("");
+      flight["third_derivative"] = Pair(g3);
+      flight["third_derivative_lower"] = g3_low;
+      flight["fourth_derivative_bound"] = M4.hi();
+    } else {
+      // g = g' = 0, g'' = −ω_1² x0 + κ sin ωt = −T_B R > 0 (a departure, docs/model.md §4.4).
+      const Interval g2 = kappa * Sin(w * t) - w1s * mdl.stop;
+      const Interval M3 = DerivativeBound(mdl, t, X0, V0, 3);
+      if (!ledger.Check(g2.Positive(), "second derivative of the gap", fl, g2, "> 0") ||
+          !ledger.Check(M3.finite(), "third-derivative bound", fl, M3, "finite"))
+        return finish("");
+      const double g2_low = g2.lo() * (1 - 1e-9);
+      ws = 1.5 * g2_low / M3.hi();
+      const Interval margin = Interval(g2_low) / Interval(2.0) - M3 * Interval(ws) / Interval(6.0);
+      if (!ledger.Check(margin.Positive(), "start window g''/2 - M3 ws/6", fl, margin, "> 0")) return finish("");
+      flight["second_derivative"] = Pair(g2);
+      flight["second_derivative_lower"] = g2_low;
+      flight["third_derivative_bound"] = M3.hi();
     }
-    if (deadline.passed()) return finish("time limit reached looking for the landing");
+    // The landing, approximately: the first sign change of g after the window, then bisection.
+    const double step = 0.05 / top;
+    double a = ws, b = ws;
+    bool found = false;
+    while (b < 1000 * T) {
+      a = b;
+      b = a + step;
+      if (gap(Interval(b)).mid() < 0) {
+        found = true;
+        break;
+      }
+      if (deadline.passed()) return finish("time limit reached looking for the landing");
+    }
+    if (!found) return finish(fmt::format("the body does not land within 1000 periods ({})", fl));
+    for (int it = 0; it < 200 && b - a > 4e-16 * b; ++it) {
+      const double c = a + (b - a) / 2;
+      (gap(Interval(c)).mid() > 0 ? a : b) = c;
+    }
+    const double s0 = a + (b - a) / 2;
+    // Interval Newton: N(S) = s0 − g(s0)/g'(S) ⊂ int S and g' < 0 on S ⇒ exactly one root in S.
+    Interval S, N;
+    double radius = request.box_radius * (1 + s0) + 4 * t.width();
+    for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
+      S = Interval::Hull(s0 - radius, s0 + radius);
+      gp = slope(S);
+      N = Interval(s0) - gap(Interval(s0)) / gp;
+      if (gp.Negative() && N.InsideOpen(S.lo(), S.hi())) break;
+    }
+    if (!ledger.Check(gp.Negative(), "contact velocity at the landing", land, gp, "< 0") ||
+        !ledger.Check(N.InsideOpen(S.lo(), S.hi()), "interval Newton", land, N, "inside the box"))
+      return finish("");
+    const Interval after_window = Interval(S.lo()) - Interval(ws);
+    if (!ledger.Check(after_window.Positive(), "landing after the start window", land, after_window, "> 0"))
+      return finish("");
+    const auto pos = ProvePositive(ws, S.lo(), 0.25 / top, request.max_depth, deadline,
+                                   [&](double s) { return gap(Interval(s)); }, slope);
+    if (!pos.proven) {
+      ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", fl, pos.failed_at), pos.failed_value, "> 0");
+      return finish(fmt::format("the gap is not proven positive on {}: {}", fl, pos.reason));
+    }
+    Json pieces = Json::array();
+    for (const auto& [lo, hi] : pos.pieces) pieces.push_back({lo, hi});
+    tL = t + N;
+    const Interval R_land = reaction(tL);
+    flight["start_window"] = ws;
+    flight["landing_center"] = s0;
+    flight["landing_box"] = {S.lo(), S.hi()};
+    flight["landing"] = Pair(N);
+    flight["landing_slope"] = Pair(gp);
+    flight["reaction_at_landing"] = Pair(R_land);
+    flight["pieces"] = pieces;
+    flights.push_back(flight);
+    events.push_back({{"kind", "impact"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
+    sequence.push_back("impact");
+    if (R_land.Positive()) {
+      ledger.Check(true, "reaction at the landing", land, R_land, "> 0");
+      events.push_back({{"kind", "stick"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
+      sequence.push_back("stick");
+      landing_low = (t - tr + Interval(S.lo())).lo();
+      stuck = true;
+    } else if (R_land.Negative()) {
+      ledger.Check(true, "reaction at the landing", land, R_land, "< 0");  // the body departs at once
+      events.push_back({{"kind", "departure"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", {0.0, 0.0}}});
+      sequence.push_back("departure");
+      t = tL;
+    } else {
+      ledger.Check(false, "reaction at the landing", land, R_land, "!= 0");
+      return finish(ledger.failed() + " (the landing meets R = 0: stick or depart is undecided)");
+    }
   }
-  if (!found) return finish("the body does not land within 1000 periods of the release");
-  for (int it = 0; it < 200 && b - a > 4e-16 * b; ++it) {
-    const double c = a + (b - a) / 2;
-    (gap(Interval(c)).mid() > 0 ? a : b) = c;
-  }
-  const double s0 = a + (b - a) / 2;
-  // Interval Newton: N(S) = s0 − g(s0)/g'(S) ⊂ int S and g' < 0 on S ⇒ exactly one root in S.
-  Interval S, N, gp;
-  bool newton = false;
-  double radius = request.box_radius * (1 + s0);
-  for (int attempt = 0; attempt < 4 && !newton; ++attempt, radius *= 4) {
-    S = Interval::Hull(s0 - radius, s0 + radius);
-    gp = slope(S);
-    N = Interval(s0) - gap(Interval(s0)) / gp;
-    newton = gp.Negative() && N.InsideOpen(S.lo(), S.hi());
-  }
-  const std::string land = "landing";
-  if (!ledger.Check(gp.Negative(), "contact velocity at the landing", land, gp, "< 0") ||
-      !ledger.Check(N.InsideOpen(S.lo(), S.hi()), "interval Newton", land, N,
-                    "inside the box"))
-    return finish("");
-  const Interval after_window = Interval(S.lo()) - Interval(ws);
-  if (!ledger.Check(after_window.Positive(), "landing after the start window", land, after_window, "> 0"))
-    return finish("");
-  const auto pos = ProvePositive(ws, S.lo(), 0.25 / top, request.max_depth, deadline,
-                                 [&](double s) { return gap(Interval(s)); }, slope);
-  if (!pos.proven) {
-    ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", fl, pos.failed_at), pos.failed_value, "> 0");
-    return finish(fmt::format("the gap is not proven positive on the {}: {}", fl, pos.reason));
-  }
-  Json gap_pieces = Json::array();
-  for (const auto& [lo, hi] : pos.pieces) gap_pieces.push_back({lo, hi});
-  const Interval tL = tr + N;
-  const Interval R_land = (w1s * mdl.stop - kappa * Sin(w * tL)) / TB;
-  if (!ledger.Check(R_land.Positive(), "reaction at the landing", land, R_land, "> 0"))
-    return finish(ledger.failed() + " (the plastic impact does not stick)");
-  out.certificate["flight"] = {{"third_derivative", Pair(g3)}, {"third_derivative_lower", g3_low}, {"fourth_derivative_bound", M4.hi()},
-                               {"start_window", ws}, {"landing_center", s0}, {"landing_box", {S.lo(), S.hi()}}, {"landing", Pair(N)},
-                               {"landing_slope", Pair(gp)}, {"pieces", gap_pieces}};
+  out.certificate["flights"] = flights;
+  if (!stuck) return finish(fmt::format("no landing with R > 0 after {} flights", kMaxFlights));
 
-  // 3. Sticking until the next release t_r + kT.
-  const Interval turns = N / mdl.period;
+  // Sticking until the next release t_r + kT.
+  const std::string st = "sticking phase";
+  const Interval turns = (tL - tr) / mdl.period;
   const double k = std::floor(turns.lo()) + 1;
-  if (!ledger.Check(turns.InsideOpen(k - 1, k), "landing time / T", land, turns, fmt::format("inside ({}, {})", k - 1, k)))
+  if (!ledger.Check(turns.InsideOpen(k - 1, k), "landing time / T", st, turns, fmt::format("inside ({}, {})", k - 1, k)))
     return finish(ledger.failed() + " (the landing meets a release phase)");
   const int q = static_cast<int>(k);
   if (request.period > 0 && request.period != q)
@@ -121,42 +178,38 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   const double rate_low = -rate.hi() * (1 - 1e-9);
   const double we = rate_low / M2R.hi();
   const Interval end_margin = Interval(rate_low) - M2R * Interval(we) / Interval(2.0);
-  const std::string st = "sticking phase";
   if (!ledger.Check(end_margin.Positive(), "end window b - M2 we/2", st, end_margin, "> 0")) return finish("");
-  const auto reaction = [&](const Interval& tau) { return (w1s * mdl.stop - kappa * Sin(w * (tr + tau))) / TB; };
-  const auto reaction_rate = [&](const Interval& tau) { return -(kappa * w * Cos(w * (tr + tau))) / TB; };
+  // R > 0 from a little before the landing (1e-9 relative: a checker's wider enclosure of the
+  // landing still lies inside) to 0.1 we into the end window (as for the flights of impact_proof.cpp).
+  const double from = landing_low - 1e-9 * (1 + std::abs(landing_low)), to = kT.hi() - 0.9 * we;
   Json stick_pieces = Json::array();
-  // From the landing box's lower end (a certificate number, below the landing) to 0.1 we into the
-  // end window (as for the flights of impact_proof.cpp).
-  if (S.lo() < kT.hi() - 0.9 * we) {
-    const auto rpos = ProvePositive(S.lo(), kT.hi() - 0.9 * we, 0.25 / top, request.max_depth, deadline,
-                                    [&](double s) { return reaction(Interval(s)); }, reaction_rate);
+  if (from < to) {
+    const auto rpos = ProvePositive(from, to, 0.25 / top, request.max_depth, deadline,
+                                    [&](double s) { return reaction(tr + Interval(s)); },
+                                    [&](const Interval& tau) { return -(kappa * w * Cos(w * (tr + tau))) / TB; });
     if (!rpos.proven) {
       ledger.Check(false, "reaction", fmt::format("{} at t - t_r = {:.17g}", st, rpos.failed_at), rpos.failed_value, "> 0");
       return finish(fmt::format("the reaction is not proven positive over the {}: {}", st, rpos.reason));
     }
     for (const auto& [lo, hi] : rpos.pieces) stick_pieces.push_back({lo, hi});
   }
-  out.certificate["sticking"] = {{"periods", q}, {"rate_lower", rate_low}, {"second_derivative_bound", M2R.hi()}, {"end_window", we},
-                                 {"pieces", stick_pieces}};
+  out.certificate["sticking"] = {{"periods", q}, {"rate_lower", rate_low}, {"second_derivative_bound", M2R.hi()},
+                                 {"end_window", we}, {"pieces", stick_pieces}};
   out.certificate["inequalities"] = ledger.list();
 
   out.summary["period"] = q;
-  out.summary["sequence"] = {"release", "impact", "stick"};
-  out.summary["events"] = Json::array(
-      {{{"kind", "release"}, {"time", Pair(tr)}, {"phase", Pair(Phase(mdl, tr))}, {"velocity_before", {0.0, 0.0}}},
-       {{"kind", "impact"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}},
-       {{"kind", "stick"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}}});
+  out.summary["sequence"] = sequence;
+  out.summary["events"] = events;
   out.summary["section"] = {{"time", Pair(tr)}, {"X", Json::array({Pair(mdl.stop)})}, {"V", Json::array({Json::array({0.0, 0.0})})},
                             {"at", "the release"}};
   out.summary["multipliers"] = Json::array();
   out.summary["stability"] = "stable";
   out.summary["stability_note"] =
       "superstable: a one-DOF trajectory that sticks is released from the same state at the same phase";
-  out.summary["box_width"] = std::max(N.width(), tr.width());
+  out.summary["box_width"] = std::max(tL.width(), tr.width());
   out.proven = true;
-  out.reason = fmt::format("exactly one period-{} sticking orbit through the release: release, flight, plastic landing "
-                           "with R > 0, sticking with R > 0 until the next release", q);
+  out.reason = fmt::format("exactly one period-{} sticking orbit through the release: release, {} flight(s) with plastic "
+                           "landings, sticking with R > 0 until the next release", q, flights.size());
   return out;
 }
 

@@ -101,6 +101,18 @@ for factor, must in ((mpf("1.000001"), False), (mpf("0.999999"), None)):
         expect((code == 0 and s2["period"] == q) or (code == 4 and s2["reason"]),
                f"just below f_free-flight (f = {amp}): proven with period {q} or a reason (exit {code})")
 
+# ---- Fig. 10: r = 0, a landing with R < 0 (the body departs at once), then a second flight -------
+cert10 = os.path.join(TMP, "fig10.json")
+code, s10, err = prove("fig10_two_flights.toml", out=cert10)
+expect(code == 0 and s10["sequence"] == ["release", "impact", "departure", "impact", "stick"],
+       f"Fig. 10 proven with two flights (exit {code}: {s10 and s10['reason']})")
+code, v = check(cert10)
+expect(code == 0 and v["verdict"] == "confirmed", f"checker confirms Fig. 10 ({v})")
+if os.path.exists(cert10):
+    def stick_at_departure(c):  # claim that the first landing sticks: its reaction is negative
+        c["flights"] = c["flights"][:1]
+    checked_mutant(json.load(open(cert10)), stick_at_departure, "fig10_stick_at_departure")
+
 # ---- Fig. 5: r = 0.75, ω = 10, f = 1.1: period-1 single-impact orbits in closed form ----------
 # ẍ + x = f sin ωt, x ≥ 1: with P = f/(1 − ω²), τ = 2π/ω, c = cos τ, s = sin τ, the flight from an impact
 # at phase φ with v⁺ returns to x0 = 1 one period later with ẋ⁻ = −v⁺/r iff
@@ -218,9 +230,9 @@ if os.path.exists(cert4):
         c["release"]["phase"] = [c["release"]["phase"][0] + 1e-9, c["release"]["phase"][1] + 1e-9]
 
     def move_landing(c):
-        lo_, hi_ = c["flight"]["landing_box"]
-        c["flight"]["landing_box"] = [lo_ + 10 * (hi_ - lo_), hi_ + 10 * (hi_ - lo_)]
-        c["flight"]["landing_center"] += 10 * (hi_ - lo_)
+        lo_, hi_ = c["flights"][0]["landing_box"]
+        c["flights"][0]["landing_box"] = [lo_ + 10 * (hi_ - lo_), hi_ + 10 * (hi_ - lo_)]
+        c["flights"][0]["landing_center"] += 10 * (hi_ - lo_)
 
     def wrong_period(c):
         c["period"] = 3
