@@ -9,6 +9,9 @@ the reaction, and the monodromy are written again here from the model (the paper
 
     vibro_check_proof.py CERT.json [--json]
 
+CERT.json holds one certificate, or {"certificates": [...]} (`vibro prove --branch --out`): each
+is checked.
+
 Exit 0: the certificate proves what it claims. Exit 1: it does not (the first failure is printed).
 Exit 2: the file is not a certificate.
 """
@@ -585,8 +588,17 @@ def main(argv):
     try:
         with open(args[0]) as fh:
             cert = json.load(fh)
-        count = check(cert)
-        verdict, reason = "confirmed", f"{count} inequalities recomputed and verified"
+        if isinstance(cert, dict) and "certificates" in cert:  # `vibro prove --branch --out`: one per point
+            count = 0
+            for k, c in enumerate(cert["certificates"]):
+                try:
+                    count += check(c)
+                except Rejected as e:
+                    raise Rejected(f"point {k}: {e}")
+            verdict, reason = "confirmed", f"{len(cert['certificates'])} certificates, {count} inequalities recomputed and verified"
+        else:
+            count = check(cert)
+            verdict, reason = "confirmed", f"{count} inequalities recomputed and verified"
         code = 0
     except (OSError, ValueError) as e:
         print(f"vibro_check_proof: {args[0]}: {e}", file=sys.stderr)

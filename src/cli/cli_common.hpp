@@ -118,7 +118,8 @@ int RunScore(const ScoreArgs& args);  // exit code: 0, 4 when the runs diverge b
 // `vibro prove SCENE` (cmd_prove.cpp). Exit 0 proven, 4 not proven.
 struct ProveArgs {
   vibro::ProofRequest request;
-  std::string from;  // --from ORBIT.h5 ("" for none)
+  std::string from;    // --from ORBIT.h5 ("" for none)
+  std::string branch;  // --branch FILE.h5: every point of a stored branch ("" for none)
   std::string out;   // --out CERT.json
 };
 int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args);

@@ -125,7 +125,10 @@ int main(int argc, char** argv) {
   prove->add_option("--transient", prove_args.request.transient_periods,
                     "periods simulated before the orbit search (default 200)")
       ->check(CLI::NonNegativeNumber)->excludes(prove_from);
-  prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file");
+  prove->add_option("--branch", prove_args.branch,
+                    "prove every point of the branch stored by `vibro continue --out FILE.h5`")
+      ->excludes(prove_from);
+  prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
   prove->add_option("--time-limit", prove_args.request.time_limit, "seconds before the proof gives up (default 60)")
       ->check(CLI::Range(0.001, 1e6));
 

@@ -244,6 +244,32 @@ if os.path.exists(cert4):
     for fn in (move_release, move_landing, wrong_period, change_restitution):
         checked_mutant(cert, fn, fn.__name__)
 
+# ---- Along a branch: every stored point of `vibro continue` proven from its own state --------
+branch = os.path.join(TMP, "branch.h5")
+p = subprocess.run([VIBRO, "continue", os.path.join(SCENES, "fig05_coexistence.toml"), "--kind", "impact",
+                    "--param", "excitation.amplitude", "--to", "1.3", "--step", "0.05", "--max-points", "4",
+                    "--out", branch], capture_output=True, text=True, timeout=600)
+expect(p.returncode == 0, f"a branch to prove ({p.stderr})")
+certs_path = os.path.join(TMP, "branch.json")
+p = subprocess.run([VIBRO, "prove", os.path.join(SCENES, "fig05_coexistence.toml"), "--branch", branch, "--json",
+                    "--out", certs_path], capture_output=True, text=True, timeout=600)
+b = json.loads(p.stdout) if p.stdout.strip() else {}
+expect(p.returncode == 0 and b.get("proven") == b.get("total") == 4,
+       f"--branch: every point proven (exit {p.returncode}, {b.get('proven')} of {b.get('total')})")
+values = [pt["value"] for pt in b.get("points", [])]
+expect(len(set(values)) == len(values) == 4, f"--branch: four distinct parameter values {values}")
+code, v = check(certs_path)
+expect(code == 0 and "4 certificates" in v["reason"], f"the checker confirms every certificate of the branch ({v})")
+if code == 0:
+    allc = json.load(open(certs_path))
+    def second_point_amplitude(c):
+        c["certificates"][1]["model"]["amplitude"] = c["certificates"][2]["model"]["amplitude"]
+    checked_mutant(allc, second_point_amplitude, "branch_swapped_parameter")
+
+# ---- Never hangs: the time limit ends a proof with the reason -------------------------------
+code, s, err = prove("chain2.toml", "--kind", "impact", "--set", "excitation.amplitude=5", "--time-limit", "0.001")
+expect(code == 4 and "time limit" in (s or {}).get("reason", ""), f"--time-limit: exit 4, reason given (exit {code}: {s and s['reason']})")
+
 # ---- Not proven, and bad input --------------------------------------------------------------
 path = os.path.join(TMP, "chatter.json")
 code, s, err = prove("fig05_coexistence.toml", out=path)
