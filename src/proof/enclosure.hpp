@@ -106,22 +106,30 @@ struct FlightEnd {
   std::vector<T> X, V;
 };
 
+// The relative, cancellation-free form of docs/model.md §2: every term that depends on t0 is
+// multiplied by an increment O(s²) or O(s³), so that an enclosure of t0 widens a short flight's end
+// by O(s²) of its width only (chattering flights are short):
+//   X_i(t0+s) = X_i cos ω_i s + Ẋ_i sin(ω_i s)/ω_i + T_A,i f K_i(s),
+//   K_i(s) = [sin ωt0 (cos ωs − cos ω_i s) + cos ωt0 (sin ωs − (ω/ω_i) sin ω_i s)]/(ω_i² − ω²),
+// with cos x − 1 = −2 sin²(x/2).
 template <class T>
 FlightEnd<T> Flight(const IntervalModel& m, const T& t0, const std::vector<T>& X, const std::vector<T>& V,
                     const T& s) {
   FlightEnd<T> e;
-  const T w(m.frequency);
+  const T w(m.frequency), two(2.0), half(0.5);
   const T sin0 = Sin(w * t0), cos0 = Cos(w * t0);
-  const T sin1 = Sin(w * (t0 + s)), cos1 = Cos(w * (t0 + s));
+  const T sw = Sin(w * s), hw = Sin(half * w * s), cw_m1 = -(two * hw * hw);  // cos ωs − 1
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     const T wi(m.omega[k]);
-    const T ua(m.forcing[k] * m.amplitude / (Sqr(m.omega[k]) - Sqr(m.frequency)));
-    const T a = X[k] - ua * sin0;
-    const T b = (V[k] - ua * w * cos0) / wi;
-    const T c = Cos(wi * s), sn = Sin(wi * s);
-    e.X.push_back(ua * sin1 + a * c + b * sn);
-    e.V.push_back(ua * w * cos1 - a * wi * sn + b * wi * c);
+    const T den(Sqr(m.omega[k]) - Sqr(m.frequency)), kappa(m.forcing[k] * m.amplitude);
+    const T sn = Sin(wi * s), hi = Sin(half * wi * s), c_m1 = -(two * hi * hi);  // cos ω_i s − 1
+    const T dcos = cw_m1 - c_m1;            // cos ωs − cos ω_i s
+    const T dsin = sw - (w / wi) * sn;      // sin ωs − (ω/ω_i) sin ω_i s
+    const T K = (sin0 * dcos + cos0 * dsin) / den;
+    const T Kp = (sin0 * (wi * sn - w * sw) + w * cos0 * dcos) / den;  // dK/ds
+    e.X.push_back(X[k] + X[k] * c_m1 + V[k] * sn / wi + kappa * K);
+    e.V.push_back(V[k] + V[k] * c_m1 - X[k] * wi * sn + kappa * Kp);
   }
   return e;
 }

@@ -118,22 +118,19 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
   const auto model = ModelOf(system);
   proof::Outcome outcome;
   std::string kind;
-  const bool one_dof_plastic = system.dof() == 1 && system.restitution() == 0 && system.contact_shape()(0) == 1;
+  const bool one_dof = system.dof() == 1 && system.contact_shape()(0) == 1;
   const auto sticking = [&]() {
     kind = "sticking";
-    if (one_dof_plastic) {
-      outcome = proof::ProveSticking1Dof(model, request, deadline);
+    if (one_dof) {
+      outcome = proof::ProveSticking1Dof(model, request, deadline);  // r = 0, or r > 0 with chattering
     } else {
-      outcome.reason = system.restitution() > 0
-                           ? "sticking orbits with chattering (r > 0) are not proven by this version: the "
-                             "accumulation point needs a rigorous remainder bound (docs/prove.md)"
-                           : "sticking orbits of a model with more than one mode are not proven by this version "
-                             "(docs/prove.md)";
+      outcome.reason = "sticking orbits of a model with more than one mode are not proven by this version "
+                       "(docs/prove.md)";
     }
   };
   if (request.kind == OrbitKind::kSticking) {
     sticking();
-  } else if (request.kind == OrbitKind::kAuto && one_dof_plastic) {
+  } else if (request.kind == OrbitKind::kAuto && one_dof && system.restitution() == 0) {
     sticking();  // r = 0, one mode: every impact is plastic, an orbit with impacts sticks or departs
   } else {
     const auto found = FindImpactOrbit(system, scene, request);

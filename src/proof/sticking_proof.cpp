@@ -21,7 +21,11 @@
 namespace vibro::proof {
 
 namespace {
-constexpr int kMaxFlights = 20;
+constexpr int kMaxFlights = 400;
+// Chattering (r > 0): impacts are followed one by one until the speed after an impact is below
+// this fraction of the first landing speed, or its enclosure is wider than kTailWidth of it (the
+// enclosures widen along the sequence); the rest of the sequence is then bounded as a whole.
+constexpr double kTailSwitch = 1e-7, kTailWidth = 1e-2;
 }
 
 Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Deadline& deadline) {
@@ -50,16 +54,20 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   Json events = Json::array(), sequence = Json::array({"release"}), flights = Json::array();
   events.push_back({{"kind", "release"}, {"time", Pair(tr)}, {"phase", Pair(Phase(mdl, tr))}, {"velocity_before", {0.0, 0.0}}});
   const double top = std::max(w.hi(), mdl.omega[0].hi()), T = mdl.period.mid();
-  const std::vector<Interval> X0{mdl.stop}, V0{Interval(0.0)};
-  Interval t = tr, tL, gp;
+  const std::vector<Interval> X0{mdl.stop};
+  std::vector<Interval> V0{Interval(0.0)};
+  const bool plastic = mdl.restitution.lo() == 0 && mdl.restitution.hi() == 0;
+  Interval t = tr, tL, gp, t_end;  // t_end: where the sticking begins (a landing, or the accumulation point)
+  double first_speed = 0;
+  std::string start_kind = "release";
   double landing_low = 0;  // lower end of the last landing box, as t − t_r
   bool stuck = false;
   for (int k = 0; k < kMaxFlights && !stuck; ++k) {
-    const bool from_release = k == 0;
+    const bool from_release = start_kind == "release", from_impact = start_kind == "impact";
     const std::string fl = fmt::format("flight {}", k), land = fmt::format("landing {}", k);
     const auto gap = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X0, V0, s).X) - mdl.stop; };
     const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X0, V0, s).V); };
-    Json flight = {{"start", from_release ? "release" : "departure"}};
+    Json flight = {{"start", start_kind}};
     double ws = 0;
     if (from_release) {
       // g = g' = g'' = 0, g''' = κ ω cos ωt (x''' at rest: −ω_1²·0 + κ ω cos ωt).
@@ -76,6 +84,19 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
       flight["third_derivative"] = Pair(g3);
       flight["third_derivative_lower"] = g3_low;
       flight["fourth_derivative_bound"] = M4.hi();
+    } else if (from_impact) {
+      // g = 0, g' = ẋ⁺ = a > 0: g(s) ≥ s(a − M2 s/2) (as after the impacts of impact_proof.cpp).
+      const Interval M2 = DerivativeBound(mdl, t, X0, V0, 2);
+      if (!ledger.Check(V0[0].Positive(), "contact velocity after impact", fl, V0[0], "> 0") ||
+          !ledger.Check(M2.finite(), "second-derivative bound", fl, M2, "finite"))
+        return finish("");
+      const double a_low = V0[0].lo() * (1 - 1e-9);
+      ws = a_low / M2.hi();
+      const Interval margin = Interval(a_low) - M2 * Interval(ws) / Interval(2.0);
+      if (!ledger.Check(margin.Positive(), "start window a - M2 ws/2", fl, margin, "> 0")) return finish("");
+      flight["velocity_after"] = Pair(V0[0]);
+      flight["velocity_after_lower"] = a_low;
+      flight["second_derivative_bound"] = M2.hi();
     } else {
       // g = g' = 0, g'' = −ω_1² x0 + κ sin ωt = −T_B R > 0 (a departure, docs/model.md §4.4).
       const Interval g2 = kappa * Sin(w * t) - w1s * mdl.stop;
@@ -92,7 +113,9 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
       flight["third_derivative_bound"] = M3.hi();
     }
     // The landing, approximately: the first sign change of g after the window, then bisection.
-    const double step = 0.05 / top;
+    // A chattering flight lasts about 2v/(T_B R): scan it in quarters.
+    const double step = from_impact ? std::min(0.05 / top, 0.5 * V0[0].hi() / std::max(1e-300, std::abs(reaction(t).mid() * TB.mid())))
+                                    : 0.05 / top;
     double a = ws, b = ws;
     bool found = false;
     while (b < 1000 * T) {
@@ -112,7 +135,8 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
     const double s0 = a + (b - a) / 2;
     // Interval Newton: N(S) = s0 − g(s0)/g'(S) ⊂ int S and g' < 0 on S ⇒ exactly one root in S.
     Interval S, N;
-    double radius = request.box_radius * (1 + s0) + 4 * t.width();
+    // Short flights of a chattering sequence: a box of a fixed fraction of the flight.
+    double radius = std::min(request.box_radius * (1 + s0), 1e-3 * s0) + 4 * t.width() + 4 * V0[0].width() * s0 / std::max(V0[0].lo(), 1e-300);
     for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
       S = Interval::Hull(s0 - radius, s0 + radius);
       gp = slope(S);
@@ -135,6 +159,69 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
     for (const auto& [lo, hi] : pos.pieces) pieces.push_back({lo, hi});
     tL = t + N;
     const Interval R_land = reaction(tL);
+    if (!plastic) {
+      // r > 0: the body bounces with ẋ⁺ = −r ẋ⁻ (the speed from the tight enclosure N of the landing).
+      const Interval vminus = slope(N), vplus = -(mdl.restitution * vminus);
+      if (!ledger.Check(vminus.Negative(), "contact velocity before impact", land, vminus, "< 0")) return finish("");
+      if (first_speed == 0) first_speed = -vminus.mid();
+      flight["start_window"] = ws;
+      flight["landing_center"] = s0;
+      flight["landing_box"] = {S.lo(), S.hi()};
+      flight["landing"] = Pair(N);
+      flight["pieces"] = pieces;
+      flights.push_back(flight);
+      events.push_back({{"kind", "impact"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(vminus)}});
+      sequence.push_back("impact");
+      landing_low = (t - tr + Interval(S.lo())).lo();
+      if (vplus.hi() < kTailSwitch * first_speed || vplus.width() > kTailWidth * vplus.mid()) {
+        // The rest of the sequence, bounded (docs/prove.md "chattering"): with y = x − x0 ≥ 0,
+        // ÿ = −ω_1² y − T_B R(t). On a window W where T_B R ∈ [a_lo, A_hi], a_lo > 0, every flight from
+        // speed v lasts at most 2v/a_lo, rises at most Y = v²/(2 a_lo), and lands with speed at most
+        // v √(a_hi/a_lo), a_hi = A_hi + ω_1² Y: the speeds shrink at least by ρ = r √(a_hi/a_lo) < 1
+        // per impact and the impacts accumulate before t + 2v/(a_lo (1 − ρ)) ≤ t + L, inside W.
+        const std::string tl = "chattering tail";
+        // Bounds a little outside the enclosures (as a_low of the flights): a checker recomputes the
+        // enclosures, checks that these bounds hold, and derives ρ and the time bound from them.
+        const double v = vplus.hi() * (1 + 1e-9);
+        double L = 4 * v / std::max(1e-300, (TB * R_land).lo());
+        Interval A, a_lo, a_hi, rho, Tmax;
+        double A_low = 0, A_high = 0;
+        bool closed = false;
+        for (int it = 0; it < 6 && !closed; ++it, L *= 2) {
+          A = TB * reaction(Interval::Hull(tL.lo(), tL.hi() + L));
+          if (!(A.lo() > 0)) continue;
+          A_low = A.lo() * (1 - 1e-9);
+          A_high = A.hi() * (1 + 1e-9);
+          a_lo = Interval(A_low);
+          a_hi = Interval(A_high) + w1s * Sqr(Interval(v)) / (Interval(2.0) * a_lo);
+          rho = mdl.restitution * Sqrt(a_hi / a_lo);
+          if (!(rho.hi() < 1)) continue;
+          Tmax = Interval(2.0) * Interval(v) / (a_lo * (Interval(1.0) - rho));
+          closed = Tmax.hi() <= L;
+        }
+        L /= 2;
+        if (!ledger.Check(A.Positive(), "tail reaction T_B R over the window", tl, A, "> 0") ||
+            !ledger.Check((Interval(1.0) - rho).Positive(), "tail contraction 1 - rho", tl, Interval(1.0) - rho, "> 0") ||
+            !ledger.Check((Interval(L) - Tmax).Positive(), "tail window L - Tmax", tl, Interval(L) - Tmax, "> 0"))
+          return finish(ledger.failed() + " (the chattering sequence could not be bounded)");
+        t_end = Interval::Hull(tL.lo(), (tL + Tmax).hi());
+        out.certificate["tail"] = {{"after_flight", k},       {"speed_upper", v},        {"window", L},
+                                   {"reaction_lower", A_low},   {"reaction_upper", A_high}, {"contraction", Pair(rho)},
+                                   {"time_bound", Tmax.hi()},   {"accumulation", Pair(t_end)}};
+        events.push_back({{"kind", "accumulation"}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
+                          {"velocity_before", {0.0, 0.0}}});
+        events.push_back({{"kind", "stick"}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
+                          {"velocity_before", {0.0, 0.0}}});
+        sequence.push_back("accumulation");
+        sequence.push_back("stick");
+        stuck = true;
+        break;
+      }
+      V0 = {vplus};
+      t = tL;
+      start_kind = "impact";
+      continue;
+    }
     flight["start_window"] = ws;
     flight["landing_center"] = s0;
     flight["landing_box"] = {S.lo(), S.hi()};
@@ -150,12 +237,14 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
       events.push_back({{"kind", "stick"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
       sequence.push_back("stick");
       landing_low = (t - tr + Interval(S.lo())).lo();
+      t_end = tL;
       stuck = true;
     } else if (R_land.Negative()) {
       ledger.Check(true, "reaction at the landing", land, R_land, "< 0");  // the body departs at once
       events.push_back({{"kind", "departure"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", {0.0, 0.0}}});
       sequence.push_back("departure");
       t = tL;
+      start_kind = "departure";
     } else {
       ledger.Check(false, "reaction at the landing", land, R_land, "!= 0");
       return finish(ledger.failed() + " (the landing meets R = 0: stick or depart is undecided)");
@@ -166,7 +255,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
 
   // Sticking until the next release t_r + kT.
   const std::string st = "sticking phase";
-  const Interval turns = (tL - tr) / mdl.period;
+  const Interval turns = (t_end - tr) / mdl.period;
   const double k = std::floor(turns.lo()) + 1;
   if (!ledger.Check(turns.InsideOpen(k - 1, k), "landing time / T", st, turns, fmt::format("inside ({}, {})", k - 1, k)))
     return finish(ledger.failed() + " (the landing meets a release phase)");
@@ -206,10 +295,14 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   out.summary["stability"] = "stable";
   out.summary["stability_note"] =
       "superstable: a one-DOF trajectory that sticks is released from the same state at the same phase";
-  out.summary["box_width"] = std::max(tL.width(), tr.width());
+  out.summary["box_width"] = std::max(t_end.width(), tr.width());
   out.proven = true;
-  out.reason = fmt::format("exactly one period-{} sticking orbit through the release: release, {} flight(s) with plastic "
-                           "landings, sticking with R > 0 until the next release", q, flights.size());
+  out.reason = out.certificate.contains("tail")
+                   ? fmt::format("exactly one period-{} sticking orbit through the release: release, {} impacts followed, "
+                                 "a chattering tail accumulating within {:.1e}, sticking with R > 0 until the next release",
+                                 q, flights.size(), t_end.width())
+                   : fmt::format("exactly one period-{} sticking orbit through the release: release, {} flight(s) with "
+                                 "plastic landings, sticking with R > 0 until the next release", q, flights.size());
   return out;
 }
 
