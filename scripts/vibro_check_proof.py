@@ -153,21 +153,29 @@ class Model:
         self.T = 2 * iv.pi / self.w
 
     def flight(self, t0, X, V, s):
-        """Closed-form free flight from (t0, X, V) over s (eqs (13)-(14)): X(t0+s), V(t0+s), as D."""
+        """Closed-form free flight from (t0, X, V) over s (eqs (13)-(14)) in the cancellation-free form
+        (docs/model.md §2): X(t0+s) = X cos ω_i s + V sin(ω_i s)/ω_i + T_A f K(s), with
+        K = [sin ωt0 (cos ωs − cos ω_i s) + cos ωt0 (sin ωs − (ω/ω_i) sin ω_i s)]/(ω_i² − ω²),
+        cos x − 1 = −2 sin²(x/2). Returns X(t0+s), V(t0+s) as D."""
         L = D.lift
         t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
         w = L(self.w)
+        sin0, cos0 = dsin(w * t0), dcos(w * t0)
+        sw, hw = dsin(w * s), dsin(L(iv.mpf(0.5)) * w * s)
+        cw_m1 = -(L(2) * hw * hw)
         Xo, Vo = [], []
-        ws0, wc0 = dsin(w * t0), dcos(w * t0)
-        ws1, wc1 = dsin(w * (t0 + s)), dcos(w * (t0 + s))
         for i in range(self.n):
             wi = L(self.w_i[i])
-            amp = L(self.TA[i] * self.f / (self.w_i[i] ** 2 - self.w ** 2))
-            A = X[i] - amp * ws0
-            B = (V[i] - amp * w * wc0) / wi
-            ci, si = dcos(wi * s), dsin(wi * s)
-            Xo.append(amp * ws1 + A * ci + B * si)
-            Vo.append(amp * w * wc1 - A * wi * si + B * wi * ci)
+            den = L(self.w_i[i] ** 2 - self.w ** 2)
+            kappa = L(self.TA[i] * self.f)
+            sn, hi_ = dsin(wi * s), dsin(L(iv.mpf(0.5)) * wi * s)
+            c_m1 = -(L(2) * hi_ * hi_)
+            dcos_ = cw_m1 - c_m1
+            dsin_ = sw - (w / wi) * sn
+            K = (sin0 * dcos_ + cos0 * dsin_) / den
+            Kp = (sin0 * (wi * sn - w * sw) + w * cos0 * dcos_) / den
+            Xo.append(X[i] + X[i] * c_m1 + V[i] * sn / wi + kappa * K)
+            Vo.append(V[i] + V[i] * c_m1 - X[i] * wi * sn + kappa * Kp)
         return Xo, Vo
 
     def contact(self, X):
@@ -470,14 +478,15 @@ def check_spectrum_general(claim, listed, M):
 # ---- One-DOF sticking orbits with r = 0 --------------------------------------------------------
 
 def check_sticking(cert, m, book):
-    if m.n != 1 or not (lo(m.r) == 0 and hi(m.r) == 0):
-        raise Rejected("a sticking certificate needs one mode and r = 0")
+    if m.n != 1 or not (lo(m.r) >= 0 and hi(m.r) < 1):
+        raise Rejected("a sticking certificate needs one mode and 0 <= r < 1")
+    plastic = lo(m.r) == 0 and hi(m.r) == 0
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
     book.check(positive(kappa) or negative(kappa), "forcing T_A f", rel, kappa)
     book.check(positive(1 - abs(ratio)), "1 - |omega_1^2 x0/(T_A f)|", rel, 1 - abs(ratio))
-    # φ1 from the certificate's enclosure P: sin is monotonic on P and sin(P) brackets the ratio.
+    # phi1 from the certificate's enclosure P: sin is monotonic on P and sin(P) brackets the ratio.
     P = pair(cert["release"]["phase"])
     half = iv.pi / 2
     if positive(kappa):
@@ -486,21 +495,45 @@ def check_sticking(cert, m, book):
         ok = lo(P) > hi(half) and hi(P) < lo(3 * half) and lo(iv.sin(lo(P))) > hi(ratio) and hi(iv.sin(hi(P))) < lo(ratio)
     if not ok:
         raise Rejected(f"the release phase {P} does not enclose the root of the reaction")
+    # A tighter enclosure of the same root (the certificate's is rounded to doubles; a chattering
+    # sequence amplifies the width of the release time), verified the same way.
+    r_mid = (lo(ratio) + hi(ratio)) / 2
+    phi = mp.asin(r_mid) if positive(kappa) else mp.pi - mp.asin(r_mid)
+    eps = mpf(2) ** -100
+    T_ = iv.mpf([phi - eps, phi + eps])
+    if positive(kappa):
+        tight = hi(iv.sin(lo(T_))) < lo(ratio) and lo(iv.sin(hi(T_))) > hi(ratio)
+    else:
+        tight = lo(iv.sin(lo(T_))) > hi(ratio) and hi(iv.sin(hi(T_))) < lo(ratio)
+    if tight and lo(T_) >= lo(P) and hi(T_) <= hi(P):
+        P = T_
     tr = P / w
     rate = -(kappa * w * iv.cos(P)) / TB
     book.check(negative(rate), "reaction rate", rel, rate)
     reaction = lambda t: (w1s * x0 - kappa * iv.sin(w * t)) / TB
-    X0, V0 = [x0], [iv.mpf(0)]
+    X0 = [x0]
     flights = cert["flights"]
     if not flights:
         raise Rejected("no flight")
-    t, tL = tr, None
+    t, tL, vplus = tr, None, None
     for k, flight in enumerate(flights):
         fl, land = f"flight {k}", f"landing {k}"
-        gap = lambda s, t=t: m.contact(m.flight(t, X0, V0, s)[0]).v - x0
-        slope = lambda s, t=t: m.contact(m.flight(t, X0, V0, s)[1]).v
+        V0 = [iv.mpf(0)] if vplus is None else [vplus]
+        gap = lambda s, t=t, V0=V0: m.contact(m.flight(t, X0, V0, s)[0]).v - x0
+        slope = lambda s, t=t, V0=V0: m.contact(m.flight(t, X0, V0, s)[1]).v
         ws = point(flight["start_window"])
-        if k == 0:
+        if vplus is not None:
+            if flight.get("start") != "impact":
+                raise Rejected(f"{fl} starts at an impact")
+            M2 = m.derivative_bound(t, X0, V0, 2)
+            book.check(positive(vplus), "contact velocity after impact", fl, vplus)
+            book.check(hi(M2) < mpf("inf"), "second-derivative bound", fl, M2)
+            a_low = point(flight["velocity_after_lower"])
+            if not hi(a_low) <= lo(vplus):
+                raise Rejected(f"{fl}: the certificate's bound on the speed after impact is not below the checker's enclosure")
+            margin = a_low - M2 * ws / 2   # g(s) >= s (a - M2 s/2) on (0, ws]
+            book.check(positive(margin) and positive(ws), "start window a - M2 ws/2", fl, margin)
+        elif k == 0:
             if flight.get("start") != "release":
                 raise Rejected("the first flight starts at the release")
             g3 = kappa * w * iv.cos(w * t)   # third derivative of x at rest on the stop
@@ -535,13 +568,45 @@ def check_sticking(cert, m, book):
         positive_pieces(flight["pieces"], lo(ws), mpf(Slo), gap, slope, f"gap on {fl}")
         tL = t + Nw
         R_land = reaction(tL)
+        if not plastic:
+            # r > 0: the body bounces, x'+ = -r x'- (the speed from the tight enclosure of the landing).
+            vminus = slope(Nw)
+            book.check(negative(vminus), "contact velocity before impact", land, vminus)
+            vplus = -m.r * vminus
+            landing_low = Slo + (t - tr)
+            t = tL
+            continue
         if k == len(flights) - 1:
             book.check(positive(R_land), "reaction at the landing", land, R_land)
             landing_low = Slo + (t - tr)  # the sticking phase starts in this box (as t - t_r)
         else:
             book.check(negative(R_land), "reaction at the landing", land, R_land)
             t = tL
-    turns = (tL - tr) / m.T
+    t_end = tL
+    if not plastic:
+        # The rest of the chattering sequence, bounded (docs/prove.md): on W = [t, t + L] with
+        # T_B R in [A_lo, A_hi], A_lo > 0, every flight from speed v lasts at most 2v/A_lo and lands
+        # at most r sqrt(a_hi/A_lo) v, a_hi = A_hi + w1^2 v^2/(2 A_lo); the impacts accumulate before
+        # t + 2v/(A_lo (1 - rho)).
+        tail = cert.get("tail")
+        if tail is None or int(tail["after_flight"]) != len(flights) - 1:
+            raise Rejected("a chattering certificate needs the tail after its last flight")
+        tl = "chattering tail"
+        v, L = point(tail["speed_upper"]), point(tail["window"])
+        if not hi(vplus) <= lo(v):
+            raise Rejected("the tail's speed bound is not above the checker's speed after the last impact")
+        A = TB * reaction(iv.mpf([lo(tL), hi(ihi(tL) + L)]))
+        A_low, A_high = point(tail["reaction_lower"]), point(tail["reaction_upper"])
+        if not (hi(A_low) <= lo(A) and hi(A) <= lo(A_high)):
+            raise Rejected("the tail's reaction bounds do not enclose the checker's reaction over the window")
+        book.check(positive(A), "tail reaction T_B R over the window", tl, A)
+        a_hi = A_high + w1s * v * v / (2 * A_low)
+        rho = m.r * iv.sqrt(a_hi / A_low)
+        book.check(positive(1 - rho), "tail contraction 1 - rho", tl, 1 - rho)
+        Tmax = 2 * v / (A_low * (1 - rho))
+        book.check(positive(L - Tmax), "tail window L - Tmax", tl, L - Tmax)
+        t_end = iv.mpf([lo(tL), hi(ihi(tL) + Tmax)])
+    turns = (t_end - tr) / m.T
     st = cert["sticking"]
     k = int(st["periods"])
     book.check(lo(turns) > k - 1 and hi(turns) < k, "landing time / T", "sticking phase", turns)
