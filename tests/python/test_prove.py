@@ -25,9 +25,11 @@ def test_prove_matches_the_command_and_its_certificate_is_confirmed(tmp_path):
     assert c.returncode == 0, c.stdout + c.stderr
 
 
-def test_prove_says_why_it_does_not_prove_a_chattering_orbit():
+def test_prove_proves_a_chattering_orbit_and_says_why_it_does_not_prove_another():
     r = vibro.prove(os.path.join(SCENES, "fig05_coexistence.toml"))
-    assert r["verdict"] == "not-proven" and "chattering" in r["reason"]
+    assert r["verdict"] == "proven" and r["sequence"][-2:] == ["accumulation", "stick"]
+    r = vibro.prove(os.path.join(SCENES, "chain3.toml"))
+    assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
 
 
 def test_prove_refuses_a_damped_scene_and_a_bad_period():

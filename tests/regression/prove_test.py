@@ -101,6 +101,40 @@ for factor, must in ((mpf("1.000001"), False), (mpf("0.999999"), None)):
         expect((code == 0 and s2["period"] == q) or (code == 4 and s2["reason"]),
                f"just below f_free-flight (f = {amp}): proven with period {q} or a reason (exit {code})")
 
+# ---- Chattering (r > 0): Fig. 8 and Fig. 5's sticking orbit -------------------------------------
+# Truth: the accumulation point lies where the reaction is positive, and the release of the next
+# period is eq. (32)'s phase asin(omega_1^2 x0/f) for the 1-DOF scene (omega_1 = 1, x0 = 1).
+for scene, f_ in (("fig08_preload.toml", mpf("1.2")), ("fig05_coexistence.toml", mpf("1.1"))):
+    path = os.path.join(TMP, scene.replace(".toml", "_chatter.json"))
+    code, s, err = prove(scene, out=path)
+    expect(code == 0 and s["verdict"] == "proven" and "accumulation" in s["sequence"],
+           f"{scene}: the chattering sticking orbit is proven (exit {code}: {s and s['reason']})")
+    if code != 0:
+        continue
+    expect(s["sequence"][-2:] == ["accumulation", "stick"] and s["sequence"].count("impact") >= 10,
+           f"{scene}: impacts, then the accumulation point and sticking ({len(s['sequence'])} events)")
+    expect(inside(asin(1 / f_), s["events"][0]["phase"]), f"{scene}: (32) release phase in {s['events'][0]['phase']}")
+    acc = [e for e in s["events"] if e["kind"] == "accumulation"][0]
+    expect(acc["time"][1] - acc["time"][0] < 1e-5, f"{scene}: accumulation time enclosed within 1e-5 ({acc['time']})")
+    speeds = [-e["velocity_before"][0] for e in s["events"] if e["kind"] == "impact"]
+    expect(all(b < a for a, b in zip(speeds, speeds[1:])), f"{scene}: the landing speeds decrease")
+    code, v = check(path)
+    expect(code == 0 and v["verdict"] == "confirmed", f"checker confirms {scene}'s chattering orbit ({v})")
+    cert = json.load(open(path))
+
+    def faster_tail(c):  # a speed bound below the last speed after impact
+        c["tail"]["speed_upper"] *= 0.5
+
+    def stronger_reaction(c):
+        c["tail"]["reaction_lower"] *= 1.5
+
+    def drop_impacts(c):  # the tail claimed after fewer followed impacts
+        c["flights"] = c["flights"][:-3]
+        c["tail"]["after_flight"] -= 3
+
+    for fn in (faster_tail, stronger_reaction, drop_impacts):
+        checked_mutant(cert, fn, scene + "_" + fn.__name__)
+
 # ---- Fig. 10: r = 0, a landing with R < 0 (the body departs at once), then a second flight -------
 cert10 = os.path.join(TMP, "fig10.json")
 code, s10, err = prove("fig10_two_flights.toml", out=cert10)
@@ -271,10 +305,10 @@ code, s, err = prove("chain2.toml", "--kind", "impact", "--set", "excitation.amp
 expect(code == 4 and "time limit" in (s or {}).get("reason", ""), f"--time-limit: exit 4, reason given (exit {code}: {s and s['reason']})")
 
 # ---- Not proven, and bad input --------------------------------------------------------------
-path = os.path.join(TMP, "chatter.json")
-code, s, err = prove("fig05_coexistence.toml", out=path)
-expect(code == 4 and s["verdict"] == "not-proven" and "chattering" in s["reason"],
-       f"Fig. 5's chattering sticking orbit: exit 4 with the reason (exit {code}, {s and s['reason']})")
+path = os.path.join(TMP, "chain3.json")
+code, s, err = prove("chain3.toml", out=path)
+expect(code == 4 and s["verdict"] == "not-proven" and "more than one mode" in s["reason"],
+       f"a sticking orbit of 3 modes: exit 4 with the reason (exit {code}, {s and s['reason']})")
 code, v = check(path)
 expect(code == 1, "the checker rejects a not-proven certificate")
 path = os.path.join(TMP, "damped.json")
