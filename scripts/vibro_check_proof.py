@@ -605,7 +605,13 @@ def check_sticking(cert, m, book):
         book.check(positive(1 - rho), "tail contraction 1 - rho", tl, 1 - rho)
         Tmax = 2 * v / (A_low * (1 - rho))
         book.check(positive(L - Tmax), "tail window L - Tmax", tl, L - Tmax)
-        t_end = iv.mpf([lo(tL), hi(ihi(tL) + Tmax)])
+        # From below: each flight lasts at least 2v/a_hi and lands at least v sqrt(A_lo/a_hi) fast.
+        v_low = point(tail["speed_lower"])
+        if not (hi(v_low) <= lo(vplus) and positive(v_low)):
+            raise Rejected("the tail's lower speed bound is not below the checker's speed after the last impact")
+        rho_low = m.r * iv.sqrt(A_low / a_hi)
+        Tmin = 2 * v_low / (a_hi * (1 - rho_low))
+        t_end = iv.mpf([lo(ilo(tL) + Tmin), hi(ihi(tL) + Tmax)])
     turns = (t_end - tr) / m.T
     st = cert["sticking"]
     k = int(st["periods"])

@@ -204,8 +204,15 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
             !ledger.Check((Interval(1.0) - rho).Positive(), "tail contraction 1 - rho", tl, Interval(1.0) - rho, "> 0") ||
             !ledger.Check((Interval(L) - Tmax).Positive(), "tail window L - Tmax", tl, Interval(L) - Tmax, "> 0"))
           return finish(ledger.failed() + " (the chattering sequence could not be bounded)");
-        t_end = Interval::Hull(tL.lo(), (tL + Tmax).hi());
-        out.certificate["tail"] = {{"after_flight", k},       {"speed_upper", v},        {"window", L},
+        // And from below: a flight from v lasts at least 2v/a_hi and lands at least v √(A_lo/a_hi)
+        // fast (the rise and the fall of the energy balance), so t∞ − t ≥ 2 v_lo/(a_hi (1 − ρ_lo)):
+        // the enclosure of t∞ is O(v²) wide.
+        const double v_low = vplus.lo() * (1 - 1e-9);
+        const Interval rho_low = mdl.restitution * Sqrt(a_lo / a_hi);
+        const Interval Tmin = Interval(2.0) * Interval(v_low) / (a_hi * (Interval(1.0) - rho_low));
+        t_end = Interval::Hull((tL + Tmin).lo(), (tL + Tmax).hi());
+        out.certificate["tail"] = {{"after_flight", k},       {"speed_upper", v},        {"speed_lower", v_low},
+                                   {"window", L},
                                    {"reaction_lower", A_low},   {"reaction_upper", A_high}, {"contraction", Pair(rho)},
                                    {"time_bound", Tmax.hi()},   {"accumulation", Pair(t_end)}};
         events.push_back({{"kind", "accumulation"}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
