@@ -25,7 +25,7 @@ constexpr int kMaxFlights = 400;
 // Chattering (r > 0): impacts are followed one by one until the speed after an impact is below
 // this fraction of the first landing speed, or its enclosure is wider than kTailWidth of it (the
 // enclosures widen along the sequence); the rest of the sequence is then bounded as a whole.
-constexpr double kTailSwitch = 1e-7, kTailWidth = 1e-2;
+constexpr double kTailSwitch = 1e-7, kTailWidth = 1e-5;
 }
 
 Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Deadline& deadline) {
