@@ -316,6 +316,15 @@ if code == 0:
         c["certificates"][1]["model"]["amplitude"] = c["certificates"][2]["model"]["amplitude"]
     checked_mutant(allc, second_point_amplitude, "branch_swapped_parameter")
 
+# ---- --from ORBIT.h5: the orbit stored by `vibro orbit --out` ----------------------------------
+orbit_file = os.path.join(TMP, "orbit.h5")
+p = subprocess.run([VIBRO, "orbit", os.path.join(SCENES, "fig05_coexistence.toml"), "--kind", "impact", "--out", orbit_file],
+                   capture_output=True, text=True, timeout=600)
+code, s, err = prove("fig05_coexistence.toml", "--kind", "impact", "--from", orbit_file)
+expect(p.returncode == 0 and code == 0 and s["stability"] == "stable", f"--from ORBIT.h5: proven (exit {code}: {err})")
+code, s, err = prove("fig05_coexistence.toml", "--from", branch)
+expect(code == 2 and "/orbit" in err, f"--from a file without /orbit: bad input (exit {code}: {err})")
+
 # ---- Never hangs: the time limit ends a proof with the reason -------------------------------
 code, s, err = prove("chain2.toml", "--kind", "impact", "--set", "excitation.amplitude=5", "--time-limit", "0.001")
 expect(code == 4 and "time limit" in (s or {}).get("reason", ""), f"--time-limit: exit 4, reason given (exit {code}: {s and s['reason']})")
