@@ -571,6 +571,29 @@ def check_sticking(cert, m, book):
         if not plastic:
             # r > 0: the body bounces, x'+ = -r x'- (the speed from the tight enclosure of the landing).
             vminus = slope(Nw)
+            if vplus is not None:
+                # Centred form of the landing as a function of the flight's start (t, v): the value
+                # at the centre plus the derivatives over the box times the offsets (mean-value
+                # theorem; s(t, v) stays in Nw over the box).
+                tc, vc = mp.mpf((lo(t) + hi(t)) / 2), mp.mpf((lo(vplus) + hi(vplus)) / 2)
+                Tc, Vc = iv.mpf(tc), iv.mpf(vc)
+                gap_c = lambda s_, Tc=Tc, Vc=Vc: m.contact(m.flight(Tc, X0, [Vc], s_)[0]).v - x0
+                slope_c = lambda s_, Tc=Tc, Vc=Vc: m.contact(m.flight(Tc, X0, [Vc], s_)[1]).v
+                Nc = point(s0) - gap_c(point(s0)) / slope_c(S)
+                Xe, Ve = m.flight(D(t, {0: iv.mpf(1)}), [D(x0)], [D(vplus, {1: iv.mpf(1)})], D(Nw, {2: iv.mpf(1)}))
+                g, vel = m.contact(Xe), m.contact(Ve)
+                zero = iv.mpf(0)
+                gt, gv, gs = g.g.get(0, zero), g.g.get(1, zero), g.g.get(2, zero)
+                vt, vv, vs = vel.g.get(0, zero), vel.g.get(1, zero), vel.g.get(2, zero)
+                ds_dt, ds_dv = -gt / gs, -gv / gs
+                dT, dV = t - Tc, vplus - Vc
+                if lo(Nc) > Slo and hi(Nc) < Shi:
+                    t_cent = Tc + Nc + (1 + ds_dt) * dT + ds_dv * dV
+                    v_cent = slope_c(Nc) + (vt + vs * ds_dt) * dT + (vv + vs * ds_dv) * dV
+                    if hi(t_cent) - lo(t_cent) < hi(tL) - lo(tL):
+                        tL = t_cent
+                    if hi(v_cent) - lo(v_cent) < hi(vminus) - lo(vminus):
+                        vminus = v_cent
             book.check(negative(vminus), "contact velocity before impact", land, vminus)
             vplus = -m.r * vminus
             landing_low = Slo + (t - tr)
