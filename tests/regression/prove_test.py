@@ -142,7 +142,8 @@ for scene, f_ in (("fig08_preload.toml", mpf("1.2")), ("fig05_coexistence.toml",
 
 # Near the end of Fig. 8's sticking branch, f_max = 1.289238516627 (docs/chattering.md, the quad
 # engine's bisection): just above it no sticking orbit is proven; just below, a proof or a reason.
-for amp, above in (("1.289239516627", True), ("1.289138516627", False), ("1.28", False)):
+for amp, above in (("1.289239516627", True), ("1.289238616627", True), ("1.289238416627", False),
+                   ("1.289228516627", False), ("1.28", False)):
     code, s2, err = prove("fig08_preload.toml", "--kind", "sticking", "--set", f"excitation.amplitude={amp}")
     if above:
         expect(code == 4 and s2["verdict"] == "not-proven" and s2["reason"],
@@ -150,6 +151,8 @@ for amp, above in (("1.289239516627", True), ("1.289138516627", False), ("1.28",
     else:
         expect(code == 0 or (code == 4 and "fails" in s2["reason"]),
                f"f = {amp} < f_max: proven, or the bound that failed is named (exit {code}: {s2 and s2['reason']})")
+        if float(amp) <= 1.289228516627:  # 1e-5 below f_max and lower: proven
+            expect(code == 0 and s2["period"] == 1, f"f = {amp}, 1e-5 or more below f_max: proven (exit {code})")
 
 # ---- Fig. 10: r = 0, a landing with R < 0 (the body departs at once), then a second flight -------
 cert10 = os.path.join(TMP, "fig10.json")
