@@ -1,6 +1,7 @@
 // `vibro prove SCENE`: a computer-assisted proof of a periodic orbit and its certificate
 // (docs/prove.md). Exit 0 proven, 4 not proven (the reason names the inequality that failed), 2 bad input.
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 
@@ -72,6 +73,12 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
 }  // namespace
 
 int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
+  if (!args.out.empty()) {  // bad input before any work, and nothing created
+    const auto dir = std::filesystem::path(args.out).parent_path();
+    if (!dir.empty() && !std::filesystem::is_directory(dir))
+      throw vibro::InputError({"--out " + args.out + ": no directory " + dir.string()});
+    if (std::filesystem::is_directory(args.out)) throw vibro::InputError({"--out " + args.out + ": a directory"});
+  }
   if (!args.branch.empty()) return RunProveBranch(path, sets, json, args);
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);

@@ -342,6 +342,8 @@ expect(code == 1, "the checker rejects a not-proven certificate")
 path = os.path.join(TMP, "damped.json")
 code, s, err = prove("chain2_damped.toml", out=path)
 expect(code == 2 and not os.path.exists(path) and "damp" in err, f"a damped scene is bad input, nothing written (exit {code}: {err})")
+code, s, err = prove("fig04_subharmonic.toml", out=os.path.join(TMP, "missing_dir", "c.json"))
+expect(code == 2 and "no directory" in err, f"--out into a missing directory: bad input before any work (exit {code})")
 code, s, err = prove("no_such_scene.toml")
 expect(code == 2, f"a missing scene is bad input (exit {code})")
 
