@@ -134,17 +134,30 @@ def dcos(x):
 
 # ---- The model ---------------------------------------------------------------------------------
 
+def parameter(text):
+    """A decimal ("1.1"), or "[a, b]": every number between two decimals (a parameter interval of
+    validated continuation)."""
+    if not isinstance(text, str):
+        raise TypeError(f"a parameter is a decimal text, got {text!r}")
+    if text.startswith("[") and text.endswith("]"):
+        a, b = (iv.mpf(x.strip()) for x in text[1:-1].split(","))
+        return iv.mpf([lo(a), hi(b)])
+    if not text or any(ch not in "0123456789.eE+-" for ch in text):
+        raise ValueError(f"not a decimal: {text!r}")
+    return iv.mpf(text)
+
+
 class Model:
     def __init__(self, m):
         try:
-            self.w_i = [iv.mpf(t) for t in m["frequencies"]]
-            self.TA = [iv.mpf(t) for t in m["forcing"]]
-            self.TB = [iv.mpf(t) for t in m["contact"]]
-            self.c = [iv.mpf(t) for t in m["shape"]]
-            self.x0 = iv.mpf(m["stop"])
-            self.r = iv.mpf(m["restitution"])
-            self.f = iv.mpf(m["amplitude"])
-            self.w = iv.mpf(m["frequency"])
+            self.w_i = [parameter(t) for t in m["frequencies"]]
+            self.TA = [parameter(t) for t in m["forcing"]]
+            self.TB = [parameter(t) for t in m["contact"]]
+            self.c = [parameter(t) for t in m["shape"]]
+            self.x0 = parameter(m["stop"])
+            self.r = parameter(m["restitution"])
+            self.f = parameter(m["amplitude"])
+            self.w = parameter(m["frequency"])
         except (KeyError, TypeError, ValueError) as e:
             raise Rejected(f"model: {e}")
         self.n = len(self.w_i)

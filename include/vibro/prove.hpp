@@ -68,4 +68,12 @@ struct ProofResult {
 // Throws std::invalid_argument for a request the prover cannot take (bad input): a damped model.
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request);
 
+// Validated continuation of an impacting orbit (docs/prove.md "Along a branch"): for EVERY value of
+// one scalar parameter between two scenes that differ in it alone (the amplitude, the forcing
+// frequency, the stop position or the restitution), exactly one orbit with the impact sequence of
+// the orbits found at both ends lies in one box. `lo` and `hi` are the requests at the two ends
+// (their start states and period). Not proven (with the reason) when the scenes differ otherwise.
+ProofResult ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
+                                   const System& system_hi, const Scene& scene_hi, const ProofRequest& hi);
+
 }  // namespace vibro

@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <algorithm>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -30,8 +32,16 @@ std::string Quoted(const std::string& s) {
 // stored section state at its parameter value. Exit 0 when every point is proven, 4 otherwise.
 int RunProveBranch(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
   const auto first = vibro::ReadBranchPoint(args.branch, 0);
-  std::string points = "[", certificates = "[";
-  long long proven = 0;
+  std::string points = "[", certificates = "[", segments = "[";
+  long long proven = 0, segments_proven = 0;
+  // The previous point, for the segment between it and the next (validated continuation).
+  struct Point {
+    vibro::Scene scene;
+    vibro::ProofRequest request;
+    bool proven = false;
+    double value = 0;
+  };
+  std::optional<Point> previous;
   for (long long k = 0; k < first.points; ++k) {
     const auto pt = k == 0 ? first : vibro::ReadBranchPoint(args.branch, k);
     auto at = sets;
@@ -51,6 +61,19 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
       throw vibro::InputError({path + ": " + e.what()});
     }
     proven += r.proven ? 1 : 0;
+    if (previous && previous->proven && r.proven && r.kind == "impact") {
+      // Every parameter value between the two points: one box, one orbit (impacting orbits).
+      const vibro::System sys_prev(previous->scene);
+      const auto seg = vibro::ProveOrbitOverInterval(sys_prev, previous->scene, previous->request, sys, loaded.scene, req);
+      segments_proven += seg.proven ? 1 : 0;
+      segments += fmt::format("{}{{\"from\": {}, \"to\": {}, \"summary\": {}}}", segments.size() > 1 ? ", " : "",
+                              previous->value, pt.value, seg.summary_json);
+      certificates += ", " + seg.certificate_json;
+      if (!json)
+        fmt::print("segment     {} in [{:.10g}, {:.10g}] {}: {}\n", pt.param, std::min(previous->value, pt.value),
+                   std::max(previous->value, pt.value), seg.proven ? "proven    " : "not proven", seg.reason);
+    }
+    previous = Point{loaded.scene, req, r.proven, pt.value};
     points += fmt::format("{}{{\"point\": {}, \"value\": {}, \"summary\": {}}}", k ? ", " : "", k, pt.value, r.summary_json);
     certificates += (k ? ", " : "") + r.certificate_json;
     if (!json)
@@ -63,10 +86,11 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     if (!file) throw vibro::WriteError(args.out + ": the certificates could not be written");
   }
   if (json)
-    fmt::print("{{\"branch\": {}, \"param\": {}, \"proven\": {}, \"total\": {}, \"points\": {}]}}\n", Quoted(args.branch),
-               Quoted(first.param), proven, first.points, points);
+    fmt::print("{{\"branch\": {}, \"param\": {}, \"proven\": {}, \"total\": {}, \"points\": {}], "
+               "\"segments_proven\": {}, \"segments\": {}]}}\n",
+               Quoted(args.branch), Quoted(first.param), proven, first.points, points, segments_proven, segments);
   else
-    fmt::print("proven       {} of {} points\n", proven, first.points);
+    fmt::print("proven       {} of {} points, {} of the segments between them\n", proven, first.points, segments_proven);
   return proven == first.points ? 0 : kExitDisagree;
 }
 

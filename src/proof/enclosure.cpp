@@ -6,6 +6,23 @@
 
 namespace vibro::proof {
 
+namespace {
+// "1.25", or "[1.2, 1.3]": every number between two decimals (a parameter interval).
+Interval Parameter(const std::string& text) {
+  if (!text.empty() && text.front() == '[' && text.back() == ']') {
+    const auto comma = text.find(',');
+    if (comma == std::string::npos) throw std::invalid_argument("not an interval: '" + text + "'");
+    const auto trim = [](std::string t) {
+      t.erase(0, t.find_first_not_of(' '));
+      t.erase(t.find_last_not_of(' ') + 1);
+      return t;
+    };
+    return Union(Interval::Decimal(trim(text.substr(1, comma - 1))), Interval::Decimal(trim(text.substr(comma + 1, text.size() - comma - 2))));
+  }
+  return Interval::Decimal(text);
+}
+}  // namespace
+
 IntervalModel IntervalModel::FromDecimals(std::vector<std::string> omega, std::vector<std::string> forcing,
                                           std::vector<std::string> contact, std::vector<std::string> shape,
                                           std::string stop, std::string restitution, std::string amplitude,
@@ -14,14 +31,14 @@ IntervalModel IntervalModel::FromDecimals(std::vector<std::string> omega, std::v
   m.n = static_cast<int>(omega.size());
   if (forcing.size() != omega.size() || contact.size() != omega.size() || shape.size() != omega.size())
     throw std::invalid_argument("the modal lists have different lengths");
-  for (const auto& t : omega) m.omega.push_back(Interval::Decimal(t));
-  for (const auto& t : forcing) m.forcing.push_back(Interval::Decimal(t));
-  for (const auto& t : contact) m.contact.push_back(Interval::Decimal(t));
-  for (const auto& t : shape) m.shape.push_back(Interval::Decimal(t));
-  m.stop = Interval::Decimal(stop);
-  m.restitution = Interval::Decimal(restitution);
-  m.amplitude = Interval::Decimal(amplitude);
-  m.frequency = Interval::Decimal(frequency);
+  for (const auto& t : omega) m.omega.push_back(Parameter(t));
+  for (const auto& t : forcing) m.forcing.push_back(Parameter(t));
+  for (const auto& t : contact) m.contact.push_back(Parameter(t));
+  for (const auto& t : shape) m.shape.push_back(Parameter(t));
+  m.stop = Parameter(stop);
+  m.restitution = Parameter(restitution);
+  m.amplitude = Parameter(amplitude);
+  m.frequency = Parameter(frequency);
   for (int i = 0; i < m.n; ++i) {
     const auto k = static_cast<std::size_t>(i);
     m.s_A += m.shape[k] * m.forcing[k];

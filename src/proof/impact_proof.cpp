@@ -103,12 +103,13 @@ struct Krawczyk {
   std::size_t worst = 0;  // the component farthest from inside
 };
 
-Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vector<double>& u, double radius) {
+Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vector<double>& u, double radius,
+               const std::vector<double>& spread, double spread_scale) {
   Krawczyk k;
   const std::size_t N = u.size();
   std::vector<Interval> U;
   for (std::size_t p = 0; p < N; ++p) {
-    const double d = radius * (1 + std::abs(u[p]));
+    const double d = radius * (1 + std::abs(u[p])) + (spread.empty() ? 0.0 : spread[p] * spread_scale);
     k.lo.push_back(u[p] - d);
     k.hi.push_back(u[p] + d);
     U.push_back(Interval::Hull(k.lo.back(), k.hi.back()));
@@ -160,14 +161,21 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
       u0.push_back(guess.V[static_cast<std::size_t>(j)](i));
     }
   }
+  // Over a parameter interval (guess.spread), the orbit of the middle parameter, from the midpoint
+  // of the orbits at the two ends.
   const auto u = Refine(mdl, L, q, u0);
+  std::vector<double> spread;
+  if (!guess.spread.empty()) {
+    spread = guess.spread;
+    for (std::size_t p = 0; p < spread.size(); ++p) spread[p] = 0.75 * spread[p] + std::abs(u[p] - u0[p]);
+  }
   Ledger ledger;
 
   // 1. Existence and uniqueness in the box: Krawczyk, widening the box a few times.
   Krawczyk k;
   double radius = request.box_radius;
   for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
-    k = Test(mdl, L, q, u, radius);
+    k = Test(mdl, L, q, u, radius, spread, radius / request.box_radius);
     if (k.inside || deadline.passed()) break;
   }
   Json krawczyk = Json::array();

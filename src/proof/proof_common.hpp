@@ -52,6 +52,9 @@ struct ImpactGuess {
   int period = 0;
   std::vector<double> times;
   std::vector<Eigen::VectorXd> X, V;
+  // Over a parameter interval: |u(end) − u(start)| per unknown (t_j, X_j, V_j), which the box must
+  // cover beyond the default radius; empty for one parameter value.
+  std::vector<double> spread;
 };
 
 Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,

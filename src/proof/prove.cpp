@@ -109,6 +109,42 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   return f;
 }
 
+
+ProofResult Wrap(const proof::Outcome& outcome, const std::string& kind, const proof::IntervalModel& model,
+                 const ProofRequest& request) {
+  ProofResult result;
+  result.proven = outcome.proven;
+  result.reason = outcome.reason;
+  Json summary = {{"verdict", outcome.proven ? "proven" : "not-proven"}, {"reason", outcome.reason}, {"kind", kind}};
+  for (const auto& [key, value] : outcome.summary.items()) summary[key] = value;
+  if (!summary.contains("period")) summary["period"] = request.period > 0 ? Json(request.period) : Json(nullptr);
+  for (const char* key : {"sequence", "events", "multipliers"})
+    if (!summary.contains(key)) summary[key] = Json::array();
+  if (!summary.contains("section")) summary["section"] = nullptr;
+  if (!summary.contains("stability")) summary["stability"] = "undecided";
+  result.summary_json = summary.dump();
+  result.kind = kind;
+  if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
+  const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
+  for (const auto& e : summary["events"])
+    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"])});
+  for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
+  result.stability = summary["stability"].get<std::string>();
+  if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
+  Json cert = {{"format", "vibro-proof-certificate/1"},
+               {"verdict", summary["verdict"]},
+               {"reason", outcome.reason},
+               {"kind", kind},
+               {"period", summary["period"]},
+               {"model", ModelJson(model)},
+               {"libraries", proof::LibraryVersions()},
+               {"precision_bits", 128},
+               {"summary", summary}};
+  for (const auto& [key, value] : outcome.certificate.items()) cert[key] = value;
+  result.certificate_json = cert.dump(1);
+  return result;
+}
+
 }  // namespace
 
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
@@ -144,37 +180,72 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
       else outcome = proof::ProveImpactOrbit(model, found.guess, request, deadline);
     }
   }
-  ProofResult result;
-  result.proven = outcome.proven;
-  result.reason = outcome.reason;
-  Json summary = {{"verdict", outcome.proven ? "proven" : "not-proven"}, {"reason", outcome.reason}, {"kind", kind}};
-  for (const auto& [key, value] : outcome.summary.items()) summary[key] = value;
-  if (!summary.contains("period")) summary["period"] = request.period > 0 ? Json(request.period) : Json(nullptr);
-  for (const char* key : {"sequence", "events", "multipliers"})
-    if (!summary.contains(key)) summary[key] = Json::array();
-  if (!summary.contains("section")) summary["section"] = nullptr;
-  if (!summary.contains("stability")) summary["stability"] = "undecided";
-  result.summary_json = summary.dump();
-  result.kind = kind;
-  if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
-  const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
-  for (const auto& e : summary["events"])
-    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"])});
-  for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
-  result.stability = summary["stability"].get<std::string>();
-  if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
-  Json cert = {{"format", "vibro-proof-certificate/1"},
-               {"verdict", summary["verdict"]},
-               {"reason", outcome.reason},
-               {"kind", kind},
-               {"period", summary["period"]},
-               {"model", ModelJson(model)},
-               {"libraries", proof::LibraryVersions()},
-               {"precision_bits", 128},
-               {"summary", summary}};
-  for (const auto& [key, value] : outcome.certificate.items()) cert[key] = value;
-  result.certificate_json = cert.dump(1);
-  return result;
+  return Wrap(outcome, kind, model, request);
+}
+
+}  // namespace vibro
+
+namespace vibro {
+
+ProofResult ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
+                                   const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+  if (system_lo.damped() || system_hi.damped())
+    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
+  const proof::Deadline deadline(lo.time_limit);
+  auto model = ModelOf(system_lo);
+  const auto model_hi = ModelOf(system_hi);
+  proof::Outcome outcome;
+  // The one scalar that differs, as the interval between its two decimals.
+  using proof::Interval;
+  std::vector<std::string> differs;
+  const auto between = [&](std::string& a, const std::string& b, const char* name) {
+    if (a == b) return;
+    differs.push_back(name);
+    const bool ordered = Interval::Decimal(a).lo() <= Interval::Decimal(b).lo();
+    a = "[" + (ordered ? a : b) + ", " + (ordered ? b : a) + "]";
+  };
+  std::string amplitude = model.amplitude_text, frequency = model.frequency_text, stop = model.stop_text,
+              restitution = model.restitution_text;
+  between(amplitude, model_hi.amplitude_text, "amplitude");
+  between(frequency, model_hi.frequency_text, "frequency");
+  between(stop, model_hi.stop_text, "stop position");
+  between(restitution, model_hi.restitution_text, "restitution");
+  const bool same_structure = model.omega_text == model_hi.omega_text && model.forcing_text == model_hi.forcing_text &&
+                              model.contact_text == model_hi.contact_text && model.shape_text == model_hi.shape_text;
+  if (!same_structure || differs.size() != 1) {
+    outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
+                     "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
+    return Wrap(outcome, "impact", model, lo);
+  }
+  const auto a = FindImpactOrbit(system_lo, scene_lo, lo), b = FindImpactOrbit(system_hi, scene_hi, hi);
+  if (!a.failure.empty() || !b.failure.empty() || a.sticking || b.sticking) {
+    outcome.reason = "no impacting orbit at one end: " + (a.failure.empty() ? b.failure : a.failure);
+    return Wrap(outcome, "impact", model, lo);
+  }
+  if (a.guess.times.size() != b.guess.times.size() || a.guess.period != b.guess.period) {
+    outcome.reason = "the orbits at the two ends have different impact sequences";
+    return Wrap(outcome, "impact", model, lo);
+  }
+  model = proof::IntervalModel::FromDecimals(model.omega_text, model.forcing_text, model.contact_text, model.shape_text,
+                                             stop, restitution, amplitude, frequency);
+  proof::ImpactGuess g = a.guess;
+  for (std::size_t j = 0; j < g.times.size(); ++j) {
+    const auto mid = [](double x, double y) { return x + (y - x) / 2; };
+    g.spread.push_back(std::abs(b.guess.times[j] - a.guess.times[j]));
+    g.times[j] = mid(a.guess.times[j], b.guess.times[j]);
+    for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(b.guess.X[j](i) - a.guess.X[j](i)));
+    for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(b.guess.V[j](i) - a.guess.V[j](i)));
+    g.X[j] = (a.guess.X[j] + b.guess.X[j]) / 2;
+    g.V[j] = (a.guess.V[j] + b.guess.V[j]) / 2;
+  }
+  outcome = proof::ProveImpactOrbit(model, g, lo, deadline);
+  if (outcome.proven)
+    outcome.reason = "for every " + differs.front() + " in " + (differs.front() == "amplitude" ? amplitude
+                                                                : differs.front() == "frequency" ? frequency
+                                                                : differs.front() == "restitution" ? restitution
+                                                                                                   : stop) +
+                     ": " + outcome.reason;
+  return Wrap(outcome, "impact", model, lo);
 }
 
 }  // namespace vibro
