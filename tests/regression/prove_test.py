@@ -319,6 +319,33 @@ if code == 0:
         c["certificates"][1]["model"]["amplitude"] = c["certificates"][2]["model"]["amplitude"]
     checked_mutant(allc, second_point_amplitude, "branch_swapped_parameter")
 
+# Validated continuation: with small steps, every parameter value between neighbouring points is
+# proven (the parameter as an interval in Krawczyk's test); the checker reads the intervals.
+branch = os.path.join(TMP, "branch_fine.h5")
+p = subprocess.run([VIBRO, "continue", os.path.join(SCENES, "fig05_coexistence.toml"), "--kind", "impact",
+                    "--param", "excitation.amplitude", "--to", "1.3", "--step", "0.001", "--max-points", "4",
+                    "--out", branch], capture_output=True, text=True, timeout=600)
+certs_path = os.path.join(TMP, "branch_fine.json")
+p = subprocess.run([VIBRO, "prove", os.path.join(SCENES, "fig05_coexistence.toml"), "--branch", branch, "--json",
+                    "--out", certs_path], capture_output=True, text=True, timeout=600)
+b = json.loads(p.stdout) if p.stdout.strip() else {}
+expect(p.returncode == 0 and b.get("segments_proven") == 3 and len(b.get("segments", [])) == 3,
+       f"--branch, steps of 1e-3: the 3 segments between the points proven ({b.get('segments_proven')})")
+for seg in b.get("segments", []):
+    lo_, hi_ = sorted((seg["from"], seg["to"]))
+    expect(f"[{lo_!r}" in seg["summary"]["reason"] or "for every amplitude in [" in seg["summary"]["reason"],
+           f"a segment's theorem names its interval ({seg['summary']['reason'][:80]})")
+code, v = check(certs_path)
+expect(code == 0 and "7 certificates" in v["reason"], f"the checker confirms points and segments ({v})")
+if code == 0:
+    allc = json.load(open(certs_path))
+    seg_index = next(i for i, c in enumerate(allc["certificates"]) if c["model"]["amplitude"].startswith("["))
+
+    def wider_segment(c):  # the same box claimed for a parameter interval 100 times longer
+        a, b_ = (float(x) for x in c["certificates"][seg_index]["model"]["amplitude"][1:-1].split(","))
+        c["certificates"][seg_index]["model"]["amplitude"] = f"[{a!r}, {a + 100 * (b_ - a)!r}]"
+    checked_mutant(allc, wider_segment, "branch_wider_segment")
+
 # ---- --from ORBIT.h5: the orbit stored by `vibro orbit --out` ----------------------------------
 orbit_file = os.path.join(TMP, "orbit.h5")
 p = subprocess.run([VIBRO, "orbit", os.path.join(SCENES, "fig05_coexistence.toml"), "--kind", "impact", "--out", orbit_file],
