@@ -397,7 +397,14 @@ def check_spectrum(cert, M):
         im = iv.sqrt(-disc) / 2
         found = [(tr / 2, im), (tr / 2, -im)]
     else:
-        raise Rejected(f"stability '{claim}' claimed but the discriminant {disc} is not separated from 0")
+        # Real or complex: both lie in tr/2 + [-1, 1] sqrt(disc+)/2 + i [-1, 1] sqrt(disc-)/2.
+        zero = mpf(0)
+        pos = iv.mpf([zero, max(hi(disc), zero)])
+        neg = iv.mpf([zero, max(-lo(disc), zero)])
+        re = tr / 2 + iv.mpf([-1, 1]) * iv.sqrt(pos) / 2
+        im = iv.mpf([-1, 1]) * iv.sqrt(neg) / 2
+        mods = [re * re + im * im] * 2
+        found = [(re, im), (re, im)]
     for (re, im), e in zip(found, listed):
         if not (overlaps(re, e["re"]) and overlaps(im, e["im"])):
             raise Rejected(f"multiplier {e} misses the checker's {re} + i {im}")

@@ -72,8 +72,10 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 // one scalar parameter between two scenes that differ in it alone (the amplitude, the forcing
 // frequency, the stop position or the restitution), exactly one orbit with the impact sequence of
 // the orbits found at both ends lies in one box. `lo` and `hi` are the requests at the two ends
-// (their start states and period). Not proven (with the reason) when the scenes differ otherwise.
-ProofResult ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
-                                   const System& system_hi, const Scene& scene_hi, const ProofRequest& hi);
+// (their start states and period). The interval is proven whole or halved up to 5 times: one proven
+// result per piece, covering it; or one result, not proven, with the reason (also when the scenes
+// differ otherwise).
+std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
+                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi);
 
 }  // namespace vibro

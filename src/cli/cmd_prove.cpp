@@ -64,14 +64,21 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     if (previous && previous->proven && r.proven && r.kind == "impact") {
       // Every parameter value between the two points: one box, one orbit (impacting orbits).
       const vibro::System sys_prev(previous->scene);
-      const auto seg = vibro::ProveOrbitOverInterval(sys_prev, previous->scene, previous->request, sys, loaded.scene, req);
-      segments_proven += seg.proven ? 1 : 0;
-      segments += fmt::format("{}{{\"from\": {}, \"to\": {}, \"summary\": {}}}", segments.size() > 1 ? ", " : "",
-                              previous->value, pt.value, seg.summary_json);
-      if (seg.proven) certificates += ", " + seg.certificate_json;  // a failed segment leaves the points' proofs
+      const auto pieces = vibro::ProveOrbitOverInterval(sys_prev, previous->scene, previous->request, sys, loaded.scene, req);
+      const bool seg_proven = pieces.front().proven;
+      segments_proven += seg_proven ? 1 : 0;
+      std::string summaries = "[";
+      for (const auto& piece : pieces) {
+        summaries += (summaries.size() > 1 ? ", " : "") + piece.summary_json;
+        if (piece.proven) certificates += ", " + piece.certificate_json;  // a failed segment leaves the points' proofs
+      }
+      segments += fmt::format("{}{{\"from\": {}, \"to\": {}, \"proven\": {}, \"pieces\": {}]}}",
+                              segments.size() > 1 ? ", " : "", previous->value, pt.value, seg_proven, summaries);
       if (!json)
         fmt::print("segment     {} in [{:.10g}, {:.10g}] {}: {}\n", pt.param, std::min(previous->value, pt.value),
-                   std::max(previous->value, pt.value), seg.proven ? "proven    " : "not proven", seg.reason);
+                   std::max(previous->value, pt.value), seg_proven ? "proven    " : "not proven",
+                   seg_proven ? fmt::format("{} piece(s), each with exactly one orbit in its box", pieces.size())
+                              : pieces.front().reason);
     }
     previous = Point{loaded.scene, req, r.proven, pt.value};
     points += fmt::format("{}{{\"point\": {}, \"value\": {}, \"summary\": {}}}", k ? ", " : "", k, pt.value, r.summary_json);

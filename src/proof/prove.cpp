@@ -3,6 +3,7 @@
 #include "vibro/prove.hpp"
 
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -187,8 +188,8 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 
 namespace vibro {
 
-ProofResult ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
-                                   const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
+                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
   if (system_lo.damped() || system_hi.damped())
     throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
   const proof::Deadline deadline(lo.time_limit);
@@ -215,37 +216,78 @@ ProofResult ProveOrbitOverInterval(const System& system_lo, const Scene& scene_l
   if (!same_structure || differs.size() != 1) {
     outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
                      "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
-    return Wrap(outcome, "impact", model, lo);
+    return {Wrap(outcome, "impact", model, lo)};
   }
   const auto a = FindImpactOrbit(system_lo, scene_lo, lo), b = FindImpactOrbit(system_hi, scene_hi, hi);
   if (!a.failure.empty() || !b.failure.empty() || a.sticking || b.sticking) {
     outcome.reason = "no impacting orbit at one end: " + (a.failure.empty() ? b.failure : a.failure);
-    return Wrap(outcome, "impact", model, lo);
+    return {Wrap(outcome, "impact", model, lo)};
   }
   if (a.guess.times.size() != b.guess.times.size() || a.guess.period != b.guess.period) {
     outcome.reason = "the orbits at the two ends have different impact sequences";
-    return Wrap(outcome, "impact", model, lo);
+    return {Wrap(outcome, "impact", model, lo)};
   }
-  model = proof::IntervalModel::FromDecimals(model.omega_text, model.forcing_text, model.contact_text, model.shape_text,
-                                             stop, restitution, amplitude, frequency);
-  proof::ImpactGuess g = a.guess;
-  for (std::size_t j = 0; j < g.times.size(); ++j) {
-    const auto mid = [](double x, double y) { return x + (y - x) / 2; };
-    g.spread.push_back(std::abs(b.guess.times[j] - a.guess.times[j]));
-    g.times[j] = mid(a.guess.times[j], b.guess.times[j]);
-    for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(b.guess.X[j](i) - a.guess.X[j](i)));
-    for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(b.guess.V[j](i) - a.guess.V[j](i)));
-    g.X[j] = (a.guess.X[j] + b.guess.X[j]) / 2;
-    g.V[j] = (a.guess.V[j] + b.guess.V[j]) / 2;
-  }
-  outcome = proof::ProveImpactOrbit(model, g, lo, deadline);
-  if (outcome.proven)
-    outcome.reason = "for every " + differs.front() + " in " + (differs.front() == "amplitude" ? amplitude
-                                                                : differs.front() == "frequency" ? frequency
-                                                                : differs.front() == "restitution" ? restitution
-                                                                                                   : stop) +
-                     ": " + outcome.reason;
-  return Wrap(outcome, "impact", model, lo);
+  // The parameter interval [p_lo, p_hi] is proven whole, or halved (at a decimal shared by both
+  // halves) up to kMaxSplit times, each piece with the orbits interpolated between the two ends.
+  constexpr int kMaxSplit = 5;
+  std::string* field = differs.front() == "amplitude"     ? &amplitude
+                       : differs.front() == "frequency"   ? &frequency
+                       : differs.front() == "restitution" ? &restitution
+                                                          : &stop;
+  const std::string whole = *field;
+  const auto comma = whole.find(',');
+  const std::string first = whole.substr(1, comma - 1), last = whole.substr(comma + 2, whole.size() - comma - 3);
+  const bool a_is_lo = Interval::Decimal(first).lo() == Interval::Decimal(differs.front() == "amplitude"     ? model.amplitude_text
+                                                                          : differs.front() == "frequency"   ? model.frequency_text
+                                                                          : differs.front() == "restitution" ? model.restitution_text
+                                                                                                             : model.stop_text).lo();
+  const auto& g_lo = a_is_lo ? a.guess : b.guess;
+  const auto& g_hi = a_is_lo ? b.guess : a.guess;
+  const auto structure = model;
+  std::vector<ProofResult> results;
+  std::string failure;
+  // Proves [x0, x1] (decimal texts) at the fractions [f0, f1] of the whole interval.
+  std::function<bool(const std::string&, const std::string&, double, double, int)> piece =
+      [&](const std::string& x0, const std::string& x1, double f0, double f1, int depth) -> bool {
+    *field = "[" + x0 + ", " + x1 + "]";
+    const auto m = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
+                                                      structure.shape_text, stop, restitution, amplitude, frequency);
+    const auto at = [&](double f, const auto& lo_v, const auto& hi_v) { return lo_v + f * (hi_v - lo_v); };
+    proof::ImpactGuess g = g_lo;
+    for (std::size_t j = 0; j < g.times.size(); ++j) {
+      const double t0 = at(f0, g_lo.times[j], g_hi.times[j]), t1 = at(f1, g_lo.times[j], g_hi.times[j]);
+      const Eigen::VectorXd X0 = at(f0, g_lo.X[j], g_hi.X[j]), X1 = at(f1, g_lo.X[j], g_hi.X[j]);
+      const Eigen::VectorXd V0 = at(f0, g_lo.V[j], g_hi.V[j]), V1 = at(f1, g_lo.V[j], g_hi.V[j]);
+      g.spread.push_back(std::abs(t1 - t0));
+      for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(X1(i) - X0(i)));
+      for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(V1(i) - V0(i)));
+      g.times[j] = (t0 + t1) / 2;
+      g.X[j] = (X0 + X1) / 2;
+      g.V[j] = (V0 + V1) / 2;
+    }
+    auto o = proof::ProveImpactOrbit(m, g, lo, deadline);
+    if (o.proven) {
+      o.reason = "for every " + differs.front() + " in " + *field + ": " + o.reason;
+      results.push_back(Wrap(o, "impact", m, lo));
+      return true;
+    }
+    const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
+    const std::string xm = Decimal(vm);
+    if (depth >= kMaxSplit || deadline.passed() || !(v0 < vm && vm < v1)) {
+      failure = fmt::format("{} in [{}, {}]: {}", differs.front(), x0, x1, o.reason);
+      outcome = o;
+      return false;
+    }
+    const double fm = f0 + (f1 - f0) / 2;
+    return piece(x0, xm, f0, fm, depth + 1) && piece(xm, x1, fm, f1, depth + 1);
+  };
+  if (piece(first, last, 0.0, 1.0, 0)) return results;
+  outcome.reason = "not proven over the whole interval: " + failure;
+  *field = whole;
+  return {Wrap(outcome, "impact", proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text,
+                                                                        structure.contact_text, structure.shape_text, stop,
+                                                                        restitution, amplitude, frequency),
+               lo)};
 }
 
 }  // namespace vibro

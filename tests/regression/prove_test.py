@@ -312,11 +312,24 @@ expect(p.returncode == 0 and b.get("proven") == b.get("total") == 4,
 values = [pt["value"] for pt in b.get("points", [])]
 expect(len(set(values)) == len(values) == 4, f"--branch: four distinct parameter values {values}")
 code, v = check(certs_path)
-expect(code == 0 and "4 certificates" in v["reason"], f"the checker confirms every certificate of the branch ({v})")
+expect(code == 0 and "certificates" in v["reason"], f"the checker confirms every certificate of the branch ({v})")
+# Steps of 0.05: the segments are proven in halved pieces that cover them.
+for seg in b.get("segments", []):
+    expect(seg["proven"], f"segment [{seg['from']}, {seg['to']}] proven in {len(seg['pieces'])} piece(s)")
+    bounds = []
+    for piece in seg["pieces"]:
+        text = piece["reason"].split("for every amplitude in ")[1].split("]")[0] + "]"
+        bounds.append([mpf(x) for x in text[1:-1].split(",")])
+    bounds.sort()
+    lo_, hi_ = sorted((mpf(repr(seg["from"])), mpf(repr(seg["to"]))))
+    covered = bounds and bounds[0][0] <= lo_ and bounds[-1][1] >= hi_ and all(
+        bounds[i][1] == bounds[i + 1][0] for i in range(len(bounds) - 1))
+    expect(covered, f"the pieces of [{seg['from']}, {seg['to']}] cover it without a hole")
 if code == 0:
     allc = json.load(open(certs_path))
-    def second_point_amplitude(c):
-        c["certificates"][1]["model"]["amplitude"] = c["certificates"][2]["model"]["amplitude"]
+    def second_point_amplitude(c):  # point 1's proof claimed at the last point's amplitude
+        points = [i for i, x in enumerate(c["certificates"]) if not x["model"]["amplitude"].startswith("[")]
+        c["certificates"][points[1]]["model"]["amplitude"] = c["certificates"][points[-1]]["model"]["amplitude"]
     checked_mutant(allc, second_point_amplitude, "branch_swapped_parameter")
 
 # Validated continuation: with small steps, every parameter value between neighbouring points is
@@ -332,9 +345,8 @@ b = json.loads(p.stdout) if p.stdout.strip() else {}
 expect(p.returncode == 0 and b.get("segments_proven") == 3 and len(b.get("segments", [])) == 3,
        f"--branch, steps of 1e-3: the 3 segments between the points proven ({b.get('segments_proven')})")
 for seg in b.get("segments", []):
-    lo_, hi_ = sorted((seg["from"], seg["to"]))
-    expect(f"[{lo_!r}" in seg["summary"]["reason"] or "for every amplitude in [" in seg["summary"]["reason"],
-           f"a segment's theorem names its interval ({seg['summary']['reason'][:80]})")
+    expect(len(seg["pieces"]) == 1 and "for every amplitude in [" in seg["pieces"][0]["reason"],
+           f"a short segment is proven whole, its theorem names its interval ({seg['pieces'][0]['reason'][:80]})")
 code, v = check(certs_path)
 expect(code == 0 and "7 certificates" in v["reason"], f"the checker confirms points and segments ({v})")
 if code == 0:
