@@ -15,6 +15,8 @@ if(VIBRO_MPI)  # beside libvibro, where src/studies/distribute.cpp looks for it
   install(TARGETS vibro_mpi LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endif()
 install(PROGRAMS scripts/vibro_plot.py DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro)
+# The independent checker of `vibro prove` certificates (docs/prove.md), on the PATH beside vibro.
+install(PROGRAMS scripts/vibro_check_proof.py DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY data/scenes DESTINATION ${CMAKE_INSTALL_DATADIR}/vibro FILES_MATCHING PATTERN "*.toml")
 # What docs/validation.md has users run: the CSV converters for `vibro validate` and `vibro score`
 # (scripts/*_to_csv.py in a checkout), and the reference problems `vibro score` compares with.

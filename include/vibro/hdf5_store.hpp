@@ -202,4 +202,8 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods = 0);
 // Throws InputError naming the file and group when either is missing.
 H5Table ReadTable(const std::string& path, const std::string& group);
 
+// The section point (time, modal X and Ẋ) of the orbit that `vibro orbit --out` stored in /orbit.
+// Throws InputError naming the file when it holds none.
+InitialOverride ReadOrbitSection(const std::string& path);
+
 }  // namespace vibro

@@ -49,6 +49,7 @@
 #include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
+#include "vibro/prove.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/stop_request.hpp"
@@ -368,6 +369,31 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   return {vibro::OrbitJson(orbit, req.kind), false};
 }
 
+// vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts.
+std::pair<std::string, std::string> Prove(const PyScene& s, const std::string& kind, long long period,
+                                          long long transient, const std::string& from, double time_limit) {
+  vibro::frontend::CheckOrbitOptions(kPython, period, 0, transient, std::nullopt, std::nullopt);
+  if (!(time_limit > 0) || !std::isfinite(time_limit))
+    throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
+  vibro::ProofRequest req;
+  req.kind = KindOf(kind);
+  req.period = static_cast<int>(period);
+  req.transient_periods = static_cast<int>(transient);
+  req.time_limit = time_limit;
+  const vibro::System sys(s.loaded.scene);
+  if (!from.empty()) {
+    req.start = vibro::ReadOrbitSection(from);
+    if (req.start->X.size() != sys.dof())
+      throw vibro::InputError({fmt::format("from {}: an orbit of {} modes, the scene has {}", from,
+                                           req.start->X.size(), sys.dof())});
+  }
+  if (sys.damped())
+    throw vibro::InputError({"vibro.prove covers undamped models only: the scene has modal damping (damping_ratios)"});
+  py::gil_scoped_release release;
+  const auto r = vibro::ProveOrbit(sys, s.loaded.scene, req);
+  return {r.summary_json, r.certificate_json};
+}
+
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
@@ -659,6 +685,7 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("model", &Model);
   m.def("simulate", &SimulateScene);
   m.def("orbit", &Orbit);
+  m.def("prove", &Prove);
   m.def("continue_branch", &ContinueBranch);
   m.def("study", &Study);
   m.def("sweep", &SweepScene);

@@ -46,7 +46,7 @@ EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "relea
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
-__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "continue_",
+__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "continue_",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
            "EVENT_KINDS", "MODES"]
 
@@ -345,6 +345,20 @@ def orbit(scene, kind="auto", period=0, impacts=0, guess=None, out=None, force=F
                                      velocity, _out(out), _int("transient", transient), _main_thread())
     if interrupted:
         raise _interrupted("orbit search", None)
+    return _json.loads(text)
+
+
+def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, time_limit=60.0):
+    """Proves a periodic orbit in interval arithmetic (``vibro prove --json``, docs/prove.md): the dict
+    has ``verdict`` ("proven" or "not-proven"), ``reason``, ``period``, ``sequence``, ``events``,
+    ``section``, ``multipliers`` and ``stability``, enclosures as [lo, hi]. ``from_`` is a file of
+    ``vibro orbit --out`` to start from; ``out`` receives the certificate (JSON), which
+    ``vibro_check_proof.py`` re-verifies."""
+    text, certificate = _vibro.prove(_scene(scene), kind, _int("period", period), _int("transient", transient),
+                                     "" if from_ is None else _path("from_", from_), _float("time_limit", time_limit))
+    if out is not None:
+        with open(_path("out", out), "w", encoding="utf-8") as fh:
+            fh.write(certificate + "\n")
     return _json.loads(text)
 
 

@@ -3,7 +3,7 @@
 // each in its cmd_<command>.cpp, with plain values and option structs.
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement
-// (check, validate) · 130 interrupted.
+// (check, validate) or not proven (prove) · 130 interrupted.
 #pragma once
 
 #include <cmath>
@@ -19,6 +19,7 @@
 #include "vibro/hdf5_store.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
+#include "vibro/prove.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
 
@@ -113,3 +114,12 @@ struct ScoreArgs {
   bool json = false;
 };
 int RunScore(const ScoreArgs& args);  // exit code: 0, 4 when the runs diverge beyond --tolerance
+
+// `vibro prove SCENE` (cmd_prove.cpp). Exit 0 proven, 4 not proven.
+struct ProveArgs {
+  vibro::ProofRequest request;
+  std::string from;    // --from ORBIT.h5 ("" for none)
+  std::string branch;  // --branch FILE.h5: every point of a stored branch ("" for none)
+  std::string out;   // --out CERT.json
+};
+int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args);

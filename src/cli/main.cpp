@@ -113,6 +113,25 @@ int main(int argc, char** argv) {
   std::string orbit_out;
   orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
 
+  CLI::App* prove = app.add_subcommand("prove", "prove a periodic orbit with interval arithmetic and write a certificate");
+  add_scene_options(prove);
+  ProveArgs prove_args;
+  std::string prove_kind = "auto";
+  prove->add_option("--kind", prove_kind, "auto | sticking | impact (default auto: the kind of the orbit found)")
+      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+  prove->add_option("--period", prove_args.request.period, "period in forcing periods (default: the orbit's own)")
+      ->check(InRange(vibro::frontend::kPeriodLimit));
+  auto* prove_from = prove->add_option("--from", prove_args.from, "start from the orbit stored by `vibro orbit --out ORBIT.h5`");
+  prove->add_option("--transient", prove_args.request.transient_periods,
+                    "periods simulated before the orbit search (default 200)")
+      ->check(CLI::NonNegativeNumber)->excludes(prove_from);
+  prove->add_option("--branch", prove_args.branch,
+                    "prove every point of the branch stored by `vibro continue --out FILE.h5`")
+      ->excludes(prove_from);
+  prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
+  prove->add_option("--time-limit", prove_args.request.time_limit, "seconds before the proof gives up (default 60)")
+      ->check(CLI::Range(0.001, 1e6));
+
   CLI::App* cont = app.add_subcommand("continue", "continue a periodic orbit in one parameter");
   add_scene_options(cont);
   std::string cont_param;
@@ -281,6 +300,12 @@ int main(int argc, char** argv) {
         if (orbit->count("--transient") == 0) orbit_req.transient_periods = 0;
       }
       return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
+    }
+    if (*prove) {
+      prove_args.request.kind = prove_kind == "impact"     ? vibro::OrbitKind::kImpact
+                                : prove_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                                           : vibro::OrbitKind::kAuto;
+      return RunProve(scene_path, sets, json, prove_args);
     }
     if (*plot) {
       if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)

@@ -1,5 +1,7 @@
 // A periodic orbit in the store (docs/output.md, /orbit): scalars and the section point as
 // attributes, the Floquet multipliers as an (m, 2) [re, im] attribute.
+#include <fmt/format.h>
+
 #include "io/hdf5_store_impl.hpp"
 
 namespace vibro {
@@ -21,6 +23,20 @@ void Hdf5Store::WriteOrbit(const OrbitResult& orbit) {
   }
   // (m, 2) as [re, im]; (0, 2) for none (one-DOF sticking orbits).
   h5::WriteDoubles(o, "multipliers", mu, 2);
+}
+
+InitialOverride ReadOrbitSection(const std::string& path) {
+  h5::Silence();
+  const h5::Handle file = h5::OpenFile(path, false);
+  if (!file) throw store::CannotOpen(path);
+  if (!h5::Exists(file.get(), "/orbit")) throw InputError({fmt::format("{}: no group /orbit in this file (not a file of `vibro orbit --out`)", path)});
+  const h5::Handle g = h5::OpenGroup(file.get(), "/orbit");
+  const auto t = h5::ReadDouble(g.get(), "section_time");
+  const auto X = h5::ReadDoubles(g.get(), "X"), V = h5::ReadDoubles(g.get(), "V");
+  if (!t || X.empty() || X.size() != V.size())
+    throw InputError({fmt::format("{}: /orbit: expected section_time, X and V (a file of `vibro orbit --out`)", path)});
+  return {*t, Eigen::Map<const Eigen::VectorXd>(X.data(), static_cast<Eigen::Index>(X.size())),
+          Eigen::Map<const Eigen::VectorXd>(V.data(), static_cast<Eigen::Index>(V.size()))};
 }
 
 }  // namespace vibro

@@ -1,0 +1,336 @@
+// Proof of an impacting periodic orbit (no sticking): Krawczyk's test on the multiple-shooting map,
+// exclusion of any other contact on every flight, the enclosed monodromy (prove.hpp, docs/prove.md).
+//
+// Unknowns, per impact j = 0..m−1 of one period: u_j = (t_j, X_j, V_j), the time and the modal state
+// just after the impact. Equations (m(2n+1) in as many unknowns), with t_m = t_0 + qT:
+//   cᵀX_j − x0 = 0                                  (on the stop at the impact)
+//   X(t_{j+1}⁻; u_j) − X_{j+1} = 0                   (the closed-form flight, eqs (13)-(14))
+//   Impact(Ẋ(t_{j+1}⁻; u_j)) − V_{j+1} = 0           (the restitution law, eqs (10)-(12))
+// Krawczyk: K(U) = ũ − C F(ũ) + (I − C J(U))(U − ũ) ⊂ int U  ⇒  exactly one zero of F in U.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "proof/proof_common.hpp"
+
+namespace vibro::proof {
+namespace {
+
+struct Layout {
+  int n, m;
+  std::size_t size() const { return static_cast<std::size_t>(m * (2 * n + 1)); }
+  std::size_t t(int j) const { return static_cast<std::size_t>(j * (2 * n + 1)); }
+  std::size_t x(int j, int i) const { return t(j) + 1 + static_cast<std::size_t>(i); }
+  std::size_t v(int j, int i) const { return t(j) + 1 + static_cast<std::size_t>(n + i); }
+};
+
+template <class T>
+std::vector<T> Slice(const std::vector<T>& u, std::size_t from, int count) {
+  return std::vector<T>(u.begin() + static_cast<std::ptrdiff_t>(from),
+                        u.begin() + static_cast<std::ptrdiff_t>(from) + count);
+}
+
+template <class T>
+std::vector<T> Residual(const IntervalModel& mdl, const Layout& L, int q, const std::vector<T>& u) {
+  std::vector<T> res;
+  const T qT(Interval(q) * mdl.period);
+  for (int j = 0; j < L.m; ++j) {
+    const int k = (j + 1) % L.m;
+    const T& t = u[L.t(j)];
+    const auto X = Slice(u, L.x(j, 0), L.n), V = Slice(u, L.v(j, 0), L.n);
+    const T tn = j == L.m - 1 ? u[L.t(k)] + qT : u[L.t(k)];
+    const auto e = Flight(mdl, t, X, V, tn - t);
+    const auto Vp = Impact(mdl, e.V);
+    res.push_back(ContactSum(mdl, X) - T(mdl.stop));
+    for (int i = 0; i < L.n; ++i) res.push_back(e.X[static_cast<std::size_t>(i)] - u[L.x(k, i)]);
+    for (int i = 0; i < L.n; ++i) res.push_back(Vp[static_cast<std::size_t>(i)] - u[L.v(k, i)]);
+  }
+  return res;
+}
+
+// The Jacobian of the residual at (or over) u, enclosed.
+std::vector<std::vector<Interval>> Jacobian(const IntervalModel& mdl, const Layout& L, int q,
+                                            const std::vector<Interval>& u) {
+  const std::size_t N = L.size();
+  std::vector<Dual> ud;
+  for (std::size_t k = 0; k < N; ++k) ud.push_back(Dual::Variable(u[k], k, N));
+  const auto r = Residual(mdl, L, q, ud);
+  std::vector<std::vector<Interval>> J(N, std::vector<Interval>(N));
+  for (std::size_t p = 0; p < N; ++p)
+    for (std::size_t l = 0; l < N && l < r[p].d.size(); ++l) J[p][l] = r[p].d[l];
+  return J;
+}
+
+Eigen::MatrixXd Mid(const std::vector<std::vector<Interval>>& a) {
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(a.size()), static_cast<Eigen::Index>(a.size()));
+  for (std::size_t p = 0; p < a.size(); ++p)
+    for (std::size_t l = 0; l < a.size(); ++l) m(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(l)) = a[p][l].mid();
+  return m;
+}
+
+std::vector<Interval> Points(const std::vector<double>& u) { return {u.begin(), u.end()}; }
+
+// Newton in double on the midpoints: the guess of the Poincaré solver to full accuracy.
+std::vector<double> Refine(const IntervalModel& mdl, const Layout& L, int q, std::vector<double> u) {
+  for (int it = 0; it < 6; ++it) {
+    const auto r = Residual(mdl, L, q, Points(u));
+    Eigen::VectorXd F(static_cast<Eigen::Index>(u.size()));
+    for (std::size_t p = 0; p < u.size(); ++p) F(static_cast<Eigen::Index>(p)) = r[p].mid();
+    const Eigen::VectorXd du = Mid(Jacobian(mdl, L, q, Points(u))).fullPivLu().solve(F);
+    if (!du.allFinite()) break;
+    for (std::size_t p = 0; p < u.size(); ++p) u[p] -= du(static_cast<Eigen::Index>(p));
+  }
+  return u;
+}
+
+using Matrix = std::vector<std::vector<Interval>>;
+Matrix Product(const Matrix& a, const Matrix& b) {
+  const std::size_t N = a.size();
+  Matrix c(N, std::vector<Interval>(N));
+  for (std::size_t i = 0; i < N; ++i)
+    for (std::size_t k = 0; k < N; ++k)
+      for (std::size_t j = 0; j < N; ++j) c[i][j] += a[i][k] * b[k][j];
+  return c;
+}
+
+struct Krawczyk {
+  bool inside = false;
+  std::vector<double> lo, hi;
+  std::vector<Interval> K;
+  Eigen::MatrixXd C;
+  std::size_t worst = 0;  // the component farthest from inside
+};
+
+Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vector<double>& u, double radius,
+               const std::vector<double>& spread, double spread_scale) {
+  Krawczyk k;
+  const std::size_t N = u.size();
+  std::vector<Interval> U;
+  for (std::size_t p = 0; p < N; ++p) {
+    const double d = radius * (1 + std::abs(u[p])) + (spread.empty() ? 0.0 : spread[p] * spread_scale);
+    k.lo.push_back(u[p] - d);
+    k.hi.push_back(u[p] + d);
+    U.push_back(Interval::Hull(k.lo.back(), k.hi.back()));
+  }
+  const auto F = Residual(mdl, L, q, Points(u));
+  const auto J = Jacobian(mdl, L, q, U);
+  k.C = Mid(J).inverse();
+  k.inside = k.C.allFinite();
+  double worst = -1;
+  for (std::size_t p = 0; p < N; ++p) {
+    Interval v(u[p]);
+    for (std::size_t l = 0; l < N; ++l) {
+      const double c = k.C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(l));
+      v -= Interval(c) * F[l];
+      Interval row(p == l ? 1.0 : 0.0);
+      for (std::size_t j = 0; j < N; ++j) row -= Interval(k.C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(j))) * J[j][l];
+      v += row * (U[l] - Interval(u[l]));
+    }
+    const bool in = v.InsideOpen(k.lo[p], k.hi[p]);
+    const double excess = v.finite() ? std::max(v.hi() - k.hi[p], k.lo[p] - v.lo()) / (k.hi[p] - k.lo[p]) : 1e300;
+    if (excess > worst) {
+      worst = excess;
+      k.worst = p;
+    }
+    k.inside = k.inside && in;
+    k.K.push_back(std::move(v));
+  }
+  return k;
+}
+
+}  // namespace
+
+Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, const ProofRequest& request,
+                         const Deadline& deadline) {
+  Outcome out;
+  const Layout L{mdl.n, static_cast<int>(guess.times.size())};
+  const int q = guess.period;
+  std::vector<std::string> names;
+  std::vector<double> u0;
+  for (int j = 0; j < L.m; ++j) {
+    names.push_back(fmt::format("t_{}", j));
+    u0.push_back(guess.times[static_cast<std::size_t>(j)]);
+    for (int i = 0; i < L.n; ++i) {
+      names.push_back(fmt::format("X_{}[{}]", j, i));
+      u0.push_back(guess.X[static_cast<std::size_t>(j)](i));
+    }
+    for (int i = 0; i < L.n; ++i) {
+      names.push_back(fmt::format("V_{}[{}]", j, i));
+      u0.push_back(guess.V[static_cast<std::size_t>(j)](i));
+    }
+  }
+  // Over a parameter interval (guess.spread), the orbit of the middle parameter, from the midpoint
+  // of the orbits at the two ends.
+  const auto u = Refine(mdl, L, q, u0);
+  std::vector<double> spread;
+  if (!guess.spread.empty()) {
+    spread = guess.spread;
+    for (std::size_t p = 0; p < spread.size(); ++p) spread[p] = 0.75 * spread[p] + std::abs(u[p] - u0[p]);
+  }
+  Ledger ledger;
+
+  // 1. Existence and uniqueness in the box: Krawczyk, widening the box a few times.
+  Krawczyk k;
+  double radius = request.box_radius;
+  for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
+    k = Test(mdl, L, q, u, radius, spread, radius / request.box_radius);
+    if (k.inside || deadline.passed()) break;
+  }
+  Json krawczyk = Json::array();
+  for (std::size_t p = 0; p < u.size(); ++p) {
+    const bool in = k.K[p].InsideOpen(k.lo[p], k.hi[p]);
+    krawczyk.push_back(Pair(k.K[p]));
+    ledger.Check(in, "krawczyk", names[p], k.K[p],
+                 "inside the box");
+  }
+  Json box = Json::array(), C = Json::array();
+  for (std::size_t p = 0; p < u.size(); ++p) {
+    box.push_back({k.lo[p], k.hi[p]});
+    Json row = Json::array();
+    for (std::size_t l = 0; l < u.size(); ++l) row.push_back(k.C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(l)));
+    C.push_back(row);
+  }
+  out.certificate["unknowns"] = names;
+  out.certificate["midpoint"] = u;
+  out.certificate["box"] = box;
+  out.certificate["preconditioner"] = C;
+  out.certificate["krawczyk"] = krawczyk;
+  if (!k.inside) {
+    out.reason = fmt::format("Krawczyk's test fails: K(U) is not inside the box U for {} (box half-width {:.1e} relative): "
+                             "no unique orbit with this impact sequence is proven near the orbit found",
+                             names[k.worst], radius / 4);
+    out.certificate["inequalities"] = ledger.list();
+    return out;
+  }
+  std::vector<Interval> U;
+  for (std::size_t p = 0; p < u.size(); ++p) U.push_back(Interval::Hull(k.lo[p], k.hi[p]));
+
+  // 2. The event sequence: every flight is free of contact between its impacts.
+  double top = mdl.frequency.hi();
+  for (const auto& w : mdl.omega) top = std::max(top, w.hi());
+  const double step = 0.25 / top;
+  const Interval qT = Interval(q) * mdl.period;
+  Json flights = Json::array(), events = Json::array();
+  std::vector<Interval> v_before(static_cast<std::size_t>(L.m));
+  Matrix M(static_cast<std::size_t>(2 * L.n), std::vector<Interval>(static_cast<std::size_t>(2 * L.n)));
+  for (int i = 0; i < 2 * L.n; ++i) M[static_cast<std::size_t>(i)][static_cast<std::size_t>(i)] = 1.0;
+  bool ok = true;
+  for (int j = 0; j < L.m && ok; ++j) {
+    const int kk = (j + 1) % L.m;
+    const Interval& t = U[L.t(j)];
+    const auto X = Slice(U, L.x(j, 0), L.n), V = Slice(U, L.v(j, 0), L.n);
+    const Interval tn = j == L.m - 1 ? U[L.t(kk)] + qT : U[L.t(kk)];
+    const Interval S = tn - t;
+    const auto e = Flight(mdl, t, X, V, S);
+    const Interval a = ContactSum(mdl, V), vminus = ContactSum(mdl, e.V);
+    const Interval M2 = DerivativeBound(mdl, t, X, V, 2);
+    const std::string where = fmt::format("flight {} (impact {} to impact {})", j, j, kk);
+    ok = ledger.Check(S.Positive(), "duration", where, S, "> 0") &&
+         ledger.Check(a.Positive(), "contact velocity after impact", where, a, "> 0") &&
+         ledger.Check(vminus.Negative(), "contact velocity before impact", where, vminus, "< 0") &&
+         ledger.Check(M2.finite(), "second-derivative bound", where, M2, "finite");
+    if (!ok) break;
+    v_before[static_cast<std::size_t>(kk)] = vminus;
+    // Windows: g(s) ≥ s(a − M2 s/2) > 0 on (0, ws]; g(S−σ) ≥ σ(b − M2 σ/2) > 0 on (0, we].
+    // The bounds a ≤ ẋ_B⁺ and b ≤ −ẋ_B⁻ are taken a little below the enclosures, so that a checker
+    // whose enclosures are a little wider still finds them valid.
+    const double a_low = a.lo() * (1 - 1e-9), b_low = -vminus.hi() * (1 - 1e-9);
+    const double ws = a_low / M2.hi(), we = b_low / M2.hi();
+    const Interval start_margin = Interval(a_low) - M2 * Interval(ws) / Interval(2.0);
+    const Interval end_margin = Interval(b_low) - M2 * Interval(we) / Interval(2.0);
+    ok = ledger.Check(start_margin.Positive(), "start window a - M2 ws/2", where, start_margin, "> 0") &&
+         ledger.Check(end_margin.Positive(), "end window b - M2 we/2", where, end_margin, "> 0");
+    if (!ok) break;
+    Json pieces = Json::array();
+    // The end window covers s ≥ S* − we ≥ S.hi − we; the pieces overlap it by 0.1 we, so that a checker
+    // whose enclosure of S is a little wider still finds them covering.
+    const double mid_lo = ws, mid_hi = S.hi() - 0.9 * we;
+    if (mid_lo < mid_hi) {
+      const auto gap = [&](double s) { return ContactSum(mdl, Flight(mdl, t, X, V, Interval(s)).X) - mdl.stop; };
+      const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X, V, s).V); };
+      const auto pos = ProvePositive(mid_lo, mid_hi, step, request.max_depth, deadline, gap, slope);
+      if (!pos.proven) {
+        ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", where, pos.failed_at), pos.failed_value, "> 0");
+        out.reason = fmt::format("the gap is not proven positive on {}: {} (a grazing or a missed contact?)", where,
+                                 pos.reason);
+        ok = false;
+        break;
+      }
+      for (const auto& [lo, hi] : pos.pieces) pieces.push_back({lo, hi});
+    }
+    flights.push_back({{"from", j}, {"duration", Pair(S)}, {"velocity_after", Pair(a)},
+                       {"velocity_before_next", Pair(vminus)}, {"velocity_after_lower", a_low},
+                       {"speed_before_lower", b_low}, {"second_derivative_bound", M2.hi()},
+                       {"start_window", ws}, {"end_window", we}, {"pieces", pieces}});
+    // Monodromy: the flight (per mode [[cos, sin/ω_i], [−ω_i sin, cos]]) and the saltation matrix of
+    // the impact at its end (docs/model.md §5.6).
+    const auto n = static_cast<std::size_t>(L.n);
+    Matrix Phi(2 * n, std::vector<Interval>(2 * n)), Sal(2 * n, std::vector<Interval>(2 * n));
+    for (std::size_t i = 0; i < n; ++i) {
+      const Interval c = Cos(mdl.omega[i] * S), s = Sin(mdl.omega[i] * S);
+      Phi[i][i] = c;
+      Phi[i][n + i] = s / mdl.omega[i];
+      Phi[n + i][i] = -(mdl.omega[i] * s);
+      Phi[n + i][n + i] = c;
+    }
+    const Interval aB = ContactAcceleration(mdl, tn, e.X);
+    const Interval one_r = Interval(1.0) + mdl.restitution;
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t l = 0; l < n; ++l) {
+        const Interval pr = Interval(i == l ? 1.0 : 0.0) - one_r * mdl.contact[i] * mdl.shape[l] / mdl.s_B;
+        Sal[i][l] = pr;
+        Sal[n + i][n + l] = pr;
+        Sal[n + i][l] = one_r * aB * mdl.contact[i] * mdl.shape[l] / (mdl.s_B * vminus);
+      }
+    M = Product(Sal, Product(Phi, M));
+  }
+  out.certificate["flights"] = flights;
+  if (!ok) {
+    if (out.reason.empty()) out.reason = ledger.failed();
+    out.certificate["inequalities"] = ledger.list();
+    return out;
+  }
+  for (int j = 0; j < L.m; ++j) {
+    const Interval& t = U[L.t(j)];
+    events.push_back({{"kind", "impact"}, {"time", Pair(t)}, {"phase", Pair(Phase(mdl, t))},
+                      {"velocity_before", Pair(v_before[static_cast<std::size_t>(j)])}});
+  }
+  const auto spectrum = Multipliers(M);
+  Json monodromy = Json::array();
+  for (const auto& row : M) {
+    Json r = Json::array();
+    for (const auto& x : row) r.push_back(Pair(x));
+    monodromy.push_back(r);
+  }
+  out.certificate["monodromy"] = monodromy;
+  out.certificate["inequalities"] = ledger.list();
+  Json Xs = Json::array(), Vs = Json::array();
+  for (int i = 0; i < L.n; ++i) {
+    Xs.push_back(Pair(U[L.x(0, i)]));
+    Vs.push_back(Pair(U[L.v(0, i)]));
+  }
+  out.summary["period"] = q;
+  out.summary["sequence"] = Json(std::vector<std::string>(static_cast<std::size_t>(L.m), "impact"));
+  out.summary["events"] = events;
+  out.summary["section"] = {{"time", Pair(U[L.t(0)])}, {"X", Xs}, {"V", Vs}, {"at", "just after impact 0"}};
+  out.summary["multipliers"] = spectrum.multipliers;
+  out.summary["stability"] = spectrum.stability;
+  if (!spectrum.note.empty()) out.summary["stability_note"] = spectrum.note;
+  double width = 0;
+  for (std::size_t p = 0; p < u.size(); ++p) width = std::max(width, k.hi[p] - k.lo[p]);
+  out.summary["box_width"] = width;
+  out.proven = true;
+  out.reason = fmt::format("exactly one period-{} orbit with {} impact(s) per period and no other contact in a box of "
+                           "width {:.1e} around the orbit found (Krawczyk)", q, L.m, width);
+  return out;
+}
+
+Interval Phase(const IntervalModel& model, const Interval& t) {
+  const Interval wt = model.frequency * t, two_pi = Interval(2.0) * Interval::Pi();
+  const double turns = std::floor(wt.mid() / two_pi.mid());
+  return wt - Interval(turns) * two_pi;
+}
+
+}  // namespace vibro::proof

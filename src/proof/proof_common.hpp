@@ -1,0 +1,76 @@
+// What the proofs of src/proof share: the outcome of a proof, the record of the inequalities it
+// verified (the certificate's "inequalities", docs/prove.md), and intervals as JSON pairs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "proof/enclosure.hpp"
+#include "proof/interval.hpp"
+#include "proof/positivity.hpp"
+#include "vibro/prove.hpp"
+
+namespace vibro::proof {
+
+using Json = nlohmann::json;
+
+inline Json Pair(const Interval& x) { return Json::array({x.lo(), x.hi()}); }
+
+// Every inequality a proof rests on, with its enclosure: the checker recomputes each.
+class Ledger {
+ public:
+  // relation: "> 0", "< 0", "inside" (with the bounds in `detail`), ...
+  bool Check(bool holds, const std::string& name, const std::string& where, const Interval& enclosure,
+             const std::string& relation) {
+    list_.push_back({{"name", name}, {"where", where}, {"enclosure", Pair(enclosure)}, {"relation", relation},
+                     {"holds", holds}});
+    if (!holds && failed_.empty())
+      failed_ = name + " " + relation + " fails at " + where + ": enclosure " + enclosure.ToString();
+    return holds;
+  }
+  const Json& list() const { return list_; }
+  const std::string& failed() const { return failed_; }
+
+ private:
+  Json list_ = Json::array();
+  std::string failed_;
+};
+
+struct Outcome {
+  bool proven = false;
+  std::string reason;
+  Json summary = Json::object();      // the --json fields of the orbit (events, section, ...)
+  Json certificate = Json::object();  // the kind-specific part of the certificate
+};
+
+// An impacting orbit as the Poincaré solver found it: the q-period orbit's impacts, each with
+// its absolute time and the modal state just after it.
+struct ImpactGuess {
+  int period = 0;
+  std::vector<double> times;
+  std::vector<Eigen::VectorXd> X, V;
+  // Over a parameter interval: |u(end) − u(start)| per unknown (t_j, X_j, V_j), which the box must
+  // cover beyond the default radius; empty for one parameter value.
+  std::vector<double> spread;
+};
+
+Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,
+                         const Deadline& deadline);
+// One-DOF, r = 0: the release phase is fixed by the model (docs/model.md §4.4), so no guess.
+Outcome ProveSticking1Dof(const IntervalModel& model, const ProofRequest& request, const Deadline& deadline);
+
+// ωt mod 2π, enclosed (the integer number of turns taken from the midpoint).
+Interval Phase(const IntervalModel& model, const Interval& t);
+// Floquet multipliers of an enclosed monodromy matrix (2n × 2n) and the verdict on stability.
+struct Spectrum {
+  bool enclosed = false;
+  Json multipliers = Json::array();  // [{"re": [lo, hi], "im": [lo, hi]}, ...]
+  std::string stability = "undecided";
+  std::string note;
+};
+Spectrum Multipliers(const std::vector<std::vector<Interval>>& monodromy);
+
+}  // namespace vibro::proof

@@ -1,0 +1,293 @@
+// `vibro prove`: the model as exact decimals, the orbit to prove (from the Poincaré solver), the
+// proof by kind, and the certificate (prove.hpp, docs/prove.md).
+#include "vibro/prove.hpp"
+
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "proof/proof_common.hpp"
+#include "vibro/observer.hpp"
+#include "vibro/orbit_from_state.hpp"
+
+namespace vibro {
+namespace {
+
+using proof::Json;
+
+// The shortest decimal that reads back as the double: the parameter the theorem is about (for a
+// scene written in decimals, the decimal the user wrote).
+std::string Decimal(double x) { return fmt::format("{}", x); }
+
+proof::IntervalModel ModelOf(const System& sys) {
+  std::vector<std::string> omega, forcing, contact, shape;
+  for (int i = 0; i < sys.dof(); ++i) {
+    omega.push_back(Decimal(sys.omega()(i)));
+    forcing.push_back(Decimal(sys.forcing()(i)));
+    contact.push_back(Decimal(sys.contact()(i)));
+    shape.push_back(Decimal(sys.contact_shape()(i)));
+  }
+  return proof::IntervalModel::FromDecimals(omega, forcing, contact, shape, Decimal(sys.stop()),
+                                            Decimal(sys.restitution()), Decimal(sys.amplitude()),
+                                            Decimal(sys.frequency()));
+}
+
+Json ModelJson(const proof::IntervalModel& m) {
+  return {{"frequencies", m.omega_text}, {"forcing", m.forcing_text},   {"contact", m.contact_text},
+          {"shape", m.shape_text},       {"stop", m.stop_text},         {"restitution", m.restitution_text},
+          {"amplitude", m.amplitude_text}, {"frequency", m.frequency_text}};
+}
+
+// The impacts of one period of an orbit (time, state just after), as the simulator meets them.
+class ImpactRecorder final : public Observer {
+ public:
+  void OnEvent(const Event& e) override {
+    if (e.kind == EventKind::kImpact) times.push_back(e.t);
+    else if (e.kind != EventKind::kGrazing) other = ToString(e.kind);
+    else grazing = true;
+  }
+  void OnReset(const Reset& r) override {
+    if (r.kind == ResetKind::kImpact) {
+      X.push_back(r.X_after);
+      V.push_back(r.V_after);
+    }
+  }
+  std::vector<double> times;
+  std::vector<Eigen::VectorXd> X, V;
+  std::string other;
+  bool grazing = false;
+};
+
+struct Found {
+  std::string failure;  // "" when an impacting orbit was found
+  bool sticking = false;
+  proof::ImpactGuess guess;
+};
+
+Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest& request) {
+  Found f;
+  OrbitRequest req;
+  req.kind = request.kind;
+  req.period = request.period;
+  req.transient_periods = request.start ? 0 : request.transient_periods;
+  req.start = request.start;
+  const auto orbit = SolveOrbit(sys, scene, req);
+  if (orbit.status != "converged") {
+    f.failure = "the Poincaré solver found no orbit to prove (" + orbit.status +
+                (orbit.message.empty() ? "" : ": " + orbit.message) + ")";
+    return f;
+  }
+  if (orbit.summary.kind == "sticking-periodic") {
+    f.sticking = true;
+    return f;
+  }
+  Scene one = scene;
+  one.run.periods = orbit.period;
+  one.run.samples_per_period = 0;
+  one.run.lyapunov = false;
+  const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+  ImpactRecorder rec;
+  SimulationOptions opt;
+  opt.observers = {&rec};
+  opt.initial = &start;
+  const auto run = Simulate(sys, one, opt);
+  if (run.status != RunStatus::kOk) f.failure = "the orbit found could not be followed over one period: " + run.message;
+  else if (!rec.other.empty()) f.failure = "the orbit found has a " + rec.other + " event: it is not an impacting orbit";
+  else if (rec.grazing) f.failure = "the orbit found grazes the stop: a grazing orbit cannot be proven";
+  else if (rec.times.empty() || rec.times.size() != rec.X.size()) f.failure = "the orbit found has no impact";
+  if (!f.failure.empty()) return f;
+  // Impact 0 first in time; the rest follow it within one period.
+  f.guess.period = orbit.period;
+  // The forcing is T-periodic: shifted by whole periods, impact 0 falls in [0, T) (small times keep
+  // the box, relative to 1 + |t|, narrow).
+  const double shift = std::floor(rec.times.front() / sys.period()) * sys.period();
+  for (double& t : rec.times) t -= shift;
+  f.guess.times = rec.times;
+  f.guess.X = rec.X;
+  f.guess.V = rec.V;
+  return f;
+}
+
+
+ProofResult Wrap(const proof::Outcome& outcome, const std::string& kind, const proof::IntervalModel& model,
+                 const ProofRequest& request) {
+  ProofResult result;
+  result.proven = outcome.proven;
+  result.reason = outcome.reason;
+  Json summary = {{"verdict", outcome.proven ? "proven" : "not-proven"}, {"reason", outcome.reason}, {"kind", kind}};
+  for (const auto& [key, value] : outcome.summary.items()) summary[key] = value;
+  if (!summary.contains("period")) summary["period"] = request.period > 0 ? Json(request.period) : Json(nullptr);
+  for (const char* key : {"sequence", "events", "multipliers"})
+    if (!summary.contains(key)) summary[key] = Json::array();
+  if (!summary.contains("section")) summary["section"] = nullptr;
+  if (!summary.contains("stability")) summary["stability"] = "undecided";
+  result.summary_json = summary.dump();
+  result.kind = kind;
+  if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
+  const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
+  for (const auto& e : summary["events"])
+    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"])});
+  for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
+  result.stability = summary["stability"].get<std::string>();
+  if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
+  Json cert = {{"format", "vibro-proof-certificate/1"},
+               {"verdict", summary["verdict"]},
+               {"reason", outcome.reason},
+               {"kind", kind},
+               {"period", summary["period"]},
+               {"model", ModelJson(model)},
+               {"libraries", proof::LibraryVersions()},
+               {"precision_bits", 128},
+               {"summary", summary}};
+  for (const auto& [key, value] : outcome.certificate.items()) cert[key] = value;
+  result.certificate_json = cert.dump(1);
+  return result;
+}
+
+}  // namespace
+
+ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
+  if (system.damped())
+    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
+  const proof::Deadline deadline(request.time_limit);
+  const auto model = ModelOf(system);
+  proof::Outcome outcome;
+  std::string kind;
+  const bool one_dof = system.dof() == 1 && system.contact_shape()(0) == 1;
+  const auto sticking = [&]() {
+    kind = "sticking";
+    if (one_dof) {
+      outcome = proof::ProveSticking1Dof(model, request, deadline);  // r = 0, or r > 0 with chattering
+    } else {
+      outcome.reason = "sticking orbits of a model with more than one mode are not proven by this version "
+                       "(docs/prove.md)";
+    }
+  };
+  if (request.kind == OrbitKind::kSticking) {
+    sticking();
+  } else if (request.kind == OrbitKind::kAuto && one_dof && system.restitution() == 0) {
+    sticking();  // r = 0, one mode: every impact is plastic, an orbit with impacts sticks or departs
+  } else {
+    const auto found = FindImpactOrbit(system, scene, request);
+    if (found.sticking && request.kind == OrbitKind::kAuto) {
+      sticking();
+    } else {
+      kind = "impact";
+      if (found.sticking) outcome.reason = "the orbit found sticks: it is not an impacting orbit (try --kind sticking)";
+      else if (!found.failure.empty()) outcome.reason = found.failure;
+      else if (system.restitution() == 0) outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
+      else outcome = proof::ProveImpactOrbit(model, found.guess, request, deadline);
+    }
+  }
+  return Wrap(outcome, kind, model, request);
+}
+
+}  // namespace vibro
+
+namespace vibro {
+
+std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
+                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+  if (system_lo.damped() || system_hi.damped())
+    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
+  const proof::Deadline deadline(lo.time_limit);
+  auto model = ModelOf(system_lo);
+  const auto model_hi = ModelOf(system_hi);
+  proof::Outcome outcome;
+  // The one scalar that differs, as the interval between its two decimals.
+  using proof::Interval;
+  std::vector<std::string> differs;
+  const auto between = [&](std::string& a, const std::string& b, const char* name) {
+    if (a == b) return;
+    differs.push_back(name);
+    const bool ordered = Interval::Decimal(a).lo() <= Interval::Decimal(b).lo();
+    a = "[" + (ordered ? a : b) + ", " + (ordered ? b : a) + "]";
+  };
+  std::string amplitude = model.amplitude_text, frequency = model.frequency_text, stop = model.stop_text,
+              restitution = model.restitution_text;
+  between(amplitude, model_hi.amplitude_text, "amplitude");
+  between(frequency, model_hi.frequency_text, "frequency");
+  between(stop, model_hi.stop_text, "stop position");
+  between(restitution, model_hi.restitution_text, "restitution");
+  const bool same_structure = model.omega_text == model_hi.omega_text && model.forcing_text == model_hi.forcing_text &&
+                              model.contact_text == model_hi.contact_text && model.shape_text == model_hi.shape_text;
+  if (!same_structure || differs.size() != 1) {
+    outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
+                     "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
+    return {Wrap(outcome, "impact", model, lo)};
+  }
+  const auto a = FindImpactOrbit(system_lo, scene_lo, lo), b = FindImpactOrbit(system_hi, scene_hi, hi);
+  if (!a.failure.empty() || !b.failure.empty() || a.sticking || b.sticking) {
+    outcome.reason = "no impacting orbit at one end: " + (a.failure.empty() ? b.failure : a.failure);
+    return {Wrap(outcome, "impact", model, lo)};
+  }
+  if (a.guess.times.size() != b.guess.times.size() || a.guess.period != b.guess.period) {
+    outcome.reason = "the orbits at the two ends have different impact sequences";
+    return {Wrap(outcome, "impact", model, lo)};
+  }
+  // The parameter interval [p_lo, p_hi] is proven whole, or halved (at a decimal shared by both
+  // halves) up to kMaxSplit times, each piece with the orbits interpolated between the two ends.
+  constexpr int kMaxSplit = 5;
+  std::string* field = differs.front() == "amplitude"     ? &amplitude
+                       : differs.front() == "frequency"   ? &frequency
+                       : differs.front() == "restitution" ? &restitution
+                                                          : &stop;
+  const std::string whole = *field;
+  const auto comma = whole.find(',');
+  const std::string first = whole.substr(1, comma - 1), last = whole.substr(comma + 2, whole.size() - comma - 3);
+  const bool a_is_lo = Interval::Decimal(first).lo() == Interval::Decimal(differs.front() == "amplitude"     ? model.amplitude_text
+                                                                          : differs.front() == "frequency"   ? model.frequency_text
+                                                                          : differs.front() == "restitution" ? model.restitution_text
+                                                                                                             : model.stop_text).lo();
+  const auto& g_lo = a_is_lo ? a.guess : b.guess;
+  const auto& g_hi = a_is_lo ? b.guess : a.guess;
+  const auto structure = model;
+  std::vector<ProofResult> results;
+  std::string failure;
+  // Proves [x0, x1] (decimal texts) at the fractions [f0, f1] of the whole interval.
+  std::function<bool(const std::string&, const std::string&, double, double, int)> piece =
+      [&](const std::string& x0, const std::string& x1, double f0, double f1, int depth) -> bool {
+    *field = "[" + x0 + ", " + x1 + "]";
+    const auto m = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
+                                                      structure.shape_text, stop, restitution, amplitude, frequency);
+    const auto at = [&](double f, const auto& lo_v, const auto& hi_v) { return lo_v + f * (hi_v - lo_v); };
+    proof::ImpactGuess g = g_lo;
+    for (std::size_t j = 0; j < g.times.size(); ++j) {
+      const double t0 = at(f0, g_lo.times[j], g_hi.times[j]), t1 = at(f1, g_lo.times[j], g_hi.times[j]);
+      const Eigen::VectorXd X0 = at(f0, g_lo.X[j], g_hi.X[j]), X1 = at(f1, g_lo.X[j], g_hi.X[j]);
+      const Eigen::VectorXd V0 = at(f0, g_lo.V[j], g_hi.V[j]), V1 = at(f1, g_lo.V[j], g_hi.V[j]);
+      g.spread.push_back(std::abs(t1 - t0));
+      for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(X1(i) - X0(i)));
+      for (int i = 0; i < system_lo.dof(); ++i) g.spread.push_back(std::abs(V1(i) - V0(i)));
+      g.times[j] = (t0 + t1) / 2;
+      g.X[j] = (X0 + X1) / 2;
+      g.V[j] = (V0 + V1) / 2;
+    }
+    auto o = proof::ProveImpactOrbit(m, g, lo, deadline);
+    if (o.proven) {
+      o.reason = "for every " + differs.front() + " in " + *field + ": " + o.reason;
+      results.push_back(Wrap(o, "impact", m, lo));
+      return true;
+    }
+    const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
+    const std::string xm = Decimal(vm);
+    if (depth >= kMaxSplit || deadline.passed() || !(v0 < vm && vm < v1)) {
+      failure = fmt::format("{} in [{}, {}]: {}", differs.front(), x0, x1, o.reason);
+      outcome = o;
+      return false;
+    }
+    const double fm = f0 + (f1 - f0) / 2;
+    return piece(x0, xm, f0, fm, depth + 1) && piece(xm, x1, fm, f1, depth + 1);
+  };
+  if (piece(first, last, 0.0, 1.0, 0)) return results;
+  outcome.reason = "not proven over the whole interval: " + failure;
+  *field = whole;
+  return {Wrap(outcome, "impact", proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text,
+                                                                        structure.contact_text, structure.shape_text, stop,
+                                                                        restitution, amplitude, frequency),
+               lo)};
+}
+
+}  // namespace vibro

@@ -1,0 +1,39 @@
+"""vibro.prove mirrors `vibro prove` (docs/prove.md): the same dict as the command's --json, the
+certificate that the independent checker confirms, and the same errors."""
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+import vibro
+from conftest import CLI, SCENES
+
+CHECKER = os.path.join(os.path.dirname(__file__), "..", "..", "scripts", "vibro_check_proof.py")
+
+
+def test_prove_matches_the_command_and_its_certificate_is_confirmed(tmp_path):
+    scene = os.path.join(SCENES, "fig05_coexistence.toml")
+    cert = tmp_path / "fig05.json"
+    r = vibro.prove(scene, kind="impact", out=cert)
+    p = subprocess.run([CLI, "prove", scene, "--kind", "impact", "--json"], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert r == json.loads(p.stdout)
+    assert r["verdict"] == "proven" and r["stability"] == "stable" and r["box_width"] <= 1e-10
+    c = subprocess.run([sys.executable, CHECKER, str(cert)], capture_output=True, text=True, timeout=600)
+    assert c.returncode == 0, c.stdout + c.stderr
+
+
+def test_prove_proves_a_chattering_orbit_and_says_why_it_does_not_prove_another():
+    r = vibro.prove(os.path.join(SCENES, "fig05_coexistence.toml"))
+    assert r["verdict"] == "proven" and r["sequence"][-2:] == ["accumulation", "stick"]
+    r = vibro.prove(os.path.join(SCENES, "chain3.toml"))
+    assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
+
+
+def test_prove_refuses_a_damped_scene_and_a_bad_period():
+    with pytest.raises(ValueError, match="undamped"):
+        vibro.prove(os.path.join(SCENES, "chain2_damped.toml"))
+    with pytest.raises(ValueError):
+        vibro.prove(os.path.join(SCENES, "fig04_subharmonic.toml"), period=-1)

@@ -1,0 +1,138 @@
+// The prover's interval layer (src/proof/interval.cpp on Arb), its closed-form enclosures and its
+// certified tests, against truths computed another way: decimals that doubles cannot hold, libm at
+// sample points, conservation of energy, finite differences, known spectra.
+#include <cmath>
+#include <complex>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "proof/enclosure.hpp"
+#include "proof/interval.hpp"
+#include "proof/positivity.hpp"
+#include "proof/proof_common.hpp"
+
+namespace vibro::proof {
+namespace {
+
+TEST(Interval, DecimalsAreEnclosedExactlyNotAsTheirNearestDouble) {
+  const Interval x = Interval::Decimal("1.1");
+  // The double nearest 1.1 is 1.100000000000000088…: not in the enclosure of the decimal 1.1,
+  // which lies between it and the double below.
+  EXPECT_FALSE(x.Contains(1.1));
+  EXPECT_TRUE(Interval::Hull(std::nextafter(1.1, 0.0), 1.1).Contains(x));
+  EXPECT_LE(x.width(), 2.3e-16);  // the ends, rounded outwards to doubles, are neighbours
+  EXPECT_THROW(Interval::Decimal("1.1abc"), std::invalid_argument);
+  EXPECT_THROW(Interval::Decimal("[1 +/- 2]"), std::invalid_argument);
+  EXPECT_THROW(Interval::Decimal(""), std::invalid_argument);
+}
+
+TEST(Interval, ElementaryFunctionsEncloseLibmAtEveryPoint) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-50, 50);
+  for (int k = 0; k < 2000; ++k) {
+    const double x = u(rng);
+    // libm is within 1 ulp: the enclosure of the exact value meets [libm − 2ulp, libm + 2ulp].
+    for (const auto& [enc, ref] : {std::pair{Sin(Interval(x)), std::sin(x)}, std::pair{Cos(Interval(x)), std::cos(x)}}) {
+      EXPECT_LE(enc.lo(), std::nextafter(std::nextafter(ref, 2.0), 2.0)) << x;
+      EXPECT_GE(enc.hi(), std::nextafter(std::nextafter(ref, -2.0), -2.0)) << x;
+      EXPECT_LT(enc.width(), 1e-15);
+    }
+  }
+  // Over an interval: sin on [0, 4] is [sin 4, 1].
+  const Interval s = Sin(Interval::Hull(0, 4));
+  EXPECT_TRUE(s.Contains(1.0));
+  EXPECT_TRUE(s.Contains(std::sin(4.0)));
+  EXPECT_FALSE(s.Contains(-0.8));
+  // π is not a double: its enclosure lies strictly between the doubles around it.
+  EXPECT_FALSE(Interval::Pi().Contains(M_PI));
+  EXPECT_TRUE(Interval::Hull(M_PI, std::nextafter(M_PI, 4.0)).Contains(Interval::Pi()));
+  EXPECT_LT(Sqrt(Interval(2.0)).lo(), 1.4142135623730951);
+  EXPECT_GT(Sqrt(Interval(2.0)).hi(), 1.4142135623730949);
+}
+
+IntervalModel OneDof(const std::string& f, const std::string& r = "0.75", const std::string& w = "10") {
+  return IntervalModel::FromDecimals({"1"}, {"1"}, {"1"}, {"1"}, "1", r, f, w);
+}
+
+TEST(Enclosure, UnforcedFlightConservesEnergyInsideItsEnclosure) {
+  // f = 0: X(s) = X cos s + V sin s, so X(s)² + V(s)² = X² + V² (ω_1 = 1) for every s.
+  const auto m = OneDof("0");
+  for (double s : {0.1, 1.0, 7.3, 100.0}) {
+    const auto e = Flight(m, Interval(0.3), {Interval(0.7)}, {Interval(-1.2)}, Interval(s));
+    const Interval energy = Sqr(e.X[0]) + Sqr(e.V[0]);
+    EXPECT_TRUE(energy.Contains(Sqr(Interval(0.7)) + Sqr(Interval(1.2)))) << s;
+    EXPECT_LE(energy.width(), 4.5e-16);
+  }
+}
+
+TEST(Enclosure, TheGradientOfAFlightMatchesFiniteDifferences) {
+  const auto m = OneDof("1.1");
+  const double t0 = 0.2, x = 1.0, v = 0.3, s = 0.55, h = 1e-6;
+  const auto value = [&](double a, double b, double c, double d) {
+    return Flight(m, Interval(a), {Interval(b)}, {Interval(c)}, Interval(d)).X[0].mid();
+  };
+  std::vector<Dual> u{Dual::Variable(t0, 0, 4), Dual::Variable(x, 1, 4), Dual::Variable(v, 2, 4), Dual::Variable(s, 3, 4)};
+  const auto e = Flight(m, u[0], {u[1]}, {u[2]}, u[3]);
+  const double fd[4] = {(value(t0 + h, x, v, s) - value(t0 - h, x, v, s)) / (2 * h),
+                        (value(t0, x + h, v, s) - value(t0, x - h, v, s)) / (2 * h),
+                        (value(t0, x, v + h, s) - value(t0, x, v - h, s)) / (2 * h),
+                        (value(t0, x, v, s + h) - value(t0, x, v, s - h)) / (2 * h)};
+  for (int k = 0; k < 4; ++k) EXPECT_NEAR(e.X[0].d[static_cast<std::size_t>(k)].mid(), fd[k], 1e-8) << k;
+  // ∂X/∂s is the velocity at the end.
+  EXPECT_NEAR(e.X[0].d[3].mid(), e.V[0].v.mid(), 1e-14);
+}
+
+TEST(Enclosure, TheImpactLawReversesAndScalesTheContactVelocity) {
+  const auto m = OneDof("1.1");
+  const auto after = Impact(m, std::vector<Interval>{Interval(-2.0)});
+  EXPECT_TRUE(after[0].Contains(1.5));  // ẋ_B⁺ = −r ẋ_B⁻, r = 0.75
+  EXPECT_LT(after[0].width(), 1e-30);
+}
+
+TEST(Positivity, ProvesAPositiveFunctionAndLocatesTheFailureOfAnother) {
+  const Deadline deadline(60);
+  // (s − 2)² ± 1e-6 on [0, 3]: positive with a narrow dip at 2, or negative within 1e-3 of 2.
+  const auto slope = [](const Interval& s) { return Interval(2.0) * (s - Interval(2.0)); };
+  const auto up = [](double s) { return Sqr(Interval(s) - Interval(2.0)) + Interval(1e-6); };
+  const auto down = [](double s) { return Sqr(Interval(s) - Interval(2.0)) - Interval(1e-6); };
+  const auto ok = ProvePositive(0.0, 3.0, 0.1, 40, deadline, up, slope);
+  EXPECT_TRUE(ok.proven) << ok.reason;
+  ASSERT_FALSE(ok.pieces.empty());
+  EXPECT_EQ(ok.pieces.front().first, 0.0);
+  EXPECT_EQ(ok.pieces.back().second, 3.0);
+  for (std::size_t k = 1; k < ok.pieces.size(); ++k) EXPECT_EQ(ok.pieces[k - 1].second, ok.pieces[k].first);
+  const auto bad = ProvePositive(0.0, 3.0, 0.1, 40, deadline, down, slope);
+  EXPECT_FALSE(bad.proven);
+  EXPECT_NEAR(bad.failed_at, 2.0, 1.1e-3);
+  EXPECT_FALSE(bad.reason.empty());
+}
+
+TEST(Spectrum, StabilityIsClaimedOnlyAwayFromTheUnitCircle) {
+  using M = std::vector<std::vector<Interval>>;
+  const double c = 0.5 * std::cos(1.0), s = 0.5 * std::sin(1.0);
+  const auto rotation = Multipliers(M{{c, -s}, {s, c}});  // 0.5 e^{±i}
+  EXPECT_EQ(rotation.stability, "stable");
+  const auto saddle = Multipliers(M{{2.0, 0.0}, {0.0, 0.1}});
+  EXPECT_EQ(saddle.stability, "unstable");
+  const auto circle = Multipliers(M{{std::cos(1.0), -std::sin(1.0)}, {std::sin(1.0), std::cos(1.0)}});
+  EXPECT_EQ(circle.stability, "undecided");
+  const auto wide = Multipliers(M{{Interval::Hull(0.9, 1.1), 0.0}, {0.0, 0.5}});
+  EXPECT_EQ(wide.stability, "undecided");
+  // 3 × 3 (Rump's method): eigenvalues 0.2, 0.5 ± 0.3i, enclosed, stable.
+  const double a = 0.5, b = 0.3;
+  const auto three = Multipliers(M{{0.2, 0.0, 0.0}, {0.0, a, -b}, {0.0, b, a}});
+  ASSERT_TRUE(three.enclosed);
+  EXPECT_EQ(three.stability, "stable");
+  int found = 0;
+  for (const auto& mu : three.multipliers) {
+    const double re = 0.5 * (mu["re"][0].get<double>() + mu["re"][1].get<double>());
+    const double im = 0.5 * (mu["im"][0].get<double>() + mu["im"][1].get<double>());
+    found += std::abs(std::complex<double>(re, im) - std::complex<double>(0.2, 0)) < 1e-12 ||
+             std::abs(std::complex<double>(re, std::abs(im)) - std::complex<double>(a, b)) < 1e-12;
+  }
+  EXPECT_EQ(found, 3);
+}
+
+}  // namespace
+}  // namespace vibro::proof
