@@ -3,7 +3,7 @@
 
 Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB (x_B against t,
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
-PREFIX_section; PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
+PREFIX_section (a run with several contacts: PREFIX_gaps, every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation, PREFIX_partition for a partition, PREFIX_basin for a basin study, PREFIX_sweep for
 a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
 coordinate than x_B (PREFIX_X2, PREFIX_q1); --title, --size and --font-size shape every picture

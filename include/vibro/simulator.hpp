@@ -4,12 +4,20 @@
 //
 // State: time t = t0 + kT + s (whole periods k, offset s ∈ [0, T)), modal X, Ẋ, the mode
 // (free | sticking) and, during chattering, the speeds of the sequence's first and last impacts.
+// With m contacts (docs/contacts.md) also: the active contact a (the held one while sticking, the
+// one the flight left, or is chattering at, while free), every gap g_j = c_jᵀX − e_j and how each
+// gap starts its flight. Below, x_B, g, T_B, s_B, R are those of the contact concerned; m = 1 (a
+// [stop]) is the same code with no other gap.
 // x⁻ / x⁺ denote the state just before / after a reset at the same t.
 //
 //   loop until k = periods, an interruption, or a failure:
-//     free flight:   advance the free flow (1) until the gap g = x_B − x0 reaches 0 or t hits the
-//                    period boundary (the engine never skips a root; trivial roots at the start of
-//                    a flight are divided out, docs/model.md §2.1)
+//     free flight:   advance the free flow (1) until the first gap g_j reaches 0 (the first
+//                    certified root over all gaps) or t hits the period boundary (the engine never
+//                    skips a root; trivial roots at the start of a flight are divided out per gap,
+//                    docs/model.md §2.1)
+//       several gaps 0 at one instant (within rounding), closing → the impact LCP on them
+//                    (docs/contacts.md): emit an impact per contact, flagged simultaneous; one
+//                    contact at rest after it → stick or leave as below; two → undetermined
 //       boundary     → section point, checkpoint, k ← k+1 (the flow restarts from the same state)
 //       g = 0, ẋ_B⁻ < 0 (impact):
 //           R⁻ = reaction of the state (the paper's eq. (5))
@@ -21,7 +29,8 @@
 //               "accumulation", 0 < r < 1, R > 0 on the stuck state (docs/model.md §5.4, §5.4):
 //                   Δ0 = 2ẋ_B⁺/((1−r) s_B R), ε = −ṘΔ0/R, Δ∞ = Δ0(1 + ε/3) with an estimated
 //                   error E (dynamics/chatter_tail.hpp); if |ε| ≤ 0.1 and E ≤ chatter_tolerance·T:
-//                   flow freely over Δ∞ (no guards), project onto the stop; if R(t∞) > 0 → emit
+//                   flow freely over Δ∞ (no guards of this contact; every other gap must stay
+//                   open over it, certified), project onto the stop; if R(t∞) > 0 → emit
 //                   accumulation and stick, mode ← sticking; otherwise follow the next impact
 //                   (counted as an impact followed)
 //               "none": impacts are followed one by one; when the next flight is shorter than
@@ -31,8 +40,14 @@
 //                    accumulation point could not be predicted within the target (never guessed)
 //       g = 0, ẋ_B⁻ ≥ 0 (tangential touch, docs/model.md §2.1): emit grazing; R > 0 → stick (docs/model.md
 //                    §4.4 iii), else keep flying (g = g' = 0, g'' > 0 divided out)
-//     sticking:      advance the constrained flow (6) until R reaches 0 or the period boundary
-//                    (one DOF: the body rests and the release phase is closed form, docs/model.md §4.4)
+//     sticking:      advance the constrained flow (6) of the held contact a until R reaches 0,
+//                    another gap g_k reaches 0 under that flow, or the period boundary (one DOF:
+//                    the body rests and the release phase is closed form, docs/model.md §4.4)
+//       g_k = 0, closing → the 2×2 impact law on {a, k}: a pushed off (liftoff) → emit impact at
+//                    k and release at a, mode ← free; else emit impact, a stays held (a leaves if
+//                    R ≤ 0 after it). k landing plastically, chattering to rest (at the rounding
+//                    floor, or 64 ever shorter flights) or arriving tangentially while a sticks →
+//                    undetermined (two contacts stuck at once, never guessed)
 //       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
 //       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, docs/model.md §5.7): stay stuck
 //

@@ -372,6 +372,7 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
 // vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts.
 std::pair<std::string, std::string> Prove(const PyScene& s, const std::string& kind, long long period,
                                           long long transient, const std::string& from, double time_limit) {
+  vibro::frontend::RequireOneContact(s.loaded, "prove");
   vibro::frontend::CheckOrbitOptions(kPython, period, 0, transient, std::nullopt, std::nullopt);
   if (!(time_limit > 0) || !std::isfinite(time_limit))
     throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});

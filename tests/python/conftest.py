@@ -17,6 +17,14 @@ def shipped_scenes():
                   if f.endswith(".toml") and not os.path.islink(os.path.join(SCENES, f)))
 
 
+def several_contacts(name):
+    """Whether a shipped scene has two or more [[contact]] tables (docs/contacts.md): the exact
+    engine only, and no command built on one contact's Poincaré map."""
+    import tomllib
+    with open(os.path.join(SCENES, name), "rb") as fh:
+        return len(tomllib.load(fh).get("contact", [])) > 1
+
+
 def cli_json(*args):
     """Runs `vibro ARGS --json` and returns its JSON (the CLI must succeed)."""
     if not CLI:

@@ -122,19 +122,21 @@ def test_a_run_stopped_by_its_progress_callback_resumes_to_the_bits_of_an_uninte
 
 
 def test_basin_resume_equals_an_uninterrupted_study(tmp_path):
+    # 30 000 cells: progress is reported at most every 0.1 s, so the study must outlast the first
+    # report (about 1.5 s on one thread of an idle machine) to be stopped by it.
     scene = vibro.load_scene(os.path.join(SCENES, "fig05_coexistence.toml"))
     ref, path = str(tmp_path / "ref.h5"), str(tmp_path / "basin.h5")
-    whole = vibro.basin(scene, grid=(40, 30), threads=1, out=ref)
+    whole = vibro.basin(scene, grid=(200, 150), threads=1, out=ref)
     with pytest.raises(Stop):
-        vibro.basin(scene, grid=(40, 30), threads=1, out=path, progress=stop_after(1))
+        vibro.basin(scene, grid=(200, 150), threads=1, out=path, progress=stop_after(1))
     with h5py.File(path, "r") as f:
         assert f.attrs["status"] == "interrupted"
         assert (f["basin/labels"][()] == -3).any()
         # An interrupted study measures no Lyapunov exponents; its resumption does.
         assert (f["attractors/chaotic"][()] == -1).all()
-    with pytest.raises(ValueError, match="cannot resume: grid is 40,30 in the file but 40,31 here"):
-        vibro.basin(scene, grid=(40, 31), threads=1, out=path, resume=True)
-    resumed = vibro.basin(scene, grid=(40, 30), threads=1, out=path, resume=True)
+    with pytest.raises(ValueError, match="cannot resume: grid is 200,150 in the file but 200,151 here"):
+        vibro.basin(scene, grid=(200, 151), threads=1, out=path, resume=True)
+    resumed = vibro.basin(scene, grid=(200, 150), threads=1, out=path, resume=True)
     assert np.array_equal(resumed["labels"], whole["labels"])
     assert resumed["attractors"] == whole["attractors"]
     assert all("lyapunov_exponents" in a for a in resumed["attractors"])

@@ -197,4 +197,20 @@ with tempfile.TemporaryDirectory() as d:
     check("sweep overlay: a marker shape per kind",
           len({vibro_plot.BIFURCATION_MARKERS[k] for k in set(kinds)}) == len(set(kinds)), kinds)
 
+    # Several contacts (docs/contacts.md): PREFIX_gaps, one panel per contact, the gaps drawn from
+    # the samples open; --coordinate is refused.
+    beam = simulate(d, "beam3", "contacts_beam3.toml", "run.periods=6", "run.samples_per_period=64")
+    p = plot(beam, "beam3", "--format", "svg")
+    texts = svg_texts(os.path.join(d, "beam3_gaps.svg")) if p.returncode == 0 else []
+    check("several contacts: PREFIX_gaps with a panel per contact",
+          p.returncode == 0 and sum(t.startswith("contact ") for t in texts) == 5 and
+          not os.path.exists(os.path.join(d, "beam3_xB.svg")), (p.stderr, texts[:8]))
+    with h5py.File(beam) as f:
+        X = f["samples/X"][:]
+        q = X @ np.asarray(f["model"].attrs["mode_shapes"]).reshape(-1, X.shape[1]).T
+    check("several contacts: the samples keep q0 between its stops at -0.1 and 0.1",
+          (q[:, 0] >= -0.1 - 1e-9).all() and (q[:, 0] <= 0.1 + 1e-9).all(), (q[:, 0].min(), q[:, 0].max()))
+    p = plot(beam, "beam3q", "--coordinate", "q1")
+    check("several contacts: --coordinate refused (exit 2)", p.returncode == 2 and "gaps" in p.stderr, p.stderr)
+
 finish()
