@@ -634,6 +634,17 @@ def plot_sweep(f, title, save, overlay):
     save(fig, "sweep")
 
 
+def time_window(t, T, window):
+    """The time plots' window: --time-window A,B within the samples t, or the last 5 periods."""
+    t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
+    t_from, t_to = max(t_from, t[0]), min(t_to, t[-1])
+    if t_to <= t_from:
+        print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
+              file=sys.stderr)
+        sys.exit(2)
+    return t_from, t_to
+
+
 def plot_run(f, title, save, window, coordinate="x_B"):
     """Time plots of a run with dense samples: the coordinate (x_B by default) against t, the
     reaction, the phase portrait and the section of that coordinate."""
@@ -642,12 +653,7 @@ def plot_run(f, title, save, window, coordinate="x_B"):
     T = float(f.attrs["forcing_period"])
     status = text(f.attrs["status"])
     t = f["samples/t"][:]
-    t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
-    t_from, t_to = max(t_from, t[0]), min(t_to, t[-1])
-    if t_to <= t_from:
-        print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
-              file=sys.stderr)
-        sys.exit(2)
+    t_from, t_to = time_window(t, T, window)
     tt, xx, vv, rstar, XX, VV = dense_run(f, t_from, t_to)
     on_xB = coordinate == "x_B"
     w, sym = coordinate_choices(f)[coordinate]
@@ -875,12 +881,7 @@ def plot_gaps(f, title, save, window, contacts):
     T = float(f.attrs["forcing_period"])
     status = text(f.attrs["status"])
     t = f["samples/t"][:]
-    t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
-    t_from, t_to = max(t_from, t[0]), min(t_to, t[-1])
-    if t_to <= t_from:
-        print(f"vibro plot: --time-window holds no sample (the run covers {t[0]:g} ≤ t ≤ {t[-1]:g})",
-              file=sys.stderr)
-        sys.exit(2)
+    t_from, t_to = time_window(t, T, window)
     X = f["samples/X"][:]
     phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, X.shape[1])
     q = X @ phi.T  # physical q = Φ X

@@ -78,6 +78,21 @@ struct Outcome {
   Log log;
 };
 
+// Two event logs of one scene walked together (i in a, j in b): an engine that follows more
+// impacts of a chattering tail before its prediction is certain (quad) has impacts where the other
+// has its accumulation; skips them. False when a log ends there.
+inline bool AlignChatteringTails(const std::vector<Event>& a, size_t& i, const std::vector<Event>& b, size_t& j) {
+  if (a[i].kind == EventKind::kAccumulation && b[j].kind == EventKind::kImpact) {
+    while (j < b.size() && b[j].kind == EventKind::kImpact) ++j;
+    return j < b.size();
+  }
+  if (b[j].kind == EventKind::kAccumulation && a[i].kind == EventKind::kImpact) {
+    while (i < a.size() && a[i].kind == EventKind::kImpact) ++i;
+    return i < a.size();
+  }
+  return true;
+}
+
 // Runs the scene (from `from` when given, e.g. a point of an orbit) and classifies its end.
 inline Outcome Simulate(const Scene& scene, const InitialOverride* from = nullptr) {
   const System sys(scene);

@@ -412,6 +412,18 @@ ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H, const S& re
   return p;
 }
 
+// Several contacts: keeps in `best` the earlier of it and the search result r for contact j (a
+// root within rounding of the segment's start is at its start).
+template <class S>
+void KeepEarliest(SegmentResultT<S>& best, SegmentResultT<S>& r, int j) {
+  if (r.end != SegmentEnd::kContact) return;
+  if (r.sigma < S(0)) r.sigma = S(0);
+  if (best.end == SegmentEnd::kLimit || r.sigma < best.sigma) {
+    best = r;
+    best.contact = j;
+  }
+}
+
 template <class S>
 S ExactEngineT<S>::FlightWindow() const {
   // docs/model.md §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
@@ -456,11 +468,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
     auto r = Search([this, j](const S& u, const S& H, const S& rest) { return GapProbe(j, u, H, rest); },
                     w, best.sigma, SegmentEnd::kContact);
     if (r.end == SegmentEnd::kFailure) return r;
-    if (r.end == SegmentEnd::kContact && r.sigma < S(0)) r.sigma = S(0);  // a root within rounding of the start
-    if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
-      best = r;
-      best.contact = j;
-    }
+    KeepEarliest(best, r, j);
   }
   return best;
 }
@@ -524,11 +532,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
     auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },
                     wk, best.sigma, SegmentEnd::kContact);
     if (r.end == SegmentEnd::kFailure) return r;
-    if (r.end == SegmentEnd::kContact && r.sigma < S(0)) r.sigma = S(0);  // a root within rounding of the start
-    if (r.end == SegmentEnd::kContact && (best.end == SegmentEnd::kLimit || r.sigma < best.sigma)) {
-      best = r;
-      best.contact = k;
-    }
+    KeepEarliest(best, r, k);
   }
   return best;
 }

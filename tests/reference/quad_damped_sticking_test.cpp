@@ -304,14 +304,7 @@ Agreement Compare(const Outcome& dbl, const Outcome& quad, double T, double tol,
   Agreement g;
   size_t i = 0, j = 0;
   for (; i < a.size() && j < b.size(); ++i, ++j) {
-    // The quad engine follows more impacts of a chattering tail before its prediction is certain.
-    if (a[i].kind == EventKind::kAccumulation && b[j].kind == EventKind::kImpact) {
-      while (j < b.size() && b[j].kind == EventKind::kImpact) ++j;
-      if (j == b.size()) break;
-    } else if (b[j].kind == EventKind::kAccumulation && a[i].kind == EventKind::kImpact) {
-      while (i < a.size() && a[i].kind == EventKind::kImpact) ++i;
-      if (i == a.size()) break;
-    }
+    if (!AlignChatteringTails(a, i, b, j)) break;
     EXPECT_EQ(a[i].kind, b[j].kind) << fmt::format("{} event {}/{}: double {} at {:.17g}, quad {} at {:.17g}",
                                                    name, i, j, ToString(a[i].kind), a[i].t,
                                                    ToString(b[j].kind), b[j].t);
