@@ -10,12 +10,15 @@
 //   Δ∞ = Δ0 (1 + ε/3)                first-order correction for a linearly varying R
 // The prediction is accepted only when |ε| ≤ 0.1 (a sequence with ε above ≈ 0.6 never completes;
 // near it no truncated expansion can be trusted) and the estimated time error
-//   E = Δ0 [0.3 ε² + |R̈| Δ0²/(2R) + M3 Δ0³/(6R) + (ω_c Δ0)²/4]
+//   E = Δ0 [0.3 ε² + |R̈| Δ0²/(2R) + M3 Δ0³/(6R) + (ω_c Δ0)²/4 + |β| Δ0/2]
 // is within the target: 0.3 ε² is the residual of the linear-R correction (docs/model.md §5.4); the
 // curvature terms bound what a quadratic and cubic change of R over the tail can do (R̈ the free
 // second derivative at the start, M3 a bound on |R'''| over the window from the modal amplitudes,
 // docs/model.md §2.1); ω_c² = Σ c_i T_B,i ω_i² / s_B is the contact's own stiffness, whose restoring force
-// on the O(v²) gap of the tail the constant-R model ignores.
+// on the O(v²) gap of the tail the constant-R model ignores; β = Σ c_i 2ζ_iω_i T_B,i / s_B is the
+// damping the contact velocity itself feels (g'' = −s_B R − β g' over a flight of the tail), which
+// shortens the tail by β Δ0²/6 to first order (each flight by 2βv²/(3a²), the arrival speeds by
+// 2βv²/(3a)); the term bounds it with a factor 3 to spare. It is 0 without damping.
 #pragma once
 
 #include <cmath>
@@ -57,6 +60,7 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
   t.delta0 = S(2) * t.speed / ((S(1) - m.r) * m.s_B * t.reaction);
   const S d = t.delta0;
   t.error = d * m.contact_stiffness * d * d / 4;
+  if (m.damped) t.error += d * R::abs(m.contact_damping) * d / 2;
   if (!(t.error <= target)) return t;
   t.rate = m.ReactionRate(X, W, phase);
   t.epsilon = -t.rate * t.delta0 / t.reaction;

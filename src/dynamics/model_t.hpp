@@ -45,9 +45,11 @@ struct ModelT {
         side(k.spec.side == Side::kAbove ? S(-1) : S(1)) {
     for (Eigen::Index i = 0; i < omega.size(); ++i) {
       contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
+      contact_damping += shape[i] * contact[i] * S(2) * zeta[i] * omega[i];
       if (shape[i] != S(0) && shape[i] != S(1)) unit_shape = false;
     }
     contact_stiffness /= s_B;
+    contact_damping /= s_B;
   }
 
   int dof() const { return static_cast<int>(omega.size()); }
@@ -109,6 +111,7 @@ struct ModelT {
   S side{1};               // σ: the physical coordinate wᵀq is σ·cᵀX (docs/contacts.md)
   bool unit_shape = true;  // every c_i is 0 or 1 (contact 0, the contact of the scaling)
   S contact_stiffness{0};  // ω_c² = Σ c_i T_B,i ω_i² / s_B, the stiffness the contact point sees
+  S contact_damping{0};    // β = Σ c_i T_B,i 2ζ_iω_i / s_B, the damping the contact velocity feels
 };
 
 }  // namespace vibro::detail

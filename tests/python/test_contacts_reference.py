@@ -340,18 +340,16 @@ def test_coupled_chattering_against_the_held_pair_as_one_dof():
 # (b) vibro against the reference on the shipped scenes
 
 
-# Known defect (found by this reference, issue 26's note): the double engine's accumulation
-# prediction omits the damping the gap feels along the impulse, so on damped scenes its error
-# exceeds its own estimate; after many sequences the damped scenes part from the reference by
-# 1.3e-10 T (impact pair, t = 132) and 2.9e-10 T (beam, t = 43). strict: passing again fails here.
-DAMPED_DOUBLE = pytest.mark.xfail(strict=True, reason="double: damped accumulation error exceeds its estimate")
+# The damped scenes in double precision found a defect, fixed since: the accumulation prediction's
+# error estimate left out the damping the contact velocity feels over the tail (docs/chattering.md),
+# so the damped scenes parted from the reference by 1.3e-10 T (impact pair, t = 132) and 2.9e-10 T
+# (beam, t = 43).
 
 
 def _cases():
     for name in FIVE + ["contacts_coupled_chatter"]:
         for precision in ("double", "quad"):
-            marks = [DAMPED_DOUBLE] if precision == "double" and name in ("contacts_impact_pair", "contacts_beam3") else []
-            yield pytest.param(name, precision, marks=marks, id=f"{name}-{precision}")
+            yield pytest.param(name, precision, id=f"{name}-{precision}")
 
 
 @pytest.mark.parametrize("name,precision", list(_cases()))
