@@ -15,6 +15,7 @@ run=(
   libcli11-dev libtomlplusplus-dev libfmt-dev libtbb-dev nlohmann-json3-dev libboost-dev
   libopenmpi-dev openmpi-bin
   pybind11-dev python3-dev python3-numpy python3-h5py python3-matplotlib
+  libflint-arb-dev python3-mpmath python3-tqdm
 )
 test=(
   hdf5-tools libgtest-dev libgmock-dev libbenchmark-dev python3-pytest
