@@ -170,20 +170,13 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
         return modes[static_cast<size_t>(a)].nu > modes[static_cast<size_t>(b)].nu;
       });
   };
-  far_of(free_modes_, [&](size_t) { return S(1); }, contacts_[0].free_far, &free_order_);
   size_t stick_max = 0;
   for (size_t j = 0; j < contacts_.size(); ++j) {
     ContactData& cd = contacts_[j];
     const ModelT<S>& mj = *cd.m;
-    if (j > 0) {
-      cd.free_far.clear();
-      far_of(free_modes_, [&](size_t i) { return mj.shape[static_cast<Eigen::Index>(i)]; },
-             cd.free_far, nullptr);
-    } else {
-      cd.free_far.clear();
-      far_of(free_modes_, [&](size_t i) { return m.shape[static_cast<Eigen::Index>(i)]; },
-             cd.free_far, nullptr);
-    }
+    // The free modes' order (fastest first) is the contacts' common one: made once, with contact 0.
+    far_of(free_modes_, [&](size_t i) { return mj.shape[static_cast<Eigen::Index>(i)]; }, cd.free_far,
+           j == 0 ? &free_order_ : nullptr);
     for (Eigen::Index k = 0; k < mj.stick_frequencies.size(); ++k)
       cd.stick_modes.push_back({mj.stick_frequencies[k], S(0), mj.stick_forcing[k] * mj.f});
     far_of(cd.stick_modes, [&](size_t k) { return mj.stick_reaction[static_cast<Eigen::Index>(k)]; },
