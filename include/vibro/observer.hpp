@@ -94,6 +94,7 @@ struct Checkpoint {
 struct Stretch {
   Mode mode;
   double duration;
+  int contact = 0;  // sticking: the held contact (0-based [[contact]] order; 0 for the [stop])
 };
 enum class ResetKind {
   kImpact,         // restitution law (12), free → free
@@ -120,6 +121,11 @@ struct Reset {
   // ẋ_B just before the reset, computed in the run's precision (a quad run's chattering impacts
   // reach speeds that the double state V_before cannot resolve); NaN when not given.
   double contact_velocity_before = std::numeric_limits<double>::quiet_NaN();
+  // Several contacts (docs/contacts.md): the contact of the reset (the impacting one, also while
+  // another sticks; the one entering or leaving sticking; the released one), and whether it is an
+  // impact of two or more contacts at one instant (impact LCP; `contact` is then the first of them).
+  int contact = 0;
+  bool simultaneous = false;
 };
 
 class Observer {

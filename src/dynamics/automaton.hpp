@@ -179,7 +179,8 @@ class Automaton {
 
   void Emit(EventKind kind, const S& v_before, const S& v_after, int contact = -1,
             bool simultaneous = false);
-  void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb);
+  void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact = -1,
+                   bool simultaneous = false);
   void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
   void AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
                     const S& exact_offset = S(-1)) const;
@@ -281,10 +282,13 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
 }
 
 template <class S>
-void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb) {
+void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact,
+                               bool simultaneous) {
   if (opt_.observers.empty()) return;
+  if (contact < 0) contact = active_;
   const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
-                0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(M(active_).ContactVelocity(Vb))};
+                0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(M(contact).ContactVelocity(Vb)),
+                contact, simultaneous};
   for (auto* o : opt_.observers) o->OnReset(r);
 }
 
@@ -616,7 +620,8 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     const Eigen::VectorXd grad = DeltaGradient<S>(m, X_k, V_k, phase_k, tail);
     const Reset jump{ResetKind::kAccumulation, R::to_double(phase_k), D(X_k, a), D(V_k, b),
                      D(X_, c), D(V_, d), R::to_double(delta), R::to_double(reaction),
-                     &grad, &D(X_end, xe), &D(V_end, ve)};
+                     &grad, &D(X_end, xe), &D(V_end, ve),
+                     std::numeric_limits<double>::quiet_NaN(), active_};
     for (auto* o : opt_.observers) o->OnReset(jump);
   }
   // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
@@ -859,6 +864,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   if (!(v_minus < -floor)) {
     // Tangential arrival: it leaves only if the held flow pulls it off.
     Emit(EventKind::kGrazing, v_minus, v_minus, k);
+    NotifyReset(ResetKind::kGrazing, X_, V_, k);
     if (HeldGapAcceleration(mj, mk, X_, V_, phase) > 0) {
       starts_[static_cast<size_t>(k)] = FlightStart::kDeparture;
       return true;
@@ -875,7 +881,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   if (vj_after > tiny) {
     // Contact j is pushed off the stop (liftoff, reported as its release with the speed after).
     V_ += mk.contact * Pk;
-    NotifyReset(ResetKind::kImpact, X_, Vb_);
+    NotifyReset(ResetKind::kImpact, X_, Vb_, k);
     Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
     Emit(EventKind::kRelease, S(0), mj.ContactVelocity(V_), j);
     mode_ = Mode::kFree;
@@ -895,7 +901,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   Pj = (S(1) + rk) * v_minus * Wjk / det;
   V_ += mk.contact * Pk + mj.contact * Pj;
   mj.ProjectOntoStop(X_, V_);
-  NotifyReset(ResetKind::kImpact, X_, Vb_);
+  NotifyReset(ResetKind::kImpact, X_, Vb_, k);
   Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
   if (rk == S(0)) return two_stuck("lands plastically");
   // A chattering sequence at k while j sticks ends with both stuck: followed until it cannot be.
@@ -975,7 +981,7 @@ bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
                             Z.size(), AbsTime(clock_)));
   Vb_ = V_;
   for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
-  NotifyReset(ResetKind::kImpact, X_, Vb_);
+  NotifyReset(ResetKind::kImpact, X_, Vb_, Z.front(), true);
   std::vector<int> resting;
   for (Eigen::Index a = 0; a < z; ++a) {
     const int j = Z[static_cast<size_t>(a)];
@@ -1138,7 +1144,7 @@ RunResult Automaton<S>::Run() {
     else if (mode_ == Mode::kFree)
       gap_ = p.Gap(seg.sigma);
     if (!opt_.observers.empty()) {
-      for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma)});
+      for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma), active_});
     }
     AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
     CheckSegment(from, seg.sigma);
