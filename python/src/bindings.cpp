@@ -288,8 +288,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   Recorder recorder(sys.dof());
   vibro::SimulationOptions options;
   options.observers = {&attractor_recorder, &recorder};
-  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+  if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   std::optional<vibro::frontend::RunOutput> output;
   {
@@ -345,7 +344,6 @@ vibro::OrbitKind KindOf(const std::string& kind) {
 std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, long long period, long long impacts,
                                    std::optional<double> guess_phase, std::optional<double> guess_velocity,
                                    const std::string& out, long long transient, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "orbit");
   vibro::frontend::CheckOrbitOptions(kPython, period, impacts, transient, guess_phase, guess_velocity);
   vibro::OrbitRequest req;
   req.kind = KindOf(kind);

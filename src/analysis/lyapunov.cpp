@@ -84,6 +84,11 @@ LyapunovSpectrum LyapunovObserver::Spectrum() const {
     out.undefined = "no period of the second half of the run was measured";
     return out;
   }
+  // Several contacts: an event whose Jacobian does not exist, or is not implemented, on the way.
+  if (!tangent_.undefined().empty()) {
+    out.undefined = "the tangent map does not cover the run: " + tangent_.undefined();
+    return out;
+  }
   const auto m = static_cast<int>(block_sums_.rows());
   // Directions kept: all, or 2n − 2 when sticking collapsed two of them. QR orders the frame by
   // decreasing growth, so the collapsed directions are the last ones.

@@ -15,7 +15,6 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::frontend::CheckOrbitOptions(vibro::frontend::Naming::kCli, req.period, req.impacts, req.transient_periods,
                                      req.guess_phase, req.guess_velocity);
   const auto loaded = vibro::LoadScene(path, sets);
-  vibro::frontend::RequireOneContact(loaded, "orbit");
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early
   // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.
@@ -42,11 +41,13 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                  : req.guess_phase         ? "Newton started at the guess"
                                            : "Newton started at the start state");
     PrintAttractor(orbit.summary, loaded.scene.restitution);
+    if (!orbit.sequence.empty()) fmt::print("sequence     {}\n", orbit.sequence);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
-    fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
-                                     : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
-                                                                   : "-");
-    fmt::print("stable       {}\n", !converged ? "-" : orbit.stable ? "yes" : "no");
+    fmt::print("multipliers  {}\n", !orbit.no_jacobian.empty() ? "none: " + orbit.no_jacobian
+                                     : !mu.empty()                ? mu
+                                     : converged                  ? "none (superstable: one-DOF sticking)"
+                                                                  : "-");
+    fmt::print("stable       {}\n", !converged || !orbit.no_jacobian.empty() ? "-" : orbit.stable ? "yes" : "no");
     if (orbit.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
                  "leaves undetermined)\n", orbit.quad_evaluations);

@@ -30,8 +30,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+  if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).

@@ -559,8 +559,7 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
       opt.initial = &*state;
     }
     opt.observers = {&rec, &tail};
-    // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-    if (sc.run.lyapunov && sys.contact_count() == 1) opt.observers.push_back(&lyapunov.emplace(sys, sc));
+      if (sc.run.lyapunov) opt.observers.push_back(&lyapunov.emplace(sys, sc));
     opt.stop_requested = stop;  // a run of many periods stops within the second too
     const RunResult r = Simulate(sys, sc, opt);
     if (r.status == RunStatus::kInterrupted) break;  // cut short: nothing to classify
