@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -51,36 +53,49 @@ struct SampleCatcher final : Observer {
 };
 
 // The events of the first q periods of a run from the section, as the contact sequence
-// "j:kind ..." (OrbitResult::sequence).
+// "j:kind ..." (OrbitResult::sequence), and the contacts that stick on the way.
 struct SequenceRecorder final : Observer {
   long long periods = 1;
-  std::vector<std::string> entries;
-  double last_t = 0;
-  bool last_simultaneous = false;
-  std::string last_kind;
+  struct Entry {
+    std::vector<int> contacts;  // several: one simultaneous impact
+    std::string kind;
+    double t;
+    bool simultaneous;
+  };
+  std::vector<Entry> entries;
+  std::vector<int> stuck;  // contacts with a sticking phase, in order of first entry
   void OnEvent(const Event& e) override {
     if (e.clock.period >= periods) return;
     const std::string kind = ToString(e.kind);
+    if (e.kind == EventKind::kStick && std::find(stuck.begin(), stuck.end(), e.contact) == stuck.end())
+      stuck.push_back(e.contact);
     // The contacts of one simultaneous impact: one entry "j+k:impact".
-    if (e.simultaneous && last_simultaneous && e.t == last_t && kind == last_kind && !entries.empty()) {
-      std::string& prev = entries.back();
-      std::string plus(1, '+');
-      plus += std::to_string(e.contact);
-      prev.insert(prev.find(':'), plus);
+    if (e.simultaneous && !entries.empty() && entries.back().simultaneous && entries.back().t == e.t &&
+        entries.back().kind == kind) {
+      entries.back().contacts.push_back(e.contact);
       return;
     }
-    entries.push_back(std::to_string(e.contact) + ":" + kind);
-    last_t = e.t;
-    last_simultaneous = e.simultaneous;
-    last_kind = kind;
+    entries.push_back({{e.contact}, kind, e.t, e.simultaneous});
+  }
+  static std::string Name(Entry e) {
+    std::sort(e.contacts.begin(), e.contacts.end());
+    std::string out;
+    for (int c : e.contacts) {
+      if (!out.empty()) out += '+';
+      out += std::to_string(c);
+    }
+    out += ':';
+    return out + e.kind;
   }
   std::string Text() const {
+    std::vector<std::string> names;
+    for (const Entry& e : entries) names.push_back(Name(e));
     std::string out;
-    for (size_t i = 0; i < entries.size();) {
+    for (size_t i = 0; i < names.size();) {
       size_t k = i + 1;
-      while (k < entries.size() && entries[k] == entries[i]) ++k;
+      while (k < names.size() && names[k] == names[i]) ++k;
       if (!out.empty()) out += ' ';
-      out += entries[i];
+      out += names[i];
       if (k - i > 1) {
         out += '*';
         out += std::to_string(k - i);
@@ -91,7 +106,9 @@ struct SequenceRecorder final : Observer {
   }
 };
 
-std::string ContactSequence(const System& sys, const Scene& scene, const OrbitResult& orbit) {
+// The orbit's contact sequence over its q periods from the section, and how many directions its
+// sticking phases collapse: 2 per independent held contact shape c_j (rank of their span).
+std::pair<std::string, int> ContactSequence(const System& sys, const Scene& scene, const OrbitResult& orbit) {
   Scene sc = scene;
   sc.initial_time = orbit.section_time;
   sc.run.periods = orbit.period;
@@ -103,7 +120,16 @@ std::string ContactSequence(const System& sys, const Scene& scene, const OrbitRe
   opt.initial = &here;
   opt.observers = {&rec};
   Simulate(sys, sc, opt);
-  return rec.Text();
+  int rank = 0;
+  if (!rec.stuck.empty()) {
+    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(rec.stuck.size()));
+    for (size_t k = 0; k < rec.stuck.size(); ++k)
+      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(rec.stuck[k])].shape;
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+    lu.setThreshold(1e-10);
+    rank = static_cast<int>(lu.rank());
+  }
+  return {rec.Text(), 2 * rank};
 }
 
 }  // namespace
@@ -454,7 +480,8 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
     classify(sc);
     ++out.quad_evaluations;
   }
-  if (sys.contact_count() > 1) out.sequence = ContactSequence(sys, scene, out);
+  int collapsed = -1;  // directions collapsed by sticking (several contacts), −1: as one contact
+  if (sys.contact_count() > 1) std::tie(out.sequence, collapsed) = ContactSequence(sys, scene, out);
   if (!out.no_jacobian.empty()) {
     out.multipliers.clear();
     out.stable = false;
@@ -465,7 +492,10 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
                                        es.eigenvalues().data() + es.eigenvalues().size());
   std::sort(mu.begin(), mu.end(), [](auto x, auto y) { return std::abs(x) > std::abs(y); });
   // Sticking collapses x_B and ẋ_B: DF has two zero eigenvalues that are not multipliers of DP.
-  if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
+  // Several contacts: two per independent held contact (DF has that many zero eigenvalues).
+  if (collapsed >= 0)
+    mu.resize(mu.size() >= static_cast<size_t>(collapsed) ? mu.size() - static_cast<size_t>(collapsed) : 0);
+  else if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
     mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
   out.multipliers = mu;
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });

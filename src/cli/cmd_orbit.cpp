@@ -1,4 +1,6 @@
 // `vibro orbit SCENE`: a periodic orbit and its Floquet multipliers (docs/orbits.md).
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
@@ -40,7 +42,8 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                  req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)
                  : req.guess_phase         ? "Newton started at the guess"
                                            : "Newton started at the start state");
-    PrintAttractor(orbit.summary, loaded.scene.restitution);
+    // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
+    PrintAttractor(orbit.summary, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
     if (!orbit.sequence.empty()) fmt::print("sequence     {}\n", orbit.sequence);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
     fmt::print("multipliers  {}\n", !orbit.no_jacobian.empty() ? "none: " + orbit.no_jacobian

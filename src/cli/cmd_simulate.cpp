@@ -1,6 +1,7 @@
 // `vibro simulate SCENE [--out FILE.h5 [--resume | --extend N]]`: one run and its attractor
 // (docs/cli.md). A resumed or extended run continues from the file's last checkpoint and writes
 // the same bits as an uninterrupted run of its total length.
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -86,7 +87,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  "target {:.2g} T), {} impacts followed before a prediction was good enough\n",
                  result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
                  vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
-    PrintAttractor(attractor, loaded.scene.restitution);
+    // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
+    PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
     if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)
       fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "

@@ -154,5 +154,133 @@ TEST(ContactsOrbit, TwoSidedSymmetricOrbitMatchesTheClosedFormAndQuadFiniteDiffe
   CheckSymmetricOrbit(1.3, 1.5, 0.5, 0.6, 2, true);
 }
 
+// The orbit each shipped scene settles on (a 200-period transient, then Newton): its analytic DF
+// against quad finite differences. Every one of these orbits chatters into sticking on at least one
+// contact (accumulation maps), some with impacts of one contact while another sticks.
+TEST(ContactsOrbit, JacobianMatchesQuadFiniteDifferencesOnEveryShippedScene) {
+  struct Case {
+    const char* file;
+    const char* sequence;
+  };
+  for (const Case& c : {Case{"contacts_two_sided_1dof.toml",
+                             "0:impact*16 0:accumulation 0:stick 0:release 1:impact*16 1:accumulation 1:stick 1:release"},
+                        Case{"contacts_preload_clearance_1dof.toml", "1:impact 0:impact*30 0:accumulation 0:stick 0:release"},
+                        Case{"contacts_chain2.toml", "0:impact*13 0:accumulation 0:stick 1:impact*2 0:release"},
+                        Case{"contacts_impact_pair.toml",
+                             "1:impact*24 1:accumulation 1:stick 1:release 0:impact*24 0:accumulation 0:stick 0:release"},
+                        Case{"contacts_beam3.toml", nullptr}}) {
+    SCOPED_TRACE(c.file);
+    const Scene scene = Shipped(c.file);
+    const System sys(scene);
+    OrbitRequest req;
+    req.kind = OrbitKind::kSticking;
+    const OrbitResult o = FindOrbit(sys, scene, req);
+    ASSERT_EQ(o.status, "converged") << o.message;
+    if (c.sequence) EXPECT_EQ(o.sequence, c.sequence);
+    EXPECT_FALSE(o.sequence.empty());
+    EXPECT_TRUE(o.no_jacobian.empty());
+    const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, o.section_time, o.X, o.V, o.period);
+    const double err = (o.monodromy - fd).cwiseAbs().maxCoeff(), scale = 1 + fd.cwiseAbs().maxCoeff();
+    EXPECT_LT(err, 1e-8 * scale) << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
+    std::printf("[          ] %s: |DF − FD_quad|∞ = %.2e (|DF|∞ = %.3g)\n", c.file, err, scale - 1);
+  }
+}
+
+// Three masses in a symmetric chain, the middle one forced, so that the outer two move alike.
+// contacts = "pairs": impact pairs between the middle mass and each neighbour (W_01 = 1/m_1 ≠ 0);
+// "stops": stops below the outer masses (W_01 = 0).
+Scene SymmetricTriple(bool pairs, double amplitude, double frequency, double damping) {
+  Scene s;
+  Eigen::MatrixXd K(3, 3);
+  K << 2, -1, 0, -1, 2, -1, 0, -1, 2;
+  s.physical = PhysicalStructureSpec{Eigen::MatrixXd::Identity(3, 3), K, 1, 0};
+  if (damping > 0) s.damping_ratios = Eigen::VectorXd::Constant(3, damping);
+  if (pairs)
+    s.contacts = {ContactSpec{1, 0, Side::kBelow, -0.3, 0.7}, ContactSpec{1, 2, Side::kBelow, -0.3, 0.7}};
+  else
+    s.contacts = {ContactSpec{0, -1, Side::kBelow, -0.3, 0.7}, ContactSpec{2, -1, Side::kBelow, -0.3, 0.7}};
+  s.frequency = frequency;
+  s.amplitude = amplitude;
+  s.run.periods = 20;
+  s.run.samples_per_period = 0;
+  return s;
+}
+
+TEST(ContactsOrbit, SimultaneousImpactsOfCoupledContactsLeaveTheOrbitWithoutMultipliers) {
+  const Scene scene = SymmetricTriple(true, 3, 1.6, 0.05);
+  const System sys(scene);
+  ASSERT_NE(sys.delassus()(0, 1), 0.0);
+  OrbitRequest req;
+  req.kind = OrbitKind::kImpact;
+  const OrbitResult o = FindOrbit(sys, scene, req);
+  ASSERT_EQ(o.status, "converged") << o.message;
+  EXPECT_EQ(o.sequence, "0+1:impact");
+  EXPECT_EQ(o.no_jacobian,
+            "the orbit passes through a simultaneous impact of coupled contacts: the map has no Jacobian there");
+  EXPECT_TRUE(o.multipliers.empty());
+  // The map is indeed discontinuous there (MODEL §11.4.3 of docs/contacts.md): breaking the
+  // symmetry by 1e-12 turns the simultaneous impact into a cascade and moves the image by O(1e-2).
+  Eigen::VectorXd X = o.X;
+  X[0] += 1e-12;  // the outer masses no longer move alike
+  const auto n = sys.dof();
+  Eigen::VectorXd z(2 * n), here(2 * n), there(2 * n);
+  z << o.X, o.V;
+  const MapValue a = StroboscopicMap(sys, scene, o.section_time, o.X, o.V, 1);
+  here << a.X, a.V;
+  const MapValue b = StroboscopicMap(sys, scene, o.section_time, X, o.V, 1);
+  there << b.X, b.V;
+  EXPECT_GT((here - there).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_FALSE(a.undefined.empty());
+}
+
+TEST(ContactsOrbit, SimultaneousImpactsOfDecoupledContactsHaveTheProductSaltation) {
+  const Scene scene = SymmetricTriple(false, 1, 1.2, 0);
+  const System sys(scene);
+  EXPECT_EQ(sys.delassus()(0, 1), 0.0);
+  OrbitRequest req;
+  req.kind = OrbitKind::kImpact;
+  const OrbitResult o = FindOrbit(sys, scene, req);
+  ASSERT_EQ(o.status, "converged") << o.message;
+  EXPECT_EQ(o.sequence, "0+1:impact");
+  EXPECT_TRUE(o.no_jacobian.empty());
+  // Undamped, two impacts of r = 0.7: det DF = r⁴.
+  EXPECT_NEAR(o.monodromy.determinant(), std::pow(0.7, 4), 1e-12);
+  const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, o.section_time, o.X, o.V, o.period);
+  EXPECT_LT((o.monodromy - fd).cwiseAbs().maxCoeff(), 1e-8 * (1 + fd.cwiseAbs().maxCoeff()))
+      << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
+}
+
+// The 2-DOF impact pair's orbit (damped; both contacts stick in turn, collapsing the same relative
+// direction): the Lyapunov exponents of a 4000-period run from the orbit are ln|μ_i|/(qT) of its
+// two multipliers (a complex pair: equal moduli), and −∞ twice.
+TEST(ContactsOrbit, FloquetMultipliersOfATwoDofOrbitMatchItsLyapunovExponents) {
+  Scene scene = Shipped("contacts_impact_pair.toml");
+  const System sys(scene);
+  const OrbitResult o = FindOrbit(sys, scene, {});
+  ASSERT_EQ(o.status, "converged") << o.message;
+  ASSERT_EQ(o.multipliers.size(), 2u);
+  const double qT = o.period * sys.period();
+  const double want = std::log(std::abs(o.multipliers[0])) / qT;
+  EXPECT_NEAR(std::log(std::abs(o.multipliers[1])) / qT, want, 1e-12);
+  scene.run.periods = 4000;
+  scene.initial_time = o.section_time;
+  LyapunovObserver ly(sys, scene);
+  const InitialOverride start{o.section_time, o.X, o.V};
+  SimulationOptions opt;
+  opt.initial = &start;
+  opt.observers = {&ly};
+  const RunResult r = vibro::Simulate(sys, scene, opt);
+  ASSERT_EQ(r.status, RunStatus::kOk) << r.message;
+  const LyapunovSpectrum s = ly.Spectrum();
+  ASSERT_TRUE(s.undefined.empty()) << s.undefined;
+  ASSERT_EQ(s.exponents.size(), 4u);
+  // The pair's sum converges like 1/periods; each of a complex pair too, oscillating.
+  EXPECT_NEAR(s.exponents[0] + s.exponents[1], 2 * want, 2e-5);
+  EXPECT_NEAR(s.exponents[0], want, 1e-4);
+  EXPECT_NEAR(s.exponents[1], want, 1e-4);
+  EXPECT_TRUE(std::isinf(s.exponents[2]) && s.exponents[2] < 0);
+  EXPECT_TRUE(std::isinf(s.exponents[3]) && s.exponents[3] < 0);
+}
+
 }  // namespace
 }  // namespace vibro::test
