@@ -940,8 +940,11 @@ def plot_gaps(f, title, save, window, contacts):
     ax.set_xlim(t_from, t_to)
     absolute_time(ax)
     sequence = text(f["orbit"].attrs["sequence"]) if "orbit" in f and "sequence" in f["orbit"].attrs else ""
-    fig.suptitle(f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})"
-                 + (f"\ncontact sequence of the orbit: {sequence}" if sequence else ""), fontsize=fs(10))
+    seq_line = f"\ncontact sequence of the orbit: {sequence}" if sequence else ""
+    chosen = OPTIONS["title"]  # --title replaces the scene line and the window, never the sequence
+    if chosen != "" or sequence:
+        head = chosen if chosen is not None else f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})"
+        fig.suptitle((head + seq_line).lstrip("\n"), fontsize=fs(10))
     save(fig, "gaps")
     if "orbit" in f and "multipliers" in f["orbit"].attrs:
         plot_multipliers(f, title, save)

@@ -36,6 +36,15 @@ def test_check_equals_cli(name):
     assert vibro.check(vibro.load_scene(path, set={"run.periods": 10})) == cli_json("check", path, *args)
 
 
+def test_orbit_with_several_contacts_equals_cli():
+    # docs/contacts.md "Periodic orbits": the dict has the contact sequence, as the CLI's JSON.
+    path = os.path.join(SCENES, "contacts_chain2.toml")
+    got = vibro.orbit(vibro.load_scene(path))
+    assert got == cli_json("orbit", path)
+    assert got["status"] == "converged"
+    assert got["sequence"] == "0:impact*13 0:accumulation 0:stick 1:impact*2 0:release"
+
+
 def test_orbit_continue_sweep_equal_cli():
     path = os.path.join(SCENES, "fig08_preload.toml")
     scene = vibro.load_scene(path)
