@@ -5,8 +5,8 @@
 //    against"), det DF = r⁴ (two impacts, det of each saltation r²: a complex pair has modulus r²);
 //  * the analytic DF against central finite differences of the stroboscopic map computed by the
 //    quad engine (each evaluation exact to ~1e-30, rounded once to double: a five-point stencil
-//    with h = 1e-4 has truncation ~h⁴ and rounding ~1e-16/h, both below 1e-11), on the shipped
-//    scenes with several contacts that have a periodic orbit;
+//    has truncation ~h⁴ times the map's fifth derivative and rounding ~1e-16/h), on every shipped
+//    scene with several contacts (each has a periodic orbit);
 //  * the Floquet multipliers of a 2-DOF orbit against the Lyapunov exponents of a run on it, which
 //    re-orthonormalise the same tangent every period instead of taking eigenvalues;
 //  * simultaneous impacts: coupled contacts (W_jk ≠ 0) leave the map without a Jacobian, which
@@ -101,7 +101,8 @@ std::vector<Symmetric> SymmetricOrbits(LD w1, LD a, LD delta, LD r, LD w) {
 
 void CheckSymmetricOrbit(double w1, double a, double delta, double r, double w, bool stable) {
   const auto all = SymmetricOrbits(w1, a, delta, r, w);
-  ASSERT_EQ(all.size(), 2u);
+  // The larger root is the stable orbit where there are two (a fold pair).
+  ASSERT_GE(all.size(), stable ? 1u : 2u);
   const Symmetric& o = all[stable ? 0 : 1];
   SCOPED_TRACE(testing::Message() << "(ω1, a, Δ, r, ω) = (" << w1 << ", " << a << ", " << delta << ", " << r
                                   << ", " << w << "), V = " << static_cast<double>(o.V));
@@ -142,8 +143,11 @@ void CheckSymmetricOrbit(double w1, double a, double delta, double r, double w, 
   // The multipliers against those of quad finite differences of the map.
   const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, orbit.section_time, orbit.X, orbit.V, 1);
   const auto mu_fd = Eigenvalues(fd), mu = Eigenvalues(orbit.monodromy);
-  for (size_t k = 0; k < 2; ++k)
-    EXPECT_LT(std::abs(mu[k] - mu_fd[k]), 1e-9 * (1 + std::abs(mu_fd[k]))) << mu[k] << " vs " << mu_fd[k];
+  for (const auto& m : mu) {  // each against the nearest of the other set (conjugates tie in modulus)
+    double d = 1e300;
+    for (const auto& f : mu_fd) d = std::min(d, std::abs(m - f));
+    EXPECT_LT(d, 1e-9 * (1 + std::abs(m))) << m;
+  }
   EXPECT_LT((orbit.monodromy - fd).cwiseAbs().maxCoeff(), 1e-9 * (1 + fd.cwiseAbs().maxCoeff()))
       << "analytic\n" << orbit.monodromy << "\nquad finite differences\n" << fd;
 }
@@ -176,12 +180,17 @@ TEST(ContactsOrbit, JacobianMatchesQuadFiniteDifferencesOnEveryShippedScene) {
     req.kind = OrbitKind::kSticking;
     const OrbitResult o = FindOrbit(sys, scene, req);
     ASSERT_EQ(o.status, "converged") << o.message;
-    if (c.sequence) EXPECT_EQ(o.sequence, c.sequence);
+    if (c.sequence) {
+      EXPECT_EQ(o.sequence, c.sequence);
+    }
     EXPECT_FALSE(o.sequence.empty());
     EXPECT_TRUE(o.no_jacobian.empty());
-    const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, o.section_time, o.X, o.V, o.period);
+    // h = 1e-6: the beam's map curves strongly along one mode (a contact sequence change lies
+    // about 1e-3 away: the stencil with h = 1e-4 is off by 2e-4 there, with 1e-5 by 2e-8, with
+    // 1e-6 by 5e-11); rounding of the double outputs is then ~1e-16/h = 1e-10.
+    const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, o.section_time, o.X, o.V, o.period, 1e-6);
     const double err = (o.monodromy - fd).cwiseAbs().maxCoeff(), scale = 1 + fd.cwiseAbs().maxCoeff();
-    EXPECT_LT(err, 1e-8 * scale) << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
+    EXPECT_LT(err, 1e-9 * scale) << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
     std::printf("[          ] %s: |DF − FD_quad|∞ = %.2e (|DF|∞ = %.3g)\n", c.file, err, scale - 1);
   }
 }
@@ -218,10 +227,12 @@ TEST(ContactsOrbit, SimultaneousImpactsOfCoupledContactsLeaveTheOrbitWithoutMult
   EXPECT_EQ(o.no_jacobian,
             "the orbit passes through a simultaneous impact of coupled contacts: the map has no Jacobian there");
   EXPECT_TRUE(o.multipliers.empty());
-  // The map is indeed discontinuous there (MODEL §11.4.3 of docs/contacts.md): breaking the
-  // symmetry by 1e-12 turns the simultaneous impact into a cascade and moves the image by O(1e-2).
+  // The map is indeed discontinuous there (docs/contacts.md, "Periodic orbits"): breaking the
+  // symmetry by 1e-12 turns the simultaneous impact into a cascade of sequential impacts and moves
+  // the image by far more than 1e-12 times any Jacobian could.
+  // The outer masses no longer move alike: every mode moved by ~1e-12, the antisymmetric one too.
   Eigen::VectorXd X = o.X;
-  X[0] += 1e-12;  // the outer masses no longer move alike
+  for (Eigen::Index i = 0; i < X.size(); ++i) X[i] += (i % 2 == 0 ? 1e-12 : -2e-12) * static_cast<double>(i + 1);
   const auto n = sys.dof();
   Eigen::VectorXd z(2 * n), here(2 * n), there(2 * n);
   z << o.X, o.V;
@@ -236,7 +247,7 @@ TEST(ContactsOrbit, SimultaneousImpactsOfCoupledContactsLeaveTheOrbitWithoutMult
 TEST(ContactsOrbit, SimultaneousImpactsOfDecoupledContactsHaveTheProductSaltation) {
   const Scene scene = SymmetricTriple(false, 1, 1.2, 0);
   const System sys(scene);
-  EXPECT_EQ(sys.delassus()(0, 1), 0.0);
+  EXPECT_NEAR(sys.delassus()(0, 1), 0.0, 1e-14);  // different masses: W_01 = 0 up to the modes' rounding
   OrbitRequest req;
   req.kind = OrbitKind::kImpact;
   const OrbitResult o = FindOrbit(sys, scene, req);
