@@ -431,7 +431,7 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
   //    not-periodic cell (deterministic: they depend only on `cells`). None for a study being
   //    stopped (its resumption measures them).
   const auto stopping = [](const std::atomic<bool>* flag) { return flag && flag->load(); };
-  if (opt.lyapunov && scene.run.lyapunov && sys.contact_count() == 1 && !stopping(opt.stop_requested) &&
+  if (opt.lyapunov && scene.run.lyapunov && !stopping(opt.stop_requested) &&
       !stopping(ProcessStopFlag())) {
     std::vector<size_t> from(out.attractors.size() + 1, cells.size());  // the last: not-periodic
     for (size_t i = 0; i < cells.size(); ++i) {
