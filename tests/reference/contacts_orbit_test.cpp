@@ -6,7 +6,8 @@
 //  * the analytic DF against central finite differences of the stroboscopic map computed by the
 //    quad engine (each evaluation exact to ~1e-30, rounded once to double: a five-point stencil
 //    has truncation ~h⁴ times the map's fifth derivative and rounding ~1e-16/h), on every shipped
-//    scene with several contacts (each has a periodic orbit);
+//    scene with several contacts (each has a periodic orbit), and on orbits of a 2-DOF chain where
+//    an impact pair hits while a coupled stop (W_01 = −1) sticks, or a plastic impact leaves;
 //  * the Floquet multipliers of a 2-DOF orbit against the Lyapunov exponents of a run on it, which
 //    re-orthonormalise the same tangent every period instead of taking eigenvalues;
 //  * simultaneous impacts: coupled contacts (W_jk ≠ 0) leave the map without a Jacobian, which
@@ -192,6 +193,46 @@ TEST(ContactsOrbit, JacobianMatchesQuadFiniteDifferencesOnEveryShippedScene) {
     const double err = (o.monodromy - fd).cwiseAbs().maxCoeff(), scale = 1 + fd.cwiseAbs().maxCoeff();
     EXPECT_LT(err, 1e-9 * scale) << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
     std::printf("[          ] %s: |DF − FD_quad|∞ = %.2e (|DF|∞ = %.3g)\n", c.file, err, scale - 1);
+  }
+}
+
+// A 2-DOF chain with a plastic stop below mass 0 and an impact pair (1, 0) above it: W_01 = −1, so
+// an impact of the pair while mass 0 sticks takes the 2 × 2 law with both impulses, and a plastic
+// impact that leaves at once projects the velocity (a zero multiplier).
+Scene HeldChain(double amplitude, double frequency) {
+  Scene s;
+  Eigen::MatrixXd K(2, 2);
+  K << 2, -1, -1, 1;
+  s.physical = PhysicalStructureSpec{Eigen::MatrixXd::Identity(2, 2), K, 0, 0};
+  s.damping_ratios = Eigen::VectorXd::Constant(2, 0.05);
+  s.contacts = {ContactSpec{0, -1, Side::kBelow, -0.2, 0.0}, ContactSpec{1, 0, Side::kBelow, -0.3, 0.6}};
+  s.frequency = frequency;
+  s.amplitude = amplitude;
+  s.run.periods = 50;
+  s.run.samples_per_period = 0;
+  return s;
+}
+
+TEST(ContactsOrbit, ImpactsWhileACoupledContactSticksMatchQuadFiniteDifferences) {
+  struct Case {
+    double amplitude, frequency;
+    const char* sequence;
+  };
+  for (const Case& c : {Case{0.5, 0.8, "0:impact 0:stick 1:impact 0:release"},
+                        Case{2, 0.5, "0:impact 0:stick 1:impact*2 0:release 1:impact"},
+                        Case{1, 1.2, "0:impact 1:impact 0:impact 1:impact"}}) {
+    SCOPED_TRACE(testing::Message() << "a = " << c.amplitude << ", ω = " << c.frequency);
+    const Scene scene = HeldChain(c.amplitude, c.frequency);
+    const System sys(scene);
+    ASSERT_NEAR(sys.delassus()(0, 1), -1.0, 1e-12);
+    OrbitRequest req;
+    req.kind = OrbitKind::kAuto;
+    const OrbitResult o = SolveOrbit(sys, scene, req);
+    ASSERT_EQ(o.status, "converged") << o.message;
+    EXPECT_EQ(o.sequence, c.sequence);
+    const Eigen::MatrixXd fd = QuadFiniteDifferences(sys, scene, o.section_time, o.X, o.V, o.period, 1e-5);
+    EXPECT_LT((o.monodromy - fd).cwiseAbs().maxCoeff(), 1e-9 * (1 + fd.cwiseAbs().maxCoeff()))
+        << "analytic\n" << o.monodromy << "\nquad finite differences\n" << fd;
   }
 }
 
