@@ -48,7 +48,9 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
     fmt::print("multipliers  {}\n", !orbit.no_jacobian.empty() ? "none: " + orbit.no_jacobian
                                      : !mu.empty()                ? mu
-                                     : converged                  ? "none (superstable: one-DOF sticking)"
+                                     : converged && loaded.scene.contacts.size() > 1
+                                         ? "none (superstable: its sticking phases hold every direction)"
+                                     : converged ? "none (superstable: one-DOF sticking)"
                                                                   : "-");
     fmt::print("stable       {}\n", !converged || !orbit.no_jacobian.empty() ? "-" : orbit.stable ? "yes" : "no");
     if (orbit.quad_evaluations > 0)
