@@ -26,9 +26,9 @@
 
 namespace vibro {
 
-// Why an orbit through a simultaneous impact of coupled contacts has no multipliers (MODEL
-// §11.4.3 in docs/contacts.md): TangentTracker::undefined() says this, after "the orbit passes
-// through ".
+// Why an orbit through a simultaneous impact of coupled contacts has no multipliers (the map is
+// discontinuous there, docs/contacts.md "Periodic orbits"): TangentTracker::undefined() says
+// this, after "the orbit passes through ".
 inline constexpr char kCoupledSimultaneousImpact[] =
     "a simultaneous impact of coupled contacts: the map has no Jacobian there";
 
@@ -58,7 +58,7 @@ class TangentTracker final : public Observer {
   void Restart(const Eigen::MatrixXd& start);
 
  private:
-  // What the saltations of one contact need (MODEL (M2) notation: c_j, T_j, W_jj, r_j).
+  // What the saltations of one contact need (docs/contacts.md notation: c_j, T_j, W_jj, r_j).
   struct ContactTangent {
     Eigen::VectorXd c, T;
     double e = 0, s = 0, r = 0;

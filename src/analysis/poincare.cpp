@@ -176,7 +176,7 @@ void TangentTracker::Undefined(std::string why) {
 }
 
 double TangentTracker::Coupling(int j, int k) const {
-  // As the automaton: a coupling within the rounding of the mode shapes is none (MODEL §11.10).
+  // As the automaton: a coupling within the rounding of the mode shapes is none (docs/contacts.md).
   const double w = sys_.delassus()(j, k);
   const double scale = std::sqrt(contacts_[static_cast<size_t>(j)].s * contacts_[static_cast<size_t>(k)].s);
   return std::abs(w) <= 64 * std::numeric_limits<double>::epsilon() * scale ? 0.0 : w;
@@ -285,12 +285,12 @@ void TangentTracker::Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd&
   phi_ = (dg + (f_plus - dg * f_minus) * grad.transpose() / denom) * phi_;
 }
 
-// Contact k = r.contact closes while contact h = held_ sticks (MODEL §11.4.2, §11.7 "Impact with
-// stuck contacts"), with the automaton's pattern: h pushed off (W_hk P_k > 0 for k's impulse
-// alone: P_h = 0, ∂g_V = Π_k) or h stays (the 2 × 2 law W P = −diag(1, 1 + r_k) C_Z Ẋ⁻ on
-// Z = {h, k}: ∂g_V = I − T_Z W_ZZ⁻¹ diag(1, 1 + r_k) C_Z, linear while the pattern holds). The
-// guard is g_k, the flow before is the one held on h, the flow after the one the run follows:
-// held on h while its reaction stays positive, free otherwise.
+// Contact k = r.contact closes while contact h = held_ sticks (docs/contacts.md, "Periodic
+// orbits"), with the automaton's pattern: h pushed off (W_hk P_k > 0 for k's impulse alone:
+// P_h = 0, ∂g_V = Π_k) or h stays (the 2 × 2 law W P = −diag(1, 1 + r_k) C_Z Ẋ⁻ on Z = {h, k}:
+// ∂g_V = I − T_Z W_ZZ⁻¹ diag(1, 1 + r_k) C_Z, linear while the pattern holds). The guard is g_k,
+// the flow before is the one held on h, the flow after the one the run follows: held on h while
+// its reaction stays positive, free otherwise.
 void TangentTracker::ImpactWhileHeld(const Reset& r) {
   const auto n = sys_.dof();
   const int h = held_, k = r.contact;
@@ -322,7 +322,7 @@ void TangentTracker::ImpactWhileHeld(const Reset& r) {
             K.c, vk);
 }
 
-// Contacts closing at one instant (MODEL §11.4.3, §11.7): with W_jk = 0 the impacts are
+// Contacts closing at one instant (docs/contacts.md, "Periodic orbits"): with W_jk = 0 the impacts are
 // independent, and the saltation is the product of the single impacts' (taken one after the
 // other at the same instant); with W_jk ≠ 0 the map is discontinuous there: no Jacobian.
 void TangentTracker::SimultaneousImpact(const Reset& r) {
