@@ -348,4 +348,29 @@ for df in (-1e-8, 1e-8):
     check(f"cvode at f_max {df:+g}: undetermined", p.returncode == 3 and j.get("status") == "undetermined",
           p.stdout + p.stderr)
 
+# Several contacts closing at one instant with W_01 ≠ 0: the orbit is found, and says it has no
+# Jacobian (the map is discontinuous there) instead of printing multipliers (docs/contacts.md).
+coupled = os.path.join(tests_scenes, "contacts_coupled_simultaneous.toml")
+no_jacobian = "the orbit passes through a simultaneous impact of coupled contacts: the map has no Jacobian there"
+p = run("orbit", coupled)
+check("orbit through coupled simultaneous impacts (text)", p.returncode == 0 and "sequence     0+1:impact" in p.stdout
+      and f"multipliers  none: {no_jacobian}" in p.stdout and "stable       -" in p.stdout, p.stdout + p.stderr)
+with tempfile.TemporaryDirectory() as d:
+    out = os.path.join(d, "orbit.h5")
+    p = run("orbit", coupled, "--json", "--out", out)
+    j = json.loads(p.stdout) if p.returncode == 0 else {}
+    check("orbit through coupled simultaneous impacts (JSON)", j.get("status") == "converged" and
+          j.get("no_jacobian") == no_jacobian and j.get("floquet_multipliers") == [] and j.get("stable") is None
+          and j.get("sequence") == "0+1:impact", p.stdout + p.stderr)
+    if p.returncode == 0:
+        import h5py
+        with h5py.File(out, "r") as f:
+            a = f["orbit"].attrs
+            seq = a.get("sequence")
+            seq = seq.decode() if isinstance(seq, bytes) else seq
+            nj = a.get("no_jacobian")
+            nj = nj.decode() if isinstance(nj, bytes) else nj
+            check("orbit --out: /orbit@sequence and @no_jacobian", seq == "0+1:impact" and nj == no_jacobian and
+                  a["multipliers"].shape == (0, 2), dict(a))
+
 finish()
