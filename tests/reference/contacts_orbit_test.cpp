@@ -7,7 +7,8 @@
 //    quad engine (each evaluation exact to ~1e-30, rounded once to double: a five-point stencil
 //    has truncation ~h⁴ times the map's fifth derivative and rounding ~1e-16/h), on every shipped
 //    scene with several contacts (each has a periodic orbit), and on orbits of a 2-DOF chain where
-//    an impact pair hits while a coupled stop (W_01 = −1) sticks, or a plastic impact leaves;
+//    an impact pair hits while a coupled stop sticks (it stays, or is lifted off), or a plastic
+//    impact leaves;
 //  * the Floquet multipliers of a 2-DOF orbit against the Lyapunov exponents of a run on it, which
 //    re-orthonormalise the same tangent every period instead of taking eigenvalues;
 //  * simultaneous impacts: coupled contacts (W_jk ≠ 0) leave the map without a Jacobian, which
@@ -199,13 +200,16 @@ TEST(ContactsOrbit, JacobianMatchesQuadFiniteDifferencesOnEveryShippedScene) {
 // A 2-DOF chain with a plastic stop below mass 0 and an impact pair (1, 0) above it: W_01 = −1, so
 // an impact of the pair while mass 0 sticks takes the 2 × 2 law with both impulses, and a plastic
 // impact that leaves at once projects the velocity (a zero multiplier).
-Scene HeldChain(double amplitude, double frequency) {
+// lift: the pair (0, 1) instead, whose impact pushes mass 0 off its stop (W_01 = +1: liftoff, the
+// held contact's release at the impact).
+Scene HeldChain(double amplitude, double frequency, bool lift = false) {
   Scene s;
   Eigen::MatrixXd K(2, 2);
   K << 2, -1, -1, 1;
   s.physical = PhysicalStructureSpec{Eigen::MatrixXd::Identity(2, 2), K, 0, 0};
   s.damping_ratios = Eigen::VectorXd::Constant(2, 0.05);
-  s.contacts = {ContactSpec{0, -1, Side::kBelow, -0.2, 0.0}, ContactSpec{1, 0, Side::kBelow, -0.3, 0.6}};
+  s.contacts = {ContactSpec{0, -1, Side::kBelow, -0.2, 0.0},
+                lift ? ContactSpec{0, 1, Side::kBelow, -0.3, 0.6} : ContactSpec{1, 0, Side::kBelow, -0.3, 0.6}};
   s.frequency = frequency;
   s.amplitude = amplitude;
   s.run.periods = 50;
@@ -216,15 +220,18 @@ Scene HeldChain(double amplitude, double frequency) {
 TEST(ContactsOrbit, ImpactsWhileACoupledContactSticksMatchQuadFiniteDifferences) {
   struct Case {
     double amplitude, frequency;
+    bool lift;
     const char* sequence;
   };
-  for (const Case& c : {Case{0.5, 0.8, "0:impact 0:stick 1:impact 0:release"},
-                        Case{2, 0.5, "0:impact 0:stick 1:impact*2 0:release 1:impact"},
-                        Case{1, 1.2, "0:impact 1:impact 0:impact 1:impact"}}) {
-    SCOPED_TRACE(testing::Message() << "a = " << c.amplitude << ", ω = " << c.frequency);
-    const Scene scene = HeldChain(c.amplitude, c.frequency);
+  for (const Case& c : {Case{0.5, 0.8, false, "0:impact 0:stick 1:impact 0:release"},
+                        Case{2, 0.5, false, "0:impact 0:stick 1:impact*2 0:release 1:impact"},
+                        Case{1, 1.2, false, "0:impact 1:impact 0:impact 1:impact"},
+                        // The pair's impact lifts mass 0 off (its release at the same instant).
+                        Case{0.7, 0.4, true, "1:impact*2 0:impact*2 0:stick 1:impact 0:release"}}) {
+    SCOPED_TRACE(testing::Message() << "a = " << c.amplitude << ", ω = " << c.frequency << (c.lift ? ", liftoff" : ""));
+    const Scene scene = HeldChain(c.amplitude, c.frequency, c.lift);
     const System sys(scene);
-    ASSERT_NEAR(sys.delassus()(0, 1), -1.0, 1e-12);
+    ASSERT_NEAR(sys.delassus()(0, 1), c.lift ? 1.0 : -1.0, 1e-12);
     OrbitRequest req;
     req.kind = OrbitKind::kAuto;
     const OrbitResult o = SolveOrbit(sys, scene, req);
