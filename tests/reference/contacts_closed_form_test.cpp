@@ -9,7 +9,9 @@
 //  * the lower limit of that orbit, √(a² − ω_1⁴Δ²) = ω ω_1 Δ cot(ω_1π/(2ω)), where the sticking
 //    proportion vanishes, and its sign trap (a spurious value when the cotangent is negative);
 //  * reductions: a second stop that is never reached gives the single stop's events to the bit.
+//  * the CVODE engine on the symmetric orbit, within its tolerance (docs/engines.md).
 #include <cmath>
+#include <cstdio>
 
 #include <gtest/gtest.h>
 
@@ -120,6 +122,38 @@ TEST(ContactsClosedForms, StableSymmetricOrbitHoldsOverManyPeriods) {
     EXPECT_NEAR(Elapsed(impacts[k], t0), (static_cast<double>(k) + 1) * T / 2, 1e-12 * T);
     EXPECT_NEAR(impacts[k].v_before, static_cast<double>(-o.V), 1e-12);
   }
+}
+
+// The CVODE engine on the same orbit (docs/engines.md): rtol = 1e-12, atol = 1e-14. Each flight
+// of T/2 is integrated to a local error of ≈ rtol per step and its landing located to that error
+// divided by the closing speed V ≈ 1: the impact times and speeds agree with the closed form to
+// ≈ 1e-11 per impact, and the stable orbit (multiplier < 1) keeps the errors from growing over
+// the periods; kCvodeTime and kCvodeSpeed leave a margin of ten over the measured worst.
+constexpr double kCvodeTime = 1e-10, kCvodeSpeed = 1e-9;
+
+TEST(ContactsClosedForms, CvodeFollowsTheSymmetricOrbit) {
+  const auto o = SymmetricOrbits(1, 1, 1, 0.8L, 2.5L)[0];
+  const double w = 2.5, T = 2 * M_PI / w, t0 = static_cast<double>(o.phi / w);
+  Scene s = TwoSided(1, 1, 1, 0.8, w, 20);
+  s.run.engine = Engine::kCvode;
+  s.run.rtol = 1e-12;
+  s.run.atol = 1e-14;
+  const Outcome run = From(s, t0, 1, static_cast<double>(-0.8L * o.V));
+  ASSERT_EQ(run.result.status, RunStatus::kOk) << run.result.message;
+  const auto impacts = run.log.Of(EventKind::kImpact);
+  ASSERT_GE(impacts.size(), 39u);
+  double worst_t = 0, worst_v = 0;
+  for (size_t k = 0; k < impacts.size(); ++k) {
+    SCOPED_TRACE(testing::Message() << "impact " << k);
+    EXPECT_EQ(impacts[k].contact, k % 2 == 0 ? 0 : 1) << "alternately below, above";
+    const double dt = std::abs(Elapsed(impacts[k], t0) - (static_cast<double>(k) + 1) * T / 2) / T;
+    const double dv = std::abs(impacts[k].v_before + static_cast<double>(o.V)) / static_cast<double>(o.V);
+    EXPECT_LE(dt, kCvodeTime);
+    EXPECT_LE(dv, kCvodeSpeed);
+    worst_t = std::max(worst_t, dt);
+    worst_v = std::max(worst_v, dv);
+  }
+  std::printf("CVODE on the symmetric orbit, 20 periods: worst |dt|/T %.3g, |dV|/V %.3g\n", worst_t, worst_v);
 }
 
 // r = 0: stuck on +Δ until the reaction a sin ωt − Δ vanishes (ω_1 = 1), free flight from rest

@@ -1,0 +1,145 @@
+// Several contacts with the CVODE engine (docs/contacts.md, docs/engines.md) against the exact
+// engine, the independent truth for CVODE: on every shipped multi-contact scene, event by event,
+// the same kinds at the same contacts, at the same times within a tolerance set by rtol.
+//
+// Tolerance: at rtol = 1e-12 (atol = 1e-14) CVODE's local error is ≈ rtol of the state per step,
+// and an event time inherits it divided by the closing speed; over the 15 to 20 periods of a
+// scene (a few hundred steps per period) the global error grows to ≈ 1e-10..1e-9 of the state,
+// and a chattering accumulation predicted from the √rtol floor of its impact speeds (docs/model.md
+// §5.4) adds ≈ rtol^(2/3) ≈ 1e-8 relative to its tail. Measured worst |Δt|/T over the five scenes:
+// see kMeasured below; the bound kTimeTolerance = 1e-7 T leaves a margin of ten over the worst.
+// Chattering tails: the engines follow a different number of impacts before the accumulation
+// prediction (CVODE switches at √rtol of the first impact speed), aligned as the quad comparisons
+// do (tests/support.hpp, AlignChatteringTails).
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include "support.hpp"
+#include "vibro/scene_file.hpp"
+
+namespace vibro::test {
+namespace {
+
+constexpr double kTimeTolerance = 1e-7;  // |Δt|/T, CVODE at rtol 1e-12 against the exact engine
+
+Scene WithEngine(Scene s, Engine e, double rtol = 1e-12) {
+  s.run.engine = e;
+  s.run.rtol = rtol;
+  s.run.atol = rtol * 1e-2;
+  return s;
+}
+
+std::vector<std::string> MultiContactScenes() {
+  std::vector<std::string> out;
+  for (const auto& entry : std::filesystem::directory_iterator(VIBRO_SCENES_DIR)) {
+    const std::string name = entry.path().filename().string();
+    if (entry.path().extension() == ".toml" && name.rfind("contacts_", 0) == 0) out.push_back(entry.path().string());
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+struct Agreement {
+  double worst = 0;  // |Δt|/T
+  int compared = 0, other_contacts = 0, sticks = 0, releases = 0;
+  bool complete = false;
+};
+
+// Every event of the exact run (a) and the CVODE run (b), walked together.
+Agreement Compare(const std::vector<Event>& a, const std::vector<Event>& b, double T, const std::string& name) {
+  Agreement g;
+  size_t i = 0, j = 0;
+  for (; i < a.size() && j < b.size(); ++i, ++j) {
+    if (!AlignChatteringTails(a, i, b, j)) break;
+    EXPECT_EQ(a[i].kind, b[j].kind) << fmt::format("{} event {}/{}: exact {} at {:.17g}, cvode {} at {:.17g}",
+                                                   name, i, j, ToString(a[i].kind), a[i].t,
+                                                   ToString(b[j].kind), b[j].t);
+    EXPECT_EQ(a[i].contact, b[j].contact) << fmt::format("{} event {} at {:.17g}", name, i, a[i].t);
+    if (a[i].kind != b[j].kind || a[i].contact != b[j].contact) return g;
+    const double dt = std::abs(a[i].t - b[j].t) / T;
+    g.worst = std::max(g.worst, dt);
+    EXPECT_LE(dt, kTimeTolerance) << fmt::format("{} event {} ({} at contact {}: exact {:.17g}, cvode {:.17g})",
+                                                 name, i, ToString(a[i].kind), a[i].contact, a[i].t, b[j].t);
+    ++g.compared;
+    g.other_contacts += a[i].contact > 0;
+    g.sticks += a[i].kind == EventKind::kStick;
+    g.releases += a[i].kind == EventKind::kRelease;
+  }
+  // What is left of either log may only be impacts of a chattering sequence the other predicted.
+  const auto only_impacts = [](const std::vector<Event>& e, size_t from) {
+    return std::all_of(e.begin() + static_cast<std::ptrdiff_t>(std::min(from, e.size())), e.end(),
+                       [](const Event& x) { return x.kind == EventKind::kImpact; });
+  };
+  g.complete = only_impacts(a, i) && only_impacts(b, j);
+  return g;
+}
+
+TEST(ContactsCvode, AgreesWithTheExactEngineOnEveryShippedMultiContactScene) {
+  const auto scenes = MultiContactScenes();
+  ASSERT_EQ(scenes.size(), 5u);
+  double worst = 0;
+  for (const auto& path : scenes) {
+    SCOPED_TRACE(path);
+    const Scene scene = LoadScene(path, {"run.samples_per_period=0"}).scene;
+    ASSERT_GT(scene.contacts.size(), 1u);
+    const Outcome exact = Simulate(WithEngine(scene, Engine::kExact));
+    const Outcome cvode = Simulate(WithEngine(scene, Engine::kCvode));
+    ASSERT_EQ(exact.result.status, RunStatus::kOk) << exact.result.message;
+    ASSERT_EQ(cvode.result.status, RunStatus::kOk) << cvode.result.message;
+    const double T = 2 * M_PI / scene.frequency;
+    const std::string name = std::filesystem::path(path).filename().string();
+    const Agreement g = Compare(exact.log.events, cvode.log.events, T, name);
+    std::printf("%s: %d events compared (%d at contacts >= 1, %d sticks, %d releases), worst |dt|/T %.3g%s\n",
+                name.c_str(), g.compared, g.other_contacts, g.sticks, g.releases, g.worst,
+                g.complete ? "" : " (incomplete)");
+    EXPECT_TRUE(g.complete) << name << ": the event logs part";
+    EXPECT_GE(g.compared, 20) << name;
+    EXPECT_GT(g.other_contacts, 0) << name << ": no event at a second contact";
+    // Every contact's counts agree (the chattering impacts aside: compare the sticks, releases
+    // and accumulations per contact).
+    ASSERT_EQ(exact.result.contact_counts.size(), cvode.result.contact_counts.size());
+    for (size_t j = 0; j < exact.result.contact_counts.size(); ++j) {
+      EXPECT_EQ(exact.result.contact_counts[j].sticks, cvode.result.contact_counts[j].sticks) << j;
+      EXPECT_EQ(exact.result.contact_counts[j].releases, cvode.result.contact_counts[j].releases) << j;
+    }
+    worst = std::max(worst, g.worst);
+  }
+  std::printf("CVODE (rtol 1e-12) against exact on the multi-contact scenes: worst |dt|/T %.3g\n", worst);
+}
+
+// The error falls with rtol: the agreement is CVODE's accuracy, not a coincidence of one setting.
+TEST(ContactsCvode, ErrorFallsWithRtolOnTheChain) {
+  const Scene scene =
+      LoadScene(std::string(VIBRO_SCENES_DIR) + "/contacts_chain2.toml", {"run.samples_per_period=0", "run.periods=5"}).scene;
+  const Outcome exact = Simulate(WithEngine(scene, Engine::kExact));
+  ASSERT_EQ(exact.result.status, RunStatus::kOk);
+  const double T = 2 * M_PI / scene.frequency;
+  std::vector<double> worst;
+  for (double rtol : {1e-8, 1e-10, 1e-12}) {
+    const Outcome cvode = Simulate(WithEngine(scene, Engine::kCvode, rtol));
+    ASSERT_EQ(cvode.result.status, RunStatus::kOk) << rtol << ": " << cvode.result.message;
+    // Milestones only (first impact of each contact's sequence, sticks, releases): the number of
+    // chattering impacts followed depends on rtol.
+    double w = 0;
+    const auto a = exact.log.events, b = cvode.log.events;
+    size_t i = 0, j = 0;
+    for (; i < a.size() && j < b.size(); ++i, ++j) {
+      if (!AlignChatteringTails(a, i, b, j)) break;
+      ASSERT_EQ(a[i].kind, b[j].kind) << rtol << " event " << i;
+      ASSERT_EQ(a[i].contact, b[j].contact) << rtol << " event " << i;
+      w = std::max(w, std::abs(a[i].t - b[j].t) / T);
+    }
+    std::printf("contacts_chain2, 5 periods, rtol %.0e: worst |dt|/T %.3g\n", rtol, w);
+    worst.push_back(w);
+  }
+  EXPECT_GT(worst[0], 10 * worst[1]);
+  EXPECT_GT(worst[1], 10 * worst[2]);
+}
+
+}  // namespace
+}  // namespace vibro::test
