@@ -125,6 +125,7 @@ struct CvodeEngine::Impl {
   // it alone in its constrained modes (docs/model.md §4.2 with c → c_j), with the gaps of the
   // other contacts under that held flow, g_k = held_base[k] + held_weights[k]ᵀξ.
   struct ContactData {
+    explicit ContactData(ModelT<double> m) : model(std::move(m)) {}
     ModelT<double> model;  // for the flight-start jets
     Eigen::VectorXd c;     // c_j, (n)
     double stop = 0;       // e_j
@@ -206,9 +207,28 @@ struct CvodeEngine::Impl {
       const Guard& gd = m->guards[static_cast<size_t>(j)];
       double gap = 1.0, vB = 1.0;
       if (!gd.off) m->FreeGap(j, Y, gap, vB);
+      if (vB == 0 && m->Count() > 1) vB = m->OffZero(m->FreeGapAcceleration(j, t, Y));
       m->DividedRoots(gd, t, gap, vB, g + 2 * j);
     }
     return 0;
+  }
+
+  // Several contacts: a gap rate that rounds to exactly 0 takes the sign of the gap acceleration.
+  // The rate roots of two contacts on one line (c_k = −c_j, a two-sided stop) cross together at
+  // every apex, where CVODE returns for the one whose gap has a minimum; near a chattering
+  // contact that rate changes by less than its rounding over CVODE's root tolerance, and a rate
+  // that is exactly 0 at the root and just after it is refused as a root "at and very near" the
+  // step's start. The sign of the next derivative is the side the rate takes just after.
+  static double OffZero(double acceleration) {
+    return acceleration == 0 ? 0.0 : std::copysign(1e-150, acceleration);
+  }
+  double FreeGapAcceleration(int j, double t, const double* Y) const {
+    const auto n = sys.dof();
+    const Eigen::VectorXd& c = contacts[static_cast<size_t>(j)].c;
+    const double s = std::sin(phase + sys.frequency() * t);
+    double a = 0;
+    for (int i = 0; i < n; ++i) a += c[i] * (-w2[i] * (X0[i] + Y[i]) - damp[i] * Y[n + i] + TA_f[i] * s);
+    return a;
   }
 
   // Guard value/σᵐ and rate/σ^(m−1), m = order of the known zero at σ = 0. Inside the certified
@@ -322,6 +342,15 @@ struct CvodeEngine::Impl {
     }
   }
 
+  double HeldGapAcceleration(int j, double t, const double* Y) const {
+    const Eigen::VectorXd& w = hd->held_weights[static_cast<size_t>(j)];
+    std::vector<double> acc(static_cast<size_t>(w.size()));
+    StickAcc(t, Y, acc.data());
+    double a = 0;
+    for (Eigen::Index q = 0; q < w.size(); ++q) a += w[q] * acc[static_cast<size_t>(q)];
+    return a;
+  }
+
   static int StickRoots(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
     auto* m = static_cast<Impl*>(user);
     const double* Y = N_VGetArrayPointer(y);
@@ -333,6 +362,7 @@ struct CvodeEngine::Impl {
       const Guard& gd = m->guards[static_cast<size_t>(j)];
       double gap = 1.0, rate = 1.0;
       if (!gd.off) m->HeldGap(j, Y, gap, rate);
+      if (rate == 0) rate = OffZero(m->HeldGapAcceleration(j, t, Y));
       m->DividedRoots(gd, t, gap, rate, g + 2 * j);
     }
     return 0;
@@ -483,7 +513,7 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
   const auto& all = sys.contacts();
   for (size_t j = 0; j < all.size(); ++j) {
     const ContactModel& k = all[j];
-    Impl::ContactData cd{ModelT<double>(sys, k)};
+    Impl::ContactData cd(ModelT<double>(sys, k));
     cd.c = k.shape;
     cd.stop = k.stop;
     const auto& cm = k.constrained;

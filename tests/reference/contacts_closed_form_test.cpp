@@ -8,7 +8,7 @@
 //    other stop at the first root of the flight from rest, sticking proportion 1 − ω s_l/π;
 //  * the lower limit of that orbit, √(a² − ω_1⁴Δ²) = ω ω_1 Δ cot(ω_1π/(2ω)), where the sticking
 //    proportion vanishes, and its sign trap (a spurious value when the cotangent is negative);
-//  * reductions: a second stop that is never reached gives the single stop's events to the bit.
+//  * reductions: a second stop that is never reached gives the single stop's events to the bit;
 //  * the CVODE engine on the symmetric orbit, within its tolerance (docs/engines.md).
 #include <cmath>
 #include <cstdio>
