@@ -557,14 +557,18 @@ void CvodeEngine::Begin(const SegmentStart& s) {
   const int count = m.Count();
   // Every contact's start: the start contact's are `gap` and `flight_start`; with several
   // contacts the others' are `gaps` and `starts` (generic, and from the state, without them).
-  const auto start_of = [&](int j) {
-    if (j == s.contact) return s.flight_start;
-    return s.starts ? (*s.starts)[static_cast<size_t>(j)] : FlightStart::kGeneric;
-  };
   const auto gap_of = [&](int j) {
     if (j == s.contact) return s.gap;
     const auto& cd = m.contacts[static_cast<size_t>(j)];
     return s.gaps ? (*s.gaps)[static_cast<size_t>(j)] : cd.c.dot(s.X) - cd.stop;
+  };
+  // Another contact's start kind is a known zero only while its gap is 0: the automaton keeps the
+  // kind after the gap has opened (the exact engine then only skips a root-free window), and a
+  // gap divided out from a non-zero value would be tracked from 0.
+  const auto start_of = [&](int j) {
+    if (j == s.contact) return s.flight_start;
+    const FlightStart k = s.starts ? (*s.starts)[static_cast<size_t>(j)] : FlightStart::kGeneric;
+    return gap_of(j) == 0 ? k : FlightStart::kGeneric;
   };
   for (auto& gd : m.guards) gd = Impl::Guard{};
   const auto n = m.sys.dof();
@@ -627,17 +631,21 @@ void CvodeEngine::Begin(const SegmentStart& s) {
       if (j == s.contact) continue;
       const Eigen::VectorXd& w = m.hd->held_weights[static_cast<size_t>(j)];
       Impl::Guard& gj = m.guards[static_cast<size_t>(j)];
-      if (j == s.skip || w.size() == 0 || w.cwiseAbs().maxCoeff() == 0) {
-        gj.off = true;
-        gj.gap0 = gap_of(j);
-        continue;
-      }
       FlightStart start = start_of(j);
       if (start == FlightStart::kAfterRelease) start = FlightStart::kGeneric;
+      // Its value at σ = 0 from the held state, g_k = e_a c_kᵀv_a − e_k + (V_aᵀc_k)ᵀξ (the
+      // automaton's gaps are not kept up to date while a contact sticks), or 0 at a known zero.
+      const bool known_zero = start == FlightStart::kAfterImpact || start == FlightStart::kDeparture;
+      const double gap = known_zero ? 0.0 : m.hd->held_base[static_cast<size_t>(j)] + w.dot(xi);
+      if (j == s.skip || w.size() == 0 || w.cwiseAbs().maxCoeff() == 0) {
+        gj.off = true;
+        gj.gap0 = gap;
+        continue;
+      }
       bool certified = false;
       FlightJet jet = m.HeldJet(j, Y, certified);
       if (!certified) jet.M3 = jet.M4 = 0;
-      m.StartGuard(j, start, gap_of(j), jet);
+      m.StartGuard(j, start, gap, jet);
       if (!certified && gj.order > 0) gj.window = std::min(1e-6 * m.sys.period(), 0.5 * gj.window);
     }
   }
