@@ -573,7 +573,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   }
   const S delta = tail.delta;
   const SegmentStartT<S> start{Mode::kFree, phase_k, clock_.offset, X_, V_, S(0),
-                               FlightStart::kAfterImpact, StickStart::kGeneric};
+                               FlightStart::kAfterImpact, StickStart::kGeneric, active_};
   // First pass without output: the jump is taken only if R(t∞) > 0 after the projection.
   engine_->Begin(start);
   const auto probe = engine_->Advance(delta, false, {});
@@ -599,7 +599,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   // Commit: the same flow with dense output, then the state at t∞.
   const Vec X_k = X_, V_k = V_;
   engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_k, V_k, S(0), FlightStart::kAfterImpact,
-                  StickStart::kGeneric});
+                  StickStart::kGeneric, active_});
   const ClockT<S> from = clock_;
   // Samples inside the tail show the state projected onto the stop: the free flow over Δ∞ sums
   // the tail's impacts into one impulse at its end and dips below the stop on the way; the true
