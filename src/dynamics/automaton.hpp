@@ -152,10 +152,12 @@ class Automaton {
   // at zero gap and zero gap velocity stick.
   bool Held(int j) const { return std::find(held_set_.begin(), held_set_.end(), j) != held_set_.end(); }
   SetStickingT<S>* SetEngine();
+  SetStickingT<S>* SetEngineFor(const std::vector<int>& set, std::string& why);
   bool ImpactWhileSetHeld(int k);
   bool EnterActiveSet(std::vector<int> Z0, const std::vector<int>& was_held, bool emit_sticks = true);
   void ProjectOntoSet(const std::vector<int>& Z);
-  bool HeldChatterGuard(int k, const S& speed, const S& r, const S& floor, int held);
+  int HeldChatter(int k, const S& speed, const S& floor);
+  int TryHeldAccumulation(int k);
   bool SimultaneousImpact(const std::vector<int>& Z);
   S Phase(const ClockT<S>& c) const { return phase0_ + m_.w * c.offset; }
   double AbsTime(const ClockT<S>& c) const {
@@ -248,7 +250,7 @@ class Automaton {
   StickStart stick_start_ = StickStart::kGeneric;
   S chatter_first_{0}, chatter_last_{0};
   // Several contacts: a chattering sequence at one contact while another sticks (ImpactWhileHeld).
-  static constexpr int kHeldChatterImpacts = 64;
+  static constexpr int kHeldChatterImpacts = 4096;
   int held_chatter_ = 0, held_chatter_contact_ = -1;
   double held_chatter_t_ = 0;
   TailPrediction<S> last_tail_;  // the last prediction tried in the current sequence
@@ -876,13 +878,6 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   const S v_minus = mk.ContactVelocity(V_);
   // The held flow's constrained modes are double data whatever S: its rounding floor is double's.
   const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
-  const auto two_stuck = [&](const char* what) {
-    return Fail(fmt::format("contact {} {} at t = {:.17g} while contact {} sticks: sticking on two "
-                            "contacts at once is not implemented (docs/contacts.md). Move the "
-                            "parameter, or change a restitution",
-                            k, what, AbsTime(clock_), j),
-                RunStatus::kUndetermined);
-  };
   if (!(v_minus < -floor)) {
     // Tangential arrival: it leaves only if the held flow pulls it off.
     Emit(EventKind::kGrazing, v_minus, v_minus, k);
@@ -929,22 +924,10 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
     NotifyReset(ResetKind::kHeldSet, X_, V_);
     return EnterActiveSet({j, k}, {j});
   }
-  // A chattering sequence at k while j sticks ends with both stuck: followed until it cannot be.
-  const S speed = -v_minus;
-  // A run of impacts of decreasing speed with flights far shorter than the period is such a
-  // sequence: after kHeldChatterImpacts of them the run ends undetermined, never guessed.
-  const double now = AbsTime(clock_);
-  const bool short_flight = k == held_chatter_contact_ && now - held_chatter_t_ < 1e-2 * R::to_double(period_);
-  const bool converging = short_flight && chatter_last_ > 0 && speed < chatter_last_;
-  held_chatter_ = short_flight ? held_chatter_ + 1 : 0;
-  held_chatter_contact_ = k;
-  held_chatter_t_ = now;
-  if ((converging && rk * speed <= floor) || held_chatter_ >= kHeldChatterImpacts)
-    return two_stuck(converging && rk * speed <= floor
-                         ? "chatters to rest"
-                         : "chatters toward rest (a chattering sequence of shrinking flights)");
-  chatter_last_ = speed;
+  // A chattering sequence at k while j sticks: predicted to its accumulation point when it can be.
   starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+  const int chatter = HeldChatter(k, -v_minus, floor);
+  if (chatter != 0) return chatter > 0;
   const S Rj = mj.Reaction(X_, V_, phase);
   if (!(Rj > 0)) {
     Depart(FlightStart::kDeparture);
@@ -1088,30 +1071,40 @@ static bool SolveLcp(const typename ModelT<S>::Mat& W, const typename ModelT<S>:
   return false;
 }
 
+// The closed-form flow held on `set` (made once per set met), or null with the reason.
 template <class S>
-SetStickingT<S>* Automaton<S>::SetEngine() {
+SetStickingT<S>* Automaton<S>::SetEngineFor(const std::vector<int>& set, std::string& why) {
   for (auto& e : set_engines_)
-    if (e->set() == held_set_) return e.get();
-  const auto fail = [&](const std::string& why) {
-    std::string who;
-    for (const int j : held_set_) who += (who.empty() ? "" : ", ") + std::to_string(j);
-    Fail(fmt::format("contacts {} stick together at t = {:.17g}: {} (docs/contacts.md)", who,
-                     AbsTime(clock_), why),
-         RunStatus::kUndetermined);
+    if (e->set() == set) return e.get();
+  if (cvode_) {
+    why = "the CVODE engine does not hold several contacts at once; use run.engine = \"exact\"";
     return nullptr;
-  };
-  if (cvode_)
-    return fail("the CVODE engine does not hold several contacts at once; use run.engine = \"exact\"");
+  }
   try {
-    auto e = std::make_unique<SetStickingT<S>>(sys_, models_, held_set_);
-    if (e->damped())
-      return fail("the flow held on several contacts of a damped structure has no closed form here "
-                  "(its constrained modes couple through the damping)");
+    auto e = std::make_unique<SetStickingT<S>>(sys_, models_, set);
+    if (e->damped()) {
+      why = "the flow held on several contacts of a damped structure has no closed form here (its "
+            "constrained modes couple through the damping)";
+      return nullptr;
+    }
     set_engines_.push_back(std::move(e));
   } catch (const std::invalid_argument& e) {
-    return fail(e.what());
+    why = e.what();
+    return nullptr;
   }
   return set_engines_.back().get();
+}
+
+template <class S>
+SetStickingT<S>* Automaton<S>::SetEngine() {
+  std::string why;
+  if (SetStickingT<S>* e = SetEngineFor(held_set_, why)) return e;
+  std::string who;
+  for (const int j : held_set_) who += (who.empty() ? "" : ", ") + std::to_string(j);
+  Fail(fmt::format("contacts {} stick together at t = {:.17g}: {} (docs/contacts.md)", who,
+                   AbsTime(clock_), why),
+       RunStatus::kUndetermined);
+  return nullptr;
 }
 
 // Plastic projection onto {g_j = ġ_j = 0, j ∈ Z} (MODEL §11.5.3): Ẋ ← Ẋ − T_Z W_ZZ⁻¹ C_Z Ẋ and
@@ -1235,11 +1228,13 @@ bool Automaton<S>::EnterActiveSet(std::vector<int> Z0, const std::vector<int>& w
   return true;
 }
 
-// A run of impacts at contact k of decreasing speed with flights far shorter than the period while
-// `held` contacts stick is a chattering sequence toward rest with them: followed, and after
-// kHeldChatterImpacts of them (or at the rounding floor) the run ends undetermined, never guessed.
+// After an impact at contact k that bounced while the held contacts stay held: a run of impacts of
+// decreasing speed with flights far shorter than the period is a chattering sequence toward rest
+// beside them. Its accumulation point is predicted when the tail allows it (TryHeldAccumulation);
+// a sequence that reaches the rounding floor (or kHeldChatterImpacts impacts) first is undetermined,
+// never guessed. Returns 1 when the jump was taken, −1 when the run ends, 0 to follow the flight.
 template <class S>
-bool Automaton<S>::HeldChatterGuard(int k, const S& speed, const S& r, const S& floor, int held) {
+int Automaton<S>::HeldChatter(int k, const S& speed, const S& floor) {
   const double now = AbsTime(clock_);
   const bool short_flight = k == held_chatter_contact_ && now - held_chatter_t_ < 1e-2 * R::to_double(period_);
   const bool converging = short_flight && chatter_last_ > 0 && speed < chatter_last_;
@@ -1247,15 +1242,143 @@ bool Automaton<S>::HeldChatterGuard(int k, const S& speed, const S& r, const S& 
   held_chatter_contact_ = k;
   held_chatter_t_ = now;
   chatter_last_ = speed;
-  if ((converging && r * speed <= floor) || held_chatter_ >= kHeldChatterImpacts)
-    return Fail(fmt::format("contact {} {} at t = {:.17g} while {} other contact(s) stick: the "
-                            "accumulation point of a chattering sequence beside held contacts is not "
-                            "predicted (docs/contacts.md). Move the parameter, or change a restitution",
-                            k, converging && r * speed <= floor ? "chatters to rest"
-                                                                : "chatters toward rest",
-                            AbsTime(clock_), held),
-                RunStatus::kUndetermined);
-  return true;
+  if (converging && run_.chatter != ChatterTreatment::kNone) {
+    const int jumped = TryHeldAccumulation(k);
+    if (jumped != 0) return jumped;
+  }
+  const S r = M(k).r;
+  if ((converging && r * speed <= floor) || held_chatter_ >= kHeldChatterImpacts) {
+    std::string held;
+    for (const int j : held_set_.empty() ? std::vector<int>{active_} : held_set_)
+      held += (held.empty() ? "" : ", ") + std::to_string(j);
+    Fail(fmt::format("contact {} chatters {} at t = {:.17g} while contact(s) {} stick, and its "
+                     "accumulation point could not be predicted within run.chatter_tolerance = "
+                     "{:.3g} T before its impact speeds reached {:.3g} (docs/contacts.md). {}",
+                     k, converging && r * speed <= floor ? "to rest" : "toward rest", AbsTime(clock_),
+                     held, R::to_double(chatter_tol_ / period_), R::to_double(r * speed),
+                     UndeterminedHint()),
+         RunStatus::kUndetermined);
+    return -1;
+  }
+  return 0;
+}
+
+// MODEL §11.6 (docs/contacts.md): contact k chatters while the set S (held_set_, or the one held
+// contact) sticks. On the tail's mean path, the state projected onto Z = S ∪ {k}, the contact
+// forces of Z must all be positive and k's gap decelerates under the S-flow at A = −c_kᵀΠ_S a > 0
+// (a the free acceleration, Π_S = I − T_S W_SS⁻¹ C_S); then Δ0 = 2u/((1 − r)A), ε = −ȦΔ0/A
+// (Ȧ along the Z-flow) and Δ∞ = Δ0(1 + ε/3). The prediction is taken only when the whole tail,
+// Δ0, is within run.chatter_tolerance (so is any error of Δ∞ inside it), |ε| ≤ 0.1, and no other
+// contact's gap closes and no held force vanishes over Δ∞ (certified search, k left out).
+template <class S>
+int Automaton<S>::TryHeldAccumulation(int k) {
+  using Mat = typename ModelT<S>::Mat;
+  const ModelT<S>& mk = M(k);
+  const S u = mk.ContactVelocity(V_), r = mk.r;
+  if (!(u > 0) || !(r > 0) || !(r < 1)) return 0;
+  const std::vector<int> held = held_set_.empty() ? std::vector<int>{active_} : held_set_;
+  std::vector<int> Z = held;
+  Z.push_back(k);
+  std::sort(Z.begin(), Z.end());
+  const auto delassus = [&](const std::vector<int>& set) {
+    const auto z = static_cast<Eigen::Index>(set.size());
+    Mat W(z, z);
+    for (Eigen::Index a = 0; a < z; ++a)
+      for (Eigen::Index b = 0; b < z; ++b)
+        W(a, b) = a == b ? M(set[static_cast<size_t>(a)]).s_B
+                         : DelassusOffDiagonal(M(set[static_cast<size_t>(a)]), M(set[static_cast<size_t>(b)]));
+    return W;
+  };
+  // Π_set v = v − T_set W⁻¹ C_set v.
+  const auto project = [&](const std::vector<int>& set, const Vec& v) {
+    const auto z = static_cast<Eigen::Index>(set.size());
+    Vec cv(z);
+    for (Eigen::Index a = 0; a < z; ++a) cv[a] = M(set[static_cast<size_t>(a)]).shape.dot(v);
+    const Vec x = delassus(set).fullPivLu().solve(cv);
+    Vec out = v;
+    for (Eigen::Index a = 0; a < z; ++a) out -= M(set[static_cast<size_t>(a)]).contact * x[a];
+    return out;
+  };
+  const Vec X0 = X_, V0 = V_;
+  ProjectOntoSet(Z);
+  const Vec Xs = X_, Vs = V_;
+  X_ = X0;
+  V_ = V0;
+  const S phase = Phase(clock_);
+  const Vec a_free = -mk.omega.cwiseAbs2().cwiseProduct(Xs) -
+                     S(2) * mk.zeta.cwiseProduct(mk.omega).cwiseProduct(Vs) + mk.forcing * (mk.f * R::sin(phase));
+  // Contact forces of Z on the mean path (all at rest there): W_ZZ λ = −C_Z a_free.
+  {
+    const auto z = static_cast<Eigen::Index>(Z.size());
+    Vec a0(z);
+    for (Eigen::Index a = 0; a < z; ++a) a0[a] = -M(Z[static_cast<size_t>(a)]).shape.dot(a_free);
+    const Vec lam = delassus(Z).fullPivLu().solve(a0);
+    for (Eigen::Index a = 0; a < z; ++a)
+      if (!(lam[a] > 0)) return 0;
+  }
+  // A = uᵀX − κ f sin along the Z-flow (undamped), u = Ω Π_Sᵀc_k, κ = c_kᵀΠ_S T_A / f, with
+  // Π_Sᵀc_k = c_k − C_Sᵀ W_SS⁻¹ W_Sk.
+  Vec pc = mk.shape;
+  {
+    const auto h = static_cast<Eigen::Index>(held.size());
+    Vec wsk(h);
+    for (Eigen::Index a = 0; a < h; ++a) wsk[a] = DelassusOffDiagonal(M(held[static_cast<size_t>(a)]), mk);
+    const Vec x = delassus(held).fullPivLu().solve(wsk);
+    for (Eigen::Index a = 0; a < h; ++a) pc -= M(held[static_cast<size_t>(a)]).shape * x[a];
+  }
+  const S A = -mk.shape.dot(project(held, a_free));
+  if (!(A > 0)) return 0;
+  const Vec acc_Z = project(Z, a_free);
+  const Vec jerk_free = -mk.omega.cwiseAbs2().cwiseProduct(Vs) -
+                        S(2) * mk.zeta.cwiseProduct(mk.omega).cwiseProduct(acc_Z) +
+                        mk.forcing * (mk.f * mk.w * R::cos(phase));
+  const S A_rate = -mk.shape.dot(project(held, jerk_free));
+  const S delta0 = S(2) * u / ((S(1) - r) * A);
+  const S eps = -A_rate * delta0 / A;
+  if (!(R::abs(eps) <= S(kTailEpsilonMax))) return 0;
+  // The estimated error of Δ∞, as for one contact (dynamics/chatter_tail.hpp): the residual of the
+  // linear-A correction, what a quadratic and cubic change of A over [0, 2Δ0] can do (Ä, and a
+  // bound of |A'''| from the modes of the flow held on Z), and k's own stiffness with S held acting
+  // on the O(u²) gap of the tail. Without the Z-flow's closed form (damped), the bound is the
+  // whole tail, Δ0.
+  S error = delta0;
+  std::string why;
+  if (SetStickingT<S>* zf = SetEngineFor(Z, why)) {
+    const Vec u_vec = mk.omega.cwiseAbs2().cwiseProduct(pc);
+    const S kappa = pc.dot(mk.forcing);
+    zf->Begin({Mode::kSticking, phase, clock_.offset, Xs, Vs, S(0), FlightStart::kGeneric,
+               StickStart::kGeneric, Z.front(), nullptr, nullptr, -1});
+    const ProbeT<S> pa = zf->Functional(u_vec, kappa, S(0), S(2) * delta0);
+    const Vec tk = project(held, mk.contact);  // the velocity change of a unit impulse at k, S held
+    const S s_kS = mk.shape.dot(tk);
+    const S wc2 = s_kS > 0 ? S(R::abs(u_vec.dot(tk)) / s_kS) : S(0);
+    const S d = delta0;
+    error = d * (S(0.3) * eps * eps + R::abs(pa.jet.g2) * d * d / (S(2) * A) +
+                 pa.M * d * d * d / (S(6) * A) + wc2 * d * d / 4);
+  }
+  if (!(error <= chatter_tol_)) return 0;
+  const S delta = delta0 * (S(1) + eps / 3);
+  // The held flow over the tail, k left out: nothing else may happen in it.
+  PropagatorT<S>* p = held_set_.empty() ? engine_.get() : static_cast<PropagatorT<S>*>(SetEngine());
+  if (!p) return -1;
+  const SegmentStartT<S> start{Mode::kSticking, phase, clock_.offset, X_, V_, S(0), flight_start_,
+                               StickStart::kGeneric, active_, &gaps_, &starts_, k};
+  p->Begin(start);
+  const auto probe = p->Advance(delta, true, {});
+  if (probe.end == SegmentEnd::kFailure) return 0;  // a stop request is seen by the next segment
+  if (probe.end != SegmentEnd::kLimit) return 0;
+  p->Begin(start);
+  const ClockT<S> from = clock_;
+  p->Advance(delta, false, [&](const S& lo, const S& hi) { EmitStretch(from, *p, lo, hi); });
+  p->Evaluate(delta, X_, V_);
+  AdvanceClock(clock_, delta, period_ - clock_.offset);
+  ProjectOntoSet(Z);
+  ++result_.chatter.accumulations_predicted;
+  const double err = R::to_double(error / period_);
+  if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
+  NotifyReset(ResetKind::kHeldSet, X_, V_);
+  Emit(EventKind::kAccumulation, S(0), S(0), k);
+  return EnterActiveSet(Z, held) ? 1 : -1;
 }
 
 // A free contact k closes while the set S = held_set_ sticks: the impact LCP (I2) on S ∪ {k}
@@ -1310,23 +1433,20 @@ bool Automaton<S>::ImpactWhileSetHeld(int k) {
       stay.push_back(j);
     }
   }
-  if (vk > floor) {
-    starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
-    if (!rest.empty() && !HeldChatterGuard(k, -v_minus, mk.r, floor, static_cast<int>(rest.size())))
-      return false;
-  } else {
-    rest.push_back(k);
-  }
-  const long long followed = held_chatter_;
-  const int contact = held_chatter_contact_;
+  if (vk > floor) starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+  else rest.push_back(k);
+  const int followed = held_chatter_, contact = held_chatter_contact_;
   const double t = held_chatter_t_;
   const S last = chatter_last_;
   if (!EnterActiveSet(rest, stay)) return false;
-  if (vk > floor) {  // keep the sequence's bookkeeping across the re-entry
-    held_chatter_ = static_cast<int>(followed);
+  if (vk > floor && mode_ == Mode::kSticking && held_set_ == was) {
+    // The set holds and k bounced: a chattering sequence beside it, its bookkeeping kept.
+    held_chatter_ = followed;
     held_chatter_contact_ = contact;
     held_chatter_t_ = t;
     chatter_last_ = last;
+    const int chatter = HeldChatter(k, -v_minus, floor);
+    if (chatter != 0) return chatter > 0;
   }
   return true;
 }

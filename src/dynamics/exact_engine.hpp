@@ -348,10 +348,14 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
   using R = Real<S>;
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const Vec& w = cd.held_weights[static_cast<size_t>(k)];
+  // The gap is its value at the start plus increments (as a flight's, docs/model.md §2): at σ = 0
+  // it is exactly the automaton's, whatever the rounding of the constrained modes (a gap snapped
+  // to 0 by an impact stays 0 there, so a chattering sequence beside a held contact gains no
+  // energy from the reconstruction of the state).
   // Modal damping: the damped constrained flow's closed form (docs/model.md §7).
-  if (damped_sticking_) return Damped().LinearProbe(w, cd.held_base[static_cast<size_t>(k)], sigma);
+  if (damped_sticking_) return Damped().LinearProbe(w, gap0s_[static_cast<size_t>(k)] - w.dot(xi0_), sigma);
   const ForcingTrigT<S> fw(omega_, sigma);
-  ProbeT<S> p{{cd.held_base[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
+  ProbeT<S> p{{gap0s_[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
   const S sf = fw.SinPhase(trig_);
   for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
     const auto qq = static_cast<Eigen::Index>(q);
@@ -360,7 +364,7 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
     const auto st = Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
     const S xi = xi0_[qq] + st.dq;
     const S acc = -o.nu * o.nu * xi + o.F * sf;
-    p.jet.g += w[qq] * xi;
+    p.jet.g += w[qq] * st.dq;
     p.jet.g1 += w[qq] * st.v;
     p.jet.g2 += w[qq] * acc;
     p.M += R::abs(w[qq]) * Bounds<S>(o, omega_, Amplitude<S>(o, xi, st.v) + R::abs(o.F) * H).d3;

@@ -67,6 +67,11 @@ class SetStickingT final : public PropagatorT<S> {
     dy0_ = left_ * s.V;
     starts_.assign(held_.size(), FlightStart::kGeneric);
     if (s.starts) starts_ = *s.starts;
+    skip_ = s.skip;
+    // Every free gap as its start value plus increments (exactly the automaton's at σ = 0).
+    gap0_.assign(held_.size(), S(0));
+    for (size_t k = 0; k < held_.size(); ++k)
+      if (!held_[k]) gap0_[k] = s.gaps ? (*s.gaps)[k] : bases_[k] + weights_[k].dot(y0_);
   }
 
   SegmentResultT<S> Advance(S sigma_max, bool detect, const StretchCallbackT<S>& cb) override {
@@ -97,7 +102,7 @@ class SetStickingT final : public PropagatorT<S> {
         Keep(best, r, h_.set[a]);
       }
       for (size_t k = 0; k < held_.size(); ++k) {
-        if (held_[k] || weights_[k].size() == 0 || weights_[k].cwiseAbs().maxCoeff() == S(0)) continue;
+        if (held_[k] || static_cast<int>(k) == skip_ || weights_[k].size() == 0 || weights_[k].cwiseAbs().maxCoeff() == S(0)) continue;
         const FlightStart start = starts_[k];
         S w(0);
         if (start != FlightStart::kGeneric) w = CertifiedWindow<S>(start, GapStartJet(k), h_cap_);
@@ -123,6 +128,11 @@ class SetStickingT final : public PropagatorT<S> {
     if (held_[static_cast<size_t>(j)]) return S(0);
     return GapProbe(static_cast<size_t>(j), sigma, S(0)).jet.g;
   }
+  // A linear functional uᵀX − κ f sin(φ + ωσ) of the held flow: its two derivatives at σ and a
+  // bound of its third over [σ, σ + H] (a chattering tail's gap deceleration, docs/contacts.md).
+  ProbeT<S> Functional(const Vec& u, const S& kappa, const S& sigma, const S& H) const {
+    return LinearProbe(vectors_.transpose() * u, u.dot(base_), kappa * f_, sigma, H);
+  }
   // The contact force of held contact `contact` and its two derivatives at σ.
   JetT<S> Force(int contact, const S& sigma) const {
     const auto it = std::find(h_.set.begin(), h_.set.end(), contact);
@@ -142,8 +152,10 @@ class SetStickingT final : public PropagatorT<S> {
     }
   }
 
-  // base + wᵀy − c f sin(φ + ωσ) with its jet and a bound of its third derivative over [σ, σ + H].
-  ProbeT<S> LinearProbe(const Vec& w, const S& base, const S& c, const S& sigma, const S& H) const {
+  // base + wᵀy − c f sin(φ + ωσ) (`increments`: base + wᵀ(y − y0), base the value at σ = 0) with
+  // its jet and a bound of its third derivative over [σ, σ + H].
+  ProbeT<S> LinearProbe(const Vec& w, const S& base, const S& c, const S& sigma, const S& H,
+                        bool increments = false) const {
     const ForcingTrigT<S> fw(omega_, sigma);
     const S sf = fw.SinPhase(trig_), cf = fw.CosPhase(trig_);
     ProbeT<S> p{{base - c * sf, -c * omega_ * cf, c * omega_ * omega_ * sf},
@@ -155,7 +167,7 @@ class SetStickingT final : public PropagatorT<S> {
       const auto st = Flow<S>(o, omega_, trig_, y0_[qq], dy0_[qq], sigma, fw);
       const S y = y0_[qq] + st.dq;
       const S acc = -o.nu * o.nu * y + o.F * sf;
-      p.jet.g += w[qq] * y;
+      p.jet.g += w[qq] * (increments ? st.dq : y);
       p.jet.g1 += w[qq] * st.v;
       p.jet.g2 += w[qq] * acc;
       p.M += R::abs(w[qq]) * Bounds<S>(o, omega_, Amplitude<S>(o, y, st.v) + R::abs(o.F) * H).d3;
@@ -168,7 +180,7 @@ class SetStickingT final : public PropagatorT<S> {
     return LinearProbe(lam_rho_.row(aa).transpose(), lam_static_[aa], lam_forcing_[aa] * f_, sigma, H);
   }
   ProbeT<S> GapProbe(size_t k, const S& sigma, const S& H) const {
-    return LinearProbe(weights_[k], bases_[k], S(0), sigma, H);
+    return LinearProbe(weights_[k], gap0_[k], S(0), sigma, H, true);
   }
   // A gap's derivatives at σ = 0 and bounds of its third and fourth over [0, h_cap] (a contact
   // that starts at zero: after an impact, a departure or a release while the set is held).
@@ -218,9 +230,10 @@ class SetStickingT final : public PropagatorT<S> {
   Vec lam_forcing_;
   std::vector<OscillatorT<S>> modes_;
   std::vector<Vec> weights_;  // g_k = bases_[k] + weights_[k]ᵀ y for a contact not held
-  std::vector<S> bases_;
+  std::vector<S> bases_, gap0_;
   std::vector<bool> held_;
   std::vector<FlightStart> starts_;
+  int skip_ = -1;  // a contact left out of the search (a chattering tail's own)
   S phase_{0};
   PhaseTrigT<S> trig_{S(0)};
   Vec y0_, dy0_;
