@@ -118,4 +118,26 @@ Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double 
   return p;
 }
 
+FlightJet DampedSticking::StartJet(const Eigen::VectorXd& w) const {
+  const auto& cm = sys_.contacts()[static_cast<size_t>(contact_)].constrained;
+  const Eigen::VectorXd xi = z0_.head(k_), eta = z0_.tail(k_), F = h_.tail(k_);
+  const Eigen::VectorXd w2 = cm.frequencies.cwiseAbs2();
+  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - cm.damping * eta + F * std::sin(phase_);
+  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - cm.damping * acc + F * (omega_ * std::cos(phase_));
+  FlightJet j{w.dot(eta), w.dot(acc), w.dot(jerk), 0.0, 0.0};
+  // |g^(p)| ≤ Σ_j |wᵀW_j| |c_j| |λ_j|^p + |wᵀq| ω^p for every σ ≥ 0 (Re λ_j ≤ 0).
+  const Eigen::VectorXcd ww = (w.transpose().cast<std::complex<double>>() * W_.topRows(k_)).transpose();
+  const double wq = std::abs(w.cast<std::complex<double>>().dot(q_.head(k_)));
+  j.M3 = wq * std::pow(omega_, 3);
+  j.M4 = wq * std::pow(omega_, 4);
+  for (Eigen::Index i = 0; i < 2 * k_; ++i) {
+    const double l = std::abs(lambda_[i]), a = std::abs(ww[i]) * std::abs(c0_[i]);
+    j.M3 += a * l * l * l;
+    j.M4 += a * l * l * l * l;
+  }
+  j.M3 *= 1.0 + 1e-9;
+  j.M4 *= 1.0 + 1e-9;
+  return j;
+}
+
 }  // namespace vibro::detail

@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 
+#include "dynamics/flight_window.hpp"
 #include "dynamics/root_finder.hpp"
 #include "vibro/system.hpp"
 
@@ -41,6 +42,9 @@ class DampedStickingT<double> {
   // g = base + wᵀξ (another contact's gap while this one is held, docs/contacts.md) and its two
   // derivatives at σ, with a bound on |d³g/dσ³| valid for every σ' ≥ σ, as ReactionProbe.
   Probe LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const;
+  // Its derivatives g', g'', g''' at σ = 0 and bounds of |g'''|, |g''''| for every σ ≥ 0 (a gap
+  // that starts at zero under the held flow, docs/model.md §2.1).
+  FlightJet StartJet(const Eigen::VectorXd& w) const;
 
  private:
   const System& sys_;

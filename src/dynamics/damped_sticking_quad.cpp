@@ -197,4 +197,29 @@ ProbeT<Quad> DampedStickingT<Quad>::LinearProbe(const Vec& w, const Quad& base, 
   return p;
 }
 
+FlightJetT<Quad> DampedStickingT<Quad>::StartJet(const Vec& w) const {
+  const Vec xi = z0_.head(k_), eta = z0_.tail(k_);
+  Quad s, c;
+  R::sincos(phase_, s, c);
+  const Vec acc = -w2_.cwiseProduct(xi) - damping_ * eta + F_ * s;
+  const Vec jerk = -w2_.cwiseProduct(eta) - damping_ * acc + F_ * (omega_ * c);
+  FlightJetT<Quad> j{w.dot(eta), w.dot(acc), w.dot(jerk), Quad(0), Quad(0)};
+  // |g^(p)| ≤ Σ_j |wᵀW_j| |c_j| |λ_j|^p + |wᵀq| ω^p for every σ ≥ 0 (Re λ_j ≤ 0).
+  C wq(0);
+  for (Eigen::Index i = 0; i < k_; ++i) wq += w[i] * q_[i];
+  const Quad o3 = omega_ * omega_ * omega_;
+  j.M3 = Abs(wq) * o3;
+  j.M4 = Abs(wq) * o3 * omega_;
+  for (Eigen::Index jj = 0; jj < 2 * k_; ++jj) {
+    C wj(0);
+    for (Eigen::Index i = 0; i < k_; ++i) wj += w[i] * W_(i, jj);
+    const Quad l = Abs(lambda_[jj]), a = Abs(wj) * Abs(c0_[jj]);
+    j.M3 += a * l * l * l;
+    j.M4 += a * l * l * l * l;
+  }
+  j.M3 *= Quad(1) + Quad(1e-9);
+  j.M4 *= Quad(1) + Quad(1e-9);
+  return j;
+}
+
 }  // namespace vibro::detail

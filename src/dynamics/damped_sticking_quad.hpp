@@ -40,6 +40,8 @@ class DampedStickingT<Quad> {
   ProbeT<Quad> ReactionProbe(const Quad& sigma) const;
   // g = base + wᵀξ and its two derivatives, with a bound on |d³g/dσ³| (as the double twin's).
   ProbeT<Quad> LinearProbe(const Vec& w, const Quad& base, const Quad& sigma) const;
+  // Its derivatives g', g'', g''' at σ = 0 and bounds of |g'''|, |g''''| for every σ ≥ 0.
+  FlightJetT<Quad> StartJet(const Vec& w) const;
 
   // The refined decomposition, for tests: eigenvalues λ_j, and the residual
   // max |G W − W Λ| / (max|G| · max|W|) after refinement (of the order of the quad rounding unit).

@@ -375,15 +375,14 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
 
 // The jet of g_k at the start of a held phase, with bounds of |g'''| and |g''''| over [0, h_cap]
 // (a gap that starts at zero: after an impact, a departure, or a release of a contact held with
-// this one, docs/contacts.md). Damped: the linear probe's jet and bound (no g''', so no window
-// after a release, which only follows sticking on several contacts of an undamped structure).
+// this one, docs/contacts.md); damped, those of the damped closed form.
 template <class S>
 FlightJetT<S> ExactEngineT<S>::HeldGapStartJet(int k) const {
-  const ProbeT<S> p0 = HeldGapProbe(k, S(0), h_cap_);
-  FlightJetT<S> j{p0.jet.g1, p0.jet.g2, S(0), p0.M, S(0)};
-  if (damped_sticking_) return j;
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const Vec& w = cd.held_weights[static_cast<size_t>(k)];
+  if (damped_sticking_) return Damped().StartJet(w);
+  const ProbeT<S> p0 = HeldGapProbe(k, S(0), h_cap_);
+  FlightJetT<S> j{p0.jet.g1, p0.jet.g2, S(0), p0.M, S(0)};
   S M4(0);
   for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
     const auto qq = static_cast<Eigen::Index>(q);
