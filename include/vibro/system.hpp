@@ -55,8 +55,8 @@ struct ContactModel {
 // Sticking on a set S of two or more contacts at once (docs/contacts.md, "Sticking on several
 // contacts"): on {g_j = ġ_j = 0, j ∈ S} the state is X = base + vectors·y with
 // ÿ_k + damping ẏ + ν_k² y_k = modal_forcing_k f sin ωt, y = left·(X − base), and the contact
-// forces are λ = reaction_static + reaction·y − reaction_forcing f sin ωt (undamped; rows in the
-// order of `set`). `vectors` are orthonormal in the modal masses of the scaling, so `left` = Vᵀμ.
+// forces are λ = reaction_static + reaction·y + reaction_velocity·ẏ − reaction_forcing f sin ωt
+// (rows in the order of `set`). `vectors` are orthonormal in the modal masses of the scaling, so `left` = Vᵀμ.
 struct HeldSetModes {
   std::vector<int> set;            // the held contacts, ascending
   Eigen::VectorXd base;            // X_p: on every stop of S, the static response to the forces
@@ -67,6 +67,7 @@ struct HeldSetModes {
   Eigen::VectorXd reaction_static;   // W_SS⁻¹ e_S-part: λ at y = 0 without forcing, (|S|)
   Eigen::MatrixXd reaction;          // W_SS⁻¹ C_S Ω V, (|S|, n − |S|)
   Eigen::VectorXd reaction_forcing;  // W_SS⁻¹ C_S T_A, (|S|)
+  Eigen::MatrixXd reaction_velocity;  // W_SS⁻¹ C_S D V: damped, λ gains reaction_velocity·ẏ
   Eigen::MatrixXd damping;         // VᵀμDV, (n − |S|)²: zero when undamped
 };
 

@@ -929,7 +929,8 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   const int chatter = HeldChatter(k, -v_minus, floor);
   if (chatter != 0) return chatter > 0;
   const S Rj = mj.Reaction(X_, V_, phase);
-  if (!(Rj > 0)) {
+  if (!(Rj > 0)) {  // j leaves at zero velocity: its release
+    Emit(EventKind::kRelease, S(0), S(0), j);
     Depart(FlightStart::kDeparture);
     gap_ = 0;
     gaps_[static_cast<size_t>(j)] = 0;
@@ -1082,9 +1083,9 @@ SetStickingT<S>* Automaton<S>::SetEngineFor(const std::vector<int>& set, std::st
   }
   try {
     auto e = std::make_unique<SetStickingT<S>>(sys_, models_, set);
-    if (e->damped()) {
-      why = "the flow held on several contacts of a damped structure has no closed form here (its "
-            "constrained modes couple through the damping)";
+    if (!e->ok()) {
+      why = "the damped flow held on them is defective (a critically damped held mode): no closed "
+            "form; change structure.damping_ratios slightly";
       return nullptr;
     }
     set_engines_.push_back(std::move(e));
@@ -1339,22 +1340,26 @@ int Automaton<S>::TryHeldAccumulation(int k) {
   // The estimated error of Δ∞, as for one contact (dynamics/chatter_tail.hpp): the residual of the
   // linear-A correction, what a quadratic and cubic change of A over [0, 2Δ0] can do (Ä, and a
   // bound of |A'''| from the modes of the flow held on Z), and k's own stiffness with S held acting
-  // on the O(u²) gap of the tail. Without the Z-flow's closed form (damped), the bound is the
-  // whole tail, Δ0.
+  // on the O(u²) gap of the tail, and the damping k's velocity feels (3 times its first-order
+  // effect, as for one contact). Without the Z-flow (a defective damped one), the whole tail, Δ0.
   S error = delta0;
   std::string why;
   if (SetStickingT<S>* zf = SetEngineFor(Z, why)) {
     const Vec u_vec = mk.omega.cwiseAbs2().cwiseProduct(pc);
+    const Vec D = S(2) * mk.zeta.cwiseProduct(mk.omega);
+    const Vec u_v = D.cwiseProduct(pc);
     const S kappa = pc.dot(mk.forcing);
     zf->Begin({Mode::kSticking, phase, clock_.offset, Xs, Vs, S(0), FlightStart::kGeneric,
                StickStart::kGeneric, Z.front(), nullptr, nullptr, -1});
-    const ProbeT<S> pa = zf->Functional(u_vec, kappa, S(0), S(2) * delta0);
+    const ProbeT<S> pa = zf->Functional(u_vec, u_v, kappa, S(0), S(2) * delta0);
     const Vec tk = project(held, mk.contact);  // the velocity change of a unit impulse at k, S held
     const S s_kS = mk.shape.dot(tk);
     const S wc2 = s_kS > 0 ? S(R::abs(u_vec.dot(tk)) / s_kS) : S(0);
+    // β: the damping k's own gap velocity feels with S held (g'' = −A − β g' over a flight).
+    const S beta = s_kS > 0 ? S(R::abs(u_v.dot(tk)) / s_kS) : S(0);
     const S d = delta0;
     error = d * (S(0.3) * eps * eps + R::abs(pa.jet.g2) * d * d / (S(2) * A) +
-                 pa.M * d * d * d / (S(6) * A) + wc2 * d * d / 4);
+                 pa.M * d * d * d / (S(6) * A) + wc2 * d * d / 4 + beta * d / 2);
   }
   if (!(error <= chatter_tol_)) return 0;
   const S delta = delta0 * (S(1) + eps / 3);

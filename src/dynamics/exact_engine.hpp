@@ -353,7 +353,7 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
   // to 0 by an impact stays 0 there, so a chattering sequence beside a held contact gains no
   // energy from the reconstruction of the state).
   // Modal damping: the damped constrained flow's closed form (docs/model.md §7).
-  if (damped_sticking_) return Damped().LinearProbe(w, gap0s_[static_cast<size_t>(k)] - w.dot(xi0_), sigma);
+  if (damped_sticking_) return Damped().LinearProbe(w, gap0s_[static_cast<size_t>(k)], sigma);
   const ForcingTrigT<S> fw(omega_, sigma);
   ProbeT<S> p{{gap0s_[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
   const S sf = fw.SinPhase(trig_);

@@ -1,6 +1,7 @@
 // Sticking on two or more contacts at once (docs/contacts.md, "Sticking on several contacts"):
 // the held flow X = X_p + V y of System::HeldOn in closed form (undamped constrained modes, one
-// oscillator each), the contact force of every held contact and the gap of every other contact as
+// oscillator each; damped, the first-order closed form of dynamics/damped_sticking.hpp), the
+// contact force of every held contact and the gap of every other contact as
 // linear functionals of y, and the first certified root over all of them (docs/model.md §2.1):
 // a held contact's force reaching 0 ends the segment as a release candidate (SegmentEnd::kRelease,
 // `contact` the contact), another gap reaching 0 as a contact (kContact).
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <vector>
 
+#include "dynamics/damped_sticking.hpp"
 #include "dynamics/flight_window.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/oscillator.hpp"
@@ -41,6 +43,17 @@ class SetStickingT final : public PropagatorT<S> {
     for (Eigen::Index k = 0; k < h_.frequencies.size(); ++k)
       modes_.push_back({S(h_.frequencies[k]), S(0), S(h_.modal_forcing[k]) * f_});
     damped_ = h_.damping.size() > 0 && h_.damping.cwiseAbs().maxCoeff() > 0;
+    if (damped_) {
+      // One damped closed form per held force (the same flow, each with its force's data).
+      for (Eigen::Index a = 0; a < static_cast<Eigen::Index>(set.size()); ++a) {
+        const DampedFlowData d{sys.frequency(), sys.amplitude(), h_.frequencies, h_.modal_forcing,
+                               h_.damping, h_.reaction_static[a],
+                               h_.reaction_forcing[a] * sys.amplitude(),
+                               h_.reaction.row(a).transpose(), h_.reaction_velocity.row(a).transpose()};
+        flows_.emplace_back(d);
+        ok_ = ok_ && flows_.back().ok();
+      }
+    }
     S fastest = omega_;
     for (const auto& o : modes_) fastest = o.nu > fastest ? o.nu : fastest;
     h_cap_ = S(0.25) * S(2) * R::pi() / fastest;
@@ -57,7 +70,8 @@ class SetStickingT final : public PropagatorT<S> {
   }
 
   const std::vector<int>& set() const { return h_.set; }
-  // Damped constrained modes couple (non-proportional damping): no closed form here.
+  // The damped closed form exists (false for a defective system, e.g. exactly critical damping).
+  bool ok() const { return ok_; }
   bool damped() const { return damped_; }
 
   void Begin(const SegmentStartT<S>& s) override {
@@ -65,6 +79,7 @@ class SetStickingT final : public PropagatorT<S> {
     trig_ = PhaseTrigT<S>(s.phase);
     y0_ = left_ * (s.X - base_);
     dy0_ = left_ * s.V;
+    for (auto& fl : flows_) fl.Begin(y0_, dy0_, s.phase);
     starts_.assign(held_.size(), FlightStart::kGeneric);
     if (s.starts) starts_ = *s.starts;
     skip_ = s.skip;
@@ -130,7 +145,11 @@ class SetStickingT final : public PropagatorT<S> {
   }
   // A linear functional uᵀX − κ f sin(φ + ωσ) of the held flow: its two derivatives at σ and a
   // bound of its third over [σ, σ + H] (a chattering tail's gap deceleration, docs/contacts.md).
-  ProbeT<S> Functional(const Vec& u, const S& kappa, const S& sigma, const S& H) const {
+  // Damped, the functional may also depend on the velocity: uᵀX + u_vᵀẊ − κ f sin.
+  ProbeT<S> Functional(const Vec& u, const Vec& u_v, const S& kappa, const S& sigma, const S& H) const {
+    if (damped_)
+      return flows_.front().FunctionalProbe(vectors_.transpose() * u, vectors_.transpose() * u_v,
+                                            u.dot(base_), kappa * f_, sigma);
     return LinearProbe(vectors_.transpose() * u, u.dot(base_), kappa * f_, sigma, H);
   }
   // The contact force of held contact `contact` and its two derivatives at σ.
@@ -141,6 +160,10 @@ class SetStickingT final : public PropagatorT<S> {
 
  private:
   void Modes(const S& sigma, Vec& y, Vec& dy) const {
+    if (damped_) {
+      flows_.front().Evaluate(sigma, y, dy);
+      return;
+    }
     const auto k = static_cast<Eigen::Index>(modes_.size());
     y.resize(k);
     dy.resize(k);
@@ -176,15 +199,18 @@ class SetStickingT final : public PropagatorT<S> {
     return p;
   }
   ProbeT<S> ForceProbe(size_t a, const S& sigma, const S& H) const {
+    if (damped_) return flows_[a].ReactionProbe(sigma);
     const auto aa = static_cast<Eigen::Index>(a);
     return LinearProbe(lam_rho_.row(aa).transpose(), lam_static_[aa], lam_forcing_[aa] * f_, sigma, H);
   }
   ProbeT<S> GapProbe(size_t k, const S& sigma, const S& H) const {
+    if (damped_) return flows_.front().LinearProbe(weights_[k], gap0_[k], sigma);
     return LinearProbe(weights_[k], gap0_[k], S(0), sigma, H, true);
   }
   // A gap's derivatives at σ = 0 and bounds of its third and fourth over [0, h_cap] (a contact
   // that starts at zero: after an impact, a departure or a release while the set is held).
   FlightJetT<S> GapStartJet(size_t k) const {
+    if (damped_) return flows_.front().StartJet(weights_[k]);
     FlightJetT<S> j{S(0), S(0), S(0), S(0), S(0)};
     const Vec& w = weights_[k];
     for (size_t q = 0; q < modes_.size(); ++q) {
@@ -222,7 +248,8 @@ class SetStickingT final : public PropagatorT<S> {
 
   HeldSetModes h_;
   S omega_, f_, h_cap_{0};
-  bool damped_ = false;
+  bool damped_ = false, ok_ = true;
+  std::vector<DampedStickingT<S>> flows_;  // damped: one per held force
   Vec base_;
   Mat vectors_, left_;
   Vec lam_static_;

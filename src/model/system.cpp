@@ -399,6 +399,7 @@ HeldSetModes System::HeldOn(const std::vector<int>& set) const {
   h.reaction = wlu.solve(C * w2.asDiagonal() * h.vectors);
   const Eigen::VectorXd D = 2.0 * zeta_.cwiseProduct(omega_);
   h.damping = h.left * D.asDiagonal() * h.vectors;
+  h.reaction_velocity = wlu.solve(C * D.asDiagonal() * h.vectors);
   return h;
 }
 
