@@ -60,7 +60,7 @@
 //                    acceleration LCP a = a⁰ + Wλ, 0 ≤ λ ⊥ a ≥ 0: λ_j > 0 → stick (emit stick for
 //                    the new ones), else leave at zero velocity (emit release if it was held);
 //                    none held → free flight; λ_j = a_j = 0 → undetermined (degenerate entry); a
-//                    held set of a damped structure with free modes, or with CVODE → undetermined
+//                    held set with CVODE, or a defective damped held flow → undetermined
 //
 // Simultaneous events: a guard met exactly at a period boundary is handled after the section
 // point is recorded (the section sees x⁻). Two guards at one instant are handled in the order
