@@ -87,6 +87,8 @@ struct Checkpoint {
   std::vector<double> gaps;
   std::vector<int> start_kinds;
   std::vector<EventCounts> contact_counts;
+  // Sticking on two or more contacts at once: the held contacts, ascending (empty otherwise).
+  std::vector<int> held;
 };
 
 // For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and
@@ -103,6 +105,7 @@ enum class ResetKind {
   kRelease,        // sticking → free at R = 0 (no jump: the saltation is the identity)
   kAccumulation,   // docs/model.md §5.4: free flight over `delta` from the post-impact state, projection
   kGrazing,        // tangential touch that stays free (the maps are singular there)
+  kHeldSet,        // two or more contacts held at once, entered or left (docs/contacts.md): no tangent
 };
 struct Reset {
   ResetKind kind;

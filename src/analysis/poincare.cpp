@@ -404,6 +404,7 @@ void TangentTracker::OnReset(const Reset& r) {
       held_ = -1;
       break;  // free and constrained fields coincide at R = 0: S = I
     case ResetKind::kGrazing:
+    case ResetKind::kHeldSet:  // no tangent across a change of a held set (docs/contacts.md)
       singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
       break;
     case ResetKind::kAccumulation: {
