@@ -404,8 +404,11 @@ void TangentTracker::OnReset(const Reset& r) {
       held_ = -1;
       break;  // free and constrained fields coincide at R = 0: S = I
     case ResetKind::kGrazing:
-    case ResetKind::kHeldSet:  // no tangent across a change of a held set (docs/contacts.md)
       singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
+      break;
+    case ResetKind::kHeldSet:  // entering or leaving a set of several held contacts
+      Undefined("sticking on two or more contacts at once: its tangent map is not implemented");
+      held_ = -2;
       break;
     case ResetKind::kAccumulation: {
       // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop
