@@ -420,6 +420,7 @@ class Reader {
 
   void Require(const std::string& path) {
     if (!Find(path)) {
+      reported_.push_back(path);  // the physics check of a missing key says nothing more
       const auto dot = path.rfind('.');
       const toml::node* table = dot == std::string::npos ? nullptr : Find(path.substr(0, dot));
       messages_.push_back(fmt::format("{}: {}: missing required key", Where(table), path));

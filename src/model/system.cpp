@@ -210,6 +210,8 @@ void System::BuildContacts(const Scene& scene) {
       if (sp.partner >= 0) w -= mode_shapes_.row(sp.partner).transpose();
     } else {
       // Modal form: the components as given, for the kept modes (docs/contacts.md).
+      if (sp.modal.size() != scene.modal->frequencies.size())
+        throw std::invalid_argument("contact " + std::to_string(j) + " needs one modal component per mode");
       for (int i = 0; i < dof(); ++i) w[i] = sp.modal[kept_[static_cast<size_t>(i)]];
     }
     c.shape = sigma * w;  // c_j,i = σ_j w_jᵀψ_i

@@ -1,9 +1,9 @@
 """[[contact]] tables in the modal form (docs/contacts.md, "the modal form") against an independent
 truth: the physical-form scene of the same structure.
 
-Every physical-form scene with several contacts (the five data/scenes/contacts_*.toml, the
-coupled-chattering scene of tests/reference/contacts, and the impact pair with its contacts in the
-other order, so that contact 0 is a stop "above") is rewritten in the modal form here, with NumPy
+Every shipped physical-form scene with several contacts (the five data/scenes/contacts_*.toml,
+and the impact pair with its contacts in the other order, so that contact 0 is a stop "above") is
+rewritten in the modal form here, with NumPy
 and none of vibro's code: K φ = λ M φ through a Cholesky factor of M, the modes scaled to contact 0
 (σ_0 w_0ᵀψ_i = 1), μ_i = ψ_iᵀMψ_i, T_A,i = ψ_i(A)/μ_i, T_B,i = 1/μ_i, contact j's components
 a_j,i = w_jᵀψ_i, the start X = Ψ⁻¹q. Both scenes run through `vibro simulate`; their events must
@@ -13,7 +13,10 @@ rounding of two eigen-decompositions (NumPy's here, Eigen's in vibro), a few 1e-
 events move by that times the sensitivity of the motion, which near the end of a chattering
 sequence (the landing where the reaction is small) reaches 1e4–1e6. 1e-10 T is the tolerance vibro
 is held to against the 40-digit reference (docs/contacts_reference.md); the measured differences
-are printed (pytest -s).
+are printed (pytest -s). Not here: the coupled-chattering scene of tests/reference/contacts, whose
+chattering sequence with a held pair amplifies any perturbation about 1.9 times per impact
+(docs/contacts_reference.md): its two forms measured 8.6e-11 T apart after 80 events, too close
+to the tolerance for a test.
 
 data/scenes/contacts_chain2_modal.toml is the same check with the modes derived by hand in closed
 form (its comment). The Python package runs it too, and bad modal-form contacts exit 2 naming the
@@ -33,7 +36,6 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
 CLI = os.environ.get("VIBRO_CLI", "")
 SCENES = os.environ.get("VIBRO_SCENES", os.path.join(ROOT, "data", "scenes"))
-COUPLED = os.path.join(ROOT, "tests", "reference", "contacts", "scenes", "contacts_coupled_chatter.toml")
 
 TIME_TOL = 1e-10  # of the forcing period
 VEL_TOL = 1e-8    # relative to 1 + |v|
@@ -153,7 +155,6 @@ def cases():
     for name in ("contacts_two_sided_1dof", "contacts_preload_clearance_1dof", "contacts_chain2",
                  "contacts_impact_pair", "contacts_beam3"):
         out.append(pytest.param(os.path.join(SCENES, name + ".toml"), False, id=name))
-    out.append(pytest.param(COUPLED, False, id="contacts_coupled_chatter"))
     out.append(pytest.param(os.path.join(SCENES, "contacts_impact_pair.toml"), True, id="impact_pair_above_first"))
     return out
 
@@ -247,15 +248,16 @@ def bad(tmp_path, second, key, words, line=None, side="below", p0=-0.5, p1=-0.5,
 
 
 def test_wrong_length(tmp_path):
-    bad(tmp_path, "modal = [1.0, 2.0]", "contact[1].modal", ["length 3 expected", "got 2"], line=13)
+    bad(tmp_path, "modal = [1.0, 2.0]", "contact[1].modal", ["length 3 expected", "got 2"], line=12)
 
 
 def test_missing_modal(tmp_path):
-    bad(tmp_path, "", "contact[1].modal", ["missing required key"])
+    err = bad(tmp_path, "", "contact[1].modal", ["missing required key"], line=11)
+    assert err.count("contact[1].modal") == 1, err
 
 
 def test_dof_in_the_modal_form(tmp_path):
-    bad(tmp_path, "dof = 1", "contact[1].dof", ["modal form names no DOF"], line=13)
+    bad(tmp_path, "dof = 1", "contact[1].dof", ["modal form names no DOF", "contact[1].modal: missing"], line=12)
 
 
 def test_modal_on_contact_zero(tmp_path):
@@ -266,7 +268,7 @@ def test_modal_on_contact_zero(tmp_path):
                                  initial=""))
     p = subprocess.run([cli(), "simulate", str(path), "--out", str(tmp_path / "c0.h5")], capture_output=True,
                        text=True, timeout=60)
-    assert p.returncode == 2 and f"{path}:8:" in p.stderr and "contact[0].modal" in p.stderr, p.stderr
+    assert p.returncode == 2 and f"{path}:7:" in p.stderr and "contact[0].modal" in p.stderr, p.stderr
     assert "contact of the modal scaling" in p.stderr
     assert not (tmp_path / "c0.h5").exists()
 
@@ -279,7 +281,7 @@ def test_contact_on_no_kept_mode(tmp_path):
 
 def test_dependent_contacts(tmp_path):
     # c_1 = 2 c_0 on the same side: dependent
-    bad(tmp_path, "modal = [2.0, 2.0, 2.0]", "contact[1].modal", ["dependent", "contacts 0 and 1"], line=13)
+    bad(tmp_path, "modal = [2.0, 2.0, 2.0]", "contact[1].modal", ["dependent", "contacts 0 and 1"], line=12)
     # the opposite side with overlapping stops: g_0 = ΣX + 0.5 ≥ 0 and g_1 = −ΣX/... must leave room
     bad(tmp_path, "modal = [1.0, 1.0, 1.0]", "contact[1].position", ["positive clearance"], side="above",
         p1=-0.6)
