@@ -191,6 +191,11 @@ def test_shipped_modal_scene_matches_the_physical_one(tmp_path):
     dt, dv, dx = compare(a, b, period)
     print(f"contacts_chain2_modal: {len(a['t'])} events, max |dt|/T = {dt:.2g}, |dv| = {dv:.2g}")
     assert dt <= TIME_TOL and dv <= VEL_TOL and dx <= VEL_TOL
+    # `vibro plot` draws every gap from the modal coordinates (no mode shapes in the modal form)
+    p = subprocess.run([cli(), "plot", "m.h5"], cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "MPLBACKEND": "Agg"})
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "m_gaps.png").stat().st_size > 10000
 
 
 def test_python_package_runs_the_modal_scene(tmp_path):
