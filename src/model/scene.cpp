@@ -359,9 +359,10 @@ std::vector<InputIssue> Validate(const Scene& s) {
   }
   const System& sys = *built;
   if (s.modal && sys.contact_count() > 1) {
-    // Modal form: two contacts are dependent when c_k ∥ c_j on the kept modes (MODEL §11.1.3 in the
-    // docs: W_jk² = W_jj W_kk, the Cauchy–Schwarz equality in the μ⁻¹ inner product). Typed
-    // components carry rounding, so parallel means |W_jk| ≥ (1 − 1e-12) √(W_jj W_kk).
+    // Modal form: two contacts are dependent when c_k ∥ c_j on the kept modes
+    // (docs/contacts_reference.md, "the modal form": W_jk = c_jᵀμ⁻¹c_k, so W_jk² = W_jj W_kk, the
+    // Cauchy–Schwarz equality in the μ⁻¹ inner product). Typed components carry rounding, so
+    // parallel means |W_jk| ≥ (1 − 1e-12) √(W_jj W_kk).
     const Eigen::MatrixXd& W = sys.delassus();
     for (int j = 0; j < sys.contact_count(); ++j)
       for (int k = j + 1; k < sys.contact_count(); ++k) {
