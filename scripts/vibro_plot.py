@@ -888,8 +888,18 @@ def plot_gaps(f, title, save, window, contacts):
     t = f["samples/t"][:]
     t_from, t_to = time_window(t, T, window)
     X = f["samples/X"][:]
-    phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, X.shape[1])
-    q = X @ phi.T  # physical q = Φ X
+    if "mode_shapes" in f["model"].attrs:
+        phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, X.shape[1])
+        q = X @ phi.T  # physical q = Φ X
+    else:
+        # The modal form (docs/contacts.md, "the modal form"): contact j reads w_jᵀq = a_jᵀX, with
+        # a_0 = σ_0 (1, …, 1) and a_j = `modal` on the kept modes (the lowest frequencies).
+        import tomllib
+        freqs = np.asarray(tomllib.loads(text(f.attrs["scene"]))["structure"]["frequencies"], dtype=float)
+        kept = np.argsort(freqs, kind="stable")[:X.shape[1]]
+        sigma0 = 1.0 if contacts[0].get("side", "below") == "below" else -1.0
+        q = np.stack([X @ (sigma0 * np.ones(X.shape[1]) if j == 0 else np.asarray(c["modal"], dtype=float)[kept])
+                      for j, c in enumerate(contacts)], axis=1)  # column j: contact j's coordinate
     ev_t, kinds, ev_c = f["events/t"][:], f["events/kind"][:], f["events/contact"][:]
     kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
     m = len(contacts)
@@ -897,11 +907,16 @@ def plot_gaps(f, title, save, window, contacts):
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
     for j, (c, ax) in enumerate(zip(contacts, axes[:, 0])):
-        dofs = c.get("dofs", [c.get("dof", 0)])
-        w = np.zeros(q.shape[1])
-        w[int(dofs[0])] = 1.0
-        if len(dofs) > 1:
-            w[int(dofs[1])] = -1.0
+        if "mode_shapes" not in f["model"].attrs:
+            w = np.eye(q.shape[1])[j]  # the modal form's column of contact j
+            where = f"a{j}·X"
+        else:
+            dofs = c.get("dofs", [c.get("dof", 0)])
+            w = np.zeros(q.shape[1])
+            w[int(dofs[0])] = 1.0
+            if len(dofs) > 1:
+                w[int(dofs[1])] = -1.0
+            where = f"q{dofs[0]}" + (f" − q{dofs[1]}" if len(dofs) > 1 else "")
         sigma = 1.0 if c.get("side", "below") == "below" else -1.0
         g = sigma * (q @ w - float(c["position"]))
         mine = ev_c == j
@@ -928,7 +943,6 @@ def plot_gaps(f, title, save, window, contacts):
         if imp.any():
             ax.plot(ev_t[imp], np.zeros(imp.sum()), "v", ms=3.5, color=OKABE_ITO[1],
                     label=f"impacts ({imp.sum()})")
-        where = f"q{dofs[0]}" + (f" − q{dofs[1]}" if len(dofs) > 1 else "")
         rel = "≥" if sigma > 0 else "≤"
         ax.set_ylabel(f"$g_{j}$")
         ax.set_title(f"contact {j}: {where} {rel} {c['position']:g}, r = {c.get('restitution', 0):g}",

@@ -36,9 +36,11 @@ struct PhysicalStructureSpec {
   int contact_dof = 0;        // index of B in [0, N)
 };
 
-// One rigid unilateral contact of the physical form (docs/contacts.md): the gap
-// g = σ (wᵀq − d) ≥ 0, w = e_dof (a stop on one DOF) or e_dof − e_partner (an impact pair: the gap is on
-// q_dof − q_partner), σ = +1 for a stop below (wᵀq ≥ d), −1 above (wᵀq ≤ d).
+// One rigid unilateral contact (docs/contacts.md): the gap g = σ (wᵀq − d) ≥ 0, σ = +1 for a stop
+// below (wᵀq ≥ d), −1 above (wᵀq ≤ d). Physical form: w = e_dof (a stop on one DOF) or
+// e_dof − e_partner (an impact pair: the gap is on q_dof − q_partner). Modal form: wᵀq = Σ_i a_i X_i
+// with a = `modal` (docs/contacts_reference.md, "the modal form"); contact 0 has no `modal`: its
+// components are σ_0 on every mode (the scaling, c_0 = σ_0 a_0 = 1).
 enum class Side { kBelow, kAbove };
 struct ContactSpec {
   int dof = 0;
@@ -46,6 +48,9 @@ struct ContactSpec {
   Side side = Side::kBelow;
   double position = 0;     // d
   double restitution = 0;  // r ∈ [0, 1]
+  // Modal form, contacts j ≥ 1: a_j,i = w_jᵀψ_i, one per listed mode (before truncation), shape (n);
+  // empty for contact 0 and in the physical form.
+  Eigen::VectorXd modal = {};
 };
 
 enum class Engine { kExact, kCvode };
@@ -87,8 +92,8 @@ struct Scene {
 
   double stop_position = 1.0;  // x0
   double restitution = 0.75;   // r
-  // The [[contact]] tables (physical form), in file order. Empty: the one-contact [stop] shorthand
-  // (stop_position, restitution, physical->contact_dof), which Contacts() returns as m = 1.
+  // The [[contact]] tables, in file order. Empty: the one-contact [stop] shorthand (stop_position,
+  // restitution, physical->contact_dof), which Contacts() returns as m = 1 in the physical form.
   std::vector<ContactSpec> contacts;
 
   double amplitude = 0.0;  // f
@@ -107,8 +112,8 @@ struct Scene {
 // structural model (positive definiteness, T_B,i > 0, admissible initial state).
 std::vector<InputIssue> Validate(const Scene& scene);
 
-// The contacts of a scene in physical form: its [[contact]] tables, or the [stop] as one contact
-// below at physical->contact_dof. Empty for the modal form (one contact, given by its modal data).
+// The contacts of a scene: its [[contact]] tables, or the [stop] as one contact below at
+// physical->contact_dof. Empty for the modal form with [stop] (one contact, given by its modal data).
 std::vector<ContactSpec> Contacts(const Scene& scene);
 const char* ToString(Side s);
 

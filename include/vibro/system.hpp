@@ -40,7 +40,7 @@ struct ConstrainedModes {
 // scaled to (unit c_0 on every mode it sees), so that for one contact every formula is the single
 // stop's.
 struct ContactModel {
-  ContactSpec spec;             // as written (modal form: dof = partner = −1, side below)
+  ContactSpec spec;             // as written (modal form: dof = partner = −1; [stop]: side below)
   Eigen::VectorXd shape;        // c_j, (n)
   Eigen::VectorXd contact;      // T_j, (n)
   double stop = 0;              // e_j: the contact is closed at c_jᵀX = e_j
@@ -76,6 +76,10 @@ class System {
   // Builds the model of a scene. Precondition: Validate(scene) is empty (throws
   // std::invalid_argument naming the first problem otherwise).
   explicit System(const Scene& scene);
+
+  // Indices of the `keep` lowest frequencies (all when keep <= 0) in ascending order of frequency:
+  // the modes a scene keeps (structure.modes), as indices into its lists.
+  static std::vector<int> KeptModes(const Eigen::VectorXd& omega, int keep);
 
   int dof() const { return static_cast<int>(omega_.size()); }  // n, modes in the model
   bool physical() const { return physical_; }

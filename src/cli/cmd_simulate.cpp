@@ -73,7 +73,10 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
       for (size_t j = 0; j < result.contact_counts.size() && j < specs.size(); ++j) {
         const auto& c = result.contact_counts[j];
         const auto& k = specs[j];
-        const std::string q = k.partner >= 0 ? fmt::format("q{} - q{}", k.dof, k.partner) : fmt::format("q{}", k.dof);
+        // Modal form: the contact's coordinate a_jᵀX (docs/contacts.md), named by its index.
+        const std::string q = loaded.scene.modal       ? fmt::format("a{}·X", j)
+                              : k.partner >= 0 ? fmt::format("q{} - q{}", k.dof, k.partner)
+                                               : fmt::format("q{}", k.dof);
         fmt::print("  contact {}  {} {} {}: {} impacts ({} simultaneous), {} accumulations, {} sticks, "
                    "{} releases, {} grazings\n",
                    j, q, k.side == vibro::Side::kBelow ? ">=" : "<=", k.position,

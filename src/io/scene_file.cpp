@@ -117,6 +117,7 @@ const std::map<std::string, Kind>& Schema() {
       {"contact", Kind::kTableArray},
       {"contact.dof", Kind::kInteger},
       {"contact.dofs", Kind::kNumberArray},
+      {"contact.modal", Kind::kNumberArray},
       {"contact.side", Kind::kString},
       {"contact.position", Kind::kNumber},
       {"contact.restitution", Kind::kNumber},
@@ -419,6 +420,7 @@ class Reader {
 
   void Require(const std::string& path) {
     if (!Find(path)) {
+      reported_.push_back(path);  // the physics check of a missing key says nothing more
       const auto dot = path.rfind('.');
       const toml::node* table = dot == std::string::npos ? nullptr : Find(path.substr(0, dot));
       messages_.push_back(fmt::format("{}: {}: missing required key", Where(table), path));
@@ -671,13 +673,38 @@ LoadedScene Build(toml::table root, const std::string& source,
       const std::string at = fmt::format("contact[{}]", j);
       ContactSpec k;
       const bool one = rd.Find(at + ".dof") != nullptr, two = rd.Find(at + ".dofs") != nullptr;
-      if (one == two)
-        rd.messages().push_back(fmt::format(
-            "{}: {}: give dof = B (a stop on DOF B) or dofs = [B, A] (an impact pair, the gap on "
-            "q_B − q_A), exactly one of them",
-            rd.Where(rd.Find(at)), at));
-      if (auto v = rd.Integer(at + ".dof", -kMaxIndex, kMaxIndex)) k.dof = static_cast<int>(*v);
-      if (two) {
+      if (s.modal) {
+        // The modal form names no DOF: a contact reads the modes through `modal`, except contact 0,
+        // the contact of the scaling (docs/contacts.md, "the modal form").
+        for (const char* leaf : {"dof", "dofs"})
+          if (const toml::node* n = rd.Find(at + "." + leaf))
+            rd.Report(n, at + "." + leaf,
+                      "the modal form names no DOF: give the contact's modal components, modal = "
+                      "[a_1, …, a_n] (docs/contacts.md)");
+        if (j == 0 && rd.Find(at + ".modal"))
+          rd.Report(rd.Find(at + ".modal"), at + ".modal",
+                    "contact 0 is the contact of the modal scaling: its components are fixed "
+                    "(a_0,i = +1 below, −1 above, on every mode; structure.contact is its T_B): "
+                    "give no modal key for it");
+        if (j > 0) {
+          rd.Require(at + ".modal");
+          if (auto v = rd.Vector(at + ".modal")) k.modal = *v;
+        }
+        k.dof = -1;
+      } else {
+        if (const toml::node* n = rd.Find(at + ".modal"))
+          rd.Report(n, at + ".modal",
+                    "modal components belong to the modal form (frequencies, forcing, contact); in "
+                    "the physical form a contact names dof = B or dofs = [B, A]");
+        if (one == two)
+          rd.messages().push_back(fmt::format(
+              "{}: {}: give dof = B (a stop on DOF B) or dofs = [B, A] (an impact pair, the gap on "
+              "q_B − q_A), exactly one of them",
+              rd.Where(rd.Find(at)), at));
+      }
+      if (!s.modal)
+        if (auto v = rd.Integer(at + ".dof", -kMaxIndex, kMaxIndex)) k.dof = static_cast<int>(*v);
+      if (two && !s.modal) {
         const toml::node* n = rd.Find(at + ".dofs");
         const auto* a = n->as_array();
         bool ok = a && a->size() == 2;

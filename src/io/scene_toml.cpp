@@ -50,18 +50,21 @@ std::string ResolvedSceneToml(const Scene& sc) {
     s += fmt::format("mass = {}\nstiffness = {}\nforcing_dof = {}\n", Matrix(sc.physical->mass),
                      Matrix(sc.physical->stiffness), sc.physical->forcing_dof);
     if (sc.contacts.empty()) s += fmt::format("contact_dof = {}\n", sc.physical->contact_dof);
-    if (sc.modes > 0) s += fmt::format("modes = {}\n", sc.modes);
   }
+  if (sc.modes > 0) s += fmt::format("modes = {}\n", sc.modes);  // either form
   if (sc.damping_ratios.size() > 0) s += fmt::format("damping_ratios = {}\n", Vector(sc.damping_ratios));
   if (sc.contacts.empty())
     s += fmt::format("\n[stop]\nposition = {}\nrestitution = {}\n", Number(sc.stop_position),
                      Number(sc.restitution));
   for (const ContactSpec& k : sc.contacts) {
     s += "\n[[contact]]\n";
-    if (k.partner >= 0)
+    if (sc.modal) {
+      if (k.modal.size() > 0) s += fmt::format("modal = {}\n", Vector(k.modal));  // contact 0: none
+    } else if (k.partner >= 0) {
       s += fmt::format("dofs = [{}, {}]\n", k.dof, k.partner);
-    else
+    } else {
       s += fmt::format("dof = {}\n", k.dof);
+    }
     s += fmt::format("side = \"{}\"\nposition = {}\nrestitution = {}\n", ToString(k.side),
                      Number(k.position), Number(k.restitution));
   }

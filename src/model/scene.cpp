@@ -38,6 +38,7 @@ class Checker {
   }
   std::vector<InputIssue> Take() { return std::move(issues_); }
   bool empty() const { return issues_.empty(); }
+  size_t size() const { return issues_.size(); }
 
  private:
   std::vector<InputIssue> issues_;
@@ -121,15 +122,46 @@ void CheckMagnitude(double v, const std::string& key, Checker& c) {
 
 // The [[contact]] tables (docs/contacts.md): indices, restitution, no two dependent contacts
 // (MODEL §11.1.3: the same direction σw twice, or a two-sided stop without clearance).
+// Modal form (docs/contacts.md, "the modal form"): every contact j ≥ 1 gives a_j, one component per
+// listed mode, finite, not zero on every kept mode (W_jj > 0). Dependence needs the model: Validate.
+void CheckModalContacts(const Scene& s, Eigen::Index n_modes, Checker& c) {
+  const auto key = [](size_t j) { return fmt::format("contact[{}].modal", j); };
+  const std::vector<int> kept = System::KeptModes(s.modal->frequencies, s.modes);
+  for (size_t j = 1; j < s.contacts.size(); ++j) {
+    const Eigen::VectorXd& a = s.contacts[j].modal;
+    if (a.size() != n_modes) {  // none given: the file layer reports the missing key
+      c.Require(false, key(j), Show(a),
+                fmt::format("one component per mode: length {} expected (structure.frequencies), got {}",
+                            n_modes, a.size()));
+      continue;
+    }
+    const size_t before = c.size();
+    CheckMagnitude(a, key(j), c);
+    if (c.size() != before) continue;
+    bool seen = false;
+    for (int i : kept) seen = seen || a[i] != 0.0;
+    c.Require(seen, key(j), Show(a),
+              fmt::format("the contact sees a kept mode: a_{},i ≠ 0 for at least one of the {} mode(s) "
+                          "kept (a contact on no mode never closes and has no impact law)",
+                          j, kept.size()));
+  }
+}
+
 void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {
   if (s.contacts.empty()) return;
+  const auto key = [](size_t j, const char* leaf) { return fmt::format("contact[{}].{}", j, leaf); };
   if (!s.physical) {
-    c.Require(false, "contact", "",
-              "[[contact]] tables need the physical form (mass, stiffness, forcing_dof); the modal "
-              "form has one contact, its [stop]");
+    for (size_t j = 0; j < s.contacts.size(); ++j) {
+      c.Require(s.contacts[j].restitution >= 0 && s.contacts[j].restitution <= 1, key(j, "restitution"),
+                Show(s.contacts[j].restitution), "0 ≤ r ≤ 1");
+      CheckMagnitude(s.contacts[j].position, key(j, "position"), c);
+    }
+    if (s.contacts.size() > 1 && s.run.engine == Engine::kCvode)
+      c.Require(false, "run.engine", "\"cvode\"",
+                "run.engine = \"exact\" with several contacts (CVODE runs one contact)");
+    if (s.modal) CheckModalContacts(s, n_dofs, c);
     return;
   }
-  const auto key = [](size_t j, const char* leaf) { return fmt::format("contact[{}].{}", j, leaf); };
   const auto N = static_cast<int>(n_dofs);
   bool indices_ok = true;
   for (size_t j = 0; j < s.contacts.size(); ++j) {
@@ -323,6 +355,35 @@ std::vector<InputIssue> Validate(const Scene& s) {
     return c.Take();
   }
   const System& sys = *built;
+  if (s.modal && sys.contact_count() > 1) {
+    // Modal form: two contacts are dependent when c_k ∥ c_j on the kept modes
+    // (docs/contacts_reference.md, "the modal form": W_jk = c_jᵀμ⁻¹c_k, so W_jk² = W_jj W_kk, the
+    // Cauchy–Schwarz equality in the μ⁻¹ inner product). Typed components carry rounding, so
+    // parallel means |W_jk| ≥ (1 − 1e-12) √(W_jj W_kk).
+    const Eigen::MatrixXd& W = sys.delassus();
+    for (int j = 0; j < sys.contact_count(); ++j)
+      for (int k = j + 1; k < sys.contact_count(); ++k) {
+        if (!(std::abs(W(j, k)) >= (1 - 1e-12) * std::sqrt(W(j, j) * W(k, k)))) continue;
+        const ContactModel& cj = sys.contacts()[static_cast<size_t>(j)];
+        const ContactModel& ck = sys.contacts()[static_cast<size_t>(k)];
+        if (W(j, k) > 0) {
+          c.Require(false, fmt::format("contact[{}].modal", k), Show(s.contacts[static_cast<size_t>(k)].modal),
+                    fmt::format("contacts {} and {} are dependent: their gaps read the kept modes in one "
+                                "direction on one side (c_{} = {} c_{}); keep one (the Delassus matrix "
+                                "is singular)",
+                                j, k, k, W(j, k) / W(j, j), j));
+        } else {
+          // c_k = −α c_j: g_j + g_k/α = −(e_j + e_k/α), the clearance between the two sides.
+          const double alpha = -W(j, k) / W(j, j);
+          const double clearance = -(cj.stop + ck.stop / alpha);
+          c.Require(clearance > 0, fmt::format("contact[{}].position", k), Show(ck.spec.position),
+                    fmt::format("a positive clearance between the two sides of contact {} and {} "
+                                "(c_{} = −{} c_{}; here {}): below must lie under above",
+                                j, k, k, alpha, j, clearance));
+        }
+      }
+    if (!c.empty()) return c.Take();
+  }
   if (!s.contacts.empty()) {
     // Every gap of the initial state (the default one included) open or closed, never violated.
     const auto init = sys.Initial(s);

@@ -14,16 +14,15 @@ namespace {
 // A mode whose B component is below this fraction of its largest component has a node at B.
 constexpr double kNodeTolerance = 1e-10;
 
-// Indices of the `keep` lowest frequencies (all when keep <= 0), in ascending order of frequency.
-std::vector<int> LowestModes(const Eigen::VectorXd& omega, int keep) {
+}  // namespace
+
+std::vector<int> System::KeptModes(const Eigen::VectorXd& omega, int keep) {
   std::vector<int> order(static_cast<size_t>(omega.size()));
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return omega[a] < omega[b]; });
   if (keep > 0 && keep < static_cast<int>(order.size())) order.resize(static_cast<size_t>(keep));
   return order;
 }
-
-}  // namespace
 
 System::System(const Scene& scene) {
   x0_ = scene.stop_position;
@@ -42,7 +41,7 @@ System::System(const Scene& scene) {
   Eigen::VectorXd zeta_all;
   if (scene.modal) {
     const auto& m = *scene.modal;
-    const auto keep = LowestModes(m.frequencies, scene.modes);
+    const auto keep = KeptModes(m.frequencies, scene.modes);
     kept_ = keep;
     const auto n = static_cast<Eigen::Index>(keep.size());
     omega_.resize(n);
@@ -65,7 +64,7 @@ System::System(const Scene& scene) {
     if (eig.info() != Eigen::Success) throw std::invalid_argument("eigenproblem K φ = λ M φ failed");
     const Eigen::VectorXd lambda = eig.eigenvalues();
     const Eigen::VectorXd all_omega = lambda.cwiseMax(0.0).cwiseSqrt();
-    const auto keep = LowestModes(all_omega, scene.modes);
+    const auto keep = KeptModes(all_omega, scene.modes);
     const auto n = static_cast<Eigen::Index>(keep.size());
     const auto N = p.mass.rows();
     omega_.resize(n);
@@ -205,8 +204,16 @@ void System::BuildContacts(const Scene& scene) {
     const double sigma = sp.side == Side::kBelow ? 1.0 : -1.0;
     ContactModel c;
     c.spec = sp;
-    Eigen::VectorXd w = mode_shapes_.row(sp.dof).transpose();
-    if (sp.partner >= 0) w -= mode_shapes_.row(sp.partner).transpose();
+    Eigen::VectorXd w(dof());  // a_j,i = w_jᵀψ_i
+    if (physical_) {
+      w = mode_shapes_.row(sp.dof).transpose();
+      if (sp.partner >= 0) w -= mode_shapes_.row(sp.partner).transpose();
+    } else {
+      // Modal form: the components as given, for the kept modes (docs/contacts.md).
+      if (sp.modal.size() != scene.modal->frequencies.size())
+        throw std::invalid_argument("contact " + std::to_string(j) + " needs one modal component per mode");
+      for (int i = 0; i < dof(); ++i) w[i] = sp.modal[kept_[static_cast<size_t>(i)]];
+    }
     c.shape = sigma * w;  // c_j,i = σ_j w_jᵀψ_i
     c.contact = c.shape.cwiseQuotient(mu);
     c.stop = sigma * sp.position;

@@ -15,6 +15,7 @@ Waits are for observable states (a file that opens, a status), with generous liv
 usage: files_test.py VIBRO FULL_DISK_SHIM SCENES_DIR
 """
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -92,8 +93,13 @@ def read_all(path):
         return repr(e)
 
 
+# Progress lines on a pipe ("cells:  41% (37628 / 90000), 7.52e+03/s, 7.0 s left", src/cli/progress.cpp)
+# come every few seconds of a run, so only on a slow or loaded machine: they are not the message.
+PROGRESS_LINE = re.compile(r"^[a-z][\w ]*:\s+\d+% \(\d+ / \d+\)")
+
+
 def one_line(text):
-    return len([l for l in text.strip().splitlines() if l.strip()]) == 1
+    return len([l for l in text.strip().splitlines() if l.strip() and not PROGRESS_LINE.match(l)]) == 1
 
 
 # ---- one writer per file ----

@@ -297,5 +297,62 @@ TEST(System, GivenStateWithinRoundingOfTheStopIsOnItAndAtRest) {
   EXPECT_THROW(with(1.0 - 1e-9, 0.0), InputError);
 }
 
+// [[contact]] in the modal form (docs/contacts.md, "the modal form"): contacts_chain2_modal.toml is
+// contacts_chain2.toml with its modes derived in closed form (the scene's comment, g = (1 + √5)/2),
+// so the two models must agree to rounding: every contact's shape c_j, T_j, stop and the Delassus
+// matrix. Oracle by hand: W_00 = 1/m_1 = 1, W_11 = 1/m_0 = 1, W_01 = 0 (stops on different masses
+// of a diagonal M, MODEL §11.1.3 in docs/contacts.md), whatever the modal data.
+TEST(System, ModalFormContactsEqualThePhysicalForm) {
+  const System physical(LoadScene(std::string(VIBRO_SCENES_DIR) + "/contacts_chain2.toml").scene);
+  const System modal(LoadScene(std::string(VIBRO_SCENES_DIR) + "/contacts_chain2_modal.toml").scene);
+  ASSERT_EQ(modal.contact_count(), 2);
+  EXPECT_FALSE(modal.physical());
+  for (int j = 0; j < 2; ++j) {
+    const ContactModel& p = physical.contacts()[static_cast<size_t>(j)];
+    const ContactModel& m = modal.contacts()[static_cast<size_t>(j)];
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(m.shape[i], p.shape[i], 1e-15 * (1 + std::abs(p.shape[i]))) << j << " " << i;
+      EXPECT_NEAR(m.contact[i], p.contact[i], 1e-15) << j << " " << i;
+    }
+    EXPECT_EQ(m.stop, p.stop);
+    EXPECT_EQ(m.restitution, p.restitution);
+  }
+  const Eigen::Matrix2d W_exact = Eigen::Matrix2d::Identity();
+  EXPECT_LE((modal.delassus() - W_exact).cwiseAbs().maxCoeff(), 1e-15);
+  EXPECT_LE((physical.delassus() - W_exact).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+// A stop above as contact 0 in the modal form: its components are −1 (c_0 = σ_0 a_0 = 1), so the
+// gap is Σ X_i − σ_0 d_0 = Σ X_i + d_0 and the contact's coordinate w_0ᵀq = −Σ X_i ≤ d_0.
+TEST(System, ModalFormContactZeroAboveIsScaledToMinusOne) {
+  const auto loaded = ParseScene(R"(
+[structure]
+frequencies = [1.0, 2.0]
+forcing = [0.5, 0.5]
+contact = [0.5, 0.25]
+[[contact]]
+side = "above"
+position = 0.5
+restitution = 0.5
+[[contact]]
+modal = [1.0, -1.0]
+side = "below"
+position = -0.3
+restitution = 0.7
+[excitation]
+amplitude = 1.0
+frequency = 1.5
+)", "above.toml");
+  const System sys(loaded.scene);
+  EXPECT_EQ(sys.stop(), -0.5);
+  EXPECT_EQ(sys.contacts()[0].shape, Eigen::Vector2d(1.0, 1.0));
+  EXPECT_EQ(sys.contacts()[1].shape, Eigen::Vector2d(1.0, -1.0));
+  EXPECT_EQ(sys.contacts()[1].contact, Eigen::Vector2d(0.5, -0.25));  // T_1 = μ⁻¹c_1, μ_i = 1/T_B,i
+  EXPECT_EQ(sys.contacts()[1].stop, -0.3);
+  // W_01 = c_0ᵀμ⁻¹c_1 = 0.5 − 0.25
+  EXPECT_DOUBLE_EQ(sys.delassus()(0, 1), 0.25);
+  EXPECT_DOUBLE_EQ(sys.delassus()(1, 1), 0.75);
+}
+
 }  // namespace
 }  // namespace vibro
