@@ -156,9 +156,6 @@ void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {
                 Show(s.contacts[j].restitution), "0 ≤ r ≤ 1");
       CheckMagnitude(s.contacts[j].position, key(j, "position"), c);
     }
-    if (s.contacts.size() > 1 && s.run.engine == Engine::kCvode)
-      c.Require(false, "run.engine", "\"cvode\"",
-                "run.engine = \"exact\" with several contacts (CVODE runs one contact)");
     if (s.modal) CheckModalContacts(s, n_dofs, c);
     return;
   }

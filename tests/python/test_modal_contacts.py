@@ -308,6 +308,19 @@ def test_initial_state_violating_a_contact(tmp_path):
         initial="[initial]\ndisplacement = [0.0, 0.0, 0.0]\nvelocity = [0.0, 0.0, 0.0]\n")
 
 
-def test_cvode_refused_with_several_modal_contacts(tmp_path):
-    bad(tmp_path, "modal = [1.0, 0.0, 0.0]", "run.engine", ["several contacts"],
-        initial='[run]\nengine = "cvode"\n')
+def test_cvode_runs_the_modal_scene(tmp_path):
+    """CVODE takes several contacts in the modal form too: contacts_chain2_modal.toml at
+    rtol 1e-12 against the exact engine, every event in kind and contact, times within 2e-9 T
+    (the bound of tests/reference/contacts_cvode_test.cpp on the physical scenes)."""
+    scene = os.path.join(SCENES, "contacts_chain2_modal.toml")
+    a, period, _, _ = run(scene, str(tmp_path / "exact.h5"))
+    cv = tmp_path / "cvode.toml"
+    with open(scene) as fh:
+        text = fh.read()
+    assert "[run]" in text
+    cv.write_text(text.replace("[run]", '[run]\nengine = "cvode"\nrtol = 1e-12\natol = 1e-14', 1))
+    b, _, status, _ = run(str(cv), str(tmp_path / "cvode.h5"))
+    assert status == "ok"
+    assert len(a["t"]) == len(b["t"]) > 20
+    assert np.array_equal(a["kind"], b["kind"]) and np.array_equal(a["contact"], b["contact"])
+    assert np.max(np.abs(a["t"] - b["t"])) / period <= 2e-9
