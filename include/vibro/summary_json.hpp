@@ -8,6 +8,7 @@
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/studies.hpp"
@@ -25,8 +26,12 @@ std::string ModelJson(const System& system);
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
 // `lyapunov`: the run's Lyapunov exponents ("lyapunov_exponents", "lyapunov_ci", "chaotic"), when
 // measured (run.lyapunov); −∞ is written as null.
+// `loads`: per contact (docs/loads.md), "loads": [{"contact", "impacts_per_period",
+// "impulse_per_period", "reaction_integral_per_period", "mean_force", "dissipated_power",
+// "work_rate", "contact_fraction", each with "…_ci": [lo, hi] (null when the run is too short)}],
+// and "loads_window": {"first_period", "periods", "blocks", "block_periods", "note"}.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor,
-                           const LyapunovSpectrum* lyapunov = nullptr);
+                           const LyapunovSpectrum* lyapunov = nullptr, const LoadsSummary* loads = nullptr);
 
 // `vibro orbit --json` (docs/cli.md, docs/output.md).
 std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);

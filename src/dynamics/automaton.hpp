@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 
 #include "dynamics/chatter_tail.hpp"
+#include "dynamics/contact_loads.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
 #include "vibro/simulator.hpp"
@@ -113,6 +114,7 @@ class Automaton {
     if (model.stick_frequencies.size() == 0)
       for (const ModelT<S>* k : models_) resting_all_.push_back(std::make_unique<RestingStick<S>>(*k));
     counts_.resize(models_.size());
+    loads_.Resize(models_.size());
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
@@ -177,8 +179,9 @@ class Automaton {
            (process_stop_ && process_stop_->load(std::memory_order_relaxed));
   }
 
+  // impulse/energy: an impact's P when known (else from v⁻, v⁺), an accumulation's tail.
   void Emit(EventKind kind, const S& v_before, const S& v_after, int contact = -1,
-            bool simultaneous = false);
+            bool simultaneous = false, const S& impulse = S(-1), const S& energy = S(0));
   void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb);
   void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
   void AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
@@ -245,6 +248,7 @@ class Automaton {
   std::string violation_;           // the first physics invariant broken (empty: none)
   ClockT<S> last_event_{-1, S(0)};  // clock of the last event emitted (monotone)
   RunResult result_;
+  ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
 };
 
 inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
@@ -260,7 +264,7 @@ inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
 
 template <class S>
 void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int contact,
-                        bool simultaneous) {
+                        bool simultaneous, const S& impulse, const S& energy) {
   if (contact < 0) contact = active_;
   const ModelT<S>& m = M(contact);
   grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
@@ -274,6 +278,13 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
           contact,
           simultaneous};
   if (kind != EventKind::kImpact && kind != EventKind::kGrazing) e.x_B = R::to_double(m.side * m.x0);
+  if (kind == EventKind::kImpact) ImpactLoads(e, m, v_before, v_after, impulse);
+  if (kind == EventKind::kAccumulation) {
+    e.impulse = R::to_double(impulse);
+    e.energy_dissipated = R::to_double(energy);
+  }
+  if (kind == EventKind::kStick) loads_.Begin(contact);
+  if (kind == EventKind::kRelease) loads_.End(contact, e);
   Count(result_.counts, kind, simultaneous);
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
@@ -620,7 +631,9 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     for (auto* o : opt_.observers) o->OnReset(jump);
   }
   // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
-  Emit(EventKind::kAccumulation, S(0), S(0));
+  S tail_impulse(0), tail_energy(0);
+  TailLoads(m, tail.speed, tail_impulse, tail_energy);
+  Emit(EventKind::kAccumulation, S(0), S(0), -1, false, tail_impulse, tail_energy);
   mode_ = Mode::kSticking;
   stick_start_ = StickStart::kGeneric;
   if (multi()) {
@@ -896,7 +909,8 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   V_ += mk.contact * Pk + mj.contact * Pj;
   mj.ProjectOntoStop(X_, V_);
   NotifyReset(ResetKind::kImpact, X_, Vb_);
-  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
+  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k, false, Pk);
+  loads_.AddImpulse(j, Pj);
   if (rk == S(0)) return two_stuck("lands plastically");
   // A chattering sequence at k while j sticks ends with both stuck: followed until it cannot be.
   const S speed = -v_minus;
@@ -981,7 +995,7 @@ bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
     const int j = Z[static_cast<size_t>(a)];
     const ModelT<S>& mj = M(j);
     const S vp = mj.ContactVelocity(V_);
-    Emit(EventKind::kImpact, vm[a], vp, j, true);
+    Emit(EventKind::kImpact, vm[a], vp, j, true, P[a]);
     gaps_[static_cast<size_t>(j)] = 0;
     const S floor = S(1000) * Eps<S>() * mj.shape.cwiseProduct(V_).cwiseAbs().sum();
     if (vp > floor) {
@@ -1038,6 +1052,7 @@ void Automaton<S>::Checkpointed() {
   cp.chatter_followed = result_.chatter.impacts_followed;
   cp.chatter_max_error = result_.chatter.max_estimated_error;
   cp.contact = active_;
+  loads_.Save(cp);
   if (multi()) cp.contact_counts = counts_;
   cp.gaps.resize(gaps_.size());
   cp.start_kinds.resize(starts_.size());
@@ -1067,6 +1082,7 @@ RunResult Automaton<S>::Run() {
     result_.counts = cp.counts;
     result_.chatter = {cp.chatter_predicted, cp.chatter_followed, cp.chatter_max_error};
     active_ = cp.contact >= 0 && cp.contact < static_cast<int>(models_.size()) ? cp.contact : 0;
+    loads_.Restore(cp);
     if (cp.contact_counts.size() == counts_.size()) counts_ = cp.contact_counts;
     else if (counts_.size() == 1) counts_[0] = cp.counts;
     if (multi()) {
@@ -1115,6 +1131,8 @@ RunResult Automaton<S>::Run() {
     p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
              multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
     const ClockT<S> from = clock_;
+    const bool loads = mode_ == Mode::kSticking && !opt_.observers.empty();
+    if (loads) loads_.SegmentStart(X_, V_);
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).
     struct {
@@ -1133,6 +1151,7 @@ RunResult Automaton<S>::Run() {
       break;
     }
     p.Evaluate(seg.sigma, X_, V_);
+    if (loads) loads_.Segment(active_, M(active_), p, Phase(from), seg.sigma, X_, V_);
     if (multi())
       UpdateGaps(p, seg.sigma);
     else if (mode_ == Mode::kFree)

@@ -62,7 +62,38 @@ void AddLyapunov(nlohmann::json& j, const LyapunovSpectrum& ly) {
   j["chaotic"] = ly.chaotic();
 }
 
-std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly) {
+void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
+  auto arr = nlohmann::json::array();
+  const auto ci = [](const ContactLoads::Interval& c) {
+    return c ? nlohmann::json::array({c->first, c->second}) : nlohmann::json(nullptr);
+  };
+  for (const ContactLoads& c : s.contacts) {
+    arr.push_back({{"contact", c.contact},
+                   {"impacts_per_period", c.impacts_per_period},
+                   {"impacts_per_period_ci", ci(c.impacts_per_period_ci)},
+                   {"impulse_per_period", c.impulse_per_period},
+                   {"impulse_per_period_ci", ci(c.impulse_per_period_ci)},
+                   {"reaction_integral_per_period", c.reaction_integral_per_period},
+                   {"reaction_integral_per_period_ci", ci(c.reaction_integral_per_period_ci)},
+                   {"mean_force", c.mean_force},
+                   {"mean_force_ci", ci(c.mean_force_ci)},
+                   {"dissipated_power", c.dissipated_power},
+                   {"dissipated_power_ci", ci(c.dissipated_power_ci)},
+                   {"work_rate", c.work_rate},
+                   {"work_rate_ci", ci(c.work_rate_ci)},
+                   {"contact_fraction", c.contact_fraction},
+                   {"contact_fraction_ci", ci(c.contact_fraction_ci)}});
+  }
+  j["loads"] = arr;
+  j["loads_window"] = {{"first_period", s.first_period},
+                       {"periods", s.periods},
+                       {"blocks", s.blocks},
+                       {"block_periods", s.block_periods},
+                       {"note", s.note}};
+}
+
+std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly,
+                           const LoadsSummary* loads) {
   nlohmann::json j;
   j["status"] = ToString(r.status);
   if (r.status != RunStatus::kOk) j["message"] = r.message;
@@ -98,6 +129,7 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                    {"error_test_failures", r.solver.error_test_failures},
                    {"reinits", r.solver.reinits}};
   if (ly) AddLyapunov(j, *ly);
+  if (loads) AddLoads(j, *loads);
   return j.dump();
 }
 

@@ -1,0 +1,176 @@
+// What the contacts endure, per event (docs/loads.md): the impulse and dissipated energy of an
+// impact, the summed tail of a chattering sequence, and the duration, ∫R dt and max R of a
+// sticking phase. The automaton (automaton.hpp) calls these at its events and after every sticking
+// segment; everything is in the contact's physical units (impulse = effective mass m = 1/s_B
+// times a gap velocity, the paper's eq. (10)-(11); R of the paper's eq. (5)).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "dynamics/model_t.hpp"
+#include "dynamics/propagator.hpp"
+#include "vibro/observer.hpp"
+
+namespace vibro::detail {
+
+// An impact of one contact with gap velocities v⁻ → v⁺. `impulse` ≥ 0 is P when the caller knows it
+// (the impact LCP); otherwise P = (v⁺ − v⁻)/s_B, exact for an impact of this contact alone
+// (the paper's eq. (11): v⁺ − v⁻ = s_B P). The energy dissipated is −P(v⁻ + v⁺)/2, which is
+// ½(1 − r)P|v⁻| whenever v⁺ = −r v⁻ (docs/loads.md §1): the share of this contact in the loss of
+// kinetic energy ΔT = Σ_j P_j(v_j⁻ + v_j⁺)/2 of the impact.
+template <class S>
+void ImpactLoads(Event& e, const ModelT<S>& m, const S& v_before, const S& v_after, const S& impulse) {
+  using R = Real<S>;
+  const S P = impulse >= S(0) ? impulse : S((v_after - v_before) / m.s_B);
+  e.impulse = R::to_double(P);
+  e.energy_dissipated = std::max(0.0, R::to_double(-P * (v_before + v_after) / S(2)));
+}
+
+// The tail of a chattering sequence not followed (docs/loads.md §2): after an impact that leaves
+// at gap speed u = v⁺ with restitution r under a constant pull s_B R, the impacts not followed
+// arrive at u, r u, r² u, …, so their impulses and losses sum to
+//   P_tail = Σ (1 + r) m rⁿ u = (1 + r) m u / (1 − r),   E_tail = Σ ½(1 − r²) m r²ⁿ u² = ½ m u²,
+// m = 1/s_B (all the relative kinetic energy left after the last impact followed).
+template <class S>
+void TailLoads(const ModelT<S>& m, const S& u, S& impulse, S& energy) {
+  impulse = (S(1) + m.r) * u / ((S(1) - m.r) * m.s_B);
+  energy = u * u / (S(2) * m.s_B);
+}
+
+// The sticking phase of one contact, accumulated segment by segment.
+struct StickAccount {
+  double duration = 0, integral = 0, max = std::numeric_limits<double>::quiet_NaN();
+  bool open = false;
+};
+
+template <class S>
+class ContactLoadsT {
+ public:
+  using Vec = typename ModelT<S>::Vec;
+  using R = Real<S>;
+
+  void Resize(size_t contacts) { phases_.assign(contacts, {}); }
+  void Begin(int j) { phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true}; }
+  // Impulsive reaction received by a held contact (an impact elsewhere while it sticks).
+  void AddImpulse(int j, const S& P) { phases_[static_cast<size_t>(j)].integral += R::to_double(P); }
+  // A release: the phase's account into the event, then closed.
+  void End(int j, Event& e) {
+    StickAccount& a = phases_[static_cast<size_t>(j)];
+    if (a.open) {
+      e.stick_duration = a.duration;
+      e.reaction_integral = a.integral;
+      e.reaction_max = a.max;
+    }
+    a = {};
+  }
+  // The state at the start of a sticking segment (kept before the propagator advances).
+  void SegmentStart(const Vec& X, const Vec& V) {
+    X0_ = X;
+    V0_ = V;
+  }
+  // A sticking segment of the held contact m over local time sigma from forcing phase `phase`,
+  // ending at (X1, V1): duration, ∫R dt in closed form and max R on the dense output of p.
+  void Segment(int j, const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma,
+               const Vec& X1, const Vec& V1) {
+    StickAccount& a = phases_[static_cast<size_t>(j)];
+    if (!a.open) return;  // a phase begun before a resume whose checkpoint had no account
+    a.duration += R::to_double(sigma);
+    a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1));
+    const double mx = R::to_double(ReactionMax(m, p, phase, sigma));
+    if (!(a.max >= mx)) a.max = mx;
+  }
+
+  // Checkpoint (open phases) and resume.
+  void Save(Checkpoint& cp) const {
+    cp.stick_duration.resize(phases_.size());
+    cp.reaction_integral.resize(phases_.size());
+    cp.reaction_max.resize(phases_.size());
+    for (size_t j = 0; j < phases_.size(); ++j) {
+      const StickAccount& a = phases_[j];
+      cp.stick_duration[j] = a.open ? a.duration : std::numeric_limits<double>::quiet_NaN();
+      cp.reaction_integral[j] = a.open ? a.integral : std::numeric_limits<double>::quiet_NaN();
+      cp.reaction_max[j] = a.open ? a.max : std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  void Restore(const Checkpoint& cp) {
+    if (cp.stick_duration.size() != phases_.size() || cp.reaction_integral.size() != phases_.size() ||
+        cp.reaction_max.size() != phases_.size())
+      return;
+    for (size_t j = 0; j < phases_.size(); ++j) {
+      const bool open = !std::isnan(cp.stick_duration[j]);
+      phases_[j] = {open ? cp.stick_duration[j] : 0.0, open ? cp.reaction_integral[j] : 0.0,
+                    cp.reaction_max[j], open};
+    }
+  }
+
+  // ∫R dt over a sticking segment in closed form (docs/loads.md §3). With u = Ω⁻¹c / φ, φ = cᵀΩ⁻¹T_B
+  // the static flexibility of the contact (uᵀT_B = 1, uᵀΩ = cᵀ/φ), uᵀ of the equation of motion
+  // Ẍ + DẊ + ΩX = T_A f sin ωt + T_B R integrated over [0, σ], with cᵀX = x0 held, gives
+  //   ∫R dt = uᵀ[Ẋ] + uᵀD[X] + x0 σ / φ − (uᵀT_A) f (cos φ0 − cos(φ0 + ωσ)) / ω
+  // from the end states alone (exact: no quadrature).
+  static S ReactionIntegral(const ModelT<S>& m, const S& phase, const S& sigma, const Vec& X0,
+                            const Vec& V0, const Vec& X1, const Vec& V1) {
+    S uV(0), uDX(0), uTA(0);
+    for (Eigen::Index i = 0; i < m.omega.size(); ++i) {
+      if (m.shape[i] == S(0)) continue;
+      const S ui = m.shape[i] / (m.omega[i] * m.omega[i]);
+      uV += ui * (V1[i] - V0[i]);
+      uDX += ui * S(2) * m.zeta[i] * m.omega[i] * (X1[i] - X0[i]);
+      uTA += ui * m.forcing[i];
+    }
+    const S phi = m.flexibility;
+    const S forcing = uTA * m.f * (R::cos(phase) - R::cos(phase + m.w * sigma)) / m.w;
+    return (uV + uDX - forcing) / phi + m.x0 * sigma / phi;
+  }
+
+  // max R over a sticking segment (docs/loads.md §3): R and Ṙ on a grid of spacing at most
+  // h = 1/(2 ω_max) (ω_max the largest of ω and the ω_i: more than 12 points per shortest
+  // oscillation of R), the ends, and every interior zero of Ṙ from + to − between grid points
+  // located by bisection to the resolution of the time. A maximum is missed only when Ṙ has two
+  // zeros between neighbouring points; R exceeds its larger neighbour there by at most
+  // max|R̈| h²/8 ≤ max|R̈|/(32 ω_max²).
+  S ReactionMax(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma) {
+    S wmax = m.w;
+    for (Eigen::Index i = 0; i < m.omega.size(); ++i) wmax = std::max(wmax, S(m.omega[i]));
+    const int n = std::max(1, std::min(4096, static_cast<int>(R::to_double(sigma * wmax * S(2))) + 1));
+    const S h = sigma / S(n);
+    const auto at = [&](const S& s, S& rate) {
+      p.Evaluate(s, Xs_, Vs_);
+      const S ph = phase + m.w * s;
+      rate = m.ReactionRate(Xs_, Vs_, ph);
+      return m.Reaction(Xs_, Vs_, ph);
+    };
+    S rate_prev(0);
+    S best = at(S(0), rate_prev);
+    for (int i = 1; i <= n; ++i) {
+      const S s = i == n ? sigma : S(h * S(i));
+      S rate(0);
+      const S Rv = at(s, rate);
+      if (Rv > best) best = Rv;
+      if (rate_prev > S(0) && rate < S(0)) {
+        S lo = s - h, hi = s;
+        for (int it = 0; it < 60 && hi - lo > Eps<S>() * (R::abs(s) + sigma); ++it) {
+          const S mid = (lo + hi) / S(2);
+          S rm(0);
+          at(mid, rm);
+          (rm > S(0) ? lo : hi) = mid;
+        }
+        S rm(0);
+        const S Rm = at((lo + hi) / S(2), rm);
+        if (Rm > best) best = Rm;
+      }
+      rate_prev = rate;
+    }
+    return best;
+  }
+
+ private:
+  std::vector<StickAccount> phases_;
+  Vec X0_, V0_;
+  mutable Vec Xs_, Vs_;
+};
+
+}  // namespace vibro::detail
