@@ -632,7 +632,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   }
   // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
   S tail_impulse(0), tail_energy(0);
-  TailLoads(m, tail.speed, tail_impulse, tail_energy);
+  TailLoads(m, tail.speed, tail.epsilon, tail_impulse, tail_energy);
   Emit(EventKind::kAccumulation, S(0), S(0), -1, false, tail_impulse, tail_energy);
   mode_ = Mode::kSticking;
   stick_start_ = StickStart::kGeneric;

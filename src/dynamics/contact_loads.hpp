@@ -33,11 +33,15 @@ void ImpactLoads(Event& e, const ModelT<S>& m, const S& v_before, const S& v_aft
 // at gap speed u = v⁺ with restitution r under a constant pull s_B R, the impacts not followed
 // arrive at u, r u, r² u, …, so their impulses and losses sum to
 //   P_tail = Σ (1 + r) m rⁿ u = (1 + r) m u / (1 − r),   E_tail = Σ ½(1 − r²) m r²ⁿ u² = ½ m u²,
-// m = 1/s_B (all the relative kinetic energy left after the last impact followed).
+// m = 1/s_B (all the relative kinetic energy left after the last impact followed). When R falls
+// over the tail (ε = −ṘΔ0/R of the prediction, docs/model.md §5.4a) each arrival speed shrinks
+// by κs_n/(3R) of its flight s_n; to first order in ε the sums become
+//   P_tail (1 − ε/(3(1 + r))),   E_tail (1 − 2ε/(3(1 + r + r²))),
+// with a residual O(ε²) (ε ≤ 0.1 and far smaller where a prediction is taken).
 template <class S>
-void TailLoads(const ModelT<S>& m, const S& u, S& impulse, S& energy) {
-  impulse = (S(1) + m.r) * u / ((S(1) - m.r) * m.s_B);
-  energy = u * u / (S(2) * m.s_B);
+void TailLoads(const ModelT<S>& m, const S& u, const S& epsilon, S& impulse, S& energy) {
+  impulse = (S(1) + m.r) * u / ((S(1) - m.r) * m.s_B) * (S(1) - epsilon / (S(3) * (S(1) + m.r)));
+  energy = u * u / (S(2) * m.s_B) * (S(1) - S(2) * epsilon / (S(3) * (S(1) + m.r + m.r * m.r)));
 }
 
 // The sticking phase of one contact, accumulated segment by segment.
