@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -172,14 +173,19 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
       ContactLoads::Interval* ci[7] = {&c.impacts_per_period_ci, &c.impulse_per_period_ci,
                                        &c.reaction_integral_per_period_ci, &c.mean_force_ci,
                                        &c.dissipated_power_ci, &c.work_rate_ci, &c.contact_fraction_ci};
+      double* point[7] = {&c.impacts_per_period, &c.impulse_per_period, &c.reaction_integral_per_period,
+                          &c.mean_force, &c.dissipated_power, &c.work_rate, &c.contact_fraction};
       for (int q = 0; q < 7; ++q) {
         double mean = 0, var = 0;
         for (const auto& x : b) mean += x[static_cast<size_t>(q)];
         mean /= blocks;
         for (const auto& x : b) var += (x[static_cast<size_t>(q)] - mean) * (x[static_cast<size_t>(q)] - mean);
         var /= blocks - 1;
-        const double half = t * std::sqrt(var / blocks);
+        // At least the rounding of the sums (a settled periodic run has equal block means).
+        const double half = std::max(t * std::sqrt(var / blocks),
+                                     16 * std::numeric_limits<double>::epsilon() * static_cast<double>(L) * std::abs(mean));
         *ci[q] = std::pair{mean - half, mean + half};
+        *point[q] = mean;  // the mean of equal blocks: the mean over the window
       }
     }
     s.contacts.push_back(c);
