@@ -1131,7 +1131,7 @@ RunResult Automaton<S>::Run() {
     p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
              multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
     const ClockT<S> from = clock_;
-    const bool loads = mode_ == Mode::kSticking && !opt_.observers.empty();
+    const bool loads = mode_ == Mode::kSticking && opt_.loads && !opt_.observers.empty();
     if (loads) loads_.SegmentStart(X_, V_);
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).

@@ -83,7 +83,7 @@ class ContactLoadsT {
     if (!a.open) return;  // a phase begun before a resume whose checkpoint had no account
     a.duration += R::to_double(sigma);
     a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1));
-    const double mx = R::to_double(ReactionMax(m, p, phase, sigma));
+    const double mx = R::to_double(ReactionMax(m, p, phase, sigma, X1, V1));
     if (!(a.max >= mx)) a.max = mx;
   }
 
@@ -130,45 +130,105 @@ class ContactLoadsT {
     return (uV + uDX - forcing) / phi + m.x0 * sigma / phi;
   }
 
-  // max R over a sticking segment (docs/loads.md §3): R and Ṙ on a grid of spacing at most
-  // h = 1/(2 ω_max) (ω_max the largest of ω and the ω_i: more than 12 points per shortest
-  // oscillation of R), the ends, and every interior zero of Ṙ from + to − between grid points
-  // located by bisection to the resolution of the time. A maximum is missed only when Ṙ has two
-  // zeros between neighbouring points; R exceeds its larger neighbour there by at most
-  // max|R̈| h²/8 ≤ max|R̈|/(32 ω_max²).
-  S ReactionMax(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma) {
+  // max R over a sticking segment (docs/loads.md §3): R and Ṙ at the ends and on a grid of spacing
+  // at most h = 1/ω_max (ω_max the largest of ω and the ω_i: R is a sum of oscillations no faster,
+  // whose consecutive extrema are at least about π/ω_max apart), and in every cell where Ṙ goes
+  // from + to −, the zero of Ṙ by regula falsi (Illinois) until |δs| < 1e-9 h: R is flat there, so
+  // its error is ½|R̈|δs², at the rounding of R. A maximum is missed only where Ṙ has two zeros
+  // inside one cell; R exceeds the larger cell end there by at most max|R̈| h²/8.
+  // X1, V1: the state at sigma (the segment's end, already evaluated); the start is X0_, V0_.
+  S ReactionMax(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma, const Vec& X1,
+                const Vec& V1) {
     S wmax = m.w;
     for (Eigen::Index i = 0; i < m.omega.size(); ++i) wmax = std::max(wmax, S(m.omega[i]));
-    const int n = std::max(1, std::min(4096, static_cast<int>(R::to_double(sigma * wmax * S(2))) + 1));
+    const int n = std::max(1, std::min(4096, static_cast<int>(R::to_double(sigma * wmax)) + 1));
     const S h = sigma / S(n);
-    const auto at = [&](const S& s, S& rate) {
-      p.Evaluate(s, Xs_, Vs_);
-      const S ph = phase + m.w * s;
-      rate = m.ReactionRate(Xs_, Vs_, ph);
-      return m.Reaction(Xs_, Vs_, ph);
-    };
     S rate_prev(0);
-    S best = at(S(0), rate_prev);
+    S best = At(m, X0_, V0_, phase, rate_prev);
+    S s_prev(0), R_prev = best;
     for (int i = 1; i <= n; ++i) {
       const S s = i == n ? sigma : S(h * S(i));
       S rate(0);
-      const S Rv = at(s, rate);
+      const S Rv = i == n ? At(m, X1, V1, phase + m.w * sigma, rate) : At(m, p, phase, s, rate);
       if (Rv > best) best = Rv;
       if (rate_prev > S(0) && rate < S(0)) {
-        S lo = s - h, hi = s;
-        for (int it = 0; it < 60 && hi - lo > Eps<S>() * (R::abs(s) + sigma); ++it) {
-          const S mid = (lo + hi) / S(2);
-          S rm(0);
-          at(mid, rm);
-          (rm > S(0) ? lo : hi) = mid;
+        S a = s_prev, b = s, fa = rate_prev, fb = rate;
+        int side = 0;
+        // First guess: the zero of the derivative of the cubic Hermite interpolant of R on the cell.
+        S c0 = HermiteZero(s - s_prev, R_prev, rate_prev, Rv, rate);
+        for (int it = 0; it < 12; ++it) {
+          const S c = it == 0 && c0 > S(0) && c0 < s - s_prev ? S(s_prev + c0) : S(b - fb * (b - a) / (fb - fa));
+          S fc(0);
+          const S Rc = At(m, p, phase, c, fc);
+          if (Rc > best) best = Rc;
+          if (R::abs(b - a) < S(1e-9) * h || fc == S(0)) break;
+          if ((fc > S(0)) == (fa > S(0))) {
+            a = c;
+            fa = fc;
+            if (side == -1) fb /= S(2);
+            side = -1;
+          } else {
+            b = c;
+            fb = fc;
+            if (side == 1) fa /= S(2);
+            side = 1;
+          }
+          if (R::abs(fc) <= S(64) * Eps<S>() * (R::abs(rate_prev) + R::abs(rate))) break;
         }
-        S rm(0);
-        const S Rm = at((lo + hi) / S(2), rm);
-        if (Rm > best) best = Rm;
       }
       rate_prev = rate;
+      s_prev = s;
+      R_prev = Rv;
     }
     return best;
+  }
+
+  // The zero in (0, h) of the derivative of the cubic with values y0, y1 and slopes d0 > 0 > d1 at
+  // 0 and h (−1 when none).
+  static S HermiteZero(const S& h, const S& y0, const S& d0, const S& y1, const S& d1) {
+    // p'(t) = d0 + (6Δ/h − 4d0 − 2d1)(t/h) + (3d0 + 3d1 − 6Δ/h)(t/h)², Δ = y1 − y0.
+    const S D = (y1 - y0) / h;
+    const S A = S(3) * (d0 + d1) - S(6) * D, B = S(6) * D - S(4) * d0 - S(2) * d1, C = d0;
+    S u(-1);
+    if (R::abs(A) <= S(1e-12) * (R::abs(B) + R::abs(C))) {
+      if (B != S(0)) u = -C / B;
+    } else {
+      const S disc = B * B - S(4) * A * C;
+      if (disc >= S(0)) {
+        const S q = -(B + R::copysign(R::sqrt(disc), B)) / S(2);
+        const S u1 = q / A, u2 = q != S(0) ? C / q : S(-1);
+        u = (u1 > S(0) && u1 < S(1)) ? u1 : u2;
+      }
+    }
+    return u > S(0) && u < S(1) ? S(u * h) : S(-1);
+  }
+
+  // R (the paper's eq. (5), damped as docs/model.md §7) and Ṙ along the held flow at local time s,
+  // without allocation: Ṙ = Σ c_i(ω_i² Ẋ_i + 2ζ_iω_i Ẍ_i) − s_A f ω cos φ over s_B, with Ẍ the
+  // constrained acceleration (the free one less T_B times the gap's).
+  S At(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& s, S& rate) const {
+    p.Evaluate(s, Xs_, Vs_);
+    return At(m, Xs_, Vs_, phase + m.w * s, rate);
+  }
+  S At(const ModelT<S>& m, const Vec& X, const Vec& V, const S& ph, S& rate) const {
+    const S sn = R::sin(ph), cs = R::cos(ph);
+    S elastic(0), r(0), gap_acc(0);
+    if (m.damped)
+      for (Eigen::Index i = 0; i < X.size(); ++i)
+        gap_acc += m.shape[i] * (-m.omega[i] * m.omega[i] * X[i] - S(2) * m.zeta[i] * m.omega[i] * V[i] +
+                                 m.forcing[i] * m.f * sn);
+    for (Eigen::Index i = 0; i < X.size(); ++i) {
+      if (m.shape[i] == S(0)) continue;
+      const S w2 = m.omega[i] * m.omega[i], d = S(2) * m.zeta[i] * m.omega[i];
+      elastic += m.shape[i] * (w2 * X[i] + d * V[i]);
+      r += m.shape[i] * w2 * V[i];
+      if (m.damped) {
+        const S acc = -w2 * X[i] - d * V[i] + m.forcing[i] * m.f * sn - m.contact[i] * gap_acc / m.s_B;
+        r += m.shape[i] * d * acc;
+      }
+    }
+    rate = (r - m.s_A * m.f * m.w * cs) / m.s_B;
+    return (elastic - m.s_A * m.f * sn) / m.s_B;
   }
 
  private:
