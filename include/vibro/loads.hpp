@@ -10,6 +10,8 @@
 #include <vector>
 
 #include "vibro/observer.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene.hpp"
 #include "vibro/system.hpp"
 
 namespace vibro {
@@ -45,7 +47,8 @@ class LoadsRecorder final : public Observer {
   void OnCheckpoint(const Checkpoint& cp) override;
 
   // Means over every period recorded after `skip`, and intervals from `blocks` batch means
-  // (at least kMinBlockPeriods periods per block, blocks ≥ 2).
+  // (at least kMinBlockPeriods periods per block, blocks ≥ 2; 0: means only, no interval asked).
+  // `blocks` 1 is refused with a note.
   LoadsSummary Summary(int blocks) const;
   static constexpr long long kMinBlockPeriods = 2;
 
@@ -63,5 +66,11 @@ class LoadsRecorder final : public Observer {
   long long first_ = -1, last_ = -1;            // periods seen: [first_, last_)
   std::vector<double> open_reaction_, open_held_;  // open phases' parts already counted
 };
+
+// The exact per-period loads of a converged periodic orbit (docs/loads.md): one orbit period q·T
+// simulated from its section point (in quad precision when the orbit needed it, or when double
+// leaves a chattering sequence undetermined); means without intervals. Empty contacts and a note
+// when the orbit did not converge or the period could not be simulated.
+LoadsSummary OrbitLoads(const System& system, const Scene& scene, const OrbitResult& orbit);
 
 }  // namespace vibro

@@ -34,7 +34,9 @@ std::string SimulationJson(const Scene& scene, const RunResult& result, const At
                            const LyapunovSpectrum* lyapunov = nullptr, const LoadsSummary* loads = nullptr);
 
 // `vibro orbit --json` (docs/cli.md, docs/output.md).
-std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+// `loads`: the orbit's exact per-period contact loads (docs/loads.md), "loads" as simulate's
+// without intervals ("loads_note" when they could not be computed).
+std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind, const LoadsSummary* loads = nullptr);
 
 // `vibro validate --json`: {"points": [{"value", "verdict", "detail", "distance", "period",
 // "stable", "floquet_multipliers", "sticking_fraction", "simulated_distance"}...],

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "vibro/simulator.hpp"
+
 namespace vibro {
 
 namespace {
@@ -117,7 +119,9 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
   s.first_period = begin;
   s.periods = last_ - begin;
   const long long L = blocks >= 2 ? s.periods / blocks : 0;
-  if (blocks < 2)
+  if (blocks == 0)
+    s.note = "";
+  else if (blocks < 2)
     s.note = "no interval: --blocks must be at least 2";
   else if (L < kMinBlockPeriods)
     s.note = fmt::format("run too short for the interval: {} periods analysed, {} blocks need at least {}",
@@ -191,6 +195,35 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
     s.contacts.push_back(c);
   }
   return s;
+}
+
+LoadsSummary OrbitLoads(const System& system, const Scene& scene, const OrbitResult& orbit) {
+  LoadsSummary none;
+  if (orbit.status != "converged" || orbit.period < 1) {
+    none.note = "no converged orbit";
+    return none;
+  }
+  Scene one = scene;
+  one.run.periods = orbit.period;
+  one.run.samples_per_period = 0;
+  one.run.lyapunov = false;
+  const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (attempt == 1) {
+      if (one.run.precision == Precision::kQuad || one.run.engine != Engine::kExact) break;
+      one.run.precision = Precision::kQuad;
+    } else if (orbit.quad_evaluations > 0 && one.run.engine == Engine::kExact) {
+      one.run.precision = Precision::kQuad;
+    }
+    LoadsRecorder recorder(system, 0);
+    SimulationOptions opt;
+    opt.observers = {&recorder};
+    opt.initial = &start;
+    const RunResult r = Simulate(system, one, opt);
+    if (r.status == RunStatus::kOk) return recorder.Summary(0);
+  }
+  none.note = "one period of the orbit could not be simulated";
+  return none;
 }
 
 }  // namespace vibro

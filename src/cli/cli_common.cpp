@@ -7,10 +7,16 @@
 #include "vibro/scene_file.hpp"
 
 void PrintLoads(const vibro::LoadsSummary& s) {
-  if (s.contacts.empty()) return;
-  fmt::print("loads        periods {}..{}{}\n", s.first_period, s.first_period + s.periods,
-             s.block_periods > 0 ? fmt::format(", 95 % intervals from {} blocks of {} periods", s.blocks, s.block_periods)
-                                 : "; " + s.note);
+  if (s.contacts.empty()) {
+    if (!s.note.empty()) fmt::print("loads        {}\n", s.note);
+    return;
+  }
+  if (s.blocks == 0)
+    fmt::print("loads        exact, per period of the orbit{}\n", s.note.empty() ? "" : "; " + s.note);
+  else
+    fmt::print("loads        periods {}..{}{}\n", s.first_period, s.first_period + s.periods,
+               s.block_periods > 0 ? fmt::format(", 95 % intervals from {} blocks of {} periods", s.blocks, s.block_periods)
+                                   : "; " + s.note);
   const auto pm = [](double v, const vibro::ContactLoads::Interval& ci) {
     return ci ? fmt::format("{:.6g} ± {:.2g}", v, 0.5 * (ci->second - ci->first)) : fmt::format("{:.6g}", v);
   };

@@ -68,6 +68,17 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
     return c ? nlohmann::json::array({c->first, c->second}) : nlohmann::json(nullptr);
   };
   for (const ContactLoads& c : s.contacts) {
+    if (s.blocks == 0) {  // a periodic orbit's exact values: no interval
+      arr.push_back({{"contact", c.contact},
+                     {"impacts_per_period", c.impacts_per_period},
+                     {"impulse_per_period", c.impulse_per_period},
+                     {"reaction_integral_per_period", c.reaction_integral_per_period},
+                     {"mean_force", c.mean_force},
+                     {"dissipated_power", c.dissipated_power},
+                     {"work_rate", c.work_rate},
+                     {"contact_fraction", c.contact_fraction}});
+      continue;
+    }
     arr.push_back({{"contact", c.contact},
                    {"impacts_per_period", c.impacts_per_period},
                    {"impacts_per_period_ci", ci(c.impacts_per_period_ci)},
@@ -85,6 +96,10 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
                    {"contact_fraction_ci", ci(c.contact_fraction_ci)}});
   }
   j["loads"] = arr;
+  if (s.blocks == 0) {
+    if (!s.note.empty()) j["loads_note"] = s.note;
+    return;
+  }
   j["loads_window"] = {{"first_period", s.first_period},
                        {"periods", s.periods},
                        {"blocks", s.blocks},
@@ -133,7 +148,7 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
   return j.dump();
 }
 
-std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
+std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* loads) {
   nlohmann::json j;
   j["status"] = o.status;
   if (!o.message.empty()) j["message"] = o.message;
@@ -162,6 +177,7 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   j["section_time"] = o.section_time;
   j["attractor_kind"] = o.summary.kind;
   j["quad_evaluations"] = o.quad_evaluations;
+  if (loads) AddLoads(j, *loads);
   return j.dump();
 }
 
