@@ -383,7 +383,10 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   // As the CLI: a failed solve still ends the file, with its status and message (never "running").
   if (!out.empty() && orbit.status == "converged") vibro::frontend::WriteOrbit(out, s.loaded, sys, orbit);
   else if (!out.empty()) vibro::frontend::WriteOrbitFailure(out, s.loaded, sys, orbit);
-  return {vibro::OrbitJson(orbit, req.kind), false};
+  // The orbit's exact per-period contact loads (docs/loads.md), as `vibro orbit --json`.
+  const bool converged = orbit.status == "converged";
+  const vibro::LoadsSummary loads = converged ? vibro::OrbitLoads(sys, s.loaded.scene, orbit) : vibro::LoadsSummary{};
+  return {vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr), false};
 }
 
 // vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts.
