@@ -133,9 +133,10 @@ class ContactLoadsT {
   // max R over a sticking segment (docs/loads.md §3): R and Ṙ at the ends and on a grid of spacing
   // at most h = 1/ω_max (ω_max the largest of ω and the ω_i: R is a sum of oscillations no faster,
   // whose consecutive extrema are at least about π/ω_max apart), and in every cell where Ṙ goes
-  // from + to −, the zero of Ṙ by regula falsi (Illinois) until |δs| < 1e-9 h: R is flat there, so
-  // its error is ½|R̈|δs², at the rounding of R. A maximum is missed only where Ṙ has two zeros
-  // inside one cell; R exceeds the larger cell end there by at most max|R̈| h²/8.
+  // from + to −, the zero of Ṙ by regula falsi (Illinois) from the cubic Hermite guess, until two
+  // estimates agree to 1e-7 h: R is flat there, so its error ½|R̈|δs² is at the rounding of R.
+  // A maximum is missed only where Ṙ has two zeros inside one cell; R exceeds the larger cell end
+  // there by at most max|R̈| h²/8.
   // X1, V1: the state at sigma (the segment's end, already evaluated); the start is X0_, V0_.
   S ReactionMax(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma, const Vec& X1,
                 const Vec& V1) {
@@ -156,8 +157,13 @@ class ContactLoadsT {
         int side = 0;
         // First guess: the zero of the derivative of the cubic Hermite interpolant of R on the cell.
         S c0 = HermiteZero(s - s_prev, R_prev, rate_prev, Rv, rate);
+        S c_last(-1);
         for (int it = 0; it < 12; ++it) {
           const S c = it == 0 && c0 > S(0) && c0 < s - s_prev ? S(s_prev + c0) : S(b - fb * (b - a) / (fb - fa));
+          // Converged when two estimates agree to 1e-7 h: R is flat there, its error ½|R̈|δs² is
+          // below 1e-14 R (|R̈| ≲ ω_max² max|R| and h ω_max ≤ 1).
+          if (c_last >= S(0) && R::abs(c - c_last) < S(1e-7) * h) break;
+          c_last = c;
           S fc(0);
           const S Rc = At(m, p, phase, c, fc);
           if (Rc > best) best = Rc;
