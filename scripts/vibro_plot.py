@@ -747,26 +747,31 @@ def plot_run(f, title, save, window, coordinate="x_B"):
     save(fig, "section")
 
     if "orbit" in f:
-        re_, im, stable, period = orbit_group(f["orbit"])
-        re_, im = np.atleast_1d(re_), np.atleast_1d(im)
-        if len(re_) == 0:
-            return  # a superstable 1-DOF sticking orbit has no multipliers to draw
-        fig, ax = figure(figsize=(5.6, 5))
-        th = np.linspace(0, 2 * np.pi, 400)
-        ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
-        ax.plot(re_, im, "o", color=OKABE_ITO[2] if stable else OKABE_ITO[1],
-                label=f"multipliers $\\mu$ ({'stable' if stable else 'unstable'})")
-        lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re_, im))))
-        ax.set_xlim(-lim, lim)
-        ax.set_ylim(-lim, lim)
-        ax.set_aspect("equal")
-        ax.axhline(0, color="0.7", lw=0.5)
-        ax.axvline(0, color="0.7", lw=0.5)
-        ax.set_xlabel("Re $\\mu$")
-        ax.set_ylabel("Im $\\mu$")
-        set_title(ax, title, f"period-{period} orbit: Floquet multipliers")
-        ax.legend(loc="upper left", fontsize=fs(8), framealpha=0.9)
-        save(fig, "multipliers")
+        plot_multipliers(f, title, save)
+
+
+def plot_multipliers(f, title, save):
+    """PREFIX_multipliers: the Floquet multipliers of the stored orbit against the unit circle."""
+    re_, im, stable, period = orbit_group(f["orbit"])
+    re_, im = np.atleast_1d(re_), np.atleast_1d(im)
+    if len(re_) == 0:
+        return  # a superstable 1-DOF sticking orbit has no multipliers to draw
+    fig, ax = figure(figsize=(5.6, 5))
+    th = np.linspace(0, 2 * np.pi, 400)
+    ax.plot(np.cos(th), np.sin(th), color="k", lw=0.8, label="unit circle")
+    ax.plot(re_, im, "o", color=OKABE_ITO[2] if stable else OKABE_ITO[1],
+            label=f"multipliers $\\mu$ ({'stable' if stable else 'unstable'})")
+    lim = max(1.2, 1.1 * max([1.0] + list(np.hypot(re_, im))))
+    ax.set_xlim(-lim, lim)
+    ax.set_ylim(-lim, lim)
+    ax.set_aspect("equal")
+    ax.axhline(0, color="0.7", lw=0.5)
+    ax.axvline(0, color="0.7", lw=0.5)
+    ax.set_xlabel("Re $\\mu$")
+    ax.set_ylabel("Im $\\mu$")
+    set_title(ax, title, f"period-{period} orbit: Floquet multipliers")
+    ax.legend(loc="upper left", fontsize=fs(8), framealpha=0.9)
+    save(fig, "multipliers")
 
 
 def parse_size(value):
@@ -934,8 +939,15 @@ def plot_gaps(f, title, save, window, contacts):
     ax.set_xlabel("$t$")
     ax.set_xlim(t_from, t_to)
     absolute_time(ax)
-    fig.suptitle(f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})", fontsize=fs(10))
+    sequence = text(f["orbit"].attrs["sequence"]) if "orbit" in f and "sequence" in f["orbit"].attrs else ""
+    seq_line = f"\ncontact sequence of the orbit: {sequence}" if sequence else ""
+    chosen = OPTIONS["title"]  # --title replaces the scene line and the window, never the sequence
+    if chosen != "" or sequence:
+        head = chosen if chosen is not None else f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})"
+        fig.suptitle((head + seq_line).lstrip("\n"), fontsize=fs(10))
     save(fig, "gaps")
+    if "orbit" in f and "multipliers" in f["orbit"].attrs:
+        plot_multipliers(f, title, save)
 
 
 def plot_loads(f, title, save):

@@ -2,8 +2,10 @@
 // the independent 1-DOF closed forms of docs/model.md §6 evaluated in long double.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -91,6 +93,69 @@ inline bool AlignChatteringTails(const std::vector<Event>& a, size_t& i, const s
     return i < a.size();
   }
   return true;
+}
+
+// Several contacts (docs/contacts.md): a random structure, a chain of n masses on springs (with a spring to the ground at each end),
+// forced on one DOF; contacts placed around the start state so that it opens every gap.
+inline Scene RandomContactsScene(std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int n = 1 + static_cast<int>(u(rng) * 3.0);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i) M(i, i) = 0.5 + 1.5 * u(rng);
+  for (int i = 0; i <= n; ++i) {
+    const double k = 0.5 + 1.5 * u(rng);
+    if (i > 0) K(i - 1, i - 1) += k;
+    if (i < n) K(i, i) += k;
+    if (i > 0 && i < n) {
+      K(i - 1, i) -= k;
+      K(i, i - 1) -= k;
+    }
+  }
+  Scene s;
+  s.physical = PhysicalStructureSpec{M, K, static_cast<int>(u(rng) * n), 0};
+  s.frequency = 0.4 + 2.6 * u(rng);
+  s.amplitude = 0.5 + 3.0 * u(rng);
+  if (u(rng) < 0.5) {
+    s.damping_ratios.resize(n);
+    for (int i = 0; i < n; ++i) s.damping_ratios[i] = 0.01 + 0.15 * u(rng);
+  }
+  // The static response to the forcing amplitude sets the scale of the gaps.
+  const Eigen::VectorXd q_static = K.ldlt().solve(Eigen::VectorXd::Unit(n, s.physical->forcing_dof)) * s.amplitude;
+  const double scale = std::max(0.05, q_static.cwiseAbs().maxCoeff());
+  const int m = 1 + static_cast<int>(u(rng) * 4.0);
+  // Preload: the first contact a stop below with d > 0, the run starting on it at its static
+  // equilibrium (the default start of a preloaded scene), the others placed around that state.
+  const bool preload = u(rng) < 0.3;
+  Eigen::VectorXd q0 = Eigen::VectorXd::Zero(n);
+  for (int j = 0; j < m; ++j) {
+    ContactSpec c;
+    c.dof = static_cast<int>(u(rng) * n);
+    if (n > 1 && u(rng) < 0.3) {
+      c.partner = (c.dof + 1 + static_cast<int>(u(rng) * (n - 1))) % n;
+    }
+    c.side = u(rng) < 0.5 ? Side::kBelow : Side::kAbove;
+    c.restitution = u(rng) < 0.25 ? 0.0 : 0.2 + 0.75 * u(rng);
+    if (j == 0 && preload) {
+      c.partner = -1;
+      c.side = Side::kBelow;
+      c.position = scale * (0.1 + 0.5 * u(rng));
+      // Static equilibrium on the stop: K q = e_b R with q_b = d.
+      const Eigen::VectorXd kb = K.ldlt().solve(Eigen::VectorXd::Unit(n, c.dof));
+      q0 = kb * (c.position / kb[c.dof]);
+    } else {
+      const double at = q0[c.dof] - (c.partner >= 0 ? q0[c.partner] : 0.0);
+      const double gap = scale * (0.2 + 1.5 * u(rng));
+      c.position = c.side == Side::kBelow ? at - gap : at + gap;
+    }
+    s.contacts.push_back(c);
+  }
+  s.stop_position = s.contacts[0].position;
+  s.restitution = s.contacts[0].restitution;
+  s.physical->contact_dof = s.contacts[0].dof;
+  s.run.samples_per_period = 0;
+  s.run.periods = 6;
+  s.run.chatter_tolerance = 1e-15;
+  return s;
 }
 
 // Runs the scene (from `from` when given, e.g. a point of an orbit) and classifies its end.

@@ -7,7 +7,8 @@
 //
 // Sticking collapses two directions (x_B and ẋ_B are fixed on the stop, docs/model.md §5.6): once
 // a sticking phase is entered in the measured window, the two smallest exponents are −∞ (all of
-// them for one DOF, whose sticking motions are superstable).
+// them for one DOF, whose sticking motions are superstable); with several contacts, two per
+// independent contact shape c_j among the contacts that stuck (docs/contacts.md).
 #pragma once
 
 #include <string>
@@ -59,6 +60,10 @@ class LyapunovObserver final : public Observer {
   long long pending_ = -1;
   bool stuck_ = false;        // a sticking entry since the last section
   bool collapsed_ = false;    // a sticking entry in the measured window
+  // Several contacts: the contacts entered into sticking since the last section, and those of the
+  // measured window; each independent contact shape c_j collapses two directions.
+  std::vector<int> period_stuck_, window_stuck_;
+  Eigen::MatrixXd shapes_;    // c_j as columns, (n, m)
   Eigen::MatrixXd frame_;     // orthonormal frame Q, (2n, 2n)
   Eigen::HouseholderQR<Eigen::MatrixXd> qr_;  // its storage reused every period
   Eigen::MatrixXd block_sums_;  // Σ log|R_ii| per block, (2n, kBlocks)

@@ -101,6 +101,8 @@ struct Checkpoint {
   std::vector<double> gaps;
   std::vector<int> start_kinds;
   std::vector<EventCounts> contact_counts;
+  // Sticking on two or more contacts at once: the held contacts, ascending (empty otherwise).
+  std::vector<int> held;
   // The open sticking phase of each contact (docs/loads.md): time held, ∫R dt and max R so far
   // (0, 0, NaN when not held), so that its release reports the whole phase after a resume and a
   // per-period account sees the reaction of a phase still open at a period boundary.
@@ -112,6 +114,7 @@ struct Checkpoint {
 struct Stretch {
   Mode mode;
   double duration;
+  int contact = 0;  // sticking: the held contact (0-based [[contact]] order; 0 for the [stop])
 };
 enum class ResetKind {
   kImpact,         // restitution law (12), free → free
@@ -120,6 +123,7 @@ enum class ResetKind {
   kRelease,        // sticking → free at R = 0 (no jump: the saltation is the identity)
   kAccumulation,   // docs/model.md §5.4: free flight over `delta` from the post-impact state, projection
   kGrazing,        // tangential touch that stays free (the maps are singular there)
+  kHeldSet,        // two or more contacts held at once, entered or left (docs/contacts.md): no tangent
 };
 struct Reset {
   ResetKind kind;
@@ -138,6 +142,11 @@ struct Reset {
   // ẋ_B just before the reset, computed in the run's precision (a quad run's chattering impacts
   // reach speeds that the double state V_before cannot resolve); NaN when not given.
   double contact_velocity_before = std::numeric_limits<double>::quiet_NaN();
+  // Several contacts (docs/contacts.md): the contact of the reset (the impacting one, also while
+  // another sticks; the one entering or leaving sticking; the released one), and whether it is an
+  // impact of two or more contacts at one instant (impact LCP; `contact` is then the first of them).
+  int contact = 0;
+  bool simultaneous = false;
 };
 
 class Observer {

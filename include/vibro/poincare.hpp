@@ -26,9 +26,23 @@
 
 namespace vibro {
 
+// Why an orbit through a simultaneous impact of coupled contacts has no multipliers (the map is
+// discontinuous there, docs/contacts.md "Periodic orbits"): TangentTracker::undefined() says
+// this, after "the orbit passes through ".
+inline constexpr char kCoupledSimultaneousImpact[] =
+    "a simultaneous impact of coupled contacts: the map has no Jacobian there";
+
 // Accumulates DF along a simulated trajectory (an Observer of Simulate). Free flights and
 // impacts, most of a run, are applied in closed form without allocating (per-mode 2 × 2 flow
 // blocks, rank-one saltation updates), so that the Lyapunov observer can follow every period.
+//
+// Several contacts (docs/contacts.md, "Periodic orbits"): each reset carries its contact j, and
+// each of the single stop's saltations holds with that contact's c_j, T_j, W_jj, r_j (an impact:
+// Π_j = I − (1 + r_j) T_j c_jᵀ/W_jj, det = r_j²); a sticking stretch follows the flow constrained
+// by the held contact; an impact of contact k while contact h sticks uses the 2 × 2 impact law
+// on {h, k} with its pattern fixed (h stays: both impulses; h pushed off: k's alone); impacts of
+// two contacts at one instant are the product of their saltations when W_jk = 0, and leave the
+// map without a Jacobian when W_jk ≠ 0 (the map is discontinuous there).
 class TangentTracker final : public Observer {
  public:
   explicit TangentTracker(const System& system);
@@ -36,20 +50,41 @@ class TangentTracker final : public Observer {
   void OnReset(const Reset& r) override;
   const Eigen::MatrixXd& jacobian() const { return phi_; }  // ∂z(t)/∂z(t0) · start, (2n, k)
   bool singular() const { return singular_; }               // a grazing on the way
+  // Why the map has no Jacobian along the way (a simultaneous impact of coupled contacts, or an
+  // event whose saltation is not implemented); empty when DF exists. Kept across Restart.
+  const std::string& undefined() const { return undefined_; }
   // Starts the product again from `start` (2n rows; the identity for DF itself): the Lyapunov
   // observer carries its orthonormal frame this way.
   void Restart(const Eigen::MatrixXd& start);
 
  private:
+  // What the saltations of one contact need (docs/contacts.md notation: c_j, T_j, W_jj, r_j).
+  struct ContactTangent {
+    Eigen::VectorXd c, T;
+    double e = 0, s = 0, r = 0;
+    Eigen::MatrixXd Pi;       // plastic projection I − T_j c_jᵀ/W_jj, (n, n)
+    Eigen::MatrixXd G_stick;  // first-order matrix of the flow with contact j held, (2n, 2n)
+  };
   Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
-                        double phase) const;
+                        double phase, int contact = 0) const;
   void FreeFlight(double duration, Eigen::MatrixXd& m) const;
-  void Impact(const Reset& r);
+  void Impact(const Reset& r, int contact);
+  // S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ/(∇h·f⁻), ∂g = diag(I, dV), ∇h = (c_k, 0), applied to the product.
+  void Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus,
+                 const Eigen::VectorXd& f_plus, const Eigen::VectorXd& c, double denom);
+  void ImpactWhileHeld(const Reset& r);
+  void SimultaneousImpact(const Reset& r);
+  double Coupling(int j, int k) const;  // W_jk, 0 within the rounding of the mode shapes
+  void Undefined(std::string why);
   const System& sys_;
-  Eigen::MatrixXd G_free_, G_stick_, Pi_, phi_;
+  std::vector<ContactTangent> contacts_;
+  Eigen::MatrixXd phi_;
   Eigen::VectorXd w2_, D_;                  // ω_i², 2ζ_iω_i
   Eigen::VectorXd du_, dv_;                 // the impact saltation's column: work space, (n)
   bool singular_ = false;
+  std::string undefined_;
+  // Several contacts: the contact the run sticks on, −1 in free flight, −2 before the first stretch.
+  int held_ = -2;
 };
 
 // kAuto: the kind of the orbit found (of the attractor after a transient, or of the orbit through
@@ -91,6 +126,13 @@ struct OrbitResult {
   // Map evaluations and orbit simulations redone in quad precision because double left a
   // chattering sequence undetermined (exact engine, near the end of a sticking branch).
   int quad_evaluations = 0;
+  // Several contacts (docs/contacts.md, "Periodic orbits"): the orbit's contact sequence over its
+  // q periods from the section, e.g. "0:impact 1:impact 0:stick 0:release" (a run of k equal
+  // entries is written once with "*k"; "0+1:impact" is a simultaneous impact); empty for one contact.
+  std::string sequence;
+  // Why the orbit has no Jacobian, so no multipliers (e.g. "the orbit passes through a
+  // simultaneous impact of coupled contacts: the map has no Jacobian there"); empty when it has one.
+  std::string no_jacobian;
 };
 
 OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);
@@ -110,6 +152,7 @@ struct MapValue {
   Eigen::VectorXd X, V;
   Eigen::MatrixXd jacobian;
   bool singular = false;
+  std::string undefined;  // TangentTracker::undefined(): why DF does not exist (empty: it does)
   RunStatus status = RunStatus::kOk;
 };
 MapValue StroboscopicMap(const System& system, const Scene& scene, double t0,

@@ -16,8 +16,8 @@
 //                    skips a root; trivial roots at the start of a flight are divided out per gap,
 //                    docs/model.md §2.1)
 //       several gaps 0 at one instant (within rounding), closing → the impact LCP on them
-//                    (docs/contacts.md): emit an impact per contact, flagged simultaneous; one
-//                    contact at rest after it → stick or leave as below; two → undetermined
+//                    (docs/contacts.md): emit an impact per contact, flagged simultaneous; the
+//                    contacts left at rest → the acceleration LCP (rest) below
 //       boundary     → section point, checkpoint, k ← k+1 (the flow restarts from the same state)
 //       g = 0, ẋ_B⁻ < 0 (impact):
 //           R⁻ = reaction of the state (the paper's eq. (5))
@@ -42,14 +42,25 @@
 //                    §4.4 iii), else keep flying (g = g' = 0, g'' > 0 divided out)
 //     sticking:      advance the constrained flow (6) of the held contact a until R reaches 0,
 //                    another gap g_k reaches 0 under that flow, or the period boundary (one DOF:
-//                    the body rests and the release phase is closed form, docs/model.md §4.4)
-//       g_k = 0, closing → the 2×2 impact law on {a, k}: a pushed off (liftoff) → emit impact at
-//                    k and release at a, mode ← free; else emit impact, a stays held (a leaves if
-//                    R ≤ 0 after it). k landing plastically, chattering to rest (at the rounding
-//                    floor, or 64 ever shorter flights) or arriving tangentially while a sticks →
-//                    undetermined (two contacts stuck at once, never guessed)
+//                    the body rests and the release phase is closed form, docs/model.md §4.4).
+//                    Held on a set S of two or more contacts: the flow on {g_j = ġ_j = 0, j ∈ S}
+//                    in closed form, until a force λ_j (j ∈ S) or another gap reaches 0
+//       g_k = 0, closing → the impact LCP on S ∪ {k}: a held contact pushed off (liftoff) →
+//                    emit its release; emit the impact at k; contacts at rest after it (k if
+//                    plastic) → the acceleration LCP (rest); k bouncing while S stays held: a
+//                    chattering sequence beside S, its accumulation point predicted as above with
+//                    k's deceleration A under the S-flow (flow over Δ∞, project onto S ∪ {k},
+//                    emit accumulation, then rest); at the rounding floor first → undetermined
+//       g_k = 0, tangential → emit grazing; the held flow pulls k off → keep going, else rest
+//       λ_j = 0, λ̇_j < 0 (S of two or more) → emit release of j, S ← S \ {j}, its gap starts
+//                    with g = g' = g'' = 0, g''' > 0 under the flow of the others
 //       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
 //       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, docs/model.md §5.7): stay stuck
+//     rest (contacts Z0 at zero gap and zero gap velocity): project onto them, solve the
+//                    acceleration LCP a = a⁰ + Wλ, 0 ≤ λ ⊥ a ≥ 0: λ_j > 0 → stick (emit stick for
+//                    the new ones), else leave at zero velocity (emit release if it was held);
+//                    none held → free flight; λ_j = a_j = 0 → undetermined (degenerate entry); a
+//                    held set with CVODE, or a defective damped held flow → undetermined
 //
 // Simultaneous events: a guard met exactly at a period boundary is handled after the section
 // point is recorded (the section sees x⁻). Two guards at one instant are handled in the order

@@ -52,6 +52,25 @@ struct ContactModel {
   ConstrainedModes constrained;
 };
 
+// Sticking on a set S of two or more contacts at once (docs/contacts.md, "Sticking on several
+// contacts"): on {g_j = ġ_j = 0, j ∈ S} the state is X = base + vectors·y with
+// ÿ_k + damping ẏ + ν_k² y_k = modal_forcing_k f sin ωt, y = left·(X − base), and the contact
+// forces are λ = reaction_static + reaction·y + reaction_velocity·ẏ − reaction_forcing f sin ωt
+// (rows in the order of `set`). `vectors` are orthonormal in the modal masses of the scaling, so `left` = Vᵀμ.
+struct HeldSetModes {
+  std::vector<int> set;            // the held contacts, ascending
+  Eigen::VectorXd base;            // X_p: on every stop of S, the static response to the forces
+  Eigen::VectorXd frequencies;     // ν_k, ascending, (n − |S|)
+  Eigen::MatrixXd vectors;         // V, (n, n − |S|)
+  Eigen::MatrixXd left;            // Vᵀμ, (n − |S|, n)
+  Eigen::VectorXd modal_forcing;   // Vᵀμ T_A, (n − |S|)
+  Eigen::VectorXd reaction_static;   // W_SS⁻¹ e_S-part: λ at y = 0 without forcing, (|S|)
+  Eigen::MatrixXd reaction;          // W_SS⁻¹ C_S Ω V, (|S|, n − |S|)
+  Eigen::VectorXd reaction_forcing;  // W_SS⁻¹ C_S T_A, (|S|)
+  Eigen::MatrixXd reaction_velocity;  // W_SS⁻¹ C_S D V: damped, λ gains reaction_velocity·ẏ
+  Eigen::MatrixXd damping;         // VᵀμDV, (n − |S|)²: zero when undamped
+};
+
 class System {
  public:
   // Builds the model of a scene. Precondition: Validate(scene) is empty (throws
@@ -90,6 +109,10 @@ class System {
   const std::vector<ContactModel>& contacts() const { return contacts_; }
   // Delassus matrix W_jk = c_jᵀT_k (MODEL §11.1.3), (m, m).
   const Eigen::MatrixXd& delassus() const { return delassus_; }
+
+  // The flow held on the contacts of `set` (two or more, independent; MODEL (S1)–(S2) in
+  // docs/contacts_reference.md). Throws std::invalid_argument for dependent contacts.
+  HeldSetModes HeldOn(const std::vector<int>& set) const;
 
   // Physical form only: mode shapes ψ_i (columns, unit component at B for contact modes), (N, n).
   const Eigen::MatrixXd& mode_shapes() const { return mode_shapes_; }

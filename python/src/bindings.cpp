@@ -299,8 +299,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   // Contact loads (docs/loads.md), the first tenth of the periods left out, as the command line.
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers = {&attractor_recorder, &recorder, &loads};
-  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+  if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   std::optional<vibro::frontend::RunOutput> output;
   {
@@ -362,7 +361,6 @@ vibro::OrbitKind KindOf(const std::string& kind) {
 std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, long long period, long long impacts,
                                    std::optional<double> guess_phase, std::optional<double> guess_velocity,
                                    const std::string& out, long long transient, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "orbit");
   vibro::frontend::CheckOrbitOptions(kPython, period, impacts, transient, guess_phase, guess_velocity);
   vibro::OrbitRequest req;
   req.kind = KindOf(kind);

@@ -339,7 +339,9 @@ def orbit(scene, kind="auto", period=0, impacts=0, guess=None, out=None, force=F
     """Finds a periodic orbit with the Poincaré solver (``vibro orbit --json``). ``guess`` is the
     phase ωt of the release (or first impact), or (phase, contact velocity): Newton starts there
     unless ``transient`` periods are asked for. Without a guess, ``transient`` defaults to 200;
-    ``transient=0`` starts Newton at the scene's initial state (``vibro orbit --transient 0``)."""
+    ``transient=0`` starts Newton at the scene's initial state (``vibro orbit --transient 0``). With
+    several contacts the dict also has ``sequence``, the orbit's contact sequence (docs/contacts.md),
+    and ``no_jacobian`` when the orbit has no multipliers (a simultaneous impact of coupled contacts)."""
     if transient is None:
         transient = 0 if guess is not None else 200
     _invoke("orbit", scene, kind=kind, period=period, impacts=impacts, guess=guess, out=out, force=force,

@@ -25,11 +25,17 @@ LyapunovObserver::LyapunovObserver(const System& sys, const Scene& scene)
   frame_ = Eigen::MatrixXd::Identity(m, m);
   block_sums_ = Eigen::MatrixXd::Zero(m, kBlocks);
   block_periods_ = Eigen::VectorXi::Zero(kBlocks);
+  shapes_.resize(sys.dof(), sys.contact_count());
+  for (int j = 0; j < sys.contact_count(); ++j) shapes_.col(j) = sys.contacts()[static_cast<size_t>(j)].shape;
 }
 
 void LyapunovObserver::OnReset(const Reset& r) {
   tangent_.OnReset(r);
-  if (r.kind == ResetKind::kPlasticStick || r.kind == ResetKind::kAccumulation) stuck_ = true;
+  if (r.kind == ResetKind::kPlasticStick || r.kind == ResetKind::kAccumulation) {
+    stuck_ = true;
+    if (std::find(period_stuck_.begin(), period_stuck_.end(), r.contact) == period_stuck_.end())
+      period_stuck_.push_back(r.contact);
+  }
 }
 
 void LyapunovObserver::OnSection(const Sample& s) {
@@ -42,6 +48,7 @@ void LyapunovObserver::OnSection(const Sample& s) {
   frame_.setIdentity();
   last_k_ = k;
   stuck_ = false;
+  period_stuck_.clear();
   tangent_.Restart(frame_);
 }
 
@@ -69,10 +76,13 @@ void LyapunovObserver::EndPeriod(long long k) {
       ++block_periods_[b];
       ++measured_;
       collapsed_ = collapsed_ || stuck_;
+      for (int j : period_stuck_)
+        if (std::find(window_stuck_.begin(), window_stuck_.end(), j) == window_stuck_.end()) window_stuck_.push_back(j);
     }
   }
   last_k_ = k;
   stuck_ = false;
+  period_stuck_.clear();
   tangent_.Restart(frame_);
 }
 
@@ -84,10 +94,23 @@ LyapunovSpectrum LyapunovObserver::Spectrum() const {
     out.undefined = "no period of the second half of the run was measured";
     return out;
   }
+  // Several contacts: an event whose Jacobian does not exist, or is not implemented, on the way.
+  if (!tangent_.undefined().empty()) {
+    out.undefined = "the tangent map does not cover the run: " + tangent_.undefined();
+    return out;
+  }
   const auto m = static_cast<int>(block_sums_.rows());
   // Directions kept: all, or 2n − 2 when sticking collapsed two of them. QR orders the frame by
   // decreasing growth, so the collapsed directions are the last ones.
-  const int kept = collapsed_ ? m - 2 : m;
+  int collapsed = collapsed_ ? 2 : 0;
+  if (collapsed_ && shapes_.cols() > 1 && !window_stuck_.empty()) {
+    Eigen::MatrixXd C(shapes_.rows(), static_cast<Eigen::Index>(window_stuck_.size()));
+    for (size_t k = 0; k < window_stuck_.size(); ++k) C.col(static_cast<Eigen::Index>(k)) = shapes_.col(window_stuck_[k]);
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+    lu.setThreshold(1e-10);
+    collapsed = 2 * static_cast<int>(lu.rank());
+  }
+  const int kept = std::max(0, m - collapsed);
   const double ninf = -std::numeric_limits<double>::infinity();
   const double time = static_cast<double>(measured_) * period_;
   std::vector<int> full;  // blocks holding periods

@@ -3,6 +3,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <tuple>
+#include <utility>
 
 #include <unsupported/Eigen/MatrixFunctions>
 
@@ -49,23 +52,113 @@ struct SampleCatcher final : Observer {
   }
 };
 
+// The events of the first q periods of a run from the section, as the contact sequence
+// "j:kind ..." (OrbitResult::sequence), and the contacts that stick on the way.
+struct SequenceRecorder final : Observer {
+  long long periods = 1;
+  struct Entry {
+    std::vector<int> contacts;  // several: one simultaneous impact
+    std::string kind;
+    double t;
+    bool simultaneous;
+  };
+  std::vector<Entry> entries;
+  std::vector<int> stuck;  // contacts with a sticking phase, in order of first entry
+  void OnEvent(const Event& e) override {
+    if (e.clock.period >= periods) return;
+    const std::string kind = ToString(e.kind);
+    if (e.kind == EventKind::kStick && std::find(stuck.begin(), stuck.end(), e.contact) == stuck.end())
+      stuck.push_back(e.contact);
+    // The contacts of one simultaneous impact: one entry "j+k:impact".
+    if (e.simultaneous && !entries.empty() && entries.back().simultaneous && entries.back().t == e.t &&
+        entries.back().kind == kind) {
+      entries.back().contacts.push_back(e.contact);
+      return;
+    }
+    entries.push_back({{e.contact}, kind, e.t, e.simultaneous});
+  }
+  static std::string Name(Entry e) {
+    std::sort(e.contacts.begin(), e.contacts.end());
+    std::string out;
+    for (int c : e.contacts) {
+      if (!out.empty()) out += '+';
+      out += std::to_string(c);
+    }
+    out += ':';
+    return out + e.kind;
+  }
+  std::string Text() const {
+    std::vector<std::string> names;
+    for (const Entry& e : entries) names.push_back(Name(e));
+    std::string out;
+    for (size_t i = 0; i < names.size();) {
+      size_t k = i + 1;
+      while (k < names.size() && names[k] == names[i]) ++k;
+      if (!out.empty()) out += ' ';
+      out += names[i];
+      if (k - i > 1) {
+        out += '*';
+        out += std::to_string(k - i);
+      }
+      i = k;
+    }
+    return out;
+  }
+};
+
+// The orbit's contact sequence over its q periods from the section, and how many directions its
+// sticking phases collapse: 2 per independent held contact shape c_j (rank of their span).
+std::pair<std::string, int> ContactSequence(const System& sys, const Scene& scene, const OrbitResult& orbit) {
+  Scene sc = scene;
+  sc.initial_time = orbit.section_time;
+  sc.run.periods = orbit.period;
+  sc.run.samples_per_period = 0;
+  const InitialOverride here{orbit.section_time, orbit.X, orbit.V};
+  SequenceRecorder rec;
+  rec.periods = orbit.period;
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.observers = {&rec};
+  Simulate(sys, sc, opt);
+  int rank = 0;
+  if (!rec.stuck.empty()) {
+    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(rec.stuck.size()));
+    for (size_t k = 0; k < rec.stuck.size(); ++k)
+      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(rec.stuck[k])].shape;
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+    lu.setThreshold(1e-10);
+    rank = static_cast<int>(lu.rank());
+  }
+  return {rec.Text(), 2 * rank};
+}
+
 }  // namespace
 
 TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
   const auto n = sys.dof();
   const Eigen::VectorXd w2 = sys.omega().cwiseAbs2();
   const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
-  const Eigen::VectorXd& c = sys.contact_shape();
-  Pi_ = Eigen::MatrixXd::Identity(n, n) - sys.contact() * c.transpose() / sys.s_B();
   const Eigen::MatrixXd Omega = w2.asDiagonal();
-  const Eigen::MatrixXd A = Omega - sys.contact() * c.cwiseProduct(w2).transpose() / sys.s_B();
-  G_free_ = Eigen::MatrixXd::Zero(2 * n, 2 * n);
-  G_free_.topRightCorner(n, n).setIdentity();
-  G_free_.bottomLeftCorner(n, n) = -Omega;
-  G_free_.bottomRightCorner(n, n) = -Eigen::MatrixXd(D.asDiagonal());
-  G_stick_ = G_free_;
-  G_stick_.bottomLeftCorner(n, n) = -A;
-  G_stick_.bottomRightCorner(n, n) = -Pi_ * D.asDiagonal();
+  Eigen::MatrixXd G_free = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  G_free.topRightCorner(n, n).setIdentity();
+  G_free.bottomLeftCorner(n, n) = -Omega;
+  G_free.bottomRightCorner(n, n) = -Eigen::MatrixXd(D.asDiagonal());
+  // Per contact j: Π_j = I − T_j c_jᵀ/W_jj and the flow with j held, G = [[0, I], [−A_j, −Π_j D]],
+  // A_j = Ω − T_j (c_j∘ω²)ᵀ/W_jj (docs/model.md §4.2 with c → c_j; contact 0 is the [stop]).
+  for (const ContactModel& k : sys.contacts()) {
+    ContactTangent t;
+    t.c = k.shape;
+    t.T = k.contact;
+    t.e = k.stop;
+    t.s = k.s_B;
+    t.r = k.restitution;
+    t.Pi = Eigen::MatrixXd::Identity(n, n) - t.T * t.c.transpose() / t.s;
+    const Eigen::MatrixXd A = Omega - t.T * t.c.cwiseProduct(w2).transpose() / t.s;
+    t.G_stick = G_free;
+    t.G_stick.bottomLeftCorner(n, n) = -A;
+    t.G_stick.bottomRightCorner(n, n) = -t.Pi * D.asDiagonal();
+    contacts_.push_back(std::move(t));
+  }
   phi_ = Eigen::MatrixXd::Identity(2 * n, 2 * n);
   w2_ = w2;
   D_ = D;
@@ -78,21 +171,43 @@ void TangentTracker::Restart(const Eigen::MatrixXd& start) {
   singular_ = false;
 }
 
+void TangentTracker::Undefined(std::string why) {
+  if (undefined_.empty()) undefined_ = std::move(why);
+}
+
+double TangentTracker::Coupling(int j, int k) const {
+  // As the automaton: a coupling within the rounding of the mode shapes is none (docs/contacts.md).
+  const double w = sys_.delassus()(j, k);
+  const double scale = std::sqrt(contacts_[static_cast<size_t>(j)].s * contacts_[static_cast<size_t>(k)].s);
+  return std::abs(w) <= 64 * std::numeric_limits<double>::epsilon() * scale ? 0.0 : w;
+}
+
 Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
-                                      const Eigen::VectorXd& V, double phase) const {
+                                      const Eigen::VectorXd& V, double phase, int contact) const {
   const Eigen::VectorXd w2 = sys_.omega().cwiseAbs2();
   const Eigen::VectorXd D = 2.0 * sys_.damping().cwiseProduct(sys_.omega());
   Eigen::VectorXd acc = -w2.cwiseProduct(X) - D.cwiseProduct(V) +
                         sys_.forcing() * (sys_.amplitude() * std::sin(phase));
-  if (mode == Mode::kSticking) acc = Pi_ * acc;  // Ẍ = free acceleration + T_B R with cᵀẌ = 0
+  // Ẍ = free acceleration + T_j λ_j with c_jᵀẌ = 0.
+  if (mode == Mode::kSticking) acc = contacts_[static_cast<size_t>(contact)].Pi * acc;
   return Stack(V, acc);
 }
 
 void TangentTracker::OnStretch(const Stretch& s) {
-  if (s.mode == Mode::kFree)
+  const bool multi = contacts_.size() > 1;
+  if (s.mode == Mode::kFree) {
+    // Several contacts: every way out of sticking is a reset the tracker has seen.
+    if (multi && held_ >= 0) Undefined("a sticking phase ended without a release the tangent map knows");
+    held_ = -1;
     FreeFlight(s.duration, phi_);
-  else
-    phi_ = (G_stick_ * s.duration).exp() * phi_;
+  } else {
+    const auto j = static_cast<size_t>(multi ? s.contact : 0);
+    if (multi && held_ != s.contact && held_ != -2)
+      Undefined("a sticking phase began without an entry the tangent map knows (several contacts held, "
+                "or a simultaneous plastic impact)");
+    held_ = s.contact;
+    phi_ = (contacts_[j].G_stick * s.duration).exp() * phi_;
+  }
 }
 
 // exp(G_free s) is block diagonal over the modes: for Ẍ_i = −ω_i² X_i − 2ζ_iω_i Ẋ_i (ζ_i < 1),
@@ -117,21 +232,22 @@ void TangentTracker::FreeFlight(double s, Eigen::MatrixXd& m) const {
 }
 
 // The restitution law's saltation S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻) (docs/model.md §5.6) with
-// ∂g = diag(I, I − (1+r) T_B cᵀ/s_B) and ∇h = (c, 0), applied as rank-one updates column by column
-// (a run has millions of impacts: no temporaries): the phase does not change across the impact,
-// so f⁺ − ∂g f⁻ = (Ẋ⁺ − Ẋ⁻, a⁺ − ∂g_V a⁻) with a = −ω²X − DẊ + T_A f sin φ on either side (X⁺ is
-// X⁻ snapped onto the stop: equal to rounding).
-void TangentTracker::Impact(const Reset& r) {
+// ∂g = diag(I, I − (1+r_j) T_j c_jᵀ/W_jj) and ∇h = (c_j, 0) (contact j; the [stop]: c, T_B, s_B),
+// applied as rank-one updates column by column (a run has millions of impacts: no temporaries):
+// the phase does not change across the impact, so f⁺ − ∂g f⁻ = (Ẋ⁺ − Ẋ⁻, a⁺ − ∂g_V a⁻) with
+// a = −ω²X − DẊ + T_A f sin φ on either side (X⁺ is X⁻ snapped onto the stop: equal to rounding).
+void TangentTracker::Impact(const Reset& r, int contact) {
   const auto n = sys_.dof();
-  const Eigen::VectorXd& c = sys_.contact_shape();
-  const Eigen::VectorXd& T_B = sys_.contact();
+  const ContactTangent& ct = contacts_[static_cast<size_t>(contact)];
+  const Eigen::VectorXd& c = ct.c;
+  const Eigen::VectorXd& T_B = ct.T;
   const Eigen::VectorXd& T_A = sys_.forcing();
   const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;
   if (!(std::abs(denom) > 1e-300)) {
     singular_ = true;
     return;
   }
-  const double k = (1.0 + sys_.restitution()) / sys_.s_B();
+  const double k = (1.0 + ct.r) / ct.s;
   const double forcing = sys_.amplitude() * std::sin(r.phase);
   // a⁺ − ∂g_V a⁻ = a⁺ − a⁻ + k T_B (cᵀa⁻), a⁺ − a⁻ = −ω²(X⁺ − X⁻) − D(Ẋ⁺ − Ẋ⁻).
   double c_a_minus = 0;
@@ -157,57 +273,161 @@ void TangentTracker::Impact(const Reset& r) {
   }
 }
 
-void TangentTracker::OnReset(const Reset& r) {
+void TangentTracker::Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus,
+                               const Eigen::VectorXd& f_plus, const Eigen::VectorXd& c, double denom) {
   const auto n = sys_.dof();
-  const Eigen::VectorXd& c = sys_.contact_shape();
+  if (!(std::abs(denom) > 1e-300)) {
+    singular_ = true;
+    return;
+  }
+  const Eigen::MatrixXd dg = BlockDiag(Eigen::MatrixXd::Identity(n, n), dV);
+  const Eigen::VectorXd grad = Stack(c, Eigen::VectorXd::Zero(n));
+  phi_ = (dg + (f_plus - dg * f_minus) * grad.transpose() / denom) * phi_;
+}
+
+// Contact k = r.contact closes while contact h = held_ sticks (docs/contacts.md, "Periodic
+// orbits"), with the automaton's pattern: h pushed off (W_hk P_k > 0 for k's impulse alone:
+// P_h = 0, ∂g_V = Π_k) or h stays (the 2 × 2 law W P = −diag(1, 1 + r_k) C_Z Ẋ⁻ on Z = {h, k}:
+// ∂g_V = I − T_Z W_ZZ⁻¹ diag(1, 1 + r_k) C_Z, linear while the pattern holds). The guard is g_k,
+// the flow before is the one held on h, the flow after the one the run follows: held on h while
+// its reaction stays positive, free otherwise.
+void TangentTracker::ImpactWhileHeld(const Reset& r) {
+  const auto n = sys_.dof();
+  const int h = held_, k = r.contact;
+  const ContactTangent& H = contacts_[static_cast<size_t>(h)];
+  const ContactTangent& K = contacts_[static_cast<size_t>(k)];
+  const double vk = std::isnan(r.contact_velocity_before) ? K.c.dot(r.V_before) : r.contact_velocity_before;
+  const double Whk = Coupling(h, k);
+  const double Pk = -(1.0 + K.r) * vk / K.s;
+  const Eigen::VectorXd f_minus = Field(Mode::kSticking, r.X_before, r.V_before, r.phase, h);
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
-  // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = cᵀX − x0 (docs/model.md §5.6).
-  const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
-    const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;
-    if (!(std::abs(denom) > 1e-300)) {
-      singular_ = true;
+  if (Whk * Pk > 64 * std::numeric_limits<double>::epsilon() * std::abs(Whk * Pk)) {
+    held_ = -1;
+    Saltation(I - (1.0 + K.r) * K.T * K.c.transpose() / K.s, f_minus,
+              Field(Mode::kFree, r.X_after, r.V_after, r.phase), K.c, vk);
+    return;
+  }
+  Eigen::Matrix2d W;
+  W << H.s, Whk, Whk, K.s;
+  Eigen::MatrixXd T_Z(n, 2), C_Z(2, n);
+  T_Z << H.T, K.T;
+  C_Z << H.c.transpose(), K.c.transpose();
+  const Eigen::Matrix2d law = W.inverse() * Eigen::Vector2d(1.0, 1.0 + K.r).asDiagonal();
+  const Eigen::MatrixXd dV = I - T_Z * law * C_Z;
+  // The reaction of h after the impact: λ_h = −c_hᵀ a_free/W_hh.
+  const Eigen::VectorXd free_after = Field(Mode::kFree, r.X_after, r.V_after, r.phase);
+  const bool stays = -H.c.dot(free_after.tail(n)) / H.s > 0;
+  if (!stays) held_ = -1;
+  Saltation(dV, f_minus, stays ? Field(Mode::kSticking, r.X_after, r.V_after, r.phase, h) : free_after,
+            K.c, vk);
+}
+
+// Contacts closing at one instant (docs/contacts.md, "Periodic orbits"): with W_jk = 0 the impacts are
+// independent, and the saltation is the product of the single impacts' (taken one after the
+// other at the same instant); with W_jk ≠ 0 the map is discontinuous there: no Jacobian.
+void TangentTracker::SimultaneousImpact(const Reset& r) {
+  if (held_ >= 0) {
+    Undefined("an impact of two contacts at one instant while another contact sticks: its "
+              "saltation is not implemented");
+    return;
+  }
+  std::vector<int> Z;
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    const ContactTangent& ct = contacts_[j];
+    const double gap = ct.c.dot(r.X_after) - ct.e;
+    const double tol = 1e-9 * (1.0 + std::abs(ct.e) + ct.c.cwiseProduct(r.X_after).cwiseAbs().sum());
+    if (std::abs(gap) <= tol || static_cast<int>(j) == r.contact) Z.push_back(static_cast<int>(j));
+  }
+  for (size_t a = 0; a < Z.size(); ++a)
+    for (size_t b = a + 1; b < Z.size(); ++b)
+      if (Coupling(Z[a], Z[b]) != 0.0) {
+        Undefined(kCoupledSimultaneousImpact);
+        return;
+      }
+  Eigen::VectorXd V = r.V_before, V_next;
+  for (int j : Z) {
+    const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
+    const double v = ct.c.dot(V);
+    if (ct.r == 0.0) {
+      Undefined("a plastic impact of two contacts at one instant: its saltation is not implemented");
       return;
     }
-    const Eigen::MatrixXd dg = BlockDiag(I, dV);
-    const Eigen::VectorXd fm = Field(Mode::kFree, r.X_before, r.V_before, r.phase);
-    const Eigen::VectorXd fp = Field(after, r.X_after, r.V_after, r.phase);
-    const Eigen::VectorXd grad = Stack(c, Eigen::VectorXd::Zero(n));
-    phi_ = (dg + (fp - dg * fm) * grad.transpose() / denom) * phi_;
+    if (!(v < 0)) {  // at zero gap without closing: a tangential touch
+      singular_ = true;
+      continue;
+    }
+    V_next = V + ct.T * (-(1.0 + ct.r) * v / ct.s);
+    const Reset one{ResetKind::kImpact, r.phase, r.X_after, V,       r.X_after, V_next,
+                    0.0,                0.0,     nullptr,   nullptr, nullptr,   v,
+                    j};
+    Impact(one, j);
+    V = V_next;
+  }
+}
+
+void TangentTracker::OnReset(const Reset& r) {
+  const auto n = sys_.dof();
+  const bool multi = contacts_.size() > 1;
+  const int j = multi ? r.contact : 0;
+  const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
+  const Eigen::VectorXd& c = ct.c;
+  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
+  // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = c_jᵀX − e_j (docs/model.md §5.6).
+  const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
+    const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;
+    Saltation(dV, Field(Mode::kFree, r.X_before, r.V_before, r.phase),
+              Field(after, r.X_after, r.V_after, r.phase, j), c, denom);
   };
+  const bool another_held = multi && held_ >= 0 && held_ != j;
   switch (r.kind) {
     case ResetKind::kImpact:
-      Impact(r);
+      if (multi && r.simultaneous)
+        SimultaneousImpact(r);
+      else if (another_held)
+        ImpactWhileHeld(r);
+      else
+        Impact(r, j);
       break;
     case ResetKind::kPlasticStick:
-      salt(Pi_, Mode::kSticking);
+      if (another_held) {
+        Undefined("sticking on two contacts at once: its saltation is not implemented");
+        break;
+      }
+      salt(ct.Pi, Mode::kSticking);
+      held_ = j;
       break;
     case ResetKind::kPlasticLeave:
-      salt(Pi_, Mode::kFree);
+      salt(ct.Pi, Mode::kFree);
+      held_ = -1;
       break;
     case ResetKind::kRelease:
+      held_ = -1;
       break;  // free and constrained fields coincide at R = 0: S = I
     case ResetKind::kGrazing:
+    case ResetKind::kHeldSet:  // no tangent across a change of a held set (docs/contacts.md)
       singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
       break;
     case ResetKind::kAccumulation: {
       // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop
       // (docs/model.md §5.4, §5.4). D L = Π (Φ(Δ∞) + f_free(t∞⁻) ∇Δ∞ᵀ) − f_stick(t∞⁺) ∇Δ∞ᵀ, with ∇Δ∞ and
       // the state at t∞⁻ those of the jump the automaton took (dynamics/chatter_tail.hpp).
+      held_ = j;
       if (!r.delta_gradient || !r.X_end || !r.V_end) {
         singular_ = true;
         break;
       }
+      const Eigen::MatrixXd& Pi = ct.Pi;
       const double delta = r.delta;
       const double phase_inf = r.phase + sys_.frequency() * delta;
       const Eigen::VectorXd f_free = Field(Mode::kFree, *r.X_end, *r.V_end, phase_inf);
-      const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf);
+      const Eigen::VectorXd f_stick = Field(Mode::kSticking, r.X_after, r.V_after, phase_inf, j);
       const Eigen::RowVectorXd grad_phi = r.delta_gradient->transpose() * phi_;  // ∇Δ∞ᵀ Φ
       FreeFlight(delta, phi_);                                                      // Φ(Δ∞) Φ
       // P = diag(Π, Π), applied by blocks.
-      phi_.topRows(n) = Pi_ * phi_.topRows(n);
-      phi_.bottomRows(n) = Pi_ * phi_.bottomRows(n);
+      phi_.topRows(n) = Pi * phi_.topRows(n);
+      phi_.bottomRows(n) = Pi * phi_.bottomRows(n);
       Eigen::VectorXd jump(2 * n);
-      jump << Pi_ * f_free.head(n), Pi_ * f_free.tail(n);
+      jump << Pi * f_free.head(n), Pi * f_free.tail(n);
       phi_ += (jump - f_stick) * grad_phi;
       break;
     }
@@ -225,7 +445,7 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   opt.initial = &init;
   opt.observers = {&tracker};
   const RunResult r = Simulate(sys, sc, opt);
-  return {r.X, r.V, tracker.jacobian(), tracker.singular(), r.status};
+  return {r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status};
 }
 
 namespace {
@@ -261,12 +481,22 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
     classify(sc);
     ++out.quad_evaluations;
   }
+  int collapsed = -1;  // directions collapsed by sticking (several contacts), −1: as one contact
+  if (sys.contact_count() > 1) std::tie(out.sequence, collapsed) = ContactSequence(sys, scene, out);
+  if (!out.no_jacobian.empty()) {
+    out.multipliers.clear();
+    out.stable = false;
+    return;
+  }
   Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(out.monodromy.cast<std::complex<double>>());
   std::vector<std::complex<double>> mu(es.eigenvalues().data(),
                                        es.eigenvalues().data() + es.eigenvalues().size());
   std::sort(mu.begin(), mu.end(), [](auto x, auto y) { return std::abs(x) > std::abs(y); });
   // Sticking collapses x_B and ẋ_B: DF has two zero eigenvalues that are not multipliers of DP.
-  if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
+  // Several contacts: two per independent held contact (DF has that many zero eigenvalues).
+  if (collapsed >= 0)
+    mu.resize(mu.size() >= static_cast<size_t>(collapsed) ? mu.size() - static_cast<size_t>(collapsed) : 0);
+  else if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
     mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
   out.multipliers = mu;
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
@@ -277,8 +507,11 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
 void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, Eigen::VectorXd z,
                              int q, const OrbitRequest& req, OrbitResult& out) {
   const auto n = sys.dof();
+  // Every gap open (one contact: x_B above the stop).
   const auto admissible = [&](const Eigen::VectorXd& zz) {
-    return sys.ContactDisplacement(zz.head(n)) > sys.stop();
+    return std::all_of(sys.contacts().begin(), sys.contacts().end(), [&](const ContactModel& c) {
+      return c.shape.dot(zz.head(n)) > c.stop;
+    });
   };
   MapValue m;
   for (int it = 0; it <= req.max_iterations; ++it) {
@@ -301,6 +534,11 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
     out.newton_iterations = it;
     if (out.residual < req.tolerance) {
       out.status = "converged";
+      if (!m.undefined.empty()) out.no_jacobian = "the orbit passes through " + m.undefined;
+      break;
+    }
+    if (!m.undefined.empty()) {
+      out.message = "the map has no Jacobian on the way: " + m.undefined;
       break;
     }
     if (m.singular) {
@@ -325,12 +563,6 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
 
 OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest& req) {
   OrbitResult out;
-  if (sys.contact_count() > 1) {
-    // The Poincaré map's tangent and saltation matrices are those of one contact (docs/contacts.md,
-    // "What works with several contacts").
-    out.message = "periodic orbits of scenes with several contacts are not implemented (docs/contacts.md)";
-    return out;
-  }
   const double T = sys.period(), w = sys.frequency();
   const auto n = sys.dof();
 
@@ -406,27 +638,29 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
     if (e.t > from - 1e-12 && e.t <= tK) ev.push_back(e);
   double best = 0, t_mid = 0;
   // Free after an impact or a release (a plastic impact that sticks is followed by a stick at
-  // the same time), on the stop after a stick or an accumulation.
-  const auto update = [](bool is_free, const Event& e) {
-    if (e.kind == EventKind::kStick || e.kind == EventKind::kAccumulation) return false;
-    if (e.kind == EventKind::kRelease || e.kind == EventKind::kImpact) return true;
-    return is_free;
+  // the same time), on the stop after a stick or an accumulation; with several contacts, an
+  // impact of another contact while one sticks leaves it stuck (its release says when it leaves).
+  const auto update = [](int held, const Event& e) {
+    if (e.kind == EventKind::kStick || e.kind == EventKind::kAccumulation) return e.contact;
+    if (e.kind == EventKind::kRelease) return e.contact == held ? -1 : held;
+    if (e.kind == EventKind::kImpact) return held >= 0 && e.contact != held ? held : -1;
+    return held;
   };
-  bool free = true;  // mode at `from`
+  int held = -1;  // the contact held at `from` (−1: free)
   for (const auto& e : log.events) {
     if (e.t > from) break;
-    free = update(free, e);
+    held = update(held, e);
   }
   double last = from;
   for (const auto& e : ev) {
-    if (free && e.t - last > best) {
+    if (held < 0 && e.t - last > best) {
       best = e.t - last;
       t_mid = 0.5 * (e.t + last);
     }
-    free = update(free, e);
+    held = update(held, e);
     last = e.t;
   }
-  if (free && tK - last > best) {
+  if (held < 0 && tK - last > best) {
     best = tK - last;
     t_mid = 0.5 * (tK + last);
   }

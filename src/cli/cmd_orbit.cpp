@@ -1,4 +1,6 @@
 // `vibro orbit SCENE`: a periodic orbit and its Floquet multipliers (docs/orbits.md).
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
@@ -16,7 +18,6 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   vibro::frontend::CheckOrbitOptions(vibro::frontend::Naming::kCli, req.period, req.impacts, req.transient_periods,
                                      req.guess_phase, req.guess_velocity);
   const auto loaded = vibro::LoadScene(path, sets);
-  vibro::frontend::RequireOneContact(loaded, "orbit");
   const vibro::System sys(loaded.scene);
   if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early
   // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.
@@ -44,12 +45,17 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                  req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)
                  : req.guess_phase         ? "Newton started at the guess"
                                            : "Newton started at the start state");
-    PrintAttractor(orbit.summary, loaded.scene.restitution);
+    // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
+    PrintAttractor(orbit.summary, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
+    if (!orbit.sequence.empty()) fmt::print("sequence     {}\n", orbit.sequence);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
-    fmt::print("multipliers  {}\n", !mu.empty()                     ? mu
-                                     : orbit.status == "converged" ? "none (superstable: one-DOF sticking)"
-                                                                   : "-");
-    fmt::print("stable       {}\n", !converged ? "-" : orbit.stable ? "yes" : "no");
+    fmt::print("multipliers  {}\n", !orbit.no_jacobian.empty() ? "none: " + orbit.no_jacobian
+                                     : !mu.empty()                ? mu
+                                     : converged && loaded.scene.contacts.size() > 1
+                                         ? "none (superstable: its sticking phases hold every direction)"
+                                     : converged ? "none (superstable: one-DOF sticking)"
+                                                                  : "-");
+    fmt::print("stable       {}\n", !converged || !orbit.no_jacobian.empty() ? "-" : orbit.stable ? "yes" : "no");
     if (converged) PrintLoads(loads);
     if (orbit.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "

@@ -1,6 +1,7 @@
 // `vibro simulate SCENE [--out FILE.h5 [--resume | --extend N]]`: one run and its attractor
 // (docs/cli.md). A resumed or extended run continues from the file's last checkpoint and writes
 // the same bits as an uninterrupted run of its total length.
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -34,8 +35,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers.push_back(&loads);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-  if (loaded.scene.run.lyapunov && sys.contact_count() == 1)
+  if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).
@@ -93,7 +93,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  "target {:.2g} T), {} impacts followed before a prediction was good enough\n",
                  result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
                  vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
-    PrintAttractor(attractor, loaded.scene.restitution);
+    // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
+    PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
     PrintLoads(load_summary);
     if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)

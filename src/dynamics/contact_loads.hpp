@@ -58,6 +58,10 @@ class ContactLoadsT {
 
   void Resize(size_t contacts) { phases_.assign(contacts, {}); }
   void Begin(int j) { phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true}; }
+  // Sticking on several contacts at once: every open account is abandoned (its release reports NaN).
+  void Invalidate() {
+    for (StickAccount& a : phases_) a = {};
+  }
   // Impulsive reaction received by a held contact (an impact elsewhere while it sticks).
   void AddImpulse(int j, const S& P) { phases_[static_cast<size_t>(j)].integral += R::to_double(P); }
   // A release: the phase's account into the event, then closed.

@@ -12,9 +12,17 @@
 // system), ξ'' + D'ξ' + Ω'ξ = F' f sin(φ + ωσ); roots R/σᵐ (−1) and Ṙ/σ^(m−1) (+1, minima of R).
 // Each segment runs in local time σ from 0 with the forcing phase reduced; both instances are
 // created once and re-initialised at every mode switch.
+// Several contacts (docs/contacts.md): one pair of roots per contact j, (2j, 2j + 1). Free flight:
+// every gap g_j = c_jᵀX − e_j and its rate, each divided by the order of its own known zero at
+// σ = 0 as above. Sticking on contact a: the pair of a is R_a and Ṙ_a in a's constrained modes;
+// the pair of every other contact k is its gap under the held flow, g_k = c_kᵀ(e_a v_a + V_a ξ)
+// − e_k, and its rate (a free contact hits while a sticks). The pair of a contact that cannot
+// have a root (the chattering tail's own contact, a gap the held flow does not move) is constant.
 #include "dynamics/cvode_engine.hpp"
 
 #include "dynamics/flight_window.hpp"
+#include "dynamics/model_t.hpp"
+#include "dynamics/oscillator.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -24,6 +32,7 @@
 #include <limits>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <cvode/cvode.h>
 #include <fmt/format.h>
@@ -112,26 +121,52 @@ struct CvodeEngine::Impl {
     return true;
   }
 
+  // What the engine keeps per contact j (docs/contacts.md): its gap c_jᵀX − e_j, and sticking on
+  // it alone in its constrained modes (docs/model.md §4.2 with c → c_j), with the gaps of the
+  // other contacts under that held flow, g_k = held_base[k] + held_weights[k]ᵀξ.
+  struct ContactData {
+    explicit ContactData(ModelT<double> m) : model(std::move(m)) {}
+    ModelT<double> model;  // for the flight-start jets
+    Eigen::VectorXd c;     // c_j, (n)
+    double stop = 0;       // e_j
+    Eigen::VectorXd stick_w2, stick_F, rho, rho_v;  // (n − 1)
+    Eigen::MatrixXd stick_D;                        // (n − 1, n − 1)
+    double react_f = 0, R_static = 0;
+    bool stick_damped = false;
+    std::vector<Eigen::VectorXd> held_weights;  // [k]: V_jᵀc_k, (n − 1)
+    std::vector<double> held_base;              // [k]: e_j c_kᵀv_j − e_k
+  };
+  std::vector<ContactData> contacts;
+  double cap = 0;  // largest step of the certified windows (all contacts)
+
+  // One guard pair (a gap, or the held contact's reaction) in the current segment.
+  struct Guard {
+    double gap0 = 0;    // value at σ = 0 (gaps: the increments from σ = 0 are added to it)
+    int order = 0;      // m: order of the known zero of the guard at σ = 0
+    double window = 0;  // certified root-free (0, window): the limits are used there
+    double g_lim = 0, v_lim = 0;  // limits of g/σᵐ and ẋ_B/σ^(m−1) (or R, Ṙ) at σ = 0
+    bool off = false;   // no root possible: constant
+  };
+
   // Segment data.
   Mode mode = Mode::kFree;
-  double phase = 0, gap0 = 0;
+  double phase = 0;
   Eigen::VectorXd X0, V0;
-  int order = 0;            // m: order of the known zero of the guard at σ = 0
-  std::string inadmissible;  // non-empty: the start is below the stop (Advance fails with it)
-  bool immediate_contact = false;  // on the stop moving into it: contact at σ = 0
-  double window = 0;        // certified root-free (0, window): the limits are used there
-  double g_lim = 0, v_lim = 0;  // limits of g/σᵐ and ẋ_B/σ^(m−1) (or R, Ṙ) at σ = 0
-  bool guards_off = false;  // Advance without events (an accumulation jump): no root finding
-  double atol = 0;          // absolute tolerance of the current free flight
+  Eigen::VectorXd xi0;               // sticking: ξ at σ = 0
+  int held = 0;                      // sticking: the held contact; free flight: the start contact
+  const ContactData* hd = nullptr;   // contacts[held]
+  std::vector<Guard> guards;         // one per contact
+  std::string inadmissible;  // non-empty: the start is below a stop (Advance fails with it)
+  int immediate = -1;        // a contact closing at σ = 0 (on its stop, moving into it)
+  bool guards_off = false;   // Advance without events (an accumulation jump): no root finding
+  double atol = 0;           // absolute tolerance of the current free flight
 
-  // Model data.
-  Eigen::VectorXd w2, damp, TA_f, c;
-  Eigen::VectorXd stick_w2, stick_F, rho, rho_v;
-  Eigen::MatrixXd stick_D;
-  double react_f = 0, R_static = 0;
-  bool stick_damped = false;
+  // Model data common to every contact.
+  Eigen::VectorXd w2, damp, TA_f;
 
   Impl(const System& s, const RunSpec& r) : sys(s), run(r) {}
+
+  int Count() const { return static_cast<int>(contacts.size()); }
 
   // ---- right-hand sides, roots, Jacobians (reached through user data) ----
   static int FreeRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
@@ -153,34 +188,64 @@ struct CvodeEngine::Impl {
     }
   }
 
+  // Gap of contact j and its rate in free flight, from the increments y = (ΔX, Ẋ).
+  void FreeGap(int j, const double* Y, double& gap, double& vB) const {
+    const auto n = sys.dof();
+    const Eigen::VectorXd& c = contacts[static_cast<size_t>(j)].c;
+    gap = guards[static_cast<size_t>(j)].gap0;
+    vB = 0;
+    for (int i = 0; i < n; ++i) {
+      gap += c[i] * Y[i];
+      vB += c[i] * Y[n + i];
+    }
+  }
+
   static int FreeRoots(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
     auto* m = static_cast<Impl*>(user);
-    const auto n = m->sys.dof();
     const double* Y = N_VGetArrayPointer(y);
-    double gap = m->gap0, vB = 0;
-    for (int i = 0; i < n; ++i) {
-      gap += m->c[i] * Y[i];
-      vB += m->c[i] * Y[n + i];
+    for (int j = 0; j < m->Count(); ++j) {
+      const Guard& gd = m->guards[static_cast<size_t>(j)];
+      double gap = 1.0, vB = 1.0;
+      if (!gd.off) m->FreeGap(j, Y, gap, vB);
+      if (vB == 0 && m->Count() > 1) vB = m->OffZero(m->FreeGapAcceleration(j, t, Y));
+      m->DividedRoots(gd, t, gap, vB, g + 2 * j);
     }
-    m->DividedRoots(t, gap, vB, g);
     return 0;
+  }
+
+  // Several contacts: a gap rate that rounds to exactly 0 takes the sign of the gap acceleration.
+  // The rate roots of two contacts on one line (c_k = −c_j, a two-sided stop) cross together at
+  // every apex, where CVODE returns for the one whose gap has a minimum; near a chattering
+  // contact that rate changes by less than its rounding over CVODE's root tolerance, and a rate
+  // that is exactly 0 at the root and just after it is refused as a root "at and very near" the
+  // step's start. The sign of the next derivative is the side the rate takes just after.
+  static double OffZero(double acceleration) {
+    return acceleration == 0 ? 0.0 : std::copysign(1e-150, acceleration);
+  }
+  double FreeGapAcceleration(int j, double t, const double* Y) const {
+    const auto n = sys.dof();
+    const Eigen::VectorXd& c = contacts[static_cast<size_t>(j)].c;
+    const double s = std::sin(phase + sys.frequency() * t);
+    double a = 0;
+    for (int i = 0; i < n; ++i) a += c[i] * (-w2[i] * (X0[i] + Y[i]) - damp[i] * Y[n + i] + TA_f[i] * s);
+    return a;
   }
 
   // Guard value/σᵐ and rate/σ^(m−1), m = order of the known zero at σ = 0. Inside the certified
   // window (docs/model.md §2.1) no root exists: the divided functions are their positive limits there,
   // free of the rounding of value/σᵐ at tiny σ.
-  void DividedRoots(double t, double value, double rate, sunrealtype* g) const {
-    if (guards_off) {  // constant guards: CVODE sees no root (and none "at and very near" t0)
+  void DividedRoots(const Guard& gd, double t, double value, double rate, sunrealtype* g) const {
+    if (guards_off || gd.off) {  // constant guards: CVODE sees no root (and none "at and very near" t0)
       g[0] = g[1] = 1.0;
-    } else if (order > 0 && t <= window) {
-      g[0] = g_lim;
-      g[1] = order <= 1 ? rate : v_lim;
-    } else if (order == 0) {
+    } else if (gd.order > 0 && t <= gd.window) {
+      g[0] = gd.g_lim;
+      g[1] = gd.order <= 1 ? rate : gd.v_lim;
+    } else if (gd.order == 0) {
       g[0] = value;
       g[1] = rate;
     } else {
-      g[0] = value / std::pow(t, order);
-      g[1] = order <= 1 ? rate : rate / std::pow(t, order - 1);
+      g[0] = value / std::pow(t, gd.order);
+      g[1] = gd.order <= 1 ? rate : rate / std::pow(t, gd.order - 1);
     }
     g[0] = AwayFromUnderflow(g[0]);
     g[1] = AwayFromUnderflow(g[1]);
@@ -209,12 +274,12 @@ struct CvodeEngine::Impl {
   }
 
   void StickAcc(double t, const double* Y, double* acc) const {
-    const auto k = stick_w2.size();
+    const auto k = hd->stick_w2.size();
     const double s = std::sin(phase + sys.frequency() * t);
     for (Eigen::Index i = 0; i < k; ++i) {
-      double a = -stick_w2[i] * Y[i] + stick_F[i] * s;
-      if (stick_damped)
-        for (Eigen::Index j = 0; j < k; ++j) a -= stick_D(i, j) * Y[k + j];
+      double a = -hd->stick_w2[i] * Y[i] + hd->stick_F[i] * s;
+      if (hd->stick_damped)
+        for (Eigen::Index j = 0; j < k; ++j) a -= hd->stick_D(i, j) * Y[k + j];
       acc[i] = a;
     }
   }
@@ -223,7 +288,7 @@ struct CvodeEngine::Impl {
     auto* m = static_cast<Impl*>(user);
     if (!m->MayGoOn()) return -1;
     try {
-      const auto k = m->stick_w2.size();
+      const auto k = m->hd->stick_w2.size();
       const double* Y = N_VGetArrayPointer(y);
       double* D = N_VGetArrayPointer(ydot);
       for (Eigen::Index i = 0; i < k; ++i) D[i] = Y[k + i];
@@ -237,50 +302,81 @@ struct CvodeEngine::Impl {
 
   // R = R_st + ρᵀξ + ρ_vᵀξ̇ − (s_A/s_B) f sin, Ṙ = ρᵀξ̇ + ρ_vᵀξ̈ − (s_A/s_B) f ω cos.
   void Reaction(double t, const double* Y, double& R, double& dR) const {
-    const auto k = stick_w2.size();
+    const auto k = hd->stick_w2.size();
     const double w = sys.frequency();
-    R = R_static - react_f * std::sin(phase + w * t);
-    dR = -react_f * w * std::cos(phase + w * t);
+    R = hd->R_static - hd->react_f * std::sin(phase + w * t);
+    dR = -hd->react_f * w * std::cos(phase + w * t);
     std::vector<double> acc(static_cast<size_t>(k));
     StickAcc(t, Y, acc.data());
     for (Eigen::Index i = 0; i < k; ++i) {
-      R += rho[i] * Y[i] + rho_v[i] * Y[k + i];
-      dR += rho[i] * Y[k + i] + rho_v[i] * acc[static_cast<size_t>(i)];
+      R += hd->rho[i] * Y[i] + hd->rho_v[i] * Y[k + i];
+      dR += hd->rho[i] * Y[k + i] + hd->rho_v[i] * acc[static_cast<size_t>(i)];
     }
   }
 
   // R̈ = ρᵀξ̈ + ρ_vᵀξ⃛ + (s_A/s_B) f ω² sin, ξ⃛ = −Ω'ξ̇ − D'ξ̈ + F' f ω cos.
   double ReactionCurvature(double t, const double* Y) const {
-    const auto k = stick_w2.size();
+    const auto k = hd->stick_w2.size();
     const double w = sys.frequency();
     std::vector<double> acc(static_cast<size_t>(k));
     StickAcc(t, Y, acc.data());
-    double d2R = react_f * w * w * std::sin(phase + w * t);
+    double d2R = hd->react_f * w * w * std::sin(phase + w * t);
     for (Eigen::Index i = 0; i < k; ++i) {
-      double jerk = -stick_w2[i] * Y[k + i] + stick_F[i] * w * std::cos(phase + w * t);
-      for (Eigen::Index j = 0; j < k; ++j) jerk -= stick_D(i, j) * acc[static_cast<size_t>(j)];
-      d2R += rho[i] * acc[static_cast<size_t>(i)] + rho_v[i] * jerk;
+      double jerk = -hd->stick_w2[i] * Y[k + i] + hd->stick_F[i] * w * std::cos(phase + w * t);
+      for (Eigen::Index j = 0; j < k; ++j) jerk -= hd->stick_D(i, j) * acc[static_cast<size_t>(j)];
+      d2R += hd->rho[i] * acc[static_cast<size_t>(i)] + hd->rho_v[i] * jerk;
     }
     return d2R;
   }
 
+  // Gap of contact j (not held) under the held flow and its rate: the start value plus the
+  // increments wᵀ(ξ − ξ(0)), so that a gap starting at its known zero is 0 there.
+  void HeldGap(int j, const double* Y, double& gap, double& rate) const {
+    const Eigen::VectorXd& w = hd->held_weights[static_cast<size_t>(j)];
+    const auto k = w.size();
+    gap = guards[static_cast<size_t>(j)].gap0;
+    rate = 0;
+    for (Eigen::Index q = 0; q < k; ++q) {
+      gap += w[q] * (Y[q] - xi0[q]);
+      rate += w[q] * Y[k + q];
+    }
+  }
+
+  double HeldGapAcceleration(int j, double t, const double* Y) const {
+    const Eigen::VectorXd& w = hd->held_weights[static_cast<size_t>(j)];
+    std::vector<double> acc(static_cast<size_t>(w.size()));
+    StickAcc(t, Y, acc.data());
+    double a = 0;
+    for (Eigen::Index q = 0; q < w.size(); ++q) a += w[q] * acc[static_cast<size_t>(q)];
+    return a;
+  }
+
   static int StickRoots(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
     auto* m = static_cast<Impl*>(user);
+    const double* Y = N_VGetArrayPointer(y);
     double R, dR;
-    m->Reaction(t, N_VGetArrayPointer(y), R, dR);
-    m->DividedRoots(t, R, dR, g);
+    m->Reaction(t, Y, R, dR);
+    m->DividedRoots(m->guards[static_cast<size_t>(m->held)], t, R, dR, g + 2 * m->held);
+    for (int j = 0; j < m->Count(); ++j) {
+      if (j == m->held) continue;
+      const Guard& gd = m->guards[static_cast<size_t>(j)];
+      double gap = 1.0, rate = 1.0;
+      if (!gd.off) m->HeldGap(j, Y, gap, rate);
+      if (rate == 0) rate = OffZero(m->HeldGapAcceleration(j, t, Y));
+      m->DividedRoots(gd, t, gap, rate, g + 2 * j);
+    }
     return 0;
   }
 
   static int StickJac(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector,
                       N_Vector) {
     auto* m = static_cast<Impl*>(user);
-    const auto k = m->stick_w2.size();
+    const auto k = m->hd->stick_w2.size();
     SUNMatZero(J);
     for (Eigen::Index i = 0; i < k; ++i) {
       SM_ELEMENT_D(J, i, k + i) = 1.0;
-      SM_ELEMENT_D(J, k + i, i) = -m->stick_w2[i];
-      for (Eigen::Index j = 0; j < k; ++j) SM_ELEMENT_D(J, k + i, k + j) = -m->stick_D(i, j);
+      SM_ELEMENT_D(J, k + i, i) = -m->hd->stick_w2[i];
+      for (Eigen::Index j = 0; j < k; ++j) SM_ELEMENT_D(J, k + i, k + j) = -m->hd->stick_D(i, j);
     }
     return 0;
   }
@@ -306,9 +402,13 @@ struct CvodeEngine::Impl {
     in.LS = SUNLinSol_Dense(in.y, in.A, ctx);
     if (CVodeSetLinearSolver(in.mem, in.LS, in.A) < 0) throw std::runtime_error("CVODE linear solver");
     CVodeSetJacFn(in.mem, jac);
-    CVodeRootInit(in.mem, 2, roots);
-    int dirs[2] = {-1, +1};
-    CVodeSetRootDirection(in.mem, dirs);
+    // Per contact, the value (direction −1) and the rate (+1: a minimum that did not cross ends a
+    // step, so that a crossing down and back up inside one step is not missed).
+    const int count = 2 * Count();
+    CVodeRootInit(in.mem, count, roots);
+    std::vector<int> dirs(static_cast<size_t>(count));
+    for (size_t i = 0; i < dirs.size(); ++i) dirs[i] = i % 2 == 0 ? -1 : +1;
+    CVodeSetRootDirection(in.mem, dirs.data());
     CVodeSetNoInactiveRootWarn(in.mem);
     if (run.max_step > 0) CVodeSetMaxStep(in.mem, run.max_step);
     CVodeSetMaxNumSteps(in.mem, run.max_steps);
@@ -322,6 +422,84 @@ struct CvodeEngine::Impl {
     if (CVodeGetNumJacEvals(in.mem, &v) == CV_SUCCESS) totals.jac_evals += v;
     if (CVodeGetNumErrTestFails(in.mem, &v) == CV_SUCCESS) totals.error_test_failures += v;
   }
+
+  // The start of the gap guard of contact j, of value `gap` and derivatives `jet` at σ = 0
+  // (docs/model.md §2.1): the known zero of a flight start is divided out. A generic start on the
+  // stop (or rounded below it) gets the order of its first non-zero derivative like after an
+  // impact, a departure or a release, or closes at once when it moves into the stop: CVODE ignores
+  // a root function that is zero at t0, so a state leaving the stop by a hair (ẋ_B = 5e-324) and
+  // falling back would pass through the wall unseen (BUILD-NOTES: the start must be admissible).
+  void StartGuard(int j, FlightStart start, double gap, const FlightJet& jet) {
+    Guard& gd = guards[static_cast<size_t>(j)];
+    gd.gap0 = gap;
+    gd.order = static_cast<int>(start);  // kGeneric 0, kAfterImpact 1, kDeparture 2, kAfterRelease 3
+    bool closes = false;
+    if (gd.order == 0 && gap <= 0) {
+      const double stop = contacts[static_cast<size_t>(j)].stop;
+      const double tol = 1e-12 * std::max(1.0, std::abs(stop));
+      if (gap < -tol) {
+        if (inadmissible.empty())
+          inadmissible = Count() == 1
+                             ? fmt::format("start below the stop (x_B − x0 = {:.3g} < 0): not an "
+                                           "admissible state of the impact oscillator",
+                                           gap)
+                             : fmt::format("start below the stop of contact {} (gap {:.3g} < 0): not "
+                                           "an admissible state of the impact oscillator",
+                                           j, gap);
+      } else {
+        const double d[3] = {jet.g1, jet.g2, jet.g3};
+        int k = 0;
+        while (k < 3 && d[k] == 0) ++k;
+        if (k == 3 || d[k] < 0) {
+          closes = true;
+        } else {
+          gd.order = k + 1;
+          gd.gap0 = 0.0;
+        }
+      }
+    }
+    gd.window = CertifiedWindow(static_cast<FlightStart>(gd.order), jet, cap);
+    // Leaving the stop so slowly that the flight (≈ 2g'/|g''|) is shorter than the clock can
+    // resolve: a touch at σ = 0, as the exact engine finds it. Integrating it instead would end in
+    // impacts at speeds of order 1e-300 that never reach the chattering treatment.
+    if (gd.order == 1 && jet.g2 < 0 &&
+        2 * jet.g1 / -jet.g2 <= 4 * std::numeric_limits<double>::epsilon() * sys.period())
+      closes = true;
+    if (closes && immediate < 0) immediate = j;
+    switch (gd.order) {
+      case 1: gd.g_lim = jet.g1; gd.v_lim = jet.g1; break;
+      case 2: gd.g_lim = jet.g2 / 2; gd.v_lim = jet.g2; break;
+      case 3: gd.g_lim = jet.g3 / 6; gd.v_lim = jet.g3 / 2; break;
+      default: break;
+    }
+  }
+
+  // Derivatives at σ = 0 of the gap of contact j under the held flow (Y: ξ, ξ̇ at σ = 0), with
+  // bounds of its third and fourth derivatives over [0, cap] from the amplitudes of the undamped
+  // constrained modes (docs/model.md §2.1). `certified` is false for a damped held flow, whose
+  // coupled modes have no such bound at hand.
+  FlightJet HeldJet(int j, const double* Y, bool& certified) const {
+    const Eigen::VectorXd& w = hd->held_weights[static_cast<size_t>(j)];
+    const auto k = w.size();
+    std::vector<double> acc(static_cast<size_t>(k));
+    StickAcc(0.0, Y, acc.data());
+    FlightJet jet{0, 0, 0, 0, 0};
+    const double fw = sys.frequency(), cp = std::cos(phase);
+    for (Eigen::Index q = 0; q < k; ++q) {
+      const OscillatorT<double> o{std::sqrt(hd->stick_w2[q]), 0.0, hd->stick_F[q]};
+      jet.g1 += w[q] * Y[k + q];
+      jet.g2 += w[q] * acc[static_cast<size_t>(q)];
+      jet.g3 += w[q] * (-hd->stick_w2[q] * Y[k + q] + hd->stick_F[q] * fw * cp);
+      const auto b = Bounds<double>(o, fw, Amplitude<double>(o, Y[q], Y[k + q]) + std::abs(o.F) * cap);
+      jet.M3 += std::abs(w[q]) * b.d3;
+      jet.M4 += std::abs(w[q]) * b.d4;
+    }
+    const double margin = 1 + 1e-9;  // rounding of the evaluated jets
+    jet.M3 *= margin;
+    jet.M4 *= margin;
+    certified = !hd->stick_damped;
+    return jet;
+  }
 };
 
 CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
@@ -331,17 +509,37 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
   m.w2 = sys.omega().cwiseAbs2();
   m.damp = 2.0 * sys.damping().cwiseProduct(sys.omega());
   m.TA_f = sys.forcing() * sys.amplitude();
-  m.c = sys.contact_shape();
-  const auto& cm = sys.constrained();
-  m.stick_w2 = cm.frequencies.cwiseAbs2();
-  m.stick_F = cm.modal_forcing * sys.amplitude();
-  m.stick_D = cm.damping;
-  m.stick_damped = cm.damping.size() > 0 && cm.damping.cwiseAbs().maxCoeff() > 0;
-  m.rho = cm.reaction;
-  // Velocity part of R (docs/model.md §7): Σ c_i 2ζ_iω_i Ẋ_i / s_B with Ẋ = V ξ̇.
-  m.rho_v = cm.vectors.transpose() * (m.c.cwiseProduct(m.damp)) / sys.s_B();
-  m.react_f = sys.s_A() / sys.s_B() * sys.amplitude();
-  m.R_static = sys.stop() / sys.flexibility();
+  // Contact 0 is the single stop, with the accessors' data (docs/contacts.md).
+  const auto& all = sys.contacts();
+  for (size_t j = 0; j < all.size(); ++j) {
+    const ContactModel& k = all[j];
+    Impl::ContactData cd(ModelT<double>(sys, k));
+    cd.c = k.shape;
+    cd.stop = k.stop;
+    const auto& cm = k.constrained;
+    cd.stick_w2 = cm.frequencies.cwiseAbs2();
+    cd.stick_F = cm.modal_forcing * sys.amplitude();
+    cd.stick_D = cm.damping;
+    cd.stick_damped = cm.damping.size() > 0 && cm.damping.cwiseAbs().maxCoeff() > 0;
+    cd.rho = cm.reaction;
+    // Velocity part of R (docs/model.md §7): Σ c_i 2ζ_iω_i Ẋ_i / s_B with Ẋ = V ξ̇.
+    cd.rho_v = cm.vectors.transpose() * (cd.c.cwiseProduct(m.damp)) / k.s_B;
+    cd.react_f = k.s_A / k.s_B * sys.amplitude();
+    cd.R_static = k.stop / k.flexibility;
+    // Gaps of the other contacts while j is held: X = e_j v_j + V_j ξ.
+    cd.held_weights.resize(all.size());
+    cd.held_base.resize(all.size());
+    for (size_t o = 0; o < all.size(); ++o) {
+      if (o == j) continue;
+      cd.held_weights[o] = cm.vectors.transpose() * all[o].shape;
+      cd.held_base[o] = k.stop * all[o].shape.dot(k.static_shape) - all[o].stop;
+    }
+    m.contacts.push_back(std::move(cd));
+  }
+  m.cap = StepCap<double>(m.contacts.front().model);
+  for (const auto& cd : m.contacts) m.cap = std::min(m.cap, StepCap<double>(cd.model));
+  m.guards.resize(m.contacts.size());
+  m.hd = &m.contacts.front();
   m.Create(m.free, 2 * n, &Impl::FreeRhs, &Impl::FreeRoots, &Impl::FreeJac);
   if (n >= 2) m.Create(m.stick, 2 * (n - 1), &Impl::StickRhs, &Impl::StickRoots, &Impl::StickJac);
 }
@@ -352,7 +550,27 @@ void CvodeEngine::Begin(const SegmentStart& s) {
   auto& m = *impl_;
   m.mode = s.mode;
   m.phase = s.phase;
-  m.gap0 = s.gap;
+  m.held = s.contact;
+  m.hd = &m.contacts[static_cast<size_t>(s.contact)];
+  m.inadmissible.clear();
+  m.immediate = -1;
+  const int count = m.Count();
+  // Every contact's start: the start contact's are `gap` and `flight_start`; with several
+  // contacts the others' are `gaps` and `starts` (generic, and from the state, without them).
+  const auto gap_of = [&](int j) {
+    if (j == s.contact) return s.gap;
+    const auto& cd = m.contacts[static_cast<size_t>(j)];
+    return s.gaps ? (*s.gaps)[static_cast<size_t>(j)] : cd.c.dot(s.X) - cd.stop;
+  };
+  // Another contact's start kind is a known zero only while its gap is 0: the automaton keeps the
+  // kind after the gap has opened (the exact engine then only skips a root-free window), and a
+  // gap divided out from a non-zero value would be tracked from 0.
+  const auto start_of = [&](int j) {
+    if (j == s.contact) return s.flight_start;
+    const FlightStart k = s.starts ? (*s.starts)[static_cast<size_t>(j)] : FlightStart::kGeneric;
+    return gap_of(j) == 0 ? k : FlightStart::kGeneric;
+  };
+  for (auto& gd : m.guards) gd = Impl::Guard{};
   const auto n = m.sys.dof();
   Integrator& in = s.mode == Mode::kFree ? m.free : m.stick;
   double* Y = N_VGetArrayPointer(in.y);
@@ -363,73 +581,72 @@ void CvodeEngine::Begin(const SegmentStart& s) {
       Y[i] = 0.0;
       Y[n + i] = s.V[i];
     }
-    m.order = static_cast<int>(s.flight_start);  // kGeneric 0, kAfterImpact 1, kDeparture 2, kAfterRelease 3
-    // Limits at σ = 0 of g/σᵐ and ẋ_B/σ^(m−1): g', g''/2, g'''/6 and g', g'', g'''/2.
-    const double cap = StepCap(m.sys);
-    const FlightJet jet = StartJet(m.sys, s.X, s.V, s.phase, cap);
-    m.inadmissible.clear();
-    m.immediate_contact = false;
-    if (m.order == 0 && s.gap <= 0) {
-      // A generic start on the stop (or rounded below it). CVODE ignores a root function that is
-      // zero at t0, so a state leaving the stop by a hair (ẋ_B = 5e-324) and falling back would
-      // pass through the wall unseen (BUILD-NOTES: the start must be admissible). Divide out the
-      // known zero like after an impact, a departure or a release: the order is that of the first
-      // non-zero derivative of g; a negative one means the state moves into the stop at once.
-      const double tol = 1e-12 * std::max(1.0, std::abs(m.sys.stop()));
-      if (s.gap < -tol) {
-        m.inadmissible = fmt::format("start below the stop (x_B − x0 = {:.3g} < 0): not an admissible "
-                                     "state of the impact oscillator", s.gap);
-      } else {
-        const double d[3] = {jet.g1, jet.g2, jet.g3};
-        int k = 0;
-        while (k < 3 && d[k] == 0) ++k;
-        if (k == 3 || d[k] < 0) {
-          m.immediate_contact = true;
-        } else {
-          m.order = k + 1;
-          m.gap0 = 0.0;
-        }
-      }
-    }
-    m.window = CertifiedWindow(static_cast<FlightStart>(m.order), jet, cap);
-    // Leaving the stop so slowly that the flight (≈ 2g'/|g''|) is shorter than the clock can
-    // resolve: a touch at σ = 0, as the exact engine finds it. Integrating it instead would end in
-    // impacts at speeds of order 1e-300 that never reach the chattering treatment.
-    if (m.order == 1 && jet.g2 < 0 &&
-        2 * jet.g1 / -jet.g2 <= 4 * std::numeric_limits<double>::epsilon() * m.sys.period())
-      m.immediate_contact = true;
-    // A flight of a chattering sequence rises only u²/(2|a|) above the stop: an absolute
-    // tolerance above rtol times that height would locate its landing to δg/u at best, and the
-    // accumulated landing errors would dominate the sequence (measured: 2e-9 T at rtol 1e-12).
     m.atol = m.run.atol;
-    if (s.flight_start == FlightStart::kAfterImpact && jet.g1 > 0 && jet.g2 < 0)
-      m.atol = std::clamp(m.run.rtol * jet.g1 * jet.g1 / (-2.0 * jet.g2), 1e-300, m.run.atol);
-    switch (m.order) {
-      case 1: m.g_lim = jet.g1; m.v_lim = jet.g1; break;
-      case 2: m.g_lim = jet.g2 / 2; m.v_lim = jet.g2; break;
-      case 3: m.g_lim = jet.g3 / 6; m.v_lim = jet.g3 / 2; break;
-      default: break;
+    for (int j = 0; j < count; ++j) {
+      if (j == s.skip) {
+        m.guards[static_cast<size_t>(j)].off = true;
+        continue;
+      }
+      const FlightStart start = start_of(j);
+      // Limits at σ = 0 of g/σᵐ and ẋ_B/σ^(m−1): g', g''/2, g'''/6 and g', g'', g'''/2.
+      const FlightJet jet = StartJet<double>(m.contacts[static_cast<size_t>(j)].model, s.X, s.V, s.phase, m.cap);
+      m.StartGuard(j, start, gap_of(j), jet);
+      // A flight of a chattering sequence rises only u²/(2|a|) above the stop: an absolute
+      // tolerance above rtol times that height would locate its landing to δg/u at best, and the
+      // accumulated landing errors would dominate the sequence (measured: 2e-9 T at rtol 1e-12).
+      if (start == FlightStart::kAfterImpact && jet.g1 > 0 && jet.g2 < 0)
+        m.atol = std::min(m.atol, std::clamp(m.run.rtol * jet.g1 * jet.g1 / (-2.0 * jet.g2), 1e-300,
+                                             m.run.atol));
     }
-  } else {
-    const auto& cm = m.sys.constrained();
+  } else if (in.mem) {
+    const auto& cm = m.sys.contacts()[static_cast<size_t>(s.contact)].constrained;
     const Eigen::VectorXd xi = cm.left * s.X, eta = cm.left * s.V;
     const auto k = xi.size();
     for (Eigen::Index i = 0; i < k; ++i) {
       Y[i] = xi[i];
       Y[k + i] = eta[i];
     }
-    m.order = static_cast<int>(s.stick_start);  // kGeneric 0, kRising 1, kTangent 2
+    m.xi0 = xi;
+    Impl::Guard& gd = m.guards[static_cast<size_t>(s.contact)];
+    gd.order = static_cast<int>(s.stick_start);  // kGeneric 0, kRising 1, kTangent 2
     // No rigorous bound is at hand for the coupled damped sticking flow: the limits are used on
     // a short fixed window (a millionth of the period) after a rising or tangent start.
-    m.window = m.order > 0 ? 1e-6 * m.sys.period() : 0.0;
+    gd.window = gd.order > 0 ? 1e-6 * m.sys.period() : 0.0;
     double R, dR;
     m.Reaction(0.0, Y, R, dR);
-    if (m.order == 1) {
-      m.g_lim = dR;
-      m.v_lim = dR;
-    } else if (m.order == 2) {
-      m.g_lim = m.ReactionCurvature(0.0, Y) / 2;
-      m.v_lim = 2 * m.g_lim;
+    if (gd.order == 1) {
+      gd.g_lim = dR;
+      gd.v_lim = dR;
+    } else if (gd.order == 2) {
+      gd.g_lim = m.ReactionCurvature(0.0, Y) / 2;
+      gd.v_lim = 2 * gd.g_lim;
+    }
+    // The other contacts' gaps under the held flow (a free contact hits while this one sticks,
+    // docs/contacts.md). A gap the held flow cannot change (zero weights, e.g. the other side of
+    // a one-DOF clearance) has no root; one that starts at zero (an impact or a departure there
+    // while this contact was held) divides out its known zero as a flight does. The damped held
+    // flow has no bound of g''' at hand: its window is then half the first-order estimate, at
+    // most a millionth of the period, like the release search's.
+    for (int j = 0; j < count; ++j) {
+      if (j == s.contact) continue;
+      const Eigen::VectorXd& w = m.hd->held_weights[static_cast<size_t>(j)];
+      Impl::Guard& gj = m.guards[static_cast<size_t>(j)];
+      FlightStart start = start_of(j);
+      if (start == FlightStart::kAfterRelease) start = FlightStart::kGeneric;
+      // Its value at σ = 0 from the held state, g_k = e_a c_kᵀv_a − e_k + (V_aᵀc_k)ᵀξ (the
+      // automaton's gaps are not kept up to date while a contact sticks), or 0 at a known zero.
+      const bool known_zero = start == FlightStart::kAfterImpact || start == FlightStart::kDeparture;
+      const double gap = known_zero ? 0.0 : m.hd->held_base[static_cast<size_t>(j)] + w.dot(xi);
+      if (j == s.skip || w.size() == 0 || w.cwiseAbs().maxCoeff() == 0) {
+        gj.off = true;
+        gj.gap0 = gap;
+        continue;
+      }
+      bool certified = false;
+      FlightJet jet = m.HeldJet(j, Y, certified);
+      if (!certified) jet.M3 = jet.M4 = 0;
+      m.StartGuard(j, start, gap, jet);
+      if (!certified && gj.order > 0) gj.window = std::min(1e-6 * m.sys.period(), 0.5 * gj.window);
     }
   }
   if (in.mem) {
@@ -446,13 +663,18 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
   auto& m = *impl_;
   Integrator& in = *m.active;
   if (!in.mem) return {SegmentEnd::kFailure, 0.0, "no sticking integrator for one DOF"};
-  if (m.mode == Mode::kFree && !m.inadmissible.empty()) return {SegmentEnd::kFailure, 0.0, m.inadmissible};
-  if (m.mode == Mode::kFree && m.immediate_contact && detect_events) return {SegmentEnd::kContact, 0.0, {}};
+  if (!m.inadmissible.empty()) return {SegmentEnd::kFailure, 0.0, m.inadmissible};
+  if (m.immediate >= 0 && detect_events) {
+    SegmentResult now{SegmentEnd::kContact, 0.0, {}};
+    now.contact = m.immediate;
+    return now;
+  }
   m.guards_off = !detect_events;
   CVodeSetStopTime(in.mem, sigma_max);
   double t_prev = 0.0;
   long steps = 0;
   m.poll = [this] { return StopRequested(); };
+  std::vector<int> found(static_cast<size_t>(2 * m.Count()));
   while (true) {
     if (StopRequested()) {
       SegmentResult stop{SegmentEnd::kFailure, t_prev,
@@ -478,10 +700,12 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
                           "time {:.6g} without completing it (the tolerances cannot be met: raise "
                           "run.atol or run.rtol)",
                           Impl::kRhsPerStep, t_prev)};
-    // A root at and very near the start of a free flight: the gap vanishes to CVODE's resolution
-    // over its first step, as after an impact whose speed is at the √rtol floor of a chattering
-    // sequence. Whether that contact ends the sequence is not decided at this precision.
-    if (flag == CV_ILL_INPUT && m.mode == Mode::kFree && m.last_error.find("very near") != std::string::npos) {
+    // A root at and very near the start of a segment: a gap vanishes to CVODE's resolution over
+    // its first step, as after an impact whose speed is at the √rtol floor of a chattering
+    // sequence (in free flight, or at a free contact while another sticks). Whether that contact
+    // ends the sequence is not decided at this precision.
+    if (flag == CV_ILL_INPUT && (m.mode == Mode::kFree || m.Count() > 1) &&
+        m.last_error.find("very near") != std::string::npos) {
       SegmentResult undecided{SegmentEnd::kFailure, t_prev,
                               fmt::format("the contact after an impact is not resolved at local time {:.6g} "
                                           "(CVODE {}: {}): a chattering sequence is undetermined at this "
@@ -503,11 +727,19 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
     t_prev = std::max(t_prev, t);
     if (flag == CV_TSTOP_RETURN || t >= sigma_max) return {SegmentEnd::kLimit, sigma_max, {}};
     if (flag == CV_ROOT_RETURN) {
-      int found[2] = {0, 0};
-      CVodeGetRootInfo(in.mem, found);
-      if (detect_events && found[0] != 0)
-        return {m.mode == Mode::kFree ? SegmentEnd::kContact : SegmentEnd::kRelease, t, {}};
-      // A minimum of the gap (or of R) that did not cross: the rest of the step is still
+      CVodeGetRootInfo(in.mem, found.data());
+      // The first contact whose guard crossed; contacts closing at the same instant are gathered
+      // by the automaton from their gaps (docs/contacts.md).
+      int hit = -1;
+      for (int j = 0; j < m.Count() && hit < 0; ++j)
+        if (found[static_cast<size_t>(2 * j)] != 0) hit = j;
+      if (detect_events && hit >= 0) {
+        const bool release = m.mode == Mode::kSticking && hit == m.held;
+        SegmentResult r{release ? SegmentEnd::kRelease : SegmentEnd::kContact, t, {}};
+        r.contact = hit;
+        return r;
+      }
+      // A minimum of a gap (or of R) that did not cross: the rest of the step is still
       // covered by the dense output of this step.
       double tn = t;
       CVodeGetCurrentTime(in.mem, &tn);
@@ -541,23 +773,30 @@ void CvodeEngine::Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V)
     }
     return;
   }
-  const auto& cm = m.sys.constrained();
+  // X = e_a v_a + V_a ξ, in the constrained modes of the held contact a.
+  const ContactModel& held = m.sys.contacts()[static_cast<size_t>(m.held)];
+  const auto& cm = held.constrained;
   const auto k = cm.frequencies.size();
   const Eigen::Map<const Eigen::VectorXd> xi(Y, k), eta(Y + k, k);
-  X = m.sys.stop() * m.sys.static_shape() + cm.vectors * xi;
+  X = held.stop * held.static_shape + cm.vectors * xi;
   V = cm.vectors * eta;
 }
 
-double CvodeEngine::Gap(double sigma) const {
+double CvodeEngine::Gap(double sigma) const { return GapOf(impl_->held, sigma); }
+
+double CvodeEngine::GapOf(int j, double sigma) const {
   auto& m = *impl_;
-  if (m.mode != Mode::kFree) return 0.0;
+  Integrator& in = *m.active;
+  if (m.mode != Mode::kFree && (j == m.held || !in.mem)) return 0.0;
+  const Impl::Guard& gd = m.guards[static_cast<size_t>(j)];
   double tn = 0.0;
-  CVodeGetCurrentTime(m.active->mem, &tn);
-  if (tn <= 0.0) return m.gap0;  // no step since Begin (see Evaluate)
-  if (CVodeGetDky(m.active->mem, sigma, 0, m.active->tmp) < 0) return 0.0;
-  const double* Y = N_VGetArrayPointer(m.active->tmp);
-  double gap = m.gap0;
-  for (int i = 0; i < m.sys.dof(); ++i) gap += m.c[i] * Y[i];
+  CVodeGetCurrentTime(in.mem, &tn);
+  if (tn <= 0.0) return gd.gap0;  // no step since Begin (see Evaluate)
+  if (CVodeGetDky(in.mem, sigma, 0, in.tmp) < 0) return 0.0;
+  const double* Y = N_VGetArrayPointer(in.tmp);
+  double gap = 0, rate = 0;
+  if (m.mode == Mode::kFree) m.FreeGap(j, Y, gap, rate);
+  else m.HeldGap(j, Y, gap, rate);
   return gap;
 }
 

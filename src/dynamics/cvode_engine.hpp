@@ -23,6 +23,7 @@ class CvodeEngine final : public Propagator {
                         const StretchCallback& on_stretch) override;
   void Evaluate(double sigma, Eigen::VectorXd& X, Eigen::VectorXd& V) const override;
   double Gap(double sigma) const override;
+  double GapOf(int j, double sigma) const override;
   SolverStats stats() const override;
 
  private:

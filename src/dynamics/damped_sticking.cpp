@@ -15,7 +15,7 @@ std::complex<double> Expm1(std::complex<double> z) {
 
 }  // namespace
 
-DampedStickingT<double>::DampedStickingT(const System& sys, int contact) : sys_(sys), contact_(contact) {
+DampedStickingT<double>::DampedStickingT(const System& sys, int contact) {
   const ContactModel& km = sys.contacts()[static_cast<size_t>(contact)];
   const auto& cm = km.constrained;
   k_ = cm.frequencies.size();
@@ -23,10 +23,32 @@ DampedStickingT<double>::DampedStickingT(const System& sys, int contact) : sys_(
   omega_ = sys.frequency();
   kappa_f_ = km.s_A / km.s_B * sys.amplitude();
   R_static_ = km.stop / km.flexibility;
+  damping_ = cm.damping;
+  rho_ = cm.reaction;
+  const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
+  rho_v_ = cm.vectors.transpose() * km.shape.cwiseProduct(D) / km.s_B;
+  Decompose(cm.frequencies, cm.modal_forcing, sys.amplitude());
+}
+
+DampedStickingT<double>::DampedStickingT(const DampedFlowData& d) {
+  k_ = d.frequencies.size();
+  if (k_ == 0) return;
+  omega_ = d.omega;
+  kappa_f_ = d.kappa_f;
+  R_static_ = d.R_static;
+  damping_ = d.damping;
+  rho_ = d.rho;
+  rho_v_ = d.rho_v;
+  Decompose(d.frequencies, d.modal_forcing, d.f);
+}
+
+void DampedSticking::Decompose(const Eigen::VectorXd& frequencies, const Eigen::VectorXd& modal_forcing,
+                               double f) {
+  w2_ = frequencies.cwiseAbs2();
   G_ = Eigen::MatrixXd::Zero(2 * k_, 2 * k_);
   G_.topRightCorner(k_, k_).setIdentity();
-  G_.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(cm.frequencies.cwiseAbs2().asDiagonal());
-  G_.bottomRightCorner(k_, k_) = -cm.damping;
+  G_.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(w2_.asDiagonal());
+  G_.bottomRightCorner(k_, k_) = -damping_;
   Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(G_.cast<std::complex<double>>());
   if (es.info() != Eigen::Success) return;
   W_ = es.eigenvectors();
@@ -35,14 +57,11 @@ DampedStickingT<double>::DampedStickingT(const System& sys, int contact) : sys_(
   if (!lu.isInvertible() || lu.rcond() < 1e-10) return;  // defective (critical damping)
   Winv_ = lu.inverse();
   h_ = Eigen::VectorXd::Zero(2 * k_);
-  h_.tail(k_) = cm.modal_forcing * sys.amplitude();
+  h_.tail(k_) = modal_forcing * f;
   const std::complex<double> iw(0.0, omega_);
   const Eigen::MatrixXcd A =
       iw * Eigen::MatrixXcd::Identity(2 * k_, 2 * k_) - G_.cast<std::complex<double>>();
   q_ = A.fullPivLu().solve(h_.cast<std::complex<double>>());
-  rho_ = cm.reaction;
-  const Eigen::VectorXd D = 2.0 * sys.damping().cwiseProduct(sys.omega());
-  rho_v_ = cm.vectors.transpose() * km.shape.cwiseProduct(D) / km.s_B;
   Eigen::VectorXd rt(2 * k_);
   rt << rho_, rho_v_;
   rq_ = rt.cast<std::complex<double>>().dot(q_);  // dot conjugates its first argument: rt is real
@@ -59,27 +78,30 @@ void DampedSticking::Begin(const Eigen::VectorXd& xi, const Eigen::VectorXd& dxi
 }
 
 void DampedSticking::Evaluate(double sigma, Eigen::VectorXd& xi, Eigen::VectorXd& dxi) const {
+  const Eigen::VectorXd dz = Increment(sigma);
+  xi = z0_.head(k_) + dz.head(k_);
+  dxi = z0_.tail(k_) + dz.tail(k_);
+}
+
+Eigen::VectorXd DampedSticking::Increment(double sigma) const {
   const double sp = std::sin(phase_), cp = std::cos(phase_);
   const double sw = std::sin(omega_ * sigma), hw = std::sin(0.5 * omega_ * sigma);
   const double cwm1 = -2.0 * hw * hw;
   const double dsin = sp * cwm1 + cp * sw, dcos = cp * cwm1 - sp * sw;
   Eigen::VectorXcd e(2 * k_);
   for (Eigen::Index j = 0; j < 2 * k_; ++j) e[j] = Expm1(lambda_[j] * sigma) * c0_[j];
-  const Eigen::VectorXd dz = q_.real() * dsin + q_.imag() * dcos + (W_ * e).real();
-  xi = z0_.head(k_) + dz.head(k_);
-  dxi = z0_.tail(k_) + dz.tail(k_);
+  return q_.real() * dsin + q_.imag() * dcos + (W_ * e).real();
 }
 
 Probe DampedSticking::ReactionProbe(double sigma) const {
   Eigen::VectorXd xi, eta;
   Evaluate(sigma, xi, eta);
-  const auto& cm = sys_.contacts()[static_cast<size_t>(contact_)].constrained;
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
   const Eigen::VectorXd F = h_.tail(k_);
-  const Eigen::VectorXd w2 = cm.frequencies.cwiseAbs2();
-  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - cm.damping * eta + F * s;
-  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - cm.damping * acc + F * (omega_ * c);
+  const Eigen::VectorXd w2 = w2_;
+  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - damping_ * eta + F * s;
+  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - damping_ * acc + F * (omega_ * c);
   Probe p{};
   p.jet.g = R_static_ + rho_.dot(xi) + rho_v_.dot(eta) - kappa_f_ * s;
   p.jet.g1 = rho_.dot(eta) + rho_v_.dot(acc) - kappa_f_ * omega_ * c;
@@ -96,14 +118,13 @@ Probe DampedSticking::ReactionProbe(double sigma) const {
 }
 
 Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const {
-  Eigen::VectorXd xi, eta;
-  Evaluate(sigma, xi, eta);
-  const auto& cm = sys_.contacts()[static_cast<size_t>(contact_)].constrained;
+  const Eigen::VectorXd dz = Increment(sigma);
+  const Eigen::VectorXd xi = z0_.head(k_) + dz.head(k_), eta = z0_.tail(k_) + dz.tail(k_);
   const double s = std::sin(phase_ + omega_ * sigma);
   const Eigen::VectorXd F = h_.tail(k_);
-  const Eigen::VectorXd acc = -cm.frequencies.cwiseAbs2().cwiseProduct(xi) - cm.damping * eta + F * s;
+  const Eigen::VectorXd acc = -w2_.cwiseProduct(xi) - damping_ * eta + F * s;
   Probe p{};
-  p.jet.g = base + w.dot(xi);
+  p.jet.g = base + w.dot(dz.head(k_));
   p.jet.g1 = w.dot(eta);
   p.jet.g2 = w.dot(acc);
   // |d³g/dσ³| ≤ Σ_j |wᵀW_j| |c_j e^{λ_j σ}| |λ_j|³ + |wᵀq| ω³ (the ξ rows of W and q).
@@ -113,6 +134,52 @@ Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double 
   for (Eigen::Index j = 0; j < 2 * k_; ++j) {
     const double l = std::abs(lambda_[j]);
     M += std::abs(ww[j]) * std::abs(c0_[j] * std::exp(lambda_[j] * sigma)) * l * l * l;
+  }
+  p.M = M * (1.0 + 1e-9);
+  return p;
+}
+
+FlightJet DampedSticking::StartJet(const Eigen::VectorXd& w) const {
+  const Eigen::VectorXd xi = z0_.head(k_), eta = z0_.tail(k_), F = h_.tail(k_);
+  const Eigen::VectorXd w2 = w2_;
+  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - damping_ * eta + F * std::sin(phase_);
+  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - damping_ * acc + F * (omega_ * std::cos(phase_));
+  FlightJet j{w.dot(eta), w.dot(acc), w.dot(jerk), 0.0, 0.0};
+  // |g^(p)| ≤ Σ_j |wᵀW_j| |c_j| |λ_j|^p + |wᵀq| ω^p for every σ ≥ 0 (Re λ_j ≤ 0).
+  const Eigen::VectorXcd ww = (w.transpose().cast<std::complex<double>>() * W_.topRows(k_)).transpose();
+  const double wq = std::abs(w.cast<std::complex<double>>().dot(q_.head(k_)));
+  j.M3 = wq * std::pow(omega_, 3);
+  j.M4 = wq * std::pow(omega_, 4);
+  for (Eigen::Index i = 0; i < 2 * k_; ++i) {
+    const double l = std::abs(lambda_[i]), a = std::abs(ww[i]) * std::abs(c0_[i]);
+    j.M3 += a * l * l * l;
+    j.M4 += a * l * l * l * l;
+  }
+  j.M3 *= 1.0 + 1e-9;
+  j.M4 *= 1.0 + 1e-9;
+  return j;
+}
+
+Probe DampedSticking::FunctionalProbe(const Eigen::VectorXd& rho, const Eigen::VectorXd& rho_v,
+                                      double base, double kappa_f, double sigma) const {
+  Eigen::VectorXd xi, eta;
+  Evaluate(sigma, xi, eta);
+  const double psi = phase_ + omega_ * sigma;
+  const double s = std::sin(psi), c = std::cos(psi);
+  const Eigen::VectorXd F = h_.tail(k_);
+  const Eigen::VectorXd acc = -w2_.cwiseProduct(xi) - damping_ * eta + F * s;
+  const Eigen::VectorXd jerk = -w2_.cwiseProduct(eta) - damping_ * acc + F * (omega_ * c);
+  Probe p{};
+  p.jet.g = base + rho.dot(xi) + rho_v.dot(eta) - kappa_f * s;
+  p.jet.g1 = rho.dot(eta) + rho_v.dot(acc) - kappa_f * omega_ * c;
+  p.jet.g2 = rho.dot(acc) + rho_v.dot(jerk) + kappa_f * omega_ * omega_ * s;
+  Eigen::VectorXd rt(2 * k_);
+  rt << rho, rho_v;
+  const Eigen::VectorXcd rw = (rt.transpose().cast<std::complex<double>>() * W_).transpose();
+  double M = (std::abs(rt.cast<std::complex<double>>().dot(q_)) + std::abs(kappa_f)) * std::pow(omega_, 3);
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) {
+    const double l = std::abs(lambda_[j]);
+    M += std::abs(rw[j]) * std::abs(c0_[j] * std::exp(lambda_[j] * sigma)) * l * l * l;
   }
   p.M = M * (1.0 + 1e-9);
   return p;

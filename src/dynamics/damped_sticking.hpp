@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 
+#include "dynamics/flight_window.hpp"
 #include "dynamics/root_finder.hpp"
 #include "vibro/system.hpp"
 
@@ -22,11 +23,23 @@ namespace vibro::detail {
 template <class S>
 class DampedStickingT;
 
+// A damped held flow given by its data (docs/model.md §7; several held contacts, docs/contacts.md):
+// ξ̈ + damping ξ̇ + diag(ν²) ξ = modal_forcing f sin ωt, and one force
+// R = R_static + ρᵀξ + ρ_vᵀξ̇ − kappa_f sin ωt.
+struct DampedFlowData {
+  double omega = 0, f = 0;
+  Eigen::VectorXd frequencies, modal_forcing;
+  Eigen::MatrixXd damping;
+  double R_static = 0, kappa_f = 0;
+  Eigen::VectorXd rho, rho_v;
+};
+
 template <>
 class DampedStickingT<double> {
  public:
   // Sticking on contact `contact` alone (docs/contacts.md).
   explicit DampedStickingT(const System& system, int contact = 0);
+  explicit DampedStickingT(const DampedFlowData& data);
 
   // Whether G could be diagonalised (false for a defective G, e.g. exactly critical damping).
   bool ok() const { return ok_; }
@@ -38,13 +51,26 @@ class DampedStickingT<double> {
   // Reaction R = R_st + ρᵀξ + ρ_vᵀξ̇ − κ f sin and its two derivatives at σ, with a bound on
   // |R'''| valid for every σ' ≥ σ (the homogeneous modes decay, Re λ ≤ 0).
   Probe ReactionProbe(double sigma) const;
-  // g = base + wᵀξ (another contact's gap while this one is held, docs/contacts.md) and its two
+  // g = base + wᵀ(ξ(σ) − ξ(0)) (another contact's gap while this one is held, base its value at
+  // the start, docs/contacts.md: increments keep a gap that starts at 0 there exactly) and its two
   // derivatives at σ, with a bound on |d³g/dσ³| valid for every σ' ≥ σ, as ReactionProbe.
   Probe LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const;
+  // Its derivatives g', g'', g''' at σ = 0 and bounds of |g'''|, |g''''| for every σ ≥ 0 (a gap
+  // that starts at zero under the held flow, docs/model.md §2.1).
+  FlightJet StartJet(const Eigen::VectorXd& w) const;
+  // F = base + ρᵀξ + ρ_vᵀξ̇ − kappa_f sin and its two derivatives at σ, with a bound on |F'''| for
+  // every σ' ≥ σ (any functional of the same form as R: a chattering tail's deceleration).
+  Probe FunctionalProbe(const Eigen::VectorXd& rho, const Eigen::VectorXd& rho_v, double base,
+                        double kappa_f, double sigma) const;
 
  private:
-  const System& sys_;
-  int contact_ = 0;
+  // The eigen-decomposition of G and what the probes need, from the fields set by a constructor.
+  void Decompose(const Eigen::VectorXd& frequencies, const Eigen::VectorXd& modal_forcing, double f);
+  // z(σ) − z(0), written with expm1 so that it keeps relative accuracy at small σ.
+  Eigen::VectorXd Increment(double sigma) const;
+
+  Eigen::VectorXd w2_;        // ν²
+  Eigen::MatrixXd damping_;   // D'
   bool ok_ = false;
   Eigen::Index k_ = 0;
   double omega_ = 0, kappa_f_ = 0, R_static_ = 0;

@@ -43,7 +43,6 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
   k_ = cm.frequencies.size();
   // Undamped sticking needs none of this (the engine's own closed form, dynamics/oscillator.hpp).
   if (k_ == 0 || cm.damping.size() == 0 || cm.damping.cwiseAbs().maxCoeff() == 0) return;
-  const Eigen::Index m = 2 * k_;
   // The same data as the quad model (dynamics/model_t.hpp): the double structure converted exactly.
   omega_ = Quad(sys.frequency());
   const Quad f(sys.amplitude()), s_B(km.s_B);
@@ -53,6 +52,33 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
   const Vec nu = cm.frequencies.cast<Quad>();
   w2_ = nu.cwiseProduct(nu);
   F_ = cm.modal_forcing.cast<Quad>() * f;
+  rho_ = cm.reaction.cast<Quad>();
+  const Vec zeta = sys.damping().cast<Quad>(), om = sys.omega().cast<Quad>();
+  const Vec D = Quad(2) * zeta.cwiseProduct(om);
+  rho_v_ = cm.vectors.cast<Quad>().transpose() * km.shape.cast<Quad>().cwiseProduct(D) /
+           s_B;
+  Decompose(cm.frequencies, cm.damping);
+}
+
+DampedStickingT<Quad>::DampedStickingT(const DampedFlowData& d) {
+  k_ = d.frequencies.size();
+  if (k_ == 0 || d.damping.size() == 0 || d.damping.cwiseAbs().maxCoeff() == 0) return;
+  omega_ = Quad(d.omega);
+  kappa_f_ = Quad(d.kappa_f);
+  R_static_ = Quad(d.R_static);
+  damping_ = d.damping.cast<Quad>();
+  const Vec nu = d.frequencies.cast<Quad>();
+  w2_ = nu.cwiseProduct(nu);
+  F_ = d.modal_forcing.cast<Quad>() * Quad(d.f);
+  rho_ = d.rho.cast<Quad>();
+  rho_v_ = d.rho_v.cast<Quad>();
+  Decompose(d.frequencies, d.damping);
+}
+
+// The eigen-decomposition of G (refined from the double one) and what the probes need, from the
+// fields a constructor set; `frequencies` and `damping` are the double data the start is made of.
+void DampedStickingT<Quad>::Decompose(const Eigen::VectorXd& frequencies, const Eigen::MatrixXd& damping) {
+  const Eigen::Index m = 2 * k_;
   Mat G = Mat::Zero(m, m);
   G.topRightCorner(k_, k_).setIdentity();
   G.bottomLeftCorner(k_, k_) = -Mat(w2_.asDiagonal());
@@ -62,8 +88,8 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
   // Start: the double eigen-decomposition (as DampedStickingT<double>), refused where that one is.
   Eigen::MatrixXd Gd = Eigen::MatrixXd::Zero(m, m);
   Gd.topRightCorner(k_, k_).setIdentity();
-  Gd.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(cm.frequencies.cwiseAbs2().asDiagonal());
-  Gd.bottomRightCorner(k_, k_) = -cm.damping;
+  Gd.bottomLeftCorner(k_, k_) = -Eigen::MatrixXd(frequencies.cwiseAbs2().asDiagonal());
+  Gd.bottomRightCorner(k_, k_) = -damping;
   Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(Gd.cast<std::complex<double>>());
   if (es.info() != Eigen::Success) return;
   {
@@ -110,11 +136,6 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
   for (Eigen::Index k = 0; k < k_; ++k) h[k_ + k] = C(F_[k]);
   const CMat A = C(Quad(0), omega_) * CMat::Identity(m, m) - Gc;
   q_ = A.fullPivLu().solve(h);
-  rho_ = cm.reaction.cast<Quad>();
-  const Vec zeta = sys.damping().cast<Quad>(), om = sys.omega().cast<Quad>();
-  const Vec D = Quad(2) * zeta.cwiseProduct(om);
-  rho_v_ = cm.vectors.cast<Quad>().transpose() * km.shape.cast<Quad>().cwiseProduct(D) /
-           s_B;
   rq_ = C(0);
   rw_ = CVec::Zero(m);
   for (Eigen::Index i = 0; i < m; ++i) {
@@ -124,6 +145,7 @@ DampedStickingT<Quad>::DampedStickingT(const System& sys, int contact) {
   }
   ok_ = true;
 }
+
 
 void DampedStickingT<Quad>::Begin(const Vec& xi, const Vec& dxi, const Quad& phase) {
   phase_ = phase;
@@ -138,6 +160,12 @@ void DampedStickingT<Quad>::Begin(const Vec& xi, const Vec& dxi, const Quad& pha
 }
 
 void DampedStickingT<Quad>::Evaluate(const Quad& sigma, Vec& xi, Vec& dxi) const {
+  const Vec dz = Increment(sigma);
+  xi = z0_.head(k_) + dz.head(k_);
+  dxi = z0_.tail(k_) + dz.tail(k_);
+}
+
+DampedStickingT<Quad>::Vec DampedStickingT<Quad>::Increment(const Quad& sigma) const {
   Quad sp, cp;
   R::sincos(phase_, sp, cp);
   const Quad sw = R::sin(omega_ * sigma), hw = R::sin(Quad(0.5) * omega_ * sigma);
@@ -146,12 +174,9 @@ void DampedStickingT<Quad>::Evaluate(const Quad& sigma, Vec& xi, Vec& dxi) const
   CVec e(2 * k_);
   for (Eigen::Index j = 0; j < 2 * k_; ++j) e[j] = Expm1(lambda_[j] * sigma) * c0_[j];
   const CVec we = W_ * e;
-  xi.resize(k_);
-  dxi.resize(k_);
-  for (Eigen::Index i = 0; i < 2 * k_; ++i) {
-    const Quad dz = q_[i].real() * dsin + q_[i].imag() * dcos + we[i].real();
-    (i < k_ ? xi[i] : dxi[i - k_]) = z0_[i] + dz;
-  }
+  Vec dz(2 * k_);
+  for (Eigen::Index i = 0; i < 2 * k_; ++i) dz[i] = q_[i].real() * dsin + q_[i].imag() * dcos + we[i].real();
+  return dz;
 }
 
 ProbeT<Quad> DampedStickingT<Quad>::ReactionProbe(const Quad& sigma) const {
@@ -177,12 +202,12 @@ ProbeT<Quad> DampedStickingT<Quad>::ReactionProbe(const Quad& sigma) const {
 }
 
 ProbeT<Quad> DampedStickingT<Quad>::LinearProbe(const Vec& w, const Quad& base, const Quad& sigma) const {
-  Vec xi, eta;
-  Evaluate(sigma, xi, eta);
+  const Vec dz = Increment(sigma);
+  const Vec xi = z0_.head(k_) + dz.head(k_), eta = z0_.tail(k_) + dz.tail(k_);
   Quad s, c;
   R::sincos(phase_ + omega_ * sigma, s, c);
   const Vec acc = -w2_.cwiseProduct(xi) - damping_ * eta + F_ * s;
-  ProbeT<Quad> p{{base + w.dot(xi), w.dot(eta), w.dot(acc)}, Quad(0)};
+  ProbeT<Quad> p{{base + w.dot(Vec(dz.head(k_))), w.dot(eta), w.dot(acc)}, Quad(0)};
   // |d³g/dσ³| ≤ Σ_j |wᵀW_j| |c_j e^{λ_j σ}| |λ_j|³ + |wᵀq| ω³ (the ξ rows of W and q).
   C wq(0);
   for (Eigen::Index i = 0; i < k_; ++i) wq += w[i] * q_[i];
@@ -192,6 +217,59 @@ ProbeT<Quad> DampedStickingT<Quad>::LinearProbe(const Vec& w, const Quad& base, 
     for (Eigen::Index i = 0; i < k_; ++i) wj += w[i] * W_(i, j);
     const Quad l = Abs(lambda_[j]);
     M += Abs(wj) * Abs(c0_[j] * Exp(lambda_[j] * sigma)) * l * l * l;
+  }
+  p.M = M * (Quad(1) + Quad(1e-9));
+  return p;
+}
+
+FlightJetT<Quad> DampedStickingT<Quad>::StartJet(const Vec& w) const {
+  const Vec xi = z0_.head(k_), eta = z0_.tail(k_);
+  Quad s, c;
+  R::sincos(phase_, s, c);
+  const Vec acc = -w2_.cwiseProduct(xi) - damping_ * eta + F_ * s;
+  const Vec jerk = -w2_.cwiseProduct(eta) - damping_ * acc + F_ * (omega_ * c);
+  FlightJetT<Quad> j{w.dot(eta), w.dot(acc), w.dot(jerk), Quad(0), Quad(0)};
+  // |g^(p)| ≤ Σ_j |wᵀW_j| |c_j| |λ_j|^p + |wᵀq| ω^p for every σ ≥ 0 (Re λ_j ≤ 0).
+  C wq(0);
+  for (Eigen::Index i = 0; i < k_; ++i) wq += w[i] * q_[i];
+  const Quad o3 = omega_ * omega_ * omega_;
+  j.M3 = Abs(wq) * o3;
+  j.M4 = Abs(wq) * o3 * omega_;
+  for (Eigen::Index jj = 0; jj < 2 * k_; ++jj) {
+    C wj(0);
+    for (Eigen::Index i = 0; i < k_; ++i) wj += w[i] * W_(i, jj);
+    const Quad l = Abs(lambda_[jj]), a = Abs(wj) * Abs(c0_[jj]);
+    j.M3 += a * l * l * l;
+    j.M4 += a * l * l * l * l;
+  }
+  j.M3 *= Quad(1) + Quad(1e-9);
+  j.M4 *= Quad(1) + Quad(1e-9);
+  return j;
+}
+
+ProbeT<Quad> DampedStickingT<Quad>::FunctionalProbe(const Vec& rho, const Vec& rho_v, const Quad& base,
+                                                    const Quad& kappa_f, const Quad& sigma) const {
+  Vec xi, eta;
+  Evaluate(sigma, xi, eta);
+  Quad s, c;
+  R::sincos(phase_ + omega_ * sigma, s, c);
+  const Vec acc = -w2_.cwiseProduct(xi) - damping_ * eta + F_ * s;
+  const Vec jerk = -w2_.cwiseProduct(eta) - damping_ * acc + F_ * (omega_ * c);
+  ProbeT<Quad> p{{base + rho.dot(xi) + rho_v.dot(eta) - kappa_f * s,
+                  rho.dot(eta) + rho_v.dot(acc) - kappa_f * omega_ * c,
+                  rho.dot(acc) + rho_v.dot(jerk) + kappa_f * omega_ * omega_ * s},
+                 Quad(0)};
+  C rq(0);
+  CVec rw = CVec::Zero(2 * k_);
+  for (Eigen::Index i = 0; i < 2 * k_; ++i) {
+    const Quad r = i < k_ ? rho[i] : rho_v[i - k_];
+    rq += r * q_[i];
+    for (Eigen::Index j = 0; j < 2 * k_; ++j) rw[j] += r * W_(i, j);
+  }
+  Quad M = (Abs(rq) + R::abs(kappa_f)) * omega_ * omega_ * omega_;
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) {
+    const Quad l = Abs(lambda_[j]);
+    M += Abs(rw[j]) * Abs(c0_[j] * Exp(lambda_[j] * sigma)) * l * l * l;
   }
   p.M = M * (Quad(1) + Quad(1e-9));
   return p;

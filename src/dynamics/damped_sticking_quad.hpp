@@ -28,6 +28,7 @@ class DampedStickingT<Quad> {
   using CMat = Eigen::Matrix<C, Eigen::Dynamic, Eigen::Dynamic>;
 
   explicit DampedStickingT(const System& system, int contact = 0);
+  explicit DampedStickingT(const DampedFlowData& data);
 
   // Whether G could be diagonalised to quad rounding (false for a defective G, e.g. exactly
   // critical damping, or eigenpairs that would not refine).
@@ -40,6 +41,11 @@ class DampedStickingT<Quad> {
   ProbeT<Quad> ReactionProbe(const Quad& sigma) const;
   // g = base + wᵀξ and its two derivatives, with a bound on |d³g/dσ³| (as the double twin's).
   ProbeT<Quad> LinearProbe(const Vec& w, const Quad& base, const Quad& sigma) const;
+  // Its derivatives g', g'', g''' at σ = 0 and bounds of |g'''|, |g''''| for every σ ≥ 0.
+  FlightJetT<Quad> StartJet(const Vec& w) const;
+  // F = base + ρᵀξ + ρ_vᵀξ̇ − kappa_f sin, as the double twin's.
+  ProbeT<Quad> FunctionalProbe(const Vec& rho, const Vec& rho_v, const Quad& base, const Quad& kappa_f,
+                               const Quad& sigma) const;
 
   // The refined decomposition, for tests: eigenvalues λ_j, and the residual
   // max |G W − W Λ| / (max|G| · max|W|) after refinement (of the order of the quad rounding unit).
@@ -48,6 +54,9 @@ class DampedStickingT<Quad> {
   int refinements() const { return refinements_; }
 
  private:
+  void Decompose(const Eigen::VectorXd& frequencies, const Eigen::MatrixXd& damping);
+  Vec Increment(const Quad& sigma) const;  // z(σ) − z(0)
+
   bool ok_ = false;
   Eigen::Index k_ = 0;
   Quad omega_{0}, kappa_f_{0}, R_static_{0};

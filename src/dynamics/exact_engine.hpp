@@ -76,6 +76,7 @@ class ExactEngineT final : public PropagatorT<S> {
   };
   // Gap of contact k (not held) during sticking on the current contact, with its jet and bound.
   ProbeT<S> HeldGapProbe(int k, const S& sigma, const S& H) const;
+  FlightJetT<S> HeldGapStartJet(int k) const;
 
   SegmentResultT<S> AdvanceFree(const S& sigma_max, bool detect_events);
   SegmentResultT<S> AdvanceSticking(const S& sigma_max, bool detect_events);
@@ -348,10 +349,14 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
   using R = Real<S>;
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const Vec& w = cd.held_weights[static_cast<size_t>(k)];
+  // The gap is its value at the start plus increments (as a flight's, docs/model.md §2): at σ = 0
+  // it is exactly the automaton's, whatever the rounding of the constrained modes (a gap snapped
+  // to 0 by an impact stays 0 there, so a chattering sequence beside a held contact gains no
+  // energy from the reconstruction of the state).
   // Modal damping: the damped constrained flow's closed form (docs/model.md §7).
-  if (damped_sticking_) return Damped().LinearProbe(w, cd.held_base[static_cast<size_t>(k)], sigma);
+  if (damped_sticking_) return Damped().LinearProbe(w, gap0s_[static_cast<size_t>(k)], sigma);
   const ForcingTrigT<S> fw(omega_, sigma);
-  ProbeT<S> p{{cd.held_base[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
+  ProbeT<S> p{{gap0s_[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
   const S sf = fw.SinPhase(trig_);
   for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
     const auto qq = static_cast<Eigen::Index>(q);
@@ -360,13 +365,36 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
     const auto st = Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
     const S xi = xi0_[qq] + st.dq;
     const S acc = -o.nu * o.nu * xi + o.F * sf;
-    p.jet.g += w[qq] * xi;
+    p.jet.g += w[qq] * st.dq;
     p.jet.g1 += w[qq] * st.v;
     p.jet.g2 += w[qq] * acc;
     p.M += R::abs(w[qq]) * Bounds<S>(o, omega_, Amplitude<S>(o, xi, st.v) + R::abs(o.F) * H).d3;
   }
   p.M *= BoundMargin<S>();
   return p;
+}
+
+// The jet of g_k at the start of a held phase, with bounds of |g'''| and |g''''| over [0, h_cap]
+// (a gap that starts at zero: after an impact, a departure, or a release of a contact held with
+// this one, docs/contacts.md); damped, those of the damped closed form.
+template <class S>
+FlightJetT<S> ExactEngineT<S>::HeldGapStartJet(int k) const {
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const Vec& w = cd.held_weights[static_cast<size_t>(k)];
+  if (damped_sticking_) return Damped().StartJet(w);
+  const ProbeT<S> p0 = HeldGapProbe(k, S(0), h_cap_);
+  FlightJetT<S> j{p0.jet.g1, p0.jet.g2, S(0), p0.M, S(0)};
+  S M4(0);
+  for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
+    const auto qq = static_cast<Eigen::Index>(q);
+    if (w[qq] == S(0)) continue;
+    const OscillatorT<S>& o = cd.stick_modes[q];
+    j.g3 += w[qq] * (-o.nu * o.nu * dxi0_[qq] + o.F * omega_ * trig_.c);
+    M4 += Real<S>::abs(w[qq]) *
+          Bounds<S>(o, omega_, Amplitude<S>(o, xi0_[qq], dxi0_[qq]) + Real<S>::abs(o.F) * h_cap_).d4;
+  }
+  j.M4 = M4 * BoundMargin<S>();
+  return j;
 }
 
 template <class S>
@@ -517,11 +545,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
     // held) divides out its known zero as a flight does (docs/model.md §2.1).
     S wk(0);
     const FlightStart start = starts_[static_cast<size_t>(k)];
-    if (start == FlightStart::kAfterImpact || start == FlightStart::kDeparture) {
-      const ProbeT<S> p0 = HeldGapProbe(k, S(0), h_cap_);
-      const FlightJetT<S> jet{p0.jet.g1, p0.jet.g2, S(0), p0.M, S(0)};
-      wk = CertifiedWindow<S>(start, jet, h_cap_);
-    }
+    if (start != FlightStart::kGeneric) wk = CertifiedWindow<S>(start, HeldGapStartJet(k), h_cap_);
     if (wk >= best.sigma) continue;
     auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },
                     wk, best.sigma, SegmentEnd::kContact);

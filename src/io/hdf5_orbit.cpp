@@ -1,5 +1,6 @@
 // A periodic orbit in the store (docs/output.md, /orbit): scalars and the section point as
-// attributes, the Floquet multipliers as an (m, 2) [re, im] attribute.
+// attributes, the Floquet multipliers as an (m, 2) [re, im] attribute, the contact sequence of an
+// orbit with several contacts as a string attribute.
 #include <fmt/format.h>
 
 #include "io/hdf5_store_impl.hpp"
@@ -23,6 +24,10 @@ void Hdf5Store::WriteOrbit(const OrbitResult& orbit) {
   }
   // (m, 2) as [re, im]; (0, 2) for none (one-DOF sticking orbits).
   h5::WriteDoubles(o, "multipliers", mu, 2);
+  // Several contacts: the contact sequence, and why there are no multipliers when the map has no
+  // Jacobian on the orbit (docs/output.md).
+  if (!orbit.sequence.empty()) h5::WriteString(o, "sequence", orbit.sequence);
+  if (!orbit.no_jacobian.empty()) h5::WriteString(o, "no_jacobian", orbit.no_jacobian);
 }
 
 InitialOverride ReadOrbitSection(const std::string& path) {

@@ -132,6 +132,12 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
                                       static_cast<long long>(r[2]), static_cast<long long>(r[3]),
                                       static_cast<long long>(r[4]), static_cast<long long>(r[5])});
         }
+        // Sticking on two or more contacts at once (absent otherwise): the held contacts.
+        for (double x : h5::ReadDoubles(g, "held")) {
+          if (!(x >= 0 && x < static_cast<double>(m)) || x != std::floor(x)) bad("held");
+          c.held.push_back(static_cast<int>(x));
+        }
+        if (c.held.size() == 1 || c.held.size() > m) bad("held");
       }
       // The open sticking phases (docs/loads.md); absent in files written before them.
       c.stick_duration = h5::ReadDoubles(g, "stick_duration");

@@ -199,6 +199,7 @@ void Hdf5Store::Impl::WriteCheckpoint() {
       for (long long v : {k.impacts, k.accumulations, k.sticks, k.releases, k.grazings, k.simultaneous})
         counts.push_back(static_cast<double>(v));
     h5::WriteDoubles(g, "contact_counts", counts, 6);
+    if (!c.held.empty()) h5::WriteDoubles(g, "held", std::vector<double>(c.held.begin(), c.held.end()));
   }
   if (!c.stick_duration.empty()) {
     // The open sticking phase of each contact (docs/loads.md): duration, ∫R dt, max R (NaN: none).

@@ -168,8 +168,12 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
   auto mu = nlohmann::json::array();
   for (const auto& m : o.multipliers) mu.push_back({m.real(), m.imag()});
   j["floquet_multipliers"] = mu;
-  // Stability is a property of a converged orbit only.
-  j["stable"] = o.status == "converged" ? nlohmann::json(o.stable) : nlohmann::json(nullptr);
+  // Stability is a property of a converged orbit with a Jacobian only.
+  j["stable"] = o.status == "converged" && o.no_jacobian.empty() ? nlohmann::json(o.stable)
+                                                                  : nlohmann::json(nullptr);
+  // Several contacts (docs/contacts.md): the contact sequence, and why there are no multipliers.
+  if (!o.sequence.empty()) j["sequence"] = o.sequence;
+  if (!o.no_jacobian.empty()) j["no_jacobian"] = o.no_jacobian;
   j["distance_from_start"] = OrNull(o.distance_from_start);
   if (!o.reached.empty()) j["reached"] = o.reached;
   j["newton_iterations"] = o.newton_iterations;

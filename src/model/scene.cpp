@@ -146,9 +146,6 @@ void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {
               "0 ≤ r ≤ 1");
     CheckMagnitude(k.position, key(j, "position"), c);
   }
-  if (s.contacts.size() > 1 && s.run.engine == Engine::kCvode)
-    c.Require(false, "run.engine", "\"cvode\"",
-              "run.engine = \"exact\" with several contacts (CVODE runs one contact)");
   if (!indices_ok) return;
   // Directions σw as sparse pairs (+1 at one DOF, −1 at another or none), for comparison.
   const auto direction = [](const ContactSpec& k) {

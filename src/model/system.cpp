@@ -347,3 +347,60 @@ System::InitialState System::Initial(const Scene& scene) const {
 }
 
 }  // namespace vibro
+
+namespace vibro {
+
+// MODEL (S1)–(S2) (docs/contacts_reference.md) in the modal coordinates of the scaling: with
+// C (rows c_jᵀ, j ∈ S) and N an orthonormal basis of ker C, the held flow moves in X = X_p + V y,
+// V = N Y from the symmetric-definite problem (NᵀμΩN) Y = (NᵀμN) Y diag(ν²), so VᵀμV = I and
+// VᵀμΩV = diag(ν²). X_p = Ω⁻¹T_S α with C X_p = e_S is the static state on every stop of S
+// (VᵀμΩX_p = VᵀCᵀα = 0: no constant force on the modes), and α is its contact force. Projecting
+// μ(Ẍ + DẊ + ΩX) = μT_A f sin ωt + Cᵀλ onto V removes λ; C Ẍ = 0 gives
+// W_SS λ = C(DẊ + ΩX − T_A f sin ωt).
+HeldSetModes System::HeldOn(const std::vector<int>& set) const {
+  const auto n = omega_.size();
+  const auto s = static_cast<Eigen::Index>(set.size());
+  if (s < 2 || s > n)
+    throw std::invalid_argument("a held set needs two to n contacts");
+  HeldSetModes h;
+  h.set = set;
+  Eigen::MatrixXd C(s, n), T(n, s);
+  Eigen::VectorXd e(s);
+  for (Eigen::Index a = 0; a < s; ++a) {
+    const ContactModel& c = contacts_.at(static_cast<size_t>(set[static_cast<size_t>(a)]));
+    C.row(a) = c.shape.transpose();
+    T.col(a) = c.contact;
+    e[a] = c.stop;
+  }
+  const Eigen::MatrixXd W = C * T;
+  Eigen::FullPivLU<Eigen::MatrixXd> wlu(W);
+  if (wlu.rank() < s) throw std::invalid_argument("dependent contacts cannot be held together");
+  const Eigen::VectorXd mu = ModalMassesOfScaling();
+  const Eigen::VectorXd w2 = omega_.cwiseAbs2();
+  const Eigen::MatrixXd OinvT = w2.cwiseInverse().asDiagonal() * T;
+  const Eigen::VectorXd alpha = (C * OinvT).fullPivLu().solve(e);
+  h.base = OinvT * alpha;
+  h.reaction_static = alpha;
+  h.reaction_forcing = wlu.solve(C * forcing_);
+  const Eigen::Index k = n - s;
+  h.frequencies.resize(k);
+  h.vectors.resize(n, k);
+  if (k > 0) {
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(C, Eigen::ComputeFullV);
+    const Eigen::MatrixXd N = svd.matrixV().rightCols(k);
+    const Eigen::MatrixXd Kc = N.transpose() * mu.cwiseProduct(w2).asDiagonal() * N;
+    const Eigen::MatrixXd Mc = N.transpose() * mu.asDiagonal() * N;
+    Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd> eig(Kc, Mc);
+    h.frequencies = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+    h.vectors = N * eig.eigenvectors();
+  }
+  h.left = h.vectors.transpose() * mu.asDiagonal();
+  h.modal_forcing = h.left * forcing_;
+  h.reaction = wlu.solve(C * w2.asDiagonal() * h.vectors);
+  const Eigen::VectorXd D = 2.0 * zeta_.cwiseProduct(omega_);
+  h.damping = h.left * D.asDiagonal() * h.vectors;
+  h.reaction_velocity = wlu.solve(C * D.asDiagonal() * h.vectors);
+  return h;
+}
+
+}  // namespace vibro

@@ -431,7 +431,7 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
   //    not-periodic cell (deterministic: they depend only on `cells`). None for a study being
   //    stopped (its resumption measures them).
   const auto stopping = [](const std::atomic<bool>* flag) { return flag && flag->load(); };
-  if (opt.lyapunov && scene.run.lyapunov && sys.contact_count() == 1 && !stopping(opt.stop_requested) &&
+  if (opt.lyapunov && scene.run.lyapunov && !stopping(opt.stop_requested) &&
       !stopping(ProcessStopFlag())) {
     std::vector<size_t> from(out.attractors.size() + 1, cells.size());  // the last: not-periodic
     for (size_t i = 0; i < cells.size(); ++i) {
@@ -559,8 +559,7 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
       opt.initial = &*state;
     }
     opt.observers = {&rec, &tail};
-    // The tangent map is one contact's (docs/contacts.md): no exponents with several contacts.
-    if (sc.run.lyapunov && sys.contact_count() == 1) opt.observers.push_back(&lyapunov.emplace(sys, sc));
+      if (sc.run.lyapunov) opt.observers.push_back(&lyapunov.emplace(sys, sc));
     opt.stop_requested = stop;  // a run of many periods stops within the second too
     const RunResult r = Simulate(sys, sc, opt);
     if (r.status == RunStatus::kInterrupted) break;  // cut short: nothing to classify

@@ -19,7 +19,7 @@ def shipped_scenes():
 
 def several_contacts(name):
     """Whether a shipped scene has two or more [[contact]] tables (docs/contacts.md): the exact
-    engine only, and no command built on one contact's Poincaré map."""
+    engine only; orbit takes them, check and continue refuse them."""
     import tomllib
     with open(os.path.join(SCENES, name), "rb") as fh:
         return len(tomllib.load(fh).get("contact", [])) > 1

@@ -346,18 +346,24 @@ def test_coupled_chattering_against_the_held_pair_as_one_dof():
 # (beam, t = 43).
 
 
+# Scenes of tests/reference/contacts/scenes/ that stick on two contacts at once: a stop chattering
+# while a coupled pair is held, then both held (coupled_chatter); two masses held, in closed form
+# (held_pair, also test_held_pair_closed_form); four random scenes (seed 1) with sets of two held
+# contacts, releases from a set, impacts and chattering beside held contacts, damped and not.
+HELD = ["contacts_coupled_chatter", "contacts_held_pair", "contacts_random_006", "contacts_random_050",
+        "contacts_random_083", "contacts_random_122"]
+
+
 def _cases():
-    for name in FIVE + ["contacts_coupled_chatter"]:
+    for name in FIVE + HELD:
         for precision in ("double", "quad"):
             yield pytest.param(name, precision, id=f"{name}-{precision}")
 
 
 @pytest.mark.parametrize("name,precision", list(_cases()))
 def test_vibro_events_match_reference(name, precision, tmp_path):
-    """The five shipped scenes, and tests/reference/contacts/scenes/contacts_coupled_chatter.toml
-    (a stop chattering while a coupled pair is held: impact LCPs on two contacts). There the pair
-    ends stuck together with the stop, which vibro does not implement: it must end undetermined
-    (exit 3), and every event it reports before must be the reference's."""
+    """The five shipped scenes and the scenes of HELD (sticking on two contacts at once): every
+    event within 1e-10 T of the reference's, and every non-chattering reference event matched."""
     if not CLI:
         pytest.fail("VIBRO_CLI is not set: run the tests through ctest (python.contacts_reference)")
     scene = os.path.join(SCENES, name + ".toml")
@@ -368,25 +374,82 @@ def test_vibro_events_match_reference(name, precision, tmp_path):
     if precision == "quad":
         args += ["--set", 'run.precision="quad"']
     p = subprocess.run(args, capture_output=True, text=True, timeout=1800)
-    two_stuck = name == "contacts_coupled_chatter"
-    if two_stuck:
-        assert p.returncode == 3 and "sticking on two contacts at once is not implemented" in p.stderr, p.stderr
-    else:
-        assert p.returncode == 0, f"vibro simulate {name} ({precision}) exited {p.returncode}: {p.stderr}"
+    assert p.returncode == 0, f"vibro simulate {name} ({precision}) exited {p.returncode}: {p.stderr}"
     import h5py
     with h5py.File(out, "r") as f:
         assert "contact" in f["events"], "/events/contact is missing (several contacts need it)"
-        t_end = float(f.attrs["t_end"])
     events, T, status = compare.read_h5(str(out))
-    assert status == ("undetermined" if two_stuck else "ok")
+    assert status == "ok"
     ref = compare.read_csv(os.path.join(CONTACTS, "reference_events", name + ".csv"))
-    if two_stuck:  # the reference's events up to where vibro stopped, its last sequence excepted
-        ref = [e for e in ref if e.t < t_end - 1e-3 * T]
-        events = [e for e in events if e.t < t_end - 1e-3 * T]
     res = compare.compare(ref, events, T, tol=1e-10)
     assert res.ok, str(res)
     # every non-chattering reference event was matched
     assert res.matched + res.skipped_ref + res.skipped_kinds == len(ref)
+
+
+def test_held_pair_closed_form(tmp_path):
+    """scenes/contacts_held_pair.toml in closed form (mpmath, 40 digits): held on both stops the
+    chain has no free mode, so the contact forces are λ = K d − b f sin ωt = (0.4, 0.1 − 0.5 sin ωt);
+    mass 1 is released when sin ωt rises through 0.2, flies with mass 0 held
+    (q'' + 2q = 0.3 + 0.5 sin ωt from q = 0.2 at rest), lands plastically, and sticks again where
+    λ_1 > 0 (mass 0 stays held: λ_0 = 0.6 − q_1 > 0). vibro (double and quad): every release and
+    landing within 1e-12 T, the landing speed within 1e-12, the same sequence of events."""
+    if not CLI:
+        pytest.fail("VIBRO_CLI is not set: run the tests through ctest (python.contacts_reference)")
+    mp.mp.dps = 40
+    w, f = mp.mpf("0.7"), mp.mpf("0.5")
+    T = 2 * mp.pi / w
+    nu = mp.sqrt(2)
+    amp = f / (2 - w ** 2)  # forced response of q'' + 2q = 0.3 + f sin wt: 0.15 + amp sin wt
+
+    def flight(tr):
+        # q(t) = 0.15 + amp sin wt + C cos nu(t - tr) + D sin nu(t - tr), q(tr) = 0.2, q'(tr) = 0
+        C = mp.mpf("0.2") - mp.mpf("0.15") - amp * mp.sin(w * tr)
+        D = -amp * w * mp.cos(w * tr) / nu
+        q = lambda t: mp.mpf("0.15") + amp * mp.sin(w * t) + C * mp.cos(nu * (t - tr)) + D * mp.sin(nu * (t - tr))
+        dq = lambda t: amp * w * mp.cos(w * t) - C * nu * mp.sin(nu * (t - tr)) + D * nu * mp.cos(nu * (t - tr))
+        return q, dq
+
+    expected = []  # (kind, contact, t, v_before)
+    t_end = 6 * T
+    k = 0
+    while True:
+        tr = (mp.asin(mp.mpf("0.2")) + 2 * mp.pi * k) / w  # sin wt rises through 0.2
+        if tr > t_end:
+            break
+        expected.append(("release", 1, tr, 0))
+        q, dq = flight(tr)
+        # the first return to the stop after the triple zero at tr: scan, then refine
+        step, t = T / 2000, tr + T / 2000
+        while q(t) > mp.mpf("0.2") and t < t_end:
+            assert mp.mpf("0.6") - q(t) > 0  # mass 0 stays held
+            t += step
+        if t >= t_end:
+            break
+        tl = mp.findroot(lambda s: q(s) - mp.mpf("0.2"), (t - step, t), solver="anderson")
+        vl = dq(tl)
+        assert vl < 0 and 0.1 - f * mp.sin(w * tl) > 0  # lands, and both stick again
+        expected += [("impact", 1, tl, vl), ("stick", 1, tl, 0)]
+        k += 1
+        while (mp.asin(mp.mpf("0.2")) + 2 * mp.pi * k) / w < tl:
+            k += 1
+    assert len(expected) >= 10
+    scene = os.path.join(CONTACTS, "scenes", "contacts_held_pair.toml")
+    for precision in ("double", "quad"):
+        out = tmp_path / f"held_pair_{precision}.h5"
+        p = subprocess.run([CLI, "simulate", scene, "--out", str(out), "--set", f'run.precision="{precision}"'],
+                           capture_output=True, text=True, timeout=600)
+        assert p.returncode == 0, p.stderr
+        events, Td, status = compare.read_h5(str(out))
+        assert status == "ok"
+        got = [(e.kind, e.contact, e.t, e.vb) for e in events]
+        assert [g[:2] for g in got[:2]] == [("stick", 0), ("stick", 1)]  # held on both from the start
+        got = got[2:]
+        assert [g[:2] for g in got] == [e[:2] for e in expected[:len(got)]]
+        assert len(got) >= len(expected) - 1  # the last landing may fall past the run's end
+        for g, e in zip(got, expected):
+            assert abs(g[2] - float(e[2])) <= 1e-12 * float(T), (precision, g, e)
+            assert abs(g[3] - float(e[3])) <= 1e-12, (precision, g, e)
 
 
 # ---------------------------------------------------------------------------------------------
