@@ -964,6 +964,39 @@ def plot_gaps(f, title, save, window, contacts):
         plot_multipliers(f, title, save)
 
 
+def plot_loads(f, title, save):
+    """Histograms of the impact speeds |v⁻| and of the impulses P, per contact (docs/loads.md), on
+    logarithmic bins: a chattering sequence spans many decades. Accumulation tails are not impacts
+    followed: they are left out (their summed impulses are in the loads of the summary)."""
+    ev = f["events"]
+    kind_of = h5py.check_enum_dtype(ev["kind"].dtype)
+    kinds = ev["kind"][:]
+    impacts = kinds == kind_of["impact"]
+    contact = ev["contact"][:] if "contact" in ev else np.zeros(len(kinds), dtype=int)
+    v = np.abs(ev["v_before"][:])
+    P = ev["impulse"][:]
+    ids = sorted(set(contact[impacts].tolist()))
+    if not ids:
+        return
+    fig, axes = figure(len(ids), 2, figsize=(8.0, 2.8 * len(ids)), squeeze=False)
+    for row, j in enumerate(ids):
+        sel = impacts & (contact == j) & (v > 0) & (P > 0)
+        for ax, data, label in ((axes[row][0], v[sel], "impact speed |v⁻|"), (axes[row][1], P[sel], "impulse P")):
+            if len(data) == 0:
+                continue
+            lo, hi = np.log10(data.min()), np.log10(data.max())
+            bins = np.logspace(lo, hi + 1e-9, 40) if hi > lo else 10
+            ax.hist(data, bins=bins, color="C0" if row % 2 == 0 else "C1")
+            if hi > lo:
+                ax.set_xscale("log")
+            ax.set_xlabel(label + (f", contact {j}" if len(ids) > 1 else ""))
+            ax.set_ylabel("impacts")
+    set_title(axes[0][0], title, f"{int(impacts.sum())} impacts")
+    if OPTIONS["size"] is None:
+        fig.tight_layout()
+    save(fig, "loads")
+
+
 def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
         varied = set()
@@ -990,6 +1023,8 @@ def draw(args, save, window):
         elif args.overlay:
             print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
             sys.exit(2)
+        if "events" in f and "impulse" in f["events"]:
+            plot_loads(f, title, save)
         contacts = scene_contacts(f)
         if len(contacts) > 1 and len(f["samples/t"]) > 1:
             if args.coordinate != "x_B":

@@ -54,6 +54,20 @@ struct Event {
   double v_after;   // ẋ_B just after
   int contact = 0;  // 0-based index of the [[contact]] table (0 for the [stop])
   bool simultaneous = false;  // an impact of this contact together with another (impact LCP)
+  // What the contact endures (docs/loads.md), in the physical units of the contact (the gap's
+  // momentum: the effective mass m_j = 1/W_jj times a gap velocity; the paper's eq. (10)-(11) for
+  // one stop, docs/contacts.md for several). impulse: P ≥ 0 of an impact (each contact's P_j of the impact LCP), the
+  // summed tail of a chattering sequence for an accumulation, 0 otherwise. energy_dissipated:
+  // ½(1 − r)P|v⁻| of an impact ((1 − r²) m v⁻²/2 for a single one), the tail's ½ m (v⁺)² for an
+  // accumulation, 0 otherwise.
+  double impulse = 0;
+  double energy_dissipated = 0;
+  // A release: the sticking phase it ends: its duration, ∫R dt over it (impulsive reactions the
+  // held contact received from impacts elsewhere included) and max R (the paper's eq. (5)). NaN
+  // for every other event, and for a phase begun before a resumed run without its loads.
+  double stick_duration = std::numeric_limits<double>::quiet_NaN();
+  double reaction_integral = std::numeric_limits<double>::quiet_NaN();
+  double reaction_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Sample {
@@ -89,6 +103,10 @@ struct Checkpoint {
   std::vector<EventCounts> contact_counts;
   // Sticking on two or more contacts at once: the held contacts, ascending (empty otherwise).
   std::vector<int> held;
+  // The open sticking phase of each contact (docs/loads.md): time held, ∫R dt and max R so far
+  // (0, 0, NaN when not held), so that its release reports the whole phase after a resume and a
+  // per-period account sees the reaction of a phase still open at a period boundary.
+  std::vector<double> stick_duration, reaction_integral, reaction_max;
 };
 
 // For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and

@@ -117,6 +117,9 @@ struct SimulationOptions {
   const InitialOverride* initial = nullptr;
   const std::atomic<bool>* stop_requested = nullptr;  // polled between events
   const Checkpoint* resume_from = nullptr;            // continue a run from this checkpoint
+  // The sticking phases' ∫R dt and max R of the events (docs/loads.md), computed when observers are
+  // given; false leaves them NaN (only to measure their cost, benchmarks/loads_bench.cpp).
+  bool loads = true;
 };
 
 // Runs the scene's initial state for scene.run.periods forcing periods with the scene's engine.

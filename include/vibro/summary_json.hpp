@@ -8,6 +8,7 @@
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/studies.hpp"
@@ -25,11 +26,17 @@ std::string ModelJson(const System& system);
 // `vibro simulate --json`: status (+ message), engine, t_end, counts, attractor.
 // `lyapunov`: the run's Lyapunov exponents ("lyapunov_exponents", "lyapunov_ci", "chaotic"), when
 // measured (run.lyapunov); −∞ is written as null.
+// `loads`: per contact (docs/loads.md), "loads": [{"contact", "impacts_per_period",
+// "impulse_per_period", "reaction_integral_per_period", "mean_force", "dissipated_power",
+// "work_rate", "contact_fraction", each with "…_ci": [lo, hi] (null when the run is too short)}],
+// and "loads_window": {"first_period", "periods", "blocks", "block_periods", "note"}.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor,
-                           const LyapunovSpectrum* lyapunov = nullptr);
+                           const LyapunovSpectrum* lyapunov = nullptr, const LoadsSummary* loads = nullptr);
 
 // `vibro orbit --json` (docs/cli.md, docs/output.md).
-std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind);
+// `loads`: the orbit's exact per-period contact loads (docs/loads.md), "loads" as simulate's
+// without intervals ("loads_note" when they could not be computed).
+std::string OrbitJson(const OrbitResult& orbit, OrbitKind kind, const LoadsSummary* loads = nullptr);
 
 // `vibro validate --json`: {"points": [{"value", "verdict", "detail", "distance", "period",
 // "stable", "floquet_multipliers", "sticking_fraction", "simulated_distance"}...],

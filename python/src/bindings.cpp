@@ -46,6 +46,7 @@
 #include "vibro/continuation.hpp"
 #include "vibro/distribute.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
@@ -223,6 +224,11 @@ class Recorder final : public vibro::Observer {
     event_v_after.push_back(e.v_after);
     event_contact.push_back(static_cast<std::int32_t>(e.contact));
     event_simultaneous.push_back(e.simultaneous ? 1 : 0);
+    event_impulse.push_back(e.impulse);
+    event_energy.push_back(e.energy_dissipated);
+    event_stick_duration.push_back(e.stick_duration);
+    event_reaction_integral.push_back(e.reaction_integral);
+    event_reaction_max.push_back(e.reaction_max);
   }
   void OnSample(const vibro::Sample& s) override { samples.Add(s); }
   void OnSection(const vibro::Sample& s) override { section.Add(s); }
@@ -243,6 +249,9 @@ class Recorder final : public vibro::Observer {
   std::vector<std::int8_t> event_kind;
   std::vector<std::int32_t> event_contact;  // the [[contact]] index (docs/contacts.md)
   std::vector<std::uint8_t> event_simultaneous;
+  // What the contacts endure (docs/loads.md).
+  std::vector<double> event_impulse, event_energy, event_stick_duration, event_reaction_integral,
+      event_reaction_max;
   Rows samples, section;
 };
 
@@ -275,7 +284,7 @@ std::string Model(const PyScene& s) {
 // vibro simulate [--out FILE [--resume | --extend N]] (src/cli/cmd_simulate.cpp): the scene, the
 // output and its checks are the command line's (frontend/run_output.hpp).
 py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, std::optional<long long> extend,
-                       const py::object& progress, bool handle_sigint) {
+                       const py::object& progress, bool handle_sigint, int blocks) {
   if (!out.empty()) CheckPaths({{"out", &out}});
   const vibro::frontend::RunContinuation how{resume, extend};
   const auto loaded = [&] {
@@ -287,7 +296,9 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   std::optional<vibro::LyapunovObserver> lyapunov;
   Recorder recorder(sys.dof());
   vibro::SimulationOptions options;
-  options.observers = {&attractor_recorder, &recorder};
+  // Contact loads (docs/loads.md), the first tenth of the periods left out, as the command line.
+  vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
+  options.observers = {&attractor_recorder, &recorder, &loads};
   if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   std::optional<vibro::frontend::RunOutput> output;
@@ -310,7 +321,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
     output.reset();  // closed without the GIL
     std::optional<vibro::LyapunovSpectrum> spectrum;
     if (lyapunov) spectrum = lyapunov->Spectrum();
-    json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr);
+    const vibro::LoadsSummary load_summary = loads.Summary(blocks);
+    json = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr, &load_summary);
     interrupted = result.status == vibro::RunStatus::kInterrupted;
   }
   relay.Finish();
@@ -326,6 +338,11 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   events["v_after"] = Array(recorder.event_v_after);
   events["contact"] = Array(recorder.event_contact);
   events["simultaneous"] = Array(recorder.event_simultaneous);
+  events["impulse"] = Array(recorder.event_impulse);
+  events["energy_dissipated"] = Array(recorder.event_energy);
+  events["stick_duration"] = Array(recorder.event_stick_duration);
+  events["reaction_integral"] = Array(recorder.event_reaction_integral);
+  events["reaction_max"] = Array(recorder.event_reaction_max);
   d["events"] = events;
   d["samples"] = RowsDict(recorder.samples, sys.dof());
   d["section"] = RowsDict(recorder.section, sys.dof());
@@ -364,7 +381,10 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   // As the CLI: a failed solve still ends the file, with its status and message (never "running").
   if (!out.empty() && orbit.status == "converged") vibro::frontend::WriteOrbit(out, s.loaded, sys, orbit);
   else if (!out.empty()) vibro::frontend::WriteOrbitFailure(out, s.loaded, sys, orbit);
-  return {vibro::OrbitJson(orbit, req.kind), false};
+  // The orbit's exact per-period contact loads (docs/loads.md), as `vibro orbit --json`.
+  const bool converged = orbit.status == "converged";
+  const vibro::LoadsSummary loads = converged ? vibro::OrbitLoads(sys, s.loaded.scene, orbit) : vibro::LoadsSummary{};
+  return {vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr), false};
 }
 
 // vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts.

@@ -265,7 +265,9 @@ def model(scene):
 
 def _events_array(e):
     a = _np.empty(len(e["t"]), dtype=[("t", "f8"), ("kind", "i1"), ("x_B", "f8"), ("v_before", "f8"),
-                                      ("v_after", "f8"), ("contact", "i4"), ("simultaneous", "?")])
+                                      ("v_after", "f8"), ("contact", "i4"), ("simultaneous", "?"),
+                                      ("impulse", "f8"), ("energy_dissipated", "f8"), ("stick_duration", "f8"),
+                                      ("reaction_integral", "f8"), ("reaction_max", "f8")])
     for k in a.dtype.names:
         a[k] = e[k]
     return a
@@ -285,7 +287,9 @@ class SimulationResult:
 
     - ``summary``: the dict of ``vibro simulate --json`` (status, engine, t_end, counts, attractor);
     - ``events``: structured array, fields t, kind (:data:`EVENT_KINDS`), x_B, v_before, v_after, contact (the
-      ``[[contact]]`` index, docs/contacts.md), simultaneous;
+      ``[[contact]]`` index, docs/contacts.md), simultaneous, and what the contacts endure (docs/loads.md):
+      impulse, energy_dissipated, and for a release stick_duration, reaction_integral, reaction_max (NaN
+      otherwise); ``summary["loads"]`` holds the per-contact means and intervals;
     - ``samples``: structured array of the dense output, fields t, X (n,), V (n,), x_B, mode;
     - ``section``: the stroboscopic section (t0 + kT), same fields as ``samples``.
     """
@@ -299,7 +303,7 @@ class SimulationResult:
                 f"{len(self.events)} events, {len(self.samples)} samples)")
 
 
-def simulate(scene, out=None, force=False, resume=False, extend=None, progress=None):
+def simulate(scene, out=None, force=False, resume=False, extend=None, progress=None, blocks=10):
     """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file (``force``:
     replace a vibro file of another scene or command).
 
@@ -310,15 +314,21 @@ def simulate(scene, out=None, force=False, resume=False, extend=None, progress=N
     length; the result's arrays hold the part this call computed, its summary the whole run's
     attractor. ``progress``: True for a progress bar (tqdm; a widget in a notebook), False for
     none, or a callable ``progress(done, total)`` called with the periods done, at most ten times a
-    second and once at the end; None (the default) shows a bar in a Jupyter notebook only."""
+    second and once at the end; None (the default) shows a bar in a Jupyter notebook only.
+    ``blocks``: the contact loads' intervals are batch means over this many blocks of periods
+    (``--blocks``, docs/loads.md)."""
     _invoke("simulate", scene, out=out, force=force, **({"resume": True} if resume else {}),
             **({"extend": extend} if extend is not None else {}))
     if not isinstance(resume, (bool, _np.bool_)):
         raise ValueError(f"resume {resume!r}: expected True or False, got {type(resume).__name__}")
     ext = None if extend is None else _int("extend", extend)
+    nblocks = _int("blocks", blocks)
+    if not 2 <= nblocks <= 100000:
+        raise ValueError(f"blocks {blocks!r}: expected 2 to 100000 blocks (an interval needs two)")
     core = _scene(scene)
     r = _with_progress(progress, "simulate", "period",
-                       lambda report: _vibro.simulate(core, _out(out), bool(resume), ext, report, _main_thread()))
+                       lambda report: _vibro.simulate(core, _out(out), bool(resume), ext, report, _main_thread(),
+                                                      nblocks))
     if r["interrupted"]:
         raise _interrupted("simulation", out)
     return SimulationResult(_json.loads(r["json"]), _events_array(r["events"]), _rows_array(r["samples"]),

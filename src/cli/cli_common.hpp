@@ -14,6 +14,7 @@
 #include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/attractor.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -34,6 +35,8 @@ int ExitCode(vibro::RunStatus s);
 // Prints an attractor's summary; restitution NaN when unknown (then the velocities after impact
 // are not printed).
 void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""));
+// Prints the contact loads of a run per contact, with their intervals (docs/loads.md).
+void PrintLoads(const vibro::LoadsSummary& s);
 // Prints the Lyapunov exponents of a run with their 95 % intervals, and whether it is chaotic.
 void PrintLyapunov(const vibro::LyapunovSpectrum& s);
 // The message for a --param KEY the scene has no number at, with the nearest known key.
@@ -44,7 +47,7 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
 
 // `vibro simulate SCENE [--out FILE [--resume | --extend N]]` (cmd_simulate.cpp); extend 0: none.
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume, long long extend);
+                const std::string& out, bool resume, long long extend, int blocks = 10);
 
 // `vibro orbit SCENE` (cmd_orbit.cpp).
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,

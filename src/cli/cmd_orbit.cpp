@@ -7,6 +7,7 @@
 #include "cli/stop_signals.hpp"
 #include "cli/text_format.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/summary_json.hpp"
@@ -24,6 +25,8 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   const auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
   vibro::cli::KeepOnStop();
   const bool converged = orbit.status == "converged";
+  // The orbit's exact per-period contact loads (docs/loads.md): one period simulated from it.
+  const vibro::LoadsSummary loads = converged ? vibro::OrbitLoads(sys, loaded.scene, orbit) : vibro::LoadsSummary{};
   if (!out.empty() && converged) {
     const vibro::cli::FinalWrite writing;
     vibro::frontend::WriteOrbit(out, loaded, sys, orbit);
@@ -32,7 +35,7 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     vibro::frontend::WriteOrbitFailure(out, loaded, sys, orbit);
   }
   if (json) {
-    fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind));
+    fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr));
   } else {
     fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
     fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
@@ -53,6 +56,7 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                                      : converged ? "none (superstable: one-DOF sticking)"
                                                                   : "-");
     fmt::print("stable       {}\n", !converged || !orbit.no_jacobian.empty() ? "-" : orbit.stable ? "yes" : "no");
+    if (converged) PrintLoads(loads);
     if (orbit.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
                  "leaves undetermined)\n", orbit.quad_evaluations);

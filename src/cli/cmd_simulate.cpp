@@ -13,6 +13,7 @@
 #include "frontend/run_output.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
@@ -20,7 +21,7 @@
 #include "vibro/system.hpp"
 
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume, long long extend) {
+                const std::string& out, bool resume, long long extend, int blocks) {
   vibro::frontend::RunContinuation how;
   how.resume = resume;
   if (extend > 0) how.extend = extend;
@@ -30,6 +31,9 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
+  // Contact loads (docs/loads.md) over the periods of this invocation, the first tenth left out.
+  vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
+  options.observers.push_back(&loads);
   std::optional<vibro::LyapunovObserver> lyapunov;
   if (loaded.scene.run.lyapunov)
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
@@ -44,6 +48,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   progress.reset();
   const auto attractor = recorder.Classify();
+  const vibro::LoadsSummary load_summary = loads.Summary(blocks);
   std::optional<vibro::LyapunovSpectrum> spectrum;
   if (lyapunov) spectrum = lyapunov->Spectrum();
   vibro::Hdf5Store::Stats written;
@@ -54,7 +59,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   output.reset();
 
   if (json) {
-    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr));
+    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr,
+                                                 &load_summary));
   } else {
     fmt::print("scene        {}{}\n", path,
                loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
@@ -92,6 +98,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
     // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
     PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
+    PrintLoads(load_summary);
     if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)
       fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "

@@ -96,6 +96,11 @@ int main(int argc, char** argv) {
   simulate->add_option("--extend", extend,
                        "continue the run stored in --out (finished or interrupted) for N more periods")
       ->check(CLI::Range(1LL, 1LL << 53));
+  int blocks = 10;
+  simulate->add_option("--blocks", blocks,
+                       "batch means of the contact loads over N blocks of periods (docs/loads.md; "
+                       "default 10)")
+      ->check(CLI::Range(2, 100000));
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
   add_scene_options(orbit);
@@ -279,7 +284,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*model) return RunModel(scene_path, sets, json);
-    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend);
+    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks);
     if (*info) return RunInfo(file_path, json);
     if (*orbit) {
       orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact

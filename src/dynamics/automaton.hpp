@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "dynamics/chatter_tail.hpp"
+#include "dynamics/contact_loads.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
 #include "dynamics/set_sticking.hpp"
@@ -115,6 +116,7 @@ class Automaton {
     if (model.stick_frequencies.size() == 0)
       for (const ModelT<S>* k : models_) resting_all_.push_back(std::make_unique<RestingStick<S>>(*k));
     counts_.resize(models_.size());
+    loads_.Resize(models_.size());
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
@@ -190,8 +192,9 @@ class Automaton {
            (process_stop_ && process_stop_->load(std::memory_order_relaxed));
   }
 
+  // impulse/energy: an impact's P when known (else from v⁻, v⁺), an accumulation's tail.
   void Emit(EventKind kind, const S& v_before, const S& v_after, int contact = -1,
-            bool simultaneous = false);
+            bool simultaneous = false, const S& impulse = S(-1), const S& energy = S(0));
   void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact = -1,
                    bool simultaneous = false);
   void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
@@ -261,6 +264,7 @@ class Automaton {
   std::string violation_;           // the first physics invariant broken (empty: none)
   ClockT<S> last_event_{-1, S(0)};  // clock of the last event emitted (monotone)
   RunResult result_;
+  ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
 };
 
 inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
@@ -276,7 +280,7 @@ inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
 
 template <class S>
 void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int contact,
-                        bool simultaneous) {
+                        bool simultaneous, const S& impulse, const S& energy) {
   if (contact < 0) contact = active_;
   const ModelT<S>& m = M(contact);
   grazing_streak_ = kind == EventKind::kGrazing ? grazing_streak_ + 1 : 0;
@@ -290,6 +294,13 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
           contact,
           simultaneous};
   if (kind != EventKind::kImpact && kind != EventKind::kGrazing) e.x_B = R::to_double(m.side * m.x0);
+  if (kind == EventKind::kImpact) ImpactLoads(e, m, v_before, v_after, impulse);
+  if (kind == EventKind::kAccumulation) {
+    e.impulse = R::to_double(impulse);
+    e.energy_dissipated = R::to_double(energy);
+  }
+  if (kind == EventKind::kStick) loads_.Begin(contact);
+  if (kind == EventKind::kRelease) loads_.End(contact, e);
   Count(result_.counts, kind, simultaneous);
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
@@ -654,7 +665,9 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     for (auto* o : opt_.observers) o->OnReset(jump);
   }
   // ẋ_B → 0 at the accumulation point: the remaining impacts are summed into one impulse.
-  Emit(EventKind::kAccumulation, S(0), S(0));
+  S tail_impulse(0), tail_energy(0);
+  TailLoads(m, tail.speed, tail.epsilon, tail_impulse, tail_energy);
+  Emit(EventKind::kAccumulation, S(0), S(0), -1, false, tail_impulse, tail_energy);
   mode_ = Mode::kSticking;
   stick_start_ = StickStart::kGeneric;
   if (multi()) {
@@ -925,7 +938,8 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   V_ += mk.contact * Pk + mj.contact * Pj;
   mj.ProjectOntoStop(X_, V_);
   NotifyReset(ResetKind::kImpact, X_, Vb_, k);
-  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
+  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k, false, Pk);
+  loads_.AddImpulse(j, Pj);
   if (rk == S(0)) {  // both at rest: the acceleration LCP on {j, k}
     NotifyReset(ResetKind::kHeldSet, X_, V_);
     return EnterActiveSet({j, k}, {j});
@@ -1002,7 +1016,7 @@ bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
     const int j = Z[static_cast<size_t>(a)];
     const ModelT<S>& mj = M(j);
     const S vp = mj.ContactVelocity(V_);
-    Emit(EventKind::kImpact, vm[a], vp, j, true);
+    Emit(EventKind::kImpact, vm[a], vp, j, true, P[a]);
     gaps_[static_cast<size_t>(j)] = 0;
     const S floor = S(1000) * Eps<S>() * mj.shape.cwiseProduct(V_).cwiseAbs().sum();
     if (vp > floor) {
@@ -1480,6 +1494,7 @@ void Automaton<S>::Checkpointed() {
   cp.chatter_followed = result_.chatter.impacts_followed;
   cp.chatter_max_error = result_.chatter.max_estimated_error;
   cp.contact = active_;
+  loads_.Save(cp);
   cp.held = held_set_;
   if (multi()) cp.contact_counts = counts_;
   cp.gaps.resize(gaps_.size());
@@ -1510,6 +1525,7 @@ RunResult Automaton<S>::Run() {
     result_.counts = cp.counts;
     result_.chatter = {cp.chatter_predicted, cp.chatter_followed, cp.chatter_max_error};
     active_ = cp.contact >= 0 && cp.contact < static_cast<int>(models_.size()) ? cp.contact : 0;
+    loads_.Restore(cp);
     if (cp.held.size() > 1) held_set_ = cp.held;
     if (cp.contact_counts.size() == counts_.size()) counts_ = cp.contact_counts;
     else if (counts_.size() == 1) counts_[0] = cp.counts;
@@ -1562,6 +1578,10 @@ RunResult Automaton<S>::Run() {
     p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
              multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
     const ClockT<S> from = clock_;
+    // Loads of a phase held on one contact (docs/loads.md); a set held at once: not computed (NaN).
+    if (mode_ == Mode::kSticking && !held_set_.empty()) loads_.Invalidate();
+    const bool loads = mode_ == Mode::kSticking && held_set_.empty() && opt_.loads && !opt_.observers.empty();
+    if (loads) loads_.SegmentStart(X_, V_);
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).
     struct {
@@ -1580,6 +1600,7 @@ RunResult Automaton<S>::Run() {
       break;
     }
     p.Evaluate(seg.sigma, X_, V_);
+    if (loads) loads_.Segment(active_, M(active_), p, Phase(from), seg.sigma, X_, V_);
     if (multi())
       UpdateGaps(p, seg.sigma);
     else if (mode_ == Mode::kFree)

@@ -119,6 +119,7 @@ class ExactEngineT final : public PropagatorT<S> {
   PhaseTrigT<S> trig_{S(0)};
   Vec X0_, V0_;     // free flight start
   Vec xi0_, dxi0_;  // sticking start, constrained modal coordinates
+  mutable Vec xi_, dxi_;  // Evaluate's scratch (no allocation per dense-output point)
   S gap0_{0};
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
@@ -580,7 +581,10 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   }
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const auto k_count = static_cast<Eigen::Index>(cd.stick_modes.size());
-  Vec xi(k_count), dxi(k_count);
+  Vec& xi = xi_;
+  Vec& dxi = dxi_;
+  xi.resize(k_count);
+  dxi.resize(k_count);
   bool done = false;
   if (damped_sticking_) {
     Damped().Evaluate(sigma, xi, dxi);
@@ -593,8 +597,9 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;
   }
-  X = cd.m->x0 * cd.m->static_shape + cd.m->stick_vectors * xi;
-  V = cd.m->stick_vectors * dxi;
+  X.noalias() = cd.m->stick_vectors * xi;
+  X += cd.m->x0 * cd.m->static_shape;
+  V.noalias() = cd.m->stick_vectors * dxi;
 }
 
 template <class S>

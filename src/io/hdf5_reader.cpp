@@ -3,6 +3,7 @@
 // section points a resume reloads, the attractor and a line per result group.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -138,6 +139,13 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
         }
         if (c.held.size() == 1 || c.held.size() > m) bad("held");
       }
+      // The open sticking phases (docs/loads.md); absent in files written before them.
+      c.stick_duration = h5::ReadDoubles(g, "stick_duration");
+      c.reaction_integral = h5::ReadDoubles(g, "reaction_integral");
+      c.reaction_max = h5::ReadDoubles(g, "reaction_max");
+      if (c.reaction_integral.size() != c.stick_duration.size() ||
+          c.reaction_max.size() != c.stick_duration.size())
+        bad("stick_duration, reaction_integral, reaction_max (one per contact)");
       cp_events = static_cast<h5::Size>(*h5::ReadInt(g, "events"));
       cp_sections = static_cast<h5::Size>(*h5::ReadInt(g, "sections"));
       const auto cp_samples = *h5::ReadInt(g, "samples");
@@ -210,9 +218,18 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
         events.contact.Read(first_ev, n_ev, contact.data());
         events.simultaneous.Read(first_ev, n_ev, simultaneous.data());
       }
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      std::vector<double> imp(n_ev, 0.0), en(n_ev, 0.0), sd(n_ev, nan), ri(n_ev, nan), rm(n_ev, nan);
+      if (events.has_loads) {
+        events.impulse.Read(first_ev, n_ev, imp.data());
+        events.energy.Read(first_ev, n_ev, en.data());
+        events.stick_duration.Read(first_ev, n_ev, sd.data());
+        events.reaction_integral.Read(first_ev, n_ev, ri.data());
+        events.reaction_max.Read(first_ev, n_ev, rm.data());
+      }
       for (h5::Size i = 0; i < n_ev; ++i)
         out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i],
-                                   contact[i], simultaneous[i] != 0});
+                                   contact[i], simultaneous[i] != 0, imp[i], en[i], sd[i], ri[i], rm[i]});
     }
 
     // Studies and branches (and their files since provenance was stored) have no /attractor.

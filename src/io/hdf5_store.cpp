@@ -40,6 +40,12 @@ void EventTable::Create(h5::Id g) {
   contact = h5::Column(g, "contact", h5::Type::I32(), 0);
   simultaneous = h5::Column(g, "simultaneous", h5::Type::I8(), 0);
   has_contact = true;
+  impulse = h5::Column(g, "impulse", h5::Type::F64(), 0);
+  energy = h5::Column(g, "energy_dissipated", h5::Type::F64(), 0);
+  stick_duration = h5::Column(g, "stick_duration", h5::Type::F64(), 0);
+  reaction_integral = h5::Column(g, "reaction_integral", h5::Type::F64(), 0);
+  reaction_max = h5::Column(g, "reaction_max", h5::Type::F64(), 0);
+  has_loads = true;
 }
 
 void EventTable::Open(h5::Id g) {
@@ -56,6 +62,14 @@ void EventTable::Open(h5::Id g) {
     contact = h5::Column::Open(g, "contact", h5::Type::I32());
     simultaneous = h5::Column::Open(g, "simultaneous", h5::Type::I8());
   }
+  has_loads = h5::Exists(g, "impulse");
+  if (has_loads) {
+    impulse = h5::Column::Open(g, "impulse", h5::Type::F64());
+    energy = h5::Column::Open(g, "energy_dissipated", h5::Type::F64());
+    stick_duration = h5::Column::Open(g, "stick_duration", h5::Type::F64());
+    reaction_integral = h5::Column::Open(g, "reaction_integral", h5::Type::F64());
+    reaction_max = h5::Column::Open(g, "reaction_max", h5::Type::F64());
+  }
 }
 
 void EventTable::Push(const Event& e) {
@@ -69,6 +83,13 @@ void EventTable::Push(const Event& e) {
   if (has_contact) {
     contact.Push(static_cast<std::int32_t>(e.contact));
     simultaneous.Push(static_cast<std::int8_t>(e.simultaneous ? 1 : 0));
+  }
+  if (has_loads) {
+    impulse.Push(e.impulse);
+    energy.Push(e.energy_dissipated);
+    stick_duration.Push(e.stick_duration);
+    reaction_integral.Push(e.reaction_integral);
+    reaction_max.Push(e.reaction_max);
   }
 }
 
@@ -179,6 +200,12 @@ void Hdf5Store::Impl::WriteCheckpoint() {
         counts.push_back(static_cast<double>(v));
     h5::WriteDoubles(g, "contact_counts", counts, 6);
     if (!c.held.empty()) h5::WriteDoubles(g, "held", std::vector<double>(c.held.begin(), c.held.end()));
+  }
+  if (!c.stick_duration.empty()) {
+    // The open sticking phase of each contact (docs/loads.md): duration, ∫R dt, max R (NaN: none).
+    h5::WriteDoubles(g, "stick_duration", c.stick_duration);
+    h5::WriteDoubles(g, "reaction_integral", c.reaction_integral);
+    h5::WriteDoubles(g, "reaction_max", c.reaction_max);
   }
   h5::WriteInt(g, "events", static_cast<long long>(cp_events));
   h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));

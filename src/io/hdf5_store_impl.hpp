@@ -38,16 +38,21 @@ h5::Type EventKindType();
 
 // /events: one row per event.
 // /events/contact and /events/simultaneous (docs/contacts.md) are absent from files written before
-// several contacts: such a file keeps its seven columns when resumed.
+// several contacts: such a file keeps its seven columns when resumed. The loads columns
+// (/events/impulse, energy_dissipated, stick_duration, reaction_integral, reaction_max,
+// docs/loads.md) are absent from files written before them: such a file keeps its columns.
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
-  bool has_contact = false;
+  h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
+  bool has_contact = false, has_loads = false;
   void Create(h5::Id g);
   void Open(h5::Id g);
   void Push(const Event& e);
   std::vector<h5::Column*> All() {
     std::vector<h5::Column*> all{&t, &period, &offset, &kind, &xB, &v_before, &v_after};
     if (has_contact) all.insert(all.end(), {&contact, &simultaneous});
+    if (has_loads)
+      all.insert(all.end(), {&impulse, &energy, &stick_duration, &reaction_integral, &reaction_max});
     return all;
   }
 };

@@ -62,7 +62,53 @@ void AddLyapunov(nlohmann::json& j, const LyapunovSpectrum& ly) {
   j["chaotic"] = ly.chaotic();
 }
 
-std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly) {
+void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
+  auto arr = nlohmann::json::array();
+  const auto ci = [](const ContactLoads::Interval& c) {
+    return c ? nlohmann::json::array({c->first, c->second}) : nlohmann::json(nullptr);
+  };
+  for (const ContactLoads& c : s.contacts) {
+    if (s.blocks == 0) {  // a periodic orbit's exact values: no interval
+      arr.push_back({{"contact", c.contact},
+                     {"impacts_per_period", c.impacts_per_period},
+                     {"impulse_per_period", c.impulse_per_period},
+                     {"reaction_integral_per_period", c.reaction_integral_per_period},
+                     {"mean_force", c.mean_force},
+                     {"dissipated_power", c.dissipated_power},
+                     {"work_rate", c.work_rate},
+                     {"contact_fraction", c.contact_fraction}});
+      continue;
+    }
+    arr.push_back({{"contact", c.contact},
+                   {"impacts_per_period", c.impacts_per_period},
+                   {"impacts_per_period_ci", ci(c.impacts_per_period_ci)},
+                   {"impulse_per_period", c.impulse_per_period},
+                   {"impulse_per_period_ci", ci(c.impulse_per_period_ci)},
+                   {"reaction_integral_per_period", c.reaction_integral_per_period},
+                   {"reaction_integral_per_period_ci", ci(c.reaction_integral_per_period_ci)},
+                   {"mean_force", c.mean_force},
+                   {"mean_force_ci", ci(c.mean_force_ci)},
+                   {"dissipated_power", c.dissipated_power},
+                   {"dissipated_power_ci", ci(c.dissipated_power_ci)},
+                   {"work_rate", c.work_rate},
+                   {"work_rate_ci", ci(c.work_rate_ci)},
+                   {"contact_fraction", c.contact_fraction},
+                   {"contact_fraction_ci", ci(c.contact_fraction_ci)}});
+  }
+  j["loads"] = arr;
+  if (s.blocks == 0) {
+    if (!s.note.empty()) j["loads_note"] = s.note;
+    return;
+  }
+  j["loads_window"] = {{"first_period", s.first_period},
+                       {"periods", s.periods},
+                       {"blocks", s.blocks},
+                       {"block_periods", s.block_periods},
+                       {"note", s.note}};
+}
+
+std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly,
+                           const LoadsSummary* loads) {
   nlohmann::json j;
   j["status"] = ToString(r.status);
   if (r.status != RunStatus::kOk) j["message"] = r.message;
@@ -98,10 +144,11 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
                    {"error_test_failures", r.solver.error_test_failures},
                    {"reinits", r.solver.reinits}};
   if (ly) AddLyapunov(j, *ly);
+  if (loads) AddLoads(j, *loads);
   return j.dump();
 }
 
-std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
+std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* loads) {
   nlohmann::json j;
   j["status"] = o.status;
   if (!o.message.empty()) j["message"] = o.message;
@@ -134,6 +181,7 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind) {
   j["section_time"] = o.section_time;
   j["attractor_kind"] = o.summary.kind;
   j["quad_evaluations"] = o.quad_evaluations;
+  if (loads) AddLoads(j, *loads);
   return j.dump();
 }
 

@@ -105,7 +105,8 @@ with tempfile.TemporaryDirectory() as d:
         with h5py.File(ref, "r") as a, h5py.File(path, "r") as b:
             check(f"{label}: status ok", b.attrs["status"] == "ok", b.attrs["status"])
             for name in ("events/t", "events/kind", "events/x_B", "events/v_before", "events/v_after",
-                         "events/period", "events/offset", "samples/t", "samples/X", "samples/V",
+                         "events/period", "events/offset", "events/impulse", "events/energy_dissipated",
+                         "events/stick_duration", "events/reaction_integral", "events/reaction_max", "samples/t", "samples/X", "samples/V",
                          "samples/mode", "section/t", "section/X", "section/V"):
                 x, y = a[name][:], b[name][:]
                 check(f"{label}: {name} identical to the bit", x.shape == y.shape and

@@ -1,0 +1,76 @@
+// What the contacts endure over a run, per contact (docs/loads.md): impact rate, impulse and
+// reaction integral per period, mean contact force, dissipated power, normal work rate (rigid
+// limit) and contact time fraction, each with a confidence interval from batch means over blocks
+// of periods.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vibro/observer.hpp"
+#include "vibro/poincare.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+
+// One contact's means over the periods analysed. Per period: impacts, impulse (impacts and summed
+// chattering tails), ∫R dt (sticking phases, impulsive reactions while held included); per unit
+// time: mean_force = (Σ impulses + Σ ∫R dt)/time, dissipated_power, work_rate
+// (Σ ½ m (v⁻² + v⁺²)/time, the normal work of the impacts in the rigid limit, docs/loads.md §4),
+// contact_fraction (time held / time).
+struct ContactLoads {
+  int contact = 0;
+  double impacts_per_period = 0, impulse_per_period = 0, reaction_integral_per_period = 0,
+         mean_force = 0, dissipated_power = 0, work_rate = 0, contact_fraction = 0;
+  // 95 % intervals (Student t over the block means); absent when the run is too short.
+  using Interval = std::optional<std::pair<double, double>>;
+  Interval impacts_per_period_ci, impulse_per_period_ci, reaction_integral_per_period_ci,
+      mean_force_ci, dissipated_power_ci, work_rate_ci, contact_fraction_ci;
+};
+
+struct LoadsSummary {
+  std::vector<ContactLoads> contacts;
+  long long first_period = 0, periods = 0;  // the window analysed: [first, first + periods)
+  int blocks = 0;                           // blocks asked for
+  long long block_periods = 0;              // periods per block (0: no interval)
+  std::string note;                         // why there is no interval, when there is none
+};
+
+// An observer of a run. The first `skip` periods of the run (a transient) are left out of the means.
+class LoadsRecorder final : public Observer {
+ public:
+  LoadsRecorder(const System& system, long long skip = 0);
+  void OnEvent(const Event& e) override;
+  void OnCheckpoint(const Checkpoint& cp) override;
+
+  // Means over every period recorded after `skip`, and intervals from `blocks` batch means
+  // (at least kMinBlockPeriods periods per block, blocks ≥ 2; 0: means only, no interval asked).
+  // `blocks` 1 is refused with a note.
+  LoadsSummary Summary(int blocks) const;
+  static constexpr long long kMinBlockPeriods = 2;
+
+  // Per-period sums of one contact (time in units of time; row k = period first + k).
+  struct Row {
+    double impacts = 0, impulse = 0, reaction = 0, energy = 0, work = 0, held = 0;
+  };
+
+ private:
+  Row& At(int contact, long long period);
+  double period_;
+  long long skip_;
+  std::vector<double> mass_, restitution_;
+  std::vector<std::vector<Row>> rows_;          // [contact][period − first_]
+  long long first_ = -1, last_ = -1;            // periods seen: [first_, last_)
+  std::vector<double> open_reaction_, open_held_;  // open phases' parts already counted
+};
+
+// The exact per-period loads of a converged periodic orbit (docs/loads.md): one orbit period q·T
+// simulated from its section point (in quad precision when the orbit needed it, or when double
+// leaves a chattering sequence undetermined); means without intervals. Empty contacts and a note
+// when the orbit did not converge or the period could not be simulated.
+LoadsSummary OrbitLoads(const System& system, const Scene& scene, const OrbitResult& orbit);
+
+}  // namespace vibro
