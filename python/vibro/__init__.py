@@ -589,7 +589,9 @@ def _event_columns(cols):
     ``v_before`` is the velocity just before the event."""
     names = set(cols)
     own = {"t", "kind", "x_B", "v_before", "v_after"}
-    if names == own or names == own | {"contact", "simultaneous"}:  # vibro's own events (a run or a file)
+    extra = {"contact", "simultaneous", "impulse", "energy_dissipated", "stick_duration", "reaction_integral",
+             "reaction_max"}
+    if own <= names <= own | extra:  # vibro's own events (a run or a file, with or without the loads)
         cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"]}
         names = set(cols)
     for k in sorted(names - {"t", "kind", "velocity"}):

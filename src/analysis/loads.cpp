@@ -71,6 +71,7 @@ void LoadsRecorder::OnEvent(const Event& e) {
       open_reaction_[j] = open_held_[j] = 0;
       break;
     case EventKind::kRelease:
+      if (!std::isfinite(e.reaction_integral)) row.partial = true;  // held with other contacts
       if (std::isfinite(e.reaction_integral)) row.reaction += e.reaction_integral - open_reaction_[j];
       if (std::isfinite(e.stick_duration)) row.held += e.stick_duration - open_held_[j];
       open_reaction_[j] = open_held_[j] = 0;
@@ -96,6 +97,7 @@ void LoadsRecorder::OnCheckpoint(const Checkpoint& cp) {
   // that ends here.
   if (cp.clock.period <= first_) return;
   const long long ended = cp.clock.period - 1;
+  for (const int j : cp.held) At(j, ended).partial = true;  // held with other contacts
   for (size_t j = 0; j < rows_.size(); ++j) {
     Row& row = At(static_cast<int>(j), ended);
     if (j < cp.reaction_integral.size() && std::isfinite(cp.reaction_integral[j])) {
@@ -145,6 +147,7 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
       Row sum;
       for (long long p = a; p < b; ++p) {
         const Row r = row(p);
+        sum.partial = sum.partial || r.partial;
         sum.impacts += r.impacts;
         sum.impulse += r.impulse;
         sum.reaction += r.reaction;
@@ -153,9 +156,10 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
         sum.held += r.held;
       }
       const double n = static_cast<double>(b - a), t = n * period_;
-      return std::array<double, 7>{sum.impacts / n, sum.impulse / n, sum.reaction / n,
-                                   (sum.impulse + sum.reaction) / t, sum.energy / t, sum.work / t,
-                                   sum.held / t};
+      const double unknown = std::numeric_limits<double>::quiet_NaN();
+      return std::array<double, 7>{sum.impacts / n, sum.impulse / n, sum.partial ? unknown : sum.reaction / n,
+                                   sum.partial ? unknown : (sum.impulse + sum.reaction) / t,
+                                   sum.energy / t, sum.work / t, sum.partial ? unknown : sum.held / t};
     };
     ContactLoads c;
     c.contact = static_cast<int>(j);
@@ -188,10 +192,14 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
         // At least the rounding of the sums (a settled periodic run has equal block means).
         const double half = std::max(t * std::sqrt(var / blocks),
                                      16 * std::numeric_limits<double>::epsilon() * static_cast<double>(L) * std::abs(mean));
-        *ci[q] = std::pair{mean - half, mean + half};
+        if (std::isfinite(mean)) *ci[q] = std::pair{mean - half, mean + half};
         *point[q] = mean;  // the mean of equal blocks: the mean over the window
       }
     }
+    if (!std::isfinite(c.mean_force))
+      s.note += fmt::format("{}contact {}: phases held together with other contacts are not accounted "
+                            "(docs/loads.md): its reaction integral, mean force and contact fraction "
+                            "are unknown", s.note.empty() ? "" : "; ", j);
     s.contacts.push_back(c);
   }
   return s;

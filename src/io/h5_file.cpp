@@ -280,10 +280,14 @@ void MarkFileFailed(hid_t obj) {
 // A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why.
 void CheckWrite(herr_t status, hid_t obj, const std::string& what) {
   if (status >= 0) return;
+  // errno is the system's reason only for the errors a write can meet (it may be left over from
+  // an earlier call that did not fail the write: a stale ENOENT made a damaged file a "system"
+  // failure, exit 3, where it is bad input).
   const int err = errno;
+  const bool write_errno = err == ENOSPC || err == EDQUOT || err == EIO || err == EFBIG || err == EROFS;
   std::string reason = SystemReason();
-  const bool from_system = !reason.empty() || err != 0;
-  if (reason.empty()) reason = err != 0 ? std::strerror(err) : fmt::format("HDF5 could not write {}", what);
+  const bool from_system = !reason.empty() || write_errno;
+  if (reason.empty()) reason = write_errno ? std::strerror(err) : fmt::format("HDF5 could not write {}", what);
   char name[4096] = "the output file";
   if (H5Fget_name(obj, name, sizeof name) < 0) std::strcpy(name, "the output file");
   MarkFileFailed(obj);

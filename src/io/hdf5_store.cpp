@@ -11,6 +11,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include <initializer_list>
+
 #include <fmt/format.h>
 
 #include "io/hdf5_store_impl.hpp"
@@ -57,6 +59,17 @@ void EventTable::Open(h5::Id g) {
   xB = h5::Column::Open(g, "x_B", h5::Type::F64());
   v_before = h5::Column::Open(g, "v_before", h5::Type::F64());
   v_after = h5::Column::Open(g, "v_after", h5::Type::F64());
+  // The optional columns come in groups, each whole or absent (a file cut by hand is refused).
+  const auto group = [&](std::initializer_list<const char*> names) {
+    size_t present = 0;
+    for (const char* n : names) present += h5::Exists(g, n) ? 1 : 0;
+    if (present != 0 && present != names.size())
+      throw std::runtime_error(fmt::format("/events has {} of the {} columns {}, {}, …: all or none",
+                                           present, names.size(), *names.begin(), *(names.begin() + 1)));
+    return present != 0;
+  };
+  group({"contact", "simultaneous"});
+  group({"impulse", "energy_dissipated", "stick_duration", "reaction_integral", "reaction_max"});
   has_contact = h5::Exists(g, "contact");
   if (has_contact) {
     contact = h5::Column::Open(g, "contact", h5::Type::I32());
