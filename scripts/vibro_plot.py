@@ -484,13 +484,16 @@ def mark_sequences(fig, ax, f):
     b = f["branch"]
     if "sequence" not in b:
         return
-    seq = [text(x) for x in b["sequence"][:]]
+    # Grouped as a person reads them: the impacts vibro followed before predicting an accumulation
+    # point are one chattering sequence ("0:chattering"; how many are followed is numerics), and a
+    # point exactly at a simultaneous impact ("0+1:impact", a boundary) joins the stretch before.
+    seq = [re.sub(r"\b(\d+):impact(\*\d+)? \1:accumulation", r"\1:chattering", text(x)) for x in b["sequence"][:]]
     value = b["value"][:]
     if not any(seq) or len(seq) != len(value):
         return
     runs = []  # (first, last, sequence)
     for i, s in enumerate(seq):
-        if runs and runs[-1][2] == s:
+        if runs and (runs[-1][2] == s or "+" in s):
             runs[-1][1] = i
         else:
             runs.append([i, i, s])
@@ -503,11 +506,14 @@ def mark_sequences(fig, ax, f):
         ax.annotate(names[s], (0.5 * (value[first] + value[last]), 1.0), xycoords=("data", "axes fraction"),
                     xytext=(0, -11), textcoords="offset points", ha="center", fontsize=fs(8), color="0.25")
     ax.plot([], [], ":", color="0.45", lw=0.8, label="contact sequence changes")
-    key = "\n".join(f"{n}: {s}" for s, n in names.items())
-    fig.text(0.01, 0.005, "contact sequences  " + key.replace("\n", "\n" + " " * 22), fontsize=fs(7),
+    shown = 6  # the key lists this many sequences, long ones cut (all are in /branch/sequence)
+    lines = [f"{n}: {s if len(s) <= 110 else s[:107] + '...'}" for s, n in list(names.items())[:shown]]
+    if len(names) > shown:
+        lines.append(f"... {len(names) - shown} more (in /branch/sequence)")
+    fig.text(0.01, 0.005, "contact sequences\n" + "\n".join(lines), fontsize=fs(7),
              family="monospace", va="bottom", ha="left", color="0.2")
     if OPTIONS["size"] is None:
-        fig.subplots_adjust(bottom=0.1 + 0.035 * len(names))
+        fig.subplots_adjust(bottom=0.12 + 0.022 * (len(lines) + 1))
 
 
 def plot_branch(f, title, save):
