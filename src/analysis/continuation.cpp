@@ -347,6 +347,9 @@ Branch Continue(const ContinuationRequest& req) {
       b.q_dot = sys.mode_shapes() * b.V;
     }
     b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
+    auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
+    b.loads = std::move(loads.contacts);
+    b.loads_note = std::move(loads.note);
     br.points.push_back(std::move(b));
     if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };
