@@ -129,3 +129,24 @@ def test_partition_cells_loads(tmp_path):
     assert o["status"] == "converged"
     for k in vibro.LOAD_FIELDS:
         assert abs(o["loads"][0][k] - d["loads"][k][i, 0]) <= 1e-8 * abs(o["loads"][0][k]) + 1e-14, k
+
+
+def test_held_set_phases_in_closed_form():
+    """Two masses held on both stops at once (contacts_held_pair.toml, docs/loads.md "Phases held on
+    several contacts at once"): every phase of mass 1 has ∫λ_1 dt = 0.1Δt + 0.5(cos ωt_r − cos ωt_s)/ω
+    (λ = K d − b f sin ωt with q = d held), and the summary's loads are known."""
+    path = os.path.join(os.path.dirname(__file__), "..", "reference", "contacts", "scenes", "contacts_held_pair.toml")
+    r = vibro.simulate(vibro.load_scene(path, set={"run.periods": 20}))
+    e = r.events
+    w = 0.7
+    one = e["contact"] == 1
+    sticks, releases = e[one & (e["kind"] == 3)], e[one & (e["kind"] == 4)]
+    assert len(releases) >= 15
+    for rel in releases:
+        ts = sticks["t"][sticks["t"] < rel["t"]].max()
+        exact = 0.1 * (rel["t"] - ts) + 0.5 * (math.cos(w * rel["t"]) - math.cos(w * ts)) / w
+        assert abs(rel["reaction_integral"] - exact) < 1e-12 * rel["t"], (rel["t"], rel["reaction_integral"], exact)
+        assert math.isnan(rel["reaction_max"])
+    assert not np.any((e["contact"] == 0) & (e["kind"] == 4))  # mass 0 never leaves
+    for c in r.summary["loads"]:
+        assert c["mean_force"] is not None and c["reaction_integral_per_period"] is not None
