@@ -607,7 +607,7 @@ def plot_branch_loads(f, title, save):
     log_scale_if_wide(axes[1, 0], work)
     unknown = int(np.isnan(force).sum())
     set_title(axes[0, 0], title, f"contact loads along the branch in ${SYMBOLS.get(param, param)}$, exact per period"
-              + (f" ({unknown} unknown values: held with other contacts)" if unknown else ""))
+              + (f" ({unknown} unknown values: see /branch/loads/note)" if unknown else ""))
     axes[-1, 0].set_xlabel(axis_label(param))
     save(fig, "branch_loads")
 
