@@ -404,6 +404,9 @@ Branch Continue(const ContinuationRequest& req) {
     }
     b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
     b.sequence = pt.orbit.sequence;
+    auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
+    b.loads = std::move(loads.contacts);
+    b.loads_note = std::move(loads.note);
     br.points.push_back(std::move(b));
     if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };

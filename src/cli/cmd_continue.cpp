@@ -109,15 +109,27 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
+    // Each point's exact mean contact force and normal work rate, per contact (docs/loads.md).
+    size_t contacts = 0;
+    for (const auto& p : branch.points) contacts = std::max(contacts, p.loads.size());
+    std::string head;
+    for (size_t j = 0; j < contacts; ++j)
+      head += contacts == 1 ? fmt::format(" {:>12} {:>12}", "mean_force", "work_rate")
+                            : fmt::format(" {:>12} {:>12}", fmt::format("mean_force{}", j), fmt::format("work_rate{}", j));
     // Several contacts: the contact sequence of each point ("0:impact 1:impact") instead of the
     // one-stop event letters.
     const bool several = sys.contact_count() > 1;
-    fmt::print("{:>16} {:>12} {:>8} {:>12}  {}\n", key, "SP", "stable", "max|mu|", several ? "sequence" : "events");
+    fmt::print("{:>16} {:>12} {:>8} {:>12}{}  {}\n", key, "SP", "stable", "max|mu|", head, several ? "sequence" : "events");
     for (const auto& p : branch.points) {
       double lead = 0;
       for (const auto& m : p.multipliers) lead = std::max(lead, std::abs(m));
-      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}  {}\n", p.value,
-                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead,
+      std::string loads;
+      for (size_t j = 0; j < contacts; ++j) {
+        const auto cell = [](double v) { return std::isfinite(v) ? fmt::format(" {:>12.6g}", v) : fmt::format(" {:>12}", "-"); };
+        loads += j < p.loads.size() ? cell(p.loads[j].mean_force) + cell(p.loads[j].work_rate) : cell(std::nan("")) + cell(std::nan(""));
+      }
+      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}{}  {}\n", p.value,
+                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, loads,
                  several ? p.sequence : p.signature);
     }
     for (const auto& b : branch.bifurcations)
