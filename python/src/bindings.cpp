@@ -586,10 +586,10 @@ std::string Info(const std::string& path) {
 // The branch is the CSV file `csv`, or `columns` (frontend/tables.hpp) when given.
 using Columns = std::map<std::string, std::vector<double>>;
 std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::optional<Columns>& columns,
+                                      const std::optional<std::vector<std::string>>& sequences,
                                       const std::string& param, const std::string& kind, long long period,
                                       double tolerance, double sticking_tolerance, const std::string& out,
                                       const py::object& progress, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "validate");
   if (!columns) CheckPaths({{"branch", &csv}});
   std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
   vibro::frontend::CheckInteger(kPython, "--period", period, vibro::frontend::kPeriodLimit, problems);
@@ -599,7 +599,7 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
   const auto job =
       columns ? vibro::frontend::PrepareValidationTable(
                     s.origin, s.loaded, spec,
-                    vibro::frontend::BranchTable(*columns, vibro::frontend::ClaimedStateSize(s.loaded)),
+                    vibro::frontend::BranchTable(*columns, vibro::frontend::ClaimedStateSize(s.loaded), sequences),
                     [](const vibro::ClaimedPoint& p) { return fmt::format("branch row {}", p.line); }, kPython)
               : vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));

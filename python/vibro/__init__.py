@@ -551,14 +551,33 @@ def _shown(table):
     return f"<{type(table).__name__} of {len(table) if hasattr(table, '__len__') else '?'} rows>"
 
 
+def _sequences(values):
+    """The claimed contact sequences of a branch table as text ("" where a row makes no claim: an
+    empty string, None or NaN)."""
+    if values.dtype.kind not in "USO":
+        raise ValueError(f"branch column 'sequence': expected strings (a contact sequence such as "
+                         f"'0:impact 1:impact'), got an array of dtype {values.dtype}")
+    out = []
+    for i, v in enumerate(values):
+        if v is None or (isinstance(v, float) and _math.isnan(v)):
+            out.append("")
+        elif isinstance(v, (str, bytes, _np.str_, _np.bytes_)):
+            out.append((v.decode() if isinstance(v, bytes) else str(v)).strip())
+        else:
+            raise ValueError(f"branch row {i} (sequence): expected a string, got {type(v).__name__}")
+    return out
+
+
 def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticking_tolerance=1e-6, out=None,
              force=False, columns=None, progress=None):
     """Confirms or refutes, point by point, a branch of periodic orbits computed by another tool
     (``vibro validate --json``). ``branch`` is the CSV file, or the same table as arrays (a numpy
     structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame), with
     the columns value, time, displacement_1..n, velocity_1..n (or fields ``displacement`` and
-    ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim);
-    ``param`` is the scene key its value column sets. Besides the keys of the JSON, the dict holds
+    ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim) and,
+    for a scene with several contacts, sequence (strings, the orbit's contact sequence as
+    ``orbit(...)["sequence"]`` writes it; "" or None: no claim); ``param`` is the scene key its
+    value column sets. Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per point (value, verdict, distance, period (−1:
     none), stable (−1: none), sticking_fraction, simulated_distance; NaN for null floats).
     ``progress``: True for a progress bar, or a callable ``progress(done, total)`` (points), as for
@@ -566,9 +585,12 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
     _invoke("validate", scene, branch=_shown(branch), param=param, kind=kind, period=period, tolerance=tolerance,
             sticking_tolerance=sticking_tolerance, out=out, force=force)
     cols = _columns("branch", branch, columns)
+    sequences = None
     if cols is not None:
+        if "sequence" in cols:
+            sequences = _sequences(cols.pop("sequence"))
         cols = {k: _numbers("branch", k, v) for k, v in cols.items()}
-    args = (_scene(scene), "" if cols is not None else _path("branch", branch), cols, param, kind,
+    args = (_scene(scene), "" if cols is not None else _path("branch", branch), cols, sequences, param, kind,
             _int("period", period), _float("tolerance", tolerance), _float("sticking_tolerance", sticking_tolerance),
             _out(out))
     text, interrupted = _with_progress(progress, "validate", "point",

@@ -10,6 +10,7 @@
 
 #include "vibro/branch_csv.hpp"
 #include "vibro/child_process.hpp"
+#include "vibro/contact_sequence.hpp"
 #include "vibro/events_csv.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
@@ -38,7 +39,7 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
   }
   std::vector<double> value, distance, period, stable, sp, sim, t0, cp, cs, csp;
   std::vector<double> mu(N * m * 2, kNaN), X(N * n, kNaN), V(N * n, kNaN);
-  std::vector<std::string> verdict, detail;
+  std::vector<std::string> verdict, detail, sequence, claimed_sequence;
   for (size_t i = 0; i < N; ++i) {
     const auto& c = checks[i];
     const auto& o = c.orbit;
@@ -46,6 +47,8 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
     value.push_back(c.value);
     verdict.push_back(c.verdict);
     detail.push_back(c.detail);
+    sequence.push_back(ok ? o.sequence : "");
+    claimed_sequence.push_back(claims[i].sequence);
     distance.push_back(c.distance.value_or(kNaN));
     period.push_back(ok ? o.summary.period.value_or(o.period) : kNaN);
     stable.push_back(ok ? (o.stable ? 1 : 0) : kNaN);
@@ -79,7 +82,7 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
   t.arrays.push_back({"multipliers", {N, m, 2}, mu});
   t.arrays.push_back({"X", {N, n}, X});
   t.arrays.push_back({"V", {N, n}, V});
-  t.strings = {{"verdict", verdict}, {"detail", detail}};
+  t.strings = {{"verdict", verdict}, {"detail", detail}, {"sequence", sequence}, {"claimed_sequence", claimed_sequence}};
   return t;
 }
 
@@ -168,8 +171,18 @@ ValidationJob PrepareValidationTable(const SceneOrigin& origin, const LoadedScen
       continue;
     }
     std::string why;
-    ClaimedStart(System(job.scenes.back()), job.scenes.back(), p, why);
+    const System sys(job.scenes.back());
+    ClaimedStart(sys, job.scenes.back(), p, why);
     if (!why.empty()) problems.push_back(fmt::format("{}: {}", where(p), why));
+    // A claimed contact sequence names contacts of the scene, which has several (docs/validation.md).
+    if (!p.sequence.empty()) {
+      if (sys.contact_count() < 2)
+        problems.push_back(fmt::format("{}: sequence '{}': the scene has one contact; a contact sequence is checked "
+                                       "on scenes with several [[contact]] tables (leave the cell empty)",
+                                       where(p), p.sequence.substr(0, 80)));
+      else if (!ParseContactSequence(p.sequence, sys.contact_count(), why))
+        problems.push_back(fmt::format("{}: sequence: {}", where(p), why));
+    }
   }
   if (!problems.empty()) throw InputError(problems);
   return job;

@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "vibro/contact_sequence.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro::frontend {
@@ -46,7 +47,8 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
   return out;
 }
 
-std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n) {
+std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n,
+                                      const std::optional<std::vector<std::string>>& sequences) {
   std::vector<std::string> known = {"value", "time", "period", "stable", "sticking_fraction"};
   std::vector<std::string> required = {"value", "time"};
   for (int i = 1; i <= n; ++i) {
@@ -61,13 +63,16 @@ std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<do
   for (const auto& [name, values] : columns) {
     if (std::find(known.begin(), known.end(), name) == known.end())
       problems.push_back(fmt::format("branch: unknown column '{}' (expected value, time, displacement_1..{}, "
-                                     "velocity_1..{}, and optionally period, stable, sticking_fraction)",
+                                     "velocity_1..{}, and optionally period, stable, sticking_fraction, "
+                                     "sequence)",
                                      name, n, n));
     if (!first && values.size() != rows)
       problems.push_back(fmt::format("branch: column '{}' has {} rows, the others {}", name, values.size(), rows));
     rows = first ? values.size() : rows;
     first = false;
   }
+  if (sequences && !first && sequences->size() != rows)
+    problems.push_back(fmt::format("branch: column 'sequence' has {} rows, the others {}", sequences->size(), rows));
   for (const auto& name : required)
     if (!columns.count(name)) problems.push_back(fmt::format("branch: missing column '{}'", name));
   if (!problems.empty()) throw InputError(problems);
@@ -109,6 +114,11 @@ std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<do
     if (const auto sp = at("sticking_fraction", r)) {
       if (*sp >= 0 && *sp <= 1) p.sticking_fraction = *sp;
       else problems.push_back(fmt::format("branch row {} (sticking_fraction): {} is not in [0, 1]", r, *sp));
+    }
+    if (sequences) {
+      std::string why;
+      p.sequence = (*sequences)[r];
+      if (!ParseContactSequence(p.sequence, -1, why)) problems.push_back(fmt::format("branch row {} (sequence): {}", r, why));
     }
     points.push_back(std::move(p));
   }

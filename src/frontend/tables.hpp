@@ -23,7 +23,9 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
 
 // A branch from another tool: the columns of a branch CSV by name (value, time,
 // displacement_1..n, velocity_1..n; optionally period, stable, sticking_fraction, where NaN is a
-// claim not made, as an empty cell), all of one length. Throws InputError with every problem.
-std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n);
+// claim not made, as an empty cell), all of one length, and optionally the column `sequence` of
+// claimed contact sequences ("" makes no claim). Throws InputError with every problem.
+std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n,
+                                      const std::optional<std::vector<std::string>>& sequences = std::nullopt);
 
 }  // namespace vibro::frontend

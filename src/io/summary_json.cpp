@@ -241,6 +241,7 @@ std::string ValidationJson(const std::vector<PointCheck>& checks) {
                       {"floquet_multipliers", mu},
                       {"sticking_fraction", ok ? OrNull(c.orbit.summary.sticking_fraction) : nlohmann::json(nullptr)},
                       {"kind", ok ? nlohmann::json(c.orbit.summary.kind) : nlohmann::json(nullptr)},
+                      {"sequence", ok ? nlohmann::json(c.orbit.sequence) : nlohmann::json(nullptr)},
                       {"simulated_distance", OrNull(c.simulated_distance)}});
     if (c.verdict == "undetermined") ++undetermined;
     else if (c.verdict != "confirmed") ++disagreements;
