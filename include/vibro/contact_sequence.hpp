@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "vibro/observer.hpp"
+
 namespace vibro {
 
 // The events of `text`, one entry per event with every "*k" expanded, each written "J:kind"
@@ -28,5 +30,11 @@ std::optional<std::vector<std::string>> ParseContactSequence(const std::string& 
 // is bookkeeping, not another orbit; continuation.hpp's relabels). Empty sequences are equal only
 // to each other.
 bool SameContactSequence(const std::vector<std::string>& a, const std::vector<std::string>& b);
+
+// The sequence of `events` in order (as ParseContactSequence returns it): one entry per event,
+// the contacts of one simultaneous impact (flagged `simultaneous`, at one time) in one entry.
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events);
+// The text of a sequence, runs of k equal entries written once with "*k" (OrbitResult::sequence).
+std::string ContactSequenceText(const std::vector<std::string>& entries);
 
 }  // namespace vibro

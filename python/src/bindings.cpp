@@ -567,7 +567,6 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
 
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
 std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "check");
   const vibro::System sys(s.loaded.scene);
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
@@ -646,7 +645,6 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
                                             const std::vector<double>& levels, long long steps1,
                                             std::optional<double> from2, long long period, long long threads,
                                             const std::string& out, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "partition");
   vibro::frontend::PartitionSpec spec;
   spec.params = params;
   spec.range1 = range1;

@@ -144,4 +144,47 @@ bool SameContactSequence(const std::vector<std::string>& a, const std::vector<st
   return false;
 }
 
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
+  std::vector<std::string> out;
+  std::vector<int> together;  // the contacts of the entry being built
+  const Event* last = nullptr;
+  const auto flush = [&] {
+    if (!last) return;
+    std::sort(together.begin(), together.end());
+    std::string name;
+    for (int c : together) {
+      if (!name.empty()) name.push_back('+');
+      name.append(std::to_string(c));
+    }
+    name.push_back(':');
+    name.append(ToString(last->kind));
+    out.push_back(std::move(name));
+    together.clear();
+  };
+  for (const Event& e : events) {
+    const bool joins = last && e.simultaneous && last->simultaneous && e.t == last->t && e.kind == last->kind;
+    if (!joins) flush();
+    together.push_back(e.contact);
+    last = &e;
+  }
+  flush();
+  return out;
+}
+
+std::string ContactSequenceText(const std::vector<std::string>& entries) {
+  std::string out;
+  for (size_t i = 0; i < entries.size();) {
+    size_t k = i + 1;
+    while (k < entries.size() && entries[k] == entries[i]) ++k;
+    if (!out.empty()) out.push_back(' ');
+    out.append(entries[i]);
+    if (k - i > 1) {
+      out.push_back('*');
+      out.append(std::to_string(k - i));
+    }
+    i = k;
+  }
+  return out;
+}
+
 }  // namespace vibro

@@ -5,15 +5,59 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include "vibro/contact_sequence.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/simulator.hpp"
+#include "vibro/system.hpp"
 
 namespace vibro {
+namespace {
+
+// The contact sequence of a branch point's orbit: its events over `period` periods from its
+// section state (as OrbitResult::sequence), in the scene at the point.
+std::vector<std::string> PointSequence(const Scene& scene, const BranchPoint& p, int period) {
+  struct Log final : Observer {
+    std::vector<Event> events;
+    void OnEvent(const Event& e) override { events.push_back(e); }
+  } log;
+  const System sys(scene);
+  Scene sc = scene;
+  sc.initial_time = p.section_time;
+  sc.run.periods = period;
+  sc.run.samples_per_period = 0;
+  const InitialOverride here{p.section_time, p.X, p.V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.observers = {&log};
+  Simulate(sys, sc, opt);
+  return ContactSequenceOf(log.events);
+}
+
+// The spans of one sequence along a column's branch points (value, sequence), sorted by value.
+std::vector<PartitionColumn::SequenceSpan> Spans(
+    std::vector<std::pair<double, std::vector<std::string>>> points) {
+  std::sort(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<PartitionColumn::SequenceSpan> out;
+  std::vector<std::string> current;
+  for (const auto& [value, sequence] : points) {
+    if (!out.empty() && SameContactSequence(current, sequence)) {
+      out.back().to = value;
+      continue;
+    }
+    out.push_back({value, value, ContactSequenceText(sequence)});
+    current = sequence;
+  }
+  return out;
+}
+
+}  // namespace
 
 std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
   std::vector<PartitionColumn> columns(req.values1.size());
   const auto one = [&](size_t i) {
     PartitionColumn& col = columns[i];
     col.value1 = req.values1[i];
+    std::vector<std::pair<double, std::vector<std::string>>> sequences;  // several contacts
     for (double to : {req.lo2, req.hi2}) {
       if (req.stop_requested && req.stop_requested->load()) {
         col.status = "interrupted";
@@ -42,6 +86,12 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
         return;
       }
       if (b.status == "interrupted") col.status = "interrupted";
+      for (const BranchPoint& p : b.points) {
+        if (req.stop_requested && req.stop_requested->load()) break;
+        const Scene at = req.scene_at(col.value1, p.value);
+        if (at.contacts.size() < 2) break;  // one contact: no sequences
+        sequences.emplace_back(p.value, PointSequence(at, p, b.period));
+      }
       col.crossings.insert(col.crossings.end(), b.crossings.begin(), b.crossings.end());
       col.bifurcations.insert(col.bifurcations.end(), b.bifurcations.begin(), b.bifurcations.end());
     }
@@ -49,6 +99,7 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
               [](const auto& a, const auto& b) { return a.value < b.value; });
     std::sort(col.bifurcations.begin(), col.bifurcations.end(),
               [](const auto& a, const auto& b) { return a.value < b.value; });
+    col.sequences = Spans(std::move(sequences));
   };
   const int threads = req.threads > 0 ? req.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));

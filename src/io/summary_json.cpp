@@ -300,6 +300,11 @@ std::string PartitionJson(const std::string& param1, const std::string& param2,
     for (const auto& b : c.bifurcations) bs.push_back({{"kind", b.kind}, {"value", b.value}});
     cols.push_back({{"value1", c.value1}, {"status", c.status}, {"crossings", xs},
                     {"bifurcations", bs}, {"end_down", c.end_down}, {"end_up", c.end_up}});
+    if (!c.sequences.empty()) {  // several contacts (docs/contacts.md)
+      auto spans = nlohmann::json::array();
+      for (const auto& sp : c.sequences) spans.push_back({{"from", sp.from}, {"to", sp.to}, {"sequence", sp.sequence}});
+      cols.back()["sequences"] = spans;
+    }
   }
   j["columns"] = cols;
   return j.dump();
