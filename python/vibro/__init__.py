@@ -667,7 +667,9 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     ``range1`` = (A, B) is split in ``steps1`` steps, each column being continued in KEY2 over
     ``range2`` = (C, D) from ``from2`` (default: the scene's KEY2); ``sticking_fraction`` lists the
     levels to trace. Besides the keys of the JSON, the dict holds ``crossings`` (value1, level,
-    value2) and ``boundaries`` (value1, kind, value2): structured arrays, one row per point."""
+    value2), ``boundaries`` (value1, kind, value2) and ``sequences`` (value1, from, to, sequence:
+    with several contacts, the spans of KEY2 with one contact sequence; no rows for one contact):
+    structured arrays, one row per point."""
     levels = [float(s) for s in (sticking_fraction if _np.ndim(sticking_fraction) else [sticking_fraction])]
     _invoke("partition", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2),
             sticking_fraction=tuple(levels), steps1=steps1, from2=from2, period=period, threads=threads, out=out,
@@ -687,6 +689,10 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
                                           ("value2", "f8", _np.nan)])
     d["boundaries"] = _records(boundaries, [("value1", "f8", _np.nan), ("kind", _text_width(boundaries, "kind"), ""),
                                             ("value2", "f8", _np.nan)])
+    spans = [{"value1": c["value1"], "from": sp["from"], "to": sp["to"], "sequence": sp["sequence"]}
+             for c in d["columns"] for sp in c.get("sequences", [])]
+    d["sequences"] = _records(spans, [("value1", "f8", _np.nan), ("from", "f8", _np.nan), ("to", "f8", _np.nan),
+                                      ("sequence", _text_width(spans, "sequence"), "")])
     return d
 
 

@@ -26,8 +26,8 @@ struct SceneOrigin {
   LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
 };
 
-// Commands built on one contact's tangent map (orbit, continue, validate, partition, check):
-// InputError naming the scene and its [[contact]] tables when it has several (docs/contacts.md).
+// Commands not extended to several contacts yet (continue, prove): InputError naming the scene
+// and its [[contact]] tables when it has several (docs/contacts.md).
 void RequireOneContact(const LoadedScene& loaded, const char* command);
 
 // The override "KEY=VALUE" with VALUE in its shortest round-trip form ("2.8", not

@@ -317,3 +317,20 @@ def test_partition_cells_agree_with_orbit():
             counts.append(seen.pop())
         assert all(abs(a - b) == 1 for a, b in zip(counts, counts[1:])), (col["value1"], edges, counts)
     assert checked >= 9
+
+
+def test_python_partition_has_the_spans():
+    # vibro.partition returns the command line's JSON, and the spans as a structured array.
+    args = ["--params", "excitation.frequency,excitation.amplitude", "--range1", "0.75,0.8", "--steps1", "1",
+            "--range2", "4.5,5.5", "--sticking-fraction", "0.05"]
+    want = json.loads(run("partition", TWO_SIDED, *args, "--json").stdout)
+    d = vibro.partition(vibro.load_scene(TWO_SIDED), ("excitation.frequency", "excitation.amplitude"), (0.75, 0.8),
+                        (4.5, 5.5), 0.05, steps1=1)
+    assert d["columns"] == want["columns"]
+    spans = [(c["value1"], sp["from"], sp["to"], sp["sequence"]) for c in want["columns"] for sp in c["sequences"]]
+    assert spans and [tuple(r) for r in d["sequences"].tolist()] == spans
+    # One contact: no spans.
+    one = vibro.partition(vibro.load_scene(os.path.join(SCENES, "fig08_preload.toml")),
+                          ("excitation.frequency", "excitation.amplitude"), (2.8, 3.0), (1.0, 1.5), 0.5, steps1=1,
+                          from2=1.2)
+    assert len(one["sequences"]) == 0 and all("sequences" not in c for c in one["columns"])
