@@ -129,6 +129,12 @@ def test_wrong_state_and_wrong_sequence_are_refuted(tmp_path):
     detail = j["points"][2]["detail"]
     assert "claimed sequence 0:impact 0:impact" in detail and "vibro's orbit has" in detail, detail
     assert sorted(detail.split("vibro's orbit has ")[1].split()) == ["0:impact", "1:impact"], detail
+    # The file holds both sequences per point.
+    p, j2 = validate_json(str(tmp_path / "e.csv"), "--out", str(tmp_path / "e.h5"))
+    v = vibro.read(str(tmp_path / "e.h5"))["validation"]
+    assert list(v["claimed_sequence"]) == [r[6] for r in rows]
+    assert list(v["sequence"]) == [pt["sequence"] for pt in j["points"]]
+    assert list(v["verdict"]) == verdicts
     # The text table names the verdict and vibro's sequence.
     p = run("validate", TWO_SIDED, str(tmp_path / "e.csv"), "--param", "excitation.frequency", *SET_ARGS)
     assert p.returncode == 4 and "sequence-differs" in p.stdout and "sequence" in p.stdout.splitlines()[0]
@@ -334,3 +340,27 @@ def test_python_partition_has_the_spans():
                           ("excitation.frequency", "excitation.amplitude"), (2.8, 3.0), (1.0, 1.5), 0.5, steps1=1,
                           from2=1.2)
     assert len(one["sequences"]) == 0 and all("sequences" not in c for c in one["columns"])
+
+
+def test_branch_reader_reads_the_sequence(tmp_path):
+    # `continue --from FILE --point K` reads /branch/sequence when the file has it: one string per
+    # point, else bad input naming the dataset (a one-contact branch with the dataset added).
+    h5py = pytest.importorskip("h5py")
+    path = os.path.join(SCENES, "fig08_preload.toml")
+    out = tmp_path / "b.h5"
+    p = run("continue", path, "--param", "excitation.amplitude", "--to", "1.3", "--out", str(out), "--json")
+    assert p.returncode == 0, p.stderr
+    with h5py.File(out, "a") as f:
+        n = len(f["branch/value"])
+        if "sequence" in f["branch"]:
+            del f["branch/sequence"]
+        f["branch/sequence"] = np.array([""] * n, dtype=h5py.string_dtype())
+    restart = ["continue", path, "--param", "excitation.amplitude", "--to", "1.35", "--from", str(out), "--point", "1"]
+    p = run(*restart, "--json")
+    assert p.returncode == 0, p.stderr
+    for bad in (np.zeros(n), np.array([""] * (n + 1), dtype=h5py.string_dtype())):
+        with h5py.File(out, "a") as f:
+            del f["branch/sequence"]
+            f["branch/sequence"] = bad
+        p = run(*restart)
+        assert p.returncode == 2 and "/branch/sequence" in p.stderr, p.stderr
