@@ -252,6 +252,27 @@ TEST(SceneFile, ContactKeysAreOverridden) {
   EXPECT_EQ(SceneNumber(kPhysical, "contact[0].restitution"), 0.5);
 }
 
+TEST(SceneFile, ModalComponentsOfAContactAreOverridden) {
+  // contact[i].modal[k]: one modal component of contact i (the modal form, docs/contacts.md).
+  const std::string path = std::string(VIBRO_SCENES_DIR) + "/contacts_chain2_modal.toml";
+  const auto base = LoadScene(path);
+  const auto a = LoadScene(path, {"contact[1].modal[0]=0.5"});
+  ASSERT_EQ(a.scene.contacts.size(), 2u);
+  EXPECT_EQ(a.scene.contacts[1].modal[0], 0.5);
+  EXPECT_EQ(a.scene.contacts[1].modal[1], base.scene.contacts[1].modal[1]);
+  EXPECT_EQ(SceneNumber(a.text_as_run, "contact[1].modal[0]"), 0.5);
+  // Contact 0 has no modal components; an entry beyond the modes is refused.
+  for (const char* bad : {"contact[0].modal[0]=0.5", "contact[1].modal[2]=0.5"}) {
+    SCOPED_TRACE(bad);
+    try {
+      LoadScene(path, {bad});
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.messages().front(), AllOf(HasSubstr(bad), HasSubstr("no such entry")));
+    }
+  }
+}
+
 TEST(SceneFile, ContactKeysOfAMissingContactAreRefusedWithTheCount) {
   auto p = Problems(kTwoContacts, {"contact[2].position=1.0"});
   ASSERT_EQ(p.size(), 1u);
