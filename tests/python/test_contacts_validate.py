@@ -364,3 +364,16 @@ def test_branch_reader_reads_the_sequence(tmp_path):
             f["branch/sequence"] = bad
         p = run(*restart)
         assert p.returncode == 2 and "/branch/sequence" in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize("key,value", [("contact[1].position", 1.1), ("contact[0].restitution", 0.3)])
+def test_sweep_in_a_contact_key_is_the_scene_with_it_set(key, value):
+    # sweep sets contact[i].position/restitution without parsing the scene again
+    # (frontend.hpp, SceneWith); its first run starts from the scene's initial state, so it is the
+    # run of the scene parsed with --set KEY=VALUE: the same attractor, to the bit.
+    sweep = json.loads(run("sweep", TWO_SIDED, "--param", key, "--from", repr(value), "--to", repr(value + 0.05),
+                           "--steps", "1", "--one-way", "--json").stdout)
+    sim = json.loads(run("simulate", TWO_SIDED, "--set", f"{key}={value!r}", "--json").stdout)
+    a, b = sweep["points"][0], sim["attractor"]
+    assert a["kind"] == b["kind"] and a["sticking_fraction"] == b["sticking_fraction"], (a, b)
+    assert a["stick_phases"] == b["stick_phases"]
