@@ -25,7 +25,8 @@ std::optional<std::vector<std::string>> ParseContactSequence(const std::string& 
 // Whether two sequences (as ParseContactSequence returns them) describe the same periodic motion:
 // the same cyclic order of events, wherever each starts on the orbit (one is a rotation of the
 // other) and over however many periods of it each is written (each is reduced to its shortest
-// repeating unit). A run of impacts at contact j that ends in j's accumulation point is one
+// repeating unit). A run of impacts at contact j that ends in j's accumulation point, or directly
+// in j's stick (a simulator that ends chattering with a plastic impact below a threshold), is one
 // chattering sequence whatever its number of impacts (where its tail of decreasing speeds starts
 // is bookkeeping, not another orbit; continuation.hpp's relabels). Empty sequences are equal only
 // to each other.

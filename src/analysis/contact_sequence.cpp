@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <map>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -36,26 +37,41 @@ std::vector<int> Primitive(const std::vector<int>& w) {
   return w.size() % p == 0 ? std::vector<int>(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(p)) : w;
 }
 
-// The sequence with each chattering run "j:impact … j:impact j:accumulation" as one entry
-// "j:chattering": the word is first rotated to start just after an accumulation, so that no run
-// wraps around its end.
+// The sequence with each chattering run as one entry "j:chattering": a run of impacts at contact
+// j that ends in j's accumulation point (absorbed), or directly in j's stick (a simulator that
+// ends chattering with a plastic impact below a threshold). The word is first rotated to end with
+// its last accumulation or stick, so that no run wraps around its end.
 std::vector<std::string> Coarse(std::vector<std::string> w) {
-  const auto is_acc = [](const std::string& e) { return e.size() > 13 && e.ends_with(":accumulation"); };
-  const auto last = std::find_if(w.rbegin(), w.rend(), is_acc);
+  const auto ends = [](const std::string& e, std::string_view tail) {
+    return e.size() > tail.size() && e.ends_with(tail);
+  };
+  const auto last = std::find_if(w.rbegin(), w.rend(), [&](const std::string& e) {
+    return ends(e, ":accumulation") || ends(e, ":stick");
+  });
   if (last == w.rend()) return w;
-  std::rotate(w.begin(), last.base(), w.end());  // the last accumulation now ends the word
+  std::rotate(w.begin(), last.base(), w.end());
   std::vector<std::string> out;
   for (const auto& e : w) {
-    if (is_acc(e)) {
-      const std::string who = e.substr(0, e.size() - 12);  // "j:"
-      std::string impact = who, chattering = who;
-      impact.append("impact");
-      chattering.append("chattering");
-      while (!out.empty() && out.back() == impact) out.pop_back();
-      out.push_back(chattering);
-    } else {
+    const bool acc = ends(e, ":accumulation"), stick = ends(e, ":stick");
+    if (!acc && !stick) {
       out.push_back(e);
+      continue;
     }
+    const std::string who = e.substr(0, e.find(':') + 1);  // "j:"
+    std::string impact = who, chattering = who;
+    impact.append("impact");
+    chattering.append("chattering");
+    if (stick && !out.empty() && out.back() == chattering) {  // after its accumulation point
+      out.push_back(e);
+      continue;
+    }
+    size_t popped = 0;
+    while (!out.empty() && out.back() == impact) {
+      out.pop_back();
+      ++popped;
+    }
+    if (acc || popped > 0) out.push_back(chattering);
+    if (stick) out.push_back(e);
   }
   return out;
 }

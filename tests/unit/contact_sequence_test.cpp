@@ -71,8 +71,15 @@ TEST(ContactSequence, AChatteringSequenceIsOneWhateverItsCount) {
                    "0:impact*16 0:accumulation 0:stick 0:release"));
   // ... but not across contacts, nor without the accumulation point.
   EXPECT_FALSE(Same("1:impact*3 0:accumulation 0:stick 0:release", "0:impact*3 0:accumulation 0:stick 0:release"));
-  EXPECT_FALSE(Same("0:impact*3 0:stick 0:release", "0:impact*4 0:stick 0:release"));
   EXPECT_FALSE(Same("0:impact*16 0:accumulation 0:stick 0:release", "0:impact*16 0:accumulation 0:stick"));
+  EXPECT_FALSE(Same("0:impact*3 0:release", "0:impact*4 0:release"));
+  // A chattering sequence ended by a plastic impact below a threshold (no accumulation point) is
+  // the same landing.
+  EXPECT_TRUE(Same("0:impact*3 0:stick 0:release", "0:impact*4 0:stick 0:release"));
+  EXPECT_TRUE(Same("0:impact*16 0:accumulation 0:stick 0:release 1:impact*16 1:accumulation 1:stick 1:release",
+                   "1:impact*9 1:stick 1:release 0:impact*12 0:stick 0:release"));
+  EXPECT_FALSE(Same("0:impact*3 0:stick 0:release", "1:impact*3 0:stick 0:release"));
+  EXPECT_FALSE(Same("0:impact*3 0:stick 0:release", "0:impact*3 0:stick 0:release 1:impact"));
 }
 
 }  // namespace
