@@ -623,11 +623,12 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
 // when `t` is given.
 std::tuple<std::string, bool, std::string, std::string> Score(
     const PyScene& s, const std::string& csv, const std::optional<std::vector<double>>& t,
-    const std::vector<std::string>& kind, const std::optional<std::vector<double>>& velocity, double window,
+    const std::vector<std::string>& kind, const std::optional<std::vector<double>>& velocity,
+    const std::optional<std::vector<double>>& contact, double window,
     double tolerance, bool handle_sigint) {
   if (!t) CheckPaths({{"events", &csv}});
   std::optional<std::vector<vibro::TheirEvent>> table;
-  if (t) table = vibro::frontend::EventTable(*t, kind, velocity);
+  if (t) table = vibro::frontend::EventTable(*t, kind, velocity, contact);
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
   const auto r = table ? vibro::frontend::ScoreEventTable(

@@ -606,18 +606,20 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
 
 
 def _event_columns(cols):
-    """t, kind (as text: a name or its number 1..5) and velocity (or None) of an events table given
-    as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they are: their
-    ``v_before`` is the velocity just before the event."""
+    """t, kind (as text: a name or its number 1..5), velocity and contact (or None) of an events
+    table given as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they
+    are: their ``v_before`` is the velocity just before the event, and their ``contact`` (when
+    present) the event's contact."""
     names = set(cols)
     own = {"t", "kind", "x_B", "v_before", "v_after"}
     extra = {"contact", "simultaneous", "impulse", "energy_dissipated", "stick_duration", "reaction_integral",
              "reaction_max"}
     if own <= names <= own | extra:  # vibro's own events (a run or a file, with or without the loads)
-        cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"]}
+        cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"],
+                **({"contact": cols["contact"]} if "contact" in cols else {})}
         names = set(cols)
-    for k in sorted(names - {"t", "kind", "velocity"}):
-        raise ValueError(f"events: unknown column {k!r} (expected t, kind and optionally velocity)")
+    for k in sorted(names - {"t", "kind", "velocity", "contact"}):
+        raise ValueError(f"events: unknown column {k!r} (expected t, kind and optionally velocity, contact)")
     for k in ("t", "kind"):
         if k not in names:
             raise ValueError(f"events: missing column {k!r} (expected t, kind and optionally velocity)")
@@ -629,24 +631,26 @@ def _event_columns(cols):
     else:
         raise ValueError(f"events column 'kind': expected names or numbers 1..5, got an array of dtype {kind.dtype}")
     velocity = _numbers("events", "velocity", cols["velocity"]) if "velocity" in cols else None
-    return _numbers("events", "t", cols["t"]), kinds, velocity
+    contact = _numbers("events", "contact", cols["contact"]) if "contact" in cols else None
+    return _numbers("events", "t", cols["t"]), kinds, velocity, contact
 
 
 def score(scene, events, window=0.05, tolerance=1e-6, columns=None):
     """Scores another simulator's events against vibro's run of the scene (``vibro score --json``).
     ``events`` is the CSV file (t, kind[, velocity]), or the same table as arrays (a numpy
     structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame; kind as
-    names or as the numbers of :data:`EVENT_KINDS`; velocity NaN: not given), or vibro's own
-    ``simulate(...).events``. Besides the keys of the JSON, the dict holds
+    names or as the numbers of :data:`EVENT_KINDS`; velocity NaN: not given; with several contacts
+    optionally contact, each event's contact, on every row or none), or vibro's own
+    ``simulate(...).events`` (with their contacts). Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per event kind (kind, theirs, ours, matched,
     in_accumulation, max_time_error, mean_time_error, max_velocity_error (NaN: none)), and
     ``vibro_run``: the status and message of vibro's own run ("ok" unless it stopped early, when
     the command line exits 3)."""
     _invoke("score", scene, events=_shown(events), window=window, tolerance=tolerance)
     cols = _columns("events", events, columns)
-    t, kinds, velocity = _event_columns(cols) if cols is not None else (None, [], None)
+    t, kinds, velocity, contact = _event_columns(cols) if cols is not None else (None, [], None, None)
     text, interrupted, status, message = _vibro.score(_scene(scene), "" if cols is not None else _path("events", events),
-                                                      t, kinds, velocity, _float("window", window),
+                                                      t, kinds, velocity, contact, _float("window", window),
                                                       _float("tolerance", tolerance), _main_thread())
     if interrupted:
         raise _interrupted("scoring run", None)

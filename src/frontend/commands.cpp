@@ -270,6 +270,23 @@ Scoring ScoreEventTable(const LoadedScene& loaded, const std::vector<TheirEvent>
   const double t_end = s.scene.initial_time + static_cast<double>(s.scene.run.periods) * T;
   problems = EventTableProblems(theirs, s.scene.initial_time, t_end, T, window, where);
   if (theirs.empty()) problems.push_back("no events to score");
+  // Several contacts: the contacts named, every row's or none, each one of the scene's.
+  const int m = sys.contact_count();
+  const TheirEvent* without = nullptr;
+  bool named = false;
+  for (const auto& e : theirs) {
+    if (problems.size() >= 40) break;
+    if (!e.contact) {
+      without = without ? without : &e;
+      continue;
+    }
+    named = true;
+    if (*e.contact >= m)
+      problems.push_back(fmt::format("{}: contact {}: the scene has {} contact{} (0 to {})", where(e), *e.contact, m,
+                                     m == 1 ? "" : "s", m - 1));
+  }
+  if (named && without)
+    problems.push_back(fmt::format("{}: no contact: give the contact of every event, or of none", where(*without)));
   if (!problems.empty()) throw InputError(problems);
   EventLog log;
   SimulationOptions opt;

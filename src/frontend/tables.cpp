@@ -12,7 +12,8 @@
 namespace vibro::frontend {
 
 std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vector<std::string>& kind,
-                                   const std::optional<std::vector<double>>& velocity) {
+                                   const std::optional<std::vector<double>>& velocity,
+                                   const std::optional<std::vector<double>>& contact) {
   static const std::map<std::string, EventKind> kKinds = {
       {"impact", EventKind::kImpact},   {"1", EventKind::kImpact},
       {"accumulation", EventKind::kAccumulation}, {"2", EventKind::kAccumulation},
@@ -20,9 +21,10 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
       {"release", EventKind::kRelease}, {"4", EventKind::kRelease},
       {"grazing", EventKind::kGrazing}, {"5", EventKind::kGrazing}};
   std::vector<std::string> problems;
-  if (kind.size() != t.size() || (velocity && velocity->size() != t.size()))
-    throw InputError({fmt::format("events: columns of different lengths (t {}, kind {}{})", t.size(), kind.size(),
-                                  velocity ? fmt::format(", velocity {}", velocity->size()) : "")});
+  if (kind.size() != t.size() || (velocity && velocity->size() != t.size()) || (contact && contact->size() != t.size()))
+    throw InputError({fmt::format("events: columns of different lengths (t {}, kind {}{}{})", t.size(), kind.size(),
+                                  velocity ? fmt::format(", velocity {}", velocity->size()) : "",
+                                  contact ? fmt::format(", contact {}", contact->size()) : "")});
   if (t.empty()) throw InputError({"events: no rows (expected columns t, kind and optionally velocity)"});
   std::vector<TheirEvent> out;
   for (size_t i = 0; i < t.size(); ++i) {
@@ -40,6 +42,11 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
     if (velocity && !std::isnan((*velocity)[i])) {
       if (std::isfinite((*velocity)[i])) e.velocity = (*velocity)[i];
       else problems.push_back(fmt::format("events row {} (velocity): {} is not a finite number", i, (*velocity)[i]));
+    }
+    if (contact && !std::isnan((*contact)[i])) {
+      const double c = (*contact)[i];
+      if (c >= 0 && c <= 1e6 && c == std::floor(c)) e.contact = static_cast<int>(c);
+      else problems.push_back(fmt::format("events row {} (contact): {} is not a contact index (a whole number ≥ 0)", i, c));
     }
     out.push_back(e);
   }

@@ -18,8 +18,10 @@ namespace vibro::frontend {
 // HDF5 enum values 1..5, as text) and optionally `velocity` (NaN: not given, as an empty CSV cell).
 // Rows in the arrays' order, as the CSV reader keeps the file's (the order is checked by
 // ScoreEventTable, commands.hpp). Throws InputError with every problem.
+// `contact` (optional, several contacts): each event's contact, NaN: none.
 std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vector<std::string>& kind,
-                                   const std::optional<std::vector<double>>& velocity);
+                                   const std::optional<std::vector<double>>& velocity,
+                                   const std::optional<std::vector<double>>& contact = std::nullopt);
 
 // A branch from another tool: the columns of a branch CSV by name (value, time,
 // displacement_1..n, velocity_1..n; optionally period, stable, sticking_fraction, where NaN is a

@@ -377,3 +377,40 @@ def test_sweep_in_a_contact_key_is_the_scene_with_it_set(key, value):
     a, b = sweep["points"][0], sim["attractor"]
     assert a["kind"] == b["kind"] and a["sticking_fraction"] == b["sticking_fraction"], (a, b)
     assert a["stick_phases"] == b["stick_phases"]
+
+
+# ---- score ----
+
+def test_score_matches_events_per_contact(tmp_path):
+    # vibro's own events of the two-sided scene scored against its run: everything matched, with
+    # or without their contacts. The same times with the contacts swapped (an impact on the other
+    # stop at the same instant) are not the same motion: with the contact column every event is
+    # unmatched, the first divergence naming the contact; without it they match (the column is
+    # what tells the stops apart).
+    ev = vibro.simulate(vibro.load_scene(TWO_SIDED)).events
+    t, kind, contact = np.asarray(ev["t"]), np.asarray(ev["kind"]), np.asarray(ev["contact"])
+    assert set(contact) == {0, 1}
+    own = vibro.score(TWO_SIDED, ev)
+    assert own["agrees"] and own["unmatched"] == 0 and own["matched"] == len(ev)
+    swapped = vibro.score(TWO_SIDED, {"t": t, "kind": kind, "contact": 1 - contact})
+    assert not swapped["agrees"] and swapped["matched"] == 0
+    assert "at contact" in swapped["first_divergence"]["why"], swapped["first_divergence"]
+    blind = vibro.score(TWO_SIDED, {"t": t, "kind": kind})
+    assert blind["agrees"] and blind["matched"] == len(ev)
+    # The same through a CSV and the command line.
+    names = {1: "impact", 2: "accumulation", 3: "stick", 4: "release", 5: "grazing"}
+    for name, cs in (("good", contact), ("swapped", 1 - contact)):
+        write_csv(tmp_path / f"{name}.csv", [[repr(float(a)), names[int(b)], int(c)] for a, b, c in zip(t, kind, cs)],
+                  ["t", "kind", "contact"])
+        p = run("score", TWO_SIDED, str(tmp_path / f"{name}.csv"), "--json")
+        assert p.returncode == (0 if name == "good" else 4), p.stderr
+        j = json.loads(p.stdout)
+        assert j["matched"] == (len(ev) if name == "good" else 0)
+    # A contact the scene does not have, or a row without one when others have it: exit 2.
+    rows = [[repr(float(a)), names[int(b)], int(c)] for a, b, c in zip(t, kind, contact)]
+    write_csv(tmp_path / "bad.csv", [rows[0][:2] + [2]] + rows[1:], ["t", "kind", "contact"])
+    p = run("score", TWO_SIDED, str(tmp_path / "bad.csv"))
+    assert p.returncode == 2 and "bad.csv:2: contact 2: the scene has 2 contacts" in p.stderr, p.stderr
+    write_csv(tmp_path / "some.csv", [rows[0][:2] + [""]] + rows[1:], ["t", "kind", "contact"])
+    p = run("score", TWO_SIDED, str(tmp_path / "some.csv"))
+    assert p.returncode == 2 and "some.csv:2: no contact" in p.stderr, p.stderr
