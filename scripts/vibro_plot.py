@@ -445,7 +445,7 @@ def plot_basin(f, title, save):
 
 BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising": "^",
                        "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o",
-                       "undetermined": "P"}
+                       "undetermined": "P", "branch-point": "p", "simultaneous": "h", "no-jacobian": "x"}
 # Colours of the kinds drawn on a sweep, in the order they first appear (Okabe–Ito, without the
 # blue and vermilion of the up and down sweeps).
 BIF_COLOURS = [OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4], OKABE_ITO[5], OKABE_ITO[7], OKABE_ITO[6]]
@@ -478,6 +478,38 @@ def draw_branch(ax, f, y):
         seen.add(k)
 
 
+def mark_sequences(fig, ax, f):
+    """Several contacts: the contact sequence of each stretch of the branch, lettered on the axes
+    (A, B, ...) and spelled out under the figure; dotted lines where it changes."""
+    b = f["branch"]
+    if "sequence" not in b:
+        return
+    seq = [text(x) for x in b["sequence"][:]]
+    value = b["value"][:]
+    if not any(seq) or len(seq) != len(value):
+        return
+    runs = []  # (first, last, sequence)
+    for i, s in enumerate(seq):
+        if runs and runs[-1][2] == s:
+            runs[-1][1] = i
+        else:
+            runs.append([i, i, s])
+    names = {}
+    for first, last, s in runs:
+        names.setdefault(s, chr(ord("A") + len(names)) if len(names) < 26 else "?")
+    for k, (first, last, s) in enumerate(runs):
+        if k > 0:
+            ax.axvline(0.5 * (value[runs[k - 1][1]] + value[first]), color="0.45", lw=0.8, ls=":")
+        ax.annotate(names[s], (0.5 * (value[first] + value[last]), 1.0), xycoords=("data", "axes fraction"),
+                    xytext=(0, -11), textcoords="offset points", ha="center", fontsize=fs(8), color="0.25")
+    ax.plot([], [], ":", color="0.45", lw=0.8, label="contact sequence changes")
+    key = "\n".join(f"{n}: {s}" for s, n in names.items())
+    fig.text(0.01, 0.005, "contact sequences  " + key.replace("\n", "\n" + " " * 22), fontsize=fs(7),
+             family="monospace", va="bottom", ha="left", color="0.2")
+    if OPTIONS["size"] is None:
+        fig.subplots_adjust(bottom=0.1 + 0.035 * len(names))
+
+
 def plot_branch(f, title, save):
     """Bifurcation diagram of a continuation: the sticking fraction (sticking orbits) or x_B at
     the section (impact orbits), and the largest |μ| when the orbits have multipliers."""
@@ -497,6 +529,7 @@ def plot_branch(f, title, save):
     else:
         draw_branch(ax1, f, b["x_B"][:])
         ax1.set_ylabel("$x_B$ at the section")
+    mark_sequences(fig, ax1, f)
     ax1.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     sym = SYMBOLS.get(param, param)
     set_title(ax1, title, f"continuation in ${sym}$ from {value[0]:g}, period {int(b.attrs['period'])}; "

@@ -58,18 +58,27 @@ struct BranchPoint {
     double phase;     // ωt mod 2π·period
     double v_before;  // contact velocity ẋ_B just before
     double v_after;   // and just after (−r·v_before)
+    int contact = 0;  // the [[contact]] it hits (0 for the [stop])
   };
   std::vector<Impact> impacts;      // every impact of one period from t0, in time order
+  // Several contacts (docs/contacts.md): the orbit's contact sequence ("0:impact 1:impact*3
+  // 0:stick 0:release", OrbitResult::sequence); empty for one contact.
+  std::string sequence;
 };
 
 struct Bifurcation {
-  // "fold" | "flip" | "neimark-sacker" | "rising" | "grazing" | "sticking-entry" |
-  // "sticking-lost" | "non-smooth" | "undetermined" (past it the precision cannot decide a
-  // chattering sequence, so where the motion changes is not known; CVODE, or beyond quad)
+  // "fold" | "flip" | "neimark-sacker" | "branch-point" (a real multiplier crosses +1 where the
+  // branch does not turn back: a pitchfork, e.g. where a symmetric orbit loses its symmetry) |
+  // "rising" | "grazing" | "sticking-entry" | "sticking-lost" | "simultaneous" (two impacts on
+  // different contacts meet) | "non-smooth" | "no-jacobian" (the orbit past it runs through an
+  // event the map has no derivative at, e.g. a simultaneous impact of coupled contacts) |
+  // "undetermined" (past it the precision cannot decide a chattering sequence, so where the
+  // motion changes is not known; CVODE, or beyond quad)
   std::string kind;
   double value;
   std::string detail;
   double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
+  int contact = -1;    // the contact where a non-smooth point happens (several contacts), −1: none
 };
 
 // A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering

@@ -385,7 +385,8 @@ def _branch_table(points):
 def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto", out=None, force=False):
     """Continues a periodic orbit in ``param`` up to ``to`` (``vibro continue --json``; named with a
     trailing underscore because ``continue`` is a Python keyword). The dict also holds ``table``, a
-    structured array (value, sticking_fraction, stable) of the branch points."""
+    structured array (value, sticking_fraction, stable) of the branch points. With several contacts
+    each point has its contact ``sequence`` and each bifurcation the ``contact`` where it happens."""
     _invoke("continue", scene, param=param, to=to, step=step, max_points=max_points, period=period, kind=kind,
             out=out, force=force)
     text, interrupted = _vibro.continue_branch(_scene(scene), param, _float("to", to), _float("step", step),

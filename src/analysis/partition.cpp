@@ -7,31 +7,9 @@
 
 #include "vibro/contact_sequence.hpp"
 #include "vibro/continuation.hpp"
-#include "vibro/simulator.hpp"
-#include "vibro/system.hpp"
 
 namespace vibro {
 namespace {
-
-// The contact sequence of a branch point's orbit: its events over `period` periods from its
-// section state (as OrbitResult::sequence), in the scene at the point.
-std::vector<std::string> PointSequence(const Scene& scene, const BranchPoint& p, int period) {
-  struct Log final : Observer {
-    std::vector<Event> events;
-    void OnEvent(const Event& e) override { events.push_back(e); }
-  } log;
-  const System sys(scene);
-  Scene sc = scene;
-  sc.initial_time = p.section_time;
-  sc.run.periods = period;
-  sc.run.samples_per_period = 0;
-  const InitialOverride here{p.section_time, p.X, p.V};
-  SimulationOptions opt;
-  opt.initial = &here;
-  opt.observers = {&log};
-  Simulate(sys, sc, opt);
-  return ContactSequenceOf(log.events);
-}
 
 // The spans of one sequence along a column's branch points (value, sequence), sorted by value.
 std::vector<PartitionColumn::SequenceSpan> Spans(
@@ -86,11 +64,13 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
         return;
       }
       if (b.status == "interrupted") col.status = "interrupted";
+      // Several contacts: each point's contact sequence, as the continuation found it (empty for
+      // one contact).
       for (const BranchPoint& p : b.points) {
-        if (req.stop_requested && req.stop_requested->load()) break;
-        const Scene at = req.scene_at(col.value1, p.value);
-        if (at.contacts.size() < 2) break;  // one contact: no sequences
-        sequences.emplace_back(p.value, PointSequence(at, p, b.period));
+        if (p.sequence.empty()) continue;
+        std::string unused;
+        if (auto entries = ParseContactSequence(p.sequence, -1, unused))
+          sequences.emplace_back(p.value, std::move(*entries));
       }
       col.crossings.insert(col.crossings.end(), b.crossings.begin(), b.crossings.end());
       col.bifurcations.insert(col.bifurcations.end(), b.bifurcations.begin(), b.bifurcations.end());

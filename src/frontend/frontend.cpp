@@ -18,9 +18,9 @@ void RequireOneContact(const LoadedScene& loaded, const char* command) {
   const size_t m = loaded.scene.contacts.size();
   if (m <= 1) return;
   throw InputError({fmt::format(
-      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (continuation and "
-      "proofs with several contacts are not implemented yet); simulate, attractors, basin, sweep, "
-      "score, orbit, check, validate and partition take them (docs/contacts.md)",
+      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (proofs with several "
+      "contacts are not implemented yet); simulate, attractors, basin, sweep, score, orbit, continue, "
+      "check, validate and partition take them (docs/contacts.md)",
       loaded.source, m, command)});
 }
 

@@ -26,7 +26,7 @@ struct SceneOrigin {
   LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
 };
 
-// Commands not extended to several contacts yet (continue, prove): InputError naming the scene
+// Commands not extended to several contacts yet (prove): InputError naming the scene
 // and its [[contact]] tables when it has several (docs/contacts.md).
 void RequireOneContact(const LoadedScene& loaded, const char* command);
 

@@ -40,7 +40,8 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   H5Table t;
   std::vector<double> value, sp, xb, phase, lead, stable, count, t0, offsets{0}, ip, ivb, iva;
   std::vector<double> mu(N * m * 2, kNaN), sticks(N * k * 2, kNaN);
-  std::vector<std::string> events;
+  std::vector<std::string> events, sequence;
+  std::vector<double> icontact;
   std::vector<const Eigen::VectorXd*> X, V, q, qd;
   for (size_t i = 0; i < N; ++i) {
     const auto& pt = b.points[i];
@@ -50,6 +51,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
     phase.push_back(pt.section_phase);
     stable.push_back(pt.stable ? 1 : 0);
     events.push_back(pt.signature);
+    sequence.push_back(pt.sequence);
     double l = 0;
     for (size_t j = 0; j < pt.multipliers.size(); ++j) {
       l = std::max(l, std::abs(pt.multipliers[j]));
@@ -71,6 +73,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
       ip.push_back(im.phase);
       ivb.push_back(im.v_before);
       iva.push_back(im.v_after);
+      icontact.push_back(im.contact);
     }
     offsets.push_back(static_cast<double>(ip.size()));
   }
@@ -98,22 +101,26 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   col("impact_phase", ip);
   col("impact_v_before", ivb);
   col("impact_v_after", iva);
+  col("impact_contact", icontact, 'i');
   t.strings.emplace_back("events", events);
+  t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
   t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
   WriteTable("/branch", t);
 
   H5Table bt;
-  std::vector<double> bv, bb;
+  std::vector<double> bv, bb, bc;
   std::vector<std::string> kind, detail;
   for (const auto& x : b.bifurcations) {
     bv.push_back(x.value);
     bb.push_back(x.bracket);
+    bc.push_back(x.contact);
     kind.push_back(x.kind);
     detail.push_back(x.detail);
   }
   bt.arrays.push_back({"value", {bv.size()}, bv});
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
+  bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
   bt.strings = {{"kind", kind}, {"detail", detail}};
   WriteTable("/bifurcations", bt);
 

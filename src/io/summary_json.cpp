@@ -270,13 +270,15 @@ std::string BranchJson(const Branch& b) {
                       {"stable", pt.stable},
                       {"floquet_multipliers", mu},
                       {"events", pt.signature},
+                      {"sequence", pt.sequence},
                       {"x_B", pt.x_B},
                       {"section_phase", pt.section_phase}});
   }
   j["points"] = points;
   auto bif = nlohmann::json::array();
   for (const auto& x : b.bifurcations)
-    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
+    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket},
+                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()}});
   j["bifurcations"] = bif;
   auto rel = nlohmann::json::array();
   for (const auto& x : b.relabels)
