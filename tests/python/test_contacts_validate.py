@@ -414,3 +414,34 @@ def test_score_matches_events_per_contact(tmp_path):
     write_csv(tmp_path / "some.csv", [rows[0][:2] + [""]] + rows[1:], ["t", "kind", "contact"])
     p = run("score", TWO_SIDED, str(tmp_path / "some.csv"))
     assert p.returncode == 2 and "some.csv:2: no contact" in p.stderr, p.stderr
+
+
+def test_continued_branch_exported_and_validated(tmp_path):
+    # The round trip: a branch computed by `vibro continue` (from the closed form's state at
+    # ω = 2.5), exported by branch_to_csv.py with its sequence column, is confirmed point by point
+    # by `vibro validate`; the same file with one point's sequence made wrong refutes that point.
+    v, phi = closed_form(2.5)[0]
+    start = ["--set", "excitation.frequency=2.5", "--set", f"initial.time={phi / 2.5!r}",
+             "--set", "initial.displacement=[1.0]", "--set", f"initial.velocity=[{-R * v!r}]"]
+    p = run("continue", TWO_SIDED, *SET_ARGS, *start, "--transient", "0", "--param", "excitation.frequency",
+            "--to", "3.0", "--out", str(tmp_path / "b.h5"))
+    assert p.returncode == 0, p.stderr
+    subprocess.run([sys.executable, os.path.join(SCRIPTS, "branch_to_csv.py"), str(tmp_path / "b.h5"),
+                    str(tmp_path / "b.csv")], check=True)
+    with open(tmp_path / "b.csv") as fh:
+        rows = list(csv.reader(fh))
+    header, body = rows[0], rows[1:]
+    assert header[-1] == "sequence" and len(body) >= 5
+    assert all(sorted(r[-1].split()) == ["0:impact", "1:impact"] for r in body), body
+    p, j = validate_json(str(tmp_path / "b.csv"))
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert all(pt["verdict"] == "confirmed" and pt["distance"] < 1e-9 for pt in j["points"])
+    # Every point against the closed form: the largest |multiplier| is r² (a complex pair).
+    assert all(abs(max(abs(complex(a, b)) for a, b in pt["floquet_multipliers"]) - R ** 2) < 1e-9
+               for pt in j["points"])
+    body[len(body) // 2][-1] = "0:impact 0:impact"
+    write_csv(tmp_path / "w.csv", body, header)
+    p, j = validate_json(str(tmp_path / "w.csv"))
+    assert p.returncode == 4
+    verdicts = [pt["verdict"] for pt in j["points"]]
+    assert verdicts.count("sequence-differs") == 1 and verdicts[len(body) // 2] == "sequence-differs"
