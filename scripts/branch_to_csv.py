@@ -6,8 +6,10 @@
 
 Columns: value, time (the section time of each point), displacement_1..n and velocity_1..n in the
 scene's [initial] convention (physical DOFs q, q_dot for a physical scene, modal X, V otherwise),
-period, stable, sticking_fraction (empty when the orbit does not stick). Writes to stdout without
-OUT.csv. Exit 2 when the file holds no branch with orbit states.
+period, stable, sticking_fraction (empty when the orbit does not stick), and sequence (each
+point's contact sequence, when the branch is of a scene with several contacts: /branch/sequence
+holds a non-empty entry). Writes to stdout without OUT.csv. Exit 2 when the file holds no branch
+with orbit states.
 """
 import csv
 import sys
@@ -27,6 +29,11 @@ def main(argv):
             x, v = (b["q"][()], b["q_dot"][()]) if "q" in b else (b["X"][()], b["V"][()])
             stable, sp = b["stable"][()], b["sticking_fraction"][()]
             period = int(b.attrs["period"])
+            sequence = None
+            if "sequence" in b:
+                sequence = [s.decode() if isinstance(s, bytes) else str(s) for s in b["sequence"][()]]
+                if not any(sequence):
+                    sequence = None
     except (OSError, KeyError) as e:
         print(f"{argv[1]}: not a branch with orbit states (vibro continue --out): {e}", file=sys.stderr)
         return 2
@@ -34,11 +41,13 @@ def main(argv):
     w = csv.writer(out, lineterminator="\n")
     n = x.shape[1]
     w.writerow(["value", "time"] + [f"displacement_{i + 1}" for i in range(n)]
-               + [f"velocity_{i + 1}" for i in range(n)] + ["period", "stable", "sticking_fraction"])
+               + [f"velocity_{i + 1}" for i in range(n)] + ["period", "stable", "sticking_fraction"]
+               + (["sequence"] if sequence else []))
     for i in range(len(value)):
         w.writerow([repr(float(value[i])), repr(float(t0[i]))] + [repr(float(a)) for a in x[i]]
                    + [repr(float(a)) for a in v[i]]
-                   + [period, int(stable[i]), "" if np.isnan(sp[i]) else repr(float(sp[i]))])
+                   + [period, int(stable[i]), "" if np.isnan(sp[i]) else repr(float(sp[i]))]
+                   + ([sequence[i]] if sequence else []))
     if out is not sys.stdout:
         out.close()
     return 0

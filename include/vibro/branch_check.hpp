@@ -27,6 +27,9 @@ struct ClaimedPoint {
   std::optional<bool> stable;
   std::optional<double> sticking_fraction;
   int line = 0;                               // where it came from (messages)
+  // Several contacts: the claimed contact sequence over the orbit (OrbitResult::sequence's
+  // format, read by ParseContactSequence); empty: no claim.
+  std::string sequence;
 };
 
 struct CheckTolerances {
@@ -37,8 +40,8 @@ struct CheckTolerances {
 
 struct PointCheck {
   double value = 0;
-  // "confirmed" | "no-orbit-near" | "undetermined" | "period-differs" | "stability-differs" |
-  // "sticking-fraction-differs". "undetermined": the simulation that checks a stable orbit ended
+  // "confirmed" | "no-orbit-near" | "undetermined" | "period-differs" | "sequence-differs" |
+  // "stability-differs" | "sticking-fraction-differs". "undetermined": the simulation that checks a stable orbit ended
   // undetermined or in a numerical failure (detail: its message), so nothing is claimed.
   std::string verdict;
   std::string detail;
@@ -53,7 +56,9 @@ struct PointCheck {
 // The modal start state of a claimed point in `scene` (the scene at the point's value). A state
 // below the stop by at most 1e-9·max(1, |x0|) (another tool's rounding) is put on the stop, and a
 // state on the stop moving into it is taken as the one just before an impact: the restitution law
-// is applied. Returns an empty `problem` or why the state is not admissible, or not a state of the
+// is applied. Several contacts: the same for each contact j (its gap g_j, |e_j| for |x0|, its own
+// restitution law); a state on two coupled contacts (W_jk ≠ 0) moving into both is refused (its
+// simultaneous impact is not one contact's law: give the state after it). Returns an empty `problem` or why the state is not admissible, or not a state of the
 // scene at all (an entry beyond the bound of [initial], |value| ≤ 1e100, or |time|/T > 1e12).
 InitialOverride ClaimedStart(const System& system, const Scene& scene, const ClaimedPoint& point,
                              std::string& problem);

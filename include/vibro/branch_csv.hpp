@@ -1,6 +1,8 @@
 // Branch files from other tools (docs/validation.md): CSV with a header row, one point per row.
 //   value, time, displacement_1..n, velocity_1..n   required (n: entries of the scene's [initial])
 //   period, stable (0/1), sticking_fraction         optional claims (a cell may be left empty)
+//   sequence                                        optional claim, several contacts: the orbit's
+//                                                   contact sequence ("0:impact 1:impact*3 0:stick")
 // Lines starting with '#' and blank lines are skipped; columns may come in any order. The file is
 // read within the limits of docs/validation.md ("Input limits": 1 GiB, 1 MiB a line, text only, a
 // UTF-8 BOM dropped) and the process's stop request (stop_request.hpp) is polled while it is read.

@@ -157,6 +157,15 @@ struct PartitionColumn {
   // The branch points of the column in increasing arclength from the lower end (the down half
   // reversed, then the up half without its repeated start point).
   std::vector<PartitionPoint> points;
+  // Several contacts (docs/contacts.md): the column's orbits classified by their contact sequence,
+  // in increasing KEY2: each span [from, to] holds the branch points (from and to among them) whose
+  // orbits have one sequence (contact_sequence.hpp: the same cyclic word); the change between two
+  // spans lies between their ends. Empty for one contact.
+  struct SequenceSpan {
+    double from = 0, to = 0;
+    std::string sequence;  // OrbitResult::sequence's format, from the section of the span's first point
+  };
+  std::vector<SequenceSpan> sequences;
 };
 std::vector<PartitionColumn> Partition(const PartitionRequest& request);
 

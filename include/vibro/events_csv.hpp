@@ -2,6 +2,8 @@
 //   t         event time (same clock as the scene's initial.time)
 //   kind      impact | accumulation | stick | release | grazing (or the HDF5 enum values 1..5)
 //   velocity  optional: contact velocity ẋ_B just before the event
+//   contact   optional, several contacts: the event's contact (0-based [[contact]] order); given,
+//             it must be given on every row (ScoreEventTable)
 // Lines starting with '#' and blank lines are skipped. The file is read within the limits of
 // docs/validation.md ("Input limits": 1 GiB, 1 MiB a line, text only, a UTF-8 BOM dropped) and
 // the process's stop request (stop_request.hpp) is polled while it is read.

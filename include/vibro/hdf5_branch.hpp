@@ -11,6 +11,8 @@
 //   stick_phase_count (N) int64, impact_offsets (N + 1) int64: the impacts of point i are rows
 //   impact_offsets[i] .. impact_offsets[i+1] − 1 of impact_phase, impact_v_before, impact_v_after
 //   (contact velocity just before and after);
+//   sequence (N) strings, the contact sequence of each point (several contacts; empty for one
+//   contact; absent in files written before it was stored);
 //   attributes param, period, end, status.
 // /bifurcations: value, kind, detail, bracket.
 #pragma once
@@ -30,6 +32,9 @@ struct StoredBranchPoint {
   long long points = 0;  // points on the stored branch
   double value = 0, section_time = 0;
   Eigen::VectorXd X, V;  // modal state at the section
+  // Several contacts: the point's contact sequence (/branch/sequence; empty when the file has no
+  // such dataset, or for one contact).
+  std::string sequence;
 };
 
 // Point k (0-based) of the branch stored in `path`. Throws InputError naming the file when it

@@ -35,7 +35,10 @@ LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& o
 LoadedScene ParseScene(std::string_view text, const std::string& source,
                        const std::vector<std::string>& overrides = {});
 
-// The number at `key` (e.g. "excitation.amplitude") in a scene's TOML text, if any.
+// The number at `key` (e.g. "excitation.amplitude", "contact[1].position") in a scene's TOML
+// text, if any. contact[0].position and contact[0].restitution of a scene with a [stop] are the
+// stop's. Throws InputError for contact[i].KEY when the scene has no contact i, naming the key and
+// how many contacts the scene has.
 std::optional<double> SceneNumber(const std::string& text, const std::string& key);
 
 // The scene key nearest to a mistyped one ("amplitude" → "excitation.amplitude"), or "".

@@ -19,6 +19,10 @@ struct TheirEvent {
   EventKind kind = EventKind::kImpact;
   std::optional<double> velocity;  // contact velocity ẋ_B just before the event
   int line = 0;                    // where it came from (messages): a CSV line, or a table's row
+  // Several contacts (docs/contacts.md): the contact (0-based [[contact]] order) of the event,
+  // matched only with vibro's events at that contact; none: matched with vibro's events of its
+  // kind at any contact.
+  std::optional<int> contact;
 };
 
 // The problems of another simulator's event table before anything is run, each named by

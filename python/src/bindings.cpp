@@ -566,7 +566,6 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
 
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
 std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "check");
   const vibro::System sys(s.loaded.scene);
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
@@ -585,10 +584,10 @@ std::string Info(const std::string& path) {
 // The branch is the CSV file `csv`, or `columns` (frontend/tables.hpp) when given.
 using Columns = std::map<std::string, std::vector<double>>;
 std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, const std::optional<Columns>& columns,
+                                      const std::optional<std::vector<std::string>>& sequences,
                                       const std::string& param, const std::string& kind, long long period,
                                       double tolerance, double sticking_tolerance, const std::string& out,
                                       const py::object& progress, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "validate");
   if (!columns) CheckPaths({{"branch", &csv}});
   std::vector<std::string> problems;  // before it is an int (PrepareValidation checks it again)
   vibro::frontend::CheckInteger(kPython, "--period", period, vibro::frontend::kPeriodLimit, problems);
@@ -598,7 +597,7 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
   const auto job =
       columns ? vibro::frontend::PrepareValidationTable(
                     s.origin, s.loaded, spec,
-                    vibro::frontend::BranchTable(*columns, vibro::frontend::ClaimedStateSize(s.loaded)),
+                    vibro::frontend::BranchTable(*columns, vibro::frontend::ClaimedStateSize(s.loaded), sequences),
                     [](const vibro::ClaimedPoint& p) { return fmt::format("branch row {}", p.line); }, kPython)
               : vibro::frontend::PrepareValidation(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
@@ -623,11 +622,12 @@ std::pair<std::string, bool> Validate(const PyScene& s, const std::string& csv, 
 // when `t` is given.
 std::tuple<std::string, bool, std::string, std::string> Score(
     const PyScene& s, const std::string& csv, const std::optional<std::vector<double>>& t,
-    const std::vector<std::string>& kind, const std::optional<std::vector<double>>& velocity, double window,
+    const std::vector<std::string>& kind, const std::optional<std::vector<double>>& velocity,
+    const std::optional<std::vector<double>>& contact, double window,
     double tolerance, bool handle_sigint) {
   if (!t) CheckPaths({{"events", &csv}});
   std::optional<std::vector<vibro::TheirEvent>> table;
-  if (t) table = vibro::frontend::EventTable(*t, kind, velocity);
+  if (t) table = vibro::frontend::EventTable(*t, kind, velocity, contact);
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
   const auto r = table ? vibro::frontend::ScoreEventTable(
@@ -645,7 +645,6 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
                                             const std::vector<double>& levels, long long steps1,
                                             std::optional<double> from2, long long period, long long threads,
                                             const std::string& out, bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "partition");
   vibro::frontend::PartitionSpec spec;
   spec.params = params;
   spec.range1 = range1;

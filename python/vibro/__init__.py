@@ -574,14 +574,33 @@ def _shown(table):
     return f"<{type(table).__name__} of {len(table) if hasattr(table, '__len__') else '?'} rows>"
 
 
+def _sequences(values):
+    """The claimed contact sequences of a branch table as text ("" where a row makes no claim: an
+    empty string, None or NaN)."""
+    if values.dtype.kind not in "USO":
+        raise ValueError(f"branch column 'sequence': expected strings (a contact sequence such as "
+                         f"'0:impact 1:impact'), got an array of dtype {values.dtype}")
+    out = []
+    for i, v in enumerate(values):
+        if v is None or (isinstance(v, float) and _math.isnan(v)):
+            out.append("")
+        elif isinstance(v, (str, bytes, _np.str_, _np.bytes_)):
+            out.append((v.decode() if isinstance(v, bytes) else str(v)).strip())
+        else:
+            raise ValueError(f"branch row {i} (sequence): expected a string, got {type(v).__name__}")
+    return out
+
+
 def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticking_tolerance=1e-6, out=None,
              force=False, columns=None, progress=None):
     """Confirms or refutes, point by point, a branch of periodic orbits computed by another tool
     (``vibro validate --json``). ``branch`` is the CSV file, or the same table as arrays (a numpy
     structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame), with
     the columns value, time, displacement_1..n, velocity_1..n (or fields ``displacement`` and
-    ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim);
-    ``param`` is the scene key its value column sets. Besides the keys of the JSON, the dict holds
+    ``velocity`` of shape (n,)) and optionally period, stable, sticking_fraction (NaN: no claim) and,
+    for a scene with several contacts, sequence (strings, the orbit's contact sequence as
+    ``orbit(...)["sequence"]`` writes it; "" or None: no claim); ``param`` is the scene key its
+    value column sets. Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per point (value, verdict, distance, period (−1:
     none), stable (−1: none), sticking_fraction, simulated_distance; NaN for null floats).
     ``progress``: True for a progress bar, or a callable ``progress(done, total)`` (points), as for
@@ -589,9 +608,12 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
     _invoke("validate", scene, branch=_shown(branch), param=param, kind=kind, period=period, tolerance=tolerance,
             sticking_tolerance=sticking_tolerance, out=out, force=force)
     cols = _columns("branch", branch, columns)
+    sequences = None
     if cols is not None:
+        if "sequence" in cols:
+            sequences = _sequences(cols.pop("sequence"))
         cols = {k: _numbers("branch", k, v) for k, v in cols.items()}
-    args = (_scene(scene), "" if cols is not None else _path("branch", branch), cols, param, kind,
+    args = (_scene(scene), "" if cols is not None else _path("branch", branch), cols, sequences, param, kind,
             _int("period", period), _float("tolerance", tolerance), _float("sticking_tolerance", sticking_tolerance),
             _out(out))
     text, interrupted = _with_progress(progress, "validate", "point",
@@ -607,18 +629,20 @@ def validate(scene, branch, param, kind="auto", period=0, tolerance=1e-6, sticki
 
 
 def _event_columns(cols):
-    """t, kind (as text: a name or its number 1..5) and velocity (or None) of an events table given
-    as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they are: their
-    ``v_before`` is the velocity just before the event."""
+    """t, kind (as text: a name or its number 1..5), velocity and contact (or None) of an events
+    table given as arrays. vibro's own events (:attr:`SimulationResult.events`) are taken as they
+    are: their ``v_before`` is the velocity just before the event, and their ``contact`` (when
+    present) the event's contact."""
     names = set(cols)
     own = {"t", "kind", "x_B", "v_before", "v_after"}
     extra = {"contact", "simultaneous", "impulse", "energy_dissipated", "stick_duration", "reaction_integral",
              "reaction_max"}
     if own <= names <= own | extra:  # vibro's own events (a run or a file, with or without the loads)
-        cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"]}
+        cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"],
+                **({"contact": cols["contact"]} if "contact" in cols else {})}
         names = set(cols)
-    for k in sorted(names - {"t", "kind", "velocity"}):
-        raise ValueError(f"events: unknown column {k!r} (expected t, kind and optionally velocity)")
+    for k in sorted(names - {"t", "kind", "velocity", "contact"}):
+        raise ValueError(f"events: unknown column {k!r} (expected t, kind and optionally velocity, contact)")
     for k in ("t", "kind"):
         if k not in names:
             raise ValueError(f"events: missing column {k!r} (expected t, kind and optionally velocity)")
@@ -630,24 +654,26 @@ def _event_columns(cols):
     else:
         raise ValueError(f"events column 'kind': expected names or numbers 1..5, got an array of dtype {kind.dtype}")
     velocity = _numbers("events", "velocity", cols["velocity"]) if "velocity" in cols else None
-    return _numbers("events", "t", cols["t"]), kinds, velocity
+    contact = _numbers("events", "contact", cols["contact"]) if "contact" in cols else None
+    return _numbers("events", "t", cols["t"]), kinds, velocity, contact
 
 
 def score(scene, events, window=0.05, tolerance=1e-6, columns=None):
     """Scores another simulator's events against vibro's run of the scene (``vibro score --json``).
     ``events`` is the CSV file (t, kind[, velocity]), or the same table as arrays (a numpy
     structured array, a dict of 1-D arrays, a 2-D array with ``columns=[...]``, a DataFrame; kind as
-    names or as the numbers of :data:`EVENT_KINDS`; velocity NaN: not given), or vibro's own
-    ``simulate(...).events``. Besides the keys of the JSON, the dict holds
+    names or as the numbers of :data:`EVENT_KINDS`; velocity NaN: not given; with several contacts
+    optionally contact, each event's contact, on every row or none), or vibro's own
+    ``simulate(...).events`` (with their contacts). Besides the keys of the JSON, the dict holds
     ``table``: a structured array with one row per event kind (kind, theirs, ours, matched,
     in_accumulation, max_time_error, mean_time_error, max_velocity_error (NaN: none)), and
     ``vibro_run``: the status and message of vibro's own run ("ok" unless it stopped early, when
     the command line exits 3)."""
     _invoke("score", scene, events=_shown(events), window=window, tolerance=tolerance)
     cols = _columns("events", events, columns)
-    t, kinds, velocity = _event_columns(cols) if cols is not None else (None, [], None)
+    t, kinds, velocity, contact = _event_columns(cols) if cols is not None else (None, [], None, None)
     text, interrupted, status, message = _vibro.score(_scene(scene), "" if cols is not None else _path("events", events),
-                                                      t, kinds, velocity, _float("window", window),
+                                                      t, kinds, velocity, contact, _float("window", window),
                                                       _float("tolerance", tolerance), _main_thread())
     if interrupted:
         raise _interrupted("scoring run", None)
@@ -671,7 +697,9 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     value2) and ``boundaries`` (value1, kind, value2): structured arrays, one row per point;
     ``cells`` (value1, value2, sticking_fraction, stable), every branch point of every column; and
     ``loads``, the cells' exact per-period contact loads (docs/loads.md) as arrays of shape
-    (cells, contacts), one per name of :data:`LOAD_FIELDS` (NaN: unknown)."""
+    (cells, contacts), one per name of :data:`LOAD_FIELDS` (NaN: unknown); ``sequences`` (value1,
+    from, to, sequence: with several contacts, the spans of KEY2 with one contact sequence; no rows
+    for one contact)."""
     levels = [float(s) for s in (sticking_fraction if _np.ndim(sticking_fraction) else [sticking_fraction])]
     _invoke("partition", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2),
             sticking_fraction=tuple(levels), steps1=steps1, from2=from2, period=period, threads=threads, out=out,
@@ -695,6 +723,10 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     d["cells"] = _records(cells, [("value1", "f8", _np.nan), ("value2", "f8", _np.nan),
                                   ("sticking_fraction", "f8", _np.nan), ("stable", "?", False)])
     d["loads"] = _loads_arrays(cells)
+    spans = [{"value1": c["value1"], "from": sp["from"], "to": sp["to"], "sequence": sp["sequence"]}
+             for c in d["columns"] for sp in c.get("sequences", [])]
+    d["sequences"] = _records(spans, [("value1", "f8", _np.nan), ("from", "f8", _np.nan), ("to", "f8", _np.nan),
+                                      ("sequence", _text_width(spans, "sequence"), "")])
     return d
 
 

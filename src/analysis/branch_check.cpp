@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "vibro/contact_sequence.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
@@ -63,17 +64,62 @@ std::optional<double> DistanceAtClaim(const System& sys, const Scene& scene, con
   Eigen::VectorXd z(2 * pick.X.size());
   z << pick.X, pick.V;
   orbit.push_back(z);
-  const double gap = sys.ContactDisplacement(pick.X) - sys.stop();
-  if (std::abs(gap) <= 1e-9 * std::max(1.0, std::abs(sys.stop())) && sys.ContactVelocity(pick.V) < 0) {
-    Eigen::VectorXd after = pick.V;
-    sys.ApplyImpact(after, sys.restitution());
-    z << pick.X, after;
-    orbit.push_back(z);
+  if (sys.contact_count() > 1) {
+    // Several contacts: the state after the impact of each contact the orbit sits on moving in.
+    for (const ContactModel& c : sys.contacts()) {
+      const double gap = c.shape.dot(pick.X) - c.stop;
+      if (!(std::abs(gap) <= 1e-9 * std::max(1.0, std::abs(c.stop)) && c.shape.dot(pick.V) < 0)) continue;
+      const Eigen::VectorXd after = pick.V - (1.0 + c.restitution) * c.shape.dot(pick.V) / c.s_B * c.contact;
+      z << pick.X, after;
+      orbit.push_back(z);
+    }
+  } else {
+    const double gap = sys.ContactDisplacement(pick.X) - sys.stop();
+    if (std::abs(gap) <= 1e-9 * std::max(1.0, std::abs(sys.stop())) && sys.ContactVelocity(pick.V) < 0) {
+      Eigen::VectorXd after = pick.V;
+      sys.ApplyImpact(after, sys.restitution());
+      z << pick.X, after;
+      orbit.push_back(z);
+    }
   }
   double best = std::numeric_limits<double>::infinity();
   for (const auto& a : claimed)
     for (const auto& b : orbit) best = std::min(best, RelativeDistance(a, b));
   return best;
+}
+
+// ClaimedStart's admissibility with several contacts (docs/contacts.md): each gap
+// g_j = c_jᵀX − e_j, with another tool's rounding forgiven per contact, and each contact's own
+// impact law (V⁺ = V − (1 + r_j)(c_jᵀV/W_jj) T_j) for a state on it moving in.
+void ClaimedStartOnContacts(const System& sys, InitialOverride& start, std::string& problem) {
+  std::vector<int> closing;
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const ContactModel& k = sys.contacts()[static_cast<size_t>(j)];
+    const double gap = k.shape.dot(start.X) - k.stop, snap = 1e-9 * std::max(1.0, std::abs(k.stop));
+    if (gap < -snap) {
+      problem = fmt::format("the state is outside the gap of contact {} (g_{} = {:.3g} < 0): not an admissible "
+                            "state of the scene",
+                            j, j, gap);
+      return;
+    }
+    if (gap > snap) continue;
+    start.X -= k.contact * (gap / k.s_B);  // onto the contact: g_j = 0
+    if (k.shape.dot(start.V) < 0) closing.push_back(j);
+  }
+  const Eigen::MatrixXd& W = sys.delassus();
+  for (size_t a = 0; a < closing.size(); ++a)
+    for (size_t b = a + 1; b < closing.size(); ++b)
+      if (std::abs(W(closing[a], closing[b])) > 1e-12 * std::sqrt(W(closing[a], closing[a]) * W(closing[b], closing[b]))) {
+        problem = fmt::format("the state is on contacts {} and {} moving into both, and they are coupled "
+                              "(W_{}{} = {:.3g} ≠ 0): their simultaneous impact is no one contact's law; give the "
+                              "state just after it",
+                              closing[a], closing[b], closing[a], closing[b], W(closing[a], closing[b]));
+        return;
+      }
+  for (int j : closing) {  // independent contacts: each impact law on its own
+    const ContactModel& k = sys.contacts()[static_cast<size_t>(j)];
+    start.V -= (1.0 + k.restitution) * (k.shape.dot(start.V) / k.s_B) * k.contact;
+  }
 }
 
 }  // namespace
@@ -102,6 +148,10 @@ InitialOverride ClaimedStart(const System& sys, const Scene& scene, const Claime
   const auto init = sys.Initial(at);
   InitialOverride start{init.time, init.X, init.V};
 
+  if (sys.contact_count() > 1) {
+    ClaimedStartOnContacts(sys, start, problem);
+    return start;
+  }
   // Admissibility, with the rounding of another tool's output forgiven.
   const double x0 = sys.stop(), gap = sys.ContactDisplacement(start.X) - x0;
   const double snap = 1e-9 * std::max(1.0, std::abs(x0));
@@ -188,9 +238,17 @@ PointCheck CheckPoint(const Scene& scene, const ClaimedPoint& p, OrbitKind kind,
     }
   }
   const int vibro_period = o.summary.period.value_or(o.period);
+  std::string unused;
+  const auto claimed_sequence = ParseContactSequence(p.sequence, sys.contact_count(), unused);
+  const auto vibro_sequence = ParseContactSequence(o.sequence, -1, unused);
   if (p.period && *p.period != vibro_period) {
     out.verdict = "period-differs";
     out.detail = fmt::format("claimed period {}, vibro's orbit has period {}", *p.period, vibro_period);
+  } else if (!p.sequence.empty() &&
+             !(claimed_sequence && vibro_sequence && SameContactSequence(*claimed_sequence, *vibro_sequence))) {
+    out.verdict = "sequence-differs";
+    out.detail = fmt::format("claimed sequence {}, vibro's orbit has {}", p.sequence,
+                             o.sequence.empty() ? "none (one contact)" : o.sequence);
   } else if (p.stable && *p.stable != o.stable) {
     double lead = 0;
     for (const auto& m : o.multipliers) lead = std::max(lead, std::abs(m));

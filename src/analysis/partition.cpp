@@ -6,15 +6,37 @@
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
+#include "vibro/contact_sequence.hpp"
 #include "vibro/continuation.hpp"
 
 namespace vibro {
+namespace {
+
+// The spans of one sequence along a column's branch points (value, sequence), sorted by value.
+std::vector<PartitionColumn::SequenceSpan> Spans(
+    std::vector<std::pair<double, std::vector<std::string>>> points) {
+  std::sort(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<PartitionColumn::SequenceSpan> out;
+  std::vector<std::string> current;
+  for (const auto& [value, sequence] : points) {
+    if (!out.empty() && SameContactSequence(current, sequence)) {
+      out.back().to = value;
+      continue;
+    }
+    out.push_back({value, value, ContactSequenceText(sequence)});
+    current = sequence;
+  }
+  return out;
+}
+
+}  // namespace
 
 std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
   std::vector<PartitionColumn> columns(req.values1.size());
   const auto one = [&](size_t i) {
     PartitionColumn& col = columns[i];
     col.value1 = req.values1[i];
+    std::vector<std::pair<double, std::vector<std::string>>> sequences;  // several contacts
     for (double to : {req.lo2, req.hi2}) {
       if (req.stop_requested && req.stop_requested->load()) {
         col.status = "interrupted";
@@ -53,6 +75,14 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
         const size_t skip = col.points.empty() || cells.empty() ? 0 : 1;
         col.points.insert(col.points.end(), cells.begin() + static_cast<std::ptrdiff_t>(skip), cells.end());
       }
+      // Several contacts: each point's contact sequence, as the continuation found it (empty for
+      // one contact).
+      for (const BranchPoint& p : b.points) {
+        if (p.sequence.empty()) continue;
+        std::string unused;
+        if (auto entries = ParseContactSequence(p.sequence, -1, unused))
+          sequences.emplace_back(p.value, std::move(*entries));
+      }
       col.crossings.insert(col.crossings.end(), b.crossings.begin(), b.crossings.end());
       col.bifurcations.insert(col.bifurcations.end(), b.bifurcations.begin(), b.bifurcations.end());
     }
@@ -60,6 +90,7 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
               [](const auto& a, const auto& b) { return a.value < b.value; });
     std::sort(col.bifurcations.begin(), col.bifurcations.end(),
               [](const auto& a, const auto& b) { return a.value < b.value; });
+    col.sequences = Spans(std::move(sequences));
   };
   const int threads = req.threads > 0 ? req.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));

@@ -12,22 +12,36 @@ namespace {
 
 // (last impact before each accumulation point, accumulation point + slack]: the tails of the
 // chattering sequences a list sums up.
+// With contacts (`by_contact`): per contact, the tails of that contact's sequences (key −1: all
+// events as one list).
+int ContactOf(const Event& e, bool by_contact) { return by_contact ? e.contact : -1; }
+int ContactOf(const TheirEvent& e, bool by_contact) { return by_contact ? e.contact.value_or(-1) : -1; }
+
 template <class E>
-std::vector<std::pair<double, double>> Tails(const std::vector<E>& list, double slack) {
-  std::vector<std::pair<double, double>> tails;
-  double last_impact = -std::numeric_limits<double>::infinity();
+std::map<int, std::vector<std::pair<double, double>>> Tails(const std::vector<E>& list, double slack,
+                                                            bool by_contact) {
+  std::map<int, std::vector<std::pair<double, double>>> tails;
+  std::map<int, double> last_impact;
   for (const auto& e : list) {
-    if (e.kind == EventKind::kImpact) last_impact = e.t;
-    if (e.kind == EventKind::kAccumulation) tails.emplace_back(last_impact, e.t + slack);
+    const int c = ContactOf(e, by_contact);
+    if (e.kind == EventKind::kImpact) last_impact[c] = e.t;
+    if (e.kind == EventKind::kAccumulation)
+      tails[c].emplace_back(last_impact.count(c) ? last_impact[c] : -std::numeric_limits<double>::infinity(),
+                            e.t + slack);
   }
   return tails;
 }
 
-bool InTail(const std::vector<std::pair<double, double>>& tails, double t) {
-  for (const auto& [a, b] : tails)
+bool InTail(const std::map<int, std::vector<std::pair<double, double>>>& tails, int contact, double t) {
+  const auto it = tails.find(contact);
+  if (it == tails.end()) return false;
+  for (const auto& [a, b] : it->second)
     if (t > a && t <= b) return true;
   return false;
 }
+
+// " at contact j" when events are matched per contact.
+std::string AtContact(int contact) { return contact >= 0 ? fmt::format(" at contact {}", contact) : ""; }
 
 }  // namespace
 
@@ -80,22 +94,28 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
                         const ScoreOptions& opt) {
   ScoreReport rep;
   rep.period = T;
+  // Their events name their contacts (all of them: ScoreEventTable checks it): events are matched
+  // per kind and contact; otherwise per kind.
+  const bool by_contact = !theirs.empty() && theirs.front().contact.has_value();
+  using Key = std::pair<EventKind, int>;  // kind, contact (−1: any)
   std::map<EventKind, std::vector<const Event*>> by_kind;
+  std::map<Key, std::vector<const Event*>> by_key;
   double v_scale = 0;
   for (const auto& e : ours) {
     by_kind[e.kind].push_back(&e);
+    by_key[{e.kind, ContactOf(e, by_contact)}].push_back(&e);
     if (e.kind == EventKind::kImpact) v_scale = std::max(v_scale, std::abs(e.v_before));
   }
-  std::map<EventKind, std::vector<const TheirEvent*>> their_kind;
-  for (const auto& e : theirs) their_kind[e.kind].push_back(&e);
+  std::map<Key, std::vector<const TheirEvent*>> their_kind;
+  for (const auto& e : theirs) their_kind[{e.kind, ContactOf(e, by_contact)}].push_back(&e);
 
-  // Per kind, in order (the n-th impact of a chattering sequence with the n-th, even where the
-  // impacts are closer together than the time error): the two lists are walked together, a pair
-  // within window·T matches, otherwise the earlier event is left unmatched.
+  // Per kind (and contact), in order (the n-th impact of a chattering sequence with the n-th, even
+  // where the impacts are closer together than the time error): the two lists are walked
+  // together, a pair within window·T matches, otherwise the earlier event is left unmatched.
   std::map<const TheirEvent*, const Event*> match;
   std::map<const Event*, const TheirEvent*> matched_ours;
-  for (auto& [kind, list] : their_kind) {
-    const auto& mine = by_kind[kind];
+  for (auto& [key, list] : their_kind) {
+    const auto& mine = by_key[key];
     size_t i = 0, j = 0;
     while (i < list.size() && j < mine.size()) {
       if (std::abs(mine[j]->t - list[i]->t) <= opt.window * T) {
@@ -109,9 +129,10 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
     }
   }
   const double slack = opt.tolerance * T;
-  const auto our_tails = Tails(ours, slack), their_tails = Tails(theirs, slack);
+  const auto our_tails = Tails(ours, slack, by_contact), their_tails = Tails(theirs, slack, by_contact);
   const auto at_end = [&](double t) { return std::abs(t - opt.t_end) <= slack; };
-  const bool their_accumulations = their_kind.count(EventKind::kAccumulation) > 0;
+  bool their_accumulations = false;
+  for (const auto& e : theirs) their_accumulations = their_accumulations || e.kind == EventKind::kAccumulation;
 
   std::map<EventKind, KindScore> score;
   for (const auto& [kind, list] : by_kind) {
@@ -142,14 +163,15 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
         diverge({e.t, e.kind, "theirs", fmt::format("time error {:.3g} T", err), m->t});
       continue;
     }
-    if (e.kind == EventKind::kImpact && InTail(our_tails, e.t)) {
+    if (e.kind == EventKind::kImpact && InTail(our_tails, ContactOf(e, by_contact), e.t)) {
       ++s.in_accumulation;
       continue;
     }
     if (at_end(e.t)) continue;
     ++s.unmatched_theirs;
     diverge({e.t, e.kind, "theirs",
-             fmt::format("unmatched: vibro has no {} within {:g} T of it", ToString(e.kind), opt.window),
+             fmt::format("unmatched: vibro has no {}{} within {:g} T of it", ToString(e.kind),
+                         AtContact(ContactOf(e, by_contact)), opt.window),
              std::nullopt});
   }
   for (const auto& e : ours) {
@@ -159,16 +181,16 @@ ScoreReport ScoreEvents(const std::vector<Event>& ours, const std::vector<TheirE
       s.scored = false;
       continue;
     }
-    if (e.kind == EventKind::kImpact && InTail(their_tails, e.t)) {
+    if (e.kind == EventKind::kImpact && InTail(their_tails, ContactOf(e, by_contact), e.t)) {
       ++s.ours_in_accumulation;
       continue;
     }
     if (at_end(e.t)) continue;
     ++s.unmatched_ours;
     diverge({e.t, e.kind, "vibro",
-             fmt::format("missed: vibro has {} {} here that the other simulator does not have within {:g} T",
+             fmt::format("missed: vibro has {} {}{} here that the other simulator does not have within {:g} T",
                          e.kind == EventKind::kImpact || e.kind == EventKind::kAccumulation ? "an" : "a",
-                         ToString(e.kind), opt.window),
+                         ToString(e.kind), AtContact(ContactOf(e, by_contact)), opt.window),
              e.t});
   }
   for (auto& [kind, s] : score) {

@@ -14,7 +14,6 @@
 int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json,
              bool with_quad) {
   const auto loaded = vibro::LoadScene(path, sets);
-  vibro::frontend::RequireOneContact(loaded, "check");
   const vibro::System sys(loaded.scene);
   vibro::cli::DiscardOnStop("");  // nothing partial to keep
   const auto report = vibro::CrossCheck(sys, loaded.scene, with_quad);

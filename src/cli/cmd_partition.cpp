@@ -53,7 +53,6 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
                  const PartitionArgs& a) {
   const vibro::frontend::SceneOrigin origin{path, std::nullopt, path, sets};
   const auto loaded = origin.Load();
-  vibro::frontend::RequireOneContact(loaded, "partition");
   // Progress: columns started (each column asks for scenes at its own value of KEY1).
   vibro::cli::Progress progress("columns", json);
   std::mutex seen_mutex;
@@ -88,6 +87,8 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
         fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, keys[1], x.value);
       for (const auto& b : c.bifurcations) fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, keys[1], b.value);
       PrintCellLoads(c, keys[1]);
+      for (const auto& sp : c.sequences)
+        fmt::print("  sequence {} for {} in [{:.12g}, {:.12g}]\n", sp.sequence, keys[1], sp.from, sp.to);
     }
   }
   return interrupted ? kExitInterrupted : 0;

@@ -17,7 +17,6 @@
 int RunValidate(const ValidateArgs& a) {
   const vibro::frontend::SceneOrigin origin{a.scene, std::nullopt, a.scene, a.sets};
   const auto loaded = origin.Load();
-  vibro::frontend::RequireOneContact(loaded, "validate");
   const vibro::frontend::ValidationSpec spec{a.csv, a.param, a.kind, a.period, a.tolerance, a.sticking_tolerance};
   const auto job = vibro::frontend::PrepareValidation(origin, loaded, spec, vibro::frontend::Naming::kCli,
                                                       &vibro::cli::StopFlag());
@@ -39,19 +38,25 @@ int RunValidate(const ValidateArgs& a) {
   if (a.json) {
     fmt::print("{}\n", vibro::ValidationJson(checks));
   } else {
-    fmt::print("{:>16} {:>26} {:>10} {:>6} {:>8} {:>12} {:>12}  {}\n", a.param, "verdict", "distance", "period",
-               "stable", "max|mu|", "SP", "detail");
+    // Several contacts: vibro's contact sequence of each orbit, in a column before the detail.
+    size_t width = 0;
+    for (const auto& c : checks) width = std::max(width, c.orbit.sequence.size());
+    const auto sequence = [&](const std::string& text) {
+      return width == 0 ? std::string() : fmt::format("  {:<{}}", text, std::max<size_t>(width, 8));
+    };
+    fmt::print("{:>16} {:>26} {:>10} {:>6} {:>8} {:>12} {:>12}{}  {}\n", a.param, "verdict", "distance", "period",
+               "stable", "max|mu|", "SP", sequence("sequence"), "detail");
     for (const auto& c : checks) {
       const auto& o = c.orbit;
       const bool ok = o.status == "converged";
       double lead = 0;
       for (const auto& m : o.multipliers) lead = std::max(lead, std::abs(m));
-      fmt::print("{:>16.10g} {:>26} {:>10} {:>6} {:>8} {:>12} {:>12}  {}\n", c.value, c.verdict,
+      fmt::print("{:>16.10g} {:>26} {:>10} {:>6} {:>8} {:>12} {:>12}{}  {}\n", c.value, c.verdict,
                  c.distance ? fmt::format("{:.2e}", *c.distance) : "-",
                  ok ? std::to_string(o.summary.period.value_or(o.period)) : "-",
                  ok ? (o.stable ? "yes" : "no") : "-", ok ? fmt::format("{:.6g}", lead) : "-",
                  ok && o.summary.sticking_fraction ? fmt::format("{:.8f}", *o.summary.sticking_fraction) : "-",
-                 c.detail);
+                 sequence(ok ? o.sequence : "-"), c.detail);
     }
     fmt::print("{} of {} points confirmed{}{}\n",
                checks.size() - static_cast<size_t>(result.disagreements + result.undetermined), checks.size(),

@@ -10,6 +10,7 @@
 
 #include "vibro/branch_csv.hpp"
 #include "vibro/child_process.hpp"
+#include "vibro/contact_sequence.hpp"
 #include "vibro/events_csv.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/system.hpp"
@@ -38,7 +39,7 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
   }
   std::vector<double> value, distance, period, stable, sp, sim, t0, cp, cs, csp;
   std::vector<double> mu(N * m * 2, kNaN), X(N * n, kNaN), V(N * n, kNaN);
-  std::vector<std::string> verdict, detail;
+  std::vector<std::string> verdict, detail, sequence, claimed_sequence;
   for (size_t i = 0; i < N; ++i) {
     const auto& c = checks[i];
     const auto& o = c.orbit;
@@ -46,6 +47,8 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
     value.push_back(c.value);
     verdict.push_back(c.verdict);
     detail.push_back(c.detail);
+    sequence.push_back(ok ? o.sequence : "");
+    claimed_sequence.push_back(claims[i].sequence);
     distance.push_back(c.distance.value_or(kNaN));
     period.push_back(ok ? o.summary.period.value_or(o.period) : kNaN);
     stable.push_back(ok ? (o.stable ? 1 : 0) : kNaN);
@@ -79,7 +82,7 @@ H5Table ValidationTable(const std::vector<ClaimedPoint>& claims,
   t.arrays.push_back({"multipliers", {N, m, 2}, mu});
   t.arrays.push_back({"X", {N, n}, X});
   t.arrays.push_back({"V", {N, n}, V});
-  t.strings = {{"verdict", verdict}, {"detail", detail}};
+  t.strings = {{"verdict", verdict}, {"detail", detail}, {"sequence", sequence}, {"claimed_sequence", claimed_sequence}};
   return t;
 }
 
@@ -168,8 +171,18 @@ ValidationJob PrepareValidationTable(const SceneOrigin& origin, const LoadedScen
       continue;
     }
     std::string why;
-    ClaimedStart(System(job.scenes.back()), job.scenes.back(), p, why);
+    const System sys(job.scenes.back());
+    ClaimedStart(sys, job.scenes.back(), p, why);
     if (!why.empty()) problems.push_back(fmt::format("{}: {}", where(p), why));
+    // A claimed contact sequence names contacts of the scene, which has several (docs/validation.md).
+    if (!p.sequence.empty()) {
+      if (sys.contact_count() < 2)
+        problems.push_back(fmt::format("{}: sequence '{}': the scene has one contact; a contact sequence is checked "
+                                       "on scenes with several [[contact]] tables (leave the cell empty)",
+                                       where(p), p.sequence.substr(0, 80)));
+      else if (!ParseContactSequence(p.sequence, sys.contact_count(), why))
+        problems.push_back(fmt::format("{}: sequence: {}", where(p), why));
+    }
   }
   if (!problems.empty()) throw InputError(problems);
   return job;
@@ -257,6 +270,23 @@ Scoring ScoreEventTable(const LoadedScene& loaded, const std::vector<TheirEvent>
   const double t_end = s.scene.initial_time + static_cast<double>(s.scene.run.periods) * T;
   problems = EventTableProblems(theirs, s.scene.initial_time, t_end, T, window, where);
   if (theirs.empty()) problems.push_back("no events to score");
+  // Several contacts: the contacts named, every row's or none, each one of the scene's.
+  const int m = sys.contact_count();
+  const TheirEvent* without = nullptr;
+  bool named = false;
+  for (const auto& e : theirs) {
+    if (problems.size() >= 40) break;
+    if (!e.contact) {
+      without = without ? without : &e;
+      continue;
+    }
+    named = true;
+    if (*e.contact >= m)
+      problems.push_back(fmt::format("{}: contact {}: the scene has {} contact{} (0 to {})", where(e), *e.contact, m,
+                                     m == 1 ? "" : "s", m - 1));
+  }
+  if (named && without)
+    problems.push_back(fmt::format("{}: no contact: give the contact of every event, or of none", where(*without)));
   if (!problems.empty()) throw InputError(problems);
   EventLog log;
   SimulationOptions opt;

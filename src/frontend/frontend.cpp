@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string_view>
 #include <utility>
 
 #include <fmt/format.h>
@@ -17,9 +18,9 @@ void RequireOneContact(const LoadedScene& loaded, const char* command) {
   const size_t m = loaded.scene.contacts.size();
   if (m <= 1) return;
   throw InputError({fmt::format(
-      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (periodic orbits, their "
-      "stability and continuation with several contacts are not implemented yet); simulate, "
-      "attractors, basin, sweep and score take them (docs/contacts.md)",
+      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (proofs with several "
+      "contacts are not implemented yet); simulate, attractors, basin, sweep, score, orbit, continue, "
+      "check, validate and partition take them (docs/contacts.md)",
       loaded.source, m, command)});
 }
 
@@ -40,6 +41,24 @@ std::string Assignment(const std::string& key, double value) {
   return key + "=" + text;
 }
 
+namespace {
+
+// contact[i].position and contact[i].restitution (docs/contacts.md): the field of ContactSpec and
+// i, or nullptr.
+double ContactSpec::*ContactField(const std::string& key, size_t& index) {
+  constexpr std::string_view kPrefix = "contact[";
+  if (key.rfind(kPrefix, 0) != 0) return nullptr;
+  const auto close = key.find("].", kPrefix.size());
+  const std::string digits = key.substr(kPrefix.size(), close == std::string::npos ? 0 : close - kPrefix.size());
+  if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos)
+    return nullptr;
+  index = static_cast<size_t>(std::stoul(digits));
+  const std::string leaf = key.substr(close + 2);
+  return leaf == "position" ? &ContactSpec::position : leaf == "restitution" ? &ContactSpec::restitution : nullptr;
+}
+
+}  // namespace
+
 Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value) {
   static thread_local std::string cached_key;
   static thread_local Scene cached;
@@ -48,7 +67,9 @@ Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value)
                          : key == "stop.position"        ? &Scene::stop_position
                          : key == "stop.restitution"     ? &Scene::restitution
                                                          : nullptr;
-  if (field) {
+  size_t contact = 0;
+  double ContactSpec::*contact_field = field ? nullptr : ContactField(key, contact);
+  if (field || contact_field) {
     std::string joined = origin.path + '\n' + origin.text.value_or("") + '\n' + origin.source + '\n';
     for (const auto& x : origin.sets) joined += x + '\n';
     if (cached_key != joined) {
@@ -56,9 +77,17 @@ Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value)
       cached_key = joined;
     }
     Scene s = cached;
-    s.*field = value;
-    const auto issues = Validate(s);
-    if (issues.empty()) return s;
+    bool set = true;
+    if (field) {
+      s.*field = value;
+    } else if (contact < s.contacts.size()) {
+      s.contacts[contact].*contact_field = value;
+    } else if (contact == 0 && s.contacts.empty()) {  // a [stop] is contact[0]
+      (contact_field == &ContactSpec::position ? s.stop_position : s.restitution) = value;
+    } else {
+      set = false;  // no such contact: the parse below says so
+    }
+    if (set && Validate(s).empty()) return s;
   }
   return origin.Load({Assignment(key, value)}).scene;
 }

@@ -26,8 +26,8 @@ struct SceneOrigin {
   LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
 };
 
-// Commands built on one contact's tangent map (orbit, continue, validate, partition, check):
-// InputError naming the scene and its [[contact]] tables when it has several (docs/contacts.md).
+// Commands not extended to several contacts yet (prove): InputError naming the scene
+// and its [[contact]] tables when it has several (docs/contacts.md).
 void RequireOneContact(const LoadedScene& loaded, const char* command);
 
 // The override "KEY=VALUE" with VALUE in its shortest round-trip form ("2.8", not
@@ -36,9 +36,9 @@ void RequireOneContact(const LoadedScene& loaded, const char* command);
 std::string Assignment(const std::string& key, double value);
 
 // The scene of `origin` with KEY=VALUE on top (continuation, partitions and sweeps). The scalar
-// keys of the excitation and the stop are set in a copy of the scene parsed once per thread, and
-// validated (a value outside a key's range throws as a parse would); other keys re-parse the
-// scene with the override.
+// keys of the excitation and the stop, and contact[i].position and contact[i].restitution, are set
+// in a copy of the scene parsed once per thread, and validated (a value outside a key's range
+// throws as a parse would); other keys re-parse the scene with the override.
 Scene SceneWith(const SceneOrigin& origin, const std::string& key, double value);
 // Same for a scene file and overrides.
 Scene SceneWith(const std::string& path, const std::vector<std::string>& sets, const std::string& key,

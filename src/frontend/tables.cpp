@@ -6,12 +6,14 @@
 
 #include <fmt/format.h>
 
+#include "vibro/contact_sequence.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro::frontend {
 
 std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vector<std::string>& kind,
-                                   const std::optional<std::vector<double>>& velocity) {
+                                   const std::optional<std::vector<double>>& velocity,
+                                   const std::optional<std::vector<double>>& contact) {
   static const std::map<std::string, EventKind> kKinds = {
       {"impact", EventKind::kImpact},   {"1", EventKind::kImpact},
       {"accumulation", EventKind::kAccumulation}, {"2", EventKind::kAccumulation},
@@ -19,9 +21,10 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
       {"release", EventKind::kRelease}, {"4", EventKind::kRelease},
       {"grazing", EventKind::kGrazing}, {"5", EventKind::kGrazing}};
   std::vector<std::string> problems;
-  if (kind.size() != t.size() || (velocity && velocity->size() != t.size()))
-    throw InputError({fmt::format("events: columns of different lengths (t {}, kind {}{})", t.size(), kind.size(),
-                                  velocity ? fmt::format(", velocity {}", velocity->size()) : "")});
+  if (kind.size() != t.size() || (velocity && velocity->size() != t.size()) || (contact && contact->size() != t.size()))
+    throw InputError({fmt::format("events: columns of different lengths (t {}, kind {}{}{})", t.size(), kind.size(),
+                                  velocity ? fmt::format(", velocity {}", velocity->size()) : "",
+                                  contact ? fmt::format(", contact {}", contact->size()) : "")});
   if (t.empty()) throw InputError({"events: no rows (expected columns t, kind and optionally velocity)"});
   std::vector<TheirEvent> out;
   for (size_t i = 0; i < t.size(); ++i) {
@@ -40,13 +43,19 @@ std::vector<TheirEvent> EventTable(const std::vector<double>& t, const std::vect
       if (std::isfinite((*velocity)[i])) e.velocity = (*velocity)[i];
       else problems.push_back(fmt::format("events row {} (velocity): {} is not a finite number", i, (*velocity)[i]));
     }
+    if (contact && !std::isnan((*contact)[i])) {
+      const double c = (*contact)[i];
+      if (c >= 0 && c <= 1e6 && c == std::floor(c)) e.contact = static_cast<int>(c);
+      else problems.push_back(fmt::format("events row {} (contact): {} is not a contact index (a whole number ≥ 0)", i, c));
+    }
     out.push_back(e);
   }
   if (!problems.empty()) throw InputError(problems);
   return out;
 }
 
-std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n) {
+std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<double>>& columns, int n,
+                                      const std::optional<std::vector<std::string>>& sequences) {
   std::vector<std::string> known = {"value", "time", "period", "stable", "sticking_fraction"};
   std::vector<std::string> required = {"value", "time"};
   for (int i = 1; i <= n; ++i) {
@@ -61,13 +70,16 @@ std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<do
   for (const auto& [name, values] : columns) {
     if (std::find(known.begin(), known.end(), name) == known.end())
       problems.push_back(fmt::format("branch: unknown column '{}' (expected value, time, displacement_1..{}, "
-                                     "velocity_1..{}, and optionally period, stable, sticking_fraction)",
+                                     "velocity_1..{}, and optionally period, stable, sticking_fraction, "
+                                     "sequence)",
                                      name, n, n));
     if (!first && values.size() != rows)
       problems.push_back(fmt::format("branch: column '{}' has {} rows, the others {}", name, values.size(), rows));
     rows = first ? values.size() : rows;
     first = false;
   }
+  if (sequences && !first && sequences->size() != rows)
+    problems.push_back(fmt::format("branch: column 'sequence' has {} rows, the others {}", sequences->size(), rows));
   for (const auto& name : required)
     if (!columns.count(name)) problems.push_back(fmt::format("branch: missing column '{}'", name));
   if (!problems.empty()) throw InputError(problems);
@@ -109,6 +121,11 @@ std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<do
     if (const auto sp = at("sticking_fraction", r)) {
       if (*sp >= 0 && *sp <= 1) p.sticking_fraction = *sp;
       else problems.push_back(fmt::format("branch row {} (sticking_fraction): {} is not in [0, 1]", r, *sp));
+    }
+    if (sequences) {
+      std::string why;
+      p.sequence = (*sequences)[r];
+      if (!ParseContactSequence(p.sequence, -1, why)) problems.push_back(fmt::format("branch row {} (sequence): {}", r, why));
     }
     points.push_back(std::move(p));
   }

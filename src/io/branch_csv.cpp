@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "io/csv_text.hpp"
+#include "vibro/contact_sequence.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro {
@@ -33,7 +34,7 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
     if (!header) {
       header = true;
       names = cells;
-      std::vector<std::string> known = {"value", "time", "period", "stable", "sticking_fraction"};
+      std::vector<std::string> known = {"value", "time", "period", "stable", "sticking_fraction", "sequence"};
       for (int i = 1; i <= n; ++i) {
         known.push_back(fmt::format("displacement_{}", i));
         known.push_back(fmt::format("velocity_{}", i));
@@ -41,7 +42,8 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
       for (size_t c = 0; c < cells.size(); ++c) {
         if (std::find(known.begin(), known.end(), cells[c]) == known.end())
           problems.push_back(fmt::format("{}: unknown column '{}' (expected value, time, displacement_1..{}, "
-                                         "velocity_1..{}, and optionally period, stable, sticking_fraction)",
+                                         "velocity_1..{}, and optionally period, stable, sticking_fraction, "
+                                         "sequence)",
                                          where(c), cells[c], n, n));
         else if (column.count(cells[c]))
           problems.push_back(fmt::format("{}: column '{}' given twice", where(c), cells[c]));
@@ -49,8 +51,8 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
           column[cells[c]] = c;
       }
       for (size_t k = 0; k < 2 + 2 * static_cast<size_t>(n); ++k)
-        if (!column.count(known[k < 2 ? k : k + 3]))
-          problems.push_back(fmt::format("{}:{}: missing column '{}'", path, number, known[k < 2 ? k : k + 3]));
+        if (!column.count(known[k < 2 ? k : k + 4]))
+          problems.push_back(fmt::format("{}:{}: missing column '{}'", path, number, known[k < 2 ? k : k + 4]));
       if (!problems.empty()) throw InputError(problems);
       continue;
     }
@@ -103,6 +105,14 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
     if (const auto sp = number_at("sticking_fraction", false)) {
       if (*sp >= 0 && *sp <= 1) p.sticking_fraction = *sp;
       else problems.push_back(fmt::format("{}: sticking fraction {} is not in [0, 1]", where(column["sticking_fraction"]), *sp));
+    }
+    if (column.count("sequence")) {
+      // The claimed contact sequence (several contacts): its syntax here, its contacts against the
+      // scene's when the rows are prepared.
+      std::string why;
+      p.sequence = cells[column["sequence"]];
+      if (!ParseContactSequence(p.sequence, -1, why))
+        problems.push_back(fmt::format("{}: {}", where(column["sequence"]), why));
     }
     points.push_back(std::move(p));
   }

@@ -21,7 +21,7 @@ std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
       {"grazing", EventKind::kGrazing}, {"5", EventKind::kGrazing}};
   std::vector<std::string> problems, names;
   std::vector<TheirEvent> out;
-  int ct = -1, ck = -1, cv = -1;
+  int ct = -1, ck = -1, cv = -1, cc = -1;
   std::string line;
   bool header = false;
   while (problems.size() < kCsvMaxProblems && in.Next(line)) {
@@ -34,9 +34,14 @@ std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
       names = cells;
       for (size_t i = 0; i < cells.size(); ++i) {
         const int k = static_cast<int>(i);
-        int* column = cells[i] == "t" ? &ct : cells[i] == "kind" ? &ck : cells[i] == "velocity" ? &cv : nullptr;
+        int* column = cells[i] == "t"          ? &ct
+                      : cells[i] == "kind"     ? &ck
+                      : cells[i] == "velocity" ? &cv
+                      : cells[i] == "contact"  ? &cc
+                                               : nullptr;
         if (!column)
-          problems.push_back(fmt::format("{}:{}:{}: unknown column '{}' (expected t, kind and optionally velocity)",
+          problems.push_back(fmt::format("{}:{}:{}: unknown column '{}' (expected t, kind and optionally velocity, "
+                                         "contact)",
                                          path, number, i + 1, cells[i]));
         else if (*column >= 0)
           problems.push_back(fmt::format("{}:{}:{}: column '{}' given twice (first as column {})", path, number,
@@ -79,6 +84,13 @@ std::vector<TheirEvent> ReadEventsCsv(const std::string& path) {
     else
       e.kind = it->second;
     if (cv >= 0) e.velocity = num(cv, false);
+    if (cc >= 0) {  // several contacts: a whole number ≥ 0 (the scene's count is checked by ScoreEventTable)
+      if (const auto c = num(cc, false)) {
+        if (*c >= 0 && *c <= 1e6 && *c == std::floor(*c)) e.contact = static_cast<int>(*c);
+        else problems.push_back(fmt::format("{}:{}:{} (contact): {} is not a contact index (a whole number ≥ 0)", path,
+                                            number, cc + 1, *c));
+      }
+    }
     out.push_back(e);
   }
   if (problems.size() >= kCsvMaxProblems)

@@ -236,6 +236,13 @@ StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {
     const auto x = h5::ReadDatasetRow(g.get(), "X", row), v = h5::ReadDatasetRow(g.get(), "V", row);
     p.X = Eigen::Map<const Eigen::VectorXd>(x.data(), static_cast<Eigen::Index>(x.size()));
     p.V = Eigen::Map<const Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+    if (h5::Exists(g.get(), "sequence")) {
+      if (!h5::IsStringDataset(g.get(), "sequence")) throw bad("/branch/sequence", "a dataset of strings");
+      const auto sequences = h5::ReadDatasetStrings(g.get(), "sequence");
+      if (sequences.size() != n_points)
+        throw bad("/branch/sequence", fmt::format("one entry per point ({}), found {}", n_points, sequences.size()));
+      p.sequence = sequences[static_cast<size_t>(k)];
+    }
   } catch (const InputError&) {
     throw;
   } catch (const std::exception& e) {
@@ -309,6 +316,22 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   col("sticking_fraction", psp);
   col("stable", pst, 'u');
   WriteTable("/partition/points", cells);
+  // Several contacts: the spans of one contact sequence per column (PartitionColumn::sequences).
+  std::vector<double> sv1, sfrom, sto;
+  std::vector<std::string> stext;
+  for (const auto& c : columns)
+    for (const auto& sp : c.sequences) {
+      sv1.push_back(c.value1);
+      sfrom.push_back(sp.from);
+      sto.push_back(sp.to);
+      stext.push_back(sp.sequence);
+    }
+  if (!stext.empty()) {
+    h5::WriteColumn(g.get(), "sequence_value1", sv1);
+    h5::WriteColumn(g.get(), "sequence_from", sfrom);
+    h5::WriteColumn(g.get(), "sequence_to", sto);
+    h5::WriteStrings(g.get(), "sequence", stext);
+  }
 }
 
 }  // namespace vibro

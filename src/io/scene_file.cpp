@@ -13,6 +13,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <regex>
 #include <sstream>
 
@@ -439,6 +440,135 @@ class Reader {
   }
 };
 
+// A key of one table of an array of tables, KEY[i].LEAF or KEY[i].LEAF[k] (the [[contact]]
+// tables: contact[1].position, contact[1].modal[0]). `valid` is false when the text has the shape
+// but not a whole index ≥ 0 (the message says what is expected).
+struct TableArrayKey {
+  std::string base, leaf;  // "contact", "position"
+  size_t index = 0;        // i
+  std::optional<size_t> entry;  // k of LEAF[k]
+  bool valid = true;
+};
+
+std::optional<TableArrayKey> ParseTableArrayKey(const std::string& key) {
+  const auto bracket = key.find('[');
+  if (bracket == std::string::npos) return std::nullopt;
+  const auto it = Schema().find(key.substr(0, bracket));
+  if (it == Schema().end() || it->second != Kind::kTableArray) return std::nullopt;
+  TableArrayKey k;
+  k.base = it->first;
+  const auto whole = [](const std::string& s, size_t& out) {
+    if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos) return false;
+    out = static_cast<size_t>(std::stoul(s));
+    return true;
+  };
+  const auto close = key.find(']', bracket);
+  if (close == std::string::npos || !whole(key.substr(bracket + 1, close - bracket - 1), k.index) ||
+      close + 1 >= key.size() || key[close + 1] != '.') {
+    k.valid = false;
+    return k;
+  }
+  std::string rest = key.substr(close + 2);
+  if (const auto open = rest.find('['); open != std::string::npos) {
+    size_t e = 0;
+    if (rest.back() != ']' || !whole(rest.substr(open + 1, rest.size() - open - 2), e)) {
+      k.valid = false;
+      return k;
+    }
+    k.entry = e;
+    rest.resize(open);
+  }
+  k.leaf = rest;
+  k.valid = !rest.empty();
+  return k;
+}
+
+// How many contacts the scene table `root` has: its [[contact]] tables, or 1 for a [stop].
+size_t ContactCount(const toml::table& root) {
+  if (const auto* a = root.get_as<toml::array>("contact")) return a->size();
+  return root.get_as<toml::table>("stop") ? 1 : 0;
+}
+
+// Why the scene table `root` has no contact `k.index` ("" when it has): the key and how many
+// contacts there are.
+std::string MissingContact(const toml::table& root, const TableArrayKey& k, const std::string& key) {
+  const size_t m = ContactCount(root);
+  if (k.index < m) return {};
+  const std::string which = m == 0   ? "none"
+                            : root.get_as<toml::array>("contact")
+                                ? (m == 1 ? "contact[0], its one [[contact]] table"
+                                          : fmt::format("contact[0] to contact[{}], its [[contact]] tables", m - 1))
+                                : "contact[0], its [stop] table";
+  return fmt::format("{}: no contact {}: the scene has {} contact{} ({}); expected an index in [0, {})", key,
+                     k.index, m, m == 1 ? "" : "s", which, m);
+}
+
+// Applies `value` at KEY[i].LEAF (ApplyOverride): the [stop] of a one-contact scene is contact[0]
+// (position and restitution); an index beyond the scene's contacts is refused with their count.
+void ApplyTableArrayOverride(toml::table& root, const TableArrayKey& k, const std::string& key,
+                             const std::string& where, toml::node& value, std::vector<std::string>& messages) {
+  if (!k.valid) {
+    messages.push_back(fmt::format("{}: {}: expected {}[i].KEY or {}[i].KEY[j] with indices ≥ 0 (e.g. "
+                                   "{}[1].position=0.5)",
+                                   where, key, k.base, k.base, k.base));
+    return;
+  }
+  const std::string schema_key = k.base + "." + k.leaf;
+  const auto known = Schema().find(schema_key);
+  if (known == Schema().end()) {
+    const std::string hint = Suggest(schema_key);
+    const bool same_table = hint.rfind(k.base + ".", 0) == 0;
+    messages.push_back(fmt::format(
+        "{}: {}: unknown key{}", where, key,
+        hint.empty() ? ""
+                     : "; did you mean " +
+                           (same_table ? fmt::format("{}[{}].{}", k.base, k.index, hint.substr(k.base.size() + 1))
+                                       : hint) +
+                           "?"));
+    return;
+  }
+  if (const std::string missing = MissingContact(root, k, key); !missing.empty()) {
+    messages.push_back(fmt::format("{}: {}", where, missing));
+    return;
+  }
+  toml::table* table = nullptr;
+  if (auto* a = root.get_as<toml::array>("contact")) {
+    table = a->get(k.index) ? a->get(k.index)->as_table() : nullptr;
+  } else {  // the [stop] shorthand: contact[0]
+    if (k.leaf != "position" && k.leaf != "restitution") {
+      messages.push_back(fmt::format("{}: {}: the scene's one contact is its [stop] table, which takes position "
+                                     "and restitution (give [[contact]] tables for more)",
+                                     where, key));
+      return;
+    }
+    table = root.get_as<toml::table>("stop");
+  }
+  if (!table) {
+    messages.push_back(fmt::format("{}: {}: {}[{}] is not a table", where, key, k.base, k.index));
+    return;
+  }
+  if (k.entry) {
+    auto* arr = table->get_as<toml::array>(k.leaf);
+    if (!(value.is_integer() || value.is_floating_point())) {
+      messages.push_back(fmt::format("{}: {}: an entry of an array takes a number", where, key));
+      return;
+    }
+    if (!arr || *k.entry >= arr->size()) {
+      messages.push_back(fmt::format("{}: {}: the scene has no such entry ({}[{}].{} {}; give the whole array "
+                                     "with --set {}[{}].{}=[...])",
+                                     where, key, k.base, k.index, k.leaf,
+                                     arr               ? fmt::format("has {} entries", arr->size())
+                                     : table->get(k.leaf) ? std::string("is not an array")
+                                                          : std::string("is not given"),
+                                     k.base, k.index, k.leaf));
+      return;
+    }
+    arr->replace(arr->cbegin() + static_cast<std::ptrdiff_t>(*k.entry), value.value<double>().value_or(0.0));
+    return;
+  }
+  table->insert_or_assign(k.leaf, std::move(value));
+}
+
 // Applies one `KEY=VALUE` override to the table (VALUE in TOML syntax, e.g. 2.5, "exact", [1, 2]).
 void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::string>& messages) {
   const auto eq = text.find('=');
@@ -475,6 +605,10 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
     messages.push_back(fmt::format("{}: {}: VALUE must be one TOML value, not more TOML (e.g. "
                                    "excitation.amplitude=2.5)",
                                    where, key));
+    return;
+  }
+  if (const auto k = ParseTableArrayKey(key)) {
+    ApplyTableArrayOverride(root, *k, key, where, *parsed.get("value"), messages);
     return;
   }
   // KEY[i] or KEY[i][j]: one entry of an array or matrix of the scene (continuation of modal data,
@@ -810,6 +944,11 @@ std::string NearestSceneKey(const std::string& key) { return Suggest(key); }
 std::optional<double> SceneNumber(const std::string& text, const std::string& key) {
   try {
     const toml::table t = toml::parse(text);
+    if (const auto k = ParseTableArrayKey(key); k && k->valid) {
+      if (const std::string missing = MissingContact(t, *k, key); !missing.empty()) throw InputError({missing});
+      if (!t.get_as<toml::array>(k->base))  // the [stop] shorthand is contact[0]
+        return k->entry ? std::nullopt : t.at_path("stop." + k->leaf).value<double>();
+    }
     return t.at_path(key).value<double>();
   } catch (const toml::parse_error&) {
     return std::nullopt;

@@ -250,6 +250,7 @@ std::string ValidationJson(const std::vector<PointCheck>& checks) {
                       {"floquet_multipliers", mu},
                       {"sticking_fraction", ok ? OrNull(c.orbit.summary.sticking_fraction) : nlohmann::json(nullptr)},
                       {"kind", ok ? nlohmann::json(c.orbit.summary.kind) : nlohmann::json(nullptr)},
+                      {"sequence", ok ? nlohmann::json(c.orbit.sequence) : nlohmann::json(nullptr)},
                       {"simulated_distance", OrNull(c.simulated_distance)}});
     if (c.verdict == "undetermined") ++undetermined;
     else if (c.verdict != "confirmed") ++disagreements;
@@ -316,6 +317,11 @@ std::string PartitionJson(const std::string& param1, const std::string& param2,
     }
     cols.push_back({{"value1", c.value1}, {"status", c.status}, {"crossings", xs},
                     {"bifurcations", bs}, {"end_down", c.end_down}, {"end_up", c.end_up}, {"points", cells}});
+    if (!c.sequences.empty()) {  // several contacts (docs/contacts.md)
+      auto spans = nlohmann::json::array();
+      for (const auto& sp : c.sequences) spans.push_back({{"from", sp.from}, {"to", sp.to}, {"sequence", sp.sequence}});
+      cols.back()["sequences"] = spans;
+    }
   }
   j["columns"] = cols;
   return j.dump();

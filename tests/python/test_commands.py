@@ -73,7 +73,8 @@ def test_partition_equals_cli(tmp_path):
     out = tmp_path / "p.h5"
     got = vibro.partition(scene, ("excitation.frequency", "excitation.amplitude"), (2.8, 5), (1.05, 12), [0.5],
                           steps1=1, from2=1.5, out=out)
-    crossings, boundaries = got.pop("crossings"), got.pop("boundaries")
+    crossings, boundaries, spans = got.pop("crossings"), got.pop("boundaries"), got.pop("sequences")
+    assert len(spans) == 0  # one contact: no contact sequences (docs/contacts.md)
     cells, loads = got.pop("cells"), got.pop("loads")
     want = cli_json("partition", FIG8, "--set", "stop.restitution=0.0", "--params",
                     "excitation.frequency,excitation.amplitude", "--range1", "2.8,5", "--steps1", "1",

@@ -7,7 +7,7 @@ import h5py
 import pytest
 
 import vibro
-from conftest import SCENES, cli_json, several_contacts, shipped_scenes
+from conftest import SCENES, cli_json, shipped_scenes
 
 SHORT = {"run.periods": 12, "run.samples_per_period": 0}
 SHORT_ARGS = ["--set", "run.periods=12", "--set", "run.samples_per_period=0"]
@@ -29,10 +29,6 @@ def test_model_and_simulate_equal_cli(name):
 def test_check_equals_cli(name):
     path = os.path.join(SCENES, name)
     args = ["--set", "run.periods=10"]
-    if several_contacts(name):  # refused by both, with the same message (docs/contacts.md)
-        with pytest.raises(ValueError, match=r"\[\[contact\]\] tables; `check` takes scenes with one contact"):
-            vibro.check(vibro.load_scene(path, set={"run.periods": 10}))
-        return
     assert vibro.check(vibro.load_scene(path, set={"run.periods": 10})) == cli_json("check", path, *args)
 
 

@@ -207,6 +207,108 @@ TEST(SceneFile, OverridesRoundTripThroughTheTextAsRun) {
   EXPECT_EQ(b.text_as_run, a.text_as_run);
 }
 
+// A chain of two masses with a stop below each, in [[contact]] tables (docs/contacts.md).
+constexpr const char* kTwoContacts = R"([structure]
+mass = [[1.0, 0.0], [0.0, 1.0]]
+stiffness = [[2.0, -1.0], [-1.0, 1.0]]
+forcing_dof = 0
+[[contact]]
+dof = 1
+side = "below"
+position = 1.0
+restitution = 0.5
+[[contact]]
+dof = 0
+side = "below"
+position = 0.2
+restitution = 0.7
+[excitation]
+amplitude = 1.5
+frequency = 1.2
+)";
+
+TEST(SceneFile, ContactKeysAreOverridden) {
+  // contact[i].KEY sets the key of the i-th [[contact]] table, and only that one.
+  const auto a = ParseScene(kTwoContacts, "scene.toml",
+                            {"contact[1].position=0.25", "contact[1].restitution=0.3", "contact[0].restitution=0"});
+  ASSERT_EQ(a.scene.contacts.size(), 2u);
+  EXPECT_EQ(a.scene.contacts[0].position, 1.0);
+  EXPECT_EQ(a.scene.contacts[0].restitution, 0.0);
+  EXPECT_EQ(a.scene.contacts[1].position, 0.25);
+  EXPECT_EQ(a.scene.contacts[1].restitution, 0.3);
+  EXPECT_EQ(a.scene.contacts[1].dof, 0);
+  // The text as run holds the new values, and SceneNumber reads them back.
+  EXPECT_EQ(ParseScene(a.text_as_run, "as-run.toml").scene.contacts[1].position, 0.25);
+  EXPECT_EQ(SceneNumber(a.text_as_run, "contact[1].position"), 0.25);
+  EXPECT_EQ(SceneNumber(a.text_as_run, "contact[0].restitution"), 0.0);
+  // Non-numeric keys of a table take their TOML value.
+  const auto b = ParseScene(kTwoContacts, "scene.toml", {"contact[1].side=\"above\"", "contact[1].position=3.0"});
+  EXPECT_EQ(b.scene.contacts[1].side, Side::kAbove);
+  // The [stop] shorthand is contact[0] (position and restitution).
+  const auto c = ParseScene(kPhysical, "scene.toml", {"contact[0].position=1.25", "contact[0].restitution=0.125"});
+  EXPECT_EQ(c.scene.stop_position, 1.25);
+  EXPECT_EQ(c.scene.restitution, 0.125);
+  EXPECT_EQ(SceneNumber(kPhysical, "contact[0].position"), 1.0);
+  EXPECT_EQ(SceneNumber(kPhysical, "contact[0].restitution"), 0.5);
+}
+
+TEST(SceneFile, ModalComponentsOfAContactAreOverridden) {
+  // contact[i].modal[k]: one modal component of contact i (the modal form, docs/contacts.md).
+  const std::string path = std::string(VIBRO_SCENES_DIR) + "/contacts_chain2_modal.toml";
+  const auto base = LoadScene(path);
+  const auto a = LoadScene(path, {"contact[1].modal[0]=0.5"});
+  ASSERT_EQ(a.scene.contacts.size(), 2u);
+  EXPECT_EQ(a.scene.contacts[1].modal[0], 0.5);
+  EXPECT_EQ(a.scene.contacts[1].modal[1], base.scene.contacts[1].modal[1]);
+  EXPECT_EQ(SceneNumber(a.text_as_run, "contact[1].modal[0]"), 0.5);
+  // Contact 0 has no modal components; an entry beyond the modes is refused.
+  for (const char* bad : {"contact[0].modal[0]=0.5", "contact[1].modal[2]=0.5"}) {
+    SCOPED_TRACE(bad);
+    try {
+      LoadScene(path, {bad});
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.messages().front(), AllOf(HasSubstr(bad), HasSubstr("no such entry")));
+    }
+  }
+}
+
+TEST(SceneFile, ContactKeysOfAMissingContactAreRefusedWithTheCount) {
+  auto p = Problems(kTwoContacts, {"contact[2].position=1.0"});
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_THAT(p[0], AllOf(HasSubstr("--set contact[2].position=1.0"), HasSubstr("no contact 2"),
+                          HasSubstr("the scene has 2 contacts"), HasSubstr("[0, 2)")));
+  p = Problems(kPhysical, {"contact[1].restitution=0.5"});
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_THAT(p[0], AllOf(HasSubstr("contact[1].restitution"), HasSubstr("the scene has 1 contact"),
+                          HasSubstr("[stop]")));
+  // Each constraint of a contact, with its key.
+  ExpectRejected(kTwoContacts, "contact[1].restitution=1.5", "contact[1].restitution", "0 ≤ r ≤ 1");
+  ExpectRejected(kTwoContacts, "contact[0].restitution=-0.1", "contact[0].restitution", "0 ≤ r ≤ 1");
+  // A misspelt key is named with the nearest key of the same table.
+  p = Problems(kTwoContacts, {"contact[1].postion=1.0"});
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_THAT(p[0], AllOf(HasSubstr("unknown key"), HasSubstr("contact[1].position?")));
+  for (const char* bad : {"contact[x].position=1.0", "contact[-1].position=1.0", "contact[1]=1.0",
+                          "contact[1].position[0]=1.0"}) {
+    SCOPED_TRACE(bad);
+    p = Problems(kTwoContacts, {bad});
+    ASSERT_EQ(p.size(), 1u);
+    EXPECT_THAT(p[0], HasSubstr(std::string("--set ") + bad));
+  }
+  // The [stop] of a one-contact scene has position and restitution only.
+  p = Problems(kPhysical, {"contact[0].side=\"above\""});
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_THAT(p[0], HasSubstr("[stop] table"));
+  // SceneNumber: a missing contact throws, naming the key and the count.
+  try {
+    SceneNumber(kTwoContacts, "contact[7].position");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.messages().front(), AllOf(HasSubstr("contact[7].position"), HasSubstr("2 contacts")));
+  }
+}
+
 TEST(SceneFile, EveryShippedSceneLoads) {
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(VIBRO_SCENES_DIR)) {

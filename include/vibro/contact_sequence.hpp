@@ -1,0 +1,41 @@
+// The contact sequence of an orbit with several contacts (docs/contacts.md, "Periodic orbits"):
+// its events from the section, in order, as "contact:event" ("0:impact 1:impact*3 0+1:impact
+// 0:stick 0:release"; OrbitResult::sequence). Reading a sequence written by a person or another
+// tool (a branch CSV's `sequence` column, docs/validation.md), and comparing two sequences of one
+// periodic orbit, which may start anywhere on it.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vibro/observer.hpp"
+
+namespace vibro {
+
+// The events of `text`, one entry per event with every "*k" expanded, each written "J:kind"
+// (the contacts of a simultaneous impact joined by '+' in ascending order, kind one of impact,
+// accumulation, stick, release, grazing). `contacts` > 0: every contact index must be below it
+// (−1: not checked). At most kMaxSequenceEvents events. Returns nothing and sets `problem` (what
+// is wrong and what is expected) when the text is not a sequence; an empty text gives no events.
+inline constexpr long long kMaxSequenceEvents = 1000000;
+std::optional<std::vector<std::string>> ParseContactSequence(const std::string& text, int contacts,
+                                                             std::string& problem);
+
+// Whether two sequences (as ParseContactSequence returns them) describe the same periodic motion:
+// the same cyclic order of events, wherever each starts on the orbit (one is a rotation of the
+// other) and over however many periods of it each is written (each is reduced to its shortest
+// repeating unit). A run of impacts at contact j that ends in j's accumulation point, or directly
+// in j's stick (a simulator that ends chattering with a plastic impact below a threshold), is one
+// chattering sequence whatever its number of impacts (where its tail of decreasing speeds starts
+// is bookkeeping, not another orbit; continuation.hpp's relabels). Empty sequences are equal only
+// to each other.
+bool SameContactSequence(const std::vector<std::string>& a, const std::vector<std::string>& b);
+
+// The sequence of `events` in order (as ParseContactSequence returns it): one entry per event,
+// the contacts of one simultaneous impact (flagged `simultaneous`, at one time) in one entry.
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events);
+// The text of a sequence, runs of k equal entries written once with "*k" (OrbitResult::sequence).
+std::string ContactSequenceText(const std::vector<std::string>& entries);
+
+}  // namespace vibro

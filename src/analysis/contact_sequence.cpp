@@ -1,0 +1,206 @@
+// Contact sequences of periodic orbits (see include/vibro/contact_sequence.hpp).
+#include "vibro/contact_sequence.hpp"
+
+#include <algorithm>
+#include <cstdlib>
+#include <map>
+#include <string_view>
+
+#include <fmt/format.h>
+
+namespace vibro {
+namespace {
+
+constexpr const char* kKinds[] = {"impact", "accumulation", "stick", "release", "grazing"};
+
+// A whole number of at most 9 digits, or −1.
+long long Whole(const std::string& s) {
+  if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::atoll(s.c_str());
+}
+
+// KMP failure function of w: fail[i] = length of the longest proper border of w[0, i).
+std::vector<size_t> Borders(const std::vector<int>& w) {
+  std::vector<size_t> fail(w.size() + 1, 0);
+  for (size_t i = 1, k = 0; i < w.size(); ++i) {
+    while (k > 0 && w[i] != w[k]) k = fail[k];
+    if (w[i] == w[k]) ++k;
+    fail[i + 1] = k;
+  }
+  return fail;
+}
+
+// The shortest repeating unit of a cyclic word (w = u^m).
+std::vector<int> Primitive(const std::vector<int>& w) {
+  if (w.empty()) return w;
+  const size_t p = w.size() - Borders(w).back();
+  return w.size() % p == 0 ? std::vector<int>(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(p)) : w;
+}
+
+// The sequence with each chattering run as one entry "j:chattering": a run of impacts at contact
+// j that ends in j's accumulation point (absorbed), or directly in j's stick (a simulator that
+// ends chattering with a plastic impact below a threshold). The word is first rotated to end with
+// its last accumulation or stick, so that no run wraps around its end.
+std::vector<std::string> Coarse(std::vector<std::string> w) {
+  const auto ends = [](const std::string& e, std::string_view tail) {
+    return e.size() > tail.size() && e.ends_with(tail);
+  };
+  const auto last = std::find_if(w.rbegin(), w.rend(), [&](const std::string& e) {
+    return ends(e, ":accumulation") || ends(e, ":stick");
+  });
+  if (last == w.rend()) return w;
+  std::rotate(w.begin(), last.base(), w.end());
+  std::vector<std::string> out;
+  for (const auto& e : w) {
+    const bool acc = ends(e, ":accumulation"), stick = ends(e, ":stick");
+    if (!acc && !stick) {
+      out.push_back(e);
+      continue;
+    }
+    const std::string who = e.substr(0, e.find(':') + 1);  // "j:"
+    std::string impact = who, chattering = who;
+    impact.append("impact");
+    chattering.append("chattering");
+    if (stick && !out.empty() && out.back() == chattering) {  // after its accumulation point
+      out.push_back(e);
+      continue;
+    }
+    size_t popped = 0;
+    while (!out.empty() && out.back() == impact) {
+      out.pop_back();
+      ++popped;
+    }
+    if (acc || popped > 0) out.push_back(chattering);
+    if (stick) out.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::optional<std::vector<std::string>> ParseContactSequence(const std::string& text, int contacts,
+                                                             std::string& problem) {
+  problem.clear();
+  std::vector<std::string> out;
+  size_t i = 0;
+  while (i < text.size()) {
+    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    if (i >= text.size()) break;
+    size_t end = i;
+    while (end < text.size() && text[end] != ' ' && text[end] != '\t') ++end;
+    const std::string entry = text.substr(i, end - i);
+    i = end;
+    const auto bad = [&](const std::string& why) {
+      problem = fmt::format("'{}' is not an event of a contact sequence ({}; expected entries J:KIND or J:KIND*N "
+                            "separated by spaces, J a contact index or indices joined by '+', KIND one of impact, "
+                            "accumulation, stick, release, grazing, e.g. \"0:impact 1:impact*3 0:stick\")",
+                            entry.substr(0, 80), why);
+      return std::nullopt;
+    };
+    const auto colon = entry.find(':');
+    if (colon == std::string::npos) return bad("no ':'");
+    std::string kind = entry.substr(colon + 1);
+    long long count = 1;
+    if (const auto star = kind.find('*'); star != std::string::npos) {
+      count = Whole(kind.substr(star + 1));
+      if (count < 1) return bad("the count after '*' is not a whole number ≥ 1");
+      kind.resize(star);
+    }
+    if (std::find(std::begin(kKinds), std::end(kKinds), kind) == std::end(kKinds)) return bad("unknown event kind");
+    std::vector<long long> ids;
+    const std::string who = entry.substr(0, colon);
+    for (size_t a = 0;;) {
+      const auto plus = who.find('+', a);
+      const long long id = Whole(who.substr(a, plus == std::string::npos ? std::string::npos : plus - a));
+      if (id < 0) return bad("a contact index is not a whole number ≥ 0");
+      if (contacts > 0 && id >= contacts)
+        return bad(fmt::format("contact {} does not exist: the scene has {} contacts, 0 to {}", id, contacts,
+                               contacts - 1));
+      ids.push_back(id);
+      if (plus == std::string::npos) break;
+      a = plus + 1;
+    }
+    std::sort(ids.begin(), ids.end());
+    if (std::adjacent_find(ids.begin(), ids.end()) != ids.end()) return bad("a contact named twice");
+    if (ids.size() > 1 && kind != "impact") return bad("only an impact involves several contacts at once");
+    if (static_cast<long long>(out.size()) + count > kMaxSequenceEvents)
+      return bad(fmt::format("more than {} events", kMaxSequenceEvents));
+    std::string name;
+    for (long long id : ids) {
+      if (!name.empty()) name.push_back('+');
+      name.append(std::to_string(id));
+    }
+    name.push_back(':');
+    name.append(kind);
+    out.insert(out.end(), static_cast<size_t>(count), name);
+  }
+  return out;
+}
+
+bool SameContactSequence(const std::vector<std::string>& a, const std::vector<std::string>& b) {
+  if (a.empty() || b.empty()) return a.empty() == b.empty();
+  // Entries as integers, then each word reduced to its shortest repeating unit.
+  std::map<std::string, int> id;
+  const auto code = [&](const std::vector<std::string>& w) {
+    std::vector<int> out;
+    out.reserve(w.size());
+    for (const auto& e : Coarse(w)) out.push_back(id.emplace(e, static_cast<int>(id.size())).first->second);
+    return Primitive(out);
+  };
+  const std::vector<int> u = code(a), v = code(b);
+  if (u.size() != v.size()) return false;
+  // u is a rotation of v: u occurs in v v (KMP).
+  const auto fail = Borders(u);
+  for (size_t i = 0, k = 0; i < 2 * v.size(); ++i) {
+    const int c = v[i % v.size()];
+    while (k > 0 && c != u[k]) k = fail[k];
+    if (c == u[k]) ++k;
+    if (k == u.size()) return true;
+  }
+  return false;
+}
+
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
+  std::vector<std::string> out;
+  std::vector<int> together;  // the contacts of the entry being built
+  const Event* last = nullptr;
+  const auto flush = [&] {
+    if (!last) return;
+    std::sort(together.begin(), together.end());
+    std::string name;
+    for (int c : together) {
+      if (!name.empty()) name.push_back('+');
+      name.append(std::to_string(c));
+    }
+    name.push_back(':');
+    name.append(ToString(last->kind));
+    out.push_back(std::move(name));
+    together.clear();
+  };
+  for (const Event& e : events) {
+    const bool joins = last && e.simultaneous && last->simultaneous && e.t == last->t && e.kind == last->kind;
+    if (!joins) flush();
+    together.push_back(e.contact);
+    last = &e;
+  }
+  flush();
+  return out;
+}
+
+std::string ContactSequenceText(const std::vector<std::string>& entries) {
+  std::string out;
+  for (size_t i = 0; i < entries.size();) {
+    size_t k = i + 1;
+    while (k < entries.size() && entries[k] == entries[i]) ++k;
+    if (!out.empty()) out.push_back(' ');
+    out.append(entries[i]);
+    if (k - i > 1) {
+      out.push_back('*');
+      out.append(std::to_string(k - i));
+    }
+    i = k;
+  }
+  return out;
+}
+
+}  // namespace vibro
