@@ -216,7 +216,10 @@ class ContactLoadsT {
   // R (the paper's eq. (5), damped as docs/model.md §7) and Ṙ along the held flow at local time s,
   // without allocation: Ṙ = Σ c_i(ω_i² Ẋ_i + 2ζ_iω_i Ẍ_i) − s_A f ω cos φ over s_B, with Ẍ the
   // constrained acceleration (the free one less T_B times the gap's).
+  // The engine's own R and Ṙ when it has them (the exact engine: no state formed), else from the state.
   S At(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& s, S& rate) const {
+    S held(0);
+    if (p.HeldReaction(s, held, rate)) return held;
     p.Evaluate(s, Xs_, Vs_);
     return At(m, Xs_, Vs_, phase + m.w * s, rate);
   }

@@ -32,6 +32,7 @@ class ExactEngineT final : public PropagatorT<S> {
   void Evaluate(S sigma, Vec& X, Vec& V) const override;
   S Gap(S sigma) const override;
   S GapOf(int j, S sigma) const override;
+  bool HeldReaction(const S& sigma, S& R, S& rate) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
@@ -600,6 +601,17 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   X.noalias() = cd.m->stick_vectors * xi;
   X += cd.m->x0 * cd.m->static_shape;
   V.noalias() = cd.m->stick_vectors * dxi;
+}
+
+// R and Ṙ as the release search sees them (AdvanceSticking's probe): the constrained modes'
+// closed form, without forming X.
+template <class S>
+bool ExactEngineT<S>::HeldReaction(const S& sigma, S& R, S& rate) const {
+  if (mode_ == Mode::kFree) return false;
+  const ProbeT<S> p = damped_sticking_ ? Damped().ReactionProbe(sigma) : ReactionProbe(sigma, S(0));
+  R = p.jet.g;
+  rate = p.jet.g1;
+  return true;
 }
 
 template <class S>
