@@ -603,14 +603,28 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   V.noalias() = cd.m->stick_vectors * dxi;
 }
 
-// R and Ṙ as the release search sees them (AdvanceSticking's probe): the constrained modes'
-// closed form, without forming X.
+// R and Ṙ as the release search sees them (AdvanceSticking's probe, ReactionProbe's R and Ṙ
+// without its bounds): the constrained modes' closed form, without forming X.
 template <class S>
 bool ExactEngineT<S>::HeldReaction(const S& sigma, S& R, S& rate) const {
   if (mode_ == Mode::kFree) return false;
-  const ProbeT<S> p = damped_sticking_ ? Damped().ReactionProbe(sigma) : ReactionProbe(sigma, S(0));
-  R = p.jet.g;
-  rate = p.jet.g1;
+  if (damped_sticking_) {
+    const ProbeT<S> p = Damped().ReactionProbe(sigma);
+    R = p.jet.g;
+    rate = p.jet.g1;
+    return true;
+  }
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto& rho = cd.m->stick_reaction;
+  const ForcingTrigT<S> fw(omega_, sigma);
+  R = cd.static_reaction - cd.reaction_forcing * fw.SinPhase(trig_);
+  rate = -cd.reaction_forcing * omega_ * fw.CosPhase(trig_);
+  for (size_t k = 0; k < cd.stick_modes.size(); ++k) {
+    const auto kk = static_cast<Eigen::Index>(k);
+    const auto st = Flow<S>(cd.stick_modes[k], omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
+    R += rho[kk] * (xi0_[kk] + st.dq);
+    rate += rho[kk] * st.v;
+  }
   return true;
 }
 
