@@ -249,26 +249,40 @@ void TangentTracker::FreeFlight(double s, Eigen::MatrixXd& m) const {
 // E = [v_0, V], X = v_0 a + V ξ, Ẋ = v_0 b + V η with a = cᵀX, ξ = LX (b, η likewise from Ẋ), the
 // held flow is ä = 0 (A v_0 = 0) and ξ̈_k = −ω'_k² ξ_k, so that
 //   X(s) = v_0 (a + b s) + V (cos ω's ξ + sin ω's/ω' η),  Ẋ(s) = v_0 b + V (−ω' sin ω's ξ + cos ω's η).
-// Applied in place to the columns of phi_ (no temporaries).
+// Applied in place to the columns of phi_ (no temporaries; loops rather than Eigen's products,
+// whose dispatch costs more than the arithmetic at these sizes).
 void TangentTracker::HeldFlight(const ContactTangent& ct, double s) {
   const auto n = sys_.dof();
   const Eigen::Index k = ct.nu.size();
   for (Eigen::Index i = 0; i < k; ++i) ::sincos(ct.nu[i] * s, &held_s_[i], &held_c_[i]);
   for (Eigen::Index j = 0; j < phi_.cols(); ++j) {
-    auto x = phi_.col(j).head(n);
-    auto v = phi_.col(j).tail(n);
-    const double a = ct.c.dot(x), b = ct.c.dot(v);
-    xi_.noalias() = ct.L * x;
-    eta_.noalias() = ct.L * v;
+    double* x = phi_.col(j).data();
+    double* v = x + n;
+    double a = 0, b = 0;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      a += ct.c[r] * x[r];
+      b += ct.c[r] * v[r];
+    }
     for (Eigen::Index i = 0; i < k; ++i) {
-      const double nu = ct.nu[i], sn = held_s_[i], cs = held_c_[i], q = xi_[i], p = eta_[i];
+      double q = 0, p = 0;
+      for (Eigen::Index r = 0; r < n; ++r) {
+        q += ct.L(i, r) * x[r];
+        p += ct.L(i, r) * v[r];
+      }
+      const double nu = ct.nu[i], sn = held_s_[i], cs = held_c_[i];
       xi_[i] = cs * q + (nu > 0 ? sn / nu : s) * p;
       eta_[i] = -nu * sn * q + cs * p;
     }
-    x.noalias() = ct.V * xi_;
-    x += (a + b * s) * ct.v0;
-    v.noalias() = ct.V * eta_;
-    v += b * ct.v0;
+    const double a_s = a + b * s;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      double xr = a_s * ct.v0[r], vr = b * ct.v0[r];
+      for (Eigen::Index i = 0; i < k; ++i) {
+        xr += ct.V(r, i) * xi_[i];
+        vr += ct.V(r, i) * eta_[i];
+      }
+      x[r] = xr;
+      v[r] = vr;
+    }
   }
 }
 
