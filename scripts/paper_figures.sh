@@ -25,12 +25,18 @@ fig() { run plot "$tmp/$1.h5"; cp "$tmp/$1_$2.png" "$out/$1.png"; }
 # Fig. 8: 1-DOF preload, r = 0.75, ω = 2.8: sticking fraction against f, from f → 1⁺ to f_max.
 run continue "$S/fig08_preload.toml" --set excitation.amplitude=1.001 --param excitation.amplitude \
   --to 1.4 --out "$tmp/fig08.h5"
-fig fig08 branch
+run plot "$tmp/fig08.h5"
+cp "$tmp/fig08_branch.png" "$out/fig08.png"
+# Its contact loads along the branch (docs/loads.md): mean force and normal work rate.
+cp "$tmp/fig08_branch_loads.png" "$out/fig08_loads.png"
 # Fig. 9: its (ω, f) partition.
 run partition "$S/fig08_preload.toml" --params excitation.frequency,excitation.amplitude \
   --range1 1.0,20 --steps1 60 --range2 1,12 --from2 1.02 \
   --sticking-fraction 0.1,0.2,0.3,0.4,0.5,0.6,0.7,0.8,0.9 --out "$tmp/fig09.h5"
-fig fig09 partition
+run plot "$tmp/fig09.h5"
+cp "$tmp/fig09_partition.png" "$out/fig09.png"
+# The wear-power map of the same partition (docs/loads.md): normal work rate over (ω, f).
+cp "$tmp/fig09_partition_loads.png" "$out/fig09_wear.png"
 # Fig. 12: 1-DOF clearance, r = 0, ω = 1.4: from f = 40 down to f_min = 2.0204 (docs/model.md
 # §6.3), where the sticking phase is lost.
 run continue "$S/fig11_clearance.toml" --set excitation.amplitude=40 --param excitation.amplitude \

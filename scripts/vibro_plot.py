@@ -4,7 +4,8 @@
 Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB (x_B against t,
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
 PREFIX_section (a run with several contacts: PREFIX_gaps, every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
-continuation, PREFIX_partition for a partition, PREFIX_basin for a basin study, PREFIX_sweep for
+continuation (and PREFIX_branch_loads: mean contact force and work rate along it), PREFIX_partition for a
+partition (and PREFIX_partition_loads: the work rate over its plane), PREFIX_basin for a basin study, PREFIX_sweep for
 a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
 coordinate than x_B (PREFIX_X2, PREFIX_q1); --title, --size and --font-size shape every picture
 for a paper; SVG text stays text.
@@ -445,7 +446,7 @@ def plot_basin(f, title, save):
 
 BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising": "^",
                        "grazing": "v", "sticking-entry": ">", "sticking-lost": "X", "non-smooth": "o",
-                       "undetermined": "P"}
+                       "undetermined": "P", "branch-point": "p", "simultaneous": "h", "no-jacobian": "x"}
 # Colours of the kinds drawn on a sweep, in the order they first appear (Okabe–Ito, without the
 # blue and vermilion of the up and down sweeps).
 BIF_COLOURS = [OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4], OKABE_ITO[5], OKABE_ITO[7], OKABE_ITO[6]]
@@ -478,6 +479,44 @@ def draw_branch(ax, f, y):
         seen.add(k)
 
 
+def mark_sequences(fig, ax, f):
+    """Several contacts: the contact sequence of each stretch of the branch, lettered on the axes
+    (A, B, ...) and spelled out under the figure; dotted lines where it changes."""
+    b = f["branch"]
+    if "sequence" not in b:
+        return
+    # Grouped as a person reads them: the impacts vibro followed before predicting an accumulation
+    # point are one chattering sequence ("0:chattering"; how many are followed is numerics), and a
+    # point exactly at a simultaneous impact ("0+1:impact", a boundary) joins the stretch before.
+    seq = [re.sub(r"\b(\d+):impact(\*\d+)? \1:accumulation", r"\1:chattering", text(x)) for x in b["sequence"][:]]
+    value = b["value"][:]
+    if not any(seq) or len(seq) != len(value):
+        return
+    runs = []  # (first, last, sequence)
+    for i, s in enumerate(seq):
+        if runs and (runs[-1][2] == s or "+" in s):
+            runs[-1][1] = i
+        else:
+            runs.append([i, i, s])
+    names = {}
+    for first, last, s in runs:
+        names.setdefault(s, chr(ord("A") + len(names)) if len(names) < 26 else "?")
+    for k, (first, last, s) in enumerate(runs):
+        if k > 0:
+            ax.axvline(0.5 * (value[runs[k - 1][1]] + value[first]), color="0.45", lw=0.8, ls=":")
+        ax.annotate(names[s], (0.5 * (value[first] + value[last]), 1.0), xycoords=("data", "axes fraction"),
+                    xytext=(0, -11), textcoords="offset points", ha="center", fontsize=fs(8), color="0.25")
+    ax.plot([], [], ":", color="0.45", lw=0.8, label="contact sequence changes")
+    shown = 6  # the key lists this many sequences, long ones cut (all are in /branch/sequence)
+    lines = [f"{n}: {s if len(s) <= 110 else s[:107] + '...'}" for s, n in list(names.items())[:shown]]
+    if len(names) > shown:
+        lines.append(f"... {len(names) - shown} more (in /branch/sequence)")
+    fig.text(0.01, 0.005, "contact sequences\n" + "\n".join(lines), fontsize=fs(7),
+             family="monospace", va="bottom", ha="left", color="0.2")
+    if OPTIONS["size"] is None:
+        fig.subplots_adjust(bottom=0.12 + 0.022 * (len(lines) + 1))
+
+
 def plot_branch(f, title, save):
     """Bifurcation diagram of a continuation: the sticking fraction (sticking orbits) or x_B at
     the section (impact orbits), and the largest |μ| when the orbits have multipliers."""
@@ -497,6 +536,7 @@ def plot_branch(f, title, save):
     else:
         draw_branch(ax1, f, b["x_B"][:])
         ax1.set_ylabel("$x_B$ at the section")
+    mark_sequences(fig, ax1, f)
     ax1.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     sym = SYMBOLS.get(param, param)
     set_title(ax1, title, f"continuation in ${sym}$ from {value[0]:g}, period {int(b.attrs['period'])}; "
@@ -558,6 +598,116 @@ def plot_partition(f, title, save):
     set_title(ax, title, f"curves of constant sticking fraction SP in the "
                  f"(${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane")
     save(fig, "partition")
+
+
+def load_columns(g):
+    """The per-contact loads of a /branch/loads or /partition/points group (docs/loads.md):
+    mean force and work rate, arrays of shape (rows, m); None when the file has none."""
+    if "mean_force" not in g or "work_rate" not in g or g["mean_force"].ndim != 2 or g["mean_force"].shape[1] == 0:
+        return None
+    return g["mean_force"][:], g["work_rate"][:]
+
+
+def log_scale_if_wide(ax, y):
+    """A logarithmic axis when the positive values span more than three decades."""
+    pos = y[np.isfinite(y) & (y > 0)]
+    if len(pos) > 1 and pos.max() > 1e3 * pos.min():
+        ax.set_yscale("log")
+
+
+def plot_branch_loads(f, title, save):
+    """Mean contact force and normal work rate (rigid limit) along a branch, per contact, against
+    the parameter (docs/loads.md): solid where the orbit is stable, dashed where unstable."""
+    b = f["branch"]
+    cols = load_columns(b["loads"]) if "loads" in b else None
+    if cols is None or len(b["value"]) == 0:
+        return
+    force, work = cols
+    param = text(b.attrs["param"])
+    value = b["value"][:]
+    stable = b["stable"][:].astype(bool)
+    m = force.shape[1]
+    fig, axes = figure(2, 1, figsize=(7.5, 6.2), sharex=True, squeeze=False)
+    for ax, y, label in ((axes[0, 0], force, "mean contact force"), (axes[1, 0], work, "normal work rate")):
+        for j in range(m):
+            colour = BRANCH if m == 1 else OKABE_ITO[j % 7]
+            start = 0
+            for i in range(1, len(value) + 1):
+                if i == len(value) or stable[i] != stable[start]:
+                    k = min(i + 1, len(value))
+                    ax.plot(value[start:k], y[start:k, j], "-" if stable[start] else "--", color=colour, lw=1.4,
+                            label=(f"contact {j}" if m > 1 else None) if start == 0 else None)
+                    start = i
+        if (~stable).any():
+            ax.plot([], [], "--", color="0.4", label="unstable")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+        ax.set_ylabel(label)
+    log_scale_if_wide(axes[1, 0], work)
+    unknown = int(np.isnan(force).sum())
+    set_title(axes[0, 0], title, f"contact loads along the branch in ${SYMBOLS.get(param, param)}$, exact per period"
+              + (f" ({unknown} unknown values: see /branch/loads/note)" if unknown else ""))
+    axes[-1, 0].set_xlabel(axis_label(param))
+    save(fig, "branch_loads")
+
+
+def plot_partition_loads(f, title, save):
+    """The normal work rate (rigid limit, the wear power of docs/loads.md) over a partition plane,
+    per contact: each column's branch points drawn as a strip of cells at its value of the first
+    parameter, coloured on a logarithmic scale; blank where no orbit of the kind exists."""
+    from matplotlib.colors import LogNorm
+    p = f["partition"]
+    if "points" not in p:
+        return
+    g = p["points"]
+    cols = load_columns(g)
+    if cols is None or len(g["value1"]) == 0:
+        return
+    _, work = cols
+    p1, p2 = text(p.attrs["param1"]), text(p.attrs["param2"])
+    column, v2 = g["column"][:], g["value2"][:]
+    value1 = p["column_value1"][:]
+    m = work.shape[1]
+    fig, axes = figure(1, m, figsize=(7.6 * m, 5.4), squeeze=False)
+    # Strip edges halfway between neighbouring columns (the columns are evenly spaced).
+    order = np.argsort(value1)
+    centres = value1[order]
+    mids = (centres[1:] + centres[:-1]) / 2
+    half = (centres[1] - centres[0]) / 2 if len(centres) > 1 else 0.5
+    left = dict(zip(order, np.concatenate([[centres[0] - half], mids])))
+    right = dict(zip(order, np.concatenate([mids, [centres[-1] + half]])))
+    for j in range(m):
+        ax = axes[0, j]
+        w = work[:, j]
+        pos = w[np.isfinite(w) & (w > 0)]
+        if len(pos) == 0:
+            ax.text(0.5, 0.5, "no impacts: the work rate is zero everywhere", transform=ax.transAxes, ha="center")
+            continue
+        hi = pos.max()
+        lo = max(pos.min(), hi * 1e-8)  # below: drawn in the colour of the lowest decade (extend="min")
+        norm = LogNorm(vmin=lo, vmax=hi)
+        cmap = plt.get_cmap("viridis").copy()
+        cmap.set_bad("0.85")  # unknown (NaN) or zero work
+        mesh = None
+        for k in range(len(value1)):
+            sel = np.flatnonzero(column == k)
+            if len(sel) == 0:
+                continue
+            sel = sel[np.argsort(v2[sel], kind="stable")]
+            y = v2[sel]
+            edges = np.concatenate([[y[0]], (y[1:] + y[:-1]) / 2, [y[-1]]])
+            X = np.array([[left[k], right[k]]] * len(edges))
+            Y = np.stack([edges, edges], axis=1)
+            C = np.where(w[sel] > 0, np.maximum(w[sel], lo), np.nan)[:, None]
+            mesh = ax.pcolormesh(X, Y, np.ma.masked_invalid(C), cmap=cmap, norm=norm, shading="flat")
+        if mesh is not None:
+            cb = fig.colorbar(mesh, ax=ax, extend="min" if pos.min() < lo else "neither")
+            cb.set_label("normal work rate" + (f", contact {j}" if m > 1 else "") + " (log scale)")
+        ax.set_xlabel(axis_label(p1))
+        ax.set_ylabel(axis_label(p2))
+        set_title(ax, title, f"normal work rate (wear power) of the sticking orbits over the "
+                  f"(${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane" + (f", contact {j}" if m > 1 else ""))
+    save(fig, "partition_loads")
 
 
 def read_branch(path, param):
@@ -1016,8 +1166,10 @@ def draw(args, save, window):
             plot_basin(f, title, save)
         if "branch" in f:
             plot_branch(f, title, save)
+            plot_branch_loads(f, title, save)
         if "partition" in f:
             plot_partition(f, title, save)
+            plot_partition_loads(f, title, save)
         if "sweep" in f:
             plot_sweep(f, title, save, args.overlay)
         elif args.overlay:

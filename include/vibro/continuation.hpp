@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
 
@@ -58,18 +59,32 @@ struct BranchPoint {
     double phase;     // ωt mod 2π·period
     double v_before;  // contact velocity ẋ_B just before
     double v_after;   // and just after (−r·v_before)
+    int contact = 0;  // the [[contact]] it hits (0 for the [stop])
   };
   std::vector<Impact> impacts;      // every impact of one period from t0, in time order
+  // Several contacts (docs/contacts.md): the orbit's contact sequence ("0:impact 1:impact*3
+  // 0:stick 0:release", OrbitResult::sequence); empty for one contact.
+  std::string sequence;
+  // The orbit's exact per-period contact loads (OrbitLoads, docs/loads.md), one entry per contact
+  // in contact order (no intervals); empty, with loads_note saying why, when the period could not
+  // be simulated. loads_note also names the contacts whose loads are unknown (NaN fields).
+  std::vector<ContactLoads> loads;
+  std::string loads_note;
 };
 
 struct Bifurcation {
-  // "fold" | "flip" | "neimark-sacker" | "rising" | "grazing" | "sticking-entry" |
-  // "sticking-lost" | "non-smooth" | "undetermined" (past it the precision cannot decide a
-  // chattering sequence, so where the motion changes is not known; CVODE, or beyond quad)
+  // "fold" | "flip" | "neimark-sacker" | "branch-point" (a real multiplier crosses +1 where the
+  // branch does not turn back: a pitchfork, e.g. where a symmetric orbit loses its symmetry) |
+  // "rising" | "grazing" | "sticking-entry" | "sticking-lost" | "simultaneous" (two impacts on
+  // different contacts meet) | "non-smooth" | "no-jacobian" (the orbit past it runs through an
+  // event the map has no derivative at, e.g. a simultaneous impact of coupled contacts) |
+  // "undetermined" (past it the precision cannot decide a chattering sequence, so where the
+  // motion changes is not known; CVODE, or beyond quad)
   std::string kind;
   double value;
   std::string detail;
   double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
+  int contact = -1;    // the contact where a non-smooth point happens (several contacts), −1: none
 };
 
 // A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering
@@ -122,6 +137,15 @@ struct PartitionRequest {
   int threads = 0;
   const std::atomic<bool>* stop_requested = nullptr;
 };
+// A point of a column's branch (a cell of the partition plane): where it is, its orbit's
+// sticking fraction and stability, and its exact per-period contact loads (as BranchPoint).
+struct PartitionPoint {
+  double value2 = 0;
+  double sticking_fraction = 0;  // 0 for an orbit without sticking
+  bool stable = false;
+  std::vector<ContactLoads> loads;
+  std::string loads_note;
+};
 struct PartitionColumn {
   double value1;
   // "ok" | "no-orbit" (no orbit of the kind at start2) | "invalid-scene" (the scene is not valid
@@ -130,6 +154,9 @@ struct PartitionColumn {
   std::vector<LevelCrossing> crossings;
   std::vector<Bifurcation> bifurcations;
   std::string end_down, end_up;  // why each half of the branch stopped
+  // The branch points of the column in increasing arclength from the lower end (the down half
+  // reversed, then the up half without its repeated start point).
+  std::vector<PartitionPoint> points;
 };
 std::vector<PartitionColumn> Partition(const PartitionRequest& request);
 

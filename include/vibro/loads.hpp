@@ -55,8 +55,9 @@ class LoadsRecorder final : public Observer {
   // Per-period sums of one contact (time in units of time; row k = period first + k).
   struct Row {
     double impacts = 0, impulse = 0, reaction = 0, energy = 0, work = 0, held = 0;
-    // A phase held together with other contacts touched this period: its ∫R dt and duration are
-    // not accounted (docs/loads.md), so the reaction, mean force and contact fraction are unknown.
+    // A phase held together with other contacts touched this period without an account (a run
+    // without loads, SimulationOptions::loads): its ∫R dt and duration are unknown, so are the
+    // reaction, mean force and contact fraction (docs/loads.md).
     bool partial = false;
   };
 

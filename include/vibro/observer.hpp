@@ -64,7 +64,8 @@ struct Event {
   double energy_dissipated = 0;
   // A release: the sticking phase it ends: its duration, ∫R dt over it (impulsive reactions the
   // held contact received from impacts elsewhere included) and max R (the paper's eq. (5)). NaN
-  // for every other event, and for a phase begun before a resumed run without its loads.
+  // for every other event, and for a phase begun before a resumed run without its loads; max R is
+  // NaN for a phase held together with other contacts for a while (docs/loads.md).
   double stick_duration = std::numeric_limits<double>::quiet_NaN();
   double reaction_integral = std::numeric_limits<double>::quiet_NaN();
   double reaction_max = std::numeric_limits<double>::quiet_NaN();

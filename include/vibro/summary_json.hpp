@@ -49,10 +49,15 @@ std::string ValidationJson(const std::vector<PointCheck>& checks);
 // relative to T (times) and to the largest impact speed (velocities).
 std::string ScoreJson(const ScoreReport& report, const Scene& scene);
 
-// `vibro continue --json` (docs/cli.md, docs/output.md).
+// `vibro continue --json` (docs/cli.md, docs/output.md); every point holds its orbit's exact
+// per-period "loads" per contact (docs/loads.md: contact, impacts_per_period, impulse_per_period,
+// reaction_integral_per_period, mean_force, dissipated_power, work_rate, contact_fraction; null
+// when unknown), and "loads_note" when there is one.
 std::string BranchJson(const Branch& branch);
 // `vibro partition --json`: {"params", "levels", "columns": [{"value1", "status", "crossings":
-// [{"level", "value"}], "bifurcations": [{"kind", "value"}], "end_down", "end_up"}]}.
+// [{"level", "value"}], "bifurcations": [{"kind", "value"}], "end_down", "end_up", "points":
+// [{"value2", "sticking_fraction", "stable", "loads": [...], "loads_note"?}]}]} (the cells, with
+// their loads as in BranchJson).
 std::string PartitionJson(const std::string& param1, const std::string& param2,
                           const std::vector<double>& levels, const std::vector<PartitionColumn>& columns);
 

@@ -128,6 +128,9 @@ class System {
   // Contact reaction (the paper's eq. 5 with the damping term of §7) for a state on the stop:
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B, φ = ωt.
   double Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
+  // The reaction of contact j held alone (the same formula with c → c_j, T_A → s_A,j, s_B → W_jj;
+  // docs/contacts.md); j = 0 is Reaction.
+  double ContactReaction(int j, const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
   // Rate Ṙ along the sticking flow (docs/model.md §4.2, with the damped constrained acceleration of §7).
   double ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) const;
   // Free acceleration of B: ẍ_B = −s_B R for the same state (docs/model.md §2).

@@ -417,7 +417,6 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
                                             bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "continue");
   vibro::frontend::CheckContinuationOptions(kPython, to, step, max_points, period, 0);
   const auto from = vibro::SceneNumber(s.loaded.text_as_run, key);
   if (!from)

@@ -48,7 +48,7 @@ MODES = {0: "free", 1: "sticking"}
 
 __all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "continue_",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
-           "EVENT_KINDS", "MODES"]
+           "EVENT_KINDS", "MODES", "LOAD_FIELDS"]
 
 
 def _toml_value(value):
@@ -382,10 +382,32 @@ def _branch_table(points):
     return t
 
 
+LOAD_FIELDS = ("impacts_per_period", "impulse_per_period", "reaction_integral_per_period", "mean_force",
+               "dissipated_power", "work_rate", "contact_fraction")
+
+
+def _loads_arrays(rows):
+    """Per-row contact loads (the "loads" lists of branch points or partition cells) as a dict
+    field → array of shape (rows, m), m the most contacts of any row; NaN where a row has no value
+    (no loads, a contact it lacks, or a load reported unknown, null in the JSON; docs/loads.md)."""
+    m = max([0] + [len(r.get("loads") or []) for r in rows])
+    out = {k: _np.full((len(rows), m), _np.nan) for k in LOAD_FIELDS}
+    for i, r in enumerate(rows):
+        for c in r.get("loads") or []:
+            for k in LOAD_FIELDS:
+                if c.get(k) is not None:
+                    out[k][i, int(c["contact"])] = c[k]
+    return out
+
+
 def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto", out=None, force=False):
     """Continues a periodic orbit in ``param`` up to ``to`` (``vibro continue --json``; named with a
     trailing underscore because ``continue`` is a Python keyword). The dict also holds ``table``, a
-    structured array (value, sticking_fraction, stable) of the branch points."""
+    structured array (value, sticking_fraction, stable) of the branch points, and ``loads``: each
+    point's exact per-period contact loads (docs/loads.md) as arrays of shape (points, contacts),
+    one per name of :data:`LOAD_FIELDS` (NaN: unknown; each point's ``loads_note`` says why). With
+    several contacts each point has its contact ``sequence`` and each bifurcation the ``contact``
+    where it happens."""
     _invoke("continue", scene, param=param, to=to, step=step, max_points=max_points, period=period, kind=kind,
             out=out, force=force)
     text, interrupted = _vibro.continue_branch(_scene(scene), param, _float("to", to), _float("step", step),
@@ -395,6 +417,7 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
         raise _interrupted("continuation", out)
     d = _json.loads(text)
     d["table"] = _branch_table(d.get("points", []))
+    d["loads"] = _loads_arrays(d.get("points", []))
     return d
 
 
@@ -645,7 +668,10 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     ``range1`` = (A, B) is split in ``steps1`` steps, each column being continued in KEY2 over
     ``range2`` = (C, D) from ``from2`` (default: the scene's KEY2); ``sticking_fraction`` lists the
     levels to trace. Besides the keys of the JSON, the dict holds ``crossings`` (value1, level,
-    value2) and ``boundaries`` (value1, kind, value2): structured arrays, one row per point."""
+    value2) and ``boundaries`` (value1, kind, value2): structured arrays, one row per point;
+    ``cells`` (value1, value2, sticking_fraction, stable), every branch point of every column; and
+    ``loads``, the cells' exact per-period contact loads (docs/loads.md) as arrays of shape
+    (cells, contacts), one per name of :data:`LOAD_FIELDS` (NaN: unknown)."""
     levels = [float(s) for s in (sticking_fraction if _np.ndim(sticking_fraction) else [sticking_fraction])]
     _invoke("partition", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2),
             sticking_fraction=tuple(levels), steps1=steps1, from2=from2, period=period, threads=threads, out=out,
@@ -665,6 +691,10 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
                                           ("value2", "f8", _np.nan)])
     d["boundaries"] = _records(boundaries, [("value1", "f8", _np.nan), ("kind", _text_width(boundaries, "kind"), ""),
                                             ("value2", "f8", _np.nan)])
+    cells = [dict(p, value1=c["value1"]) for c in d["columns"] for p in c.get("points", [])]
+    d["cells"] = _records(cells, [("value1", "f8", _np.nan), ("value2", "f8", _np.nan),
+                                  ("sticking_fraction", "f8", _np.nan), ("stable", "?", False)])
+    d["loads"] = _loads_arrays(cells)
     return d
 
 

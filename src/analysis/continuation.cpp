@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include <fmt/format.h>
@@ -82,6 +83,13 @@ class Problem {
     }
     if (m.status == RunStatus::kUndetermined) undetermined_ = true;
     if (m.status != RunStatus::kOk || m.singular) return std::nullopt;
+    // An event the tangent map does not cover (a simultaneous impact of coupled contacts, a set
+    // of contacts held at once; docs/contacts.md): no derivative, so no Newton step and no
+    // multipliers there.
+    if (jac && !m.undefined.empty()) {
+      no_jacobian_ = m.undefined;
+      return std::nullopt;
+    }
     if (jac) *jac = m.jacobian;
     Eigen::VectorXd out(2 * n);
     out << m.X, m.V;
@@ -133,7 +141,12 @@ class Problem {
   // could not switch: CVODE, or a scene quad does not cover).
   int quad_evaluations() const { return quad_evaluations_; }
   bool undetermined() const { return undetermined_; }
-  void ClearUndetermined() { undetermined_ = false; }
+  void ClearUndetermined() {
+    undetermined_ = false;
+    no_jacobian_.clear();
+  }
+  // Why the last map evaluation that failed for lack of a derivative had none (empty: none failed so).
+  const std::string& no_jacobian() const { return no_jacobian_; }
 
  private:
   const ContinuationRequest& req_;
@@ -142,6 +155,7 @@ class Problem {
   mutable std::vector<double> quad_at_;  // the λ values at which the map switched to quad
   mutable int quad_evaluations_ = 0;
   mutable bool undetermined_ = false;
+  mutable std::string no_jacobian_;
 };
 
 // Every impact of q periods of the orbit from the free state (X, V) at t0.
@@ -168,7 +182,7 @@ std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene
     const double phase = std::fmod(std::fmod(w * t0, cycle) + 2.0 * M_PI * static_cast<double>(e.clock.period) +
                                        w * e.clock.offset,
                                    cycle);
-    out.push_back({phase, e.v_before, e.v_after});
+    out.push_back({phase, e.v_before, e.v_after, e.contact});
   }
   return out;
 }
@@ -232,61 +246,102 @@ long Count(const std::string& s, char c) { return std::count(s.begin(), s.end(),
 
 // The non-smooth bifurcation between `lo` (on the branch) and `hi` (past it, if the orbit goes
 // on): named by the probe quantity that vanishes there (docs/model.md §5.7, orbit_probe.hpp), or
-// "relabel" when only the grouping of a chattering sequence changed (no bifurcation).
-std::pair<std::string, std::string> NameNonSmooth(const Point& lo, const Point* hi) {
-  const auto both = [&](double OrbitProbe::*q) {
-    return std::min(lo.probe.*q, hi ? hi->probe.*q : OrbitProbe::kNone);
+// "relabel" when only the grouping of a chattering sequence changed (no bifurcation). With several
+// contacts (`m` > 1) the detail names the contact, and `contact` is set.
+struct NonSmooth {
+  std::string kind, detail;
+  int contact = -1;
+};
+NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
+  // The smaller of lo's and hi's value of a probe quantity, with the contact where it is.
+  struct Value {
+    double value;
+    int contact;
   };
+  const auto both = [&](double OrbitProbe::*q, int OrbitProbe::Where::*w) {
+    Value v{lo.probe.*q, lo.probe.at.*w};
+    if (hi && hi->probe.*q < v.value) v = {hi->probe.*q, hi->probe.at.*w};
+    return v;
+  };
+  const auto on = [&](int c) { return m > 1 ? fmt::format(" on contact {}", c) : std::string(); };
   const std::string change =
       hi ? fmt::format("events per period {} → {}", lo.probe.signature, hi->probe.signature)
          : fmt::format("events per period {}; the orbit does not go on", lo.probe.signature);
   if (lo.probe.shortest_stick < 1e-6)
     return {"sticking-lost",
-            fmt::format("a sticking phase shrinks to zero ({:.1e} of the period); {}", lo.probe.shortest_stick, change)};
+            fmt::format("a sticking phase{} shrinks to zero ({:.1e} of the period); {}", on(lo.probe.at.shortest_stick),
+                        lo.probe.shortest_stick, change),
+            m > 1 ? lo.probe.at.shortest_stick : -1};
   // A sticking phase that splits in two (or two that merge) across the point, by a release
   // followed, after a vanishing time, by a landing: the rising bifurcation seen from either side.
   if (hi && std::abs(hi->probe.sticking_phases - lo.probe.sticking_phases) == 1) {
     const Point& more = hi->probe.sticking_phases > lo.probe.sticking_phases ? *hi : lo;
     const Point& fewer = &more == &lo ? *hi : lo;
     if (std::min(more.probe.release_to_stick, fewer.probe.interior_reaction) < 1e-3 &&
-        fewer.probe.sticking_phases > 0)
-      return {"rising", fmt::format("R touches zero inside a sticking phase, which splits in two "
-                                    "(flight {:.1e} of the period); {}",
-                                    more.probe.release_to_stick, change)};
+        fewer.probe.sticking_phases > 0) {
+      const int c = more.probe.release_to_stick <= fewer.probe.interior_reaction ? more.probe.at.release_to_stick
+                                                                                 : fewer.probe.at.interior_reaction;
+      return {"rising",
+              fmt::format("R touches zero inside a sticking phase{}, which splits in two "
+                          "(flight {:.1e} of the period); {}",
+                          on(c), more.probe.release_to_stick, change),
+              m > 1 ? c : -1};
+    }
   }
   struct Candidate {
     const char* kind;
-    double value;
-    const char* what;
+    Value v;
+    std::string what;
   };
-  if (both(&OrbitProbe::entry_reaction) < 1e-3)  // also a degenerate grazing at f_sticking (§6.3)
-    return {"sticking-entry", fmt::format("R vanishes at the landing (test quantity {:.1e}; grazing "
-                                          "quantity {:.1e}); {}",
-                                          both(&OrbitProbe::entry_reaction),
-                                          std::min(both(&OrbitProbe::flight_gap), both(&OrbitProbe::impact_speed)),
-                                          change)};
+  const auto entry = both(&OrbitProbe::entry_reaction, &OrbitProbe::Where::entry_reaction);
+  const auto gap = both(&OrbitProbe::flight_gap, &OrbitProbe::Where::flight_gap);
+  const auto speed = both(&OrbitProbe::impact_speed, &OrbitProbe::Where::impact_speed);
+  const auto grazing = gap.value <= speed.value ? gap : speed;
+  if (entry.value < 1e-3)  // also a degenerate grazing at f_sticking (§6.3)
+    return {"sticking-entry",
+            fmt::format("R vanishes at the landing{} (test quantity {:.1e}; grazing quantity {:.1e}); {}",
+                        on(entry.contact), entry.value, grazing.value, change),
+            m > 1 ? entry.contact : -1};
+  const auto interior = both(&OrbitProbe::interior_reaction, &OrbitProbe::Where::interior_reaction);
+  const auto release = both(&OrbitProbe::release_to_stick, &OrbitProbe::Where::release_to_stick);
+  const auto closing = both(&OrbitProbe::closing_gap, &OrbitProbe::Where::closing_gap);
+  const int closing_held = closing.value == lo.probe.closing_gap ? lo.probe.at.closing_held
+                           : hi                                   ? hi->probe.at.closing_held
+                                                                  : 0;
+  const auto simultaneous = both(&OrbitProbe::simultaneous, &OrbitProbe::Where::simultaneous);
+  const int simultaneous_other = simultaneous.value == lo.probe.simultaneous ? lo.probe.at.simultaneous_other
+                                 : hi                                         ? hi->probe.at.simultaneous_other
+                                                                              : 0;
   const Candidate c[] = {
-      {"rising", std::min(both(&OrbitProbe::interior_reaction), both(&OrbitProbe::release_to_stick)),
-       "R touches zero inside a sticking phase"},
-      {"sticking-entry", both(&OrbitProbe::entry_reaction), "R vanishes at the landing"},
-      {"grazing", std::min(both(&OrbitProbe::flight_gap), both(&OrbitProbe::impact_speed)),
-       "a free flight touches the stop tangentially"},
+      {"rising", interior.value <= release.value ? interior : release,
+       "R touches zero inside a sticking phase" + on(interior.value <= release.value ? interior.contact : release.contact)},
+      {"sticking-entry", entry, "R vanishes at the landing" + on(entry.contact)},
+      {"grazing", grazing, "a free flight touches the stop tangentially" + on(grazing.contact)},
+      {"rising", closing,
+       fmt::format("contact {} closes tangentially while contact {} sticks", closing.contact, closing_held)},
+      {"simultaneous", simultaneous,
+       fmt::format("impacts on contacts {} and {} become simultaneous", simultaneous_other, simultaneous.contact)},
   };
   const auto best = std::min_element(std::begin(c), std::end(c),
-                                     [](const auto& a, const auto& b) { return a.value < b.value; });
-  if (best->value < 1e-3)
-    return {best->kind, fmt::format("{} (test quantity {:.1e}); {}", best->what, best->value, change)};
+                                     [](const auto& a, const auto& b) { return a.v.value < b.v.value; });
+  const int where = m > 1 ? best->v.contact : -1;
+  if (best->v.value < 1e-3)
+    return {best->kind, fmt::format("{} (test quantity {:.1e}); {}", best->what, best->v.value, change), where};
   // The same events grouped differently (orbit_probe.hpp, coarse_signature): the impact that
   // starts a chattering sequence's tail of decreasing speeds moved by one, as two of its impacts
   // swapped which is faster. Nothing of the orbit changes there: not a bifurcation.
   if (hi && lo.probe.coarse_signature == hi->probe.coarse_signature)
-    return {"relabel", fmt::format("a chattering sequence is regrouped: its tail of decreasing impact "
-                                   "speeds now starts one impact {} (no event appears or vanishes; "
-                                   "smallest test quantity: {} {:.1e}); {}",
-                                   Count(hi->probe.signature, 'I') > Count(lo.probe.signature, 'I') ? "later" : "earlier",
-                                   best->kind, best->value, change)};
-  return {"non-smooth", fmt::format("the event sequence changes and no test quantity vanishes "
-                                    "(smallest: {} {:.1e}); {}", best->kind, best->value, change)};
+    return {"relabel",
+            fmt::format("a chattering sequence is regrouped: its tail of decreasing impact "
+                        "speeds now starts one impact {} (no event appears or vanishes; "
+                        "smallest test quantity: {} {:.1e}); {}",
+                        Count(hi->probe.signature, 'I') > Count(lo.probe.signature, 'I') ? "later" : "earlier",
+                        best->kind, best->v.value, change),
+            where};
+  return {"non-smooth",
+          fmt::format("the event sequence changes and no test quantity vanishes "
+                      "(smallest: {} {:.1e}); {}", best->kind, best->v.value, change),
+          where};
 }
 
 // The branch as returned, with how many map evaluations needed the quad engine.
@@ -320,6 +375,7 @@ Branch Continue(const ContinuationRequest& req) {
   Problem p(req, std::fmod(first_scene.frequency * start.section_time, cycle), start.period);
   const auto n2 = start.X.size() * 2;
   const auto n = n2 / 2;
+  const int m = first_sys.contact_count();
   const double span = req.to - req.from;
   double ds = req.step > 0 ? req.step : std::abs(span) / 50.0;
   const double ds_max = req.max_step > 0 ? req.max_step : std::abs(span) / 10.0;
@@ -347,6 +403,10 @@ Branch Continue(const ContinuationRequest& req) {
       b.q_dot = sys.mode_shapes() * b.V;
     }
     b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
+    b.sequence = pt.orbit.sequence;
+    auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
+    b.loads = std::move(loads.contacts);
+    b.loads_note = std::move(loads.note);
     br.points.push_back(std::move(b));
     if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };
@@ -406,6 +466,62 @@ Branch Continue(const ContinuationRequest& req) {
     return value;
   };
 
+  // A branch point: arclength hyperplanes close to it also cut the branch that crosses this one,
+  // and the corrector may land on either, so bisection cannot close in on it. The test function
+  // is instead sampled at six points of this branch kept at least ds/8 from the first estimate
+  // (s_guess), on both sides, and the root of their degree-5 interpolant in λ is the location;
+  // `bracket` is its distance to the root of the degree-3 interpolant of the four inner points.
+  // Falls back to `fallback` when a sample cannot be corrected on this branch.
+  const auto locate_fit = [&](const std::function<double(const Point&)>& test, double s_guess, double hi,
+                              double fallback, double& bracket) {
+    const double h = hi / 8.0;
+    std::vector<double> lam, val;
+    for (double k : {-3.0, -2.0, -1.0, 1.0, 2.0, 3.0}) {
+      if (stop_requested()) return fallback;
+      const double s = s_guess + k * h;
+      int iters = 0;
+      const auto yc = Correct(p, cur.y + s * t, t, iters);
+      const auto pc = yc ? p.Examine(*yc) : std::nullopt;
+      // On this branch: near its predictor, the same events, ordered in λ.
+      if (!pc || !SameFamily(cur, *pc) || (pc->y - (cur.y + s * t)).norm() > 0.2 * std::abs(s) + 1e-12) return fallback;
+      const double v = test(*pc);
+      if (!std::isfinite(v)) return fallback;
+      if (!lam.empty() && (pc->y[n2] - lam.back()) * t[n2] <= 0) return fallback;
+      lam.push_back(pc->y[n2]);
+      val.push_back(v);
+    }
+    // The root of the interpolant through points [from, to) between lam[2] and lam[3].
+    const auto root = [&](size_t from, size_t to) {
+      const auto poly = [&](double x) {
+        double sum = 0;
+        for (size_t i = from; i < to; ++i) {
+          double w = val[i];
+          for (size_t j = from; j < to; ++j)
+            if (j != i) w *= (x - lam[j]) / (lam[i] - lam[j]);
+          sum += w;
+        }
+        return sum;
+      };
+      double a = lam[2], b = lam[3], fa = poly(a);
+      if (fa * poly(b) > 0) return std::numeric_limits<double>::quiet_NaN();
+      for (int it = 0; it < 200 && a != b; ++it) {
+        const double mid = 0.5 * (a + b), fm = poly(mid);
+        if (mid == a || mid == b) break;
+        if ((fm > 0) == (fa > 0)) {
+          a = mid;
+          fa = fm;
+        } else {
+          b = mid;
+        }
+      }
+      return 0.5 * (a + b);
+    };
+    const double at = root(0, 6), inner = root(1, 5);
+    if (!std::isfinite(at) || !std::isfinite(inner)) return fallback;
+    bracket = std::abs(at - inner);
+    return at;
+  };
+
   // Moves the section to the middle of the longest free flight of `cur` (when an event comes near
   // it, the map loses its smoothness there and the corrector fails for no reason of the orbit's).
   const auto move_section = [&]() {
@@ -459,6 +575,22 @@ Branch Continue(const ContinuationRequest& req) {
       const auto by_multipliers = [](auto score) {
         return [score](const Point& pc, const Eigen::VectorXd&) { return score(pc.orbit.multipliers); };
       };
+      // A real multiplier through +1 where the branch goes on in the same direction: a branch
+      // point (a pitchfork where a symmetric orbit loses its symmetry, or a transcritical point).
+      // Test function det(DF − I) = Π(μ_i − 1): analytic along the branch, unlike the multiplier
+      // itself (a real pair is often born from a complex one just before).
+      const auto det = [](const Point& pc) { return pc.eval.Jz.determinant(); };
+      const double one_old = det(cur), one_new = det(*next);
+      if (t[n2] * t_new[n2] > 0 && one_old * one_new < 0) {
+        const double w = one_old / (one_old - one_new);
+        bracket = std::abs(l_new - l_old);
+        const double at = locate_fit(det, w * ds, ds, l_old + w * (l_new - l_old), bracket);
+        br.bifurcations.push_back({"branch-point", at,
+                                   "a real multiplier crosses +1 and the branch does not turn back (a "
+                                   "pitchfork: another branch of orbits crosses this one, e.g. where a "
+                                   "symmetric orbit loses its symmetry)",
+                                   bracket});
+      }
       const double flip_old = MostNegativeReal(cur.orbit.multipliers);
       const double flip_new = MostNegativeReal(next->orbit.multipliers);
       if ((flip_old + 1) * (flip_new + 1) < 0 && (flip_old < 0 || flip_new < 0)) {
@@ -559,7 +691,7 @@ Branch Continue(const ContinuationRequest& req) {
         auto po = trial(s_over);
         if (po && !SameFamily(cur, *po) && (po->y - cur.y).norm() < 1e3 * s_over) past = po;
       }
-      auto [kind, detail] = NameNonSmooth(cur, past ? &*past : nullptr);
+      auto [kind, detail, contact] = NameNonSmooth(cur, past ? &*past : nullptr, m);
       // The boundary lies between cur and its predictor at arclength hi.
       const double at = cur.y[n2] + 0.5 * hi * t[n2], bracket = hi * std::abs(t[n2]);
       if (moved) record(cur);
@@ -587,13 +719,22 @@ Branch Continue(const ContinuationRequest& req) {
                              cur.y[n2], kind, detail);
         kind = "undetermined";
       }
-      br.bifurcations.push_back({kind, at, detail, bracket});
+      if (!past && !p.no_jacobian().empty()) {
+        detail = fmt::format("past λ = {:.17g} the orbit runs through {}: the map has no derivative there, "
+                             "so the branch cannot be corrected beyond ({} suspected: {})",
+                             cur.y[n2], p.no_jacobian(), kind, detail);
+        kind = "no-jacobian";
+      }
+      br.bifurcations.push_back({kind, at, detail, bracket, contact});
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
+      // (Not when the orbit past it is itself at a sticking-lost boundary: e.g. a symmetric orbit
+      // whose sticking phases on two contacts vanish together.)
       const bool goes_on = past && Sticks(*past) == Sticks(cur) &&
-                           past->probe.signature.find_first_of("RI") != std::string::npos;
+                           past->probe.signature.find_first_of("RI") != std::string::npos &&
+                           !(kind == "sticking-lost" && past->probe.shortest_stick < 1e-6);
       if (!goes_on) {
-        br.end = kind == "sticking-lost" || kind == "undetermined" ? kind
+        br.end = kind == "sticking-lost" || kind == "undetermined" || kind == "no-jacobian" ? kind
                  : past && past->probe.signature.find_first_of("RI") == std::string::npos
                      ? kind + " (permanent contact beyond)"
                      : kind + " (the orbit does not go on)";

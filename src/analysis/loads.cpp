@@ -97,7 +97,10 @@ void LoadsRecorder::OnCheckpoint(const Checkpoint& cp) {
   // that ends here.
   if (cp.clock.period <= first_) return;
   const long long ended = cp.clock.period - 1;
-  for (const int j : cp.held) At(j, ended).partial = true;  // held with other contacts
+  // Held with other contacts, without an account (SimulationOptions::loads off): unknown.
+  for (const int j : cp.held)
+    if (static_cast<size_t>(j) >= cp.reaction_integral.size() || !std::isfinite(cp.reaction_integral[static_cast<size_t>(j)]))
+      At(j, ended).partial = true;
   for (size_t j = 0; j < rows_.size(); ++j) {
     Row& row = At(static_cast<int>(j), ended);
     if (j < cp.reaction_integral.size() && std::isfinite(cp.reaction_integral[j])) {

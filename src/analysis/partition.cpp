@@ -1,5 +1,6 @@
 // Two-parameter partitions by families of one-parameter branches (include/vibro/continuation.hpp).
 #include <algorithm>
+#include <cstddef>
 #include <exception>
 
 #include <tbb/global_control.h>
@@ -42,6 +43,16 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
         return;
       }
       if (b.status == "interrupted") col.status = "interrupted";
+      // The cells: the down half reversed, then the up half without its start (the same point).
+      std::vector<PartitionPoint> cells;
+      for (const auto& pt : b.points)
+        cells.push_back({pt.value, pt.summary.sticking_fraction.value_or(0.0), pt.stable, pt.loads, pt.loads_note});
+      if (to == req.lo2) {
+        col.points.assign(cells.rbegin(), cells.rend());
+      } else {
+        const size_t skip = col.points.empty() || cells.empty() ? 0 : 1;
+        col.points.insert(col.points.end(), cells.begin() + static_cast<std::ptrdiff_t>(skip), cells.end());
+      }
       col.crossings.insert(col.crossings.end(), b.crossings.begin(), b.crossings.end());
       col.bifurcations.insert(col.bifurcations.end(), b.bifurcations.begin(), b.bifurcations.end());
     }

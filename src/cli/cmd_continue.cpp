@@ -34,7 +34,6 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     orbit.period = pt.period;
   }
   const auto loaded = vibro::LoadScene(path, sets);
-  vibro::frontend::RequireOneContact(loaded, "continue");
   if (!restart_file.empty()) {
     // The stored state must be one this scene can start from, as [initial] is checked.
     const vibro::System at(loaded.scene);
@@ -44,13 +43,25 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
       throw vibro::InputError({fmt::format("--from {}: /branch/X has {} columns (modal coordinates), the scene "
                                            "has {} mode(s): a branch of another scene",
                                            restart_file, X.size(), at.dof())});
-    const double xB = at.ContactDisplacement(X), vB = at.ContactVelocity(V);
-    const double x0 = loaded.scene.stop_position;
-    const double tol = 1e-12 * std::max(1.0, std::abs(x0));
-    if (xB < x0 - tol || (std::abs(xB - x0) <= tol && vB < 0))
-      throw vibro::InputError({fmt::format("--from {}: /branch/X of point {}: expected an admissible state "
-                                           "x_B ≥ x0 (moving away on the stop), found x_B = {}, ẋ_B = {}, x0 = {}",
-                                           restart_file, restart_point, xB, vB, x0)});
+    if (at.contact_count() == 1) {
+      const double xB = at.ContactDisplacement(X), vB = at.ContactVelocity(V);
+      const double x0 = loaded.scene.stop_position;
+      const double tol = 1e-12 * std::max(1.0, std::abs(x0));
+      if (xB < x0 - tol || (std::abs(xB - x0) <= tol && vB < 0))
+        throw vibro::InputError({fmt::format("--from {}: /branch/X of point {}: expected an admissible state "
+                                             "x_B ≥ x0 (moving away on the stop), found x_B = {}, ẋ_B = {}, x0 = {}",
+                                             restart_file, restart_point, xB, vB, x0)});
+    }
+    for (int j = 0; j < at.contact_count() && at.contact_count() > 1; ++j) {
+      const auto& c = at.contacts()[static_cast<size_t>(j)];
+      const double g = c.shape.dot(X) - c.stop, gv = c.shape.dot(V);
+      const double tol = 1e-12 * std::max(1.0, std::abs(c.stop));
+      if (g < -tol || (std::abs(g) <= tol && gv < 0))
+        throw vibro::InputError({fmt::format("--from {}: /branch/X of point {}: expected an admissible state "
+                                             "(every gap ≥ 0, moving away where it is 0), found gap {} = {}, "
+                                             "its velocity {}",
+                                             restart_file, restart_point, j, g, gv)});
+    }
   }
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
@@ -98,12 +109,28 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
-    fmt::print("{:>16} {:>12} {:>8} {:>12}  {}\n", key, "SP", "stable", "max|mu|", "events");
+    // Each point's exact mean contact force and normal work rate, per contact (docs/loads.md).
+    size_t contacts = 0;
+    for (const auto& p : branch.points) contacts = std::max(contacts, p.loads.size());
+    std::string head;
+    for (size_t j = 0; j < contacts; ++j)
+      head += contacts == 1 ? fmt::format(" {:>12} {:>12}", "mean_force", "work_rate")
+                            : fmt::format(" {:>12} {:>12}", fmt::format("mean_force{}", j), fmt::format("work_rate{}", j));
+    // Several contacts: the contact sequence of each point ("0:impact 1:impact") instead of the
+    // one-stop event letters.
+    const bool several = sys.contact_count() > 1;
+    fmt::print("{:>16} {:>12} {:>8} {:>12}{}  {}\n", key, "SP", "stable", "max|mu|", head, several ? "sequence" : "events");
     for (const auto& p : branch.points) {
       double lead = 0;
       for (const auto& m : p.multipliers) lead = std::max(lead, std::abs(m));
-      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}  {}\n", p.value,
-                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, p.signature);
+      std::string loads;
+      for (size_t j = 0; j < contacts; ++j) {
+        const auto cell = [](double v) { return std::isfinite(v) ? fmt::format(" {:>12.6g}", v) : fmt::format(" {:>12}", "-"); };
+        loads += j < p.loads.size() ? cell(p.loads[j].mean_force) + cell(p.loads[j].work_rate) : cell(std::nan("")) + cell(std::nan(""));
+      }
+      fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}{}  {}\n", p.value,
+                 p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, loads,
+                 several ? p.sequence : p.signature);
     }
     for (const auto& b : branch.bifurcations)
       fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);

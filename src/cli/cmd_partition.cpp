@@ -2,6 +2,7 @@
 // parameter plane (docs/orbits.md). The checks and the request are frontend/commands.hpp's,
 // shared with Python's vibro.partition.
 #include <algorithm>
+#include <cmath>
 #include <memory>
 #include <mutex>
 
@@ -16,6 +17,37 @@
 #include "vibro/scene_file.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
+
+namespace {
+
+// The range of the mean contact force and of the normal work rate over a column's cells, per
+// contact (docs/loads.md); the cells themselves are in --json and --out.
+void PrintCellLoads(const vibro::PartitionColumn& c, const std::string& key2) {
+  if (c.points.empty()) return;
+  size_t contacts = 0;
+  for (const auto& p : c.points) contacts = std::max(contacts, p.loads.size());
+  fmt::print("  {:<17} {} points, {} = {:.10g} to {:.10g}\n", "cells", c.points.size(), key2,
+             c.points.front().value2, c.points.back().value2);
+  for (size_t j = 0; j < contacts; ++j) {
+    double f_lo = INFINITY, f_hi = -INFINITY, w_lo = INFINITY, w_hi = -INFINITY;
+    for (const auto& p : c.points) {
+      if (j >= p.loads.size()) continue;
+      if (std::isfinite(p.loads[j].mean_force)) {
+        f_lo = std::min(f_lo, p.loads[j].mean_force);
+        f_hi = std::max(f_hi, p.loads[j].mean_force);
+      }
+      w_lo = std::min(w_lo, p.loads[j].work_rate);
+      w_hi = std::max(w_hi, p.loads[j].work_rate);
+    }
+    const auto range = [](double lo, double hi) {
+      return lo <= hi ? fmt::format("{:.6g} to {:.6g}", lo, hi) : std::string("unknown");
+    };
+    fmt::print("  {:<17} mean force {}, work rate {}\n", fmt::format("loads, contact {}", j), range(f_lo, f_hi),
+               range(w_lo, w_hi));
+  }
+}
+
+}  // namespace
 
 int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
                  const PartitionArgs& a) {
@@ -55,6 +87,7 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
       for (const auto& x : c.crossings)
         fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, keys[1], x.value);
       for (const auto& b : c.bifurcations) fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, keys[1], b.value);
+      PrintCellLoads(c, keys[1]);
     }
   }
   return interrupted ? kExitInterrupted : 0;

@@ -1443,6 +1443,7 @@ bool Automaton<S>::ImpactWhileSetHeld(int k) {
                             k, AbsTime(clock_), was.size()));
   Vb_ = V_;
   for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
+  for (Eigen::Index a = 0; a + 1 < z; ++a) loads_.AddImpulse(Z[static_cast<size_t>(a)], P[a]);  // held ones
   NotifyReset(ResetKind::kHeldSet, X_, Vb_);
   const S vk = mk.ContactVelocity(V_);
   Emit(EventKind::kImpact, v_minus, vk, k);
@@ -1578,10 +1579,11 @@ RunResult Automaton<S>::Run() {
     p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
              multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
     const ClockT<S> from = clock_;
-    // Loads of a phase held on one contact (docs/loads.md); a set held at once: not computed (NaN).
-    if (mode_ == Mode::kSticking && !held_set_.empty()) loads_.Invalidate();
+    // Loads of a phase held on one contact or on a set of contacts at once (docs/loads.md).
     const bool loads = mode_ == Mode::kSticking && held_set_.empty() && opt_.loads && !opt_.observers.empty();
-    if (loads) loads_.SegmentStart(X_, V_);
+    const bool set_loads = mode_ == Mode::kSticking && !held_set_.empty() && opt_.loads && !opt_.observers.empty();
+    if (mode_ == Mode::kSticking && !held_set_.empty() && !set_loads) loads_.Invalidate();
+    if (loads || set_loads) loads_.SegmentStart(X_, V_);
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).
     struct {
@@ -1601,6 +1603,7 @@ RunResult Automaton<S>::Run() {
     }
     p.Evaluate(seg.sigma, X_, V_);
     if (loads) loads_.Segment(active_, M(active_), p, Phase(from), seg.sigma, X_, V_);
+    if (set_loads) loads_.SetSegment(held_set_, models_, Phase(from), seg.sigma, X_, V_);
     if (multi())
       UpdateGaps(p, seg.sigma);
     else if (mode_ == Mode::kFree)

@@ -44,10 +44,13 @@ void TailLoads(const ModelT<S>& m, const S& u, const S& epsilon, S& impulse, S& 
   energy = u * u / (S(2) * m.s_B) * (S(1) - S(2) * epsilon / (S(3) * (S(1) + m.r + m.r * m.r)));
 }
 
-// The sticking phase of one contact, accumulated segment by segment.
+// The sticking phase of one contact, accumulated segment by segment. A phase that was held
+// together with other contacts for a while has no max R (its held-set segments give ∫λ dt, not
+// the maximum of λ): max_unknown keeps it NaN.
 struct StickAccount {
   double duration = 0, integral = 0, max = std::numeric_limits<double>::quiet_NaN();
   bool open = false;
+  bool max_unknown = false;
 };
 
 template <class S>
@@ -57,7 +60,7 @@ class ContactLoadsT {
   using R = Real<S>;
 
   void Resize(size_t contacts) { phases_.assign(contacts, {}); }
-  void Begin(int j) { phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true}; }
+  void Begin(int j) { phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true, false}; }
   // Sticking on several contacts at once: every open account is abandoned (its release reports NaN).
   void Invalidate() {
     for (StickAccount& a : phases_) a = {};
@@ -86,10 +89,93 @@ class ContactLoadsT {
     StickAccount& a = phases_[static_cast<size_t>(j)];
     if (!a.open) return;  // a phase begun before a resume whose checkpoint had no account
     a.duration += R::to_double(sigma);
+    if (a.max_unknown) {
+      a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1));
+      return;
+    }
     // max R first: it evaluates cos φ0 and cos(φ0 + ωσ), which ∫R dt needs too.
     const double mx = R::to_double(ReactionMax(m, p, phase, sigma, X1, V1));
     a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1, &cos_ends_));
     if (!(a.max >= mx)) a.max = mx;
+  }
+
+  // A segment held on the set `held` of several contacts (models[j] each contact's), over local
+  // time sigma from forcing phase `phase`, ending at (X1, V1): every held contact's duration and
+  // ∫λ_j dt in closed form (SetReactionIntegrals); their max λ is left unknown. A set whose
+  // flexibility matrix cannot be solved (dependent contacts) abandons its contacts' accounts.
+  void SetSegment(const std::vector<int>& held, const std::vector<const ModelT<S>*>& models, const S& phase,
+                  const S& sigma, const Vec& X1, const Vec& V1) {
+    Vec lambda;
+    const bool ok = SetReactionIntegrals(held, models, phase, sigma, X0_, V0_, X1, V1, lambda);
+    for (size_t a = 0; a < held.size(); ++a) {
+      StickAccount& acc = phases_[static_cast<size_t>(held[a])];
+      if (!acc.open) continue;
+      if (!ok) {
+        acc = {};
+        continue;
+      }
+      acc.duration += R::to_double(sigma);
+      acc.integral += R::to_double(lambda[static_cast<Eigen::Index>(a)]);
+      acc.max = std::numeric_limits<double>::quiet_NaN();
+      acc.max_unknown = true;
+    }
+  }
+
+  // ∫λ_j dt of every contact j of a held set S over a segment, in closed form from the end states
+  // (docs/loads.md, "Phases held on several contacts"): the modal equations of motion
+  //   Ẍ + DẊ + ΩX = T_A f sin ωt + Σ_{j∈S} T_j λ_j
+  // integrated over [0, σ] give Ω∫X dt = Σ T_j Λ_j − b, b = [Ẋ] + D[X] − T_A f ∫sin ωt dt, and the
+  // held constraints c_jᵀX = x0_j give c_jᵀ∫X dt = x0_j σ; so, with u_j = Ω⁻¹c_j,
+  //   Σ_k (u_jᵀT_k) Λ_k = x0_j σ + u_jᵀ b   for every j ∈ S,
+  // the flexibility matrix of the set times Λ (for one contact: ReactionIntegral). False when that
+  // matrix is singular.
+  static bool SetReactionIntegrals(const std::vector<int>& held, const std::vector<const ModelT<S>*>& models,
+                                   const S& phase, const S& sigma, const Vec& X0, const Vec& V0, const Vec& X1,
+                                   const Vec& V1, Vec& lambda) {
+    const size_t zs = held.size();
+    if (zs == 0 || zs > 4096) return false;
+    const auto z = static_cast<Eigen::Index>(zs);
+    const ModelT<S>& m0 = *models[static_cast<size_t>(held.front())];
+    const Eigen::Index n = m0.omega.size();
+    const S sin_integral = (R::cos(phase) - R::cos(phase + m0.w * sigma)) / m0.w;
+    Vec b(n);
+    for (Eigen::Index i = 0; i < n; ++i)
+      b[i] = (V1[i] - V0[i]) + S(2) * m0.zeta[i] * m0.omega[i] * (X1[i] - X0[i]) - m0.forcing[i] * m0.f * sin_integral;
+    // The augmented system [F | rhs], solved by Gaussian elimination with partial pivoting.
+    std::vector<std::vector<S>> A(zs, std::vector<S>(zs + 1, S(0)));
+    S scale(0);
+    for (Eigen::Index a = 0; a < z; ++a) {
+      const ModelT<S>& ma = *models[static_cast<size_t>(held[static_cast<size_t>(a)])];
+      auto& row = A[static_cast<size_t>(a)];
+      S rhs = ma.x0 * sigma;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (ma.shape[i] == S(0)) continue;
+        const S u = ma.shape[i] / (m0.omega[i] * m0.omega[i]);
+        rhs += u * b[i];
+        for (Eigen::Index k = 0; k < z; ++k)
+          row[static_cast<size_t>(k)] += u * models[static_cast<size_t>(held[static_cast<size_t>(k)])]->contact[i];
+      }
+      row[zs] = rhs;
+      for (Eigen::Index k = 0; k < z; ++k) scale = std::max(scale, R::abs(row[static_cast<size_t>(k)]));
+    }
+    for (size_t c = 0; c < zs; ++c) {
+      size_t piv = c;
+      for (size_t r = c + 1; r < zs; ++r)
+        if (R::abs(A[r][c]) > R::abs(A[piv][c])) piv = r;
+      if (!(R::abs(A[piv][c]) > S(1e-12) * scale)) return false;
+      std::swap(A[c], A[piv]);
+      for (size_t r = c + 1; r < zs; ++r) {
+        const S q = A[r][c] / A[c][c];
+        for (size_t k = c; k <= zs; ++k) A[r][k] -= q * A[c][k];
+      }
+    }
+    lambda.resize(z);
+    for (size_t c = zs; c-- > 0;) {
+      S v = A[c][zs];
+      for (size_t k = c + 1; k < zs; ++k) v -= A[c][k] * lambda[static_cast<Eigen::Index>(k)];
+      lambda[static_cast<Eigen::Index>(c)] = v / A[c][c];
+    }
+    return true;
   }
 
   // Checkpoint (open phases) and resume.
@@ -110,8 +196,9 @@ class ContactLoadsT {
       return;
     for (size_t j = 0; j < phases_.size(); ++j) {
       const bool open = !std::isnan(cp.stick_duration[j]);
-      phases_[j] = {open ? cp.stick_duration[j] : 0.0, open ? cp.reaction_integral[j] : 0.0,
-                    cp.reaction_max[j], open};
+      // An open phase with time held and no max was held with other contacts: its max stays unknown.
+      phases_[j] = {open ? cp.stick_duration[j] : 0.0, open ? cp.reaction_integral[j] : 0.0, cp.reaction_max[j],
+                    open, open && cp.stick_duration[j] > 0 && std::isnan(cp.reaction_max[j])};
     }
   }
 

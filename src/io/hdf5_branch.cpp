@@ -28,6 +28,34 @@ H5Table::Array Rows(const std::string& name, const std::vector<const Eigen::Vect
   return a;
 }
 
+// Per-row, per-contact loads (docs/loads.md) as a table of (rows, m) arrays, one per field of
+// ContactLoads, m the most contacts of any row; a row without loads (or with fewer contacts) is
+// NaN there. `note` holds each row's loads note.
+H5Table LoadsTable(const std::vector<const std::vector<ContactLoads>*>& rows, const std::vector<std::string>& notes) {
+  size_t m = 0;
+  for (const auto* r : rows) m = std::max(m, r->size());
+  using Field = double ContactLoads::*;
+  const std::pair<const char*, Field> fields[] = {
+      {"impacts_per_period", &ContactLoads::impacts_per_period},
+      {"impulse_per_period", &ContactLoads::impulse_per_period},
+      {"reaction_integral_per_period", &ContactLoads::reaction_integral_per_period},
+      {"mean_force", &ContactLoads::mean_force},
+      {"dissipated_power", &ContactLoads::dissipated_power},
+      {"work_rate", &ContactLoads::work_rate},
+      {"contact_fraction", &ContactLoads::contact_fraction}};
+  H5Table t;
+  for (const auto& [name, field] : fields) {
+    H5Table::Array a{name, {rows.size(), m}, std::vector<double>(rows.size() * m, kNaN)};
+    for (size_t i = 0; i < rows.size(); ++i)
+      for (const ContactLoads& c : *rows[i])
+        if (c.contact >= 0 && static_cast<size_t>(c.contact) < m) a.data[i * m + static_cast<size_t>(c.contact)] = c.*field;
+    t.arrays.push_back(std::move(a));
+  }
+  t.strings.emplace_back("note", notes);
+  t.integers = {{"contacts", static_cast<long long>(m)}};
+  return t;
+}
+
 }  // namespace
 
 void Hdf5Store::WriteBranch(const Branch& b) {
@@ -40,7 +68,8 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   H5Table t;
   std::vector<double> value, sp, xb, phase, lead, stable, count, t0, offsets{0}, ip, ivb, iva;
   std::vector<double> mu(N * m * 2, kNaN), sticks(N * k * 2, kNaN);
-  std::vector<std::string> events;
+  std::vector<std::string> events, sequence;
+  std::vector<double> icontact;
   std::vector<const Eigen::VectorXd*> X, V, q, qd;
   for (size_t i = 0; i < N; ++i) {
     const auto& pt = b.points[i];
@@ -50,6 +79,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
     phase.push_back(pt.section_phase);
     stable.push_back(pt.stable ? 1 : 0);
     events.push_back(pt.signature);
+    sequence.push_back(pt.sequence);
     double l = 0;
     for (size_t j = 0; j < pt.multipliers.size(); ++j) {
       l = std::max(l, std::abs(pt.multipliers[j]));
@@ -71,6 +101,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
       ip.push_back(im.phase);
       ivb.push_back(im.v_before);
       iva.push_back(im.v_after);
+      icontact.push_back(im.contact);
     }
     offsets.push_back(static_cast<double>(ip.size()));
   }
@@ -98,22 +129,33 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   col("impact_phase", ip);
   col("impact_v_before", ivb);
   col("impact_v_after", iva);
+  col("impact_contact", icontact, 'i');
   t.strings.emplace_back("events", events);
+  t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
   t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
   WriteTable("/branch", t);
+  std::vector<const std::vector<ContactLoads>*> loads;
+  std::vector<std::string> notes;
+  for (const auto& pt : b.points) {
+    loads.push_back(&pt.loads);
+    notes.push_back(pt.loads_note);
+  }
+  WriteTable("/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
-  std::vector<double> bv, bb;
+  std::vector<double> bv, bb, bc;
   std::vector<std::string> kind, detail;
   for (const auto& x : b.bifurcations) {
     bv.push_back(x.value);
     bb.push_back(x.bracket);
+    bc.push_back(x.contact);
     kind.push_back(x.kind);
     detail.push_back(x.detail);
   }
   bt.arrays.push_back({"value", {bv.size()}, bv});
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
+  bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
   bt.strings = {{"kind", kind}, {"detail", detail}};
   WriteTable("/bifurcations", bt);
 
@@ -242,6 +284,31 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   h5::WriteColumn(g.get(), "boundary_value1", bv1);
   h5::WriteColumn(g.get(), "boundary_value2", bv2);
   h5::WriteStrings(g.get(), "boundary_kind", bk);
+  // The cells: every branch point of every column, with its loads in /partition/loads.
+  std::vector<double> pv1, pv2, psp, pst, pcol;
+  std::vector<const std::vector<ContactLoads>*> loads;
+  std::vector<std::string> notes;
+  for (size_t i = 0; i < columns.size(); ++i)
+    for (const auto& pt : columns[i].points) {
+      pcol.push_back(static_cast<double>(i));
+      pv1.push_back(columns[i].value1);
+      pv2.push_back(pt.value2);
+      psp.push_back(pt.sticking_fraction);
+      pst.push_back(pt.stable ? 1 : 0);
+      loads.push_back(&pt.loads);
+      notes.push_back(pt.loads_note);
+    }
+  H5Table cells = LoadsTable(loads, notes);
+  const auto col = [&](const char* name, std::vector<double> v, char type = 'f') {
+    const size_t rows = v.size();
+    cells.arrays.push_back({name, {rows}, std::move(v), type});
+  };
+  col("column", pcol, 'i');
+  col("value1", pv1);
+  col("value2", pv2);
+  col("sticking_fraction", psp);
+  col("stable", pst, 'u');
+  WriteTable("/partition/points", cells);
 }
 
 }  // namespace vibro

@@ -107,6 +107,15 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
                        {"note", s.note}};
 }
 
+// A branch point's or partition cell's exact loads (no intervals): "loads", and "loads_note"
+// when there is one.
+void AddPointLoads(nlohmann::json& j, const std::vector<ContactLoads>& loads, const std::string& note) {
+  LoadsSummary s;
+  s.contacts = loads;
+  s.note = note;
+  AddLoads(j, s);
+}
+
 std::string SimulationJson(const Scene& scene, const RunResult& r, const Attractor& a, const LyapunovSpectrum* ly,
                            const LoadsSummary* loads) {
   nlohmann::json j;
@@ -269,13 +278,16 @@ std::string BranchJson(const Branch& b) {
                       {"stable", pt.stable},
                       {"floquet_multipliers", mu},
                       {"events", pt.signature},
+                      {"sequence", pt.sequence},
                       {"x_B", pt.x_B},
                       {"section_phase", pt.section_phase}});
+    AddPointLoads(points.back(), pt.loads, pt.loads_note);
   }
   j["points"] = points;
   auto bif = nlohmann::json::array();
   for (const auto& x : b.bifurcations)
-    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket}});
+    bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket},
+                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()}});
   j["bifurcations"] = bif;
   auto rel = nlohmann::json::array();
   for (const auto& x : b.relabels)
@@ -297,8 +309,13 @@ std::string PartitionJson(const std::string& param1, const std::string& param2,
     for (const auto& x : c.crossings) xs.push_back({{"level", x.level}, {"value", x.value}});
     auto bs = nlohmann::json::array();
     for (const auto& b : c.bifurcations) bs.push_back({{"kind", b.kind}, {"value", b.value}});
+    auto cells = nlohmann::json::array();
+    for (const auto& pt : c.points) {
+      cells.push_back({{"value2", pt.value2}, {"sticking_fraction", pt.sticking_fraction}, {"stable", pt.stable}});
+      AddPointLoads(cells.back(), pt.loads, pt.loads_note);
+    }
     cols.push_back({{"value1", c.value1}, {"status", c.status}, {"crossings", xs},
-                    {"bifurcations", bs}, {"end_down", c.end_down}, {"end_up", c.end_up}});
+                    {"bifurcations", bs}, {"end_down", c.end_down}, {"end_up", c.end_up}, {"points", cells}});
   }
   j["columns"] = cols;
   return j.dump();

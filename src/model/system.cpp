@@ -250,6 +250,16 @@ double System::Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, doub
   return (elastic - s_A_ * f_ * std::sin(phase)) / s_B_;
 }
 
+double System::ContactReaction(int j, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                               double phase) const {
+  if (j == 0) return Reaction(X, V, phase);
+  const ContactModel& c = contacts_[static_cast<size_t>(j)];
+  double elastic = 0.0;
+  for (Eigen::Index i = 0; i < X.size(); ++i)
+    elastic += c.shape[i] * (omega_[i] * omega_[i] * X[i] + 2.0 * zeta_[i] * omega_[i] * V[i]);
+  return (elastic - c.s_A * f_ * std::sin(phase)) / c.s_B;
+}
+
 double System::ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                             double phase) const {
   const Eigen::VectorXd w2 = omega_.cwiseAbs2();

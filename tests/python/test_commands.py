@@ -74,12 +74,15 @@ def test_partition_equals_cli(tmp_path):
     got = vibro.partition(scene, ("excitation.frequency", "excitation.amplitude"), (2.8, 5), (1.05, 12), [0.5],
                           steps1=1, from2=1.5, out=out)
     crossings, boundaries = got.pop("crossings"), got.pop("boundaries")
+    cells, loads = got.pop("cells"), got.pop("loads")
     want = cli_json("partition", FIG8, "--set", "stop.restitution=0.0", "--params",
                     "excitation.frequency,excitation.amplitude", "--range1", "2.8,5", "--steps1", "1",
                     "--range2", "1.05,12", "--from2", "1.5", "--sticking-fraction", "0.5")
     assert got == want
     assert len(crossings) == sum(len(c["crossings"]) for c in want["columns"]) > 0
     assert len(boundaries) == sum(len(c["bifurcations"]) for c in want["columns"])
+    assert list(cells["value2"]) == [x["value2"] for c in want["columns"] for x in c["points"]]
+    assert list(loads["mean_force"][:, 0]) == [x["loads"][0]["mean_force"] for c in want["columns"] for x in c["points"]]
     p = vibro.read(out)["partition"]
     assert np.array_equal(p["crossing_value2"], crossings["value2"])
     assert list(p["boundary_kind"]) == list(boundaries["kind"])

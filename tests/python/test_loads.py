@@ -59,3 +59,94 @@ def test_blocks_argument_and_too_short_run():
     summary = vibro.simulate(s, blocks=10).summary
     assert summary["loads"][0]["mean_force_ci"] is None
     assert "too short" in summary["loads_window"]["note"]
+
+
+def _mean_x(scene_path, value, t0, X, V, spp=4000):
+    """⟨x⟩ over one period of the 1-DOF Fig. 8 orbit through (t0, X, V) at f = value: a dense run
+    of two periods from that state, the trapezoid rule over the first period's samples. With
+    ω_1 = 1 and T_A = T_B = 1 it is the mean elastic force, which the mean contact force must
+    equal (momentum balance over a period, docs/loads.md §6)."""
+    s = vibro.load_scene(scene_path, set={"excitation.amplitude": float(value), "initial.time": float(t0),
+                                          "initial.displacement": [float(x) for x in X],
+                                          "initial.velocity": [float(v) for v in V],
+                                          "run.periods": 2, "run.samples_per_period": spp})
+    smp = vibro.simulate(s).samples
+    x = smp["x_B"][:spp + 1]
+    T = 2 * math.pi / 2.8
+    assert abs(smp["t"][spp] - smp["t"][0] - T) < 1e-9 * T
+    return (x.sum() - 0.5 * (x[0] + x[-1])) * (T / spp) / T
+
+
+def test_branch_loads(tmp_path):
+    """Along a Fig. 8 branch: the loads arrays are the points' JSON and the file's /branch/loads;
+    each point's mean force is the orbit's mean deflection (positions, not impulses); a point's
+    loads are vibro.orbit's at its value."""
+    path = os.path.join(SCENES, "fig08_preload.toml")
+    out = str(tmp_path / "b.h5")
+    scene = vibro.load_scene(path, set={"excitation.amplitude": 1.001})
+    b = vibro.continue_(scene, "excitation.amplitude", 1.4, out=out)
+    n = len(b["points"])
+    assert n > 10
+    for k in vibro.LOAD_FIELDS:
+        assert b["loads"][k].shape == (n, 1)
+        assert list(b["loads"][k][:, 0]) == [p["loads"][0][k] for p in b["points"]]
+    f = vibro.read(out)["branch"]
+    for k in vibro.LOAD_FIELDS:
+        np.testing.assert_array_equal(f["loads"][k], b["loads"][k])
+    assert f["loads"].attrs["contacts"] == 1 and all(note == "" for note in f["loads"]["note"])
+    for i in range(0, n, n // 5):
+        p = b["points"][i]
+        F = b["loads"]["mean_force"][i, 0]
+        mean_x = _mean_x(path, p["value"], f["section_time"][i], f["X"][i], f["V"][i])
+        assert abs(F - mean_x) < 2e-6 * F, (p["value"], F, mean_x)
+    for i in (n // 3, n // 2):
+        p = b["points"][i]
+        o = vibro.orbit(vibro.load_scene(path, set={"excitation.amplitude": p["value"]}))
+        assert o["status"] == "converged"
+        for k in vibro.LOAD_FIELDS:
+            assert abs(o["loads"][0][k] - p["loads"][0][k]) <= 1e-8 * abs(o["loads"][0][k]) + 1e-14, k
+
+
+def test_partition_cells_loads(tmp_path):
+    """Over the Fig. 9 plane: the cells and their loads in the dict, the JSON and /partition/points;
+    a cell's loads are vibro.orbit's at (ω, f)."""
+    path = os.path.join(SCENES, "fig08_preload.toml")
+    out = str(tmp_path / "p.h5")
+    d = vibro.partition(path, ("excitation.frequency", "excitation.amplitude"), (2.8, 6.0), (1.0, 1.4), [0.5],
+                        steps1=1, from2=1.02, out=out)
+    cells = d["cells"]
+    assert len(cells) == sum(len(c["points"]) for c in d["columns"]) > 20
+    assert set(cells["value1"]) == {2.8, 6.0}
+    g = vibro.read(out)["partition"]["points"]
+    np.testing.assert_array_equal(g["value1"], cells["value1"])
+    np.testing.assert_array_equal(g["value2"], cells["value2"])
+    for k in vibro.LOAD_FIELDS:
+        assert d["loads"][k].shape == (len(cells), 1)
+        np.testing.assert_array_equal(g[k], d["loads"][k])
+    i = len(cells) // 3
+    w, fv = cells["value1"][i], cells["value2"][i]
+    o = vibro.orbit(vibro.load_scene(path, set={"excitation.frequency": float(w), "excitation.amplitude": float(fv)}))
+    assert o["status"] == "converged"
+    for k in vibro.LOAD_FIELDS:
+        assert abs(o["loads"][0][k] - d["loads"][k][i, 0]) <= 1e-8 * abs(o["loads"][0][k]) + 1e-14, k
+
+
+def test_held_set_phases_in_closed_form():
+    """Two masses held on both stops at once (contacts_held_pair.toml, docs/loads.md "Phases held on
+    several contacts at once"): every phase of mass 1 has ∫λ_1 dt = 0.1Δt + 0.5(cos ωt_r − cos ωt_s)/ω
+    (λ = K d − b f sin ωt with q = d held), and the summary's loads are known."""
+    path = os.path.join(os.path.dirname(__file__), "..", "reference", "contacts", "scenes", "contacts_held_pair.toml")
+    r = vibro.simulate(vibro.load_scene(path, set={"run.periods": 20}))
+    e = r.events
+    w = 0.7
+    one = e["contact"] == 1
+    sticks, releases = e[one & (e["kind"] == 3)], e[one & (e["kind"] == 4)]
+    assert len(releases) >= 15
+    for rel in releases:
+        ts = sticks["t"][sticks["t"] < rel["t"]].max()
+        exact = 0.1 * (rel["t"] - ts) + 0.5 * (math.cos(w * rel["t"]) - math.cos(w * ts)) / w
+        assert abs(rel["reaction_integral"] - exact) < 1e-12 * rel["t"], (rel["t"], rel["reaction_integral"], exact)
+        assert math.isnan(rel["reaction_max"])
+    assert not np.any((e["contact"] == 0) & (e["kind"] == 4))  # mass 0 never leaves
+    for c in r.summary["loads"]:
+        assert c["mean_force"] is not None and c["reaction_integral_per_period"] is not None

@@ -54,7 +54,10 @@ def test_orbit_continue_sweep_equal_cli():
     branch = vibro.continue_(scene, "excitation.amplitude", 2.0, max_points=40)
     want = cli_json("continue", path, "--param", "excitation.amplitude", "--to", "2.0", "--max-points", "40")
     table = branch.pop("table")
+    loads = branch.pop("loads")
     assert branch == want
+    # The loads arrays are the points' loads, per contact.
+    assert [p["loads"][0]["work_rate"] for p in want["points"]] == list(loads["work_rate"][:, 0])
     # The table is the points' columns.
     assert [p["value"] for p in want["points"]] == list(table["value"])
     assert [p["stable"] for p in want["points"]] == list(table["stable"])

@@ -114,6 +114,59 @@ TEST(LoadsMomentumBalance, SeveralContacts) {
 
 // Energy over [a, b): E(b) − E(a) = ∫ f sin ωt (μT_A)ᵀẊ dt − ∫ Ẋᵀ μ D Ẋ dt − Σ impact losses, with
 // μ_i = 1/T_B,i (every mode seen by the single contact), integrals by the trapezoid rule.
+// Two masses held on two stops at once (tests/reference/contacts/scenes/contacts_held_pair.toml:
+// m = k = 1, K = [[2, −1], [−1, 2]], stops q_0 ≥ 0.3 and q_1 ≥ 0.2, r = 0, f = 0.5 on mass 1,
+// ω = 0.7). Mass 0 is held throughout (λ_0 = 0.6 − q_1 > 0), so every sticking phase of mass 1 is
+// held on both stops: q = d constant, and the contact forces are algebraic, λ = K d − b f sin ωt,
+// λ_1 = 0.1 − 0.5 sin ωt; over a phase [t_s, t_r]
+//   ∫λ_1 dt = 0.1 (t_r − t_s) + 0.5 (cos ωt_r − cos ωt_s)/ω   (long double, independent of vibro).
+Scene HeldPair(long long periods, int spp) {
+  Scene s = LoadScene(std::string(VIBRO_CONTACTS_SCENES_DIR) + "/contacts_held_pair.toml", {}).scene;
+  s.run.periods = periods;
+  s.run.samples_per_period = spp;
+  return s;
+}
+
+TEST(LoadsHeldSet, TwoMassesOnBothStopsClosedForm) {
+  const Recorded rec = RunLoads(HeldPair(20, 0), 0, 0);
+  ASSERT_EQ(rec.result.status, RunStatus::kOk) << rec.result.message;
+  const long double w = 0.7L;
+  double t_stick = std::nan("");
+  int phases = 0;
+  for (const Event& e : rec.log.events) {
+    if (e.contact == 0) {
+      EXPECT_NE(e.kind, EventKind::kRelease) << "mass 0 leaves its stop at t = " << e.t;
+    }
+    if (e.contact != 1) continue;
+    if (e.kind == EventKind::kStick) t_stick = e.t;
+    if (e.kind != EventKind::kRelease) continue;
+    ASSERT_TRUE(std::isfinite(t_stick));
+    const long double ts = t_stick, tr = e.t;
+    const long double exact = 0.1L * (tr - ts) + 0.5L * (std::cos(w * tr) - std::cos(w * ts)) / w;
+    EXPECT_NEAR(e.stick_duration, static_cast<double>(tr - ts), 1e-12 * static_cast<double>(tr));
+    // Event times carry the absolute-time rounding (a few ulp of t): the integral too.
+    EXPECT_NEAR(e.reaction_integral, static_cast<double>(exact), 1e-12 * static_cast<double>(tr)) << "t = " << e.t;
+    EXPECT_TRUE(std::isnan(e.reaction_max));  // the max of λ over a held set is not computed
+    ++phases;
+  }
+  EXPECT_GE(phases, 15);
+  // The run's loads are known: the note names no contact, every mean is finite.
+  const LoadsSummary s = rec.loads;
+  EXPECT_EQ(s.note.find("not accounted"), std::string::npos) << s.note;
+  ASSERT_EQ(s.contacts.size(), 2u);
+  for (const ContactLoads& c : s.contacts) {
+    EXPECT_TRUE(std::isfinite(c.mean_force)) << c.contact;
+    EXPECT_TRUE(std::isfinite(c.reaction_integral_per_period)) << c.contact;
+  }
+  EXPECT_NEAR(s.contacts[0].contact_fraction, 1.0, 1e-15);
+}
+
+TEST(LoadsMomentumBalance, HeldPairBothStops) {
+  // Mass 0 held for the whole window (its reaction only through the per-period account of an
+  // open phase), mass 1 alternating flights and phases held on both stops.
+  ExpectMomentumBalance(HeldPair(40, 4000), 40, 4000, 2e-6);
+}
+
 TEST(LoadsEnergyBalance, DampedChain2) {
   Scene s = Load("chain2_damped.toml", {});
   const int spp = 20000;

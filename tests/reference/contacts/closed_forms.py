@@ -129,6 +129,117 @@ def admissible(orb):
 
 
 # ---------------------------------------------------------------------------------------------
+# Stability of the symmetric orbit, its fold and its symmetry-breaking pitchfork (T5)
+#
+# With the symmetry S(x, x') = (-x, -x') and the forcing's sign change over half a period, the
+# impact map over one period is G o G, where G maps an impact on +D (phase phi, arrival speed V)
+# to the next impact on -D, reflected by S: G(phi, V) = (phi + w s - pi, -x'(s)) with s the flight
+# time to -D. The symmetric orbit is a fixed point of G (s = T/2); the Floquet multipliers of the
+# period-1 orbit are the squares of DG's eigenvalues, det DG = r^2 (one impact). Hence a complex
+# pair of multipliers has modulus r^2, no multiplier reaches -1 (DG would need eigenvalues +-i,
+# det 1), and a multiplier reaches +1 in two ways:
+#   DG eigenvalue +1: tr DG = 1 + r^2, the fold of the symmetric family (the discriminant of (T2)
+#                     vanishes: U^2 (k1^2 + k2^2) = D^2 k2^2);
+#   DG eigenvalue -1: tr DG = -(1 + r^2), a pitchfork: the orbit loses its symmetry and two
+#                     mirror-image asymmetric orbits branch off.
+
+
+def half_map_jacobian(orb):
+    """DG at the symmetric orbit, in closed form (implicit differentiation of x(s; phi, V) = -D
+    at s = T/2 along the flight from (D, -r V) at phase phi)."""
+    w1, a, D, r, w, V, phi = orb.w1, orb.a, orb.D, orb.r, orb.w, orb.V, orb.phi
+    U = a / (w1**2 - w**2)
+    s = mp.pi / w
+    c, sn = mp.cos(w1 * s), mp.sin(w1 * s)
+    x_phi = -U * mp.cos(phi) * c + U * w * mp.sin(phi) / w1 * sn + U * mp.cos(phi + w * s)
+    x_V = -r / w1 * sn
+    v_phi = U * w1 * mp.cos(phi) * sn + U * w * mp.sin(phi) * c - U * w * mp.sin(phi + w * s)
+    v_V = -r * c
+    v_end, acc_end = -V, w1**2 * D - a * mp.sin(phi)
+    s_phi, s_V = -x_phi / v_end, -x_V / v_end
+    return mp.matrix([[1 + w * s_phi, w * s_V],
+                      [-(v_phi + acc_end * s_phi), -(v_V + acc_end * s_V)]])
+
+
+def half_map(orb, phi, V):
+    """G(phi, V) by propagation of the closed-form flight (for a finite-difference check of DG)."""
+    w1, a, D, r, w = orb.w1, orb.a, orb.D, orb.r, orb.w
+    f = lambda s: flight(D, -r * V, phi / w, w1, a, w, s)
+    s = mp.findroot(lambda s: f(s)[0] + D, mp.pi / w)
+    return phi + w * s - mp.pi, -f(s)[1]
+
+
+def floquet_multipliers(orb):
+    """The multipliers of the period-1 orbit: the squares of DG's eigenvalues."""
+    return [e**2 for e in mp.eig(half_map_jacobian(orb))[0]]
+
+
+def pitchfork_amplitude(w1, D, r, w, lo, hi):
+    """The forcing amplitude a in [lo, hi] at which the stable symmetric orbit (largest V) loses
+    its symmetry: tr DG = -(1 + r^2). The sign of tr DG + 1 + r^2 must change in [lo, hi]."""
+    w1, D, r, w = _mp(w1, D, r, w)
+
+    def g(a):
+        orb = symmetric_orbits(w1, a, D, r, w)[0]
+        J = half_map_jacobian(orb)
+        return J[0, 0] + J[1, 1] + 1 + r**2
+
+    return mp.findroot(g, (mp.mpf(lo), mp.mpf(hi)), solver="anderson")
+
+
+def fold_frequency(w1, a, D, r, lo, hi):
+    """The forcing frequency w in [lo, hi] at which the two symmetric orbits of (T2) meet: the
+    discriminant U^2 (k1^2 + k2^2) - D^2 k2^2 vanishes."""
+    w1, a, D, r = _mp(w1, a, D, r)
+
+    def disc(w):
+        U = a / (w1**2 - w**2)
+        k1 = (1 + r) * mp.tan(w1 * mp.pi / w / 2) / (2 * w1)
+        k2 = (1 - r) / (2 * w)
+        return U**2 * (k1**2 + k2**2) - D**2 * k2**2
+
+    return mp.findroot(disc, (mp.mpf(lo), mp.mpf(hi)), solver="anderson")
+
+
+# ---------------------------------------------------------------------------------------------
+# One-sided orbits and grazing of the other stop (T6)
+#
+# An orbit that hits only the upper stop +D, once every q periods: impact at phase phi with arrival
+# speed V (x' = V before, -r V after), a free flight of q T back to +D arriving with x' = V. Its
+# lowest point min x over the flight does not depend on where the lower stop is, as long as the
+# flight does not reach it: the lower stop at -D2 is grazed exactly when -D2 = min x.
+
+
+def one_sided_orbit(w1, a, D, r, w, q, phi0, V0):
+    """The orbit of period q with one impact on +D, by mpmath.findroot on (phi, V) from the guess
+    (phi0, V0): flight(D, -r V) over q T ends at (D, V)."""
+    w1, a, D, r, w = _mp(w1, a, D, r, w)
+    span = 2 * mp.pi * q / w
+
+    def residual(phi, V):
+        x, v = flight(D, -r * V, phi / w, w1, a, w, span)
+        return [x - D, v - V]
+
+    phi, V = mp.findroot(residual, (mp.mpf(phi0), mp.mpf(V0)))
+    return Orbit(V, phi, w1, a, D, r, w), span
+
+
+def flight_minimum(orb, span, samples=4000):
+    """The lowest point of the flight from just after the impact on +D over `span` (sampled, each
+    sampled minimum refined on x' = 0): (min x, its time after the impact)."""
+    t0 = orb.phi / orb.w
+    f = lambda s: flight(orb.D, -orb.r * orb.V, t0, orb.w1, orb.a, orb.w, s)
+    xs = [f(span * k / samples)[0] for k in range(samples + 1)]
+    best = (min(xs), None)
+    for k in range(1, samples):
+        if xs[k] <= xs[k - 1] and xs[k] <= xs[k + 1]:
+            s = mp.findroot(lambda s: f(s)[1], span * k / samples)
+            if 0 < s < span and f(s)[0] <= best[0]:
+                best = (f(s)[0], s)
+    return best
+
+
+# ---------------------------------------------------------------------------------------------
 # r = 0 with sticking (T3) and the lower limit (T4)
 
 
