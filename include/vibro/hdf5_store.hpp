@@ -4,7 +4,8 @@
 // src/io/hdf5_*.cpp.
 //
 // Crash safety: rows are buffered in memory and written, with the latest checkpoint, at flushes
-// (every `flush_interval` seconds of wall time and at the end). Between flushes nothing touches
+// (every `flush_interval` seconds of wall time, when the rows held reach 8 MiB, and at the end).
+// Between flushes nothing touches
 // the file's metadata (metadata-cache evictions are off) and freed file space is never reused
 // (file-space strategy NONE), so the file on disk is always the consistent state of the last
 // flush: after a kill -9 it opens as it is and holds everything up to the last flush.

@@ -65,7 +65,11 @@ class LyapunovObserver final : public Observer {
   std::vector<int> period_stuck_, window_stuck_;
   Eigen::MatrixXd shapes_;    // c_j as columns, (n, m)
   Eigen::MatrixXd frame_;     // orthonormal frame Q, (2n, 2n)
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;  // its storage reused every period
+  // Householder QR of the period's tangent map (Orthonormalize): R's diagonal and the reflectors,
+  // storage reused every period.
+  void Orthonormalize(const Eigen::MatrixXd& J);
+  Eigen::MatrixXd qr_;      // J reduced in place: R on and above the diagonal, (2n, 2n)
+  Eigen::VectorXd tau_;     // the reflectors' coefficients, (2n)
   Eigen::MatrixXd block_sums_;  // Σ log|R_ii| per block, (2n, kBlocks)
   Eigen::VectorXi block_periods_;
   long long measured_ = 0, singular_ = 0;

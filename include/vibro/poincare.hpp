@@ -64,10 +64,16 @@ class TangentTracker final : public Observer {
     double e = 0, s = 0, r = 0;
     Eigen::MatrixXd Pi;       // plastic projection I − T_j c_jᵀ/W_jj, (n, n)
     Eigen::MatrixXd G_stick;  // first-order matrix of the flow with contact j held, (2n, 2n)
+    // The held flow's exp(G s) in closed form (undamped: HeldFlight), from the constrained modes
+    // of docs/model.md §4.2: v_0 = static_shape, V = [v_k] (n, n−1), L = [l_kᵀ] (n−1, n), ω'_k.
+    bool closed_form = false;
+    Eigen::VectorXd v0, nu;
+    Eigen::MatrixXd V, L;
   };
   Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                         double phase, int contact = 0) const;
   void FreeFlight(double duration, Eigen::MatrixXd& m) const;
+  void HeldFlight(const ContactTangent& ct, double duration);  // phi_ ← exp(G_stick s) phi_
   void Impact(const Reset& r, int contact);
   // S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ/(∇h·f⁻), ∂g = diag(I, dV), ∇h = (c_k, 0), applied to the product.
   void Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus,
@@ -81,6 +87,8 @@ class TangentTracker final : public Observer {
   Eigen::MatrixXd phi_;
   Eigen::VectorXd w2_, D_;                  // ω_i², 2ζ_iω_i
   Eigen::VectorXd du_, dv_;                 // the impact saltation's column: work space, (n)
+  Eigen::VectorXd xi_, eta_, held_c_, held_s_;  // HeldFlight's work space, (n − 1)
+  Eigen::VectorXd salt_u_, salt_v_;         // Saltation's work space, (2n) and (n)
   bool singular_ = false;
   std::string undefined_;
   // Several contacts: the contact the run sticks on, −1 in free flight, −2 before the first stretch.

@@ -66,9 +66,8 @@ void LyapunovObserver::EndPeriod(long long k) {
     // left out and the frame goes on unchanged.
     if (k >= first_measured_) ++singular_;
   } else {
-    qr_.compute(tangent_.jacobian());
-    const Eigen::MatrixXd& packed = qr_.matrixQR();
-    frame_ = qr_.householderQ();
+    Orthonormalize(tangent_.jacobian());
+    const Eigen::MatrixXd& packed = qr_;
     if (k >= first_measured_) {
       const auto b = static_cast<int>(
           std::min<long long>(kBlocks - 1, (k - first_measured_) * kBlocks / std::max<long long>(1, window_)));
@@ -84,6 +83,55 @@ void LyapunovObserver::EndPeriod(long long k) {
   stuck_ = false;
   period_stuck_.clear();
   tangent_.Restart(frame_);
+}
+
+// J = Q R by Householder reflections (Eigen's householder_qr_inplace_unblocked and householderQ,
+// written out for these small sizes, where the generic code's dispatch outweighs the arithmetic):
+// column k's reflector H_k = I − τ_k v_k v_kᵀ, v_k = (1, x_{k+1..}/(x_k − β)), maps it onto β e_k,
+// β = −sign(x_k)‖x‖ (τ = 0 and β = x_k when the column below the diagonal is zero); R_kk = β.
+// frame_ ← Q = H_0 H_1 ⋯ H_{m−1}.
+void LyapunovObserver::Orthonormalize(const Eigen::MatrixXd& J) {
+  const Eigen::Index m = J.rows(), cols = J.cols();
+  qr_ = J;
+  tau_.resize(cols);
+  for (Eigen::Index k = 0; k < cols && k < m; ++k) {
+    double* x = qr_.col(k).data();
+    const double c0 = x[k];
+    double tail = 0;
+    for (Eigen::Index i = k + 1; i < m; ++i) tail += x[i] * x[i];
+    if (tail <= std::numeric_limits<double>::min()) {
+      tau_[k] = 0;
+      for (Eigen::Index i = k + 1; i < m; ++i) x[i] = 0;
+      continue;
+    }
+    double beta = std::sqrt(c0 * c0 + tail);
+    if (c0 >= 0) beta = -beta;
+    const double scale = 1.0 / (c0 - beta);
+    for (Eigen::Index i = k + 1; i < m; ++i) x[i] *= scale;  // v_k below the diagonal
+    tau_[k] = (beta - c0) / beta;
+    x[k] = beta;
+    for (Eigen::Index j = k + 1; j < cols; ++j) {
+      double* y = qr_.col(j).data();
+      double w = y[k];
+      for (Eigen::Index i = k + 1; i < m; ++i) w += x[i] * y[i];
+      w *= tau_[k];
+      y[k] -= w;
+      for (Eigen::Index i = k + 1; i < m; ++i) y[i] -= w * x[i];
+    }
+  }
+  frame_.setIdentity(m, m);
+  for (Eigen::Index k = std::min(cols, m) - 1; k >= 0; --k) {
+    if (tau_[k] == 0) continue;
+    const double* v = qr_.col(k).data();
+    for (Eigen::Index j = 0; j < m; ++j) {
+      double* y = frame_.col(j).data();
+      double w = y[k];
+      for (Eigen::Index i = k + 1; i < m; ++i) w += v[i] * y[i];
+      w *= tau_[k];
+      y[k] -= w;
+      for (Eigen::Index i = k + 1; i < m; ++i) y[i] -= w * v[i];
+    }
+  }
 }
 
 LyapunovSpectrum LyapunovObserver::Spectrum() const {

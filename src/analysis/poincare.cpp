@@ -12,13 +12,6 @@
 namespace vibro {
 namespace {
 
-Eigen::MatrixXd BlockDiag(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
-  Eigen::MatrixXd m = Eigen::MatrixXd::Zero(a.rows() + b.rows(), a.cols() + b.cols());
-  m.topLeftCorner(a.rows(), a.cols()) = a;
-  m.bottomRightCorner(b.rows(), b.cols()) = b;
-  return m;
-}
-
 Eigen::VectorXd Stack(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
   Eigen::VectorXd z(a.size() + b.size());
   z << a, b;
@@ -157,6 +150,18 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
     t.G_stick = G_free;
     t.G_stick.bottomLeftCorner(n, n) = -A;
     t.G_stick.bottomRightCorner(n, n) = -t.Pi * D.asDiagonal();
+    // Undamped: exp(G s) from the constrained modes (HeldFlight), E = [v_0, V] with E⁻¹ = [cᵀ; L]
+    // (cᵀv_0 = 1, cᵀV = 0).
+    const ConstrainedModes& cm = k.constrained;
+    t.closed_form = !sys.damped() && cm.vectors.rows() == n && cm.vectors.cols() == n - 1 &&
+                    cm.left.rows() == n - 1 && cm.frequencies.size() == n - 1 &&
+                    std::abs(t.c.dot(k.static_shape) - 1.0) <= 1e-12;
+    if (t.closed_form) {
+      t.v0 = k.static_shape;
+      t.nu = cm.frequencies;
+      t.V = cm.vectors;
+      t.L = cm.left;
+    }
     contacts_.push_back(std::move(t));
   }
   phi_ = Eigen::MatrixXd::Identity(2 * n, 2 * n);
@@ -164,6 +169,12 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
   D_ = D;
   du_.resize(n);
   dv_.resize(n);
+  xi_.resize(n - 1);
+  eta_.resize(n - 1);
+  held_c_.resize(n - 1);
+  held_s_.resize(n - 1);
+  salt_u_.resize(2 * n);
+  salt_v_.resize(n);
 }
 
 void TangentTracker::Restart(const Eigen::MatrixXd& start) {
@@ -184,13 +195,13 @@ double TangentTracker::Coupling(int j, int k) const {
 
 Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
                                       const Eigen::VectorXd& V, double phase, int contact) const {
-  const Eigen::VectorXd w2 = sys_.omega().cwiseAbs2();
-  const Eigen::VectorXd D = 2.0 * sys_.damping().cwiseProduct(sys_.omega());
-  Eigen::VectorXd acc = -w2.cwiseProduct(X) - D.cwiseProduct(V) +
-                        sys_.forcing() * (sys_.amplitude() * std::sin(phase));
+  const auto n = sys_.dof();
+  Eigen::VectorXd z(2 * n);
+  z.head(n) = V;
+  z.tail(n) = -w2_.cwiseProduct(X) - D_.cwiseProduct(V) + sys_.forcing() * (sys_.amplitude() * std::sin(phase));
   // Ẍ = free acceleration + T_j λ_j with c_jᵀẌ = 0.
-  if (mode == Mode::kSticking) acc = contacts_[static_cast<size_t>(contact)].Pi * acc;
-  return Stack(V, acc);
+  if (mode == Mode::kSticking) z.tail(n) = contacts_[static_cast<size_t>(contact)].Pi * z.tail(n);
+  return z;
 }
 
 void TangentTracker::OnStretch(const Stretch& s) {
@@ -206,7 +217,10 @@ void TangentTracker::OnStretch(const Stretch& s) {
       Undefined("a sticking phase began without an entry the tangent map knows (several contacts held, "
                 "or a simultaneous plastic impact)");
     held_ = s.contact;
-    phi_ = (contacts_[j].G_stick * s.duration).exp() * phi_;
+    if (contacts_[j].closed_form)
+      HeldFlight(contacts_[j], s.duration);
+    else
+      phi_ = (contacts_[j].G_stick * s.duration).exp() * phi_;
   }
 }
 
@@ -227,6 +241,47 @@ void TangentTracker::FreeFlight(double s, Eigen::MatrixXd& m) const {
       const double x = m(i, j), v = m(n + i, j);
       m(i, j) = b00 * x + b01 * v;
       m(n + i, j) = b10 * x + b11 * v;
+    }
+  }
+}
+
+// exp(G s) of the flow held on contact j, undamped (docs/model.md §4.2): in the coordinates of
+// E = [v_0, V], X = v_0 a + V ξ, Ẋ = v_0 b + V η with a = cᵀX, ξ = LX (b, η likewise from Ẋ), the
+// held flow is ä = 0 (A v_0 = 0) and ξ̈_k = −ω'_k² ξ_k, so that
+//   X(s) = v_0 (a + b s) + V (cos ω's ξ + sin ω's/ω' η),  Ẋ(s) = v_0 b + V (−ω' sin ω's ξ + cos ω's η).
+// Applied in place to the columns of phi_ (no temporaries; loops rather than Eigen's products,
+// whose dispatch costs more than the arithmetic at these sizes).
+void TangentTracker::HeldFlight(const ContactTangent& ct, double s) {
+  const auto n = sys_.dof();
+  const Eigen::Index k = ct.nu.size();
+  for (Eigen::Index i = 0; i < k; ++i) ::sincos(ct.nu[i] * s, &held_s_[i], &held_c_[i]);
+  for (Eigen::Index j = 0; j < phi_.cols(); ++j) {
+    double* x = phi_.col(j).data();
+    double* v = x + n;
+    double a = 0, b = 0;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      a += ct.c[r] * x[r];
+      b += ct.c[r] * v[r];
+    }
+    for (Eigen::Index i = 0; i < k; ++i) {
+      double q = 0, p = 0;
+      for (Eigen::Index r = 0; r < n; ++r) {
+        q += ct.L(i, r) * x[r];
+        p += ct.L(i, r) * v[r];
+      }
+      const double nu = ct.nu[i], sn = held_s_[i], cs = held_c_[i];
+      xi_[i] = cs * q + (nu > 0 ? sn / nu : s) * p;
+      eta_[i] = -nu * sn * q + cs * p;
+    }
+    const double a_s = a + b * s;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      double xr = a_s * ct.v0[r], vr = b * ct.v0[r];
+      for (Eigen::Index i = 0; i < k; ++i) {
+        xr += ct.V(r, i) * xi_[i];
+        vr += ct.V(r, i) * eta_[i];
+      }
+      x[r] = xr;
+      v[r] = vr;
     }
   }
 }
@@ -280,9 +335,18 @@ void TangentTracker::Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd&
     singular_ = true;
     return;
   }
-  const Eigen::MatrixXd dg = BlockDiag(Eigen::MatrixXd::Identity(n, n), dV);
-  const Eigen::VectorXd grad = Stack(c, Eigen::VectorXd::Zero(n));
-  phi_ = (dg + (f_plus - dg * f_minus) * grad.transpose() / denom) * phi_;
+  // S = [[I + u_X cᵀ/denom, 0], [u_V cᵀ/denom, dV]] with u = f⁺ − ∂g f⁻, applied column by column.
+  salt_u_.head(n) = f_plus.head(n) - f_minus.head(n);
+  salt_u_.tail(n) = f_plus.tail(n);
+  salt_u_.tail(n).noalias() -= dV * f_minus.tail(n);
+  for (Eigen::Index j = 0; j < phi_.cols(); ++j) {
+    auto x = phi_.col(j).head(n);
+    auto v = phi_.col(j).tail(n);
+    const double cx = c.dot(x) / denom;
+    salt_v_.noalias() = dV * v;
+    v = salt_v_ + salt_u_.tail(n) * cx;
+    x += salt_u_.head(n) * cx;
+  }
 }
 
 // Contact k = r.contact closes while contact h = held_ sticks (docs/contacts.md, "Periodic
@@ -371,7 +435,6 @@ void TangentTracker::OnReset(const Reset& r) {
   const int j = multi ? r.contact : 0;
   const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
   const Eigen::VectorXd& c = ct.c;
-  const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
   // Saltation matrix S = ∂g + (f⁺ − ∂g f⁻) ∇hᵀ / (∇h·f⁻), guard h = c_jᵀX − e_j (docs/model.md §5.6).
   const auto salt = [&](const Eigen::MatrixXd& dV, Mode after) {
     const double denom = std::isnan(r.contact_velocity_before) ? c.dot(r.V_before) : r.contact_velocity_before;

@@ -89,9 +89,13 @@ class ContactLoadsT {
     StickAccount& a = phases_[static_cast<size_t>(j)];
     if (!a.open) return;  // a phase begun before a resume whose checkpoint had no account
     a.duration += R::to_double(sigma);
-    a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1));
-    if (a.max_unknown) return;
+    if (a.max_unknown) {
+      a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1));
+      return;
+    }
+    // max R first: it evaluates cos φ0 and cos(φ0 + ωσ), which ∫R dt needs too.
     const double mx = R::to_double(ReactionMax(m, p, phase, sigma, X1, V1));
+    a.integral += R::to_double(ReactionIntegral(m, phase, sigma, X0_, V0_, X1, V1, &cos_ends_));
     if (!(a.max >= mx)) a.max = mx;
   }
 
@@ -203,8 +207,9 @@ class ContactLoadsT {
   // Ẍ + DẊ + ΩX = T_A f sin ωt + T_B R integrated over [0, σ], with cᵀX = x0 held, gives
   //   ∫R dt = uᵀ[Ẋ] + uᵀD[X] + x0 σ / φ − (uᵀT_A) f (cos φ0 − cos(φ0 + ωσ)) / ω
   // from the end states alone (exact: no quadrature).
+  // cos_ends: cos φ0 and cos(φ0 + ωσ) when the caller has them.
   static S ReactionIntegral(const ModelT<S>& m, const S& phase, const S& sigma, const Vec& X0,
-                            const Vec& V0, const Vec& X1, const Vec& V1) {
+                            const Vec& V0, const Vec& X1, const Vec& V1, const S (*cos_ends)[2] = nullptr) {
     S uV(0), uDX(0), uTA(0);
     for (Eigen::Index i = 0; i < m.omega.size(); ++i) {
       if (m.shape[i] == S(0)) continue;
@@ -214,7 +219,9 @@ class ContactLoadsT {
       uTA += ui * m.forcing[i];
     }
     const S phi = m.flexibility;
-    const S forcing = uTA * m.f * (R::cos(phase) - R::cos(phase + m.w * sigma)) / m.w;
+    const S forcing = uTA * m.f *
+                      (cos_ends ? S((*cos_ends)[0] - (*cos_ends)[1]) : S(R::cos(phase) - R::cos(phase + m.w * sigma))) /
+                      m.w;
     return (uV + uDX - forcing) / phi + m.x0 * sigma / phi;
   }
 
@@ -234,11 +241,13 @@ class ContactLoadsT {
     const S h = sigma / S(n);
     S rate_prev(0);
     S best = At(m, X0_, V0_, phase, rate_prev);
+    cos_ends_[0] = cos_;
     S s_prev(0), R_prev = best;
     for (int i = 1; i <= n; ++i) {
       const S s = i == n ? sigma : S(h * S(i));
       S rate(0);
       const S Rv = i == n ? At(m, X1, V1, phase + m.w * sigma, rate) : At(m, p, phase, s, rate);
+      if (i == n) cos_ends_[1] = cos_;
       if (Rv > best) best = Rv;
       if (rate_prev > S(0) && rate < S(0)) {
         S a = s_prev, b = s, fa = rate_prev, fb = rate;
@@ -300,12 +309,18 @@ class ContactLoadsT {
   // R (the paper's eq. (5), damped as docs/model.md §7) and Ṙ along the held flow at local time s,
   // without allocation: Ṙ = Σ c_i(ω_i² Ẋ_i + 2ζ_iω_i Ẍ_i) − s_A f ω cos φ over s_B, with Ẍ the
   // constrained acceleration (the free one less T_B times the gap's).
+  // The engine's own R and Ṙ when it has them (the exact engine: no state formed), else from the state.
   S At(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& s, S& rate) const {
+    S held(0);
+    if (p.HeldReaction(s, held, rate)) return held;
     p.Evaluate(s, Xs_, Vs_);
     return At(m, Xs_, Vs_, phase + m.w * s, rate);
   }
+  // Keeps cos φ in cos_.
   S At(const ModelT<S>& m, const Vec& X, const Vec& V, const S& ph, S& rate) const {
-    const S sn = R::sin(ph), cs = R::cos(ph);
+    S sn(0), cs(0);
+    R::sincos(ph, sn, cs);
+    cos_ = cs;
     S elastic(0), r(0), gap_acc(0);
     if (m.damped)
       for (Eigen::Index i = 0; i < X.size(); ++i)
@@ -329,6 +344,8 @@ class ContactLoadsT {
   std::vector<StickAccount> phases_;
   Vec X0_, V0_;
   mutable Vec Xs_, Vs_;
+  mutable S cos_{0};     // cos φ of the last state-based At
+  S cos_ends_[2] = {};   // cos φ0, cos(φ0 + ωσ) of the last ReactionMax
 };
 
 }  // namespace vibro::detail

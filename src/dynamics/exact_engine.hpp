@@ -32,6 +32,7 @@ class ExactEngineT final : public PropagatorT<S> {
   void Evaluate(S sigma, Vec& X, Vec& V) const override;
   S Gap(S sigma) const override;
   S GapOf(int j, S sigma) const override;
+  bool HeldReaction(const S& sigma, S& R, S& rate) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
@@ -600,6 +601,31 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   X.noalias() = cd.m->stick_vectors * xi;
   X += cd.m->x0 * cd.m->static_shape;
   V.noalias() = cd.m->stick_vectors * dxi;
+}
+
+// R and Ṙ as the release search sees them (AdvanceSticking's probe, ReactionProbe's R and Ṙ
+// without its bounds): the constrained modes' closed form, without forming X.
+template <class S>
+bool ExactEngineT<S>::HeldReaction(const S& sigma, S& R, S& rate) const {
+  if (mode_ == Mode::kFree) return false;
+  if (damped_sticking_) {
+    const ProbeT<S> p = Damped().ReactionProbe(sigma);
+    R = p.jet.g;
+    rate = p.jet.g1;
+    return true;
+  }
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto& rho = cd.m->stick_reaction;
+  const ForcingTrigT<S> fw(omega_, sigma);
+  R = cd.static_reaction - cd.reaction_forcing * fw.SinPhase(trig_);
+  rate = -cd.reaction_forcing * omega_ * fw.CosPhase(trig_);
+  for (size_t k = 0; k < cd.stick_modes.size(); ++k) {
+    const auto kk = static_cast<Eigen::Index>(k);
+    const auto st = Flow<S>(cd.stick_modes[k], omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
+    R += rho[kk] * (xi0_[kk] + st.dq);
+    rate += rho[kk] * st.v;
+  }
+  return true;
 }
 
 template <class S>

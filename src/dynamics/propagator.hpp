@@ -103,6 +103,10 @@ class PropagatorT {
   // The gap of contact j at sigma (free flight: without cancellation from its start value;
   // sticking: of a contact that is not held). Gap(σ) is GapOf(start contact, σ).
   virtual S GapOf(int j, S sigma) const { return j == 0 ? Gap(sigma) : S(0); }
+  // Sticking on one contact: its reaction R (the paper's eq. (5)) and Ṙ at sigma of the last
+  // segment, from the engine's own closed form of the held flow (the one its release search
+  // uses); false when the engine has none, and the caller evaluates the state instead.
+  virtual bool HeldReaction(const S& /*sigma*/, S& /*R*/, S& /*rate*/) const { return false; }
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
   // Polled inside long root searches and stepping loops: true stops the segment with a failure

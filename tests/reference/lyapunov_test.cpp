@@ -11,6 +11,7 @@
 #include <complex>
 
 #include <gtest/gtest.h>
+#include <unsupported/Eigen/MatrixFunctions>
 
 #include "support.hpp"
 #include "vibro/lyapunov.hpp"
@@ -46,6 +47,43 @@ LyapunovSpectrum MeasureRun(const System& sys, const Scene& scene, const Initial
   const RunResult r = Simulate(sys, scene, opt);
   EXPECT_EQ(r.status, RunStatus::kOk) << r.message;
   return ly.Spectrum();
+}
+
+// The tangent map of a sticking stretch is exp(G s) with G = [[0, I], [−A, −ΠD]] (docs/model.md
+// §4.2, §5): the tracker applies it in closed form from the constrained modes when the structure is
+// undamped; here against Eigen's Padé exponential of G built from the contact data, for every
+// contact of undamped scenes of 1 to 3 DOF and durations from a hundredth of a period to ten.
+TEST(Lyapunov, HeldFlowTangentEqualsTheMatrixExponential) {
+  for (const char* file : {"fig08_preload.toml", "chain2.toml", "chain3.toml", "contacts_chain2.toml",
+                           "chaotic/chain2_sticking.toml"}) {
+    const Scene scene = Shipped(file);
+    const System sys(scene);
+    const auto n = sys.dof();
+    ASSERT_FALSE(sys.damped()) << file;
+    const Eigen::VectorXd w2 = sys.omega().cwiseAbs2();
+    for (int j = 0; j < sys.contact_count(); ++j) {
+      const ContactModel& k = sys.contacts()[static_cast<size_t>(j)];
+      const Eigen::MatrixXd Pi =
+          Eigen::MatrixXd::Identity(n, n) - k.contact * k.shape.transpose() / k.shape.dot(k.contact);
+      Eigen::MatrixXd G = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+      G.topRightCorner(n, n).setIdentity();
+      G.bottomLeftCorner(n, n) = -Pi * Eigen::MatrixXd(w2.asDiagonal());
+      for (double periods : {0.01, 0.3, 1.0, 10.0}) {
+        const double s = periods * sys.period();
+        // A full frame (not only directions on the held set): start from a dense matrix.
+        Eigen::MatrixXd start(2 * n, 2 * n);
+        for (Eigen::Index a = 0; a < start.rows(); ++a)
+          for (Eigen::Index b = 0; b < start.cols(); ++b) start(a, b) = std::cos(1.0 + 3.0 * a + 7.0 * b);
+        TangentTracker tracker(sys);
+        tracker.Restart(start);
+        tracker.OnStretch({Mode::kSticking, s, j});
+        const Eigen::MatrixXd expected = (G * s).exp() * start;
+        const double scale = 1.0 + expected.cwiseAbs().maxCoeff();
+        EXPECT_LE((tracker.jacobian() - expected).cwiseAbs().maxCoeff(), 1e-12 * scale)
+            << file << " contact " << j << " s = " << s;
+      }
+    }
+  }
 }
 
 TEST(Lyapunov, OneDofStickingOrbitIsSuperstable) {
