@@ -210,7 +210,9 @@ OrbitResult SolveOrbit(const System& sys, const Scene& scene, const OrbitRequest
   if (req.kind == OrbitKind::kAuto) {
     if (reached.kind == "sticking-periodic") kinds = {OrbitKind::kSticking};
     else if (reached.kind == "impact-periodic") kinds = {OrbitKind::kImpact};
-    else if (reached.kind == "not-periodic") kinds = {OrbitKind::kSticking, OrbitKind::kImpact};
+    // Not settled: Newton from where the transient ended, whichever kind it converges to; then
+    // each kind on its own (an impact orbit may be searched from other departures).
+    else if (reached.kind == "not-periodic") kinds = {OrbitKind::kAuto, OrbitKind::kSticking, OrbitKind::kImpact};
     else {
       OrbitResult out;
       out.status = "no-orbit";

@@ -222,3 +222,17 @@ def test_python_continue_gives_the_sequences_and_the_branch_point(tmp_path):
     assert abs(b["bifurcations"][0]["value"] - float(a_star)) < 1e-10
     assert all(p["sequence"] in ("0:impact 1:impact", "1:impact 0:impact") for p in b["points"])
     assert len(b["table"]) == len(b["points"])
+
+
+def test_orbit_from_a_state_just_after_an_impact_with_a_transient(tmp_path):
+    # Started right after an impact on the orbit, every period boundary of the transient is an
+    # impact to rounding: the section state must still be taken on the orbit (it used to be
+    # restarted from the state just before that impact, and Newton went to the no-contact orbit).
+    orb = cf.symmetric_orbits(1, 1, 1, R, "2.5")[0]
+    path = scene_file(tmp_path, "after_impact", a=1.0, t0=float(orb.phi / orb.w), x0=1.0,
+                      v0=float(-orb.r * orb.V))
+    for transient in (1, 50, 200):
+        o = json.loads(vibro("orbit", path, "--transient", transient, "--json").stdout)
+        assert o["status"] == "converged", (transient, o["message"])
+        assert o["sequence"] in ("0:impact 1:impact", "1:impact 0:impact")
+        assert np.allclose(np.abs(o["impact_velocities"]), float(orb.V), rtol=0, atol=1e-10)
