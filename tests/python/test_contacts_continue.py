@@ -236,3 +236,23 @@ def test_orbit_from_a_state_just_after_an_impact_with_a_transient(tmp_path):
         assert o["status"] == "converged", (transient, o["message"])
         assert o["sequence"] in ("0:impact 1:impact", "1:impact 0:impact")
         assert np.allclose(np.abs(o["impact_velocities"]), float(orb.V), rtol=0, atol=1e-10)
+
+
+SHIPPED = sorted(n for n in os.listdir(os.path.join(ROOT, "data", "scenes")) if n.startswith("contacts_"))
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_contact_scene_continues_from_python(name):
+    # Every shipped scene with several contacts: its orbit is continued a few points down in the
+    # frequency from Python, each point with its contact sequence, the same as the CLI's.
+    vibro_py = pytest.importorskip("vibro")
+    path = os.path.join(ROOT, "data", "scenes", name)
+    import tomllib
+    with open(path, "rb") as f:
+        w = tomllib.load(f)["excitation"]["frequency"]
+    b = vibro_py.continue_(path, "excitation.frequency", 0.98 * w, max_points=3)
+    assert len(b["points"]) >= 2, b["end"]
+    assert all(p["sequence"] for p in b["points"]), b["points"]
+    cli = continue_json(path, "--param", "excitation.frequency", "--to", 0.98 * w, "--max-points", 3)
+    assert [p["sequence"] for p in cli["points"]] == [p["sequence"] for p in b["points"]]
+    assert [p["value"] for p in cli["points"]] == [p["value"] for p in b["points"]]
