@@ -14,6 +14,16 @@ double StudentT975(int dof) {
   return t[std::clamp(dof, 1, 9) - 1];
 }
 
+// Applies the Householder reflector I − τ v vᵀ (v_k = 1 implied, v_i for i > k, rows k..m−1) to
+// the column y in place.
+inline void Reflect(const double* v, double tau, Eigen::Index k, Eigen::Index m, double* y) {
+  double w = y[k];
+  for (Eigen::Index i = k + 1; i < m; ++i) w += v[i] * y[i];
+  w *= tau;
+  y[k] -= w;
+  for (Eigen::Index i = k + 1; i < m; ++i) y[i] -= w * v[i];
+}
+
 }  // namespace
 
 LyapunovObserver::LyapunovObserver(const System& sys, const Scene& scene)
@@ -110,27 +120,13 @@ void LyapunovObserver::Orthonormalize(const Eigen::MatrixXd& J) {
     for (Eigen::Index i = k + 1; i < m; ++i) x[i] *= scale;  // v_k below the diagonal
     tau_[k] = (beta - c0) / beta;
     x[k] = beta;
-    for (Eigen::Index j = k + 1; j < cols; ++j) {
-      double* y = qr_.col(j).data();
-      double w = y[k];
-      for (Eigen::Index i = k + 1; i < m; ++i) w += x[i] * y[i];
-      w *= tau_[k];
-      y[k] -= w;
-      for (Eigen::Index i = k + 1; i < m; ++i) y[i] -= w * x[i];
-    }
+    for (Eigen::Index j = k + 1; j < cols; ++j) Reflect(x, tau_[k], k, m, qr_.col(j).data());
   }
   frame_.setIdentity(m, m);
   for (Eigen::Index k = std::min(cols, m) - 1; k >= 0; --k) {
     if (tau_[k] == 0) continue;
     const double* v = qr_.col(k).data();
-    for (Eigen::Index j = 0; j < m; ++j) {
-      double* y = frame_.col(j).data();
-      double w = y[k];
-      for (Eigen::Index i = k + 1; i < m; ++i) w += v[i] * y[i];
-      w *= tau_[k];
-      y[k] -= w;
-      for (Eigen::Index i = k + 1; i < m; ++i) y[i] -= w * v[i];
-    }
+    for (Eigen::Index j = 0; j < m; ++j) Reflect(v, tau_[k], k, m, frame_.col(j).data());
   }
 }
 

@@ -30,12 +30,18 @@ struct TransientLog final : Observer {
 // Observer catching the dense sample with a given index.
 struct SampleCatcher final : Observer {
   long long target = 0, seen = 0;
+  // When finite: the sample nearest to this time (within half a spacing) instead of the index
+  // (a long run's samples need not all be emitted: none inside a chattering tail's jump).
+  double target_time = std::numeric_limits<double>::quiet_NaN(), half_spacing = 0;
   bool caught = false;
   double t = 0;
   Eigen::VectorXd X, V;
   Mode mode = Mode::kFree;
   void OnSample(const Sample& s) override {
-    if (seen++ == target) {
+    const bool hit = std::isfinite(target_time) ? !caught && std::abs(s.t - target_time) <= half_spacing
+                                                : seen == target;
+    ++seen;
+    if (hit) {
       caught = true;
       t = s.t;
       X = s.X;
@@ -748,7 +754,9 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
         return std::abs(c.shape.dot(end.X) - c.stop) <= 1e-9 * std::max(1.0, std::abs(c.stop)) &&
                c.shape.dot(end.V) < 0;  // on it and moving into it: an impact not yet applied
       });
-  if (!event_at_end) {
+  const auto from_end = [&] {
+    catcher = SampleCatcher();
+    catcher.target = std::llround((t_mid + q * T - tK) / (T / kSamples));
     Scene sc = scene;
     sc.run.periods = q;
     sc.run.samples_per_period = kSamples;
@@ -757,17 +765,28 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
     opt.initial = &here;
     opt.observers = {&catcher};
     Simulate(sys, sc, opt);
-  } else {
+  };
+  if (event_at_end) {
     Scene sc = scene;
     sc.run.periods = K + q;
     sc.run.samples_per_period = kSamples;
     if (req.period > 0) sc.run.max_period = std::max(sc.run.max_period, req.period);
     if (init) sc.initial_time = init->time;
-    catcher.target = std::llround((t_mid + q * T - t_start) / (T / kSamples));
+    catcher.target_time = t_start + static_cast<double>(std::llround((t_mid + q * T - t_start) / (T / kSamples))) * (T / kSamples);
+    catcher.half_spacing = 0.5 * T / kSamples;
+    SampleCatcher at_end;  // the rerun's state at tK, to see that it repeats the transient
+    at_end.target_time = tK;
+    at_end.half_spacing = 0.5 * T / kSamples;
     SimulationOptions opt;
     opt.initial = init ? &*init : nullptr;
-    opt.observers = {&catcher};
+    opt.observers = {&catcher, &at_end};
     Simulate(sys, sc, opt);
+    // A transient that has not settled may not repeat itself with dense samples (a sensitive
+    // chattering motion): then the end state it is.
+    const bool repeated = at_end.caught && (at_end.X - end.X).norm() <= 1e-9 * (1.0 + end.X.norm());
+    if (!repeated || !catcher.caught || catcher.mode != Mode::kFree) from_end();
+  } else {
+    from_end();
   }
   if (!catcher.caught || catcher.mode != Mode::kFree) {
     out.status = "no-orbit";
