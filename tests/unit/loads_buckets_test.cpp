@@ -345,7 +345,9 @@ TEST(LoadsBuckets, ResumedInTheMiddleEqualsUninterrupted) {
     EXPECT_EQ(a.periods, b.periods);
     for (size_t j = 0; j < 2; ++j) {
       EXPECT_EQ(a.contacts[j].work_rate, b.contacts[j].work_rate) << blocks;
-      EXPECT_EQ(a.contacts[j].reaction_integral_per_period, b.contacts[j].reaction_integral_per_period) << blocks;
+      const double ra = a.contacts[j].reaction_integral_per_period, rb = b.contacts[j].reaction_integral_per_period;
+      EXPECT_TRUE(ra == rb || (std::isnan(ra) && std::isnan(rb))) << blocks << " " << ra << " " << rb;
+      EXPECT_EQ(std::isnan(ra), j == 1) << "contact 1 is partial at period 1000";
       EXPECT_EQ(a.contacts[j].contact_fraction_ci, b.contacts[j].contact_fraction_ci) << blocks;
       EXPECT_EQ(a.contacts[j].impulse_per_period_ci, b.contacts[j].impulse_per_period_ci) << blocks;
     }
