@@ -54,7 +54,8 @@ class LoadsRecorder final : public Observer {
 
   // Means over every period recorded after `skip`, and intervals from `blocks` batch means
   // (at least kMinBlockPeriods periods per block, blocks ≥ 2; 0: means only, no interval asked).
-  // `blocks` 1 is refused with a note.
+  // `blocks` 1 is refused with a note. Once rows are merged, blocks are whole buckets and the
+  // interval is centred on the mean (docs/loads.md §5, "Long runs").
   LoadsSummary Summary(int blocks) const;
   static constexpr long long kMinBlockPeriods = 2;
 
