@@ -244,7 +244,9 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
         // beyond it (the part of bucket 0 beyond the head kept apart once bucket 0 is longer).
         Row sum;
         const long long from = s.first_period - begin;
-        for (long long k = from; k < head_periods_; ++k) Add(sum, head_[j][static_cast<size_t>(k)]);
+        const auto& head = head_[j];
+        for (long long k = from; k < head_periods_; ++k)
+          if (k < static_cast<long long>(head.size())) Add(sum, head[static_cast<size_t>(k)]);
         long long k0 = head_periods_ / bucket_;
         if (bucket_ > head_periods_) {
           Add(sum, rest_[j]);
