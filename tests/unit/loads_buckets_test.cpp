@@ -370,6 +370,13 @@ TEST(LoadsBuckets, MemoryStaysWithinTheCap) {
     EXPECT_LE(rec.stored_rows(), static_cast<size_t>(cap + cap / 16)) << last;
   }
   EXPECT_EQ(rec.bucket_periods(), 64);  // 2560 periods ≤ 64 buckets of 64
+  // 40 whole buckets: 41 blocks cannot be formed (a short run would have had 62 periods per block).
+  const LoadsSummary many = rec.Summary(41);
+  EXPECT_EQ(many.block_periods, 0);
+  EXPECT_NE(many.note.find("too many blocks"), std::string::npos) << many.note;
+  EXPECT_FALSE(many.contacts[0].work_rate_ci.has_value());
+  EXPECT_EQ(many.periods, 40 * cap);
+  EXPECT_EQ(rec.Summary(40).block_periods, 64);
   // The default cap: 2^16 rows per contact.
   LoadsRecorder big(sys, 0);
   const Stream small = Generate(2, 100, mass, {}, 3);
