@@ -4,6 +4,7 @@
 // of periods.
 #pragma once
 
+#include <cstddef>
 #include <optional>
 #include <string>
 #include <utility>
@@ -40,15 +41,21 @@ struct LoadsSummary {
 };
 
 // An observer of a run. The first `skip` periods of the run (a transient) are left out of the means.
+// Memory is bounded whatever the run's length (docs/loads.md §5): the periods analysed are kept one
+// row per period up to `bucket_cap` rows per contact; beyond, adjacent rows are merged pairwise
+// (each row then sums 2, 4, 8, … periods) and the first bucket_cap/16 periods analysed are kept
+// apart, one row each. `bucket_cap` is rounded up to a power of two, at least 32.
 class LoadsRecorder final : public Observer {
  public:
-  LoadsRecorder(const System& system, long long skip = 0);
+  static constexpr long long kBucketCap = 1LL << 16;
+  LoadsRecorder(const System& system, long long skip = 0, long long bucket_cap = kBucketCap);
   void OnEvent(const Event& e) override;
   void OnCheckpoint(const Checkpoint& cp) override;
 
   // Means over every period recorded after `skip`, and intervals from `blocks` batch means
   // (at least kMinBlockPeriods periods per block, blocks ≥ 2; 0: means only, no interval asked).
-  // `blocks` 1 is refused with a note.
+  // `blocks` 1 is refused with a note. Once rows are merged, blocks are whole buckets and the
+  // interval is centred on the mean (docs/loads.md §5, "Long runs").
   LoadsSummary Summary(int blocks) const;
   static constexpr long long kMinBlockPeriods = 2;
 
@@ -61,13 +68,25 @@ class LoadsRecorder final : public Observer {
     bool partial = false;
   };
 
+  // Memory (for tests): periods per bucket (1 until the first merge) and rows held per contact
+  // (buckets and the head kept apart), never more than bucket_cap + bucket_cap/16.
+  long long bucket_periods() const { return bucket_; }
+  size_t stored_rows() const;
+
  private:
   Row& At(int contact, long long period);
+  void Merge();  // every contact's buckets pairwise: bucket_ doubles
   double period_;
-  long long skip_;
+  long long skip_, cap_, head_periods_;
   std::vector<double> mass_, restitution_;
-  std::vector<std::vector<Row>> rows_;          // [contact][period − first_]
-  long long first_ = -1, last_ = -1;            // periods seen: [first_, last_)
+  // rows_[contact][k]: the sums of periods begin + [k·bucket_, (k + 1)·bucket_), begin = first_ + skip_
+  // (the periods before begin are not analysed and not kept).
+  std::vector<std::vector<Row>> rows_;
+  long long bucket_ = 1;
+  std::vector<std::vector<Row>> head_;  // [contact][period − begin] for the first head_periods_, once merged
+  std::vector<Row> rest_;               // [contact]: periods begin + [head_periods_, bucket_), once bucket_ > head
+  Row skipped_;                         // where the periods before begin go
+  long long first_ = -1, last_ = -1;    // periods seen: [first_, last_)
   std::vector<double> open_reaction_, open_held_;  // open phases' parts already counted
 };
 

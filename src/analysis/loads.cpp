@@ -25,26 +25,95 @@ double StudentT975(long long df) {
   return z + (z * z * z + z) / (4 * d) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * d * d);
 }
 
+// The seven quantities of a sum of n periods of one contact (docs/loads.md §5).
+std::array<double, 7> Quantities(const LoadsRecorder::Row& sum, double n, double period) {
+  const double t = n * period;
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
+  return std::array<double, 7>{sum.impacts / n, sum.impulse / n, sum.partial ? unknown : sum.reaction / n,
+                               sum.partial ? unknown : (sum.impulse + sum.reaction) / t,
+                               sum.energy / t, sum.work / t, sum.partial ? unknown : sum.held / t};
+}
+
+void Add(LoadsRecorder::Row& sum, const LoadsRecorder::Row& r) {
+  sum.partial = sum.partial || r.partial;
+  sum.impacts += r.impacts;
+  sum.impulse += r.impulse;
+  sum.reaction += r.reaction;
+  sum.energy += r.energy;
+  sum.work += r.work;
+  sum.held += r.held;
+}
+
+long long PowerOfTwoAtLeast(long long n) {
+  long long p = 32;
+  while (p < n) p *= 2;
+  return p;
+}
+
 }  // namespace
 
-LoadsRecorder::LoadsRecorder(const System& system, long long skip) : period_(system.period()), skip_(skip) {
+LoadsRecorder::LoadsRecorder(const System& system, long long skip, long long bucket_cap)
+    : period_(system.period()), skip_(skip), cap_(PowerOfTwoAtLeast(bucket_cap)), head_periods_(cap_ / 16) {
   for (const ContactModel& c : system.contacts()) {
     mass_.push_back(1.0 / c.s_B);
     restitution_.push_back(c.restitution);
   }
   rows_.resize(mass_.size());
+  head_.resize(mass_.size());
+  rest_.resize(mass_.size());
   open_reaction_.assign(mass_.size(), 0.0);
   open_held_.assign(mass_.size(), 0.0);
+}
+
+size_t LoadsRecorder::stored_rows() const {
+  size_t most = 0;
+  for (size_t j = 0; j < rows_.size(); ++j) most = std::max(most, rows_[j].capacity() + head_[j].capacity());
+  return most;
+}
+
+void LoadsRecorder::Merge() {
+  for (size_t j = 0; j < rows_.size(); ++j) {
+    auto& r = rows_[j];
+    // The first merge: the head's periods are kept one by one (the means' window may start
+    // inside it, docs/loads.md §5).
+    if (bucket_ == 1) head_[j].assign(r.begin(), r.begin() + std::min<long long>(head_periods_, static_cast<long long>(r.size())));
+    // Bucket 0 grows past the head: what it holds beyond the head is kept apart too.
+    if (2 * bucket_ > head_periods_) {
+      const Row next = r.size() > 1 ? r[1] : Row{};
+      if (bucket_ > head_periods_) {
+        Add(rest_[j], next);
+      } else {
+        rest_[j] = next;
+      }
+    }
+    const size_t m = (r.size() + 1) / 2;
+    for (size_t i = 0; i < m; ++i) {
+      Row x = r[2 * i];
+      if (2 * i + 1 < r.size()) Add(x, r[2 * i + 1]);
+      r[i] = x;
+    }
+    r.resize(m);
+  }
+  bucket_ *= 2;
 }
 
 LoadsRecorder::Row& LoadsRecorder::At(int contact, long long period) {
   if (first_ < 0) first_ = period;
   if (period < first_) period = first_;  // never: events come in time order
-  const auto k = static_cast<size_t>(period - first_);
-  for (auto& r : rows_)
-    if (r.size() <= k) r.resize(k + 1);
   last_ = std::max(last_, period + 1);
-  return rows_[static_cast<size_t>(contact)][k];
+  const long long begin = first_ + skip_;
+  if (period < begin) {  // not analysed
+    skipped_ = Row{};
+    return skipped_;
+  }
+  auto k = (period - begin) / bucket_;
+  while (k >= cap_) {
+    Merge();
+    k = (period - begin) / bucket_;
+  }
+  for (auto& r : rows_)
+    if (static_cast<long long>(r.size()) <= k) r.resize(static_cast<size_t>(k) + 1);
+  return rows_[static_cast<size_t>(contact)][static_cast<size_t>(k)];
 }
 
 void LoadsRecorder::OnEvent(const Event& e) {
@@ -123,51 +192,69 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
   const long long begin = std::min(first_ + skip_, last_);
   s.first_period = begin;
   s.periods = last_ - begin;
-  const long long L = blocks >= 2 ? s.periods / blocks : 0;
+  const long long n = s.periods;
+  const bool merged = bucket_ > 1;
+  // Once merged, a block is a whole number of buckets (the last, partial bucket is in no block).
+  const long long whole = n / bucket_;
+  const long long L = blocks < 2 ? 0 : merged ? whole / blocks * bucket_ : n / blocks;
   if (blocks == 0)
     s.note = "";
   else if (blocks < 2)
     s.note = "no interval: --blocks must be at least 2";
+  else if (merged && L == 0)
+    s.note = fmt::format("too many blocks for the interval: {} periods analysed are kept as {} buckets of {} "
+                         "periods (docs/loads.md §5), {} blocks need at least {} buckets",
+                         n, whole, bucket_, blocks, blocks);
   else if (L < kMinBlockPeriods)
     s.note = fmt::format("run too short for the interval: {} periods analysed, {} blocks need at least {}",
                          s.periods, blocks, kMinBlockPeriods * blocks);
   else
     s.block_periods = L;
-  // With an interval, the means are those of the blocks' window: the last blocks·L periods (the
-  // first periods % blocks of the window are left out: the end of a run is the most settled).
+  // With an interval, the means are those of the last blocks·⌊periods/blocks⌋ periods (the first
+  // periods % blocks of the window are left out: the end of a run is the most settled). Once
+  // merged this holds while periods % blocks < the head kept period by period; beyond, the means
+  // are those of the blocks.
+  const long long cut = blocks >= 2 ? n % blocks : 0;
+  const bool means_of_blocks = merged && s.block_periods > 0 && cut >= head_periods_;
   if (s.block_periods > 0) {
-    s.first_period = last_ - L * blocks;
-    s.periods = L * blocks;
+    const long long span = merged ? (means_of_blocks ? L * blocks : n - cut) : L * blocks;
+    s.first_period = merged && means_of_blocks ? begin + whole * bucket_ - span : last_ - span;
+    s.periods = span;
   }
   for (size_t j = 0; j < rows_.size(); ++j) {
     const auto& rows = rows_[j];
-    const auto row = [&](long long p) {
-      const auto k = static_cast<size_t>(p - first_);
-      return k < rows.size() ? rows[k] : Row{};
+    // Row k of the window: period begin + k, or (merged) bucket k.
+    const auto row = [&](long long k) {
+      return k >= 0 && k < static_cast<long long>(rows.size()) ? rows[static_cast<size_t>(k)] : Row{};
     };
-    // The seven quantities of a window [a, b) of periods.
+    // The seven quantities of the rows [a, b) (periods, or buckets once merged) of the window.
     const auto means = [&](long long a, long long b) {
       Row sum;
-      for (long long p = a; p < b; ++p) {
-        const Row r = row(p);
-        sum.partial = sum.partial || r.partial;
-        sum.impacts += r.impacts;
-        sum.impulse += r.impulse;
-        sum.reaction += r.reaction;
-        sum.energy += r.energy;
-        sum.work += r.work;
-        sum.held += r.held;
-      }
-      const double n = static_cast<double>(b - a), t = n * period_;
-      const double unknown = std::numeric_limits<double>::quiet_NaN();
-      return std::array<double, 7>{sum.impacts / n, sum.impulse / n, sum.partial ? unknown : sum.reaction / n,
-                                   sum.partial ? unknown : (sum.impulse + sum.reaction) / t,
-                                   sum.energy / t, sum.work / t, sum.partial ? unknown : sum.held / t};
+      for (long long k = a; k < b; ++k) Add(sum, row(k));
+      return Quantities(sum, static_cast<double>((b - a) * bucket_), period_);
     };
     ContactLoads c;
     c.contact = static_cast<int>(j);
+    std::array<double, 7> m{};
     if (s.periods > 0) {
-      const auto m = means(s.first_period, last_);
+      if (!merged || means_of_blocks) {
+        m = means((s.first_period - begin) / bucket_, (s.first_period - begin + s.periods + bucket_ - 1) / bucket_);
+      } else {
+        // Merged: from period s.first_period on, one by one through the head, then the buckets
+        // beyond it (the part of bucket 0 beyond the head kept apart once bucket 0 is longer).
+        Row sum;
+        const long long from = s.first_period - begin;
+        const auto& head = head_[j];
+        for (long long k = from; k < head_periods_; ++k)
+          if (k < static_cast<long long>(head.size())) Add(sum, head[static_cast<size_t>(k)]);
+        long long k0 = head_periods_ / bucket_;
+        if (bucket_ > head_periods_) {
+          Add(sum, rest_[j]);
+          k0 = 1;
+        }
+        for (long long k = k0; k < static_cast<long long>(rows.size()); ++k) Add(sum, rows[static_cast<size_t>(k)]);
+        m = Quantities(sum, static_cast<double>(s.periods), period_);
+      }
       c.impacts_per_period = m[0];
       c.impulse_per_period = m[1];
       c.reaction_integral_per_period = m[2];
@@ -177,9 +264,10 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
       c.contact_fraction = m[6];
     }
     if (s.block_periods > 0) {
-      const long long start = s.first_period;
+      // The blocks: the last blocks·L periods (merged: of the whole buckets).
+      const long long per = L / bucket_, start = merged ? whole - per * blocks : (s.first_period - begin);
       std::vector<std::array<double, 7>> b;
-      for (int i = 0; i < blocks; ++i) b.push_back(means(start + i * L, start + (i + 1) * L));
+      for (int i = 0; i < blocks; ++i) b.push_back(means(start + i * per, start + (i + 1) * per));
       const double t = StudentT975(blocks - 1);
       ContactLoads::Interval* ci[7] = {&c.impacts_per_period_ci, &c.impulse_per_period_ci,
                                        &c.reaction_integral_per_period_ci, &c.mean_force_ci,
@@ -195,8 +283,11 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
         // At least the rounding of the sums (a settled periodic run has equal block means).
         const double half = std::max(t * std::sqrt(var / blocks),
                                      16 * std::numeric_limits<double>::epsilon() * static_cast<double>(L) * std::abs(mean));
-        if (std::isfinite(mean)) *ci[q] = std::pair{mean - half, mean + half};
-        *point[q] = mean;  // the mean of equal blocks: the mean over the window
+        // Merged, the means' window may differ from the blocks' by a few periods at its ends: the
+        // interval is centred on the mean reported.
+        const double centre = merged && !means_of_blocks ? *point[q] : mean;
+        if (std::isfinite(mean) && std::isfinite(centre)) *ci[q] = std::pair{centre - half, centre + half};
+        *point[q] = centre;  // the mean of equal blocks: the mean over the window
       }
     }
     if (!std::isfinite(c.mean_force))
