@@ -293,8 +293,9 @@ class ContactLoadsT {
   // (HeldReactionJet): Newton's steps c ← c − Ṙ/R̈ on the zero of Ṙ from the guess c, the bracket
   // kept (a step outside it, or with R̈ ≥ 0, bisects), until the next step is below 1e-7 h — the
   // criterion of the regula falsi it replaces, so the value kept is within ½|R̈|(1e-7 h)² of the
-  // maximum, at the rounding of R. Newton converges quadratically from the Hermite guess: two or
-  // three evaluations where the regula falsi took four to six. False when the engine has no R̈.
+  // maximum, at the rounding of R. Newton converges quadratically from the Hermite guess: two
+  // evaluations per refined cell on chain3.toml (counted over vibro_loads_bench). False when the
+  // engine has no R̈.
   bool NewtonMax(const PropagatorT<S>& p, S c, S a, S b, const S& h, const S& rate_scale, S& best) const {
     S Rc(0), fc(0), gc(0);
     if (!p.HeldReactionJet(c, Rc, fc, gc)) return false;
