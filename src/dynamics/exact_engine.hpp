@@ -33,6 +33,7 @@ class ExactEngineT final : public PropagatorT<S> {
   S Gap(S sigma) const override;
   S GapOf(int j, S sigma) const override;
   bool HeldReaction(const S& sigma, S& R, S& rate) const override;
+  bool HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
@@ -607,23 +608,37 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
 // without its bounds): the constrained modes' closed form, without forming X.
 template <class S>
 bool ExactEngineT<S>::HeldReaction(const S& sigma, S& R, S& rate) const {
+  S accel(0);
+  return HeldReactionJet(sigma, R, rate, accel);
+}
+
+// R̈ = κ ω² sin φ + Σ ρ_k ξ̈_k, ξ̈_k = −ν_k² ξ_k + F_k sin φ (ReactionProbe's g2): two products per
+// mode on top of R and Ṙ.
+template <class S>
+bool ExactEngineT<S>::HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const {
   if (mode_ == Mode::kFree) return false;
   if (damped_sticking_) {
     const ProbeT<S> p = Damped().ReactionProbe(sigma);
     R = p.jet.g;
     rate = p.jet.g1;
+    accel = p.jet.g2;
     return true;
   }
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const auto& rho = cd.m->stick_reaction;
   const ForcingTrigT<S> fw(omega_, sigma);
-  R = cd.static_reaction - cd.reaction_forcing * fw.SinPhase(trig_);
+  const S sf = fw.SinPhase(trig_);
+  R = cd.static_reaction - cd.reaction_forcing * sf;
   rate = -cd.reaction_forcing * omega_ * fw.CosPhase(trig_);
+  accel = cd.reaction_forcing * omega_ * omega_ * sf;
   for (size_t k = 0; k < cd.stick_modes.size(); ++k) {
     const auto kk = static_cast<Eigen::Index>(k);
-    const auto st = Flow<S>(cd.stick_modes[k], omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
-    R += rho[kk] * (xi0_[kk] + st.dq);
+    const OscillatorT<S>& o = cd.stick_modes[k];
+    const auto st = Flow<S>(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
+    const S xi = xi0_[kk] + st.dq;
+    R += rho[kk] * xi;
     rate += rho[kk] * st.v;
+    accel += rho[kk] * (-o.nu * o.nu * xi + o.F * sf);
   }
   return true;
 }

@@ -107,6 +107,9 @@ class PropagatorT {
   // segment, from the engine's own closed form of the held flow (the one its release search
   // uses); false when the engine has none, and the caller evaluates the state instead.
   virtual bool HeldReaction(const S& /*sigma*/, S& /*R*/, S& /*rate*/) const { return false; }
+  // The same with R̈ (the max R search's Newton steps, docs/loads.md §3); false when the engine
+  // has no closed form.
+  virtual bool HeldReactionJet(const S& /*sigma*/, S& /*R*/, S& /*rate*/, S& /*accel*/) const { return false; }
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
   // Polled inside long root searches and stepping loops: true stops the segment with a failure
