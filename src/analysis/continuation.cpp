@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "analysis/orbit_probe.hpp"
+#include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
 namespace vibro {
@@ -309,9 +310,15 @@ NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
                            : hi                                   ? hi->probe.at.closing_held
                                                                   : 0;
   const auto simultaneous = both(&OrbitProbe::simultaneous, &OrbitProbe::Where::simultaneous);
-  const int simultaneous_other = simultaneous.value == lo.probe.simultaneous ? lo.probe.at.simultaneous_other
-                                 : hi                                         ? hi->probe.at.simultaneous_other
-                                                                              : 0;
+  const OrbitProbe::Where& sim_at = simultaneous.value == lo.probe.simultaneous || !hi ? lo.probe.at : hi->probe.at;
+  const auto kind_name = [](int k) { return ToString(static_cast<EventKind>(k)); };
+  const std::string simultaneous_what =
+      sim_at.simultaneous_kind == 1 && sim_at.simultaneous_other_kind == 1
+          ? fmt::format("impacts on contacts {} and {} become simultaneous", sim_at.simultaneous_other,
+                        sim_at.simultaneous)
+          : fmt::format("the {} of contact {} and the {} of contact {} become simultaneous",
+                        kind_name(sim_at.simultaneous_other_kind), sim_at.simultaneous_other,
+                        kind_name(sim_at.simultaneous_kind), sim_at.simultaneous);
   const Candidate c[] = {
       {"rising", interior.value <= release.value ? interior : release,
        "R touches zero inside a sticking phase" + on(interior.value <= release.value ? interior.contact : release.contact)},
@@ -319,8 +326,7 @@ NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
       {"grazing", grazing, "a free flight touches the stop tangentially" + on(grazing.contact)},
       {"rising", closing,
        fmt::format("contact {} closes tangentially while contact {} sticks", closing.contact, closing_held)},
-      {"simultaneous", simultaneous,
-       fmt::format("impacts on contacts {} and {} become simultaneous", simultaneous_other, simultaneous.contact)},
+      {"simultaneous", simultaneous, simultaneous_what},
   };
   const auto best = std::min_element(std::begin(c), std::end(c),
                                      [](const auto& a, const auto& b) { return a.v.value < b.v.value; });

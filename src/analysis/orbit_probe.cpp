@@ -260,18 +260,18 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
       released[k] = -1;
     }
   }
-  // Impacts on two different contacts close in time (simultaneous impacts are the limit).
-  for (size_t i = 1; m > 1 && i < ev.size(); ++i)
-    for (size_t k = i; k-- > 0;) {
-      if (ev[k].kind != EventKind::kImpact) continue;
-      if (ev[i].kind == EventKind::kImpact && ev[k].contact != ev[i].contact &&
-          (ev[i].offset - ev[k].offset) / span < p.simultaneous) {
-        p.simultaneous = (ev[i].offset - ev[k].offset) / span;
-        p.at.simultaneous = ev[i].contact;
-        p.at.simultaneous_other = ev[k].contact;
-      }
-      break;  // only the impact just before
-    }
+  // Two consecutive events on different contacts close in time (an impact on one at the moment
+  // another releases, or two impacts: simultaneous impacts are the limit). Only adjacent events
+  // can swap their order.
+  for (size_t i = 1; m > 1 && i < ev.size(); ++i) {
+    const size_t k = i - 1;
+    if (ev[k].contact == ev[i].contact || (ev[i].offset - ev[k].offset) / span >= p.simultaneous) continue;
+    p.simultaneous = (ev[i].offset - ev[k].offset) / span;
+    p.at.simultaneous = ev[i].contact;
+    p.at.simultaneous_other = ev[k].contact;
+    p.at.simultaneous_kind = static_cast<int>(ev[i].kind);
+    p.at.simultaneous_other_kind = static_cast<int>(ev[k].kind);
+  }
 
   // 3. Interior minima of R (sticking) and of the gaps between consecutive events, per contact.
   const auto& S = rec.samples;

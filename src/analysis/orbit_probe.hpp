@@ -11,7 +11,8 @@
 //   sticking-entry  R at the start of a sticking phase                (→ 0, e.g. f_sticking)
 //   grazing         interior minima of the gap in a free flight, and the speed of an impact that
 //                   is not part of a chattering tail                  (→ 0)
-//   simultaneous    the time between two impacts on different contacts (→ 0)
+//   simultaneous    the time between two consecutive events on different contacts (→ 0): two
+//                   impacts, or an impact on one at the moment another releases
 //
 // each made dimensionless by the orbit's own scale (R, gap and gap-velocity ranges of the contact,
 // the period). Each quantity keeps the contact where it is smallest. The probe also finds where a
@@ -52,7 +53,7 @@ struct OrbitProbe {
   double release_to_stick = kNone;    // shortest time from a release to the next stick / (qT)
   double impact_speed = kNone;        // min |ẋ_B⁻| of isolated impacts / max |ẋ_B|
   // Several contacts: the interior minima of a gap while another contact sticks / its range, and
-  // the shortest time between impacts on two different contacts / (qT).
+  // the shortest time between consecutive events on two different contacts / (qT).
   double closing_gap = kNone;
   double simultaneous = kNone;
   // The contact where each quantity above is smallest (for simultaneous and closing_gap: the
@@ -61,6 +62,7 @@ struct OrbitProbe {
     int shortest_stick = 0, interior_reaction = 0, entry_reaction = 0, flight_gap = 0,
         release_to_stick = 0, impact_speed = 0, closing_gap = 0, closing_held = 0,
         simultaneous = 0, simultaneous_other = 0;
+    int simultaneous_kind = 1, simultaneous_other_kind = 1;  // their EventKinds (1: impact)
   } at;
   // The section: distance from t0 to the nearest event over the length of the free flight it
   // lies in (0 when it is not in a free flight), and a better section: a dense sample near the
