@@ -177,12 +177,18 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
       case EventKind::kAccumulation: {
         // The tail: the last impacts on this contact, of decreasing speed, and the one before them.
         size_t s = pending.size();
-        while (s > 0 && ev[pending[s - 1]].contact != c) --s;  // (none expected: the tail is last)
+        while (s > 0 && ev[pending[s - 1]].contact != c) --s;  // impacts elsewhere after the tail
         size_t tail = s;
         while (tail > 1 && ev[pending[tail - 2]].contact == c && ev[pending[tail - 2]].speed > ev[pending[tail - 1]].speed)
           --tail;
         if (tail > 0) --tail;
         flush(tail);
+        // Impacts on other contacts between the tail's last impact and the accumulation point:
+        // isolated, before the C.
+        for (size_t j = s - tail; j < pending.size(); ++j) {
+          tokens += label('I', ev[pending[j]].contact);
+          isolated.push_back(pending[j]);
+        }
         pending.clear();
         tokens += label('C', c);
         stick_in_token[static_cast<size_t>(c)] = 1;

@@ -744,7 +744,6 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   // The state at t_mid + qT, from the end of the transient (one orbit period later).
   constexpr int kSamples = 1024;
   SampleCatcher catcher;
-  catcher.target = std::llround((t_mid + q * T - tK) / (T / kSamples));
   // The transient's end state is a restart point unless it is on a contact moving into it (e.g. a start right
   // after an impact on the orbit: every period boundary is then an impact, and the run may end
   // with the state just before it, which a new run does not take as an impact). Then the same run
