@@ -36,6 +36,43 @@ class RestingStick final : public PropagatorT<S> {
     X_ = m_.x0 * m_.static_shape;
     V_ = Vec::Zero(m_.dof());
   }
+  // R = R_st − κ sin(φ + ωσ) with R_st = cᵀΩX/s_B at rest and κ = s_A f/s_B (eq. (5)): its
+  // derivatives and their bounds |κ|ω³, |κ|ω⁵ in closed form (the max R search, docs/loads.md §3).
+  bool HeldReaction(const S& sigma, S& R, S& rate) const override {
+    S d[5];
+    HeldReactionTaylor(sigma, d);
+    R = d[0];
+    rate = d[1];
+    return true;
+  }
+  bool HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const override {
+    S d[5];
+    HeldReactionTaylor(sigma, d);
+    R = d[0];
+    rate = d[1];
+    accel = d[2];
+    return true;
+  }
+  bool HeldReactionBound(const S&, S& M, S* m5) const override {
+    const S k = Real<S>::abs(Kappa()), w3 = m_.w * m_.w * m_.w;
+    const S margin = S(1) + S(1e-9);  // the rounding of the products (as the engines' BoundMargin)
+    M = k * w3 * margin;
+    if (m5) *m5 = k * w3 * m_.w * m_.w * margin;
+    return true;
+  }
+  bool HeldReactionTaylor(const S& sigma, S* d) const override {
+    S sn(0), cs(0);
+    Real<S>::sincos(phase_ + m_.w * sigma, sn, cs);
+    const S k = Kappa(), w = m_.w, w2 = w * w;
+    S elastic(0);
+    for (Eigen::Index i = 0; i < X_.size(); ++i) elastic += m_.shape[i] * m_.omega[i] * m_.omega[i] * X_[i];
+    d[0] = elastic / m_.s_B - k * sn;
+    d[1] = -k * w * cs;
+    d[2] = k * w2 * sn;
+    d[3] = k * w2 * w * cs;
+    d[4] = -k * w2 * w2 * sn;
+    return true;
+  }
   SegmentResultT<S> Advance(S sigma_max, bool detect, const StretchCallbackT<S>& cb) override {
     const S target = detect ? ReleaseOffset() : S(std::numeric_limits<double>::infinity());
     const bool released = target - offset_ <= sigma_max;
@@ -72,6 +109,8 @@ class RestingStick final : public PropagatorT<S> {
     }
     return o;
   }
+
+  S Kappa() const { return m_.s_A * m_.f / m_.s_B; }
 
   const ModelT<S>& m_;
   S phase_{0}, offset_{0};
@@ -265,6 +304,7 @@ class Automaton {
   ClockT<S> last_event_{-1, S(0)};  // clock of the last event emitted (monotone)
   RunResult result_;
   ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
+  bool stretch_loads_ = false;  // the sticking segment under way searches max R per stretch
 };
 
 inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
@@ -323,6 +363,8 @@ template <class S>
 void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo,
                                const S& hi) {
   if (opt_.observers.empty()) return;
+  // CVODE's dense output is valid on its last stretch only: max R is searched stretch by stretch.
+  if (stretch_loads_) loads_.Stretch(M(active_), p, Phase(start), lo, hi);
   const int spp = run_.samples_per_period;
   // Section points: period boundaries t0 + kT.
   for (long long k = start.period + 1;; ++k) {
@@ -1584,6 +1626,7 @@ RunResult Automaton<S>::Run() {
     const bool set_loads = mode_ == Mode::kSticking && !held_set_.empty() && opt_.loads && !opt_.observers.empty();
     if (mode_ == Mode::kSticking && !held_set_.empty() && !set_loads) loads_.Invalidate();
     if (loads || set_loads) loads_.SegmentStart(X_, V_);
+    stretch_loads_ = loads && cvode_;
     // The callback captures one pointer, so that std::function keeps it inline (no allocation per
     // segment).
     struct {
@@ -1594,6 +1637,7 @@ RunResult Automaton<S>::Run() {
     const auto seg = p.Advance(to_boundary, true, [ctx = &stretch](const S& lo, const S& hi) {
       ctx->self->EmitStretch(*ctx->from, *ctx->p, lo, hi);
     });
+    stretch_loads_ = false;
     if (seg.end == SegmentEnd::kFailure) {
       if (StopPolled()) continue;  // reported as an interruption at the top of the loop
       Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),

@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <utility>
 #include <vector>
 
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
+#include "dynamics/reaction_max.hpp"
 #include "vibro/observer.hpp"
 
 namespace vibro::detail {
@@ -60,10 +62,14 @@ class ContactLoadsT {
   using R = Real<S>;
 
   void Resize(size_t contacts) { phases_.assign(contacts, {}); }
-  void Begin(int j) { phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true, false}; }
+  void Begin(int j) {
+    phases_[static_cast<size_t>(j)] = {0, 0, std::numeric_limits<double>::quiet_NaN(), true, false};
+    end_model_ = nullptr;
+  }
   // Sticking on several contacts at once: every open account is abandoned (its release reports NaN).
   void Invalidate() {
     for (StickAccount& a : phases_) a = {};
+    end_model_ = nullptr;
   }
   // Impulsive reaction received by a held contact (an impact elsewhere while it sticks).
   void AddImpulse(int j, const S& P) { phases_[static_cast<size_t>(j)].integral += R::to_double(P); }
@@ -76,14 +82,33 @@ class ContactLoadsT {
       e.reaction_max = a.max;
     }
     a = {};
+    end_model_ = nullptr;
   }
   // The state at the start of a sticking segment (kept before the propagator advances).
+  // A segment that starts where the last one of the same phase ended (a section cut) takes that
+  // end's jet of R and cos φ as its start's (the phase restarts at 0 there: equal to rounding).
   void SegmentStart(const Vec& X, const Vec& V) {
     X0_ = X;
     V0_ = V;
+    start_model_ = end_model_ && X.size() == X1_.size() && (X.array() == X1_.array()).all() &&
+                           (V.array() == V1_.array()).all()
+                       ? end_model_
+                       : nullptr;
+    end_model_ = nullptr;
+    stretches_ = 0;
+    stretch_max_ = S(0);
+  }
+  // A stretch [lo, hi] of a sticking segment's dense output as an integrator reports it (each valid
+  // only until the next, so that the max R search cannot wait for the segment's end): the grid
+  // search on it, from the segment's start phase. Segment() takes the largest.
+  void Stretch(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& lo, const S& hi) {
+    if (!(hi >= lo)) return;
+    const S mx = search_.OnStretch(m, p, phase, lo, hi);
+    if (stretches_++ == 0 || mx > stretch_max_) stretch_max_ = mx;
   }
   // A sticking segment of the held contact m over local time sigma from forcing phase `phase`,
-  // ending at (X1, V1): duration, ∫R dt in closed form and max R on the dense output of p.
+  // ending at (X1, V1): duration, ∫R dt in closed form and max R, certified on the engine's closed
+  // form of the held flow (ReactionMax) or searched on the stretches an integrator reported.
   void Segment(int j, const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma,
                const Vec& X1, const Vec& V1) {
     StickAccount& a = phases_[static_cast<size_t>(j)];
@@ -191,6 +216,7 @@ class ContactLoadsT {
     }
   }
   void Restore(const Checkpoint& cp) {
+    end_model_ = nullptr;
     if (cp.stick_duration.size() != phases_.size() || cp.reaction_integral.size() != phases_.size() ||
         cp.reaction_max.size() != phases_.size())
       return;
@@ -208,174 +234,60 @@ class ContactLoadsT {
   //   ∫R dt = uᵀ[Ẋ] + uᵀD[X] + x0 σ / φ − (uᵀT_A) f (cos φ0 − cos(φ0 + ωσ)) / ω
   // from the end states alone (exact: no quadrature).
   // cos_ends: cos φ0 and cos(φ0 + ωσ) when the caller has them.
-  static S ReactionIntegral(const ModelT<S>& m, const S& phase, const S& sigma, const Vec& X0,
-                            const Vec& V0, const Vec& X1, const Vec& V1, const S (*cos_ends)[2] = nullptr) {
-    S uV(0), uDX(0), uTA(0);
-    for (Eigen::Index i = 0; i < m.omega.size(); ++i) {
-      if (m.shape[i] == S(0)) continue;
-      const S ui = m.shape[i] / (m.omega[i] * m.omega[i]);
-      uV += ui * (V1[i] - V0[i]);
-      uDX += ui * S(2) * m.zeta[i] * m.omega[i] * (X1[i] - X0[i]);
-      uTA += ui * m.forcing[i];
-    }
-    const S phi = m.flexibility;
-    const S forcing = uTA * m.f *
+  S ReactionIntegral(const ModelT<S>& m, const S& phase, const S& sigma, const Vec& X0, const Vec& V0,
+                     const Vec& X1, const Vec& V1, const S (*cos_ends)[2] = nullptr) const {
+    const auto& k = search_.CoefsOf(m);
+    S sum(0);
+    for (Eigen::Index i = 0; i < m.omega.size(); ++i) sum += k.u[i] * (V1[i] - V0[i]) + k.ud[i] * (X1[i] - X0[i]);
+    const S forcing = k.uTA * m.f *
                       (cos_ends ? S((*cos_ends)[0] - (*cos_ends)[1]) : S(R::cos(phase) - R::cos(phase + m.w * sigma))) /
                       m.w;
-    return (uV + uDX - forcing) / phi + m.x0 * sigma / phi;
+    return (sum - forcing + m.x0 * sigma) / m.flexibility;
   }
 
-  // max R over a sticking segment (docs/loads.md §3): R and Ṙ at the ends and on a grid of spacing
-  // at most h = 1/ω_max (ω_max the largest of ω and the ω_i: R is a sum of oscillations no faster,
-  // whose consecutive extrema are at least about π/ω_max apart), and in every cell where Ṙ goes
-  // from + to −, the zero of Ṙ by regula falsi (Illinois) from the cubic Hermite guess, until two
-  // estimates agree to 1e-7 h: R is flat there, so its error ½|R̈|δs² is at the rounding of R.
-  // A maximum is missed only where Ṙ has two zeros inside one cell; R exceeds the larger cell end
-  // there by at most max|R̈| h²/8.
+  // max R over a sticking segment (docs/loads.md §3): the jets at its ends from the states (the
+  // start's taken from the previous segment's end at a section cut), then the search (ReactionMax
+  // of dynamics/reaction_max.hpp), or the largest of the stretches an integrator reported.
   // X1, V1: the state at sigma (the segment's end, already evaluated); the start is X0_, V0_.
   S ReactionMax(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma, const Vec& X1,
                 const Vec& V1) {
-    S wmax = m.w;
-    for (Eigen::Index i = 0; i < m.omega.size(); ++i) wmax = std::max(wmax, S(m.omega[i]));
-    const int n = std::max(1, std::min(4096, static_cast<int>(R::to_double(sigma * wmax)) + 1));
-    const S h = sigma / S(n);
-    S rate_prev(0);
-    S best = At(m, X0_, V0_, phase, rate_prev);
-    cos_ends_[0] = cos_;
-    S s_prev(0), R_prev = best;
-    for (int i = 1; i <= n; ++i) {
-      const S s = i == n ? sigma : S(h * S(i));
-      S rate(0);
-      const S Rv = i == n ? At(m, X1, V1, phase + m.w * sigma, rate) : At(m, p, phase, s, rate);
-      if (i == n) cos_ends_[1] = cos_;
-      if (Rv > best) best = Rv;
-      if (rate_prev > S(0) && rate < S(0)) {
-        S a = s_prev, b = s, fa = rate_prev, fb = rate;
-        int side = 0;
-        // First guess: the zero of the derivative of the cubic Hermite interpolant of R on the cell.
-        S c0 = HermiteZero(s - s_prev, R_prev, rate_prev, Rv, rate);
-        S c_last(-1);
-        const S first = c0 > S(0) && c0 < s - s_prev ? S(s_prev + c0) : S(b - fb * (b - a) / (fb - fa));
-        // With the engine's R̈: Newton's steps on Ṙ from the same guess, kept inside the bracket.
-        const bool newton = NewtonMax(p, first, a, b, h, R::abs(rate_prev) + R::abs(rate), best);
-        for (int it = 0; it < 12 && !newton; ++it) {
-          const S c = it == 0 && c0 > S(0) && c0 < s - s_prev ? S(s_prev + c0) : S(b - fb * (b - a) / (fb - fa));
-          // Converged when two estimates agree to 1e-7 h: R is flat there, its error ½|R̈|δs² is
-          // below 1e-14 R (|R̈| ≲ ω_max² max|R| and h ω_max ≤ 1).
-          if (c_last >= S(0) && R::abs(c - c_last) < S(1e-7) * h) break;
-          c_last = c;
-          S fc(0);
-          const S Rc = At(m, p, phase, c, fc);
-          if (Rc > best) best = Rc;
-          if (R::abs(b - a) < S(1e-9) * h || fc == S(0)) break;
-          if ((fc > S(0)) == (fa > S(0))) {
-            a = c;
-            fa = fc;
-            if (side == -1) fb /= S(2);
-            side = -1;
-          } else {
-            b = c;
-            fb = fc;
-            if (side == 1) fa /= S(2);
-            side = 1;
-          }
-          if (R::abs(fc) <= S(64) * Eps<S>() * (R::abs(rate_prev) + R::abs(rate))) break;
-        }
-      }
-      rate_prev = rate;
-      s_prev = s;
-      R_prev = Rv;
-    }
-    return best;
-  }
-
-  // The refinement of one cell (a, b) with Ṙ(a) > 0 > Ṙ(b) when the engine gives R̈
-  // (HeldReactionJet): Newton's steps c ← c − Ṙ/R̈ on the zero of Ṙ from the guess c, the bracket
-  // kept (a step outside it, or with R̈ ≥ 0, bisects), until the next step is below 1e-7 h — the
-  // criterion of the regula falsi it replaces, so the value kept is within ½|R̈|(1e-7 h)² of the
-  // maximum, at the rounding of R. Newton converges quadratically from the Hermite guess: two
-  // evaluations per refined cell on chain3.toml (counted over vibro_loads_bench). False when the
-  // engine has no R̈.
-  bool NewtonMax(const PropagatorT<S>& p, S c, S a, S b, const S& h, const S& rate_scale, S& best) const {
-    S Rc(0), fc(0), gc(0);
-    if (!p.HeldReactionJet(c, Rc, fc, gc)) return false;
-    for (int it = 0; it < 16; ++it) {
-      if (Rc > best) best = Rc;
-      if (fc == S(0) || R::abs(fc) <= S(64) * Eps<S>() * rate_scale) break;
-      if (fc > S(0))
-        a = c;
-      else
-        b = c;
-      if (R::abs(b - a) < S(1e-9) * h) break;
-      S next = gc < S(0) ? S(c - fc / gc) : S(-1);
-      if (!(next > a && next < b)) next = S(S(0.5) * (a + b));
-      if (R::abs(next - c) < S(1e-7) * h) break;
-      c = next;
-      p.HeldReactionJet(c, Rc, fc, gc);
-    }
-    return true;
-  }
-
-  // The zero in (0, h) of the derivative of the cubic with values y0, y1 and slopes d0 > 0 > d1 at
-  // 0 and h (−1 when none).
-  static S HermiteZero(const S& h, const S& y0, const S& d0, const S& y1, const S& d1) {
-    // p'(t) = d0 + (6Δ/h − 4d0 − 2d1)(t/h) + (3d0 + 3d1 − 6Δ/h)(t/h)², Δ = y1 − y0.
-    const S D = (y1 - y0) / h;
-    const S A = S(3) * (d0 + d1) - S(6) * D, B = S(6) * D - S(4) * d0 - S(2) * d1, C = d0;
-    S u(-1);
-    if (R::abs(A) <= S(1e-12) * (R::abs(B) + R::abs(C))) {
-      if (B != S(0)) u = -C / B;
+    Jet j0 = end_jet_;
+    if (start_model_ == &m) {
+      cos_ends_[0] = end_cos_;
     } else {
-      const S disc = B * B - S(4) * A * C;
-      if (disc >= S(0)) {
-        const S q = -(B + R::copysign(R::sqrt(disc), B)) / S(2);
-        const S u1 = q / A, u2 = q != S(0) ? C / q : S(-1);
-        u = (u1 > S(0) && u1 < S(1)) ? u1 : u2;
-      }
+      j0 = search_.JetAt(m, X0_, V0_, phase);
+      cos_ends_[0] = search_.LastCos();
     }
-    return u > S(0) && u < S(1) ? S(u * h) : S(-1);
-  }
-
-  // R (the paper's eq. (5), damped as docs/model.md §7) and Ṙ along the held flow at local time s,
-  // without allocation: Ṙ = Σ c_i(ω_i² Ẋ_i + 2ζ_iω_i Ẍ_i) − s_A f ω cos φ over s_B, with Ẍ the
-  // constrained acceleration (the free one less T_B times the gap's).
-  // The engine's own R and Ṙ when it has them (the exact engine: no state formed), else from the state.
-  S At(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& s, S& rate) const {
-    S held(0);
-    if (p.HeldReaction(s, held, rate)) return held;
-    p.Evaluate(s, Xs_, Vs_);
-    return At(m, Xs_, Vs_, phase + m.w * s, rate);
-  }
-  // Keeps cos φ in cos_.
-  S At(const ModelT<S>& m, const Vec& X, const Vec& V, const S& ph, S& rate) const {
-    S sn(0), cs(0);
-    R::sincos(ph, sn, cs);
-    cos_ = cs;
-    S elastic(0), r(0), gap_acc(0);
-    if (m.damped)
-      for (Eigen::Index i = 0; i < X.size(); ++i)
-        gap_acc += m.shape[i] * (-m.omega[i] * m.omega[i] * X[i] - S(2) * m.zeta[i] * m.omega[i] * V[i] +
-                                 m.forcing[i] * m.f * sn);
-    for (Eigen::Index i = 0; i < X.size(); ++i) {
-      if (m.shape[i] == S(0)) continue;
-      const S w2 = m.omega[i] * m.omega[i], d = S(2) * m.zeta[i] * m.omega[i];
-      elastic += m.shape[i] * (w2 * X[i] + d * V[i]);
-      r += m.shape[i] * w2 * V[i];
-      if (m.damped) {
-        const S acc = -w2 * X[i] - d * V[i] + m.forcing[i] * m.f * sn - m.contact[i] * gap_acc / m.s_B;
-        r += m.shape[i] * d * acc;
-      }
+    const Jet j1 = search_.JetAt(m, X1, V1, phase + m.w * sigma);
+    cos_ends_[1] = search_.LastCos();
+    end_jet_ = j1;
+    end_cos_ = cos_ends_[1];
+    X1_ = X1;
+    V1_ = V1;
+    end_model_ = &m;
+    if (stretches_ > 0) {
+      const S ends = j0.R > j1.R ? j0.R : j1.R;
+      return stretch_max_ > ends ? stretch_max_ : ends;
     }
-    rate = (r - m.s_A * m.f * m.w * cs) / m.s_B;
-    return (elastic - m.s_A * m.f * sn) / m.s_B;
+    return search_.Max(m, p, phase, sigma, j0, j1);
   }
 
  private:
+  using Jet = typename ReactionMaxT<S>::Jet;
+
   std::vector<StickAccount> phases_;
   Vec X0_, V0_;
-  mutable Vec Xs_, Vs_;
-  mutable S cos_{0};     // cos φ of the last state-based At
-  S cos_ends_[2] = {};   // cos φ0, cos(φ0 + ωσ) of the last ReactionMax
+  ReactionMaxT<S> search_;
+  // The last segment's end (its jet, cos φ and state) and the model it was held on, for the next
+  // segment's start (SegmentStart); null when the phase ended or nothing is kept.
+  const ModelT<S>* end_model_ = nullptr;
+  const ModelT<S>* start_model_ = nullptr;
+  Jet end_jet_{};
+  S end_cos_{0};
+  Vec X1_, V1_;
+  int stretches_ = 0;  // stretches of the current segment searched by Stretch()
+  S stretch_max_{0};
+  S cos_ends_[2] = {};  // cos φ0, cos(φ0 + ωσ) of the last ReactionMax
 };
 
 }  // namespace vibro::detail

@@ -34,6 +34,8 @@ class ExactEngineT final : public PropagatorT<S> {
   S GapOf(int j, S sigma) const override;
   bool HeldReaction(const S& sigma, S& R, S& rate) const override;
   bool HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const override;
+  bool HeldReactionBound(const S& H, S& M, S* m5 = nullptr) const override;
+  bool HeldReactionTaylor(const S& sigma, S* d) const override;
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
@@ -122,6 +124,15 @@ class ExactEngineT final : public PropagatorT<S> {
   Vec X0_, V0_;     // free flight start
   Vec xi0_, dxi0_;  // sticking start, constrained modal coordinates
   mutable Vec xi_, dxi_;  // Evaluate's scratch (no allocation per dense-output point)
+  // HeldReactionTaylor's form of each constrained mode over the segment, made at its first call:
+  // ξ = P sin φ + a cos νσ + b sin νσ (P = F/(ν² − ω²)); `flow` where ν is within a factor
+  // √(3/4) … √(5/4) of ω (near resonance, P large and the sum cancelling: Flow instead).
+  struct TaylorMode {
+    S P, a, b;
+    bool flow;
+  };
+  mutable std::vector<TaylorMode> taylor_;
+  mutable bool taylor_ready_ = false;
   S gap0_{0};
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
@@ -264,6 +275,7 @@ void ExactEngineT<S>::AddFarBound(ProbeT<S>& p, const std::vector<OscillatorT<S>
 
 template <class S>
 void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
+  taylor_ready_ = false;
   mode_ = s.mode;
   phase_ = s.phase;
   trig_ = PhaseTrigT<S>(s.phase);
@@ -639,6 +651,95 @@ bool ExactEngineT<S>::HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) c
     R += rho[kk] * xi;
     rate += rho[kk] * st.v;
     accel += rho[kk] * (-o.nu * o.nu * xi + o.F * sf);
+  }
+  return true;
+}
+
+// |R'''| ≤ |κ f| ω³ + Σ |ρ_k| max|ξ_k'''| over [0, H], each mode bounded from its energy amplitude at
+// σ = 0 as ReactionProbe(0, H) bounds it (oscillator.hpp, Bounds); damped, the damped closed
+// form's bound, valid for every σ ≥ 0. No trigonometric function: amplitudes only.
+// |R⁽⁵⁾| ≤ |κ f| ω⁵ + Σ |ρ_k| (ν_k² max|ξ_k'''| + |F_k| ω³) likewise (ξ⁽⁵⁾ = −ν²ξ''' + Fω³ cos φ
+// for an undamped constrained mode); none for the damped closed form (m5 = 0).
+template <class S>
+bool ExactEngineT<S>::HeldReactionBound(const S& H, S& M, S* m5) const {
+  if (mode_ == Mode::kFree) return false;
+  if (m5) *m5 = S(0);
+  if (damped_sticking_) {
+    M = Damped().ReactionProbe(S(0)).M;
+    return true;
+  }
+  using R = Real<S>;
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto& rho = cd.m->stick_reaction;
+  const S w3 = omega_ * omega_ * omega_;
+  S b = R::abs(cd.reaction_forcing) * w3, b5 = b * omega_ * omega_;
+  for (size_t k = 0; k < cd.stick_modes.size(); ++k) {
+    const auto kk = static_cast<Eigen::Index>(k);
+    const OscillatorT<S>& o = cd.stick_modes[k];
+    const S d3 = Bounds<S>(o, omega_, Amplitude<S>(o, xi0_[kk], dxi0_[kk]) + R::abs(o.F) * H).d3;
+    b += R::abs(rho[kk]) * d3;
+    b5 += R::abs(rho[kk]) * (o.nu * o.nu * d3 + R::abs(o.F) * w3);
+  }
+  M = b * BoundMargin<S>();
+  if (m5) *m5 = b5 * BoundMargin<S>();
+  return true;
+}
+
+// R⁽³⁾ = κω³ cos φ + Σ ρ_k ξ_k''', R⁽⁴⁾ = −κω⁴ sin φ + Σ ρ_k ξ_k'''' with ξ''' = −ν²ξ' + Fω cos φ,
+// ξ'''' = −ν²ξ'' − Fω² sin φ (undamped constrained modes); the damped closed form has none.
+template <class S>
+bool ExactEngineT<S>::HeldReactionTaylor(const S& sigma, S* d) const {
+  if (mode_ == Mode::kFree || damped_sticking_) return false;
+  const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+  const auto& rho = cd.m->stick_reaction;
+  const ForcingTrigT<S> fw(omega_, sigma);
+  const S sf = fw.SinPhase(trig_), cf = fw.CosPhase(trig_);
+  const S k = cd.reaction_forcing, w = omega_, w2 = omega_ * omega_;
+  d[0] = cd.static_reaction - k * sf;
+  d[1] = -k * w * cf;
+  d[2] = k * w2 * sf;
+  d[3] = k * w2 * w * cf;
+  d[4] = -k * w2 * w2 * sf;
+  if (!taylor_ready_) {
+    taylor_.resize(cd.stick_modes.size());
+    for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
+      const auto qq = static_cast<Eigen::Index>(q);
+      const OscillatorT<S>& o = cd.stick_modes[q];
+      const S den = o.nu * o.nu - w2;
+      TaylorMode& tm = taylor_[q];
+      tm.flow = !(Real<S>::abs(den) >= S(0.25) * o.nu * o.nu);
+      if (tm.flow) continue;
+      tm.P = o.F / den;
+      tm.a = xi0_[qq] - tm.P * trig_.s;
+      tm.b = (dxi0_[qq] - tm.P * w * trig_.c) / o.nu;
+    }
+    taylor_ready_ = true;
+  }
+  for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
+    const auto qq = static_cast<Eigen::Index>(q);
+    const OscillatorT<S>& o = cd.stick_modes[q];
+    const S nu2 = o.nu * o.nu;
+    const TaylorMode& tm = taylor_[q];
+    if (!tm.flow) {
+      // h = a cos νσ + b sin νσ, h' = ν(−a sin νσ + b cos νσ) = ν hp.
+      S sn(0), cn(0);
+      Real<S>::sincos(o.nu * sigma, sn, cn);
+      const S h = tm.a * cn + tm.b * sn, hp = tm.b * cn - tm.a * sn;
+      d[0] += rho[qq] * (tm.P * sf + h);
+      d[1] += rho[qq] * (tm.P * w * cf + o.nu * hp);
+      d[2] += rho[qq] * (-tm.P * w2 * sf - nu2 * h);
+      d[3] += rho[qq] * (-tm.P * w2 * w * cf - nu2 * o.nu * hp);
+      d[4] += rho[qq] * (tm.P * w2 * w2 * sf + nu2 * nu2 * h);
+      continue;
+    }
+    const auto st = Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
+    const S xi = xi0_[qq] + st.dq;
+    const S acc = -nu2 * xi + o.F * sf;
+    d[0] += rho[qq] * xi;
+    d[1] += rho[qq] * st.v;
+    d[2] += rho[qq] * acc;
+    d[3] += rho[qq] * (-nu2 * st.v + o.F * w * cf);
+    d[4] += rho[qq] * (-nu2 * acc - o.F * w2 * sf);
   }
   return true;
 }

@@ -110,6 +110,14 @@ class PropagatorT {
   // The same with R̈ (the max R search's Newton steps, docs/loads.md §3); false when the engine
   // has no closed form.
   virtual bool HeldReactionJet(const S& /*sigma*/, S& /*R*/, S& /*rate*/, S& /*accel*/) const { return false; }
+  // A bound M ≥ |R'''| over [0, H] of the last segment's held flow, from the engine's closed form
+  // (the bound its release search steps with): the max R search certifies its cells with it
+  // (docs/loads.md §3). False when the engine has none.
+  // With M5 ≥ |R⁽⁵⁾| there too when m5 is given (0 when the engine has none).
+  virtual bool HeldReactionBound(const S& /*H*/, S& /*M*/, S* /*m5*/ = nullptr) const { return false; }
+  // R and its first four derivatives at sigma (d[0..4]), from the engine's closed form; false when
+  // it has none (the max R search then steps with HeldReactionJet).
+  virtual bool HeldReactionTaylor(const S& /*sigma*/, S* /*d*/) const { return false; }
   // Integrator work so far (zero for closed forms).
   virtual SolverStats stats() const { return {}; }
   // Polled inside long root searches and stepping loops: true stops the segment with a failure
