@@ -150,14 +150,22 @@ class ProgressRelay {
 
   bool active() const { return !callback_.is_none(); }
 
-  // done of total units; called without the GIL.
+  // done of total units; called without the GIL. The state reached is kept even when this report
+  // is skipped (another thread calling), so that Finish() reports it.
   void Update(long long done, long long total) {
     if (!active()) return;
+    {
+      std::lock_guard state(state_mutex_);
+      if (total != reached_total_) {
+        reached_total_ = total;
+        reached_ = done;
+      } else {
+        reached_ = std::max(reached_, done);  // never backwards
+      }
+    }
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock()) return;
-    if (done <= done_ && total == total_) return;  // never backwards
-    done_ = std::max(done, done_);
-    total_ = total;
+    if (!Take()) return;
     const auto now = Clock::now();
     if (failed_ || std::chrono::duration<double>(now - last_).count() < kInterval) return;
     last_ = now;
@@ -167,10 +175,11 @@ class ProgressRelay {
   // The last report (the state reached), with the GIL held; raises the callback's exception.
   void Finish() {
     if (!active()) return;
-    if (!failed_ && done_ >= 0) {
+    if (!failed_) {
       py::gil_scoped_release release;  // Call() takes it, as from a worker thread
       std::lock_guard lock(mutex_);
-      Call();
+      Take();
+      if (done_ >= 0) Call();
     }
     if (error_) {
       std::shared_ptr<py::error_already_set> error = std::move(error_);
@@ -180,6 +189,14 @@ class ProgressRelay {
 
  private:
   using Clock = std::chrono::steady_clock;
+  // mutex_ held: the state reached into done_, total_; false when it is not new.
+  bool Take() {
+    std::lock_guard state(state_mutex_);
+    if (reached_ <= done_ && reached_total_ == total_) return false;
+    done_ = reached_;
+    total_ = reached_total_;
+    return true;
+  }
   // mutex_ held, GIL not held.
   void Call() {
     py::gil_scoped_acquire gil;
@@ -193,8 +210,10 @@ class ProgressRelay {
   }
   py::object callback_;
   SigintGuard& guard_;
-  std::mutex mutex_;
-  long long done_ = -1, total_ = 0;
+  std::mutex mutex_;        // held while reporting (the Python call)
+  long long done_ = -1, total_ = 0;  // the state last reported
+  std::mutex state_mutex_;  // held for a few instructions: the state reached
+  long long reached_ = -1, reached_total_ = 0;
   Clock::time_point last_ = Clock::now();
   bool failed_ = false;
   std::shared_ptr<py::error_already_set> error_;

@@ -9,6 +9,7 @@
 //   undamped constrained modes (Taylor step), the damped closed form (Newton steps), CVODE (the grid
 //   search), quad precision, one DOF.
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
@@ -114,6 +115,52 @@ double ReactionOf(const System& sys, const Eigen::VectorXd& X, const Eigen::Vect
   return (elastic - sys.s_A() * sys.amplitude() * std::sin(sys.frequency() * t)) / sys.s_B();
 }
 
+// Every release of a run of `s` with its sticking phase longer than 20 samples: vibro's max R
+// against this test's R of eq. (5) on the dense samples (at least every sample, and the vertex of
+// the parabola through the three largest within 1e-10 when the largest is inside the phase). The
+// number of phases checked.
+int CheckAgainstSamples(Scene s, int spp, const std::string& what) {
+  s.run.samples_per_period = spp;
+  const System sys(s);
+  Log log;
+  LoadsRecorder rec(sys, 0);
+  SimulationOptions opt;
+  opt.observers = {&log, &rec};
+  const RunResult r = vibro::Simulate(sys, s, opt);
+  EXPECT_EQ(r.status, RunStatus::kOk) << what << ": " << r.message;
+  const double h = sys.period() / spp;
+  int checked = 0;
+  for (const Event& e : log.events) {
+    if (e.kind != EventKind::kRelease || !(e.stick_duration > 20 * h)) continue;
+    const double t1 = e.t, t0 = t1 - e.stick_duration;
+    std::vector<double> Rs;
+    for (const auto& row : log.samples)
+      if (row.t >= t0 && row.t <= t1) Rs.push_back(ReactionOf(sys, row.X, row.V, row.t));
+    if (Rs.size() < 10) continue;
+    size_t k = 0;
+    for (size_t i = 1; i < Rs.size(); ++i)
+      if (Rs[i] > Rs[k]) k = i;
+    const double top = Rs[k];
+    const double scale = std::max(1.0, std::abs(top));
+    // vibro's maximum is at least every sample's R (to rounding) ...
+    EXPECT_GE(e.reaction_max, top - 1e-13 * scale) << what << " release at t = " << t1;
+    if (k == 0 || k + 1 == Rs.size()) {
+      // ... and at an end of the phase, at most one sample step of R above it.
+      EXPECT_LE(e.reaction_max, top + std::abs(Rs[k == 0 ? 1 : k - 1] - top) + 1e-12 * scale) << what;
+    } else {
+      // ... and inside, the vertex of the parabola through the three largest samples, whose error
+      // is of the order of R'''h³, the third difference there.
+      const double a = Rs[k - 1], b = Rs[k], d = Rs[k + 1];
+      const double vertex = b + (d - a) * (d - a) / (8 * (2 * b - a - d));
+      const auto third = [&](size_t i) { return std::abs(Rs[i + 3] - 3 * Rs[i + 2] + 3 * Rs[i + 1] - Rs[i]); };
+      const double d3 = k + 2 < Rs.size() ? third(k - 1) : k >= 2 ? third(k - 2) : 0.0;
+      EXPECT_NEAR(e.reaction_max, vertex, 1e-10 * scale + d3) << what << " release at t = " << t1;
+    }
+    ++checked;
+  }
+  return checked;
+}
+
 TEST(LoadsMaxR, MaximumAgainstDenseSamples) {
   struct Case {
     const char* file;
@@ -131,50 +178,55 @@ TEST(LoadsMaxR, MaximumAgainstDenseSamples) {
   int phases = 0;
   for (const Case& c : cases) {
     Scene s = Load(c.file, c.sets);
-    const int spp = 20000;
     s.run.periods = 10;
-    s.run.samples_per_period = spp;
-    const System sys(s);
-    Log log;
-    LoadsRecorder rec(sys, 0);
-    SimulationOptions opt;
-    opt.observers = {&log, &rec};
-    const RunResult r = vibro::Simulate(sys, s, opt);
-    ASSERT_EQ(r.status, RunStatus::kOk) << c.file << ": " << r.message;
-    const double h = sys.period() / spp;
-    int here = 0;
-    for (const Event& e : log.events) {
-      if (e.kind != EventKind::kRelease || !(e.stick_duration > 20 * h)) continue;
-      const double t1 = e.t, t0 = t1 - e.stick_duration;
-      std::vector<double> ts, Rs;
-      for (const auto& row : log.samples) {
-        if (row.t < t0 || row.t > t1) continue;
-        ts.push_back(row.t);
-        Rs.push_back(ReactionOf(sys, row.X, row.V, row.t));
-      }
-      ASSERT_GT(Rs.size(), 10u);
-      size_t k = 0;
-      for (size_t i = 1; i < Rs.size(); ++i)
-        if (Rs[i] > Rs[k]) k = i;
-      const double top = Rs[k];
-      const double scale = std::max(1.0, std::abs(top));
-      // vibro's maximum is at least every sample's R (to rounding) ...
-      EXPECT_GE(e.reaction_max, top - 1e-13 * scale) << c.file << (c.sets.empty() ? "" : " " + c.sets[0]) << " release at t = " << t1;
-      if (k == 0 || k + 1 == Rs.size()) {
-        // ... and at an end of the phase, at most one sample step of R above it.
-        EXPECT_LE(e.reaction_max, top + std::abs(Rs[k == 0 ? 1 : k - 1] - top) + 1e-12 * scale) << c.file;
-      } else {
-        // ... and inside, the vertex of the parabola through the three largest samples.
-        const double a = Rs[k - 1], b = Rs[k], d = Rs[k + 1];
-        const double vertex = b + (d - a) * (d - a) / (8 * (2 * b - a - d));
-        EXPECT_NEAR(e.reaction_max, vertex, 1e-10 * scale) << c.file << (c.sets.empty() ? "" : " " + c.sets[0]) << " release at t = " << t1;
-      }
-      ++here;
-    }
+    const int here = CheckAgainstSamples(s, 20000, c.file + (c.sets.empty() ? std::string() : " " + c.sets[0]));
     EXPECT_GE(here, 2) << c.file << (c.sets.empty() ? "" : " " + c.sets[0]);
     phases += here;
   }
   EXPECT_GE(phases, 25);
+}
+
+// Random chains of 2 to 5 masses and springs, undamped or with modal damping, forced on a random
+// mass, preloaded against a stop on another with r ∈ {0, 0.3, 0.6}, over random ω and f: the worst
+// case of the search (several modes, maxima anywhere in the phase, transients), against the samples.
+TEST(LoadsMaxR, RandomStickingChains) {
+  std::mt19937_64 rng(2026);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int scenes = 0, phases = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 2 + static_cast<int>(u(rng) * 4.0);
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n), K = Eigen::MatrixXd::Zero(n, n);
+    for (int i = 0; i < n; ++i) M(i, i) = 0.5 + 1.5 * u(rng);
+    for (int i = 0; i < n; ++i) {
+      const double k = 0.5 + 1.5 * u(rng);
+      K(i, i) += k;
+      if (i > 0) {
+        K(i - 1, i - 1) += k;
+        K(i - 1, i) -= k;
+        K(i, i - 1) -= k;
+      }
+    }
+    Scene s;
+    s.physical = PhysicalStructureSpec{M, K, static_cast<int>(u(rng) * n), static_cast<int>(u(rng) * n)};
+    const double restitutions[] = {0.0, 0.3, 0.6};
+    s.restitution = restitutions[static_cast<int>(u(rng) * 3.0)];
+    s.frequency = 0.3 + 1.7 * u(rng);
+    s.amplitude = 0.5 + 2.5 * u(rng);
+    s.stop_position = 0.05 + 0.5 * u(rng);
+    if (u(rng) < 0.4) {
+      s.damping_ratios.resize(n);
+      for (int i = 0; i < n; ++i) s.damping_ratios[i] = 0.01 + 0.1 * u(rng);
+    }
+    s.run.periods = 8;
+    // Samples about 4e-4 apart whatever the period.
+    const int spp = std::max(4000, static_cast<int>(2 * M_PI / s.frequency / 4e-4));
+    const int here = CheckAgainstSamples(s, spp, "random chain " + std::to_string(trial));
+    scenes += here > 0;
+    phases += here;
+  }
+  std::printf("random chains: %d phases in %d scenes that stick\n", phases, scenes);
+  EXPECT_GE(scenes, 10);
+  EXPECT_GE(phases, 60);
 }
 
 }  // namespace
