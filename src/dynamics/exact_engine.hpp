@@ -125,8 +125,8 @@ class ExactEngineT final : public PropagatorT<S> {
   Vec xi0_, dxi0_;  // sticking start, constrained modal coordinates
   mutable Vec xi_, dxi_;  // Evaluate's scratch (no allocation per dense-output point)
   // HeldReactionTaylor's form of each constrained mode over the segment, made at its first call:
-  // ξ = P sin φ + a cos νσ + b sin νσ (P = F/(ν² − ω²)); `flow` where ν is within a factor
-  // √(3/4) … √(5/4) of ω (near resonance, P large and the sum cancelling: Flow instead).
+  // ξ = P sin φ + a cos νσ + b sin νσ (P = F/(ν² − ω²)); `flow` where ω/ν is within √(3/4) …
+  // √(5/4) (near resonance, P large and the sum cancelling) or ν = 0: Flow instead.
   struct TaylorMode {
     S P, a, b;
     bool flow;
@@ -658,7 +658,7 @@ bool ExactEngineT<S>::HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) c
 // |R'''| ≤ |κ f| ω³ + Σ |ρ_k| max|ξ_k'''| over [0, H], each mode bounded from its energy amplitude at
 // σ = 0 as ReactionProbe(0, H) bounds it (oscillator.hpp, Bounds); damped, the damped closed
 // form's bound, valid for every σ ≥ 0. No trigonometric function: amplitudes only.
-// |R⁽⁵⁾| ≤ |κ f| ω⁵ + Σ |ρ_k| (ν_k² max|ξ_k'''| + |F_k| ω³) likewise (ξ⁽⁵⁾ = −ν²ξ''' + Fω³ cos φ
+// |R⁽⁵⁾| ≤ |κ f| ω⁵ + Σ |ρ_k| (ν_k² max|ξ_k'''| + |F_k| ω³) likewise (ξ⁽⁵⁾ = −ν²ξ''' − Fω³ cos φ
 // for an undamped constrained mode); none for the damped closed form (m5 = 0).
 template <class S>
 bool ExactEngineT<S>::HeldReactionBound(const S& H, S& M, S* m5) const {
@@ -707,7 +707,7 @@ bool ExactEngineT<S>::HeldReactionTaylor(const S& sigma, S* d) const {
       const OscillatorT<S>& o = cd.stick_modes[q];
       const S den = o.nu * o.nu - w2;
       TaylorMode& tm = taylor_[q];
-      tm.flow = !(Real<S>::abs(den) >= S(0.25) * o.nu * o.nu);
+      tm.flow = !(o.nu > S(0)) || !(Real<S>::abs(den) >= S(0.25) * o.nu * o.nu);
       if (tm.flow) continue;
       tm.P = o.F / den;
       tm.a = xi0_[qq] - tm.P * trig_.s;
