@@ -409,15 +409,15 @@ class ReactionMaxT {
     return u > S(0) && u < S(1) ? S(u * h) : S(-1);
   }
 
-  // R (the paper's eq. (5), damped as docs/model.md §7) and Ṙ along the held flow at local time s,
-  // without allocation: Ṙ = Σ c_i(ω_i² Ẋ_i + 2ζ_iω_i Ẍ_i) − s_A f ω cos φ over s_B, with Ẍ the
-  // constrained acceleration (the free one less T_B times the gap's).
-  // The engine's own R and Ṙ when it has them (the exact engine: no state formed), else from the state.
+  // R and Ṙ along the held flow at local time s, without allocation: the engine's own when it has
+  // them (no state formed), else from the state (JetAt).
   S At(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& s, S& rate) const {
     S held(0);
     if (p.HeldReaction(s, held, rate)) return held;
     p.Evaluate(s, Xs_, Vs_);
-    return At(m, Xs_, Vs_, phase + m.w * s, rate);
+    const Jet j = JetAt(m, Xs_, Vs_, phase + m.w * s);
+    rate = j.rate;
+    return j.R;
   }
   // R, Ṙ and R̈ from a state on the held flow of m at forcing phase ph (keeps cos φ in cos_). The
   // constrained acceleration is Ẍ = −ΩX − DẊ + T_A f sin φ + T_B R (R = −cᵀ(free acceleration)/s_B,
@@ -513,30 +513,6 @@ class ReactionMaxT {
     coefs_.push_back(std::move(c));
     last_coefs_ = &coefs_.back();
     return coefs_.back();
-  }
-
-  // Keeps cos φ in cos_.
-  S At(const ModelT<S>& m, const Vec& X, const Vec& V, const S& ph, S& rate) const {
-    S sn(0), cs(0);
-    R::sincos(ph, sn, cs);
-    cos_ = cs;
-    S elastic(0), r(0), gap_acc(0);
-    if (m.damped)
-      for (Eigen::Index i = 0; i < X.size(); ++i)
-        gap_acc += m.shape[i] * (-m.omega[i] * m.omega[i] * X[i] - S(2) * m.zeta[i] * m.omega[i] * V[i] +
-                                 m.forcing[i] * m.f * sn);
-    for (Eigen::Index i = 0; i < X.size(); ++i) {
-      if (m.shape[i] == S(0)) continue;
-      const S w2 = m.omega[i] * m.omega[i], d = S(2) * m.zeta[i] * m.omega[i];
-      elastic += m.shape[i] * (w2 * X[i] + d * V[i]);
-      r += m.shape[i] * w2 * V[i];
-      if (m.damped) {
-        const S acc = -w2 * X[i] - d * V[i] + m.forcing[i] * m.f * sn - m.contact[i] * gap_acc / m.s_B;
-        r += m.shape[i] * d * acc;
-      }
-    }
-    rate = (r - m.s_A * m.f * m.w * cs) / m.s_B;
-    return (elastic - m.s_A * m.f * sn) / m.s_B;
   }
 
  private:
