@@ -25,6 +25,27 @@ namespace vibro::detail {
 
 // One DOF (no constrained mode): the stuck body rests at x0 and R depends on the phase only, so
 // the release phase is closed form (docs/model.md §4.4, §6.1) and no sticking flow is integrated.
+// Contact j's force λ_j under the held set's closed form, as a source of the max R search
+// (ReactionMaxT::Max, docs/loads.md): its jet and the bound of its third derivative (no Taylor step).
+template <class S>
+struct SetForce {
+  const SetStickingT<S>* set;
+  int contact;
+  bool HeldReactionJet(const S& s, S& R, S& rate, S& accel) const {
+    const JetT<S> j = set->Force(contact, s);
+    R = j.g;
+    rate = j.g1;
+    accel = j.g2;
+    return true;
+  }
+  bool HeldReactionTaylor(const S&, S*) const { return false; }
+  bool HeldReactionBound(const S& H, S& M, S* m5) const {
+    M = set->ForceBound(contact, H);
+    if (m5) *m5 = S(0);
+    return true;
+  }
+};
+
 template <class S>
 class RestingStick final : public PropagatorT<S> {
  public:
@@ -1647,7 +1668,9 @@ RunResult Automaton<S>::Run() {
     }
     p.Evaluate(seg.sigma, X_, V_);
     if (loads) loads_.Segment(active_, M(active_), p, Phase(from), seg.sigma, X_, V_);
-    if (set_loads) loads_.SetSegment(held_set_, models_, Phase(from), seg.sigma, X_, V_);
+    if (set_loads)
+      loads_.SetSegment(held_set_, models_, Phase(from), seg.sigma, X_, V_,
+                        [set](int c) { return SetForce<S>{set, c}; });
     if (multi())
       UpdateGaps(p, seg.sigma);
     else if (mode_ == Mode::kFree)

@@ -46,9 +46,9 @@ void TailLoads(const ModelT<S>& m, const S& u, const S& epsilon, S& impulse, S& 
   energy = u * u / (S(2) * m.s_B) * (S(1) - S(2) * epsilon / (S(3) * (S(1) + m.r + m.r * m.r)));
 }
 
-// The sticking phase of one contact, accumulated segment by segment. A phase that was held
-// together with other contacts for a while has no max R (its held-set segments give ∫λ dt, not
-// the maximum of λ): max_unknown keeps it NaN.
+// The sticking phase of one contact, accumulated segment by segment. A phase resumed from a
+// checkpoint that has time held and no max (written by an earlier release, which did not compute
+// the max of λ over held sets) keeps its max NaN: max_unknown.
 struct StickAccount {
   double duration = 0, integral = 0, max = std::numeric_limits<double>::quiet_NaN();
   bool open = false;
@@ -126,10 +126,14 @@ class ContactLoadsT {
 
   // A segment held on the set `held` of several contacts (models[j] each contact's), over local
   // time sigma from forcing phase `phase`, ending at (X1, V1): every held contact's duration and
-  // ∫λ_j dt in closed form (SetReactionIntegrals); their max λ is left unknown. A set whose
-  // flexibility matrix cannot be solved (dependent contacts) abandons its contacts' accounts.
+  // ∫λ_j dt in closed form (SetReactionIntegrals), and max λ_j certified as max R is (from the set's
+  // closed form of λ_j, without the Taylor step). A set whose flexibility matrix cannot be solved
+  // (dependent contacts) abandons its contacts' accounts.
+  // force_of(j): contact j's force λ_j as a source of the max R search (its jets and bound,
+  // ReactionMaxT::Max), from the set's closed form.
+  template <class ForceOf>
   void SetSegment(const std::vector<int>& held, const std::vector<const ModelT<S>*>& models, const S& phase,
-                  const S& sigma, const Vec& X1, const Vec& V1) {
+                  const S& sigma, const Vec& X1, const Vec& V1, const ForceOf& force_of) {
     Vec lambda;
     const bool ok = SetReactionIntegrals(held, models, phase, sigma, X0_, V0_, X1, V1, lambda);
     for (size_t a = 0; a < held.size(); ++a) {
@@ -141,8 +145,13 @@ class ContactLoadsT {
       }
       acc.duration += R::to_double(sigma);
       acc.integral += R::to_double(lambda[static_cast<Eigen::Index>(a)]);
-      acc.max = std::numeric_limits<double>::quiet_NaN();
-      acc.max_unknown = true;
+      if (acc.max_unknown) continue;
+      const auto source = force_of(held[a]);
+      Jet j0{}, j1{};
+      source.HeldReactionJet(S(0), j0.R, j0.rate, j0.accel);
+      source.HeldReactionJet(sigma, j1.R, j1.rate, j1.accel);
+      const double mx = R::to_double(search_.Max(*models[static_cast<size_t>(held[a])], source, phase, sigma, j0, j1));
+      if (!(acc.max >= mx)) acc.max = mx;
     }
   }
 
@@ -222,7 +231,7 @@ class ContactLoadsT {
       return;
     for (size_t j = 0; j < phases_.size(); ++j) {
       const bool open = !std::isnan(cp.stick_duration[j]);
-      // An open phase with time held and no max was held with other contacts: its max stays unknown.
+      // An open phase with time held and no max (an earlier release's held set): its max stays unknown.
       phases_[j] = {open ? cp.stick_duration[j] : 0.0, open ? cp.reaction_integral[j] : 0.0, cp.reaction_max[j],
                     open, open && cp.stick_duration[j] > 0 && std::isnan(cp.reaction_max[j])};
     }

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -63,14 +64,18 @@ class ReactionMaxT {
   // largest R found plus 1024 ε of the R at hand and the most R can exceed the maxima found beside
   // them (their Taylor remainders): max R over the segment is within that of the value returned.
   // Most segments need their two ends only. Without a bound (an integrator): the grid search.
-  S Max(const ModelT<S>& m, const PropagatorT<S>& p, const S& phase, const S& sigma, const Jet& j0,
-        const Jet& j1) {
+  // P: a PropagatorT, or any source of R with its HeldReactionJet, HeldReactionTaylor and
+  // HeldReactionBound (a contact of a held set: λ_j), which has no grid search to fall back on.
+  template <class P>
+  S Max(const ModelT<S>& m, const P& p, const S& phase, const S& sigma, const Jet& j0, const Jet& j1) {
     S best = j0.R > j1.R ? j0.R : j1.R;
     if (!(sigma > S(0))) return best;
     const S wmax = CoefsOf(m).wmax;
     S M(0), M5(0);
-    if (!p.HeldReactionBound(sigma, M, &M5) || !R::isfinite(M))
-      return GridMax(m, p, phase, wmax, {S(0), j0}, {sigma, j1});
+    if (!p.HeldReactionBound(sigma, M, &M5) || !R::isfinite(M)) {
+      if constexpr (std::is_base_of_v<PropagatorT<S>, P>) return GridMax(m, p, phase, wmax, {S(0), j0}, {sigma, j1});
+      return best;
+    }
     const S h = std::min(sigma, S(S(1) / wmax));  // the scale of the Newton steps' tolerance
     const S rounding = S(1024) * Eps<S>() * (R::abs(j0.R) + R::abs(j1.R));
     S excess(0);
@@ -114,9 +119,11 @@ class ReactionMaxT {
         cells_.push_back({a, c});
       }
     }
-    if (!cells_.empty()) {
-      const S grid = GridMax(m, p, phase, wmax, {S(0), j0}, {sigma, j1});
-      if (grid > best) best = grid;
+    if constexpr (std::is_base_of_v<PropagatorT<S>, P>) {
+      if (!cells_.empty()) {
+        const S grid = GridMax(m, p, phase, wmax, {S(0), j0}, {sigma, j1});
+        if (grid > best) best = grid;
+      }
     }
     return best;
   }
@@ -167,7 +174,8 @@ class ReactionMaxT {
   // c ← c − Ṙ/R̈ from there, the bracket kept (a step outside it, or R̈ ≥ 0, bisects), until the
   // maximum near c is known to rounding (below) or the next step is below 1e-7 h. Returns the point
   // with its jet. phase, w: the segment's start phase and the forcing frequency.
-  Node Peak(const PropagatorT<S>& p, const Node& a0, const Node& b0, const S& h, const S& M, const S& M5,
+  template <class P>
+  Node Peak(const P& p, const Node& a0, const Node& b0, const S& h, const S& M, const S& M5,
             const S& phase, const S& w, S& best) {
     S a = a0.s, b = b0.s;
     Node c;
@@ -218,7 +226,8 @@ class ReactionMaxT {
   // |R − T| ≤ M5|t|⁵/120, |Ṙ − T'| ≤ M5|t|⁴/24, |R̈ − T''| ≤ M5|t|³/6. Taken (true, the point in
   // `out` with its jet at worst within those errors) when R there is known to the rounding of R,
   // inside (a, b); else `out` is the jet at s0 (false).
-  bool TaylorPeak(const PropagatorT<S>& p, const S& s0, const S& a, const S& b, const S& M5, S& best,
+  template <class P>
+  bool TaylorPeak(const P& p, const S& s0, const S& a, const S& b, const S& M5, S& best,
                   Node& out) const {
     S d[5];
     out.s = s0;

@@ -157,6 +157,12 @@ class SetStickingT final : public PropagatorT<S> {
     const auto it = std::find(h_.set.begin(), h_.set.end(), contact);
     return ForceProbe(static_cast<size_t>(it - h_.set.begin()), sigma, S(0)).jet;
   }
+  // A bound on the third derivative of that force over [0, H] (the one its release search steps
+  // with; damped, valid for every σ ≥ 0).
+  S ForceBound(int contact, const S& H) const {
+    const auto it = std::find(h_.set.begin(), h_.set.end(), contact);
+    return ForceProbe(static_cast<size_t>(it - h_.set.begin()), S(0), H).M;
+  }
 
  private:
   void Modes(const S& sigma, Vec& y, Vec& dy) const {

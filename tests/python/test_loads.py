@@ -134,7 +134,8 @@ def test_partition_cells_loads(tmp_path):
 def test_held_set_phases_in_closed_form():
     """Two masses held on both stops at once (contacts_held_pair.toml, docs/loads.md "Phases held on
     several contacts at once"): every phase of mass 1 has ∫λ_1 dt = 0.1Δt + 0.5(cos ωt_r − cos ωt_s)/ω
-    (λ = K d − b f sin ωt with q = d held), and the summary's loads are known."""
+    and max λ_1 that of 0.1 − 0.5 sin ωt over [t_s, t_r] (λ = K d − b f sin ωt with q = d held), and
+    the summary's loads are known."""
     path = os.path.join(os.path.dirname(__file__), "..", "reference", "contacts", "scenes", "contacts_held_pair.toml")
     r = vibro.simulate(vibro.load_scene(path, set={"run.periods": 20}))
     e = r.events
@@ -146,7 +147,11 @@ def test_held_set_phases_in_closed_form():
         ts = sticks["t"][sticks["t"] < rel["t"]].max()
         exact = 0.1 * (rel["t"] - ts) + 0.5 * (math.cos(w * rel["t"]) - math.cos(w * ts)) / w
         assert abs(rel["reaction_integral"] - exact) < 1e-12 * rel["t"], (rel["t"], rel["reaction_integral"], exact)
-        assert math.isnan(rel["reaction_max"])
+        lam = [0.1 - 0.5 * math.sin(w * t) for t in (ts, rel["t"])]
+        k = math.ceil((w * ts - 1.5 * math.pi) / (2 * math.pi))  # sin ωt = −1 inside: λ = 0.6
+        if ts < (1.5 * math.pi + 2 * math.pi * k) / w < rel["t"]:
+            lam.append(0.6)
+        assert abs(rel["reaction_max"] - max(lam)) < 1e-12, (rel["t"], rel["reaction_max"], max(lam))
     assert not np.any((e["contact"] == 0) & (e["kind"] == 4))  # mass 0 never leaves
     for c in r.summary["loads"]:
         assert c["mean_force"] is not None and c["reaction_integral_per_period"] is not None

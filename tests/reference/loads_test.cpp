@@ -132,7 +132,7 @@ TEST(LoadsHeldSet, TwoMassesOnBothStopsClosedForm) {
   ASSERT_EQ(rec.result.status, RunStatus::kOk) << rec.result.message;
   const long double w = 0.7L;
   double t_stick = std::nan("");
-  int phases = 0;
+  int phases = 0, interior = 0;
   for (const Event& e : rec.log.events) {
     if (e.contact == 0) {
       EXPECT_NE(e.kind, EventKind::kRelease) << "mass 0 leaves its stop at t = " << e.t;
@@ -146,10 +146,17 @@ TEST(LoadsHeldSet, TwoMassesOnBothStopsClosedForm) {
     EXPECT_NEAR(e.stick_duration, static_cast<double>(tr - ts), 1e-12 * static_cast<double>(tr));
     // Event times carry the absolute-time rounding (a few ulp of t): the integral too.
     EXPECT_NEAR(e.reaction_integral, static_cast<double>(exact), 1e-12 * static_cast<double>(tr)) << "t = " << e.t;
-    EXPECT_TRUE(std::isnan(e.reaction_max));  // the max of λ over a held set is not computed
+    // max λ_1 over [t_s, t_r]: at an end, or 0.6 where sin ωt = −1 inside.
+    long double lmax = std::max(0.1L - 0.5L * std::sin(w * ts), 0.1L - 0.5L * std::sin(w * tr));
+    const long double k = std::ceil((w * ts - 1.5L * 3.14159265358979323846264L) / (2 * 3.14159265358979323846264L));
+    const long double t_min = (1.5L * 3.14159265358979323846264L + 2 * 3.14159265358979323846264L * k) / w;
+    if (t_min > ts && t_min < tr) lmax = 0.6L;
+    EXPECT_NEAR(e.reaction_max, static_cast<double>(lmax), 1e-12) << "t = " << e.t;
+    interior += lmax == 0.6L;
     ++phases;
   }
   EXPECT_GE(phases, 15);
+  EXPECT_GE(interior, 10);  // maxima inside the phases, found by the search
   // The run's loads are known: the note names no contact, every mean is finite.
   const LoadsSummary s = rec.loads;
   EXPECT_EQ(s.note.find("not accounted"), std::string::npos) << s.note;
