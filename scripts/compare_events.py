@@ -1,0 +1,115 @@
+#!/usr/bin/python3
+"""Events to the bit: run every shipped scene with two `vibro` binaries and compare their /events.
+
+    scripts/compare_events.py OLD_VIBRO NEW_VIBRO [--periods 60] [--precision double,quad]
+                              [--scenes GLOB ...] [--keep DIR]
+
+Each scene (data/scenes/**/*.toml and data/benchmarks/*.toml, or the --scenes globs) is simulated
+by both binaries with `--out`, double and quad precision, the same overrides; every /events column
+of the two files is compared bit for bit (NaN equal to NaN). Prints one line per scene and
+precision: `identical`, or the columns that differ with their largest relative difference.
+Exit 0 when every column of every scene is identical, 1 otherwise, 2 on bad arguments.
+
+A change to the engine or the automaton that should leave single-stop scenes untouched is checked
+with it against the commit before (docs/performance.md, "Events to the bit").
+"""
+import argparse
+import glob
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run(vibro, scene, precision, periods, out):
+    cmd = [vibro, "simulate", scene, "--out", out, "--set", f"run.periods={periods}"]
+    if precision != "double":
+        cmd += ["--set", f'run.precision="{precision}"', "--set", 'run.engine="exact"']
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    return r.returncode, r.stderr.strip().splitlines()[-1:] if r.stderr else []
+
+
+def columns(path):
+    with h5py.File(path, "r") as f:
+        if "events" not in f:
+            return {}
+        return {k: f["events"][k][()] for k in f["events"]}
+
+
+def compare(a, b):
+    diffs = []
+    for k in sorted(set(a) | set(b)):
+        if k not in a or k not in b:
+            diffs.append(f"{k}: only in {'old' if k in a else 'new'}")
+            continue
+        x, y = a[k], b[k]
+        if x.shape != y.shape:
+            diffs.append(f"{k}: {x.shape[0]} vs {y.shape[0]} events")
+            continue
+        if x.dtype.kind == "f":
+            same = (x.view(np.uint64 if x.itemsize == 8 else np.uint32) ==
+                    y.view(np.uint64 if y.itemsize == 8 else np.uint32)) | (np.isnan(x) & np.isnan(y))
+            if not same.all():
+                with np.errstate(invalid="ignore", divide="ignore"):
+                    rel = np.abs(x - y) / np.maximum(np.maximum(np.abs(x), np.abs(y)), 1e-300)
+                rel = rel[~same]
+                diffs.append(f"{k}: {int((~same).sum())} differ, max rel {np.nanmax(rel) if rel.size else 0:.2e}")
+        elif not np.array_equal(x, y):
+            diffs.append(f"{k}: {int((x != y).sum())} differ")
+    return diffs
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("old")
+    p.add_argument("new")
+    p.add_argument("--periods", type=int, default=60)
+    p.add_argument("--precision", default="double,quad")
+    p.add_argument("--scenes", nargs="*")
+    p.add_argument("--keep", help="keep the HDF5 files in this folder")
+    a = p.parse_args()
+    for exe in (a.old, a.new):
+        if not os.access(exe, os.X_OK):
+            print(f"compare_events: {exe}: not an executable", file=sys.stderr)
+            return 2
+    patterns = a.scenes or [os.path.join(ROOT, "data/scenes/**/*.toml"),
+                            os.path.join(ROOT, "data/benchmarks/*.toml")]
+    scenes = sorted({s for pat in patterns for s in glob.glob(pat, recursive=True)})
+    if not scenes:
+        print("compare_events: no scene matches", file=sys.stderr)
+        return 2
+    tmp = a.keep or tempfile.mkdtemp(prefix="compare_events.")
+    os.makedirs(tmp, exist_ok=True)
+    bad = 0
+    for scene in scenes:
+        name = os.path.relpath(scene, ROOT)
+        for prec in a.precision.split(","):
+            outs = []
+            for tag, exe in (("old", a.old), ("new", a.new)):
+                out = os.path.join(tmp, f"{os.path.basename(scene)}.{prec}.{tag}.h5")
+                if os.path.exists(out):
+                    os.remove(out)
+                rc, last = run(exe, scene, prec, a.periods, out)
+                outs.append((rc, out, last))
+            (rc0, o0, l0), (rc1, o1, l1) = outs
+            if rc0 != rc1:
+                print(f"{name} [{prec}]: exit {rc0} vs {rc1} {l0} {l1}")
+                bad += 1
+                continue
+            if not (os.path.exists(o0) and os.path.exists(o1)):
+                print(f"{name} [{prec}]: no file (exit {rc0}) {l0}")
+                continue
+            d = compare(columns(o0), columns(o1))
+            n = len(columns(o1).get("t", []))
+            print(f"{name} [{prec}]: " + ("identical" if not d else "DIFFERS " + "; ".join(d)) + f" ({n} events)")
+            bad += bool(d)
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
