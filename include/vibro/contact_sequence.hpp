@@ -1,8 +1,8 @@
-// The contact sequence of an orbit with several contacts (docs/contacts.md, "Periodic orbits"):
-// its events from the section, in order, as "contact:event" ("0:impact 1:impact*3 0+1:impact
-// 0:stick 0:release"; OrbitResult::sequence). Reading a sequence written by a person or another
-// tool (a branch CSV's `sequence` column, docs/validation.md), and comparing two sequences of one
-// periodic orbit, which may start anywhere on it.
+// The contact sequence of a periodic orbit (docs/contacts.md, "Contact sequences are cyclic
+// words"): its events over its q periods as "contact:event" ("0:impact 1:impact*3 0+1:impact
+// 0:stick 0:release"; OrbitResult::sequence), a cyclic word written in one canonical rotation. Reading a sequence
+// written by a person or another tool (a branch CSV's `sequence` column, docs/validation.md),
+// comparing two sequences of one periodic orbit, which may start anywhere on it, and writing one.
 #pragma once
 
 #include <optional>
@@ -35,7 +35,18 @@ bool SameContactSequence(const std::vector<std::string>& a, const std::vector<st
 // The sequence of `events` in order (as ParseContactSequence returns it): one entry per event,
 // the contacts of one simultaneous impact (flagged `simultaneous`, at one time) in one entry.
 std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events);
-// The text of a sequence, runs of k equal entries written once with "*k" (OrbitResult::sequence).
+
+// The canonical rotation of a cyclic sequence (docs/contacts.md, "Contact sequences are cyclic
+// words"): the rotation whose tokens form the least word, a token being an entry or a whole chattering run at
+// one contact (as SameContactSequence groups them), tokens ordered by their contacts (ascending
+// lists compared lexicographically: 0 < 0+1 < 1) and then by kind (impact, chattering run,
+// accumulation, stick, release, grazing). When the tokens repeat (u^m, over several periods), of
+// the m rotations that give that word the one whose repetitions, each compared entry by entry in
+// the same order, form the least word. Every rotation of a word gives the same result; the word's
+// length and entries are kept (nothing is reduced to its repeating unit).
+std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entries);
+// The text of a sequence in its canonical rotation, runs of k equal entries written once with
+// "*k" (OrbitResult::sequence, and every sequence vibro writes).
 std::string ContactSequenceText(const std::vector<std::string>& entries);
 
 }  // namespace vibro

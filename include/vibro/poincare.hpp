@@ -134,9 +134,10 @@ struct OrbitResult {
   // Map evaluations and orbit simulations redone in quad precision because double left a
   // chattering sequence undetermined (exact engine, near the end of a sticking branch).
   int quad_evaluations = 0;
-  // Several contacts (docs/contacts.md, "Periodic orbits"): the orbit's contact sequence over its
-  // q periods from the section, e.g. "0:impact 1:impact 0:stick 0:release" (a run of k equal
-  // entries is written once with "*k"; "0+1:impact" is a simultaneous impact); empty for one contact.
+  // A scene with [[contact]] tables (docs/contacts.md, "Periodic orbits"): the orbit's contact
+  // sequence over its q periods, e.g. "0:impact 1:impact 0:stick 0:release" (a run of k equal
+  // entries is written once with "*k"; "0+1:impact" is a simultaneous impact), in its canonical
+  // rotation (contact_sequence.hpp), not necessarily from the section; empty for a [stop].
   std::string sequence;
   // Why the orbit has no Jacobian, so no multipliers (e.g. "the orbit passes through a
   // simultaneous impact of coupled contacts: the map has no Jacobian there"); empty when it has one.

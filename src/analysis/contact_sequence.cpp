@@ -2,6 +2,7 @@
 #include "vibro/contact_sequence.hpp"
 
 #include <algorithm>
+#include <compare>
 #include <cstdlib>
 #include <map>
 #include <string_view>
@@ -37,43 +38,118 @@ std::vector<int> Primitive(const std::vector<int>& w) {
   return w.size() % p == 0 ? std::vector<int>(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(p)) : w;
 }
 
-// The sequence with each chattering run as one entry "j:chattering": a run of impacts at contact
-// j that ends in j's accumulation point (absorbed), or directly in j's stick (a simulator that
-// ends chattering with a plastic impact below a threshold). The word is first rotated to end with
-// its last accumulation or stick, so that no run wraps around its end.
-std::vector<std::string> Coarse(std::vector<std::string> w) {
+// The sequence as tokens, each chattering run one token "j:chattering": a run of impacts at
+// contact j that ends in j's accumulation point (absorbed), or directly in j's stick (a simulator
+// that ends chattering with a plastic impact below a threshold). The word is read cyclically from
+// just after its last accumulation or stick, so that no run wraps around its end; each token
+// covers the entries [first, first + size) of `w`, indices modulo w.size().
+struct Token {
+  std::string name;
+  size_t first, size;
+};
+std::vector<Token> Tokens(const std::vector<std::string>& w) {
   const auto ends = [](const std::string& e, std::string_view tail) {
     return e.size() > tail.size() && e.ends_with(tail);
   };
   const auto last = std::find_if(w.rbegin(), w.rend(), [&](const std::string& e) {
     return ends(e, ":accumulation") || ends(e, ":stick");
   });
-  if (last == w.rend()) return w;
-  std::rotate(w.begin(), last.base(), w.end());
-  std::vector<std::string> out;
-  for (const auto& e : w) {
+  const size_t from = last == w.rend() ? 0 : static_cast<size_t>(w.rend() - last);  // after it
+  std::vector<Token> out;
+  for (size_t i = 0; i < w.size(); ++i) {
+    const size_t at = (from + i) % w.size();
+    const std::string& e = w[at];
     const bool acc = ends(e, ":accumulation"), stick = ends(e, ":stick");
     if (!acc && !stick) {
-      out.push_back(e);
+      out.push_back({e, at, 1});
       continue;
     }
     const std::string who = e.substr(0, e.find(':') + 1);  // "j:"
-    std::string impact = who, chattering = who;
-    impact.append("impact");
-    chattering.append("chattering");
-    if (stick && !out.empty() && out.back() == chattering) {  // after its accumulation point
-      out.push_back(e);
+    const std::string impact = who + "impact", chattering = who + "chattering";
+    if (stick && !out.empty() && out.back().name == chattering) {  // after its accumulation point
+      out.push_back({e, at, 1});
       continue;
     }
-    size_t popped = 0;
-    while (!out.empty() && out.back() == impact) {
+    Token run{chattering, at, 0};
+    while (!out.empty() && out.back().name == impact) {
+      run.first = out.back().first;
+      run.size += 1;
       out.pop_back();
-      ++popped;
     }
-    if (acc || popped > 0) out.push_back(chattering);
-    if (stick) out.push_back(e);
+    if (acc) run.size += 1;  // the accumulation point ends the run
+    if (run.size > 0) out.push_back(run);
+    if (stick) out.push_back({e, at, 1});
   }
   return out;
+}
+
+// The order of entries and tokens in the canonical rotation: by contacts (their ascending list,
+// compared lexicographically: 0 < 0+1 < 1 < 2), then by kind in the order impact, chattering,
+// accumulation, stick, release, grazing; an entry not of the form "J:kind" after all others.
+struct OrderKey {
+  bool malformed;
+  std::vector<long long> contacts;
+  int kind;
+  std::string text;
+  auto operator<=>(const OrderKey&) const = default;
+};
+OrderKey KeyOf(const std::string& e) {
+  constexpr const char* kOrder[] = {"impact", "chattering", "accumulation", "stick", "release", "grazing"};
+  OrderKey key{false, {}, 0, e};
+  const auto colon = e.find(':');
+  const auto kind = std::find(std::begin(kOrder), std::end(kOrder), e.substr(colon == std::string::npos ? 0 : colon + 1));
+  key.kind = static_cast<int>(kind - std::begin(kOrder));
+  for (size_t a = 0; colon != std::string::npos;) {
+    const auto plus = e.find('+', a);
+    const auto end = plus == std::string::npos || plus > colon ? colon : plus;
+    const long long id = Whole(e.substr(a, end - a));
+    if (id < 0) break;
+    key.contacts.push_back(id);
+    if (end == colon) break;
+    a = end + 1;
+  }
+  key.malformed = colon == std::string::npos || key.contacts.empty() || kind == std::end(kOrder);
+  return key;
+}
+
+// Each word of `words` as integers, equal entries equal integers, in the order of OrderKey.
+std::vector<std::vector<int>> Ranked(const std::vector<std::vector<std::string>>& words) {
+  std::map<OrderKey, int> rank;
+  for (const auto& w : words)
+    for (const auto& e : w) rank.emplace(KeyOf(e), 0);
+  int next = 0;
+  for (auto& [key, r] : rank) r = next++;
+  std::vector<std::vector<int>> out;
+  for (const auto& w : words) {
+    std::vector<int> v;
+    v.reserve(w.size());
+    for (const auto& e : w) v.push_back(rank.at(KeyOf(e)));
+    out.push_back(std::move(v));
+  }
+  return out;
+}
+
+// Where the lexicographically least rotation of a nonempty word starts (the first such start;
+// the two-pointer algorithm, O(n)).
+template <class T>
+size_t LeastRotation(const std::vector<T>& s) {
+  const size_t n = s.size();
+  size_t i = 0, j = 1, k = 0;
+  while (i < n && j < n && k < n) {
+    const T& a = s[(i + k) % n];
+    const T& b = s[(j + k) % n];
+    if (a == b) {
+      ++k;
+      continue;
+    }
+    if (b < a)
+      i += k + 1;
+    else
+      j += k + 1;
+    if (i == j) ++j;
+    k = 0;
+  }
+  return std::min(i, j);
 }
 
 }  // namespace
@@ -144,7 +220,7 @@ bool SameContactSequence(const std::vector<std::string>& a, const std::vector<st
   const auto code = [&](const std::vector<std::string>& w) {
     std::vector<int> out;
     out.reserve(w.size());
-    for (const auto& e : Coarse(w)) out.push_back(id.emplace(e, static_cast<int>(id.size())).first->second);
+    for (const auto& t : Tokens(w)) out.push_back(id.emplace(t.name, static_cast<int>(id.size())).first->second);
     return Primitive(out);
   };
   const std::vector<int> u = code(a), v = code(b);
@@ -187,13 +263,39 @@ std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
   return out;
 }
 
+std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entries) {
+  if (entries.size() < 2) return entries;
+  const std::vector<Token> tokens = Tokens(entries);
+  std::vector<std::string> names;
+  names.reserve(tokens.size());
+  for (const auto& t : tokens) names.push_back(t.name);
+  const std::vector<int> coarse = std::move(Ranked({names}).front());
+  // The least rotation of the tokens; when the tokens repeat (u^m), m rotations give it: the one
+  // whose m repetitions, each compared as its entries, form the least word of repetitions.
+  size_t start = LeastRotation(coarse);
+  const size_t unit = Primitive(coarse).size(), m = coarse.size() / unit;
+  if (m > 1) {
+    std::vector<std::vector<std::string>> blocks(m);
+    for (size_t b = 0; b < m; ++b)
+      for (size_t t = 0; t < unit; ++t) {
+        const Token& tok = tokens[(start + b * unit + t) % tokens.size()];
+        for (size_t i = 0; i < tok.size; ++i) blocks[b].push_back(entries[(tok.first + i) % entries.size()]);
+      }
+    start += LeastRotation(Ranked(blocks)) * unit;
+  }
+  std::vector<std::string> out(entries);
+  std::rotate(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(tokens[start % tokens.size()].first), out.end());
+  return out;
+}
+
 std::string ContactSequenceText(const std::vector<std::string>& entries) {
+  const std::vector<std::string> word = CanonicalRotation(entries);
   std::string out;
-  for (size_t i = 0; i < entries.size();) {
+  for (size_t i = 0; i < word.size();) {
     size_t k = i + 1;
-    while (k < entries.size() && entries[k] == entries[i]) ++k;
+    while (k < word.size() && word[k] == word[i]) ++k;
     if (!out.empty()) out.push_back(' ');
-    out.append(entries[i]);
+    out.append(word[i]);
     if (k - i > 1) {
       out.push_back('*');
       out.append(std::to_string(k - i));

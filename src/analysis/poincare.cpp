@@ -9,6 +9,8 @@
 
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include "vibro/contact_sequence.hpp"
+
 namespace vibro {
 namespace {
 
@@ -51,85 +53,30 @@ struct SampleCatcher final : Observer {
   }
 };
 
-// The events of the first q periods of a run from the section, as the contact sequence
-// "j:kind ..." (OrbitResult::sequence), and the contacts that stick on the way.
+// The events of the first q periods of a run from the section (the orbit's contact sequence,
+// OrbitResult::sequence), and how many directions its sticking phases collapse: 2 per independent
+// held contact shape c_j (rank of their span).
 struct SequenceRecorder final : Observer {
-  long long periods = 1;
-  struct Entry {
-    std::vector<int> contacts;  // several: one simultaneous impact
-    std::string kind;
-    double t;
-    bool simultaneous;
-  };
-  std::vector<Entry> entries;
+  explicit SequenceRecorder(long long q) : periods(q) {}
+  long long periods;
+  std::vector<Event> events;
   std::vector<int> stuck;  // contacts with a sticking phase, in order of first entry
   void OnEvent(const Event& e) override {
     if (e.clock.period >= periods) return;
-    const std::string kind = ToString(e.kind);
     if (e.kind == EventKind::kStick && std::find(stuck.begin(), stuck.end(), e.contact) == stuck.end())
       stuck.push_back(e.contact);
-    // The contacts of one simultaneous impact: one entry "j+k:impact".
-    if (e.simultaneous && !entries.empty() && entries.back().simultaneous && entries.back().t == e.t &&
-        entries.back().kind == kind) {
-      entries.back().contacts.push_back(e.contact);
-      return;
-    }
-    entries.push_back({{e.contact}, kind, e.t, e.simultaneous});
+    events.push_back(e);
   }
-  static std::string Name(Entry e) {
-    std::sort(e.contacts.begin(), e.contacts.end());
-    std::string out;
-    for (int c : e.contacts) {
-      if (!out.empty()) out += '+';
-      out += std::to_string(c);
-    }
-    out += ':';
-    return out + e.kind;
-  }
-  std::string Text() const {
-    std::vector<std::string> names;
-    for (const Entry& e : entries) names.push_back(Name(e));
-    std::string out;
-    for (size_t i = 0; i < names.size();) {
-      size_t k = i + 1;
-      while (k < names.size() && names[k] == names[i]) ++k;
-      if (!out.empty()) out += ' ';
-      out += names[i];
-      if (k - i > 1) {
-        out += '*';
-        out += std::to_string(k - i);
-      }
-      i = k;
-    }
-    return out;
-  }
-};
-
-// The orbit's contact sequence over its q periods from the section, and how many directions its
-// sticking phases collapse: 2 per independent held contact shape c_j (rank of their span).
-std::pair<std::string, int> ContactSequence(const System& sys, const Scene& scene, const OrbitResult& orbit) {
-  Scene sc = scene;
-  sc.initial_time = orbit.section_time;
-  sc.run.periods = orbit.period;
-  sc.run.samples_per_period = 0;
-  const InitialOverride here{orbit.section_time, orbit.X, orbit.V};
-  SequenceRecorder rec;
-  rec.periods = orbit.period;
-  SimulationOptions opt;
-  opt.initial = &here;
-  opt.observers = {&rec};
-  Simulate(sys, sc, opt);
-  int rank = 0;
-  if (!rec.stuck.empty()) {
-    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(rec.stuck.size()));
-    for (size_t k = 0; k < rec.stuck.size(); ++k)
-      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(rec.stuck[k])].shape;
+  int Collapsed(const System& sys) const {
+    if (stuck.empty()) return 0;
+    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(stuck.size()));
+    for (size_t k = 0; k < stuck.size(); ++k)
+      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(stuck[k])].shape;
     Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
     lu.setThreshold(1e-10);
-    rank = static_cast<int>(lu.rank());
+    return 2 * static_cast<int>(lu.rank());
   }
-  return {rec.Text(), 2 * rank};
-}
+};
 
 }  // namespace
 
@@ -537,11 +484,13 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   sc.run.samples_per_period = 0;
   sc.run.max_period = q;
   const InitialOverride here{out.section_time, out.X, out.V};
+  SequenceRecorder events(q);
   const auto classify = [&](const Scene& at) {
     AttractorRecorder rec(sys, at);
+    events = SequenceRecorder(q);
     SimulationOptions opt;
     opt.initial = &here;
-    opt.observers = {&rec};
+    opt.observers = {&rec, &events};
     const RunStatus status = Simulate(sys, at, opt).status;
     out.summary = rec.Classify();
     return status;
@@ -553,8 +502,10 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
     classify(sc);
     ++out.quad_evaluations;
   }
-  int collapsed = -1;  // directions collapsed by sticking (several contacts), −1: as one contact
-  if (sys.contact_count() > 1) std::tie(out.sequence, collapsed) = ContactSequence(sys, scene, out);
+  // The contact sequence: every scene with [[contact]] tables, also a single one (docs/contacts.md).
+  if (sys.contact_count() > 1 || !scene.contacts.empty()) out.sequence = ContactSequenceText(ContactSequenceOf(events.events));
+  // Directions collapsed by sticking (several contacts), −1: as one contact.
+  const int collapsed = sys.contact_count() > 1 ? events.Collapsed(sys) : -1;
   if (!out.no_jacobian.empty()) {
     out.multipliers.clear();
     out.stable = false;

@@ -121,7 +121,7 @@ def test_pitchfork_of_the_symmetric_orbit_at_the_closed_form(tmp_path):
         speeds = v_before[offsets[i]:offsets[i + 1]]
         assert sorted(contact[offsets[i]:offsets[i + 1]]) == [0, 1]
         assert np.allclose(np.abs(speeds), float(orb.V), rtol=0, atol=1e-10), (a, speeds, orb.V)
-        assert seq[i] in ("0:impact 1:impact", "1:impact 0:impact")
+        assert seq[i] == "0:impact 1:impact"
         m = mu[i, :, 0] + 1j * mu[i, :, 1]
         assert abs(np.prod(m) - float(R) ** 4) < 1e-10
         # The multipliers are the squares of DG's eigenvalues (T5).
@@ -130,7 +130,7 @@ def test_pitchfork_of_the_symmetric_orbit_at_the_closed_form(tmp_path):
         assert (b["points"][i]["stable"]) == (a < float(a_star)), (a, b["points"][i])
     # Past the pitchfork the attractor is an asymmetric orbit: two impact speeds that differ.
     o = json.loads(vibro("orbit", path, "--set", "excitation.amplitude=4.7", "--json").stdout)
-    assert o["stable"] and o["sequence"] in ("0:impact 1:impact", "1:impact 0:impact")
+    assert o["stable"] and o["sequence"] == "0:impact 1:impact"
     speeds = np.abs(np.array(o["impact_velocities"]))
     assert abs(speeds[0] - speeds[1]) > 1e-3, speeds
 
@@ -220,7 +220,7 @@ def test_python_continue_gives_the_sequences_and_the_branch_point(tmp_path):
     b = vibro_py.continue_(path, "excitation.amplitude", 5.0)
     assert [x["kind"] for x in b["bifurcations"]] == ["branch-point"]
     assert abs(b["bifurcations"][0]["value"] - float(a_star)) < 1e-10
-    assert all(p["sequence"] in ("0:impact 1:impact", "1:impact 0:impact") for p in b["points"])
+    assert all(p["sequence"] == "0:impact 1:impact" for p in b["points"])
     assert len(b["table"]) == len(b["points"])
 
 
@@ -234,7 +234,7 @@ def test_orbit_from_a_state_just_after_an_impact_with_a_transient(tmp_path):
     for transient in (1, 50, 200):
         o = json.loads(vibro("orbit", path, "--transient", transient, "--json").stdout)
         assert o["status"] == "converged", (transient, o["message"])
-        assert o["sequence"] in ("0:impact 1:impact", "1:impact 0:impact")
+        assert o["sequence"] == "0:impact 1:impact"
         assert np.allclose(np.abs(o["impact_velocities"]), float(orb.V), rtol=0, atol=1e-10)
 
 

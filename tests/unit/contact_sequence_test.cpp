@@ -2,6 +2,9 @@
 // sequences of one periodic orbit as cyclic words.
 #include "vibro/contact_sequence.hpp"
 
+#include <algorithm>
+#include <random>
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -24,6 +27,14 @@ std::string Problem(const std::string& text, int contacts = -1) {
 }
 
 bool Same(const std::string& a, const std::string& b) { return SameContactSequence(Parse(a), Parse(b)); }
+
+// The canonical text of a sequence given as text.
+std::string Canonical(const std::string& text) { return ContactSequenceText(Parse(text)); }
+
+std::vector<std::string> Rotated(std::vector<std::string> w, size_t k) {
+  std::rotate(w.begin(), w.begin() + static_cast<std::ptrdiff_t>(k % w.size()), w.end());
+  return w;
+}
 
 TEST(ContactSequence, ReadsOrbitResultsFormat) {
   EXPECT_EQ(Parse("0:impact 1:impact*3  1+0:impact 0:stick 0:release"),
@@ -80,6 +91,96 @@ TEST(ContactSequence, AChatteringSequenceIsOneWhateverItsCount) {
                    "1:impact*9 1:stick 1:release 0:impact*12 0:stick 0:release"));
   EXPECT_FALSE(Same("0:impact*3 0:stick 0:release", "1:impact*3 0:stick 0:release"));
   EXPECT_FALSE(Same("0:impact*3 0:stick 0:release", "0:impact*3 0:stick 0:release 1:impact"));
+}
+
+TEST(ContactSequence, OneCanonicalRotation) {
+  // Issue 37, scene E continued in ω: one orbit written from two sections.
+  EXPECT_EQ(Canonical("1:impact 0:impact"), "0:impact 1:impact");
+  EXPECT_EQ(Canonical("0:impact 1:impact"), "0:impact 1:impact");
+  EXPECT_EQ(Canonical("0:impact 1:impact*2 0:impact"), "0:impact*2 1:impact*2");
+  EXPECT_EQ(Canonical("1:impact 0:impact*2 1:impact"), "0:impact*2 1:impact*2");
+  // Contacts first (ascending lists compared lexicographically: 0 < 0+1 < 1), then the kind.
+  EXPECT_EQ(Canonical("1:impact 0+1:impact 2:grazing"), "0+1:impact 2:grazing 1:impact");
+  EXPECT_EQ(Canonical("1:impact 0:stick 0:release"), "0:stick 0:release 1:impact");
+  EXPECT_EQ(Canonical("2:impact 10:impact"), "2:impact 10:impact");  // contacts as numbers
+  // A chattering run is one token, after a lone impact at its contact: it is never cut, also
+  // when the word was written from inside it.
+  EXPECT_EQ(Canonical("0:impact*2 0:accumulation 0:stick 0:release 1:impact 0:impact*3"),
+            "0:impact*5 0:accumulation 0:stick 0:release 1:impact");
+  EXPECT_EQ(Canonical("1:impact*9 1:stick 1:release 0:impact*12 0:stick 0:release"),
+            "0:impact*12 0:stick 0:release 1:impact*9 1:stick 1:release");
+  EXPECT_EQ(Canonical("0:release 0:impact 0:impact*4 0:accumulation 0:stick 1:impact 0:impact"),
+            "0:impact 0:release 0:impact*5 0:accumulation 0:stick 1:impact");
+  // Where its tail starts does not move the start: the same rotation whatever the counts.
+  EXPECT_EQ(Canonical("1:impact*3 1:accumulation 1:stick 1:release 0:impact*20 0:accumulation 0:stick 0:release"),
+            "0:impact*20 0:accumulation 0:stick 0:release 1:impact*3 1:accumulation 1:stick 1:release");
+  // Over several periods the whole word is kept; repetitions that differ only in a chattering
+  // count are ordered by their entries (an impact before an accumulation point).
+  EXPECT_EQ(Canonical("1:impact 0:impact 1:impact 0:impact"), "0:impact 1:impact 0:impact 1:impact");
+  EXPECT_EQ(Canonical("0:impact*2 0:accumulation 0:stick 0:release 0:impact*3 0:accumulation 0:stick 0:release"),
+            "0:impact*3 0:accumulation 0:stick 0:release 0:impact*2 0:accumulation 0:stick 0:release");
+  EXPECT_EQ(Canonical(""), "");
+  EXPECT_EQ(Canonical("0:impact*4"), "0:impact*4");
+}
+
+// The canonical rotation against its definition by brute force, without chattering (every entry a
+// token): the least of all rotations under the stated order, computed here independently.
+TEST(ContactSequence, CanonicalRotationIsTheLeastRotation) {
+  std::mt19937 rng(37);
+  const std::vector<std::string> alphabet = {"0:impact", "1:impact", "0+1:impact", "2:impact", "0:release",
+                                             "1:grazing", "1:release", "0+2:impact"};
+  // Rank of each entry in the order: contacts' lists lexicographically, then kind.
+  const std::vector<std::string> order = {"0:impact", "0:release", "0+1:impact", "0+2:impact", "1:impact",
+                                          "1:release", "1:grazing", "2:impact"};
+  const auto rank = [&](const std::string& e) { return std::find(order.begin(), order.end(), e) - order.begin(); };
+  for (int trial = 0; trial < 2000; ++trial) {
+    const size_t n = 1 + rng() % 9;
+    std::vector<std::string> w(n);
+    for (auto& e : w) e = alphabet[rng() % alphabet.size()];
+    std::vector<std::string> least = w;
+    for (size_t k = 1; k < n; ++k) {
+      const auto r = Rotated(w, k);
+      if (std::lexicographical_compare(r.begin(), r.end(), least.begin(), least.end(),
+                                       [&](const auto& a, const auto& b) { return rank(a) < rank(b); }))
+        least = r;
+    }
+    ASSERT_EQ(CanonicalRotation(w), least) << ContactSequenceText(w);
+  }
+}
+
+// Every rotation of a word, chattering runs and all, is written the same: a rotation of the word,
+// the same cyclic word.
+TEST(ContactSequence, EveryRotationIsWrittenTheSame) {
+  std::mt19937 rng(11);
+  const std::vector<std::vector<std::string>> pieces = {
+      {"0:impact"}, {"1:impact"}, {"0+1:impact"}, {"1:grazing"},
+      {"0:impact", "0:impact", "0:accumulation", "0:stick", "0:release"},
+      {"0:impact", "0:impact", "0:impact", "0:accumulation", "0:stick", "0:release"},
+      {"1:impact", "1:impact", "1:stick", "1:release"},
+      {"1:impact", "1:impact", "1:impact", "1:accumulation", "1:stick", "1:release"},
+      {"0:stick", "0:release"}};
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::vector<std::string> w;
+    const size_t parts = 1 + rng() % 5;
+    for (size_t i = 0; i < parts; ++i) {
+      const auto& p = pieces[rng() % pieces.size()];
+      w.insert(w.end(), p.begin(), p.end());
+    }
+    if (rng() % 3 == 0) {  // over two periods
+      const auto once = w;
+      w.insert(w.end(), once.begin(), once.end());
+    }
+    const auto canonical = CanonicalRotation(w);
+    ASSERT_EQ(canonical.size(), w.size());
+    bool is_rotation = false;
+    for (size_t k = 0; k < w.size(); ++k) {
+      const auto r = Rotated(w, k);
+      is_rotation = is_rotation || r == canonical;
+      ASSERT_EQ(CanonicalRotation(r), canonical) << ContactSequenceText(w) << " rotated by " << k;
+    }
+    ASSERT_TRUE(is_rotation) << ContactSequenceText(w);
+    ASSERT_TRUE(SameContactSequence(w, canonical));
+  }
 }
 
 }  // namespace
