@@ -7,7 +7,8 @@
 // With m contacts (docs/contacts.md) also: the active contact a (the held one while sticking, the
 // one the flight left, or is chattering at, while free), every gap g_j = c_jᵀX − e_j and how each
 // gap starts its flight. Below, x_B, g, T_B, s_B, R are those of the contact concerned; m = 1 (a
-// [stop]) is the same code with no other gap.
+// [stop]) is the same code with no other gap. The laws of several contacts (the impact LCP, the
+// acceleration LCP, held sets: their entry and release) are in src/dynamics/contact_laws.hpp.
 // x⁻ / x⁺ denote the state just before / after a reset at the same t.
 //
 //   loop until k = periods, an interruption, or a failure:

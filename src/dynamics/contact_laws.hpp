@@ -1,0 +1,759 @@
+// The contact laws of several contacts (docs/contacts.md): the impact LCP (I2), the
+// acceleration-level LCP (S3) that decides which contacts at rest stick, the plastic projection
+// onto a set, and the automaton's transitions that use them: a start on several stops, impacts
+// in free flight and while one contact or a set is held, entry into and release from a held set,
+// and a chattering sequence beside a held set (pseudocode in include/vibro/simulator.hpp).
+// The laws first, as free functions of the contacts' models; then the members of Automaton
+// (dynamics/automaton.hpp, which includes this file after its class).
+#pragma once
+
+#include <algorithm>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "dynamics/model_t.hpp"
+
+namespace vibro::detail {
+
+template <class S>
+using ContactModelsT = std::vector<const ModelT<S>*>;
+
+// W_jk = c_jᵀT_k between two contacts, 0 when it is within the rounding of the model's (double)
+// mode shapes, whatever S: contacts on different masses of a diagonal mass matrix are decoupled
+// (MODEL §11.10), and a rounding-level coupling would push a held contact off its stop.
+template <class S>
+S DelassusOffDiagonal(const ModelT<S>& a, const ModelT<S>& b) {
+  const S w = a.shape.dot(b.contact);
+  const S scale = Real<S>::sqrt(a.s_B * b.s_B);
+  return Real<S>::abs(w) <= S(64 * std::numeric_limits<double>::epsilon()) * scale ? S(0) : w;
+}
+
+// The Delassus matrix W_ZZ of the contacts Z: W_jj = s_B of j, W_jk as above.
+template <class S>
+typename ModelT<S>::Mat Delassus(const ContactModelsT<S>& models, const std::vector<int>& Z) {
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  typename ModelT<S>::Mat W(z, z);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const ModelT<S>& ma = *models[static_cast<size_t>(Z[static_cast<size_t>(a)])];
+    for (Eigen::Index b = 0; b < z; ++b)
+      W(a, b) = a == b ? ma.s_B : DelassusOffDiagonal(ma, *models[static_cast<size_t>(Z[static_cast<size_t>(b)])]);
+  }
+  return W;
+}
+
+// The free modal acceleration Ẍ = −ΩX − DẊ + T_A f sin φ (every contact's model has the same).
+template <class S>
+typename ModelT<S>::Vec FreeAcceleration(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
+                                         const typename ModelT<S>::Vec& V, const S& phase) {
+  return -m.omega.cwiseAbs2().cwiseProduct(X) - S(2) * m.zeta.cwiseProduct(m.omega).cwiseProduct(V) +
+         m.forcing * (m.f * Real<S>::sin(phase));
+}
+
+// Gap acceleration g_k'' under the flow with contact `held` stuck: c_kᵀ Π Ẍ_free, Π = I − T cᵀ/s.
+template <class S>
+S HeldGapAcceleration(const ModelT<S>& held, const ModelT<S>& k, const typename ModelT<S>::Vec& X,
+                      const typename ModelT<S>::Vec& V, const S& phase) {
+  using Vec = typename ModelT<S>::Vec;
+  const Vec acc = FreeAcceleration(k, X, V, phase);
+  const Vec held_acc = acc - held.contact * (held.shape.dot(acc) / held.s_B);
+  return k.shape.dot(held_acc);
+}
+
+// The LCP w = W x + q, 0 ≤ x ⊥ w ≥ 0 by enumerating the index sets (W positive definite: exactly
+// one fits), within tol[a] of each sign condition of row a. False when none fits (W singular:
+// dependent contacts).
+template <class S>
+bool SolveLcp(const typename ModelT<S>::Mat& W, const typename ModelT<S>::Vec& q,
+              const typename ModelT<S>::Vec& tol, typename ModelT<S>::Vec& x) {
+  using Mat = typename ModelT<S>::Mat;
+  using Vec = typename ModelT<S>::Vec;
+  const auto z = q.size();
+  for (unsigned mask = 0; mask < (1u << z); ++mask) {
+    std::vector<Eigen::Index> act;
+    for (Eigen::Index a = 0; a < z; ++a)
+      if (mask & (1u << a)) act.push_back(a);
+    const auto na = static_cast<Eigen::Index>(act.size());
+    Vec xt = Vec::Zero(z);
+    if (na > 0) {
+      Mat Wa(na, na);
+      Vec qa(na);
+      for (Eigen::Index a = 0; a < na; ++a) {
+        qa[a] = -q[act[static_cast<size_t>(a)]];
+        for (Eigen::Index b = 0; b < na; ++b) Wa(a, b) = W(act[static_cast<size_t>(a)], act[static_cast<size_t>(b)]);
+      }
+      const Vec xa = Wa.fullPivLu().solve(qa);
+      for (Eigen::Index a = 0; a < na; ++a) xt[act[static_cast<size_t>(a)]] = xa[a];
+    }
+    const Vec w = W * xt + q;
+    bool ok = true;
+    for (Eigen::Index a = 0; a < z; ++a)
+      if (xt[a] < -tol[a] || w[a] < -tol[a]) ok = false;
+    if (ok) {
+      x = xt.cwiseMax(S(0));
+      return true;
+    }
+  }
+  return false;
+}
+
+// Plastic projection onto {g_j = ġ_j = 0, j ∈ Z} (MODEL §11.5.3): Ẋ ← Ẋ − T_Z W_ZZ⁻¹ C_Z Ẋ and
+// X ← X − T_Z W_ZZ⁻¹ (C_Z X − e_Z).
+template <class S>
+void ProjectOnto(const ContactModelsT<S>& models, const std::vector<int>& Z, typename ModelT<S>::Vec& X,
+                 typename ModelT<S>::Vec& V) {
+  using Vec = typename ModelT<S>::Vec;
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  const auto model = [&](Eigen::Index a) -> const ModelT<S>& { return *models[static_cast<size_t>(Z[static_cast<size_t>(a)])]; };
+  if (z == 1) {
+    model(0).ProjectOntoStop(X, V);
+    return;
+  }
+  Vec gx(z), gv(z);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    gx[a] = model(a).ContactDisplacement(X) - model(a).x0;
+    gv[a] = model(a).ContactVelocity(V);
+  }
+  const auto lu = Delassus(models, Z).fullPivLu();
+  const Vec px = lu.solve(gx), pv = lu.solve(gv);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    X -= model(a).contact * px[a];
+    V -= model(a).contact * pv[a];
+  }
+}
+
+// Π_Z v = v − T_Z W_ZZ⁻¹ C_Z v: v with the contacts of Z held (a velocity or an acceleration).
+template <class S>
+typename ModelT<S>::Vec ProjectAlong(const ContactModelsT<S>& models, const std::vector<int>& Z,
+                                     const typename ModelT<S>::Vec& v) {
+  using Vec = typename ModelT<S>::Vec;
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  Vec cv(z);
+  for (Eigen::Index a = 0; a < z; ++a) cv[a] = models[static_cast<size_t>(Z[static_cast<size_t>(a)])]->shape.dot(v);
+  const Vec x = Delassus(models, Z).fullPivLu().solve(cv);
+  Vec out = v;
+  for (Eigen::Index a = 0; a < z; ++a) out -= models[static_cast<size_t>(Z[static_cast<size_t>(a)])]->contact * x[a];
+  return out;
+}
+
+// The automaton's transitions at several contacts ------------------------------------------------
+
+// A start with several contacts: which gaps are closed (docs/contacts.md).
+template <class S>
+void Automaton<S>::ClassifyInitialContacts() {
+  // Which gaps are closed (within the rounding of the initial state, as
+  // System::StopTolerance for one contact); one closed contact is classified as the single stop
+  // is, on its own model; none starts a free flight.
+  int on = -1, closed = 0;
+  for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+    const ModelT<S>& c = M(j);
+    const S g = c.ContactDisplacement(X_) - c.x0;
+    const S tol = S(System::kStopUlps) * Eps<S>() *
+                  (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
+    gaps_[static_cast<size_t>(j)] = g;
+    starts_[static_cast<size_t>(j)] = FlightStart::kGeneric;
+    if (g <= tol) {
+      on = j;
+      ++closed;
+    }
+  }
+  if (closed > 1) {
+    // Several closed gaps: those moving away leave, the others are at rest on their stops and the
+    // acceleration LCP decides which stick (their stick events follow the initial section).
+    std::vector<int> Z0;
+    for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+      const ModelT<S>& c = M(j);
+      const S tol = S(System::kStopUlps) * Eps<S>() *
+                    (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
+      if (!(gaps_[static_cast<size_t>(j)] <= tol)) continue;
+      gaps_[static_cast<size_t>(j)] = 0;
+      X_ -= c.contact * ((c.ContactDisplacement(X_) - c.x0) / c.s_B);
+      const S vtol = S(System::kStopUlps) * Eps<S>() * c.shape.cwiseProduct(V_).cwiseAbs().sum();
+      if (c.ContactVelocity(V_) > vtol) starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+      else Z0.push_back(j);
+    }
+    active_ = Z0.empty() ? on : Z0.front();
+    EnterActiveSet(Z0, {}, false);  // a failure ends the run before its first segment
+    return;
+  }
+  if (closed == 0) {
+    active_ = 0;
+    gap_ = gaps_[0];
+    Depart(FlightStart::kGeneric);
+    return;
+  }
+  active_ = on;
+  const ModelT<S>& m = M(on);
+  gap_ = 0;
+  gaps_[static_cast<size_t>(on)] = 0;
+  X_ -= m.contact * ((m.ContactDisplacement(X_) - m.x0) / m.s_B);
+  if (m.ContactVelocity(V_) > 0) {
+    Depart(FlightStart::kAfterImpact);
+    return;
+  }
+  V_ -= m.contact * (m.ContactVelocity(V_) / m.s_B);
+  const S phase = Phase(clock_);
+  const S Rc = m.Reaction(X_, V_, phase);
+  if (Rc > 0) {
+    EnterSticking(StickStart::kGeneric);
+  } else if (Rc < 0) {
+    m.ProjectOntoStop(X_, V_);
+    Depart(FlightStart::kDeparture);
+  } else if (m.ReactionRate(X_, V_, phase) >= 0) {
+    EnterSticking(StickStart::kRising);
+  } else {
+    m.ProjectOntoStop(X_, V_);
+    Depart(FlightStart::kAfterRelease);
+  }
+}
+
+template <class S>
+void Automaton<S>::UpdateGaps(PropagatorT<S>& p, const S& sigma) {
+  const bool resting = held_set_.empty() && &p != engine_.get();
+  for (size_t j = 0; j < models_.size(); ++j) {
+    const int jj = static_cast<int>(j);
+    if (mode_ == Mode::kSticking && (jj == active_ || Held(jj)))
+      gaps_[j] = S(0);
+    else if (resting)
+      gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;  // constant at rest
+    else
+      gaps_[j] = p.GapOf(jj, sigma);
+  }
+  if (mode_ == Mode::kFree) gap_ = gaps_[static_cast<size_t>(active_)];
+}
+
+// Whether the free flow over a chattering tail at the active contact keeps every other gap open
+// (certified search of their first roots over [0, Δ∞], the tail's own contact left out).
+template <class S>
+bool Automaton<S>::TailClearOfOtherContacts(const S& delta) {
+  std::vector<FlightStart> starts = starts_;
+  starts[static_cast<size_t>(active_)] = FlightStart::kAfterImpact;
+  engine_->Begin({Mode::kFree, Phase(clock_), clock_.offset, X_, V_, S(0), FlightStart::kAfterImpact,
+                  StickStart::kGeneric, active_, &gaps_, &starts, active_});
+  const auto r = engine_->Advance(delta, true, {});
+  return r.end == SegmentEnd::kLimit;
+}
+
+template <class S>
+bool Automaton<S>::OnContactMulti(int k) {
+  if (mode_ == Mode::kSticking) return held_set_.empty() ? ImpactWhileHeld(k) : ImpactWhileSetHeld(k);
+  // Contacts closed at the same instant, within the rounding of their gaps and a window of a few
+  // ulps of the period at their closing speed (MODEL §11.2.3): one impact LCP (§11.4).
+  std::vector<int> Z{k};
+  const S window = S(64) * Eps<S>() * period_;
+  for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+    if (j == k) continue;
+    const ModelT<S>& c = M(j);
+    const S v = c.ContactVelocity(V_);
+    const S tol = S(System::kStopUlps) * Eps<S>() *
+                      (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum()) +
+                  window * R::abs(v);
+    if (gaps_[static_cast<size_t>(j)] <= tol && v <= S(0)) Z.push_back(j);
+  }
+  if (Z.size() > 1) return SimultaneousImpact(Z);
+  if (k != active_) chatter_first_ = chatter_last_ = 0;  // a sequence is at one contact
+  active_ = k;
+  for (size_t j = 0; j < starts_.size(); ++j) starts_[j] = FlightStart::kGeneric;
+  return OnContact();
+}
+
+// A free contact k closes while contact j = active_ sticks: the impact LCP on {j, k} (MODEL §11.4.2).
+template <class S>
+bool Automaton<S>::ImpactWhileHeld(int k) {
+  const int j = active_;
+  const ModelT<S>& mj = M(j);
+  const ModelT<S>& mk = M(k);
+  X_ -= mk.contact * ((mk.ContactDisplacement(X_) - mk.x0) / mk.s_B);  // snap g_k to 0
+  mj.ProjectOntoStop(X_, V_);
+  gaps_[static_cast<size_t>(k)] = 0;
+  const S phase = Phase(clock_);
+  const S v_minus = mk.ContactVelocity(V_);
+  // The held flow's constrained modes are double data whatever S: its rounding floor is double's.
+  const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
+  if (!(v_minus < -floor)) {
+    // Tangential arrival: it leaves only if the held flow pulls it off.
+    Emit(EventKind::kGrazing, v_minus, v_minus, k);
+    NotifyReset(ResetKind::kGrazing, X_, V_, k);
+    if (HeldGapAcceleration(mj, mk, X_, V_, phase) > 0) {
+      starts_[static_cast<size_t>(k)] = FlightStart::kDeparture;
+      return true;
+    }
+    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    return EnterActiveSet({j, k}, {j});
+  }
+  const S Wjj(mj.s_B), Wkk(mk.s_B), Wjk = DelassusOffDiagonal(mj, mk);
+  const S rk = mk.r;
+  // P_j = 0 first: contact k alone, and j's velocity after it.
+  S Pk = -(S(1) + rk) * v_minus / Wkk, Pj(0);
+  const S vj_after = Wjk * Pk;
+  const S tiny = S(64) * Eps<S>() * (R::abs(Wjk * Pk) + S(1e-300));
+  Vb_ = V_;
+  if (vj_after > tiny) {
+    // Contact j is pushed off the stop (liftoff, reported as its release with the speed after).
+    V_ += mk.contact * Pk;
+    NotifyReset(ResetKind::kImpact, X_, Vb_, k);
+    Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k);
+    Emit(EventKind::kRelease, S(0), mj.ContactVelocity(V_), j);
+    mode_ = Mode::kFree;
+    gaps_[static_cast<size_t>(j)] = 0;
+    starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+    if (rk == S(0)) return EnterActiveSet({k}, {});  // k at rest alone: stick or leave
+    active_ = k;
+    gap_ = 0;
+    flight_start_ = FlightStart::kAfterImpact;
+    starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+    chatter_first_ = chatter_last_ = 0;
+    return true;
+  }
+  // j stays: both impulses from the 2×2 law (W P = −(1 + R) v⁻ with v_j⁻ = 0).
+  const S det = Wjj * Wkk - Wjk * Wjk;
+  Pk = -(S(1) + rk) * v_minus * Wjj / det;
+  Pj = (S(1) + rk) * v_minus * Wjk / det;
+  V_ += mk.contact * Pk + mj.contact * Pj;
+  mj.ProjectOntoStop(X_, V_);
+  NotifyReset(ResetKind::kImpact, X_, Vb_, k);
+  Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k, false, Pk);
+  loads_.AddImpulse(j, Pj);
+  if (rk == S(0)) {  // both at rest: the acceleration LCP on {j, k}
+    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    return EnterActiveSet({j, k}, {j});
+  }
+  // A chattering sequence at k while j sticks: predicted to its accumulation point when it can be.
+  starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+  const int chatter = HeldChatter(k, -v_minus, floor);
+  if (chatter != 0) return chatter > 0;
+  const S Rj = mj.Reaction(X_, V_, phase);
+  if (!(Rj > 0)) {  // j leaves at zero velocity: its release
+    Emit(EventKind::kRelease, S(0), S(0), j);
+    Depart(FlightStart::kDeparture);
+    gap_ = 0;
+    gaps_[static_cast<size_t>(j)] = 0;
+  }
+  return true;
+}
+
+// Two or more contacts close at one instant (free flight): the impact LCP (I2) of MODEL §11.4,
+// W_ZZ P + (I + R) v⁻ = w, 0 ≤ P ⊥ w ≥ 0, solved by enumerating the index sets (W_ZZ is positive
+// definite for independent contacts, so exactly one set fits).
+template <class S>
+bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  Vec vm(z), q(z), tol(z);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const ModelT<S>& ma = M(Z[static_cast<size_t>(a)]);
+    X_ -= ma.contact * ((ma.ContactDisplacement(X_) - ma.x0) / ma.s_B);
+    vm[a] = ma.ContactVelocity(V_);
+    q[a] = (S(1) + ma.r) * vm[a];
+    tol[a] = S(64) * Eps<S>() * (R::abs(q[a]) + S(1e-300));
+  }
+  Vec P;
+  if (!SolveLcp<S>(Delassus(models_, Z), q, tol, P))
+    return Fail(fmt::format("simultaneous impact of {} contacts at t = {:.17g}: the impact law has no "
+                            "solution (dependent contacts)",
+                            Z.size(), AbsTime(clock_)));
+  Vb_ = V_;
+  for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
+  NotifyReset(ResetKind::kImpact, X_, Vb_, Z.front(), true);
+  std::vector<int> resting;
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const int j = Z[static_cast<size_t>(a)];
+    const ModelT<S>& mj = M(j);
+    const S vp = mj.ContactVelocity(V_);
+    Emit(EventKind::kImpact, vm[a], vp, j, true, P[a]);
+    gaps_[static_cast<size_t>(j)] = 0;
+    const S floor = S(1000) * Eps<S>() * mj.shape.cwiseProduct(V_).cwiseAbs().sum();
+    if (vp > floor) {
+      starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+      active_ = j;
+    } else {
+      resting.push_back(j);
+    }
+  }
+  chatter_first_ = chatter_last_ = 0;
+  mode_ = Mode::kFree;
+  if (resting.size() > 1) {
+    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    return EnterActiveSet(resting, {});
+  }
+  if (resting.size() == 1) {
+    // One contact at rest (r = 0): stick or leave as the single stop (docs/model.md §4.4).
+    const int j = resting.front();
+    active_ = j;
+    const ModelT<S>& mj = M(j);
+    const S phase = Phase(clock_);
+    const S Rc = mj.Reaction(X_, V_, phase);
+    if (Rc > 0 || (Rc == 0 && mj.ReactionRate(X_, V_, phase) > 0)) {
+      EnterSticking(Rc > 0 ? StickStart::kGeneric : StickStart::kRising);
+      for (size_t i = 0; i < starts_.size(); ++i)
+        if (static_cast<int>(i) != j && starts_[i] != FlightStart::kAfterImpact) starts_[i] = FlightStart::kGeneric;
+      Emit(EventKind::kStick, S(0), S(0), j);
+      return true;
+    }
+    mj.ProjectOntoStop(X_, V_);
+    Depart(Rc < 0 ? FlightStart::kDeparture : FlightStart::kAfterRelease);
+  }
+  gap_ = 0;
+  flight_start_ = starts_[static_cast<size_t>(active_)];
+  return true;
+}
+
+// The closed-form flow held on `set` (made once per set met), or null with the reason.
+template <class S>
+SetStickingT<S>* Automaton<S>::SetEngineFor(const std::vector<int>& set, std::string& why) {
+  for (auto& e : set_engines_)
+    if (e->set() == set) return e.get();
+  if (cvode_) {
+    why = "the CVODE engine does not hold several contacts at once; use run.engine = \"exact\"";
+    return nullptr;
+  }
+  try {
+    auto e = std::make_unique<SetStickingT<S>>(sys_, models_, set);
+    if (!e->ok()) {
+      why = "the damped flow held on them is defective (a critically damped held mode): no closed "
+            "form; change structure.damping_ratios slightly";
+      return nullptr;
+    }
+    set_engines_.push_back(std::move(e));
+  } catch (const std::invalid_argument& e) {
+    why = e.what();
+    return nullptr;
+  }
+  return set_engines_.back().get();
+}
+
+template <class S>
+SetStickingT<S>* Automaton<S>::SetEngine() {
+  std::string why;
+  if (SetStickingT<S>* e = SetEngineFor(held_set_, why)) return e;
+  std::string who;
+  for (const int j : held_set_) who += (who.empty() ? "" : ", ") + std::to_string(j);
+  Fail(fmt::format("contacts {} stick together at t = {:.17g}: {} (docs/contacts.md)", who,
+                   AbsTime(clock_), why),
+       RunStatus::kUndetermined);
+  return nullptr;
+}
+
+template <class S>
+void Automaton<S>::ProjectOntoSet(const std::vector<int>& Z) {
+  ProjectOnto<S>(models_, Z, X_, V_);
+}
+
+// Contacts Z0 at zero gap and zero gap velocity (a plastic landing, a tangential arrival, impacts
+// that leave several contacts at rest, the start of a run): after the projection onto them, the
+// acceleration LCP (S3) a = a⁰ + W λ, 0 ≤ λ ⊥ a ≥ 0 decides which stick (λ > 0) and which leave at
+// zero velocity (a > 0, start g = g' = 0, g'' > 0). `was_held`: the contacts held before, whose
+// leaving is a release. λ = a = 0 at once is the degenerate entry: undetermined, never guessed.
+template <class S>
+bool Automaton<S>::EnterActiveSet(std::vector<int> Z0, const std::vector<int>& was_held,
+                                  bool emit_sticks) {
+  using Mat = typename ModelT<S>::Mat;
+  std::sort(Z0.begin(), Z0.end());
+  const auto before = [&](int j) { return std::find(was_held.begin(), was_held.end(), j) != was_held.end(); };
+  chatter_first_ = chatter_last_ = 0;
+  held_chatter_ = 0;
+  std::vector<int> stick;
+  if (!Z0.empty()) {
+    ProjectOntoSet(Z0);
+    const auto z = static_cast<Eigen::Index>(Z0.size());
+    const S phase = Phase(clock_);
+    const Mat W = Delassus(models_, Z0);
+    Vec a0(z);
+    S scale(0);
+    for (Eigen::Index a = 0; a < z; ++a) {
+      const ModelT<S>& ma = M(Z0[static_cast<size_t>(a)]);
+      const Vec acc = FreeAcceleration(ma, X_, V_, phase);
+      a0[a] = ma.shape.dot(acc);
+      scale += ma.shape.cwiseProduct(acc).cwiseAbs().sum();
+    }
+    // The held flow's data are double whatever S: decisions within double rounding of the forces.
+    const S tol = S(1e3 * std::numeric_limits<double>::epsilon()) * (scale + S(1e-300));
+    Vec lam;
+    if (!SolveLcp<S>(W, a0, Vec::Constant(z, tol), lam))
+      return Fail(fmt::format("{} contacts at rest at t = {:.17g}: the contact-force LCP has no "
+                              "solution (dependent contacts)", Z0.size(), AbsTime(clock_)));
+    const Vec acc = W * lam + a0;
+    for (Eigen::Index a = 0; a < z; ++a) {
+      const int j = Z0[static_cast<size_t>(a)];
+      if (lam[a] <= tol && acc[a] <= tol)
+        return Fail(fmt::format("contact {} at rest at t = {:.17g} with zero force and zero "
+                                "acceleration (a degenerate entry into sticking, docs/contacts.md): "
+                                "undetermined at this order. Move the parameter",
+                                j, AbsTime(clock_)),
+                    RunStatus::kUndetermined);
+      gaps_[static_cast<size_t>(j)] = 0;
+      if (lam[a] > tol) {
+        stick.push_back(j);
+      } else {
+        starts_[static_cast<size_t>(j)] = FlightStart::kDeparture;
+        if (before(j)) Emit(EventKind::kRelease, S(0), S(0), j);
+      }
+    }
+  }
+  const auto refresh_gaps = [&] {
+    for (size_t j = 0; j < models_.size(); ++j)
+      gaps_[j] = std::find(stick.begin(), stick.end(), static_cast<int>(j)) != stick.end()
+                     ? S(0) : models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+    for (const int j : Z0) gaps_[static_cast<size_t>(j)] = 0;
+  };
+  if (stick.empty()) {  // every contact leaves: a free flight
+    held_set_.clear();
+    mode_ = Mode::kFree;
+    refresh_gaps();
+    // The flight's start contact: one that just bounced or lifted off, else one that leaves.
+    int start = Z0.empty() ? active_ : Z0.front();
+    for (size_t j = 0; j < starts_.size(); ++j)
+      if (starts_[j] == FlightStart::kAfterImpact && gaps_[j] == S(0)) start = static_cast<int>(j);
+    active_ = start;
+    flight_start_ = starts_[static_cast<size_t>(active_)];
+    gap_ = gaps_[static_cast<size_t>(active_)];
+    return true;
+  }
+  if (stick.size() == 1) {
+    held_set_.clear();
+    active_ = stick.front();
+    EnterSticking(StickStart::kGeneric);
+    refresh_gaps();
+  } else {
+    held_set_ = stick;
+    active_ = stick.front();
+    if (!SetEngine()) return false;
+    mode_ = Mode::kSticking;
+    stick_start_ = StickStart::kGeneric;
+    gap_ = 0;
+    refresh_gaps();
+  }
+  if (emit_sticks)
+    for (const int j : stick)
+      if (!before(j)) Emit(EventKind::kStick, S(0), S(0), j);
+  return true;
+}
+
+// After an impact at contact k that bounced while the held contacts stay held: a run of impacts of
+// decreasing speed with flights far shorter than the period is a chattering sequence toward rest
+// beside them. Its accumulation point is predicted when the tail allows it (TryHeldAccumulation);
+// a sequence that reaches the rounding floor (or kHeldChatterImpacts impacts) first is undetermined,
+// never guessed. Returns 1 when the jump was taken, −1 when the run ends, 0 to follow the flight.
+template <class S>
+int Automaton<S>::HeldChatter(int k, const S& speed, const S& floor) {
+  const double now = AbsTime(clock_);
+  const bool short_flight = k == held_chatter_contact_ && now - held_chatter_t_ < 1e-2 * R::to_double(period_);
+  const bool converging = short_flight && chatter_last_ > 0 && speed < chatter_last_;
+  held_chatter_ = short_flight ? held_chatter_ + 1 : 0;
+  held_chatter_contact_ = k;
+  held_chatter_t_ = now;
+  chatter_last_ = speed;
+  if (converging && run_.chatter != ChatterTreatment::kNone) {
+    const int jumped = TryHeldAccumulation(k);
+    if (jumped != 0) return jumped;
+  }
+  const S r = M(k).r;
+  if ((converging && r * speed <= floor) || held_chatter_ >= kHeldChatterImpacts) {
+    std::string held;
+    for (const int j : held_set_.empty() ? std::vector<int>{active_} : held_set_)
+      held += (held.empty() ? "" : ", ") + std::to_string(j);
+    Fail(fmt::format("contact {} chatters {} at t = {:.17g} while contact(s) {} stick, and its "
+                     "accumulation point could not be predicted within run.chatter_tolerance = "
+                     "{:.3g} T before its impact speeds reached {:.3g} (docs/contacts.md). {}",
+                     k, converging && r * speed <= floor ? "to rest" : "toward rest", AbsTime(clock_),
+                     held, R::to_double(chatter_tol_ / period_), R::to_double(r * speed),
+                     UndeterminedHint()),
+         RunStatus::kUndetermined);
+    return -1;
+  }
+  return 0;
+}
+
+// MODEL §11.6 (docs/contacts.md): contact k chatters while the set S (held_set_, or the one held
+// contact) sticks. On the tail's mean path, the state projected onto Z = S ∪ {k}, the contact
+// forces of Z must all be positive and k's gap decelerates under the S-flow at A = −c_kᵀΠ_S a > 0
+// (a the free acceleration, Π_S = I − T_S W_SS⁻¹ C_S); then Δ0 = 2u/((1 − r)A), ε = −ȦΔ0/A
+// (Ȧ along the Z-flow) and Δ∞ = Δ0(1 + ε/3). The prediction is taken only when the whole tail,
+// Δ0, is within run.chatter_tolerance (so is any error of Δ∞ inside it), |ε| ≤ 0.1, and no other
+// contact's gap closes and no held force vanishes over Δ∞ (certified search, k left out).
+template <class S>
+int Automaton<S>::TryHeldAccumulation(int k) {
+  const ModelT<S>& mk = M(k);
+  const S u = mk.ContactVelocity(V_), r = mk.r;
+  if (!(u > 0) || !(r > 0) || !(r < 1)) return 0;
+  const std::vector<int> held = held_set_.empty() ? std::vector<int>{active_} : held_set_;
+  std::vector<int> Z = held;
+  Z.push_back(k);
+  std::sort(Z.begin(), Z.end());
+  const auto delassus = [&](const std::vector<int>& set) { return Delassus(models_, set); };
+  const auto project = [&](const std::vector<int>& set, const Vec& v) { return ProjectAlong(models_, set, v); };
+  const Vec X0 = X_, V0 = V_;
+  ProjectOntoSet(Z);
+  const Vec Xs = X_, Vs = V_;
+  X_ = X0;
+  V_ = V0;
+  const S phase = Phase(clock_);
+  const Vec a_free = FreeAcceleration(mk, Xs, Vs, phase);
+  // Contact forces of Z on the mean path (all at rest there): W_ZZ λ = −C_Z a_free.
+  {
+    const auto z = static_cast<Eigen::Index>(Z.size());
+    Vec a0(z);
+    for (Eigen::Index a = 0; a < z; ++a) a0[a] = -M(Z[static_cast<size_t>(a)]).shape.dot(a_free);
+    const Vec lam = delassus(Z).fullPivLu().solve(a0);
+    for (Eigen::Index a = 0; a < z; ++a)
+      if (!(lam[a] > 0)) return 0;
+  }
+  // A = uᵀX − κ f sin along the Z-flow (undamped), u = Ω Π_Sᵀc_k, κ = c_kᵀΠ_S T_A / f, with
+  // Π_Sᵀc_k = c_k − C_Sᵀ W_SS⁻¹ W_Sk.
+  Vec pc = mk.shape;
+  {
+    const auto h = static_cast<Eigen::Index>(held.size());
+    Vec wsk(h);
+    for (Eigen::Index a = 0; a < h; ++a) wsk[a] = DelassusOffDiagonal(M(held[static_cast<size_t>(a)]), mk);
+    const Vec x = delassus(held).fullPivLu().solve(wsk);
+    for (Eigen::Index a = 0; a < h; ++a) pc -= M(held[static_cast<size_t>(a)]).shape * x[a];
+  }
+  const S A = -mk.shape.dot(project(held, a_free));
+  if (!(A > 0)) return 0;
+  const Vec acc_Z = project(Z, a_free);
+  const Vec jerk_free = -mk.omega.cwiseAbs2().cwiseProduct(Vs) -
+                        S(2) * mk.zeta.cwiseProduct(mk.omega).cwiseProduct(acc_Z) +
+                        mk.forcing * (mk.f * mk.w * R::cos(phase));
+  const S A_rate = -mk.shape.dot(project(held, jerk_free));
+  const S delta0 = S(2) * u / ((S(1) - r) * A);
+  const S eps = -A_rate * delta0 / A;
+  if (!(R::abs(eps) <= S(kTailEpsilonMax))) return 0;
+  // The estimated error of Δ∞, as for one contact (dynamics/chatter_tail.hpp): the residual of the
+  // linear-A correction, what a quadratic and cubic change of A over [0, 2Δ0] can do (Ä, and a
+  // bound of |A'''| from the modes of the flow held on Z), and k's own stiffness with S held acting
+  // on the O(u²) gap of the tail, and the damping k's velocity feels (3 times its first-order
+  // effect, as for one contact). Without the Z-flow (a defective damped one), the whole tail, Δ0.
+  S error = delta0;
+  std::string why;
+  if (SetStickingT<S>* zf = SetEngineFor(Z, why)) {
+    const Vec u_vec = mk.omega.cwiseAbs2().cwiseProduct(pc);
+    const Vec D = S(2) * mk.zeta.cwiseProduct(mk.omega);
+    const Vec u_v = D.cwiseProduct(pc);
+    const S kappa = pc.dot(mk.forcing);
+    zf->Begin({Mode::kSticking, phase, clock_.offset, Xs, Vs, S(0), FlightStart::kGeneric,
+               StickStart::kGeneric, Z.front(), nullptr, nullptr, -1});
+    const ProbeT<S> pa = zf->Functional(u_vec, u_v, kappa, S(0), S(2) * delta0);
+    const Vec tk = project(held, mk.contact);  // the velocity change of a unit impulse at k, S held
+    const S s_kS = mk.shape.dot(tk);
+    const S wc2 = s_kS > 0 ? S(R::abs(u_vec.dot(tk)) / s_kS) : S(0);
+    // β: the damping k's own gap velocity feels with S held (g'' = −A − β g' over a flight).
+    const S beta = s_kS > 0 ? S(R::abs(u_v.dot(tk)) / s_kS) : S(0);
+    const S d = delta0;
+    error = d * (S(0.3) * eps * eps + R::abs(pa.jet.g2) * d * d / (S(2) * A) +
+                 pa.M * d * d * d / (S(6) * A) + wc2 * d * d / 4 + beta * d / 2);
+  }
+  if (!(error <= chatter_tol_)) return 0;
+  const S delta = delta0 * (S(1) + eps / 3);
+  // The held flow over the tail, k left out: nothing else may happen in it.
+  PropagatorT<S>* p = held_set_.empty() ? engine_.get() : static_cast<PropagatorT<S>*>(SetEngine());
+  if (!p) return -1;
+  const SegmentStartT<S> start{Mode::kSticking, phase, clock_.offset, X_, V_, S(0), flight_start_,
+                               StickStart::kGeneric, active_, &gaps_, &starts_, k};
+  p->Begin(start);
+  const auto probe = p->Advance(delta, true, {});
+  if (probe.end == SegmentEnd::kFailure) return 0;  // a stop request is seen by the next segment
+  if (probe.end != SegmentEnd::kLimit) return 0;
+  p->Begin(start);
+  const ClockT<S> from = clock_;
+  p->Advance(delta, false, [&](const S& lo, const S& hi) { EmitStretch(from, *p, lo, hi); });
+  p->Evaluate(delta, X_, V_);
+  AdvanceClock(clock_, delta, period_ - clock_.offset);
+  ProjectOntoSet(Z);
+  ++result_.chatter.accumulations_predicted;
+  const double err = R::to_double(error / period_);
+  if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
+  NotifyReset(ResetKind::kHeldSet, X_, V_);
+  Emit(EventKind::kAccumulation, S(0), S(0), k);
+  return EnterActiveSet(Z, held) ? 1 : -1;
+}
+
+// A free contact k closes while the set S = held_set_ sticks: the impact LCP (I2) on S ∪ {k}
+// with v_S⁻ = 0 (MODEL §11.4.2). Held contacts the impulse pushes off lift off (a release with
+// their speed after); those left at rest, and k if it lands plastically or arrives tangentially,
+// go to the acceleration LCP (S3).
+template <class S>
+bool Automaton<S>::ImpactWhileSetHeld(int k) {
+  const ModelT<S>& mk = M(k);
+  const std::vector<int> was = held_set_;
+  X_ -= mk.contact * ((mk.ContactDisplacement(X_) - mk.x0) / mk.s_B);
+  ProjectOntoSet(was);
+  gaps_[static_cast<size_t>(k)] = 0;
+  const S v_minus = mk.ContactVelocity(V_);
+  const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
+  std::vector<int> Z = was;
+  Z.push_back(k);
+  if (!(v_minus < -floor)) {
+    Emit(EventKind::kGrazing, v_minus, v_minus, k);
+    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    return EnterActiveSet(Z, was);
+  }
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  Vec q(z);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    const ModelT<S>& ma = M(Z[static_cast<size_t>(a)]);
+    q[a] = (S(1) + ma.r) * ma.ContactVelocity(V_);
+  }
+  Vec P;
+  if (!SolveLcp<S>(Delassus(models_, Z), q, Vec::Constant(z, S(64) * Eps<S>() * (R::abs(q[z - 1]) + S(1e-300))), P))
+    return Fail(fmt::format("contact {} hits at t = {:.17g} while {} contacts stick: the impact law "
+                            "has no solution (dependent contacts)",
+                            k, AbsTime(clock_), was.size()));
+  Vb_ = V_;
+  for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
+  for (Eigen::Index a = 0; a + 1 < z; ++a) loads_.AddImpulse(Z[static_cast<size_t>(a)], P[a]);  // held ones
+  NotifyReset(ResetKind::kHeldSet, X_, Vb_);
+  const S vk = mk.ContactVelocity(V_);
+  Emit(EventKind::kImpact, v_minus, vk, k);
+  std::vector<int> rest, stay;
+  for (const int j : was) {
+    const S vj = M(j).ContactVelocity(V_);
+    if (vj > floor) {  // pushed off its stop
+      Emit(EventKind::kRelease, S(0), vj, j);
+      starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+      gaps_[static_cast<size_t>(j)] = 0;
+    } else {
+      rest.push_back(j);
+      stay.push_back(j);
+    }
+  }
+  if (vk > floor) starts_[static_cast<size_t>(k)] = FlightStart::kAfterImpact;
+  else rest.push_back(k);
+  const int followed = held_chatter_, contact = held_chatter_contact_;
+  const double t = held_chatter_t_;
+  const S last = chatter_last_;
+  if (!EnterActiveSet(rest, stay)) return false;
+  if (vk > floor && mode_ == Mode::kSticking && held_set_ == was) {
+    // The set holds and k bounced: a chattering sequence beside it, its bookkeeping kept.
+    held_chatter_ = followed;
+    held_chatter_contact_ = contact;
+    held_chatter_t_ = t;
+    chatter_last_ = last;
+    const int chatter = HeldChatter(k, -v_minus, floor);
+    if (chatter != 0) return chatter > 0;
+  }
+  return true;
+}
+
+// A held set's force λ_c reached 0 at the end of a segment of length sigma: a release candidate.
+template <class S>
+void Automaton<S>::ReleaseFromSet(const SetStickingT<S>& set, int c, const S& sigma) {
+  // A release when λ_c crosses 0 downwards (MODEL (S4) in docs/contacts_reference.md): c leaves
+  // with g = g' = g'' = 0, g''' > 0 under the flow of the others, which stay held.
+  const JetT<S> jf = set.Force(c, sigma);
+  if (jf.g1 < 0 || (jf.g1 == S(0) && jf.g2 < 0)) {
+    ProjectOntoSet(held_set_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    Emit(EventKind::kRelease, S(0), S(0), c);
+    held_set_.erase(std::find(held_set_.begin(), held_set_.end(), c));
+    starts_[static_cast<size_t>(c)] = FlightStart::kAfterRelease;
+    gaps_[static_cast<size_t>(c)] = 0;
+    active_ = held_set_.front();
+    if (held_set_.size() == 1) held_set_.clear();
+    stick_start_ = StickStart::kGeneric;
+  } else {
+    stick_start_ = StickStart::kTangent;  // the force touches 0 without crossing: stay
+  }
+}
+
+}  // namespace vibro::detail
