@@ -10,7 +10,8 @@ of the two files is compared bit for bit (NaN equal to NaN). Prints one line per
 precision: `identical`, or the columns that differ with their largest relative difference.
 Exit 0 when every column of every scene is identical, 1 otherwise, 2 on bad arguments.
 
-A change to the engine or the automaton that should leave single-stop scenes untouched is checked
+Each binary runs with the libvibro.so beside it (LD_LIBRARY_PATH = its folder): compare copies
+made by scripts/snapshot_build.sh, or build folders. A change to the engine or the automaton that should leave single-stop scenes untouched is checked
 with it against the commit before (docs/performance.md, "Events to the bit").
 """
 import argparse
@@ -30,7 +31,10 @@ def run(vibro, scene, precision, periods, out):
     cmd = [vibro, "simulate", scene, "--out", out, "--set", f"run.periods={periods}"]
     if precision != "double":
         cmd += ["--set", f'run.precision="{precision}"', "--set", 'run.engine="exact"']
-    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    # The binary finds libvibro through its RUNPATH (its build folder): a copy of a build, with its
+    # libraries beside it, must use those, so the folder of the binary comes first.
+    env = dict(os.environ, LD_LIBRARY_PATH=os.path.dirname(os.path.abspath(vibro)))
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
     return r.returncode, r.stderr.strip().splitlines()[-1:] if r.stderr else []
 
 
@@ -76,6 +80,10 @@ def main():
     for exe in (a.old, a.new):
         if not os.access(exe, os.X_OK):
             print(f"compare_events: {exe}: not an executable", file=sys.stderr)
+            return 2
+        if not glob.glob(os.path.join(os.path.dirname(os.path.abspath(exe)), "libvibro.so*")):
+            print(f"compare_events: {exe}: no libvibro.so beside it (copy a build with "
+                  "scripts/snapshot_build.sh, not the binary alone)", file=sys.stderr)
             return 2
     patterns = a.scenes or [os.path.join(ROOT, "data/scenes/**/*.toml"),
                             os.path.join(ROOT, "data/benchmarks/*.toml")]
