@@ -60,9 +60,9 @@ std::string Outward(double x, bool up, int digits = 12) {
 
 std::string Range(const vibro::Enclosure& e) { return fmt::format("[{}, {}]", Outward(e.lo, false), Outward(e.hi, true)); }
 
-// `vibro prove` ends at once with exit 130 on a stop request: nothing is proven or written.
-int Interrupted(const std::string& what) {
-  fmt::print(stderr, "vibro: interrupted{}; nothing is proven{}\n", what, what.empty() ? " or written" : "");
+// A stop request ends `vibro prove` with exit 130 and no verdict; `kept` says what was kept.
+int Interrupted(const std::string& kept) {
+  fmt::print(stderr, "vibro: interrupted; {}\n", kept);
   return kExitInterrupted;
 }
 
@@ -165,8 +165,10 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
   else
     fmt::print("proven       {} of {} points, {} of the segments between them\n", proven, first.points, segments_proven);
   if (interrupted)
-    return Interrupted(fmt::format(" after {} of {} points (their certificates{} kept)", done, first.points,
-                                   args.out.empty() ? " are not" : " are"));
+    return Interrupted(args.out.empty() || done == 0
+                           ? fmt::format("{} of {} points were done, nothing is written", done, first.points)
+                           : fmt::format("{} of {} points were done, their certificates are kept in {}", done,
+                                         first.points, args.out));
   return proven == first.points ? 0 : kExitDisagree;
 }
 
@@ -194,7 +196,7 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
   } catch (const std::invalid_argument& e) {
     throw vibro::InputError({path + ": " + e.what()});
   }
-  if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("");
+  if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("nothing is proven or written");
   if (!args.out.empty()) {
     const vibro::cli::FinalWrite writing;
     std::ofstream file(args.out, std::ios::trunc);
