@@ -84,10 +84,6 @@ def excludes_zero(x):
     return positive(x) or negative(x)
 
 
-def hull(a, b):
-    return iv.mpf([a, b])
-
-
 def meet(a, b):
     """a ∩ b (both enclose the same value; None when they do not meet)."""
     l, h = max(lo(a), lo(b)), min(hi(a), hi(b))
@@ -691,7 +687,6 @@ class Truth:
         self.not_enclosed = False  # the multipliers could not be enclosed (no stability can be claimed)
         self.min_box_width = mp.mpf(0)
         self.reason = None      # a function of the reason text that raises NotConfirmed
-        self.notes = ()
 
 
 def prime_factors(q):
@@ -1178,7 +1173,6 @@ def check_sticking(cert, m, ledger):
     truth.period = k
     truth.section = (tr, [x0], [ZERO], "the release")
     truth.multipliers = "zero"
-    truth.notes = (SUPERSTABLE,)
     flights_count = len(flights)
 
     def reason(node, text):

@@ -18,7 +18,7 @@ import subprocess
 import sys
 import tempfile
 
-from mpmath import mp, mpf, asin, sin, cos, sqrt, atan2, pi, hypot, fmod, tan
+from mpmath import mp, mpf, asin, sin, cos, sqrt, atan2, pi, hypot, fmod
 
 mp.dps = 50
 VIBRO, CHECKER, SCENES = sys.argv[1], sys.argv[2], sys.argv[3]
