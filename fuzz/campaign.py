@@ -15,7 +15,8 @@ Each run is judged against what vibro promises:
 
 - no crash: the process ends by exit(), not by a signal it was not sent;
 - no hang: a run past its time limit gets SIGTERM and must be gone within LIVENESS seconds;
-- exit codes 0, 2, 3 and 130 only (4 for `check`/`validate`/`score`, whose methods, claims or runs may disagree);
+- exit codes 0, 2, 3 and 130 only (4 for `check`/`validate`/`score`, whose methods, claims or runs may disagree,
+  and for `prove`: not proven);
 - exit 2 creates and changes nothing in the run's directory or the files it was given, and
   its message says where the problem is;
 - a signal: exit 130 (or the run had already finished), the --out file readable, with status
@@ -210,7 +211,7 @@ class Campaign:
             self.find("crash" if -rc not in (signal.SIGINT, signal.SIGTERM) else "died of the stop signal", full,
                       f"{tag} killed by signal {-rc}; stderr: {err}")
         else:
-            allowed = {0, 2, 3, 130} | ({4} if argv and argv[0] in ("check", "validate", "score") else set())
+            allowed = {0, 2, 3, 130} | ({4} if argv and argv[0] in ("check", "validate", "score", "prove") else set())
             if rc not in allowed:
                 self.find(f"exit {rc}", full, f"{tag} {err}")
             if took is not None and took > LIVENESS and rc == 130:

@@ -10,6 +10,8 @@
 - score-input: event CSVs given to `vibro score`, with events shifted, dropped or added, times
   out of range or out of order, duplicate columns, a BOM, and extreme `--window` values;
 - python-api: every Python function called with corner arguments, and Ctrl-C during the long ones;
+- prove-branch: `prove --branch` with the damaged branch files of from-branch, a tiny --time-limit
+  or a stop signal at a random moment, its certificates given to the proof checker;
 - two-writers: a second process on the output file of a running one (the same --out, with and
   without --force, and --resume), and two --resume of one interrupted file at once;
 - full-disk: runs whose output lives on a 3 MiB tmpfs (when this process may mount one).
@@ -51,7 +53,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from campaign import Campaign, default_stop_signals, write_report, HANG, LIVENESS  # noqa: E402
 
-CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk"]
+CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk", "prove-branch"]
 
 
 def read_csv(path):
@@ -93,6 +95,10 @@ class Surfaces(Campaign):
                                  "--max-points", "8", "--out", os.path.join(d, "b.h5")], os.path.join(d, "b.h5"))
         s["branch2"] = self.make(["continue", self.chain2, "--param", "excitation.frequency", "--to", "0.75",
                                   "--max-points", "6", "--out", os.path.join(d, "b2.h5")], os.path.join(d, "b2.h5"))
+        # An impacting branch for prove --branch: three points and the segments between them.
+        s["branch_impact"] = self.make(["continue", self.fig5, "--kind", "impact", "--param", "excitation.amplitude",
+                                        "--to", "1.3", "--step", "0.002", "--max-points", "3", "--out",
+                                        os.path.join(d, "b3.h5")], os.path.join(d, "b3.h5"))
         csv_path = os.path.join(d, "b.csv")
         subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "branch_to_csv.py"), s["branch"], csv_path],
                        check=True, capture_output=True, timeout=60)
@@ -106,11 +112,11 @@ class Surfaces(Campaign):
         self.seed_files = s
 
     # ---- from-branch ----
-    def damaged_branch(self, point):
+    def damaged_branch(self, point, seed="branch"):
         """A copy of a seed branch with one damage; returns (path, what, valid) where valid is
         False when the damage makes the file one vibro must refuse, None when it cannot tell."""
         r = self.rng
-        src = self.seed_files["branch"]
+        src = self.seed_files[seed]
         path = self.fresh(".h5")
         shutil.copy(src, path)
         what = r.choice(["bits", "bits", "empty-rows", "empty-cols", "short-X", "below-stop", "other-scene",
@@ -179,6 +185,52 @@ class Surfaces(Campaign):
                       f"[from-branch] damage {what}, point {point}: exit 0")
         if rc == 2 and valid is True and in_range:
             self.find("refused a valid branch file", [self.vibro, *argv], f"[from-branch] {err}")
+
+    # ---- prove-branch ----
+    def gen_prove_branch(self):
+        """prove --branch on a damaged impacting branch: refused with exit 2 when the file is invalid
+        by construction (a state below the stop is only where the orbit search starts: proving
+        from it is allowed); an untouched file proven whole (exit 0); a tiny --time-limit or a
+        stop signal ends it (exit 4 or 130); every certificate file written is read by the checker
+        in one line with exit 0, 1 or 2, and exit 0 of prove means the checker confirms it."""
+        r = self.rng
+        path, what, valid = self.damaged_branch(-1, seed="branch_impact")
+        if what == "below-stop":
+            valid = None
+        out = os.path.join(self.work, f"prove{self.runs}.json")
+        argv = ["prove", self.fig5, "--branch", path, "--out", out]
+        if r.random() < 0.5:
+            argv.append("--json")
+        limited = r.random() < 0.25
+        if limited:
+            argv += ["--time-limit", r.choice(["0.001", "0.02", "0.2"])]
+        signals = [(r.uniform(0.02, 1.0), r.choice([signal.SIGINT, signal.SIGTERM]))] if r.random() < 0.25 else []
+        rc, err = self.run("prove-branch", argv, signals=signals, limit=120, watch=[path], key=what)
+        full = [self.vibro, *argv]
+        if rc == 0 and valid is False:
+            self.find("prove accepted a branch file it must refuse", full, f"[prove-branch] damage {what}: exit 0")
+        if rc == 2 and valid is True:
+            self.find("prove refused a valid branch file", full, f"[prove-branch] {err}")
+        if valid is True and not limited and not signals and rc != 0:
+            self.find("prove did not prove an untouched branch", full, f"[prove-branch] exit {rc}: {err[-300:]}")
+        if rc in (0, 4) and "--json" in argv:
+            try:
+                doc = json.loads(self.last_stdout)
+                assert isinstance(doc.get("points"), list)
+            except (ValueError, AssertionError, AttributeError):
+                self.find("prove --branch --json printed no JSON", full, f"[prove-branch] {self.last_stdout[-300:]}")
+        if os.path.exists(out):
+            p = subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "vibro_check_proof.py"), out],
+                               capture_output=True, text=True, timeout=600)
+            lines = p.stdout.splitlines()
+            if p.returncode not in (0, 1, 2) or len(lines) != 1 or "Traceback" in p.stderr:
+                self.find("the checker failed on a certificate file", full,
+                          f"[prove-branch] checker exit {p.returncode}: {p.stdout[-300:]} {p.stderr[-300:]}")
+            elif rc == 0 and p.returncode != 0:
+                self.find("a branch proven whole that the checker does not confirm", full, f"[prove-branch] {lines[0]}")
+            os.remove(out)
+        elif rc == 0:
+            self.find("prove --branch --out exit 0 wrote no certificates", full, "[prove-branch]")
 
     # ---- validate-input ----
     def gen_validate_input(self):
@@ -574,7 +626,8 @@ class Surfaces(Campaign):
         self.seeds_()
         gens = {"from-branch": (0.22, self.gen_from_branch), "validate-input": (0.22, self.gen_validate_input),
                 "score-input": (0.22, self.gen_score_input), "python-api": (0.16, self.gen_python_api),
-                "two-writers": (0.09, self.gen_two_writers), "full-disk": (0.09, self.gen_full_disk)}
+                "two-writers": (0.09, self.gen_two_writers), "full-disk": (0.09, self.gen_full_disk),
+                "prove-branch": (0.1, self.gen_prove_branch)}
         if self.only:
             gens = {self.only: (1.0, gens[self.only][1])}
         total = sum(w for w, _ in gens.values())

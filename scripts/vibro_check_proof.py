@@ -1,81 +1,256 @@
-#!/usr/bin/env python3
-"""Independent checker of a `vibro prove` certificate (docs/prove.md).
-
-Re-verifies every inequality of the certificate from the certificate alone, with mpmath's interval
-arithmetic (mpmath.iv, 128 bits). It shares no code with the C++ prover: the closed forms of the
-flight, the impact law and the reaction, the Krawczyk operator, the positivity of the gap and of
-the reaction, and the monodromy are written again here from the model (the paper's eqs (5),
-(10)-(14); docs/model.md §2-§5).
+#!/usr/bin/python3
+"""Independent checker of a `vibro prove` certificate (docs/prove.md, "What the checker checks").
 
     vibro_check_proof.py CERT.json [--json]
 
-CERT.json holds one certificate, or {"certificates": [...]} (`vibro prove --branch --out`): each
-is checked.
+CERT.json holds one certificate, or {"branch": ..., "certificates": [...]} (`vibro prove --branch
+--out`): each is checked.
 
-Exit 0: the certificate proves what it claims. Exit 1: it does not (the first failure is printed).
-Exit 2: the file is not a certificate.
+Every claim the certificate makes is recomputed from the certificate alone, with mpmath's interval
+arithmetic (mpmath.iv, 192 bits), and accepted only when the checker's own enclosure E of the true
+value lies inside the claimed interval C (E ⊆ C, so the truth lies in C): the verdict, the kind,
+the period (the orbit's least period), the sequence, every event's kind, contact, time, phase and
+velocity, the section state, the multipliers and the stability, the box width, the reason, the
+model's data, and every inequality the proof lists with its enclosure. The checker shares no code
+with the C++ prover: the flight, the impact law, the reaction, Krawczyk's operator, the positivity
+of the gap and of the reaction, the monodromy and the eigenvalue enclosures are written again here
+from the model (the paper's eqs (5), (10)-(14); docs/model.md §2-§5). Its enclosures of the true
+orbit are contracted far below the prover's widths (a Krawczyk test of its own on a box of relative
+width ~1e-36 around a 192-bit Newton point inside the certificate's box), so a claim that excludes
+the truth by one unit in the last place of a double is found.
+
+One line is printed, and the exit code is
+  0  "confirmed: ..."          every claim checked and true;
+  1  "not confirmed: ..."      a claim that the checker's enclosures do not confirm (which, values);
+  2  "not a certificate: ..."  the file is not a well-formed certificate (what, where).
 """
 import json
+import os
+import re
 import sys
 
-from mpmath import iv, mp, mpf
+from mpmath import iv, mp
 
-iv.prec = 128
-mp.prec = 128
+PREC = 192
+iv.prec = PREC
+mp.prec = PREC
+
+# Bounds on what a certificate may hold (`vibro prove` stays within them, docs/prove.md).
+MAX_BYTES = 64 << 20
+MAX_UNKNOWNS = 128
+MAX_MODES = 32
+MAX_FLIGHTS = 1000
+MAX_PIECES = 1_000_000
+MAX_CERTIFICATES = 10_000
+MAX_TEXT = 4096
+FORMAT = "vibro-proof-certificate/1"
 
 
-class Rejected(Exception):
-    pass
+class NotACertificate(Exception):
+    """Exit 2: malformed (what, where)."""
+
+
+class NotConfirmed(Exception):
+    """Exit 1: a claim the checker does not confirm (which claim, which values)."""
+
+
+# ---- Intervals --------------------------------------------------------------------------------
+
+ZERO, ONE = iv.mpf(0), iv.mpf(1)
+IV = type(ZERO)
 
 
 def lo(x):
-    return mpf(x._mpi_[0])
+    return mp.make_mpf(x._mpi_[0])
 
 
 def hi(x):
-    return mpf(x._mpi_[1])
+    return mp.make_mpf(x._mpi_[1])
 
 
-def ilo(x):
-    return iv.mpf(lo(x))
-
-
-def ihi(x):
-    return iv.mpf(hi(x))
+def finite(x):
+    return mp.isfinite(lo(x)) and mp.isfinite(hi(x))
 
 
 def positive(x):
-    return (x > 0) is True
+    return finite(x) and lo(x) > 0
 
 
 def negative(x):
-    return (x < 0) is True
+    return finite(x) and hi(x) < 0
 
 
-def point(v):
-    return iv.mpf(float(v))  # a double of the certificate, exactly
+def excludes_zero(x):
+    return positive(x) or negative(x)
 
 
-def hull(a, b):
-    return iv.mpf([float(a), float(b)])
+def meet(a, b):
+    """a ∩ b (both enclose the same value; None when they do not meet)."""
+    l, h = max(lo(a), lo(b)), min(hi(a), hi(b))
+    return iv.mpf([l, h]) if l <= h else None
 
 
-def pair(p):
-    return hull(p[0], p[1])
+def mid(x):
+    return (lo(x) + hi(x)) / 2
 
 
-def overlaps(x, p):
-    """The certificate's enclosure p = [lo, hi] meets the checker's x."""
-    return not (hi(x) < mpf(float(p[0])) or lo(x) > mpf(float(p[1])))
+def inside(small, big):
+    return lo(big) <= lo(small) and hi(small) <= hi(big)
 
 
-# ---- Forward differentiation over intervals (the Krawczyk test needs J over the whole box) ----
+def show(x):
+    """An mpf as a short decimal (17 digits)."""
+    return mp.nstr(x, 17, min_fixed=-4, max_fixed=6)
+
+
+def show_iv(x):
+    return f"[{show(lo(x))}, {show(hi(x))}]"
+
+
+def show_pair(p):
+    return f"[{p[0]!r}, {p[1]!r}]"
+
+
+# ---- Reading: every access typed and located ---------------------------------------------------
+
+class Node:
+    """A JSON value and where it is in the file ("summary.events[0].phase")."""
+    __slots__ = ("v", "path")
+
+    def __init__(self, v, path=""):
+        self.v, self.path = v, path
+
+    def fail(self, what):
+        raise NotACertificate(f"{self.path or 'the file'}: {what}")
+
+    def _child(self, key):
+        if isinstance(key, int):
+            return f"{self.path}[{key}]"
+        return f"{self.path}.{key}" if self.path else key
+
+    def obj(self, required, optional=()):
+        if not isinstance(self.v, dict):
+            self.fail(f"expected an object, got {kind_of(self.v)}")
+        for k in required:
+            if k not in self.v:
+                self.fail(f"no '{k}'")
+        for k in self.v:
+            if k not in required and k not in optional:
+                self.fail(f"unknown key '{k}'")
+        return self
+
+    def has(self, key):
+        return isinstance(self.v, dict) and key in self.v
+
+    def __getitem__(self, key):
+        if isinstance(key, int):
+            return Node(self.v[key], self._child(key))
+        if not isinstance(self.v, dict) or key not in self.v:
+            self.fail(f"no '{key}'")
+        return Node(self.v[key], self._child(key))
+
+    def items(self, at_least=0, at_most=None, exactly=None):
+        if not isinstance(self.v, list):
+            self.fail(f"expected a list, got {kind_of(self.v)}")
+        n = len(self.v)
+        if exactly is not None and n != exactly:
+            self.fail(f"{n} entries, expected {exactly}")
+        if n < at_least:
+            self.fail(f"{n} entries, expected at least {at_least}")
+        if at_most is not None and n > at_most:
+            self.fail(f"{n} entries, more than the {at_most} a certificate may have")
+        return [Node(x, self._child(k)) for k, x in enumerate(self.v)]
+
+    def num(self):
+        """A finite number, exactly (a double of the certificate, or an integer)."""
+        x = self.v
+        if isinstance(x, bool) or not isinstance(x, (int, float)):
+            self.fail(f"expected a number, got {kind_of(x)}")
+        if isinstance(x, float) and x != x:
+            self.fail("nan")
+        if isinstance(x, int) and abs(x) > 2 ** 1024:
+            self.fail("an integer beyond the range of doubles")
+        if isinstance(x, float) and x in (float("inf"), float("-inf")):
+            self.fail(f"{x} (bounds must be finite)")
+        return mp.mpf(x)
+
+    def point(self):
+        return iv.mpf(self.num())
+
+    def integer(self, least, most):
+        x = self.v
+        if isinstance(x, bool) or not isinstance(x, int):
+            self.fail(f"expected an integer, got {kind_of(x)}")
+        if not least <= x <= most:
+            self.fail(f"{x}, expected an integer in [{least}, {most}]")
+        return x
+
+    def text(self, choices=None):
+        x = self.v
+        if not isinstance(x, str):
+            self.fail(f"expected a text, got {kind_of(x)}")
+        if len(x) > MAX_TEXT:
+            self.fail(f"a text of {len(x)} characters")
+        if choices is not None and x not in choices:
+            self.fail(f"'{x}', expected one of {', '.join(repr(c) for c in choices)}")
+        return x
+
+    def boolean(self):
+        if not isinstance(self.v, bool):
+            self.fail(f"expected true or false, got {kind_of(self.v)}")
+        return self.v
+
+    def pair(self):
+        """[lo, hi]: two finite numbers with lo <= hi, as an interval."""
+        if not isinstance(self.v, list) or len(self.v) != 2:
+            self.fail(f"expected [lo, hi], got {kind_of(self.v)}")
+        a, b = self[0].num(), self[1].num()
+        if not a <= b:
+            self.fail(f"[{self.v[0]!r}, {self.v[1]!r}] has lo > hi")
+        return iv.mpf([a, b])
+
+
+def kind_of(x):
+    if isinstance(x, bool):
+        return f"{str(x).lower()}"
+    if isinstance(x, (int, float)):
+        return f"the number {x!r}"
+    if isinstance(x, str):
+        return f"the text {x[:40]!r}"
+    if isinstance(x, list):
+        return f"a list of {len(x)}"
+    if isinstance(x, dict):
+        return "an object"
+    return "null" if x is None else type(x).__name__
+
+
+DECIMAL = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d{1,4})?")
+
+
+def decimal(node, text=None):
+    """A decimal text ("1.1"), or "[a, b]": every number between two decimals (a parameter
+    interval of validated continuation)."""
+    t = node.text() if text is None else text
+    if t.startswith("[") and t.endswith("]") and t.count(",") == 1:
+        a, b = (s.strip() for s in t[1:-1].split(","))
+        x, y = decimal(node, a), decimal(node, b)
+        if not lo(x) <= hi(y):
+            node.fail(f"'{t}' has lo > hi")
+        return iv.mpf([lo(x), hi(y)])
+    g = DECIMAL.fullmatch(t)
+    if not g or (g.group(2) and abs(int(g.group(2)[1:])) > 400):
+        node.fail(f"'{t}' is not a finite decimal")
+    return iv.mpf(t)
+
+
+# ---- Forward differentiation over intervals (Jacobians over a box) -----------------------------
 
 class D:
-    """A value and its gradient, both intervals; an empty gradient is a constant."""
+    """A value and its gradient (a sparse dict index -> interval), both intervals."""
+    __slots__ = ("v", "g")
 
     def __init__(self, v, g=None):
-        self.v = v if isinstance(v, type(iv.mpf(0))) else iv.mpf(v)
+        self.v = v if isinstance(v, IV) else iv.mpf(v)
         self.g = g or {}
 
     @staticmethod
@@ -132,74 +307,93 @@ def dcos(x):
     return iv.cos(x)
 
 
+def value(x):
+    return x.v if isinstance(x, D) else x
+
+
+def variable(x, k):
+    return D(x, {k: ONE})
+
+
 # ---- The model ---------------------------------------------------------------------------------
 
-def parameter(text):
-    """A decimal ("1.1"), or "[a, b]": every number between two decimals (a parameter interval of
-    validated continuation)."""
-    if not isinstance(text, str):
-        raise TypeError(f"a parameter is a decimal text, got {text!r}")
-    if text.startswith("[") and text.endswith("]"):
-        a, b = (iv.mpf(x.strip()) for x in text[1:-1].split(","))
-        return iv.mpf([lo(a), hi(b)])
-    if not text or any(ch not in "0123456789.eE+-" for ch in text):
-        raise ValueError(f"not a decimal: {text!r}")
-    return iv.mpf(text)
+MODEL_KEYS = ("frequencies", "forcing", "contact", "shape", "stop", "restitution", "amplitude", "frequency")
 
 
 class Model:
-    def __init__(self, m):
-        try:
-            self.w_i = [parameter(t) for t in m["frequencies"]]
-            self.TA = [parameter(t) for t in m["forcing"]]
-            self.TB = [parameter(t) for t in m["contact"]]
-            self.c = [parameter(t) for t in m["shape"]]
-            self.x0 = parameter(m["stop"])
-            self.r = parameter(m["restitution"])
-            self.f = parameter(m["amplitude"])
-            self.w = parameter(m["frequency"])
-        except (KeyError, TypeError, ValueError) as e:
-            raise Rejected(f"model: {e}")
-        self.n = len(self.w_i)
-        self.sA = sum((ci * ti for ci, ti in zip(self.c, self.TA)), iv.mpf(0))
-        self.sB = sum((ci * ti for ci, ti in zip(self.c, self.TB)), iv.mpf(0))
+    """The undamped modal model of docs/model.md with exact decimal parameters."""
+
+    def __init__(self, node):
+        node.obj(MODEL_KEYS)
+        lists = {k: node[k].items(at_least=1, at_most=MAX_MODES) for k in MODEL_KEYS[:4]}
+        n = len(lists["frequencies"])
+        for k in MODEL_KEYS[1:4]:
+            if len(lists[k]) != n:
+                node[k].fail(f"{len(lists[k])} entries, model.frequencies has {n} (one per mode)")
+        self.n = n
+        self.w_i = [decimal(x) for x in lists["frequencies"]]
+        self.TA = [decimal(x) for x in lists["forcing"]]
+        self.TB = [decimal(x) for x in lists["contact"]]
+        self.c = [decimal(x) for x in lists["shape"]]
+        self.x0 = decimal(node["stop"])
+        self.r = decimal(node["restitution"])
+        self.f = decimal(node["amplitude"])
+        self.w = decimal(node["frequency"])
+        self.texts = {k: node[k].v for k in MODEL_KEYS}
+        for k, w in enumerate(self.w_i):
+            if not lo(w) > 0:
+                lists["frequencies"][k].fail("a modal frequency must be > 0")
+        if not lo(self.w) > 0:
+            node["frequency"].fail("the forcing frequency must be > 0")
+        if not (lo(self.r) >= 0 and hi(self.r) <= 1):
+            node["restitution"].fail("the restitution must lie in [0, 1]")
+        self.point = not any(isinstance(t, str) and t.startswith("[") for t in
+                             [self.texts["stop"], self.texts["restitution"], self.texts["amplitude"],
+                              self.texts["frequency"]] + [t for k in MODEL_KEYS[:4] for t in self.texts[k]])
+        self.sA = sum((ci * ti for ci, ti in zip(self.c, self.TA)), ZERO)
+        self.sB = sum((ci * ti for ci, ti in zip(self.c, self.TB)), ZERO)
         self.T = 2 * iv.pi / self.w
 
     def flight(self, t0, X, V, s):
-        """Closed-form free flight from (t0, X, V) over s (eqs (13)-(14)) in the cancellation-free form
-        (docs/model.md §2): X(t0+s) = X cos ω_i s + V sin(ω_i s)/ω_i + T_A f K(s), with
+        """The closed-form free flight from (t0, X, V) over s (eqs (13)-(14)) in the cancellation-free
+        form of docs/model.md §2: X(t0+s) = X cos ω_i s + V sin(ω_i s)/ω_i + T_A f K(s),
         K = [sin ωt0 (cos ωs − cos ω_i s) + cos ωt0 (sin ωs − (ω/ω_i) sin ω_i s)]/(ω_i² − ω²),
-        cos x − 1 = −2 sin²(x/2). Returns X(t0+s), V(t0+s) as D."""
-        L = D.lift
-        t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
-        w = L(self.w)
+        cos x − 1 = −2 sin²(x/2). Works on intervals and on D."""
+        if any(isinstance(z, D) for z in (t0, s, *X, *V)):
+            L = D.lift
+            t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
+            w, half, two = L(self.w), L(iv.mpf(0.5)), L(iv.mpf(2))
+        else:
+            L = lambda z: z  # noqa: E731
+            w, half, two = self.w, iv.mpf(0.5), iv.mpf(2)
         sin0, cos0 = dsin(w * t0), dcos(w * t0)
-        sw, hw = dsin(w * s), dsin(L(iv.mpf(0.5)) * w * s)
-        cw_m1 = -(L(2) * hw * hw)
+        sw, hw = dsin(w * s), dsin(half * w * s)
+        cw_m1 = -(two * hw * hw)
         Xo, Vo = [], []
         for i in range(self.n):
             wi = L(self.w_i[i])
             den = L(self.w_i[i] ** 2 - self.w ** 2)
             kappa = L(self.TA[i] * self.f)
-            sn, hi_ = dsin(wi * s), dsin(L(iv.mpf(0.5)) * wi * s)
-            c_m1 = -(L(2) * hi_ * hi_)
-            dcos_ = cw_m1 - c_m1
-            dsin_ = sw - (w / wi) * sn
-            K = (sin0 * dcos_ + cos0 * dsin_) / den
-            Kp = (sin0 * (wi * sn - w * sw) + w * cos0 * dcos_) / den
+            sn, hn = dsin(wi * s), dsin(half * wi * s)
+            c_m1 = -(two * hn * hn)
+            K = (sin0 * (cw_m1 - c_m1) + cos0 * (sw - (w / wi) * sn)) / den
+            Kp = (sin0 * (wi * sn - w * sw) + w * cos0 * (cw_m1 - c_m1)) / den
             Xo.append(X[i] + X[i] * c_m1 + V[i] * sn / wi + kappa * K)
             Vo.append(V[i] + V[i] * c_m1 - X[i] * wi * sn + kappa * Kp)
         return Xo, Vo
 
-    def contact(self, X):
-        out = D(0)
+    def contact_of(self, X):
+        """c·X (x_B, or ẋ_B of velocities)."""
+        out = ZERO
         for ci, xi in zip(self.c, X):
-            out = D.lift(xi) * D(ci) + out
+            out = xi * ci + out if not isinstance(xi, D) else xi * D(ci) + out
         return out
 
     def impact(self, V):
-        p = self.contact(V) * D(-(1 + self.r) / self.sB)
-        return [D.lift(V[i]) + p * D(self.TB[i]) for i in range(self.n)]
+        """The restitution law (10)-(12): Ẋ⁺ = Ẋ⁻ − (1+r) T_B c·Ẋ⁻/s_B."""
+        p = self.contact_of(V) * (-(1 + self.r) / self.sB)
+        return [V[i] + p * self.TB[i] if not isinstance(p, D) else D.lift(V[i]) + p * D(self.TB[i])
+                for i in range(self.n)]
 
     def contact_acceleration(self, t, X):
         a = self.sA * self.f * iv.sin(self.w * t)
@@ -208,8 +402,8 @@ class Model:
         return a
 
     def derivative_bound(self, t0, X, V, order):
-        """max |d^order/ds^order of c.X(t0+s)|: sum of amplitudes times pulsation^order."""
-        total, forced = iv.mpf(0), iv.mpf(0)
+        """max over s of |d^order/ds^order c·X(t0+s)|: the sum of the amplitudes times pulsation^order."""
+        total, forced = ZERO, ZERO
         for i in range(self.n):
             wi = self.w_i[i]
             amp = self.TA[i] * self.f / (wi * wi - self.w * self.w)
@@ -219,74 +413,328 @@ class Model:
             forced += self.c[i] * amp
         return total + abs(forced) * self.w ** order
 
+    def phase(self, t):
+        """ωt reduced by the whole turns of its midpoint (the certificate's phase convention)."""
+        wt = self.w * t
+        turns = mp.floor(mid(wt) / (2 * mp.pi))
+        return wt - iv.mpf(turns) * 2 * iv.pi
 
-# ---- Bookkeeping: every inequality the certificate lists must be recomputed here ---------------
 
-class Book:
-    def __init__(self, cert):
-        self.listed = {}
-        for e in cert.get("inequalities", []):
-            self.listed.setdefault((e["name"], e["where"]), []).append(e)
+# ---- Claims ------------------------------------------------------------------------------------
+
+def claim_contains(node, E, what):
+    """The claim at `node`, [lo, hi], must contain the checker's enclosure E of the true value."""
+    C = node.pair()
+    if not inside(E, C):
+        raise NotConfirmed(f"{node.path} = {show_pair(node.v)} does not contain {what}, which the checker "
+                           f"encloses in {show_iv(E)}")
+    return C
+
+
+def claim_phase(node, E_time, model, what):
+    """A phase claim: ωt reduced to [0, 2π) (the representative whose interval meets [0, 2π])."""
+    C = node.pair()
+    raw = model.w * E_time
+    k = mp.nint((mid(raw) - mid(C)) / (2 * mp.pi))
+    E = raw - iv.mpf(k) * 2 * iv.pi
+    if not inside(E, C):
+        raise NotConfirmed(f"{node.path} = {show_pair(node.v)} does not contain {what}, which the checker "
+                           f"encloses in {show_iv(E)} (mod 2π)")
+    if hi(C) < 0 or lo(C) >= 2 * mp.pi:
+        raise NotConfirmed(f"{node.path} = {show_pair(node.v)} is not a phase in [0, 2π)")
+
+
+def claim_upper(node, E, what):
+    """A number claimed to bound the true value from above."""
+    x = node.num()
+    if not hi(E) <= x:
+        raise NotConfirmed(f"{node.path} = {node.v!r} is not above {what}, which the checker encloses in {show_iv(E)}")
+
+
+def claim_lower(node, E, what):
+    x = node.num()
+    if not x <= lo(E):
+        raise NotConfirmed(f"{node.path} = {node.v!r} is not below {what}, which the checker encloses in {show_iv(E)}")
+
+
+def holds(relation, x, box=None):
+    if relation == "> 0":
+        return positive(x)
+    if relation == "< 0":
+        return negative(x)
+    if relation == "!= 0":
+        return excludes_zero(x)
+    if relation == "finite":
+        return finite(x)
+    if relation == "inside the box":
+        return finite(x) and lo(x) > lo(box) and hi(x) < hi(box)
+    m = re.fullmatch(r"inside \((-?\d+), (-?\d+)\)", relation)
+    if m:
+        return finite(x) and lo(x) > int(m.group(1)) and hi(x) < int(m.group(2))
+    raise AssertionError(relation)
+
+
+class Ledger:
+    """The certificate's inequalities: each one recomputed here, once. For each: the checker's
+    enclosure over the proof's domain must satisfy the relation (the proof), the record must say
+    it holds, its own enclosure must satisfy the relation, and contain the checker's enclosure of
+    the quantity's true value."""
+
+    def __init__(self, node):
+        self.records = {}
+        for r in node.items(at_most=100 * MAX_FLIGHTS + MAX_UNKNOWNS):
+            r.obj(("name", "where", "enclosure", "relation", "holds"))
+            key = (r["name"].text(), r["where"].text())
+            if key in self.records:
+                r.fail(f"'{key[0]}' at {key[1]} listed twice")
+            self.records[key] = r
         self.done = set()
 
-    def check(self, holds, name, where, x):
+    def check(self, name, where, relation, proof, truth, box=None):
         key = (name, where)
-        if key not in self.listed:
-            raise Rejected(f"the certificate does not list '{name}' at {where}")
-        for e in self.listed[key]:
-            if not overlaps(x, e["enclosure"]):
-                raise Rejected(f"{name} at {where}: the certificate's enclosure {e['enclosure']} misses the checker's {x}")
-            if not e.get("holds", False):
-                raise Rejected(f"{name} at {where}: the certificate itself says it fails")
-        if not holds:
-            raise Rejected(f"{name} at {where} does not hold: checker's enclosure {x}")
+        r = self.records.get(key)
+        if r is None:
+            raise NotConfirmed(f"the certificate does not list the inequality '{name}' at {where}, which the "
+                               f"proof needs")
+        if r["relation"].text() != relation:
+            raise NotConfirmed(f"{r.path}.relation: '{r['relation'].v}', the inequality '{name}' is '{relation}'")
+        if not r["holds"].boolean():
+            raise NotConfirmed(f"{r.path}: '{name}' at {where} does not hold, the certificate says")
+        if not holds(relation, proof, box):
+            raise NotConfirmed(f"'{name} {relation}' at {where} is not verified: the checker's enclosure is "
+                               f"{show_iv(proof)}")
+        C = r["enclosure"].pair()
+        if not holds(relation, C, box):
+            raise NotConfirmed(f"{r.path}.enclosure = {show_pair(r['enclosure'].v)} does not satisfy '{relation}'")
+        claim_contains(r["enclosure"], truth, f"the value of '{name}' at {where}")
         self.done.add(key)
 
     def finish(self):
-        missing = [k for k in self.listed if k not in self.done]
+        missing = [k for k in self.records if k not in self.done]
         if missing:
-            raise Rejected(f"inequalities the checker could not recompute: {missing[:3]}")
+            name, where = missing[0]
+            raise NotConfirmed(f"the certificate lists {len(missing)} inequalities that the proof does not use, "
+                               f"e.g. '{name}' at {where}")
+        return len(self.done)
 
 
-def positive_pieces(pieces, a, b, value, slope, what):
+def positive_pieces(node, a, b, f_value, f_slope, what, budget):
     """f > 0 on [a, b]: the pieces are contiguous, cover [a, b], and on each the mean-value form
     f(c) + f'(I)(I - c) lies above 0."""
-    if not pieces:
-        raise Rejected(f"{what}: no pieces")
-    if mpf(float(pieces[0][0])) > a:
-        raise Rejected(f"{what}: the pieces start after {a}")
-    if mpf(float(pieces[-1][1])) < b:
-        raise Rejected(f"{what}: the pieces end before {b}")
-    for k, (p0, p1) in enumerate(pieces):
-        if k > 0 and float(pieces[k - 1][1]) != float(p0):
-            raise Rejected(f"{what}: a hole between pieces {k - 1} and {k}")
-        if not float(p0) < float(p1):
-            raise Rejected(f"{what}: piece {k} is empty")
-        c = point((float(p0) + float(p1)) / 2)
-        I = hull(p0, p1)
-        f = value(c) + slope(I) * (I - c)
+    pieces = node.items(at_least=1, at_most=MAX_PIECES)
+    budget[0] -= len(pieces)
+    if budget[0] < 0:
+        node.fail(f"more than {MAX_PIECES} pieces in the certificate")
+    vals = [(lo(x), hi(x)) for x in (p.pair() for p in pieces)]
+    if vals[0][0] > a:
+        raise NotConfirmed(f"{what}: the pieces start at {show(vals[0][0])}, after {show(a)}")
+    if vals[-1][1] < b:
+        raise NotConfirmed(f"{what}: the pieces end at {show(vals[-1][1])}, before {show(b)}")
+    for k, (p0, p1) in enumerate(vals):
+        if k > 0 and vals[k - 1][1] != p0:
+            raise NotConfirmed(f"{what}: a hole or an overlap between pieces {k - 1} and {k}")
+        if not p0 < p1:
+            raise NotConfirmed(f"{node.path}[{k}]: an empty piece")
+        c = iv.mpf((p0 + p1) / 2)
+        I = iv.mpf([p0, p1])
+        f = f_value(c) + f_slope(I) * (I - c)
         if not positive(f):
-            raise Rejected(f"{what}: not positive on [{p0}, {p1}]: {f}")
+            raise NotConfirmed(f"{what}: not positive on {node.path}[{k}] = [{show(p0)}, {show(p1)}] ({show_iv(f)})")
+
+
+# ---- Eigenvalues of an interval matrix ---------------------------------------------------------
+
+def eigenvalues(M):
+    """Every eigenvalue of every matrix in the interval matrix M, enclosed: disjoint boxes
+    (re, im), one per eigenvalue; None when the checker cannot separate them."""
+    n = len(M)
+    if n == 2:
+        tr, det = M[0][0] + M[1][1], M[0][0] * M[1][1] - M[0][1] * M[1][0]
+        disc = tr * tr - 4 * det
+        if positive(disc):
+            r = iv.sqrt(disc)
+            return [((tr + r) / 2, ZERO), ((tr - r) / 2, ZERO)]
+        if negative(disc):
+            im = iv.sqrt(-disc) / 2
+            return [(tr / 2, im), (tr / 2, -im)]
+        # Real or complex: both lie in tr/2 + [-1, 1] sqrt(disc+)/2 + i [-1, 1] sqrt(disc-)/2.
+        pos = iv.mpf([0, max(hi(disc), 0)])
+        neg = iv.mpf([0, max(-lo(disc), 0)])
+        re = tr / 2 + iv.mpf([-1, 1]) * iv.sqrt(pos) / 2
+        im = iv.mpf([-1, 1]) * iv.sqrt(neg) / 2
+        return [(re, im), (re, im)]
+    return eigenvalues_general(M)
+
+
+def eigenvalues_general(M):
+    """Krawczyk's test on the eigenpair equations (A − λ)v = 0, v_k = 1 (real form, λ = a + ib,
+    v = x + iy) around approximate eigenpairs of the midpoint matrix (mpmath's eig, not part of the
+    proof). Disjoint boxes, as many as the dimension: every eigenvalue is enclosed."""
+    n = len(M)
+    A = mp.matrix([[mid(x) for x in row] for row in M])
+    values, vectors = mp.eig(A)
+    width = max(hi(x) - lo(x) for row in M for x in row)
+    boxes = []
+    for e in range(n):
+        lam = values[e]
+        vec = [vectors[i, e] for i in range(n)]
+        k = max(range(n), key=lambda i: abs(vec[i]))
+        vec = [v / vec[k] for v in vec]
+        free = [j for j in range(n) if j != k]
+        z0 = [mp.re(lam), mp.im(lam)] + [mp.re(vec[j]) for j in free] + [mp.im(vec[j]) for j in free]
+        size = len(z0)
+
+        def unpack(z):
+            x = [ONE if j == k else None for j in range(n)]
+            y = [ZERO if j == k else None for j in range(n)]
+            for i, j in enumerate(free):
+                x[j], y[j] = z[2 + i], z[2 + len(free) + i]
+            return z[0], z[1], x, y
+
+        def F(z):
+            a, b, x, y = unpack(z)
+            re = [sum((M[i][j] * x[j] for j in range(n)), ZERO) - a * x[i] + b * y[i] for i in range(n)]
+            im = [sum((M[i][j] * y[j] for j in range(n)), ZERO) - a * y[i] - b * x[i] for i in range(n)]
+            return re + im
+
+        def J(z):
+            a, b, x, y = unpack(z)
+            rows = []
+            for part in (0, 1):
+                for i in range(n):
+                    row = [-x[i], y[i]] if part == 0 else [-y[i], -x[i]]
+                    for j in free:
+                        row.append((M[i][j] - (a if i == j else 0)) if part == 0 else (-b if i == j else ZERO))
+                    for j in free:
+                        row.append((b if i == j else ZERO) if part == 0 else (M[i][j] - (a if i == j else 0)))
+                    rows.append(row)
+            return rows
+
+        Fz = F([iv.mpf(v) for v in z0])
+        found = None
+        scale = max(mp.mpf(2) ** (16 - PREC), 4 * width)
+        while scale < 1e-2 and found is None:
+            rad = [scale * (1 + abs(v)) for v in z0]
+            Z = [iv.mpf([z0[p] - rad[p], z0[p] + rad[p]]) for p in range(size)]
+            Jz = J(Z)
+            try:
+                Cm = mp.inverse(mp.matrix([[mid(x) for x in row] for row in Jz]))
+            except ZeroDivisionError:
+                return None
+            C = [[iv.mpf(Cm[p, l]) for l in range(size)] for p in range(size)]
+            ok = True
+            for p in range(size):
+                kz = iv.mpf(z0[p])
+                for l in range(size):
+                    kz -= C[p][l] * Fz[l]
+                    row = ONE if p == l else ZERO
+                    for j in range(size):
+                        row -= C[p][j] * Jz[j][l]
+                    kz += row * (Z[l] - z0[l])
+                if not (lo(kz) > lo(Z[p]) and hi(kz) < hi(Z[p])):
+                    ok = False
+                    break
+            if ok:
+                found = (Z[0], Z[1])
+            scale *= 1000
+        if found is None:
+            return None
+        boxes.append(found)
+    for i in range(n):
+        for j in range(i):
+            (a, b), (c, d) = boxes[i], boxes[j]
+            if not (hi(a) < lo(c) or hi(c) < lo(a) or hi(b) < lo(d) or hi(d) < lo(b)):
+                return None
+    return boxes
+
+
+def match(claims, boxes):
+    """A one-to-one assignment of the checker's eigenvalue enclosures to the claims that contain
+    them (augmenting paths); the index of an enclosure left without a claim, or None."""
+    owner = [None] * len(claims)
+
+    def fits(e, c):
+        (re, im), (cre, cim) = boxes[e], claims[c]
+        return inside(re, cre) and inside(im, cim)
+
+    def assign(e, seen):
+        for c in range(len(claims)):
+            if c not in seen and fits(e, c):
+                seen.add(c)
+                if owner[c] is None or assign(owner[c], seen):
+                    owner[c] = e
+                    return True
+        return False
+
+    for e in range(len(boxes)):
+        if not assign(e, set()):
+            return e
+    return None
+
+
+# ---- What a proof establishes: the truth, enclosed ---------------------------------------------
+
+class Truth:
+    """The checker's enclosures of the true orbit, against which the summary's claims are checked."""
+
+    def __init__(self):
+        self.kind = None
+        self.period = None
+        self.sequence = []
+        self.events = []        # (kind, time, velocity_before) with intervals; velocity None: exactly 0
+        self.section = None     # (time, [X], [V], at)
+        self.multipliers = None  # list of (re, im); "zero" for the superstable sticking orbit
+        self.not_enclosed = False  # the multipliers could not be enclosed (no stability can be claimed)
+        self.min_box_width = mp.mpf(0)
+        self.reason = None      # a function of the reason text that raises NotConfirmed
+
+
+def prime_factors(q):
+    out, d = [], 2
+    while d * d <= q:
+        if q % d == 0:
+            out.append(d)
+            while q % d == 0:
+                q //= d
+        d += 1
+    return out + ([q] if q > 1 else [])
 
 
 # ---- Impacting orbits --------------------------------------------------------------------------
 
-def check_impact(cert, m, book):
-    q = int(cert["period"])
-    names = cert["unknowns"]
-    u = [float(x) for x in cert["midpoint"]]
-    box = cert["box"]
-    C = cert["preconditioner"]
-    N = len(u)
+def check_impact(cert, m, ledger):
+    """Krawczyk's test on the multiple-shooting map, the exclusion of any other contact on every
+    flight, the monodromy and the multipliers (docs/prove.md "Impacting orbits")."""
+    q = cert["period"].integer(1, 1 << 20)
     n = m.n
-    if N % (2 * n + 1) or len(box) != N or len(C) != N or any(len(r) != N for r in C):
-        raise Rejected("the box, midpoint and preconditioner do not fit the model")
-    count = N // (2 * n + 1)
+    per = 2 * n + 1
+    names_node = cert["unknowns"]
+    N = len(names_node.items(at_least=per, at_most=MAX_UNKNOWNS))
+    if N % per:
+        names_node.fail(f"{N} unknowns: not a multiple of 2n + 1 = {per} (n = {n} modes)")
+    count = N // per
+    expected = []
+    for j in range(count):
+        expected += [f"t_{j}"] + [f"X_{j}[{i}]" for i in range(n)] + [f"V_{j}[{i}]" for i in range(n)]
+    names = [x.text() for x in names_node.items()]
+    if names != expected:
+        k = next(p for p in range(N) if names[p] != expected[p])
+        names_node[k].fail(f"'{names[k]}', expected '{expected[k]}'")
+    u_mid = [x.num() for x in cert["midpoint"].items(exactly=N)]
+    box_nodes = cert["box"].items(exactly=N)
+    U = [b.pair() for b in box_nodes]
+    for p in range(N):
+        if not lo(U[p]) < u_mid[p] < hi(U[p]):
+            cert["midpoint"][p].fail(f"{u_mid[p]} is not inside the box {show_pair(box_nodes[p].v)}")
+    C = [[iv.mpf(x.num()) for x in row.items(exactly=N)] for row in cert["preconditioner"].items(exactly=N)]
+    kr_nodes = cert["krawczyk"].items(exactly=N)
+    flights = cert["flights"].items(exactly=count)
+    mono_nodes = [row.items(exactly=2 * n) for row in cert["monodromy"].items(exactly=2 * n)]
     qT = q * m.T
 
     def unpack(vec, j):
-        b = j * (2 * n + 1)
-        return vec[b], vec[b + 1:b + 1 + n], vec[b + 1 + n:b + 1 + 2 * n]
+        b = j * per
+        return vec[b], vec[b + 1:b + 1 + n], vec[b + 1 + n:b + per]
 
     def residual(vec):
         out = []
@@ -298,433 +746,739 @@ def check_impact(cert, m, book):
                 tn = tn + qT
             Xe, Ve = m.flight(t, X, V, tn - t)
             Vp = m.impact(Ve)
-            out.append(m.contact(X) - m.x0)
+            out.append(m.contact_of(X) - m.x0)
             out += [Xe[i] - Xn[i] for i in range(n)]
             out += [Vp[i] - Vn[i] for i in range(n)]
         return out
 
-    # Krawczyk: K = u - C F(u) + (I - C J(U))(U - u) inside the open box.
-    lo_, hi_ = [float(b[0]) for b in box], [float(b[1]) for b in box]
-    if any(not (lo_[p] < u[p] < hi_[p]) for p in range(N)):
-        raise Rejected("the midpoint is not inside the box")
-    U = [hull(lo_[p], hi_[p]) for p in range(N)]
-    F = [r.v for r in residual([point(x) for x in u])]
-    R = residual([D(U[p], {p: iv.mpf(1)}) for p in range(N)])
-    J = [[r.g.get(l, iv.mpf(0)) for l in range(N)] for r in R]
-    for p in range(N):
-        k = point(u[p])
-        for l in range(N):
-            k -= point(C[p][l]) * F[l]
-            row = iv.mpf(1 if p == l else 0)
+    def krawczyk(center, box):
+        """K(box) = ũ − C F(ũ) + (I − C J(box))(box − ũ) with the sparse Jacobian over the box."""
+        F = [value(r) for r in residual([iv.mpf(x) for x in center])]
+        J = [r.g if isinstance(r, D) else {} for r in residual([variable(box[p], p) for p in range(N)])]
+        diff = [box[l] - center[l] for l in range(N)]
+        K = []
+        for p in range(N):
+            row = C[p]
+            k = iv.mpf(center[p])
+            acc = {}
             for j in range(N):
-                row -= point(C[p][j]) * J[j][l]
-            k += row * (U[l] - point(u[l]))
-        inside = lo(k) > lo_[p] and hi(k) < hi_[p]
-        book.check(inside, "krawczyk", names[p], k)
+                c = row[j]
+                k -= c * F[j]
+                for l, d in J[j].items():
+                    acc[l] = acc[l] + c * d if l in acc else c * d
+            for l in range(N):
+                k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * diff[l]
+            K.append(k)
+        return K
 
-    # No contact between the impacts; the monodromy along the way.
-    flights = cert["flights"]
-    if len(flights) != count:
-        raise Rejected("one flight per impact expected")
-    M = [[iv.mpf(1 if i == j else 0) for j in range(2 * n)] for i in range(2 * n)]
+    # 1. Existence and uniqueness in the certificate's box.
+    K = krawczyk(u_mid, U)
+    # 2. The true orbit, enclosed tightly: Newton at 192 bits from the midpoint, then Krawczyk's
+    # test of the checker's own on a box of relative radius 2^-120 around it, inside U (so the
+    # zero there is the one of U). A parameter interval has a set of orbits: K(U) ∩ U, iterated.
+    E = contract(residual, krawczyk, u_mid, U, K, C, m.point)
+    # The Krawczyk records and the certificate's list: inside the box, containing the true orbit.
+    for p in range(N):
+        ledger.check("krawczyk", names[p], "inside the box", K[p], E[p], box=U[p])
+        claim_contains(kr_nodes[p], E[p], f"the orbit's {names[p]}")
+        if not holds("inside the box", kr_nodes[p].pair(), U[p]):
+            raise NotConfirmed(f"{kr_nodes[p].path} = {show_pair(kr_nodes[p].v)} is not inside the box")
+
+    # 3. No contact between the impacts, over the whole box; the monodromy at the true orbit.
+    budget = [MAX_PIECES]
+    M = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
+    vbefore = [None] * count
     for j in range(count):
         k = (j + 1) % count
-        t, X, V = unpack(U, j)
-        tn = unpack(U, k)[0] + (qT if j == count - 1 else 0)
-        S = tn - t
-        Xe, Ve = m.flight(t, X, V, S)
-        a, vm = m.contact(V).v, m.contact(Ve).v
-        M2 = m.derivative_bound(t, X, V, 2)
-        where = f"flight {j} (impact {j} to impact {k})"
-        book.check(positive(S), "duration", where, S)
-        book.check(positive(a), "contact velocity after impact", where, a)
-        book.check(negative(vm), "contact velocity before impact", where, vm)
-        book.check(hi(M2) < mpf("inf"), "second-derivative bound", where, M2)
         fl = flights[j]
-        ws, we = point(fl["start_window"]), point(fl["end_window"])
-        a_low, b_low = point(fl["velocity_after_lower"]), point(fl["speed_before_lower"])
-        if not (hi(a_low) <= lo(a) and hi(b_low) <= lo(-vm)):
-            raise Rejected(f"{where}: the certificate's velocity bounds are not below the checker's enclosures")
+        fl.obj(("from", "duration", "velocity_after", "velocity_before_next", "velocity_after_lower",
+                "speed_before_lower", "second_derivative_bound", "start_window", "end_window", "pieces"))
+        if fl["from"].integer(0, count - 1) != j:
+            fl["from"].fail(f"{fl['from'].v}, expected {j}")
+        where = f"flight {j} (impact {j} to impact {k})"
+
+        def quantities(vec):
+            t, X, V = unpack(vec, j)
+            tn = unpack(vec, k)[0] + (qT if j == count - 1 else 0)
+            S = tn - t
+            Xe, Ve = m.flight(t, X, V, S)
+            return t, X, V, tn, S, Xe, Ve, m.contact_of(V), m.contact_of(Ve), m.derivative_bound(t, X, V, 2)
+
+        t, X, V, tn, S, Xe, Ve, a, vm, M2 = quantities(U)
+        tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T = quantities(E)
+        ledger.check("duration", where, "> 0", S, ST)
+        ledger.check("contact velocity after impact", where, "> 0", a, aT)
+        ledger.check("contact velocity before impact", where, "< 0", vm, vmT)
+        ledger.check("second-derivative bound", where, "finite", M2, M2T)
+        claim_contains(fl["duration"], ST, f"the duration of {where}")
+        claim_contains(fl["velocity_after"], aT, f"the contact velocity after impact {j}")
+        claim_contains(fl["velocity_before_next"], vmT, f"the contact velocity before impact {k}")
+        claim_upper(fl["second_derivative_bound"], M2T, f"the bound on |x_B''| of {where}")
+        ws, we = fl["start_window"].point(), fl["end_window"].point()
+        a_low, b_low = fl["velocity_after_lower"].point(), fl["speed_before_lower"].point()
+        claim_lower(fl["velocity_after_lower"], a, f"the contact velocity after impact {j} over the box")
+        claim_lower(fl["speed_before_lower"], -vm, f"the contact speed before impact {k} over the box")
         start = a_low - M2 * ws / 2   # g(s) >= s (a - M2 s/2) on (0, ws]
         end = b_low - M2 * we / 2     # g(S - σ) >= σ (b - M2 σ/2) on (0, we]
-        book.check(positive(start) and positive(ws), "start window a - M2 ws/2", where, start)
-        book.check(positive(end) and positive(we), "end window b - M2 we/2", where, end)
-        top = hi(ihi(S) - we)
+        if not (positive(ws) and positive(we)):
+            raise NotConfirmed(f"{fl.path}: the windows must be > 0")
+        ledger.check("start window a - M2 ws/2", where, "> 0", start, a_low - M2T * ws / 2)
+        ledger.check("end window b - M2 we/2", where, "> 0", end, b_low - M2T * we / 2)
+        top = hi(iv.mpf(hi(S)) - we)
         if lo(ws) < top:
             positive_pieces(fl["pieces"], lo(ws), top,
-                            lambda s: m.contact(m.flight(t, X, V, s)[0]).v - m.x0,
-                            lambda s: m.contact(m.flight(t, X, V, s)[1]).v, f"gap on {where}")
-        # Flight and saltation matrices (docs/model.md §5.6).
-        Phi = [[iv.mpf(0)] * (2 * n) for _ in range(2 * n)]
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[0]) - m.x0,
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[1]), f"the gap on {where}", budget)
+        else:
+            fl["pieces"].items(at_most=MAX_PIECES)
+        vbefore[k] = vmT
+        # Flight and saltation matrices at the true orbit (docs/model.md §5.6).
+        Phi = [[ZERO] * (2 * n) for _ in range(2 * n)]
         for i in range(n):
-            c, s = iv.cos(m.w_i[i] * S), iv.sin(m.w_i[i] * S)
+            c, s = iv.cos(m.w_i[i] * ST), iv.sin(m.w_i[i] * ST)
             Phi[i][i], Phi[i][n + i], Phi[n + i][i], Phi[n + i][n + i] = c, s / m.w_i[i], -m.w_i[i] * s, c
-        aB = m.contact_acceleration(tn, [x.v for x in Xe])
-        Sal = [[iv.mpf(0)] * (2 * n) for _ in range(2 * n)]
+        aB = m.contact_acceleration(tnT, XeT)
+        Sal = [[ZERO] * (2 * n) for _ in range(2 * n)]
         for i in range(n):
             for l in range(n):
                 pr = (1 if i == l else 0) - (1 + m.r) * m.TB[i] * m.c[l] / m.sB
                 Sal[i][l] = pr
                 Sal[n + i][n + l] = pr
-                Sal[n + i][l] = (1 + m.r) * aB * m.TB[i] * m.c[l] / (m.sB * vm)
+                Sal[n + i][l] = (1 + m.r) * aB * m.TB[i] * m.c[l] / (m.sB * vmT)
         M = matmul(Sal, matmul(Phi, M))
-    check_spectrum(cert, M)
+    for i in range(2 * n):
+        for j in range(2 * n):
+            claim_contains(mono_nodes[i][j], M[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
+
+    truth = Truth()
+    truth.kind, truth.period = "impact", q
+    truth.sequence = ["impact"] * count
+    for j in range(count):
+        truth.events.append(("impact", unpack(E, j)[0], vbefore[j]))
+    t0, X0, V0 = unpack(E, 0)
+    truth.section = (t0, X0, V0, "just after impact 0")
+    boxes = eigenvalues(M)
+    truth.multipliers = boxes
+    truth.not_enclosed = boxes is None
+    truth.min_box_width = max(hi(x) - lo(x) for x in U)
+    least_period(q, count, n, E, unpack, m)
+
+    def reason(node, text):
+        prefix = interval_prefix(node, text, m)
+        rest = text[len(prefix):]
+        g = re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period and no other contact "
+                         r"in a box of width (\S+) around the orbit found \(Krawczyk\)", rest)
+        if not g:
+            raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
+        check_count(node, "period", int(g.group(1)), q)
+        check_count(node, "impacts per period", int(g.group(2)), count)
+        check_width(node, g.group(3), max(hi(x) - lo(x) for x in U), "the box")
+    truth.reason = reason
+    return truth
 
 
 def matmul(A, B):
-    return [[sum((A[i][k] * B[k][j] for k in range(len(B))), iv.mpf(0)) for j in range(len(B[0]))] for i in range(len(A))]
+    return [[sum((A[i][k] * B[k][j] for k in range(len(B))), ZERO) for j in range(len(B[0]))] for i in range(len(A))]
 
 
-def check_spectrum(cert, M):
-    claim = cert["summary"].get("stability", "undecided")
-    listed = cert["summary"].get("multipliers", [])
-    for i, row in enumerate(cert.get("monodromy", [])):
-        for j, e in enumerate(row):
-            if not overlaps(M[i][j], e):
-                raise Rejected(f"monodromy[{i}][{j}]: the certificate's {e} misses the checker's {M[i][j]}")
-    if claim == "undecided":
-        return
-    if len(M) != 2:
-        return check_spectrum_general(claim, listed, M)
-    tr, det = M[0][0] + M[1][1], M[0][0] * M[1][1] - M[0][1] * M[1][0]
-    disc = tr * tr - 4 * det
-    if positive(disc):
-        r = iv.sqrt(disc)
-        mods = [((tr + r) / 2) ** 2, ((tr - r) / 2) ** 2]
-        found = [((tr + r) / 2, iv.mpf(0)), ((tr - r) / 2, iv.mpf(0))]
-    elif negative(disc):
-        mods = [det, det]
-        im = iv.sqrt(-disc) / 2
-        found = [(tr / 2, im), (tr / 2, -im)]
-    else:
-        # Real or complex: both lie in tr/2 + [-1, 1] sqrt(disc+)/2 + i [-1, 1] sqrt(disc-)/2.
-        zero = mpf(0)
-        pos = iv.mpf([zero, max(hi(disc), zero)])
-        neg = iv.mpf([zero, max(-lo(disc), zero)])
-        re = tr / 2 + iv.mpf([-1, 1]) * iv.sqrt(pos) / 2
-        im = iv.mpf([-1, 1]) * iv.sqrt(neg) / 2
-        mods = [re * re + im * im] * 2
-        found = [(re, im), (re, im)]
-    for (re, im), e in zip(found, listed):
-        if not (overlaps(re, e["re"]) and overlaps(im, e["im"])):
-            raise Rejected(f"multiplier {e} misses the checker's {re} + i {im}")
-    if claim == "stable" and not all(hi(x) < 1 for x in mods):
-        raise Rejected(f"'stable' claimed, |multiplier|^2 in {mods}")
-    if claim == "unstable" and not any(lo(x) > 1 for x in mods):
-        raise Rejected(f"'unstable' claimed, |multiplier|^2 in {mods}")
-
-
-def check_spectrum_general(claim, listed, M):
-    """Every eigenvalue of every matrix in the interval matrix M, each enclosed by Krawczyk's test on
-    the eigenpair equations (A − λ)v = 0, v_k = 1 (real form, λ = a + ib, v = x + iy), around the
-    approximate eigenpairs (numpy, not part of the proof). Disjoint boxes, as many as the dimension:
-    all eigenvalues are enclosed."""
-    import numpy as np
-    n = len(M)
-    mid = np.array([[float(mp.mpf((lo(x) + hi(x)) / 2)) for x in row] for row in M])
-    values, vectors = np.linalg.eig(mid)
-    boxes = []
-    for e in range(n):
-        lam, vec = values[e], vectors[:, e]
-        k = int(np.argmax(np.abs(vec)))
-        vec = vec / vec[k]
-        free = [j for j in range(n) if j != k]
-        z0 = [lam.real, lam.imag] + [vec[j].real for j in free] + [vec[j].imag for j in free]
-        size = len(z0)
-
-        def unpack(z):
-            x = [iv.mpf(1) if j == k else None for j in range(n)]
-            y = [iv.mpf(0) if j == k else None for j in range(n)]
-            for i, j in enumerate(free):
-                x[j], y[j] = z[2 + i], z[2 + len(free) + i]
-            return z[0], z[1], x, y
-
-        def F(z):
-            a, b, x, y = unpack(z)
-            re = [sum((M[i][j] * x[j] for j in range(n)), iv.mpf(0)) - a * x[i] + b * y[i] for i in range(n)]
-            im = [sum((M[i][j] * y[j] for j in range(n)), iv.mpf(0)) - a * y[i] - b * x[i] for i in range(n)]
-            return re + im
-
-        def J(z):
-            a, b, x, y = unpack(z)
-            rows = []
-            for part in (0, 1):
-                for i in range(n):
-                    row = [-x[i], y[i]] if part == 0 else [-y[i], -x[i]]
-                    for j in free:  # d/dx_j
-                        row.append((M[i][j] - (a if i == j else 0)) if part == 0 else (-b if i == j else iv.mpf(0)))
-                    for j in free:  # d/dy_j
-                        row.append((b if i == j else iv.mpf(0)) if part == 0 else (M[i][j] - (a if i == j else 0)))
-                    rows.append(row)
-            return rows
-
-        Fz = F([iv.mpf(v) for v in z0])
-        for scale in (1e-9, 1e-7, 1e-5, 1e-3):  # boxes from tight to wide, as the enclosure of M allows
-            rad = [scale * (1 + abs(v)) for v in z0]
-            Z = [iv.mpf([z0[p] - rad[p], z0[p] + rad[p]]) for p in range(size)]
-            Jz = J(Z)
-            C = np.linalg.inv(np.array([[float(mp.mpf((lo(x) + hi(x)) / 2)) for x in row] for row in Jz]))
-            inside = True
-            for p in range(size):
-                kz = iv.mpf(z0[p])
-                for l in range(size):
-                    kz -= iv.mpf(float(C[p][l])) * Fz[l]
-                    row = iv.mpf(1 if p == l else 0)
-                    for j in range(size):
-                        row -= iv.mpf(float(C[p][j])) * Jz[j][l]
-                    kz += row * (Z[l] - iv.mpf(z0[l]))
-                inside = inside and lo(kz) > lo(Z[p]) and hi(kz) < hi(Z[p])
-            if inside:
+def contract(residual, krawczyk, u_mid, U, K, C, point_model):
+    """The checker's enclosure of the zero in U. K(U) ⊂ int U has been tested by the caller (the
+    ledger rejects it otherwise). For a model of point parameters: Newton at 192 bits from the
+    midpoint with the preconditioner C, then Krawczyk's test on a box of relative radius 2^-120
+    around the point; that box lies in U, so its zero is U's. Otherwise (or should that fail):
+    K(U) ∩ U, intersected with K of itself three times."""
+    N = len(U)
+    if all(lo(K[p]) > lo(U[p]) and hi(K[p]) < hi(U[p]) for p in range(N)):
+        if point_model:
+            u = [mp.mpf(x) for x in u_mid]
+            for _ in range(8):
+                F = [mid(value(r)) for r in residual([iv.mpf(x) for x in u])]
+                du = [sum((mid(C[p][l]) * F[l] for l in range(N)), mp.mpf(0)) for p in range(N)]
+                u = [u[p] - du[p] for p in range(N)]
+                if max(abs(du[p]) / (1 + abs(u[p])) for p in range(N)) < mp.mpf(2) ** (20 - PREC):
+                    break
+            V = [iv.mpf([x - mp.mpf(2) ** -120 * (1 + abs(x)), x + mp.mpf(2) ** -120 * (1 + abs(x))]) for x in u]
+            if all(inside(V[p], U[p]) for p in range(N)):
+                KV = krawczyk(u, V)
+                if all(lo(KV[p]) > lo(V[p]) and hi(KV[p]) < hi(V[p]) for p in range(N)):
+                    return [meet(KV[p], V[p]) for p in range(N)]
+        E = [meet(K[p], U[p]) for p in range(N)]
+        for _ in range(3):
+            Kn = krawczyk([mid(x) for x in E], E)
+            En = [meet(Kn[p], E[p]) for p in range(N)]
+            if any(x is None for x in En):
                 break
-        if not inside:
-            raise Rejected(f"stability '{claim}': the eigenvalue near {lam} could not be enclosed")
-        boxes.append((Z[0], Z[1]))
-    for i in range(n):
-        for j in range(i):
-            apart = hi(boxes[i][0]) < lo(boxes[j][0]) or hi(boxes[j][0]) < lo(boxes[i][0]) or \
-                hi(boxes[i][1]) < lo(boxes[j][1]) or hi(boxes[j][1]) < lo(boxes[i][1])
-            if not apart:
-                raise Rejected(f"stability '{claim}': two eigenvalue enclosures overlap")
-    mods = [a * a + b * b for a, b in boxes]
-    for e in listed:
-        if not any(overlaps(a, e["re"]) and overlaps(b, e["im"]) for a, b in boxes):
-            raise Rejected(f"multiplier {e} is not one of the checker's enclosures")
-    if claim == "stable" and not all(hi(x) < 1 for x in mods):
-        raise Rejected(f"'stable' claimed, |multiplier|^2 in {mods}")
-    if claim == "unstable" and not any(lo(x) > 1 for x in mods):
-        raise Rejected(f"'unstable' claimed, |multiplier|^2 in {mods}")
+            E = En
+        return E
+    return U  # the ledger's Krawczyk records fail (not confirmed) before these are used
 
 
-# ---- One-DOF sticking orbits with r = 0 --------------------------------------------------------
+def least_period(q, count, n, E, unpack, m):
+    """The orbit's least period is q: for every prime ℓ dividing q, the orbit is not (q/ℓ)-periodic.
+    A (q/ℓ)-periodic orbit has ℓ | m impacts per q periods and maps impact j onto impact j + m/ℓ
+    shifted by (q/ℓ)T: some time or state difference must exclude 0."""
+    qT = q * m.T
+    for ell in prime_factors(q):
+        if count % ell:
+            continue
+        p, h = q // ell, count // ell
+        shift = p * m.T
+        apart = False
+        for j in range(count):
+            k = (j + h) % count
+            tj, Xj, Vj = unpack(E, j)
+            tk, Xk, Vk = unpack(E, k)
+            dt = tk + (qT if j + h >= count else 0) - tj - shift
+            if excludes_zero(dt) or any(excludes_zero(Xk[i] - Xj[i]) or excludes_zero(Vk[i] - Vj[i]) for i in range(n)):
+                apart = True
+                break
+        if not apart:
+            raise NotConfirmed(f"period: {q} is claimed, but the orbit repeats after {p} forcing period(s) "
+                               f"(impact j + {h} is impact j shifted by {p}T, within the checker's enclosures)")
 
-def check_sticking(cert, m, book):
-    if m.n != 1 or not (lo(m.r) >= 0 and hi(m.r) < 1):
-        raise Rejected("a sticking certificate needs one mode and 0 <= r < 1")
+
+def interval_prefix(node, text, m):
+    """"for every amplitude in [a, b]: " exactly when the model has that parameter interval."""
+    keys = {"amplitude": "amplitude", "frequency": "frequency", "stop position": "stop", "restitution": "restitution"}
+    g = re.match(r"for every (amplitude|frequency|stop position|restitution) in (\[[^\]]*\]): ", text)
+    intervals = [k for k in keys.values() if isinstance(m.texts[k], str) and m.texts[k].startswith("[")]
+    if g:
+        if intervals != [keys[g.group(1)]] or m.texts[keys[g.group(1)]] != g.group(2):
+            raise NotConfirmed(f"{node.path}: '{g.group(0)}' is not the model's parameter interval")
+        return g.group(0)
+    if intervals:
+        raise NotConfirmed(f"{node.path}: the model has the parameter interval model.{intervals[0]} "
+                           f"= {m.texts[intervals[0]]}, the reason does not say so")
+    return ""
+
+
+def check_count(node, what, claimed, true):
+    if claimed != true:
+        raise NotConfirmed(f"{node.path}: {what} {claimed}, the proof has {true}")
+
+
+def check_width(node, text, width, what):
+    """A width printed with two significant digits ("4.0e-12") must not understate `width`."""
+    try:
+        w = mp.mpf(text)
+    except (ValueError, TypeError):
+        raise NotConfirmed(f"{node.path}: '{text}' is not a width")
+    digits = re.fullmatch(r"\d\.\d[eE]([+-]?\d+)", text)
+    half_unit = mp.mpf(10) ** (int(digits.group(1)) - 1) / 2 if digits else mp.mpf(0)
+    if not width <= w + half_unit:
+        raise NotConfirmed(f"{node.path}: width {text}, but {what} is {show(width)} wide")
+
+
+# ---- One-DOF sticking orbits -------------------------------------------------------------------
+
+SUPERSTABLE = "superstable: a one-DOF trajectory that sticks is released from the same state at the same phase"
+
+
+def newton_root(gap, slope, S, center, rounds=3):
+    """The root of the gap in S, tightened: interval Newton from the certificate's box S, then
+    from mpmath centres of the enclosures found."""
+    E = S
+    for _ in range(rounds):
+        c = iv.mpf(center)
+        Nw = c - gap(c) / slope(E)
+        En = meet(Nw, E)
+        if En is None:
+            break
+        E = En
+        center = mid(E)
+    return E
+
+
+def check_sticking(cert, m, ledger):
+    """The release, each flight and landing (interval Newton), the chattering tail, and the
+    reaction over the sticking phase (docs/prove.md "One-DOF sticking orbits")."""
+    if m.n != 1 or not lo(m.c[0]) == 1 == hi(m.c[0]):
+        raise NotConfirmed("a sticking certificate needs one mode with shape 1")
+    if not hi(m.r) < 1:
+        raise NotConfirmed("a sticking certificate needs 0 <= r < 1")
     plastic = lo(m.r) == 0 and hi(m.r) == 0
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
-    book.check(positive(kappa) or negative(kappa), "forcing T_A f", rel, kappa)
-    book.check(positive(1 - abs(ratio)), "1 - |omega_1^2 x0/(T_A f)|", rel, 1 - abs(ratio))
-    # phi1 from the certificate's enclosure P: sin is monotonic on P and sin(P) brackets the ratio.
-    P = pair(cert["release"]["phase"])
-    half = iv.pi / 2
-    if positive(kappa):
-        ok = lo(P) > hi(-half) and hi(P) < lo(half) and hi(iv.sin(lo(P))) < lo(ratio) and lo(iv.sin(hi(P))) > hi(ratio)
-    else:
-        ok = lo(P) > hi(half) and hi(P) < lo(3 * half) and lo(iv.sin(lo(P))) > hi(ratio) and hi(iv.sin(hi(P))) < lo(ratio)
-    if not ok:
-        raise Rejected(f"the release phase {P} does not enclose the root of the reaction")
-    # A tighter enclosure of the same root (the certificate's is rounded to doubles; a chattering
-    # sequence amplifies the width of the release time), verified the same way.
-    r_mid = (lo(ratio) + hi(ratio)) / 2
+    ledger.check("forcing T_A f", rel, "!= 0", kappa, kappa)
+    ledger.check("1 - |omega_1^2 x0/(T_A f)|", rel, "> 0", 1 - abs(ratio), 1 - abs(ratio))
+    # φ1 (eq. (32)): sin φ1 = ratio, κ cos φ1 > 0; enclosed to 2^-170 by the monotonicity of sin.
+    r_mid = mid(ratio)
     phi = mp.asin(r_mid) if positive(kappa) else mp.pi - mp.asin(r_mid)
-    eps = mpf(2) ** -100
-    T_ = iv.mpf([phi - eps, phi + eps])
+    eps = mp.mpf(2) ** -170
+    P = iv.mpf([phi - eps, phi + eps])
     if positive(kappa):
-        tight = hi(iv.sin(lo(T_))) < lo(ratio) and lo(iv.sin(hi(T_))) > hi(ratio)
+        ok = hi(iv.sin(lo(P))) < lo(ratio) and lo(iv.sin(hi(P))) > hi(ratio) and hi(P) < mp.pi / 2
     else:
-        tight = lo(iv.sin(lo(T_))) > hi(ratio) and hi(iv.sin(hi(T_))) < lo(ratio)
-    if tight and lo(T_) >= lo(P) and hi(T_) <= hi(P):
-        P = T_
+        ok = lo(iv.sin(lo(P))) > hi(ratio) and hi(iv.sin(hi(P))) < lo(ratio) and lo(P) > mp.pi / 2
+    if not ok:
+        raise NotConfirmed("the checker cannot enclose the release phase (the reaction's root)")
+    release = cert["release"].obj(("phase", "time", "reaction_rate"))
     tr = P / w
     rate = -(kappa * w * iv.cos(P)) / TB
-    book.check(negative(rate), "reaction rate", rel, rate)
-    reaction = lambda t: (w1s * x0 - kappa * iv.sin(w * t)) / TB
+    claim_contains(release["phase"], P, "the release phase φ1 of eq. (32)")
+    claim_contains(release["time"], tr, "the release time φ1/ω")
+    claim_contains(release["reaction_rate"], rate, "the reaction rate at the release")
+    ledger.check("reaction rate", rel, "< 0", rate, rate)
+
+    def reaction(t):
+        return (w1s * x0 - kappa * iv.sin(w * t)) / TB
+
+    truth = Truth()
+    truth.kind = "sticking"
+    truth.sequence = ["release"]
+    truth.events = [("release", tr, None)]
     X0 = [x0]
-    flights = cert["flights"]
-    if not flights:
-        raise Rejected("no flight")
-    t, tL, vplus = tr, None, None
-    for k, flight in enumerate(flights):
+    flights = cert["flights"].items(at_least=1, at_most=MAX_FLIGHTS)
+    budget = [MAX_PIECES]
+    t, vplus = tr, None
+    landing_low = None
+    t_end = None
+    for k, fn in enumerate(flights):
         fl, land = f"flight {k}", f"landing {k}"
-        V0 = [iv.mpf(0)] if vplus is None else [vplus]
-        gap = lambda s, t=t, V0=V0: m.contact(m.flight(t, X0, V0, s)[0]).v - x0
-        slope = lambda s, t=t, V0=V0: m.contact(m.flight(t, X0, V0, s)[1]).v
-        ws = point(flight["start_window"])
-        if vplus is not None:
-            if flight.get("start") != "impact":
-                raise Rejected(f"{fl} starts at an impact")
+        common = ("start", "start_window", "landing_center", "landing_box", "landing", "pieces")
+        start_kind = "release" if k == 0 else ("impact" if vplus is not None else "departure")
+        extra = {"release": ("third_derivative", "third_derivative_lower", "fourth_derivative_bound"),
+                 "impact": ("velocity_after", "velocity_after_lower", "second_derivative_bound"),
+                 "departure": ("second_derivative", "second_derivative_lower", "third_derivative_bound")}[start_kind]
+        fn.obj(common + extra + (() if not plastic else ("landing_slope", "reaction_at_landing")))
+        if fn["start"].text() != start_kind:
+            raise NotConfirmed(f"{fn['start'].path}: '{fn['start'].v}', the flight starts at a {start_kind}")
+        V0 = [ZERO] if vplus is None else [vplus]
+        gap = lambda s, t=t, V0=V0: m.contact_of(m.flight(t, X0, V0, s)[0]) - x0  # noqa: E731
+        slope = lambda s, t=t, V0=V0: m.contact_of(m.flight(t, X0, V0, s)[1])  # noqa: E731
+        ws = fn["start_window"].point()
+        if not positive(ws):
+            raise NotConfirmed(f"{fn['start_window'].path}: the window must be > 0")
+        if start_kind == "impact":
             M2 = m.derivative_bound(t, X0, V0, 2)
-            book.check(positive(vplus), "contact velocity after impact", fl, vplus)
-            book.check(hi(M2) < mpf("inf"), "second-derivative bound", fl, M2)
-            a_low = point(flight["velocity_after_lower"])
-            if not hi(a_low) <= lo(vplus):
-                raise Rejected(f"{fl}: the certificate's bound on the speed after impact is not below the checker's enclosure")
+            ledger.check("contact velocity after impact", fl, "> 0", vplus, vplus)
+            ledger.check("second-derivative bound", fl, "finite", M2, M2)
+            claim_contains(fn["velocity_after"], vplus, f"the speed after the impact that starts {fl}")
+            claim_lower(fn["velocity_after_lower"], vplus, f"the speed after the impact that starts {fl}")
+            claim_upper(fn["second_derivative_bound"], M2, f"the bound on |x''| of {fl}")
+            a_low = fn["velocity_after_lower"].point()
             margin = a_low - M2 * ws / 2   # g(s) >= s (a - M2 s/2) on (0, ws]
-            book.check(positive(margin) and positive(ws), "start window a - M2 ws/2", fl, margin)
-        elif k == 0:
-            if flight.get("start") != "release":
-                raise Rejected("the first flight starts at the release")
-            g3 = kappa * w * iv.cos(w * t)   # third derivative of x at rest on the stop
+            ledger.check("start window a - M2 ws/2", fl, "> 0", margin, margin)
+        elif start_kind == "release":
+            g3 = kappa * w * iv.cos(w * t)   # x''' at rest on the stop
             M4 = m.derivative_bound(t, X0, V0, 4)
-            book.check(positive(g3), "third derivative of the gap", fl, g3)
-            book.check(hi(M4) < mpf("inf"), "fourth-derivative bound", fl, M4)
-            g3_low = point(flight["third_derivative_lower"])
-            if not hi(g3_low) <= lo(g3):
-                raise Rejected(f"{fl}: the certificate's bound on g''' is not below the checker's enclosure")
-            margin = g3_low / 6 - M4 * ws / 24   # g(s)/s^3 >= g'''/6 - M4 s/24 on (0, ws]
-            book.check(positive(margin) and positive(ws), "start window g'''/6 - M4 ws/24", fl, margin)
+            ledger.check("third derivative of the gap", fl, "> 0", g3, g3)
+            ledger.check("fourth-derivative bound", fl, "finite", M4, M4)
+            claim_contains(fn["third_derivative"], g3, f"g''' at the start of {fl}")
+            claim_lower(fn["third_derivative_lower"], g3, f"g''' at the start of {fl}")
+            claim_upper(fn["fourth_derivative_bound"], M4, f"the bound on |x''''| of {fl}")
+            margin = fn["third_derivative_lower"].point() / 6 - M4 * ws / 24  # g(s)/s^3 >= g'''/6 - M4 s/24
+            ledger.check("start window g'''/6 - M4 ws/24", fl, "> 0", margin, margin)
         else:
-            if flight.get("start") != "departure":
-                raise Rejected(f"{fl} starts at a departure")
             g2 = kappa * iv.sin(w * t) - w1s * x0   # x'' at rest on the stop = -T_B R > 0
             M3 = m.derivative_bound(t, X0, V0, 3)
-            book.check(positive(g2), "second derivative of the gap", fl, g2)
-            book.check(hi(M3) < mpf("inf"), "third-derivative bound", fl, M3)
-            g2_low = point(flight["second_derivative_lower"])
-            if not hi(g2_low) <= lo(g2):
-                raise Rejected(f"{fl}: the certificate's bound on g'' is not below the checker's enclosure")
-            margin = g2_low / 2 - M3 * ws / 6    # g(s)/s^2 >= g''/2 - M3 s/6 on (0, ws]
-            book.check(positive(margin) and positive(ws), "start window g''/2 - M3 ws/6", fl, margin)
-        s0 = float(flight["landing_center"])
-        Slo, Shi = (float(x) for x in flight["landing_box"])
-        S = hull(Slo, Shi)
+            ledger.check("second derivative of the gap", fl, "> 0", g2, g2)
+            ledger.check("third-derivative bound", fl, "finite", M3, M3)
+            claim_contains(fn["second_derivative"], g2, f"g'' at the start of {fl}")
+            claim_lower(fn["second_derivative_lower"], g2, f"g'' at the start of {fl}")
+            claim_upper(fn["third_derivative_bound"], M3, f"the bound on |x'''| of {fl}")
+            margin = fn["second_derivative_lower"].point() / 2 - M3 * ws / 6  # g(s)/s^2 >= g''/2 - M3 s/6
+            ledger.check("start window g''/2 - M3 ws/6", fl, "> 0", margin, margin)
+        # The landing: interval Newton on the certificate's box, then tightened.
+        s0 = fn["landing_center"].num()
+        S = fn["landing_box"].pair()
+        if not lo(S) <= s0 <= hi(S):
+            raise NotConfirmed(f"{fn['landing_center'].path} = {s0} is not in the landing box")
         gp = slope(S)
-        Nw = point(s0) - gap(point(s0)) / gp
-        book.check(negative(gp), "contact velocity at the landing", land, gp)
-        book.check(lo(Nw) > Slo and hi(Nw) < Shi, "interval Newton", land, Nw)
-        book.check(positive(S.a - ws), "landing after the start window", land, S.a - ws)
-        positive_pieces(flight["pieces"], lo(ws), mpf(Slo), gap, slope, f"gap on {fl}")
-        tL = t + Nw
-        R_land = reaction(tL)
-        if not plastic:
-            # r > 0: the body bounces, x'+ = -r x'- (the speed from the tight enclosure of the landing).
-            vminus = slope(Nw)
-            if vplus is not None:
-                # Centred form of the landing as a function of the flight's start (t, v): the value
-                # at the centre plus the derivatives over the box times the offsets (mean-value
-                # theorem; s(t, v) stays in Nw over the box).
-                tc, vc = mp.mpf((lo(t) + hi(t)) / 2), mp.mpf((lo(vplus) + hi(vplus)) / 2)
-                Tc, Vc = iv.mpf(tc), iv.mpf(vc)
-                gap_c = lambda s_, Tc=Tc, Vc=Vc: m.contact(m.flight(Tc, X0, [Vc], s_)[0]).v - x0
-                slope_c = lambda s_, Tc=Tc, Vc=Vc: m.contact(m.flight(Tc, X0, [Vc], s_)[1]).v
-                Nc = point(s0) - gap_c(point(s0)) / slope_c(S)
-                Xe, Ve = m.flight(D(t, {0: iv.mpf(1)}), [D(x0)], [D(vplus, {1: iv.mpf(1)})], D(Nw, {2: iv.mpf(1)}))
-                g, vel = m.contact(Xe), m.contact(Ve)
-                zero = iv.mpf(0)
-                gt, gv, gs = g.g.get(0, zero), g.g.get(1, zero), g.g.get(2, zero)
-                vt, vv, vs = vel.g.get(0, zero), vel.g.get(1, zero), vel.g.get(2, zero)
-                ds_dt, ds_dv = -gt / gs, -gv / gs
-                dT, dV = t - Tc, vplus - Vc
-                if lo(Nc) > Slo and hi(Nc) < Shi:
-                    t_cent = Tc + Nc + (1 + ds_dt) * dT + ds_dv * dV
-                    v_cent = slope_c(Nc) + (vt + vs * ds_dt) * dT + (vv + vs * ds_dv) * dV
-                    if hi(t_cent) - lo(t_cent) < hi(tL) - lo(tL):
-                        tL = t_cent
-                    if hi(v_cent) - lo(v_cent) < hi(vminus) - lo(vminus):
-                        vminus = v_cent
-            book.check(negative(vminus), "contact velocity before impact", land, vminus)
-            vplus = -m.r * vminus
-            landing_low = Slo + (t - tr)
-            t = tL
-            continue
-        if k == len(flights) - 1:
-            book.check(positive(R_land), "reaction at the landing", land, R_land)
-            landing_low = Slo + (t - tr)  # the sticking phase starts in this box (as t - t_r)
+        Nw = iv.mpf(s0) - gap(iv.mpf(s0)) / gp
+        root = meet(Nw, S)
+        ledger.check("contact velocity at the landing", land, "< 0", gp, slope(root) if root else gp)
+        if not (finite(Nw) and lo(Nw) > lo(S) and hi(Nw) < hi(S)):
+            raise NotConfirmed(f"the interval Newton test at {land} fails: {show_iv(Nw)} is not inside the landing "
+                               f"box {show_pair(fn['landing_box'].v)}")
+        if start_kind == "impact":
+            # Centred form of the landing as a function of the flight's start (t, v): the landing from
+            # the centre, tightened by Newton, plus the derivatives over the box times the offsets
+            # (mean-value theorem; s(t, v) stays in Nw over the box).
+            tc, vc = mid(t), mid(vplus)
+            Tc, Vc = iv.mpf(tc), iv.mpf(vc)
+            gap_c = lambda s_, Tc=Tc, Vc=Vc: m.contact_of(m.flight(Tc, X0, [Vc], s_)[0]) - x0  # noqa: E731
+            slope_c = lambda s_, Tc=Tc, Vc=Vc: m.contact_of(m.flight(Tc, X0, [Vc], s_)[1])  # noqa: E731
+            s_c = newton_root(gap_c, slope_c, S, s0, rounds=4)
+            Xe, Ve = m.flight(variable(t, 0), [D(x0)], [variable(vplus, 1)], variable(Nw, 2))
+            g_, vel = m.contact_of(Xe), m.contact_of(Ve)
+            gt, gv, gs = g_.g.get(0, ZERO), g_.g.get(1, ZERO), g_.g.get(2, ZERO)
+            vt, vv, vs = vel.g.get(0, ZERO), vel.g.get(1, ZERO), vel.g.get(2, ZERO)
+            ds_dt, ds_dv = -gt / gs, -gv / gs
+            dT, dV = t - Tc, vplus - Vc
+            s_true = meet(s_c + ds_dt * dT + ds_dv * dV, Nw)
+            t_next = Tc + s_c + (1 + ds_dt) * dT + ds_dv * dV
+            v_minus = meet(slope_c(s_c) + (vt + vs * ds_dt) * dT + (vv + vs * ds_dv) * dV, slope(Nw))
+            if s_true is None or v_minus is None:
+                raise NotConfirmed(f"the checker's enclosures of {land} do not meet")
         else:
-            book.check(negative(R_land), "reaction at the landing", land, R_land)
-            t = tL
-    t_end = tL
+            s_true = newton_root(gap, slope, meet(Nw, S), mid(meet(Nw, S)), rounds=4)
+            t_next = t + s_true
+            v_minus = slope(s_true)
+        ledger.check("interval Newton", land, "inside the box", Nw, s_true, box=S)
+        claim_contains(fn["landing"], s_true, f"the duration of {fl} to its landing")
+        if not holds("inside the box", fn["landing"].pair(), S):
+            raise NotConfirmed(f"{fn['landing'].path} = {show_pair(fn['landing'].v)} is not inside the landing box")
+        after = iv.mpf(lo(S)) - ws
+        ledger.check("landing after the start window", land, "> 0", after, after)
+        positive_pieces(fn["pieces"], lo(ws), lo(S), gap, slope, f"the gap on {fl}", budget)
+        landing_low = lo(S) + lo(t - tr)
+        truth.events.append(("impact", t_next, v_minus))
+        truth.sequence.append("impact")
+        if not plastic:
+            ledger.check("contact velocity before impact", land, "< 0", v_minus, v_minus)
+            vplus = -m.r * v_minus
+            t = t_next
+            continue
+        R_land = reaction(t_next)
+        claim_contains(fn["landing_slope"], v_minus, f"the contact velocity at {land}")
+        claim_contains(fn["reaction_at_landing"], R_land, f"the reaction at {land}")
+        if k == len(flights) - 1:
+            ledger.check("reaction at the landing", land, "> 0", R_land, R_land)
+            truth.events.append(("stick", t_next, v_minus))
+            truth.sequence.append("stick")
+            t_end = t_next
+        else:
+            ledger.check("reaction at the landing", land, "< 0", R_land, R_land)
+            truth.events.append(("departure", t_next, None))
+            truth.sequence.append("departure")
+            t = t_next
     if not plastic:
-        # The rest of the chattering sequence, bounded (docs/prove.md): on W = [t, t + L] with
-        # T_B R in [A_lo, A_hi], A_lo > 0, every flight from speed v lasts at most 2v/A_lo and lands
-        # at most r sqrt(a_hi/A_lo) v, a_hi = A_hi + w1^2 v^2/(2 A_lo); the impacts accumulate before
-        # t + 2v/(A_lo (1 - rho)).
-        tail = cert.get("tail")
-        if tail is None or int(tail["after_flight"]) != len(flights) - 1:
-            raise Rejected("a chattering certificate needs the tail after its last flight")
-        tl = "chattering tail"
-        v, L = point(tail["speed_upper"]), point(tail["window"])
-        if not hi(vplus) <= lo(v):
-            raise Rejected("the tail's speed bound is not above the checker's speed after the last impact")
-        A = TB * reaction(iv.mpf([lo(tL), hi(ihi(tL) + L)]))
-        A_low, A_high = point(tail["reaction_lower"]), point(tail["reaction_upper"])
-        if not (hi(A_low) <= lo(A) and hi(A) <= lo(A_high)):
-            raise Rejected("the tail's reaction bounds do not enclose the checker's reaction over the window")
-        book.check(positive(A), "tail reaction T_B R over the window", tl, A)
-        a_hi = A_high + w1s * v * v / (2 * A_low)
-        rho = m.r * iv.sqrt(a_hi / A_low)
-        book.check(positive(1 - rho), "tail contraction 1 - rho", tl, 1 - rho)
-        Tmax = 2 * v / (A_low * (1 - rho))
-        book.check(positive(L - Tmax), "tail window L - Tmax", tl, L - Tmax)
-        # From below: each flight lasts at least 2v/a_hi and lands at least v sqrt(A_lo/a_hi) fast.
-        v_low = point(tail["speed_lower"])
-        if not (hi(v_low) <= lo(vplus) and positive(v_low)):
-            raise Rejected("the tail's lower speed bound is not below the checker's speed after the last impact")
-        rho_low = m.r * iv.sqrt(A_low / a_hi)
-        Tmin = 2 * v_low / (a_hi * (1 - rho_low))
-        t_end = iv.mpf([lo(ilo(tL) + Tmin), hi(ihi(tL) + Tmax)])
+        t_end = check_tail(cert, m, ledger, len(flights), t, vplus, reaction, w1s)
+        truth.events += [("accumulation", t_end, None), ("stick", t_end, None)]
+        truth.sequence += ["accumulation", "stick"]
+    elif cert.has("tail"):
+        cert["tail"].fail("a plastic (r = 0) orbit has no chattering tail")
+    # Sticking from t_end until the next release t_r + kT, k periods after the first.
+    st = cert["sticking"].obj(("periods", "rate_lower", "second_derivative_bound", "end_window", "pieces"))
     turns = (t_end - tr) / m.T
-    st = cert["sticking"]
-    k = int(st["periods"])
-    book.check(lo(turns) > k - 1 and hi(turns) < k, "landing time / T", "sticking phase", turns)
-    if int(cert["period"]) != k:
-        raise Rejected("the period is not the number of turns to the next release")
+    k = st["periods"].integer(1, 1 << 20)
+    ledger.check("landing time / T", "sticking phase", f"inside ({k - 1}, {k})", turns, turns)
     M2R = abs(kappa) * w * w / TB
-    we = point(st["end_window"])
-    rate_low = point(st["rate_lower"])
-    if not hi(rate_low) <= lo(-rate):
-        raise Rejected("the certificate's bound on -R' is not below the checker's enclosure")
-    end = rate_low - M2R * we / 2
-    book.check(positive(end) and positive(we), "end window b - M2 we/2", "sticking phase", end)
-    top = hi(ihi(k * m.T) - we)
-    if lo(landing_low) < top:
-        positive_pieces(st["pieces"], lo(landing_low), top,
-                        lambda tau: reaction(tr + tau),
-                        lambda tau: -(kappa * w * iv.cos(w * (tr + tau))) / TB, "reaction over the sticking phase")
+    claim_upper(st["second_derivative_bound"], M2R, "the bound |κ| ω²/T_B on |R''|")
+    claim_lower(st["rate_lower"], -rate, "-R' at the release")
+    we = st["end_window"].point()
+    if not positive(we):
+        raise NotConfirmed(f"{st['end_window'].path}: the window must be > 0")
+    end = st["rate_lower"].point() - M2R * we / 2
+    ledger.check("end window b - M2 we/2", "sticking phase", "> 0", end, end)
+    top = hi(k * m.T - we)
+    if landing_low < top:
+        positive_pieces(st["pieces"], landing_low, top, lambda tau: reaction(tr + tau),
+                        lambda tau: -(kappa * w * iv.cos(w * (tr + tau))) / TB, "the reaction over the sticking phase",
+                        budget)
+    # The least period is k: a release needs the body at rest on the stop with R = 0 falling; before
+    # t_end (> t_r + (k−1)T) it is in flight, or at an impact with a speed, or departs with R < 0.
+    truth.period = k
+    truth.section = (tr, [x0], [ZERO], "the release")
+    truth.multipliers = "zero"
+    flights_count = len(flights)
+
+    def reason(node, text):
+        interval_prefix(node, "", m)
+        if plastic:
+            g = re.fullmatch(r"exactly one period-(\d+) sticking orbit through the release: release, (\d+) flight\(s\) "
+                             r"with plastic landings, sticking with R > 0 until the next release", text)
+        else:
+            g = re.fullmatch(r"exactly one period-(\d+) sticking orbit through the release: release, (\d+) impacts "
+                             r"followed, a chattering tail accumulating within (\S+), sticking with R > 0 until the "
+                             r"next release", text)
+        if not g:
+            raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
+        check_count(node, "period", int(g.group(1)), k)
+        check_count(node, "flights", int(g.group(2)), flights_count)
+        if not plastic:
+            acc = [e for e in cert["summary"]["events"].items() if isinstance(e.v, dict) and e.v.get("kind") == "accumulation"]
+            if acc:
+                a = acc[0]["time"].pair()
+                check_width(node, g.group(3), hi(a) - lo(a), f"{acc[0].path}.time")
+    truth.reason = reason
+    return truth
 
 
-def check(cert):
-    if cert.get("format") != "vibro-proof-certificate/1":
-        raise ValueError("not a vibro proof certificate (format)")
-    if cert.get("verdict") != "proven":
-        raise Rejected("the certificate claims no proof (verdict: %s)" % cert.get("verdict"))
-    m = Model(cert["model"])
-    book = Book(cert)
-    kind = cert.get("kind")
-    if kind == "impact":
-        check_impact(cert, m, book)
-    elif kind == "sticking":
-        check_sticking(cert, m, book)
+def check_tail(cert, m, ledger, count, tL, vplus, reaction, w1s):
+    """The rest of the chattering sequence, bounded (docs/prove.md): on W = [t, t + L] with T_B R in
+    [A_lo, A_hi], A_lo > 0, every flight from speed v lasts at most 2v/A_lo and lands at most
+    r sqrt(a_hi/A_lo) v, a_hi = A_hi + w1² v²/(2 A_lo); the impacts accumulate before
+    t + 2v/(A_lo (1 - rho)), and after t + 2 v_lo/(a_hi (1 - r sqrt(A_lo/a_hi)))."""
+    tail = cert["tail"].obj(("after_flight", "speed_upper", "speed_lower", "window", "reaction_lower",
+                             "reaction_upper", "contraction", "time_bound", "accumulation"))
+    if tail["after_flight"].integer(0, MAX_FLIGHTS) != count - 1:
+        raise NotConfirmed(f"{tail['after_flight'].path}: {tail['after_flight'].v}, the last flight is {count - 1}")
+    tl = "chattering tail"
+    v, L = tail["speed_upper"].point(), tail["window"].point()
+    claim_upper(tail["speed_upper"], vplus, "the speed after the last impact followed")
+    claim_lower(tail["speed_lower"], vplus, "the speed after the last impact followed")
+    v_low = tail["speed_lower"].point()
+    if not positive(v_low):
+        raise NotConfirmed(f"{tail['speed_lower'].path}: the lower speed bound must be > 0")
+    A = m.TB[0] * reaction(iv.mpf([lo(tL), hi(tL + L)]))
+    claim_lower(tail["reaction_lower"], A, "T_B R over the tail's window")
+    claim_upper(tail["reaction_upper"], A, "T_B R over the tail's window")
+    A_low, A_high = tail["reaction_lower"].point(), tail["reaction_upper"].point()
+    ledger.check("tail reaction T_B R over the window", tl, "> 0", A, A)
+    a_hi = A_high + w1s * v * v / (2 * A_low)
+    rho = m.r * iv.sqrt(a_hi / A_low)
+    claim_contains(tail["contraction"], rho, "the tail's contraction r sqrt(a_hi/A_lo)")
+    ledger.check("tail contraction 1 - rho", tl, "> 0", 1 - rho, 1 - rho)
+    Tmax = 2 * v / (A_low * (1 - rho))
+    claim_upper(tail["time_bound"], Tmax, "the tail's time bound 2v/(A_lo (1 - rho))")
+    ledger.check("tail window L - Tmax", tl, "> 0", L - Tmax, L - Tmax)
+    rho_low = m.r * iv.sqrt(A_low / a_hi)
+    Tmin = 2 * v_low / (a_hi * (1 - rho_low))
+    t_end = iv.mpf([lo(tL + Tmin), hi(tL + Tmax)])
+    claim_contains(tail["accumulation"], t_end, "the accumulation time")
+    return t_end
+
+
+# ---- The summary: what `vibro prove` prints ---------------------------------------------------
+
+SUMMARY_KEYS = ("verdict", "reason", "kind", "period", "sequence", "events", "section", "multipliers", "stability",
+                "box_width")
+NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
+         "a multiplier enclosure meets the unit circle",
+         "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE)
+
+
+def summary_shape(s, n):
+    """The summary's form, before any proof is checked (a malformed one is refused at once)."""
+    s.obj(SUMMARY_KEYS, ("stability_note",))
+    s["verdict"].text(("proven",))
+    s["kind"].text(("impact", "sticking"))
+    s["period"].integer(1, 1 << 20)
+    for x in s["sequence"].items(at_most=4 * MAX_FLIGHTS):
+        x.text()
+    for e in s["events"].items(at_most=4 * MAX_FLIGHTS):
+        e.obj(("kind", "contact", "time", "phase", "velocity_before"))
+        e["kind"].text()
+        e["contact"].integer(0, 1 << 20)
+        for key in ("time", "phase", "velocity_before"):
+            e[key].pair()
+    sec = s["section"].obj(("time", "X", "V", "at"))
+    sec["time"].pair()
+    for key in ("X", "V"):
+        for x in sec[key].items(exactly=n):
+            x.pair()
+    sec["at"].text()
+    for x in s["multipliers"].items(at_most=2 * MAX_MODES):
+        x.obj(("re", "im"))
+        x["re"].pair()
+        x["im"].pair()
+    s["stability"].text(("stable", "unstable", "undecided"))
+    if s.has("stability_note"):
+        s["stability_note"].text(NOTES)
+    if not s["box_width"].num() >= 0:
+        s["box_width"].fail("a width must be >= 0")
+    s["reason"].text()
+
+
+def check_summary(cert, s, truth, m):
+    """Every claim of the summary against the checker's truth."""
+    s.obj(SUMMARY_KEYS, ("stability_note",))
+    s["verdict"].text(("proven",))
+    if s["kind"].text() != truth.kind:
+        raise NotConfirmed(f"{s['kind'].path}: '{s['kind'].v}', the orbit proven is of kind '{truth.kind}'")
+    period = s["period"].integer(1, 1 << 20)
+    if period != truth.period:
+        raise NotConfirmed(f"{s['period'].path}: {period}, the orbit proven has period {truth.period}")
+    seq = [x.text() for x in s["sequence"].items(at_most=4 * MAX_FLIGHTS)]
+    if seq != truth.sequence:
+        raise NotConfirmed(f"{s['sequence'].path}: {seq[:8]}{'...' if len(seq) > 8 else ''}, the orbit proven has "
+                           f"{truth.sequence[:8]}{'...' if len(truth.sequence) > 8 else ''}")
+    events = s["events"].items(at_most=4 * MAX_FLIGHTS)
+    if len(events) != len(truth.events):
+        raise NotConfirmed(f"{s['events'].path}: {len(events)} events, the orbit proven has {len(truth.events)}")
+    widths = [truth.min_box_width]
+    for e, (kind, time, vb) in zip(events, truth.events):
+        e.obj(("kind", "contact", "time", "phase", "velocity_before"))
+        if e["kind"].text() != kind:
+            raise NotConfirmed(f"{e['kind'].path}: '{e['kind'].v}', the event proven there is '{kind}'")
+        if e["contact"].integer(0, 1 << 20) != 0:
+            raise NotConfirmed(f"{e['contact'].path}: {e['contact'].v}, the model has one contact (0)")
+        C = claim_contains(e["time"], time, f"the time of this {kind}")
+        widths.append((hi(C) - lo(C), e["time"].path))
+        claim_phase(e["phase"], time, m, f"the phase of this {kind}")
+        claim_contains(e["velocity_before"], ZERO if vb is None else vb, f"the contact velocity before this {kind}")
+    sec = s["section"].obj(("time", "X", "V", "at"))
+    t, X, V, at = truth.section
+    C = claim_contains(sec["time"], t, "the section's time")
+    widths.append((hi(C) - lo(C), sec["time"].path))
+    for name, vals in (("X", X), ("V", V)):
+        nodes = sec[name].items(exactly=m.n)
+        for node, x in zip(nodes, vals):
+            C = claim_contains(node, x, f"the section's modal {'displacement' if name == 'X' else 'velocity'}")
+            widths.append((hi(C) - lo(C), node.path))
+    if sec["at"].text() != at:
+        raise NotConfirmed(f"{sec['at'].path}: '{sec['at'].v}', the section of a {truth.kind} orbit is {at}")
+    # Box width: no claimed enclosure of the orbit's times or section is wider.
+    bw = s["box_width"].num()
+    if not bw >= 0:
+        s["box_width"].fail("a width must be >= 0")
+    if not truth.min_box_width <= bw * (1 + mp.mpf(2) ** -52):
+        raise NotConfirmed(f"{s['box_width'].path} = {s['box_width'].v!r}: the box is {show(truth.min_box_width)} wide")
+    for w, where in widths[1:]:
+        if not w <= bw * (1 + mp.mpf(2) ** -52):
+            raise NotConfirmed(f"{s['box_width'].path} = {s['box_width'].v!r}, but {where} is {show(w)} wide")
+    # Multipliers and stability.
+    listed = s["multipliers"].items(at_most=2 * MAX_MODES)
+    claims = []
+    for x in listed:
+        x.obj(("re", "im"))
+        claims.append((x["re"].pair(), x["im"].pair()))
+    stability = s["stability"].text(("stable", "unstable", "undecided"))
+    note = s["stability_note"].text(NOTES) if s.has("stability_note") else None
+    if truth.multipliers == "zero":
+        if claims and (len(claims) != 2 or not all(inside(ZERO, re) and inside(ZERO, im) for re, im in claims)):
+            raise NotConfirmed(f"{s['multipliers'].path}: the orbit's multipliers are 0 and 0 (superstable)")
+        mods = [ZERO, ZERO]
     else:
-        raise Rejected(f"unknown kind {kind!r}")
-    book.finish()
-    return len(book.done)
+        if truth.not_enclosed:
+            if claims or stability != "undecided":
+                raise NotConfirmed(f"{s['multipliers'].path}: the checker cannot enclose the multipliers of the "
+                                   f"monodromy, so it confirms no multiplier and no stability")
+            mods = None
+        else:
+            if len(claims) != len(truth.multipliers):
+                raise NotConfirmed(f"{s['multipliers'].path}: {len(claims)} multipliers, the orbit has "
+                                   f"{len(truth.multipliers)}")
+            left = match(claims, truth.multipliers)
+            if left is not None:
+                re, im = truth.multipliers[left]
+                raise NotConfirmed(f"{s['multipliers'].path}: no claimed multiplier contains the multiplier that the "
+                                   f"checker encloses in {show_iv(re)} + i {show_iv(im)}")
+            mods = [re * re + im * im for re, im in truth.multipliers]
+    if stability == "stable" and not (mods is not None and all(hi(x) < 1 for x in mods)):
+        raise NotConfirmed(f"{s['stability'].path}: 'stable', but the checker's |multiplier|² are "
+                           f"{', '.join(show_iv(x) for x in mods or [])}")
+    if stability == "unstable" and not (mods is not None and any(lo(x) > 1 for x in mods)):
+        raise NotConfirmed(f"{s['stability'].path}: 'unstable', but the checker's |multiplier|² are "
+                           f"{', '.join(show_iv(x) for x in mods or [])}")
+    if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
+            truth.multipliers == "zero":
+        raise NotConfirmed(f"{s['stability_note'].path}: '{note}' is not about this orbit")
+    truth.reason(s["reason"], s["reason"].text())
+
+
+# ---- One certificate --------------------------------------------------------------------------
+
+CERT_KEYS = ("format", "verdict", "reason", "kind", "period", "model", "libraries", "precision_bits", "summary",
+             "inequalities")
+IMPACT_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczyk", "flights", "monodromy")
+STICKING_KEYS = ("release", "flights", "sticking")
+
+
+def check(node):
+    """Checks one certificate; returns how many inequalities were recomputed."""
+    if not isinstance(node.v, dict):
+        node.fail(f"expected a certificate (an object), got {kind_of(node.v)}")
+    if node.v.get("format") != FORMAT:
+        node.fail(f"format: expected '{FORMAT}'")
+    verdict = node["verdict"].text(("proven", "not-proven"))
+    if verdict != "proven":
+        raise NotConfirmed(f"{node['verdict'].path}: the certificate claims no proof ('{verdict}': "
+                           f"{node['reason'].text()[:200] if node.has('reason') else ''})")
+    kind = node["kind"].text(("impact", "sticking"))
+    node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
+             ("tail",) if kind == "sticking" else ())
+    node["libraries"].text()  # the interval library's versions (information)
+    node["precision_bits"].integer(1, 1 << 20)
+    s = node["summary"]
+    s.obj(SUMMARY_KEYS, ("stability_note",))
+    for key in ("verdict", "reason", "kind", "period"):
+        if node[key].v != s[key].v or type(node[key].v) is not type(s[key].v):
+            raise NotConfirmed(f"{node[key].path} = {node[key].v!r} and {s[key].path} = {s[key].v!r} differ")
+    m = Model(node["model"])
+    summary_shape(s, m.n)
+    ledger = Ledger(node["inequalities"])
+    if kind == "impact":
+        truth = check_impact(node, m, ledger)
+    else:
+        truth = check_sticking(node, m, ledger)
+    check_summary(node, s, truth, m)
+    return ledger.finish()
+
+
+def check_document(data):
+    """The checker on a file's bytes: (exit code, one line)."""
+    try:
+        if len(data) > MAX_BYTES:
+            raise NotACertificate(f"the file: more than {MAX_BYTES >> 20} MiB")
+        try:
+            text = data.decode("utf-8")
+        except UnicodeDecodeError as e:
+            raise NotACertificate(f"the file: not UTF-8 text (byte {e.start})")
+        try:
+            doc = json.loads(text, object_pairs_hook=unique_keys, parse_constant=reject_constant)
+        except RecursionError:
+            raise NotACertificate("the file: JSON nested too deeply")
+        except ValueError as e:
+            raise NotACertificate(f"the file: not JSON ({str(e).splitlines()[0][:200]})")
+        root = Node(doc)
+        if isinstance(doc, dict) and "certificates" in doc:
+            root.obj(("certificates",), ("branch",))
+            if root.has("branch"):
+                root["branch"].text()
+            certs = root["certificates"].items(at_least=1, at_most=MAX_CERTIFICATES)
+            count = sum(check(c) for c in certs)
+            return 0, f"confirmed: {len(certs)} certificates, every claim checked ({count} inequalities recomputed)"
+        count = check(root)
+        return 0, f"confirmed: every claim checked ({count} inequalities recomputed)"
+    except NotACertificate as e:
+        return 2, f"not a certificate: {one_line(e)}"
+    except NotConfirmed as e:
+        return 1, f"not confirmed: {one_line(e)}"
+    except RecursionError:
+        return 2, "not a certificate: nested too deeply"
+    except MemoryError:
+        return 1, "not confirmed: the checker ran out of memory"
+    except Exception as e:  # a checker bug: never a traceback, never "confirmed"
+        return 1, f"not confirmed: the checker failed ({type(e).__name__}: {one_line(e)})"
+
+
+def one_line(e):
+    return " ".join(str(e).split())[:2000]
+
+
+def unique_keys(pairs):
+    out = {}
+    for k, v in pairs:
+        if k in out:
+            raise NotACertificate(f"the key '{k[:60]}' appears twice in an object")
+        out[k] = v
+    return out
+
+
+def reject_constant(name):
+    raise NotACertificate(f"the file: '{name}' is not a JSON number (bounds must be finite)")
 
 
 def main(argv):
     args = [a for a in argv[1:] if a != "--json"]
     as_json = "--json" in argv[1:]
-    if len(args) != 1:
-        print(__doc__, file=sys.stderr)
+    if len(args) != 1 or args[0].startswith("-") and args[0] != "-":
+        print("usage: vibro_check_proof.py CERT.json [--json]", file=sys.stderr)
         return 2
+    path = args[0]
     try:
-        with open(args[0]) as fh:
-            cert = json.load(fh)
-        if isinstance(cert, dict) and "certificates" in cert:  # `vibro prove --branch --out`: one per point
-            count = 0
-            for k, c in enumerate(cert["certificates"]):
-                try:
-                    count += check(c)
-                except Rejected as e:
-                    raise Rejected(f"point {k}: {e}")
-            verdict, reason = "confirmed", f"{len(cert['certificates'])} certificates, {count} inequalities recomputed and verified"
-        else:
-            count = check(cert)
-            verdict, reason = "confirmed", f"{count} inequalities recomputed and verified"
-        code = 0
-    except (OSError, ValueError) as e:
-        print(f"vibro_check_proof: {args[0]}: {e}", file=sys.stderr)
-        return 2
-    except (Rejected, KeyError, TypeError, IndexError, ZeroDivisionError) as e:
-        verdict, reason, code = "rejected", f"{type(e).__name__}: {e}" if not isinstance(e, Rejected) else str(e), 1
+        if os.path.isdir(path):
+            raise OSError("a directory")
+        with open(path, "rb") as fh:
+            data = fh.read(MAX_BYTES + 1)
+        code, line = check_document(data)
+    except OSError as e:
+        code, line = 2, f"not a certificate: {path}: {e.strerror or e}"
+    except KeyboardInterrupt:
+        print("vibro_check_proof: interrupted; nothing was confirmed", file=sys.stderr)
+        return 130
     if as_json:
-        print(json.dumps({"verdict": verdict, "reason": reason}))
+        verdict = line.split(":", 1)[0]
+        print(json.dumps({"verdict": verdict, "reason": line.split(": ", 1)[1] if ": " in line else line}))
     else:
-        print(f"{verdict}: {reason}")
+        print(line)
     return code
 
 
 if __name__ == "__main__":
+    sys.setrecursionlimit(10000)
     sys.exit(main(sys.argv))

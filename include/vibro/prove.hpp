@@ -17,6 +17,7 @@
 // scripts/vibro_check_proof.py re-verifies with no code in common with the prover.
 #pragma once
 
+#include <atomic>
 #include <optional>
 #include <string>
 #include <utility>
@@ -38,7 +39,12 @@ struct ProofRequest {
   // prover widens it at most 3 times ×4 (boxes stay ≤ 1e-10 wide at the default).
   double box_radius = 1e-12;
   int max_depth = 40;         // bisections of a flight before a positivity test fails
-  double time_limit = 60.0;   // seconds; the proof ends "not proven" past it
+  // Seconds for the whole call: the transient, the orbit search and the proof; past it the result
+  // is "not proven" with that reason.
+  double time_limit = 60.0;
+  // A stop request (besides the process's, vibro/stop_request.hpp): the call ends within a second
+  // with `interrupted` and no verdict. nullptr: none.
+  const std::atomic<bool>* stop_requested = nullptr;
 };
 
 // A closed interval [lo, hi] with outward-rounded ends.
@@ -47,25 +53,30 @@ struct Enclosure {
 };
 
 struct ProvenEvent {
-  std::string kind;          // "impact", "release", "stick"
+  std::string kind;          // "impact", "release", "departure", "accumulation", "stick"
   Enclosure phase;           // ωt mod 2π
   Enclosure velocity_before; // ẋ_B just before
+  int contact = 0;           // the contact it happens at (0: the model has one)
 };
 
 struct ProofResult {
   bool proven = false;
+  // A stop request ended the call: no verdict, nothing proven, no certificate (summary_json says
+  // "not-proven" with reason "interrupted"); callers report an interruption (exit 130).
+  bool interrupted = false;
   std::string reason;            // not proven: which inequality failed, where; proven: what holds
   std::string kind;              // "impact" or "sticking" ("" when no proof was attempted)
   int period = 0;                // forcing periods (0 when unknown)
   std::vector<ProvenEvent> events;                      // one period, in time order
   std::vector<std::pair<Enclosure, Enclosure>> multipliers;  // (re, im) of each Floquet multiplier
   std::string stability = "undecided";  // "stable" | "unstable" | "undecided"
-  double box_width = 0;          // widest side of the box the orbit is proven in
+  double box_width = 0;          // widest side of the box, and of every enclosure of a time or the section
   std::string summary_json;      // the `vibro prove --json` object (docs/prove.md)
   std::string certificate_json;  // the certificate (docs/prove.md), empty when nothing was attempted
 };
 
 // Throws std::invalid_argument for a request the prover cannot take (bad input): a damped model.
+// Bounded in time (request.time_limit) and memory (docs/prove.md "Bounds") for every request.
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request);
 
 // Validated continuation of an impacting orbit (docs/prove.md "Along a branch"): for EVERY value of

@@ -13,6 +13,22 @@ namespace vibro {
 // orbits of a study's classes. A run that sees it ends with status interrupted; the command
 // that owns the computation reports it as interrupted. nullptr (the default): none.
 void SetProcessStopFlag(const std::atomic<bool>* flag);
+// The flag the runs started on the calling thread poll: the thread's own (ThreadStopFlag) while
+// one is set, else the process's.
 const std::atomic<bool>* ProcessStopFlag();
+
+// While alive, runs started on the calling thread poll `flag` instead of the process's stop flag:
+// a computation's own limit over the runs it starts (the prover's time limit over its orbit
+// search, docs/prove.md). Whoever sets `flag` sets it on the process's stop request too.
+class ThreadStopFlag {
+ public:
+  explicit ThreadStopFlag(const std::atomic<bool>* flag);
+  ~ThreadStopFlag();
+  ThreadStopFlag(const ThreadStopFlag&) = delete;
+  ThreadStopFlag& operator=(const ThreadStopFlag&) = delete;
+
+ private:
+  const std::atomic<bool>* previous_;
+};
 
 }  // namespace vibro

@@ -406,9 +406,11 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   return {vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr), false};
 }
 
-// vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts.
-std::pair<std::string, std::string> Prove(const PyScene& s, const std::string& kind, long long period,
-                                          long long transient, const std::string& from, double time_limit) {
+// vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts,
+// and whether a stop request (Ctrl-C) ended it (then nothing is proven and the caller raises).
+std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::string& kind, long long period,
+                                                 long long transient, const std::string& from, double time_limit,
+                                                 bool handle_sigint) {
   vibro::frontend::RequireOneContact(s.loaded, "prove");
   vibro::frontend::CheckOrbitOptions(kPython, period, 0, transient, std::nullopt, std::nullopt);
   if (!(time_limit > 0) || !std::isfinite(time_limit))
@@ -427,9 +429,12 @@ std::pair<std::string, std::string> Prove(const PyScene& s, const std::string& k
   }
   if (sys.damped())
     throw vibro::InputError({"vibro.prove covers undamped models only: the scene has modal damping (damping_ratios)"});
+  SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
+  req.stop_requested = guard.flag();
   const auto r = vibro::ProveOrbit(sys, s.loaded.scene, req);
-  return {r.summary_json, r.certificate_json};
+  if (r.interrupted || guard.interrupted()) return {"", "", true};
+  return {r.summary_json, r.certificate_json, false};
 }
 
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,

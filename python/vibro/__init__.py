@@ -365,9 +365,14 @@ def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, tim
     has ``verdict`` ("proven" or "not-proven"), ``reason``, ``period``, ``sequence``, ``events``,
     ``section``, ``multipliers`` and ``stability``, enclosures as [lo, hi]. ``from_`` is a file of
     ``vibro orbit --out`` to start from; ``out`` receives the certificate (JSON), which
-    ``vibro_check_proof.py`` re-verifies."""
-    text, certificate = _vibro.prove(_scene(scene), kind, _int("period", period), _int("transient", transient),
-                                     "" if from_ is None else _path("from_", from_), _float("time_limit", time_limit))
+    ``vibro_check_proof.py`` re-verifies. ``time_limit`` bounds the whole call (the transient, the orbit
+    search and the proof); Ctrl-C raises ``KeyboardInterrupt`` within a second, nothing proven or written."""
+    text, certificate, interrupted = _vibro.prove(_scene(scene), kind, _int("period", period),
+                                                  _int("transient", transient),
+                                                  "" if from_ is None else _path("from_", from_),
+                                                  _float("time_limit", time_limit), _main_thread())
+    if interrupted:
+        raise _interrupted("proof", None)
     if out is not None:
         with open(_path("out", out), "w", encoding="utf-8") as fh:
             fh.write(certificate + "\n")

@@ -1,15 +1,22 @@
 // `vibro prove SCENE`: a computer-assisted proof of a periodic orbit and its certificate
-// (docs/prove.md). Exit 0 proven, 4 not proven (the reason names the inequality that failed), 2 bad input.
+// (docs/prove.md). Exit 0 proven, 4 not proven (the reason names the inequality that failed, or the
+// time limit), 2 bad input, 3 out of memory, 130 interrupted (nothing proven, nothing written).
+#include <algorithm>
+#include <cfenv>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <algorithm>
+#include <new>
 #include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
+#include "cli/stop_signals.hpp"
 #include "vibro/hdf5_branch.hpp"
 #include "vibro/prove.hpp"
 #include "vibro/scene_file.hpp"
@@ -28,9 +35,44 @@ std::string Quoted(const std::string& s) {
   return q + "\"";
 }
 
+// The decimal `s` read as a double rounded toward `mode` (FE_UPWARD: the least double >= s).
+double ReadRounded(const std::string& s, int mode) {
+  const int before = std::fegetround();
+  std::fesetround(mode);
+  const double v = std::strtod(s.c_str(), nullptr);
+  std::fesetround(before);
+  return v;
+}
+
+// x as a decimal of `digits` significant digits rounded down (up = false) or up, so that the printed
+// interval contains the JSON's (docs/prove.md): s <= x exactly when the least double >= s is <= x.
+std::string Outward(double x, bool up, int digits = 12) {
+  if (x == 0 || !std::isfinite(x)) return fmt::format("{}", x);
+  std::string s = fmt::format("{:.{}e}", x, digits - 1);
+  for (int step = 0; step < 4; ++step) {
+    if (up ? ReadRounded(s, FE_DOWNWARD) >= x : ReadRounded(s, FE_UPWARD) <= x) break;
+    const int exponent = std::atoi(s.c_str() + s.find('e') + 1);
+    const double unit = std::pow(10.0, exponent - (digits - 1));
+    s = fmt::format("{:.{}e}", std::strtod(s.c_str(), nullptr) + (up ? unit : -unit), digits - 1);
+  }
+  return fmt::format("{:.{}g}", std::strtod(s.c_str(), nullptr), digits);
+}
+
+std::string Range(const vibro::Enclosure& e) { return fmt::format("[{}, {}]", Outward(e.lo, false), Outward(e.hi, true)); }
+
+// A stop request ends `vibro prove` with exit 130 and no verdict; `kept` says what was kept.
+int Interrupted(const std::string& kept) {
+  fmt::print(stderr, "vibro: interrupted; {}\n", kept);
+  return kExitInterrupted;
+}
+
 // `vibro prove SCENE --branch FILE.h5`: every stored point of a continuation branch, each from its
 // stored section state at its parameter value. Exit 0 when every point is proven, 4 otherwise.
 int RunProveBranch(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
+  const auto started = std::chrono::steady_clock::now();
+  const auto seconds_left = [&] {
+    return args.request.time_limit - std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  };
   const auto first = vibro::ReadBranchPoint(args.branch, 0);
   std::string points = "[", certificates = "[", segments = "[";
   long long proven = 0, segments_proven = 0;
@@ -42,7 +84,9 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     double value = 0;
   };
   std::optional<Point> previous;
-  for (long long k = 0; k < first.points; ++k) {
+  long long done = 0;
+  bool interrupted = false;
+  for (long long k = 0; k < first.points && !interrupted; ++k) {
     const auto pt = k == 0 ? first : vibro::ReadBranchPoint(args.branch, k);
     auto at = sets;
     at.push_back(vibro::frontend::Assignment(pt.param, pt.value));
@@ -55,17 +99,34 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     vibro::ProofRequest req = args.request;
     req.start = vibro::InitialOverride{pt.section_time, pt.X, pt.V};
     req.period = pt.period;
+    req.time_limit = seconds_left();  // --time-limit bounds the whole command
     vibro::ProofResult r;
-    try {
-      r = vibro::ProveOrbit(sys, loaded.scene, req);
-    } catch (const std::invalid_argument& e) {
-      throw vibro::InputError({path + ": " + e.what()});
+    if (req.time_limit <= 0) {
+      r.reason = fmt::format("the time limit of {:g} s (--time-limit, for the whole command) was reached before "
+                             "this point: nothing is proven", args.request.time_limit);
+      r.summary_json = fmt::format("{{\"verdict\": \"not-proven\", \"reason\": {}}}", Quoted(r.reason));
+    } else {
+      try {
+        r = vibro::ProveOrbit(sys, loaded.scene, req);
+      } catch (const std::invalid_argument& e) {
+        throw vibro::InputError({path + ": " + e.what()});
+      }
+    }
+    if (r.interrupted || vibro::cli::StopRequested()) {
+      interrupted = true;
+      break;
     }
     proven += r.proven ? 1 : 0;
     if (previous && previous->proven && r.proven && r.kind == "impact") {
       // Every parameter value between the two points: one box, one orbit (impacting orbits).
       const vibro::System sys_prev(previous->scene);
-      const auto pieces = vibro::ProveOrbitOverInterval(sys_prev, previous->scene, previous->request, sys, loaded.scene, req);
+      auto from = previous->request;
+      from.time_limit = std::max(seconds_left(), 1e-3);
+      const auto pieces = vibro::ProveOrbitOverInterval(sys_prev, previous->scene, from, sys, loaded.scene, req);
+      if (pieces.front().interrupted || vibro::cli::StopRequested()) {
+        interrupted = true;
+        break;
+      }
       const bool seg_proven = pieces.front().proven;
       segments_proven += seg_proven ? 1 : 0;
       std::string summaries = "[";
@@ -83,28 +144,35 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     }
     previous = Point{loaded.scene, req, r.proven, pt.value};
     points += fmt::format("{}{{\"point\": {}, \"value\": {}, \"summary\": {}}}", k ? ", " : "", k, pt.value, r.summary_json);
-    certificates += (k ? ", " : "") + r.certificate_json;
+    if (!r.certificate_json.empty()) certificates += (certificates.size() > 1 ? ", " : "") + r.certificate_json;
+    ++done;
     if (!json)
       fmt::print("point {:>4}  {} = {:<12.10g} {}: {}\n", k, pt.param, pt.value, r.proven ? "proven    " : "not proven",
                  r.reason);
   }
-  if (!args.out.empty()) {
+  // What was proven is kept: interrupted, the certificates of the points done (each whole).
+  if (!args.out.empty() && certificates.size() > 1) {
+    const vibro::cli::FinalWrite writing;
     std::ofstream file(args.out, std::ios::trunc);
     file << "{\"branch\": " << Quoted(args.branch) << ", \"certificates\": " << certificates << "]}\n";
     if (!file) throw vibro::WriteError(args.out + ": the certificates could not be written");
   }
   if (json)
     fmt::print("{{\"branch\": {}, \"param\": {}, \"proven\": {}, \"total\": {}, \"points\": {}], "
-               "\"segments_proven\": {}, \"segments\": {}]}}\n",
-               Quoted(args.branch), Quoted(first.param), proven, first.points, points, segments_proven, segments);
+               "\"segments_proven\": {}, \"segments\": {}]{}}}\n",
+               Quoted(args.branch), Quoted(first.param), proven, first.points, points, segments_proven, segments,
+               interrupted ? fmt::format(", \"interrupted_after\": {}", done) : "");
   else
     fmt::print("proven       {} of {} points, {} of the segments between them\n", proven, first.points, segments_proven);
+  if (interrupted)
+    return Interrupted(args.out.empty() || done == 0
+                           ? fmt::format("{} of {} points were done, nothing is written", done, first.points)
+                           : fmt::format("{} of {} points were done, their certificates are kept in {}", done,
+                                         first.points, args.out));
   return proven == first.points ? 0 : kExitDisagree;
 }
 
-}  // namespace
-
-int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
+int Prove(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
   if (!args.out.empty()) {  // bad input before any work, and nothing created
     const auto dir = std::filesystem::path(args.out).parent_path();
     if (!dir.empty() && !std::filesystem::is_directory(dir))
@@ -128,7 +196,9 @@ int RunProve(const std::string& path, const std::vector<std::string>& sets, bool
   } catch (const std::invalid_argument& e) {
     throw vibro::InputError({path + ": " + e.what()});
   }
+  if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("nothing is proven or written");
   if (!args.out.empty()) {
+    const vibro::cli::FinalWrite writing;
     std::ofstream file(args.out, std::ios::trunc);
     file << result.certificate_json << "\n";
     if (!file) throw vibro::WriteError(args.out + ": the certificate could not be written");
@@ -136,18 +206,35 @@ int RunProve(const std::string& path, const std::vector<std::string>& sets, bool
   if (json) {
     fmt::print("{}\n", result.summary_json);
   } else {
-    const auto range = [](const vibro::Enclosure& e) { return fmt::format("[{:.12g}, {:.12g}]", e.lo, e.hi); };
+    // The summary of the certificate (result's fields are read from it), every interval rounded
+    // outward to 12 digits: what is printed is what the checker checks.
     fmt::print("verdict      {}\n", result.proven ? "proven" : "not proven");
     fmt::print("reason       {}\n", result.reason);
     if (result.proven) {
-      fmt::print("period       {} ({} orbit, box width {:.1e})\n", result.period, result.kind, result.box_width);
+      fmt::print("period       {} ({} orbit, box width {})\n", result.period, result.kind, Outward(result.box_width, true, 3));
       for (const auto& e : result.events)
-        fmt::print("event        {:<8} phase {}  velocity before {}\n", e.kind, range(e.phase), range(e.velocity_before));
-      for (const auto& [re, im] : result.multipliers) fmt::print("multiplier   {} + i {}\n", range(re), range(im));
-      if (result.multipliers.empty()) fmt::print("multipliers  none (one-DOF sticking orbit)\n");
+        fmt::print("event        {:<8} contact {}  phase {}  velocity before {}\n", e.kind, e.contact, Range(e.phase),
+                   Range(e.velocity_before));
+      for (const auto& [re, im] : result.multipliers) fmt::print("multiplier   {} + i {}\n", Range(re), Range(im));
+      if (result.multipliers.empty())
+        fmt::print("multipliers  {}\n", result.kind == "sticking" ? "none (one-DOF sticking orbit: superstable)"
+                                                                  : "not enclosed (the stability is undecided)");
       fmt::print("stability    {}\n", result.stability);
     }
     if (!args.out.empty()) fmt::print("certificate  {} (check it: vibro_check_proof.py {})\n", args.out, args.out);
   }
   return result.proven ? 0 : kExitDisagree;
+}
+
+}  // namespace
+
+int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
+  try {
+    return Prove(path, sets, json, args);
+  } catch (const std::bad_alloc&) {  // the prover is bounded (docs/prove.md "Bounds"); memory may still run out
+    fmt::print(stderr, "vibro: prove ran out of memory: nothing is proven{}\n",
+               args.out.empty() ? "" : ", " + args.out + " is not written");
+    std::fflush(nullptr);
+    return kExitNumerical;
+  }
 }

@@ -134,7 +134,9 @@ int main(int argc, char** argv) {
                     "prove every point of the branch stored by `vibro continue --out FILE.h5`")
       ->excludes(prove_from);
   prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
-  prove->add_option("--time-limit", prove_args.request.time_limit, "seconds before the proof gives up (default 60)")
+  prove->add_option("--time-limit", prove_args.request.time_limit,
+                    "seconds for the whole command: the transient, the orbit search and the proof (with --branch: "
+                    "every point and segment); past it: not proven, exit 4 (default 60)")
       ->check(CLI::Range(0.001, 1e6));
 
   CLI::App* cont = app.add_subcommand("continue", "continue a periodic orbit in one parameter");

@@ -10,10 +10,14 @@
 namespace vibro {
 namespace {
 std::atomic<const std::atomic<bool>*> g_process_stop{nullptr};
+thread_local const std::atomic<bool>* t_thread_stop = nullptr;
 }  // namespace
 
 void SetProcessStopFlag(const std::atomic<bool>* flag) { g_process_stop.store(flag); }
-const std::atomic<bool>* ProcessStopFlag() { return g_process_stop.load(); }
+const std::atomic<bool>* ProcessStopFlag() { return t_thread_stop ? t_thread_stop : g_process_stop.load(); }
+
+ThreadStopFlag::ThreadStopFlag(const std::atomic<bool>* flag) : previous_(t_thread_stop) { t_thread_stop = flag; }
+ThreadStopFlag::~ThreadStopFlag() { t_thread_stop = previous_; }
 
 const char* ToString(RunStatus s) {
   switch (s) {

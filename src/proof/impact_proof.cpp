@@ -143,10 +143,15 @@ Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vecto
 }  // namespace
 
 Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, const ProofRequest& request,
-                         const Deadline& deadline) {
+                         const Budget& budget) {
   Outcome out;
   const Layout L{mdl.n, static_cast<int>(guess.times.size())};
   const int q = guess.period;
+  if (L.size() > kMaxUnknowns) {  // memory and time grow as the square and the cube of the unknowns
+    out.reason = fmt::format("{} impacts in {} period(s) and {} mode(s): {} unknowns, more than the {} the prover "
+                             "takes (docs/prove.md \"Bounds\")", L.m, q, L.n, L.size(), kMaxUnknowns);
+    return out;
+  }
   std::vector<std::string> names;
   std::vector<double> u0;
   for (int j = 0; j < L.m; ++j) {
@@ -176,7 +181,7 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
   double radius = request.box_radius;
   for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
     k = Test(mdl, L, q, u, radius, spread, radius / request.box_radius);
-    if (k.inside || deadline.passed()) break;
+    if (k.inside || budget.passed()) break;
   }
   Json krawczyk = Json::array();
   for (std::size_t p = 0; p < u.size(); ++p) {
@@ -250,7 +255,7 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
     if (mid_lo < mid_hi) {
       const auto gap = [&](double s) { return ContactSum(mdl, Flight(mdl, t, X, V, Interval(s)).X) - mdl.stop; };
       const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X, V, s).V); };
-      const auto pos = ProvePositive(mid_lo, mid_hi, step, request.max_depth, deadline, gap, slope);
+      const auto pos = ProvePositive(mid_lo, mid_hi, step, request.max_depth, budget, gap, slope);
       if (!pos.proven) {
         ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", where, pos.failed_at), pos.failed_value, "> 0");
         out.reason = fmt::format("the gap is not proven positive on {}: {} (a grazing or a missed contact?)", where,
@@ -294,8 +299,32 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
   }
   for (int j = 0; j < L.m; ++j) {
     const Interval& t = U[L.t(j)];
-    events.push_back({{"kind", "impact"}, {"time", Pair(t)}, {"phase", Pair(Phase(mdl, t))},
+    events.push_back({{"kind", "impact"}, {"contact", 0}, {"time", Pair(t)}, {"phase", Pair(Phase(mdl, t))},
                       {"velocity_before", Pair(v_before[static_cast<std::size_t>(j)])}});
+  }
+  // The least period is q: for every prime ℓ | q, shifting by q/ℓ periods does not map the impacts
+  // onto themselves (a time or a state difference excludes 0), as the checker verifies.
+  for (int ell = 2, rest = q; ell <= rest; ++ell) {
+    if (rest % ell) continue;
+    while (rest % ell == 0) rest /= ell;
+    if (L.m % ell) continue;
+    const int p = q / ell, h = L.m / ell;
+    bool apart = false;
+    for (int j = 0; j < L.m && !apart; ++j) {
+      const int kk = (j + h) % L.m;
+      const Interval dt = U[L.t(kk)] + (j + h >= L.m ? qT : Interval(0.0)) - U[L.t(j)] - Interval(p) * mdl.period;
+      apart = dt.Positive() || dt.Negative();
+      for (int i = 0; i < L.n && !apart; ++i) {
+        const Interval dx = U[L.x(kk, i)] - U[L.x(j, i)], dv = U[L.v(kk, i)] - U[L.v(j, i)];
+        apart = dx.Positive() || dx.Negative() || dv.Positive() || dv.Negative();
+      }
+    }
+    if (!apart) {
+      out.reason = fmt::format("the orbit proven in the box repeats after {} forcing period(s) (or cannot be told "
+                               "apart from one that does): its least period is not proven to be {}", p, q);
+      out.certificate["inequalities"] = ledger.list();
+      return out;
+    }
   }
   const auto spectrum = Multipliers(M);
   Json monodromy = Json::array();

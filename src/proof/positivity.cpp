@@ -10,15 +10,15 @@ namespace {
 
 struct Search {
   int max_depth;
-  const Deadline& deadline;
+  const Budget& budget;
   const std::function<Interval(double)>& value;
   const std::function<Interval(const Interval&)>& slope;
   Positivity& out;
 
   // Pieces are appended left to right; false on the first failure.
   bool Piece(double lo, double hi, int depth) {
-    if (deadline.passed()) {
-      out.reason = "time limit reached";
+    if (budget.passed()) {
+      out.reason = budget.interrupted() ? "interrupted" : "time limit reached";
       out.failed_at = lo;
       return false;
     }
@@ -26,6 +26,12 @@ struct Search {
     const Interval piece = Interval::Hull(lo, hi);
     const Interval f = value(c) + slope(piece) * (piece - Interval(c));
     if (f.Positive()) {
+      if (!budget.TakePieces(1)) {
+        out.failed_at = c;
+        out.failed_value = f;
+        out.reason = fmt::format("more than {} subdivision pieces (the prover's bound, docs/prove.md)", kMaxPieces);
+        return false;
+      }
       out.pieces.emplace_back(lo, hi);
       return true;
     }
@@ -41,13 +47,19 @@ struct Search {
 
 }  // namespace
 
-Positivity ProvePositive(double a, double b, double step, int max_depth, const Deadline& deadline,
+Positivity ProvePositive(double a, double b, double step, int max_depth, const Budget& budget,
                          const std::function<Interval(double)>& value,
                          const std::function<Interval(const Interval&)>& slope) {
   Positivity out;
   const double pieces = std::ceil((b - a) / step);
+  if (!(pieces <= static_cast<double>(kMaxPieces))) {
+    out.failed_at = a;
+    out.reason = fmt::format("[{:.17g}, {:.17g}] needs more than {} subdivision pieces (the prover's bound, "
+                             "docs/prove.md)", a, b, kMaxPieces);
+    return out;
+  }
   const int count = pieces < 1 ? 1 : static_cast<int>(pieces);
-  Search search{max_depth, deadline, value, slope, out};
+  Search search{max_depth, budget, value, slope, out};
   double lo = a;
   for (int k = 1; k <= count; ++k) {
     const double hi = k == count ? b : a + (b - a) * k / count;

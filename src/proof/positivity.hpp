@@ -5,27 +5,15 @@
 // checker evaluates the same form again.
 #pragma once
 
-#include <chrono>
 #include <functional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "proof/budget.hpp"
 #include "proof/interval.hpp"
 
 namespace vibro::proof {
-
-// A wall-clock limit: a proof never hangs.
-class Deadline {
- public:
-  explicit Deadline(double seconds)
-      : end_(std::chrono::steady_clock::now() + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                                    std::chrono::duration<double>(seconds))) {}
-  bool passed() const { return std::chrono::steady_clock::now() > end_; }
-
- private:
-  std::chrono::steady_clock::time_point end_;
-};
 
 struct Positivity {
   bool proven = false;
@@ -36,8 +24,9 @@ struct Positivity {
 };
 
 // f > 0 on [a, b] (a ≤ b): value(c) encloses f at the point c, slope(I) encloses f' on I.
-// The first cut uses pieces of at most `step`; a piece is halved at most `max_depth` times.
-Positivity ProvePositive(double a, double b, double step, int max_depth, const Deadline& deadline,
+// The first cut uses pieces of at most `step`; a piece is halved at most `max_depth` times; the
+// pieces accepted are taken from the budget, which also ends the search past its time.
+Positivity ProvePositive(double a, double b, double step, int max_depth, const Budget& budget,
                          const std::function<Interval(double)>& value,
                          const std::function<Interval(const Interval&)>& slope);
 

@@ -58,9 +58,9 @@ struct ImpactGuess {
 };
 
 Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,
-                         const Deadline& deadline);
+                         const Budget& budget);
 // One-DOF, r = 0: the release phase is fixed by the model (docs/model.md §4.4), so no guess.
-Outcome ProveSticking1Dof(const IntervalModel& model, const ProofRequest& request, const Deadline& deadline);
+Outcome ProveSticking1Dof(const IntervalModel& model, const ProofRequest& request, const Budget& budget);
 
 // ωt mod 2π, enclosed (the integer number of turns taken from the midpoint).
 Interval Phase(const IntervalModel& model, const Interval& t);

@@ -52,28 +52,74 @@ class ImpactRecorder final : public Observer {
     if (r.kind == ResetKind::kImpact) {
       X.push_back(r.X_after);
       V.push_back(r.V_after);
+    } else if (r.kind == ResetKind::kPlasticLeave) {
+      ++plastic_departures;
     }
   }
   std::vector<double> times;
   std::vector<Eigen::VectorXd> X, V;
   std::string other;
   bool grazing = false;
+  int plastic_departures = 0;
 };
 
 struct Found {
   std::string failure;  // "" when an impacting orbit was found
   bool sticking = false;
+  bool stopped = false;  // the budget ended the search (time limit or stop request): no result
   proof::ImpactGuess guess;
 };
 
-Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest& request) {
+// The least period of the impacts found over q periods: the smallest p dividing q such that p
+// periods later the impacts repeat (times within 1e-7 T, states within 1e-7 relative).
+int LeastPeriod(const proof::ImpactGuess& g, double T) {
+  const int q = g.period;
+  const auto m = static_cast<long long>(g.times.size());
+  for (int p = 1; p < q; ++p) {
+    if (q % p != 0 || (m * p) % q != 0) continue;
+    const long long h = m * p / q;
+    bool repeats = true;
+    for (long long j = 0; j < m && repeats; ++j) {
+      const auto k = static_cast<std::size_t>((j + h) % m), i = static_cast<std::size_t>(j);
+      const double dt = g.times[k] + (j + h >= m ? q * T : 0.0) - g.times[i] - p * T;
+      const auto close = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+        return (a - b).cwiseAbs().maxCoeff() <= 1e-7 * (1 + a.cwiseAbs().maxCoeff());
+      };
+      repeats = std::abs(dt) <= 1e-7 * T && close(g.X[k], g.X[i]) && close(g.V[k], g.V[i]);
+    }
+    if (repeats) return p;
+  }
+  return q;
+}
+
+Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest& request, const proof::Budget& budget) {
   Found f;
   OrbitRequest req;
   req.kind = request.kind;
   req.period = request.period;
   req.transient_periods = request.start ? 0 : request.transient_periods;
   req.start = request.start;
-  const auto orbit = SolveOrbit(sys, scene, req);
+  OrbitResult orbit;
+  ImpactRecorder rec;
+  RunResult run;
+  // The search runs under the budget: the time limit and the stop requests end its transient.
+  budget.Watch([&] {
+    orbit = SolveOrbit(sys, scene, req);
+    if (orbit.status != "converged" || orbit.summary.kind == "sticking-periodic" || budget.passed()) return;
+    Scene one = scene;
+    one.run.periods = orbit.period;
+    one.run.samples_per_period = 0;
+    one.run.lyapunov = false;
+    const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+    SimulationOptions opt;
+    opt.observers = {&rec};
+    opt.initial = &start;
+    run = Simulate(sys, one, opt);
+  });
+  if (budget.passed()) {
+    f.stopped = true;
+    return f;
+  }
   if (orbit.status != "converged") {
     f.failure = "the Poincaré solver found no orbit to prove (" + orbit.status +
                 (orbit.message.empty() ? "" : ": " + orbit.message) + ")";
@@ -83,20 +129,15 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
     f.sticking = true;
     return f;
   }
-  Scene one = scene;
-  one.run.periods = orbit.period;
-  one.run.samples_per_period = 0;
-  one.run.lyapunov = false;
-  const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
-  ImpactRecorder rec;
-  SimulationOptions opt;
-  opt.observers = {&rec};
-  opt.initial = &start;
-  const auto run = Simulate(sys, one, opt);
   if (run.status != RunStatus::kOk) f.failure = "the orbit found could not be followed over one period: " + run.message;
   else if (!rec.other.empty()) f.failure = "the orbit found has a " + rec.other + " event: it is not an impacting orbit";
   else if (rec.grazing) f.failure = "the orbit found grazes the stop: a grazing orbit cannot be proven";
-  else if (rec.times.empty() || rec.times.size() != rec.X.size()) f.failure = "the orbit found has no impact";
+  else if (rec.plastic_departures > 0)
+    f.failure = fmt::format("r = 0: the orbit found has {} plastic impact(s) per {} period(s), each leaving the stop "
+                            "at once with zero contact velocity; impacting orbits with plastic impacts are not proven "
+                            "by this version (docs/prove.md)", rec.plastic_departures, orbit.period);
+  else if (rec.times.empty()) f.failure = "the orbit found has no impact: it never touches the stop";
+  else if (rec.times.size() != rec.X.size()) f.failure = "the orbit found has impacts the prover cannot follow";
   if (!f.failure.empty()) return f;
   // Impact 0 first in time; the rest follow it within one period.
   f.guess.period = orbit.period;
@@ -107,13 +148,53 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   f.guess.times = rec.times;
   f.guess.X = rec.X;
   f.guess.V = rec.V;
+  // The least period: the orbit's own (asked for none), or a refusal of a period it does not have.
+  const int least = LeastPeriod(f.guess, sys.period());
+  if (least < f.guess.period) {
+    if (request.period > 0) {
+      f.failure = fmt::format("the orbit found has period {}, not {}: its impacts repeat after {} forcing period(s) "
+                              "(prove it with --period {})", least, request.period, least, least);
+      return f;
+    }
+    const auto keep = f.guess.times.size() * static_cast<std::size_t>(least) / static_cast<std::size_t>(f.guess.period);
+    f.guess.times.resize(keep);
+    f.guess.X.resize(keep);
+    f.guess.V.resize(keep);
+    f.guess.period = least;
+  }
+  const std::size_t unknowns = f.guess.times.size() * static_cast<std::size_t>(2 * sys.dof() + 1);
+  if (unknowns > proof::kMaxUnknowns)
+    f.failure = fmt::format("the orbit found has {} impacts in {} period(s) and {} mode(s): {} unknowns, more than the "
+                            "{} the prover takes (docs/prove.md \"Bounds\")", f.guess.times.size(), f.guess.period,
+                            sys.dof(), unknowns, proof::kMaxUnknowns);
   return f;
 }
 
+// Every enclosure of a time or of the section in the summary is at most box_width wide (docs/prove.md).
+double WidestClaim(const Json& summary) {
+  double w = summary.contains("box_width") ? summary["box_width"].get<double>() : 0.0;
+  const auto widen = [&](const Json& p) { w = std::max(w, p[1].get<double>() - p[0].get<double>()); };
+  for (const auto& e : summary["events"]) widen(e["time"]);
+  if (summary["section"].is_object()) {
+    widen(summary["section"]["time"]);
+    for (const char* key : {"X", "V"})
+      for (const auto& p : summary["section"][key]) widen(p);
+  }
+  return w;
+}
 
-ProofResult Wrap(const proof::Outcome& outcome, const std::string& kind, const proof::IntervalModel& model,
-                 const ProofRequest& request) {
+ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::IntervalModel& model,
+                 const ProofRequest& request, const proof::Budget& budget, const std::string& stage) {
   ProofResult result;
+  if (budget.interrupted()) {  // no verdict, nothing proven, no certificate
+    result.interrupted = true;
+    result.reason = "interrupted: nothing is proven";
+    result.summary_json = Json{{"verdict", "not-proven"}, {"reason", result.reason}, {"kind", kind}}.dump();
+    return result;
+  }
+  if (!outcome.proven && budget.expired())
+    outcome.reason = fmt::format("the time limit of {:g} s was reached {}: nothing is proven",
+                                 budget.seconds(), stage);
   result.proven = outcome.proven;
   result.reason = outcome.reason;
   Json summary = {{"verdict", outcome.proven ? "proven" : "not-proven"}, {"reason", outcome.reason}, {"kind", kind}};
@@ -123,12 +204,14 @@ ProofResult Wrap(const proof::Outcome& outcome, const std::string& kind, const p
     if (!summary.contains(key)) summary[key] = Json::array();
   if (!summary.contains("section")) summary["section"] = nullptr;
   if (!summary.contains("stability")) summary["stability"] = "undecided";
+  if (outcome.proven) summary["box_width"] = WidestClaim(summary);
   result.summary_json = summary.dump();
   result.kind = kind;
   if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
   const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
   for (const auto& e : summary["events"])
-    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"])});
+    result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"]),
+                             e["contact"].get<int>()});
   for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
   result.stability = summary["stability"].get<std::string>();
   if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
@@ -151,15 +234,15 @@ ProofResult Wrap(const proof::Outcome& outcome, const std::string& kind, const p
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
   if (system.damped())
     throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
-  const proof::Deadline deadline(request.time_limit);
+  const proof::Budget budget(request.time_limit, request.stop_requested);
   const auto model = ModelOf(system);
   proof::Outcome outcome;
-  std::string kind;
+  std::string kind, stage = "during the proof";
   const bool one_dof = system.dof() == 1 && system.contact_shape()(0) == 1;
   const auto sticking = [&]() {
     kind = "sticking";
     if (one_dof) {
-      outcome = proof::ProveSticking1Dof(model, request, deadline);  // r = 0, or r > 0 with chattering
+      outcome = proof::ProveSticking1Dof(model, request, budget);  // r = 0, or r > 0 with chattering
     } else {
       outcome.reason = "sticking orbits of a model with more than one mode are not proven by this version "
                        "(docs/prove.md)";
@@ -170,18 +253,22 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
   } else if (request.kind == OrbitKind::kAuto && one_dof && system.restitution() == 0) {
     sticking();  // r = 0, one mode: every impact is plastic, an orbit with impacts sticks or departs
   } else {
-    const auto found = FindImpactOrbit(system, scene, request);
-    if (found.sticking && request.kind == OrbitKind::kAuto) {
+    const auto found = FindImpactOrbit(system, scene, request, budget);
+    if (found.stopped) {
+      kind = request.kind == OrbitKind::kSticking ? "sticking" : "impact";
+      stage = fmt::format("during the orbit search (a transient of {} periods, then Newton)",
+                          request.start ? 0 : request.transient_periods);
+    } else if (found.sticking && request.kind == OrbitKind::kAuto) {
       sticking();
     } else {
       kind = "impact";
       if (found.sticking) outcome.reason = "the orbit found sticks: it is not an impacting orbit (try --kind sticking)";
       else if (!found.failure.empty()) outcome.reason = found.failure;
       else if (system.restitution() == 0) outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
-      else outcome = proof::ProveImpactOrbit(model, found.guess, request, deadline);
+      else outcome = proof::ProveImpactOrbit(model, found.guess, request, budget);
     }
   }
-  return Wrap(outcome, kind, model, request);
+  return Wrap(outcome, kind, model, request, budget, stage);
 }
 
 }  // namespace vibro
@@ -192,7 +279,7 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
                                                 const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
   if (system_lo.damped() || system_hi.damped())
     throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
-  const proof::Deadline deadline(lo.time_limit);
+  const proof::Budget budget(lo.time_limit, lo.stop_requested);
   auto model = ModelOf(system_lo);
   const auto model_hi = ModelOf(system_hi);
   proof::Outcome outcome;
@@ -216,16 +303,19 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
   if (!same_structure || differs.size() != 1) {
     outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
                      "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
-    return {Wrap(outcome, "impact", model, lo)};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
   }
-  const auto a = FindImpactOrbit(system_lo, scene_lo, lo), b = FindImpactOrbit(system_hi, scene_hi, hi);
+  const auto a = FindImpactOrbit(system_lo, scene_lo, lo, budget);
+  const auto b = a.stopped ? Found{} : FindImpactOrbit(system_hi, scene_hi, hi, budget);
+  if (a.stopped || b.stopped || budget.passed())
+    return {Wrap(outcome, "impact", model, lo, budget, "during the orbit search at the ends of the interval")};
   if (!a.failure.empty() || !b.failure.empty() || a.sticking || b.sticking) {
     outcome.reason = "no impacting orbit at one end: " + (a.failure.empty() ? b.failure : a.failure);
-    return {Wrap(outcome, "impact", model, lo)};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
   }
   if (a.guess.times.size() != b.guess.times.size() || a.guess.period != b.guess.period) {
     outcome.reason = "the orbits at the two ends have different impact sequences";
-    return {Wrap(outcome, "impact", model, lo)};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
   }
   // The parameter interval [p_lo, p_hi] is proven whole, or halved (at a decimal shared by both
   // halves) up to kMaxSplit times, each piece with the orbits interpolated between the two ends.
@@ -265,15 +355,15 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
       g.X[j] = (X0 + X1) / 2;
       g.V[j] = (V0 + V1) / 2;
     }
-    auto o = proof::ProveImpactOrbit(m, g, lo, deadline);
+    auto o = proof::ProveImpactOrbit(m, g, lo, budget);
     if (o.proven) {
       o.reason = "for every " + differs.front() + " in " + *field + ": " + o.reason;
-      results.push_back(Wrap(o, "impact", m, lo));
+      results.push_back(Wrap(o, "impact", m, lo, budget, "during the proof"));
       return true;
     }
     const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
     const std::string xm = Decimal(vm);
-    if (depth >= kMaxSplit || deadline.passed() || !(v0 < vm && vm < v1)) {
+    if (depth >= kMaxSplit || budget.passed() || !(v0 < vm && vm < v1)) {
       failure = fmt::format("{} in [{}, {}]: {}", differs.front(), x0, x1, o.reason);
       outcome = o;
       return false;
@@ -281,13 +371,13 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
     const double fm = f0 + (f1 - f0) / 2;
     return piece(x0, xm, f0, fm, depth + 1) && piece(xm, x1, fm, f1, depth + 1);
   };
-  if (piece(first, last, 0.0, 1.0, 0)) return results;
+  if (piece(first, last, 0.0, 1.0, 0) && !budget.interrupted()) return results;
   outcome.reason = "not proven over the whole interval: " + failure;
   *field = whole;
   return {Wrap(outcome, "impact", proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text,
                                                                         structure.contact_text, structure.shape_text, stop,
                                                                         restitution, amplitude, frequency),
-               lo)};
+               lo, budget, "during the proof")};
 }
 
 }  // namespace vibro

@@ -28,7 +28,7 @@ constexpr int kMaxFlights = 400;
 constexpr double kTailSwitch = 1e-7, kTailWidth = 1e-5;
 }
 
-Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Deadline& deadline) {
+Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Budget& budget) {
   Outcome out;
   Ledger ledger;
   const auto finish = [&](std::string reason) {
@@ -52,7 +52,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   const auto reaction = [&](const Interval& t) { return (w1s * mdl.stop - kappa * Sin(w * t)) / TB; };
 
   Json events = Json::array(), sequence = Json::array({"release"}), flights = Json::array();
-  events.push_back({{"kind", "release"}, {"time", Pair(tr)}, {"phase", Pair(Phase(mdl, tr))}, {"velocity_before", {0.0, 0.0}}});
+  events.push_back({{"kind", "release"}, {"contact", 0}, {"time", Pair(tr)}, {"phase", Pair(Phase(mdl, tr))}, {"velocity_before", {0.0, 0.0}}});
   const double top = std::max(w.hi(), mdl.omega[0].hi()), T = mdl.period.mid();
   const std::vector<Interval> X0{mdl.stop};
   std::vector<Interval> V0{Interval(0.0)};
@@ -125,7 +125,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
         found = true;
         break;
       }
-      if (deadline.passed()) return finish("time limit reached looking for the landing");
+      if (budget.passed()) return finish("time limit reached looking for the landing");
     }
     if (!found) return finish(fmt::format("the body does not land within 1000 periods ({})", fl));
     for (int it = 0; it < 200 && b - a > 4e-16 * b; ++it) {
@@ -149,7 +149,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
     const Interval after_window = Interval(S.lo()) - Interval(ws);
     if (!ledger.Check(after_window.Positive(), "landing after the start window", land, after_window, "> 0"))
       return finish("");
-    const auto pos = ProvePositive(ws, S.lo(), 0.25 / top, request.max_depth, deadline,
+    const auto pos = ProvePositive(ws, S.lo(), 0.25 / top, request.max_depth, budget,
                                    [&](double s) { return gap(Interval(s)); }, slope);
     if (!pos.proven) {
       ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", fl, pos.failed_at), pos.failed_value, "> 0");
@@ -192,7 +192,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
       flight["landing"] = Pair(N);
       flight["pieces"] = pieces;
       flights.push_back(flight);
-      events.push_back({{"kind", "impact"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(vminus)}});
+      events.push_back({{"kind", "impact"}, {"contact", 0}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(vminus)}});
       sequence.push_back("impact");
       landing_low = (t - tr + Interval(S.lo())).lo();
       if (vplus.hi() < kTailSwitch * first_speed || vplus.width() > kTailWidth * vplus.mid()) {
@@ -237,9 +237,9 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
                                    {"window", L},
                                    {"reaction_lower", A_low},   {"reaction_upper", A_high}, {"contraction", Pair(rho)},
                                    {"time_bound", Tmax.hi()},   {"accumulation", Pair(t_end)}};
-        events.push_back({{"kind", "accumulation"}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
+        events.push_back({{"kind", "accumulation"}, {"contact", 0}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
                           {"velocity_before", {0.0, 0.0}}});
-        events.push_back({{"kind", "stick"}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
+        events.push_back({{"kind", "stick"}, {"contact", 0}, {"time", Pair(t_end)}, {"phase", Pair(Phase(mdl, t_end))},
                           {"velocity_before", {0.0, 0.0}}});
         sequence.push_back("accumulation");
         sequence.push_back("stick");
@@ -259,18 +259,18 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
     flight["reaction_at_landing"] = Pair(R_land);
     flight["pieces"] = pieces;
     flights.push_back(flight);
-    events.push_back({{"kind", "impact"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
+    events.push_back({{"kind", "impact"}, {"contact", 0}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
     sequence.push_back("impact");
     if (R_land.Positive()) {
       ledger.Check(true, "reaction at the landing", land, R_land, "> 0");
-      events.push_back({{"kind", "stick"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
+      events.push_back({{"kind", "stick"}, {"contact", 0}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(gp)}});
       sequence.push_back("stick");
       landing_low = (t - tr + Interval(S.lo())).lo();
       t_end = tL;
       stuck = true;
     } else if (R_land.Negative()) {
       ledger.Check(true, "reaction at the landing", land, R_land, "< 0");  // the body departs at once
-      events.push_back({{"kind", "departure"}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", {0.0, 0.0}}});
+      events.push_back({{"kind", "departure"}, {"contact", 0}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", {0.0, 0.0}}});
       sequence.push_back("departure");
       t = tL;
       start_kind = "departure";
@@ -302,7 +302,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   const double from = landing_low - 1e-9 * (1 + std::abs(landing_low)), to = kT.hi() - 0.9 * we;
   Json stick_pieces = Json::array();
   if (from < to) {
-    const auto rpos = ProvePositive(from, to, 0.25 / top, request.max_depth, deadline,
+    const auto rpos = ProvePositive(from, to, 0.25 / top, request.max_depth, budget,
                                     [&](double s) { return reaction(tr + Interval(s)); },
                                     [&](const Interval& tau) { return -(kappa * w * Cos(w * (tr + tau))) / TB; });
     if (!rpos.proven) {

@@ -37,3 +37,25 @@ def test_prove_refuses_a_damped_scene_and_a_bad_period():
         vibro.prove(os.path.join(SCENES, "chain2_damped.toml"))
     with pytest.raises(ValueError):
         vibro.prove(os.path.join(SCENES, "fig04_subharmonic.toml"), period=-1)
+
+
+
+def test_ctrl_c_during_the_transient_of_a_proof_raises_keyboard_interrupt(tmp_path):
+    """vibro.prove(scene, transient=10**7) ignored Ctrl-C for 40 s and more (issue 38): now
+    KeyboardInterrupt, nothing proven, the certificate not written. The child is signalled once it
+    is observably inside the call (test_stop_requests.py's harness)."""
+    from test_stop_requests import LIMIT, _interrupt
+    code, out, err, elapsed = _interrupt("vibro.prove(scene, transient=10**7, out='c.json')", tmp_path)
+    assert code == 130 and "KeyboardInterrupt: vibro: proof interrupted" in out, (out, err)
+    assert not (tmp_path / "c.json").exists()
+    print(f"KeyboardInterrupt {elapsed:.3f} s after SIGINT")
+    assert elapsed < LIMIT, f"KeyboardInterrupt {elapsed:.2f} s after SIGINT"
+
+def test_the_time_limit_covers_the_transient():
+    """time_limit bounds the whole call, the transient included (it ran on past 120 s)."""
+    code = ("import vibro, json; print(json.dumps(vibro.prove(%r, transient=10**7, time_limit=1)))"
+            % os.path.join(SCENES, "fig05_coexistence.toml"))
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    r = json.loads(p.stdout)
+    assert r["verdict"] == "not-proven" and "time limit of 1 s" in r["reason"] and "orbit search" in r["reason"]

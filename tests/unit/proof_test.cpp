@@ -1,9 +1,12 @@
 // The prover's interval layer (src/proof/interval.cpp on Arb), its closed-form enclosures and its
 // certified tests, against truths computed another way: decimals that doubles cannot hold, libm at
 // sample points, conservation of energy, finite differences, known spectra.
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <random>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -11,6 +14,7 @@
 #include "proof/interval.hpp"
 #include "proof/positivity.hpp"
 #include "proof/proof_common.hpp"
+#include "vibro/stop_request.hpp"
 
 namespace vibro::proof {
 namespace {
@@ -91,7 +95,7 @@ TEST(Enclosure, TheImpactLawReversesAndScalesTheContactVelocity) {
 }
 
 TEST(Positivity, ProvesAPositiveFunctionAndLocatesTheFailureOfAnother) {
-  const Deadline deadline(60);
+  const Budget deadline(60, nullptr);
   // (s − 2)² ± 1e-6 on [0, 3]: positive with a narrow dip at 2, or negative within 1e-3 of 2.
   const auto slope = [](const Interval& s) { return Interval(2.0) * (s - Interval(2.0)); };
   const auto up = [](double s) { return Sqr(Interval(s) - Interval(2.0)) + Interval(1e-6); };
@@ -132,6 +136,58 @@ TEST(Spectrum, StabilityIsClaimedOnlyAwayFromTheUnitCircle) {
              std::abs(std::complex<double>(re, std::abs(im)) - std::complex<double>(a, b)) < 1e-12;
   }
   EXPECT_EQ(found, 3);
+}
+
+// A proof's budget (budget.hpp): the stop request ends it, the time limit ends it and the runs its
+// orbit search starts (they poll ProcessStopFlag(), which is the watchdog's flag inside Watch).
+TEST(Budget, AStopRequestAndTheTimeLimitEndTheProofAndTheRunsOfItsSearch) {
+  std::atomic<bool> stop{false};
+  const Budget stoppable(60, &stop);
+  EXPECT_FALSE(stoppable.passed());
+  stop.store(true);
+  EXPECT_TRUE(stoppable.passed());
+  EXPECT_TRUE(stoppable.interrupted());
+  EXPECT_FALSE(stoppable.expired());
+
+  const Budget short_budget(0.05, nullptr);
+  const std::atomic<bool>* outside = ProcessStopFlag();
+  bool seen = false;
+  const auto start = std::chrono::steady_clock::now();
+  short_budget.Watch([&] {
+    // As a transient polls between its events: the flag comes up once the time is over.
+    const std::atomic<bool>* flag = ProcessStopFlag();
+    ASSERT_NE(flag, outside);
+    while (!flag->load() && std::chrono::steady_clock::now() - start < std::chrono::seconds(60))
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    seen = flag->load();
+  });
+  EXPECT_TRUE(seen);
+  EXPECT_TRUE(short_budget.expired());
+  EXPECT_FALSE(short_budget.interrupted());
+  EXPECT_EQ(ProcessStopFlag(), outside);  // restored after the search
+}
+
+// Every request is bounded in memory: a positivity test that would need more pieces than a
+// certificate may hold, and an orbit with more unknowns than the prover takes, end not proven.
+TEST(Budget, ProofsAreBoundedInPiecesAndUnknowns) {
+  const Budget budget(60, nullptr);
+  const auto one = [](double) { return Interval(1.0); };
+  const auto flat = [](const Interval&) { return Interval(0.0); };
+  const auto wide = ProvePositive(0.0, 1e12, 1e-3, 40, budget, one, flat);
+  EXPECT_FALSE(wide.proven);
+  EXPECT_NE(wide.reason.find("pieces"), std::string::npos) << wide.reason;
+  const auto model = IntervalModel::FromDecimals({"1"}, {"1"}, {"1"}, {"1"}, "1", "0.75", "1.1", "10");
+  ImpactGuess guess;
+  guess.period = 64;
+  for (int j = 0; j < 64; ++j) {
+    guess.times.push_back(0.1 + j * 2 * M_PI / 10);
+    guess.X.push_back(Eigen::VectorXd::Constant(1, 1.0));
+    guess.V.push_back(Eigen::VectorXd::Constant(1, 0.28));
+  }
+  ProofRequest request;
+  const auto out = ProveImpactOrbit(model, guess, request, budget);  // 64 × 3 = 192 unknowns
+  EXPECT_FALSE(out.proven);
+  EXPECT_NE(out.reason.find("192 unknowns"), std::string::npos) << out.reason;
 }
 
 }  // namespace
