@@ -541,7 +541,9 @@ Branch Continue(const ContinuationRequest& req) {
       if (!pc || !SameFamily(cur, *pc) || (pc->y - guess).norm() > 0.2 * std::abs(reach) + 1e-12 * (1.0 + cur.y.norm()))
         return std::nullopt;
       const double v = test(*pc);
-      if (!std::isfinite(v)) return std::nullopt;
+      // A sample this close to the root is within the corrector's ill-conditioned zone (it may
+      // sit on the crossing branch): not trusted, neither as a value nor as a start for others.
+      if (!std::isfinite(v) || std::abs(v) < 1e-6 * std::max(std::abs(f0), std::abs(f1))) return std::nullopt;
       known.insert(above, {s, pc->y});
       return TestSample{s, pc->y[n2], v};
     };
@@ -551,7 +553,7 @@ Branch Continue(const ContinuationRequest& req) {
     int side = 0;
     bool bracketed = false;
     std::vector<double> widths = {hi, hi};
-    for (int it = 0; it < 100 && b - a > 1e-6 * hi; ++it) {
+    for (int it = 0; it < 100 && b - a > 1e-3 * hi; ++it) {
       if (stop_requested()) break;
       const double w = b - a;
       const bool bisect = w > 0.5 * widths[widths.size() - 2];
@@ -575,67 +577,74 @@ Branch Continue(const ContinuationRequest& req) {
         side = 1;
       }
     }
-    const double s_star = 0.5 * (a + b);
+    double s_star = 0.5 * (a + b);
     double at = bracketed ? 0.5 * (l_a + l_b) : fallback;
     bracket = bracketed ? std::abs(l_b - l_a) : bracket;
-    if (b - a > 1e-6 * hi || stop_requested()) return at;
-    // (2) The least-squares fit through samples on both sides.
-    const double h = 1e-4 * hi;
-    std::vector<TestSample> xs;
-    int below = 0, above = 0;
-    for (double k : {-4.0, -3.0, -2.0, -1.0, 1.0, 2.0, 3.0, 4.0}) {
-      if (stop_requested()) return at;
-      const double s = s_star + k * h;
-      if (s <= 0 || s >= hi) continue;
-      if (const auto x = sample(s)) {
-        xs.push_back(*x);
-        (k < 0 ? below : above) += 1;
-      }
-    }
-    if (below < 2 || above < 2 || xs.size() < 6) return at;
-    double centre = 0, width = 0;
-    for (const auto& x : xs) centre += x.lambda / static_cast<double>(xs.size());
-    for (const auto& x : xs) width = std::max(width, std::abs(x.lambda - centre));
-    if (!(width > 0)) return at;
-    const auto fit_root = [&](int degree, double* noise) {
-      Eigen::MatrixXd A(xs.size(), degree + 1);
-      Eigen::VectorXd f(xs.size());
-      for (size_t i = 0; i < xs.size(); ++i) {
-        const double u = (xs[i].lambda - centre) / width;
-        for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow(u, d);
-        f[static_cast<long>(i)] = xs[i].f;
-      }
-      const Eigen::VectorXd c = A.colPivHouseholderQr().solve(f);
-      const auto poly = [&](double u, double* slope) {
-        double v = 0, dv = 0;
-        for (int d = degree; d >= 0; --d) {
-          dv = dv * u + v;
-          v = v * u + c[d];
+    if (b - a > 1e-3 * hi || stop_requested()) return at;
+    // (2) The least-squares fit through samples on both sides: first at 2e-3 to 8e-3 of the step
+    // from the bracket's middle, then at 1e-4 to 4e-4 of it from the first fit's root.
+    for (const double h : {2e-3 * hi, 1e-4 * hi}) {
+      std::vector<TestSample> xs;
+      int below = 0, above = 0;
+      for (double k : {-4.0, -3.0, -2.0, -1.0, 1.0, 2.0, 3.0, 4.0}) {
+        if (stop_requested()) return at;
+        const double s = s_star + k * h;
+        if (s <= 0 || s >= hi) continue;
+        if (const auto x = sample(s)) {
+          xs.push_back(*x);
+          (k < 0 ? below : above) += 1;
         }
-        if (slope) *slope = dv;
-        return v;
+      }
+      if (below < 2 || above < 2 || xs.size() < 6) return at;
+      double centre = 0, width = 0;
+      for (const auto& x : xs) centre += x.lambda / static_cast<double>(xs.size());
+      for (const auto& x : xs) width = std::max(width, std::abs(x.lambda - centre));
+      if (!(width > 0)) return at;
+      const auto fit_root = [&](int degree, double* noise) {
+        Eigen::MatrixXd A(xs.size(), degree + 1);
+        Eigen::VectorXd f(xs.size());
+        for (size_t i = 0; i < xs.size(); ++i) {
+          const double u = (xs[i].lambda - centre) / width;
+          for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow(u, d);
+          f[static_cast<long>(i)] = xs[i].f;
+        }
+        const Eigen::VectorXd c = A.colPivHouseholderQr().solve(f);
+        const auto poly = [&](double u, double* slope) {
+          double v = 0, dv = 0;
+          for (int d = degree; d >= 0; --d) {
+            dv = dv * u + v;
+            v = v * u + c[d];
+          }
+          if (slope) *slope = dv;
+          return v;
+        };
+        double u = -c[0] / c[1];  // Newton from the linear root
+        for (int it = 0; it < 50; ++it) {
+          double slope = 0;
+          const double v = poly(u, &slope);
+          const double du = v / slope;
+          u -= du;
+          if (std::abs(du) < 1e-17) break;
+        }
+        if (noise) {
+          double slope = 0;
+          poly(u, &slope);
+          const double rms = std::sqrt((A * c - f).squaredNorm() / static_cast<double>(xs.size()));
+          *noise = rms / std::abs(slope) * width;
+        }
+        return centre + u * width;
       };
-      double u = -c[0] / c[1];  // Newton from the linear root
-      for (int it = 0; it < 50; ++it) {
-        double slope = 0;
-        const double v = poly(u, &slope);
-        const double du = v / slope;
-        u -= du;
-        if (std::abs(du) < 1e-17) break;
-      }
-      if (noise) {
-        double slope = 0;
-        poly(u, &slope);
-        const double rms = std::sqrt((A * c - f).squaredNorm() / static_cast<double>(xs.size()));
-        *noise = rms / std::abs(slope) * width;
-      }
-      return centre + u * width;
-    };
-    double noise = 0;
-    const double root3 = fit_root(3, &noise), root4 = fit_root(4, nullptr);
-    if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 2.0 * width)) return at;
-    bracket = std::abs(root4 - root3) + noise;
-    return root3;
+      double noise = 0;
+      const double root3 = fit_root(3, &noise), root4 = fit_root(4, nullptr);
+      if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 2.0 * width)) return at;
+  bracket = std::abs(root4 - root3) + noise;
+      at = root3;
+      // The arclength of the root, for the next pass: interpolated between the samples.
+      for (size_t i = 1; i < xs.size(); ++i)
+        if ((xs[i - 1].lambda - root3) * (xs[i].lambda - root3) <= 0 && xs[i].lambda != xs[i - 1].lambda)
+          s_star = xs[i - 1].s + (root3 - xs[i - 1].lambda) / (xs[i].lambda - xs[i - 1].lambda) * (xs[i].s - xs[i - 1].s);
+    }
+    return at;
   };
 
   // Moves the section to the middle of the longest free flight of `cur` (when an event comes near

@@ -133,9 +133,10 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
                  several ? p.sequence : p.signature);
     }
     for (const auto& b : branch.bifurcations)
-      fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
+      fmt::print("bifurcation  {} at {} = {:#.17g} (bracket {:.1e}): {}\n", b.kind, key, b.value, b.bracket, b.detail);
     for (const auto& r : branch.relabels)
-      fmt::print("relabel      {} → {} at {} = {:.15g} (no bifurcation): {}\n", r.from, r.to, key, r.value, r.detail);
+      fmt::print("relabel      {} → {} at {} = {:#.17g} (bracket {:.1e}; no bifurcation): {}\n", r.from, r.to, key,
+                 r.value, r.bracket, r.detail);
     fmt::print("end          {}\n", branch.end);
     if (branch.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
