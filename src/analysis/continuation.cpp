@@ -714,7 +714,7 @@ Branch Continue(const ContinuationRequest& req) {
             return tc[n2];
           },
           ds, 0.5 * (cur.y[n2] + next->y[n2]), bracket);
-      if (nearest_one < 1e-5 && !stop_requested())
+      if (nearest_one < 1e-3 && !stop_requested())
         fold = Bifurcation{"fold", at,
                            fmt::format("the branch turns back (λ-tangent changes sign; the nearest multiplier "
                                        "is {:.1e} from +1)", nearest_one),
