@@ -494,7 +494,10 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
   SegmentResultT<S> best{SegmentEnd::kLimit, sigma_max, {}};
   for (int j = 0; j < static_cast<int>(contacts_.size()); ++j) {
     if (j == skip_) continue;
-    const FlightStart start = starts_[static_cast<size_t>(j)];
+    // A start kind is a known zero only while the gap is 0 (the automaton resets it once the gap
+    // opens; a zero divided out from a non-zero gap would skip its next root).
+    const FlightStart start = gap0s_[static_cast<size_t>(j)] == S(0) ? starts_[static_cast<size_t>(j)]
+                                                                      : FlightStart::kGeneric;
     const S w = start == FlightStart::kGeneric
                     ? S(0)
                     : CertifiedWindow<S>(start, StartJet<S>(*contacts_[static_cast<size_t>(j)].m, X0_, V0_,
@@ -558,7 +561,8 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
     // A gap that starts at zero (an impact or a departure at this contact while the other was
     // held) divides out its known zero as a flight does (docs/model.md §2.1).
     S wk(0);
-    const FlightStart start = starts_[static_cast<size_t>(k)];
+    const FlightStart start = gap0s_[static_cast<size_t>(k)] == S(0) ? starts_[static_cast<size_t>(k)]
+                                                                      : FlightStart::kGeneric;
     if (start != FlightStart::kGeneric) wk = CertifiedWindow<S>(start, HeldGapStartJet(k), h_cap_);
     if (wk >= best.sigma) continue;
     auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },
