@@ -742,6 +742,61 @@ for amp in ("3",):
     del undamped["model"]["damping"]
     run(f"{label}: the damping left out", undamped, "rejected")
 
+# Several contacts: the damped tube in its two-sided support (docs/prove.md), against Newton on its
+# shooting map; the contacts of the events and of the model edited.
+tube_path = os.path.join(TMP, "tube.toml")
+with open(tube_path, "w") as fh:
+    fh.write("""title = "tube"
+[structure]
+mass = [[2.0, 0.0], [0.0, 1.0]]
+stiffness = [[4.0, -1.0], [-1.0, 1.0]]
+forcing_dof = 0
+damping_ratios = [0.02, 0.02]
+[[contact]]
+dof = 1
+side = "below"
+position = -0.1
+restitution = 0.7
+[[contact]]
+dof = 1
+side = "above"
+position = 0.1
+restitution = 0.7
+[excitation]
+amplitude = 0.3
+frequency = 0.9
+[initial]
+displacement = [0.0, 0.0]
+velocity = [0.0, 0.0]
+""")
+cert = prove("tube", tube_path)
+if cert is not None and timed_check("tube (two contacts, damped)", cert):
+    st = shooting_truth(cert)
+    truth = {"events": st["events"], "section": st["section"], "w": st["w"], "multipliers": None}
+    summary_edits("tube", cert, truth, full=False)
+    ledger_edits("tube", cert, count=3)
+    proof_data_edits("tube", cert, [["box", 1], ["flights", 0, "gaps", 1, "pieces", 0], ["flights", 1, "end_window"],
+                                    ["flights", 0, "gaps", 0, "second_derivative_bound"]])
+    hits = cert["impact_contacts"]
+    more = cert["model"]["more_contacts"][0]
+    for what, path, value, expected in (
+            ("an event at the other contact", ["summary", "events", 0, "contact"], 1 - hits[0], "rejected"),
+            ("the impacts swapped between the contacts", ["impact_contacts"], hits[::-1], "rejected"),
+            ("an impact at contact 2 (there is none)", ["impact_contacts", 0], 2, "malformed"),
+            ("contact 1's stop moved by 1e-6", ["model", "more_contacts", 0, "stop"],
+             mp.nstr(mpf(more["stop"]) + mpf("1e-6"), 20), "rejected"),
+            ("contact 1's restitution moved by 1e-6", ["model", "more_contacts", 0, "restitution"],
+             mp.nstr(mpf(more["restitution"]) - mpf("1e-6"), 20), "rejected"),
+            ("contact 1's shape of the wrong length", ["model", "more_contacts", 0, "shape"], more["shape"][:1],
+             "malformed"),
+            ("contact 1 given an unknown key", ["model", "more_contacts", 0], dict(more, side="above"), "malformed"),
+            ("a flight's gaps of the wrong contact", ["flights", 0, "gaps", 1, "contact"], 0, "malformed"),
+            ("a flight's gaps of contact 1 emptied", ["flights", 0, "gaps", 1, "pieces"], [], "malformed")):
+        run(f"tube: {what}", mutate(cert, path, value), expected)
+    single = copy.deepcopy(cert)
+    del single["model"]["more_contacts"]
+    run("tube: the second contact left out of the model", single, "rejected")
+
 # A branch: points and a segment whose parameter is an interval.
 branch = os.path.join(TMP, "branch.h5")
 p = subprocess.run([VIBRO, "continue", os.path.join(SCENES, "fig05_coexistence.toml"), "--kind", "impact", "--param",
