@@ -411,7 +411,6 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
 std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::string& kind, long long period,
                                                  long long transient, const std::string& from, double time_limit,
                                                  bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "prove");
   vibro::frontend::CheckOrbitOptions(kPython, period, 0, transient, std::nullopt, std::nullopt);
   if (!(time_limit > 0) || !std::isfinite(time_limit))
     throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
@@ -427,8 +426,6 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
       throw vibro::InputError({fmt::format("from {}: an orbit of {} modes, the scene has {}", from,
                                            req.start->X.size(), sys.dof())});
   }
-  if (sys.damped())
-    throw vibro::InputError({"vibro.prove covers undamped models only: the scene has modal damping (damping_ratios)"});
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
   req.stop_requested = guard.flag();
