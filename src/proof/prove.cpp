@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "proof/proof_common.hpp"
+#include "proof/prove_api.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -231,7 +232,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
 
 }  // namespace
 
-ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
+ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
   if (system.damped())
     throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
   const proof::Budget budget(request.time_limit, request.stop_requested);
@@ -275,8 +276,9 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 
 namespace vibro {
 
-std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
-                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo,
+                                                       const ProofRequest& lo, const System& system_hi,
+                                                       const Scene& scene_hi, const ProofRequest& hi) {
   if (system_lo.damped() || system_hi.damped())
     throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
   const proof::Budget budget(lo.time_limit, lo.stop_requested);
@@ -381,3 +383,10 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
 }
 
 }  // namespace vibro
+
+namespace {
+const VibroProveApi kApi{sizeof(vibro::ProofResult), sizeof(vibro::ProofRequest), &vibro::proof::ProveOrbit,
+                         &vibro::proof::ProveOrbitOverInterval};
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const VibroProveApi* vibro_prove_api() { return &kApi; }
