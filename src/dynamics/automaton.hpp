@@ -180,6 +180,7 @@ class Automaton {
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
+      pair_speed_.assign(models_.size(), S(-1));
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
         if (j >= specs.size()) {
@@ -222,6 +223,7 @@ class Automaton {
   // cancellation), and what follows an event at contact k.
   void UpdateGaps(PropagatorT<S>& p, const S& sigma);
   bool OnContactMulti(int k);
+  bool PairChatter(int k);
   bool ImpactWhileHeld(int k);
   // Sticking on two or more contacts at once (docs/contacts.md): the held set's propagator, a
   // contact closing while the set is held, and the acceleration LCP that decides which contacts
@@ -309,6 +311,11 @@ class Automaton {
   std::vector<S> gaps_;         // several contacts: every gap (0 for the held one)
   std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
   std::vector<std::string> labels_;  // several contacts: each one's constraint, "q0 - q2 >= -1"
+  // Several contacts: impacts alternating between two contacts (PairChatter): the last one's
+  // contact and time, how many alternations in a row, each contact's last closing speed (−1: none).
+  int pair_last_ = -1, pair_cascade_ = 0;
+  double pair_t_ = 0;
+  std::vector<S> pair_speed_;
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "proof/proof_common.hpp"
+#include "proof/prove_api.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -287,7 +288,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
 
 }  // namespace
 
-ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
+ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
   const proof::Budget budget(request.time_limit, request.stop_requested);
   const auto model = ModelOf(system);
   proof::Outcome outcome;
@@ -336,8 +337,9 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 
 namespace vibro {
 
-std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
-                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo,
+                                                       const ProofRequest& lo, const System& system_hi,
+                                                       const Scene& scene_hi, const ProofRequest& hi) {
   const proof::Budget budget(lo.time_limit, lo.stop_requested);
   auto model = ModelOf(system_lo);
   const auto model_hi = ModelOf(system_hi);
@@ -451,3 +453,10 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
 }
 
 }  // namespace vibro
+
+namespace {
+const VibroProveApi kApi{sizeof(vibro::ProofResult), sizeof(vibro::ProofRequest), &vibro::proof::ProveOrbit,
+                         &vibro::proof::ProveOrbitOverInterval};
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const VibroProveApi* vibro_prove_api() { return &kApi; }

@@ -210,7 +210,27 @@ with tempfile.TemporaryDirectory() as d:
         q = X @ np.asarray(f["model"].attrs["mode_shapes"]).reshape(-1, X.shape[1]).T
     check("several contacts: the samples keep q0 between its stops at -0.1 and 0.1",
           (q[:, 0] >= -0.1 - 1e-9).all() and (q[:, 0] <= 0.1 + 1e-9).all(), (q[:, 0].min(), q[:, 0].max()))
-    p = plot(beam, "beam3q", "--coordinate", "q1")
-    check("several contacts: --coordinate refused (exit 2)", p.returncode == 2 and "gaps" in p.stderr, p.stderr)
+    # A refused plot writes nothing (issue 38): every option is checked before the first picture,
+    # here options that were refused only after PREFIX_loads had been written.
+    for prefix, options, why in (("refq", ("--coordinate", "q1"), "gaps"),
+                                 ("refw", ("--time-window", "1e300,1e301"), "--time-window"),
+                                 ("refo", ("--overlay", beam), "--overlay")):
+        p = plot(beam, prefix, *options)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"several contacts: plot {' '.join(options[:1])} refused (exit 2, says why), nothing written",
+              p.returncode == 2 and why in p.stderr and not made, (p.returncode, p.stderr, made))
+    p = plot(c3, "refw3", "--time-window", "1e300,1e301")
+    made = [n for n in os.listdir(d) if n.startswith("refw3")]
+    check("--time-window outside the run: exit 2, nothing written", p.returncode == 2 and not made,
+          (p.returncode, p.stderr, made))
+    # A title matplotlib cannot typeset, or too long for any picture: named, not "data damaged".
+    for prefix, title, why in (("reft1", "$\\frac{$", "cannot typeset"), ("reft2", "x" * 10000, "10000 characters")):
+        p = plot(c3, prefix, "--title", title)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"--title {title[:12]!r}: exit 2 naming the title, nothing written",
+              p.returncode == 2 and "--title" in p.stderr and why in p.stderr and "damaged" not in p.stderr
+              and len(p.stderr.strip().splitlines()) == 1 and not made, (p.returncode, p.stderr[:300], made))
+    p = plot(c3, "okt", "--title", "$\\omega = 1.2$, $x_B$")
+    check("--title with mathtext that typesets: exit 0", p.returncode == 0, p.stderr)
 
 finish()
