@@ -158,7 +158,19 @@ int main(int argc, char** argv) {
   cont->add_option("--transient", cont_transient, "periods simulated before the first Newton (default 200; 0: from [initial])")
       ->check(CLI::NonNegativeNumber);
   auto* cont_from_opt = cont->add_option("--from", cont_from, "restart from a branch stored by vibro continue --out");
-  cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(cont_from_opt);
+  auto* cont_point_opt =
+      cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(cont_from_opt);
+  bool cont_switch = false;
+  std::string cont_side = "above";
+  auto* cont_switch_opt = cont->add_flag("--switch", cont_switch,
+                                         "follow the other branch through the branch-point or flip of --from next to "
+                                         "point K (the period-doubled branch at a flip)")
+                              ->needs(cont_point_opt);
+  cont->add_option("--side", cont_side,
+                   "with --switch at a pitchfork whose two halves both head for --to: the half whose x_B at the "
+                   "section lies above (default) or below the old branch's")
+      ->check(CLI::IsMember({"above", "below"}))
+      ->needs(cont_switch_opt);
   StudyArgs study_args;
   CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
   CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
@@ -351,7 +363,7 @@ int main(int argc, char** argv) {
       if (!cont_from.empty() && cont_point < 0)
         throw vibro::InputError({"--from " + cont_from + ": give the point to restart from with --point K"});
       return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out,
-                         cont_from, cont_point);
+                         cont_from, cont_point, cont_switch ? cont_side : std::string());
     }
   } catch (const vibro::InputError& e) {
     for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", OneLine(m));
