@@ -181,6 +181,7 @@ class Automaton {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
       pair_speed_.assign(models_.size(), S(-1));
+      last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
         if (j >= specs.size()) {
@@ -231,7 +232,10 @@ class Automaton {
   bool Held(int j) const { return std::find(held_set_.begin(), held_set_.end(), j) != held_set_.end(); }
   SetStickingT<S>* SetEngine();
   SetStickingT<S>* SetEngineFor(const std::vector<int>& set, std::string& why);
-  bool ImpactWhileSetHeld(int k);
+  // `resting`: free contacts at zero gap, at rest or closing, that the impact at k reaches (they
+  // join its LCP); `was`: the held contacts (the set, or the single held contact).
+  bool ImpactWhileSetHeld(int k, const std::vector<int>& was, const std::vector<int>& resting = {});
+  std::vector<int> RestingBeside(int k) const;
   bool EnterActiveSet(std::vector<int> Z0, const std::vector<int>& was_held, bool emit_sticks = true);
   void ProjectOntoSet(const std::vector<int>& Z);
   int HeldChatter(int k, const S& speed, const S& floor);
@@ -316,6 +320,10 @@ class Automaton {
   int pair_last_ = -1, pair_cascade_ = 0;
   double pair_t_ = 0;
   std::vector<S> pair_speed_;
+  // Several contacts: each contact's last impact time (a tail beside a recent impact of another
+  // contact is not one contact's chattering tail, RecentOtherImpact).
+  std::vector<double> last_impact_t_;
+  bool RecentOtherImpact(int k, const S& delta) const;
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
@@ -390,6 +398,7 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
   Count(result_.counts, kind, simultaneous);
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
+  if (multi() && kind == EventKind::kImpact) last_impact_t_[static_cast<size_t>(contact)] = e.t;
   for (auto* o : opt_.observers) o->OnEvent(e);
 }
 
@@ -677,8 +686,9 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     ++result_.chatter.impacts_followed;
     return false;
   }
-  // Several contacts (MODEL §11.6): the tail holds only if every other gap stays open over it.
-  if (multi() && !TailClearOfOtherContacts(delta)) {
+  // Several contacts (MODEL §11.6): the tail holds only if every other gap stays open over it,
+  // and no other contact took part in the sequence.
+  if (multi() && (RecentOtherImpact(active_, delta) || !TailClearOfOtherContacts(delta))) {
     ++result_.chatter.impacts_followed;
     return false;
   }
