@@ -248,6 +248,17 @@ class Automaton {
   Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
   // What may resolve an undetermined sequence: quad precision where it is not already in use (it
   // runs every scene the double engine runs, damped sticking of several modes included).
+  // Several contacts: " at contact j (its constraint)", and the held ones; one contact: "".
+  std::string AtContact() const {
+    if (!multi()) return "";
+    std::string s = fmt::format(" at contact {} ({})", active_, labels_[static_cast<size_t>(active_)]);
+    if (held_set_.size() > 1) {
+      std::string who;
+      for (const int j : held_set_) who += (who.empty() ? "" : ", ") + std::to_string(j);
+      s += fmt::format(", contacts {} held", who);
+    }
+    return s;
+  }
   std::string UndeterminedHint() const {
     if (std::is_same_v<S, double>)
       return fmt::format("Use run.precision = \"quad\"{}, or move the parameter",
@@ -986,8 +997,8 @@ RunResult Automaton<S>::Run() {
     stretch_loads_ = false;
     if (seg.end == SegmentEnd::kFailure) {
       if (StopPolled()) continue;  // reported as an interruption at the top of the loop
-      Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),
-                       mode_ == Mode::kFree ? "free flight" : "sticking"),
+      Fail(fmt::format("{} (t = {:.17g}, mode {}{})", seg.message, AbsTime(clock_),
+                       mode_ == Mode::kFree ? "free flight" : "sticking", AtContact()),
            seg.undetermined ? RunStatus::kUndetermined : RunStatus::kNumericalFailure);
       break;
     }
@@ -1008,9 +1019,9 @@ RunResult Automaton<S>::Run() {
     if (!Guarded()) break;
     stalled = seg.sigma <= tiny ? stalled + 1 : 0;
     if (stalled > 1000) {
-      Fail(fmt::format("no progress at t = {:.17g}: 1000 consecutive events without time "
+      Fail(fmt::format("no progress at t = {:.17g}{}: 1000 consecutive events without time "
                        "advancing (degenerate contact)",
-                       AbsTime(clock_)));
+                       AbsTime(clock_), AtContact()));
       break;
     }
     if (seg.end == SegmentEnd::kLimit) {
@@ -1023,9 +1034,9 @@ RunResult Automaton<S>::Run() {
     if (seg.end == SegmentEnd::kContact) {
       if (!(multi() ? OnContactMulti(seg.contact) : OnContact())) break;
       if (grazing_streak_ > 1000) {
-        Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}: the contact is "
+        Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}{}: the contact is "
                          "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
-                         AbsTime(clock_),
+                         AbsTime(clock_), AtContact(),
                          cvode_ ? "; tighten run.rtol or use run.engine = \"exact\""
                                 : " (e.g. next to a rising bifurcation); move the parameter slightly"));
         break;
