@@ -307,6 +307,13 @@ def dcos(x):
     return iv.cos(x)
 
 
+def dexp(x):
+    if isinstance(x, D):
+        e = iv.exp(x.v)
+        return D(e, {k: e * d for k, d in x.g.items()})
+    return iv.exp(x)
+
+
 def value(x):
     return x.v if isinstance(x, D) else x
 
@@ -321,10 +328,11 @@ MODEL_KEYS = ("frequencies", "forcing", "contact", "shape", "stop", "restitution
 
 
 class Model:
-    """The undamped modal model of docs/model.md with exact decimal parameters."""
+    """The modal model of docs/model.md with exact decimal parameters: undamped, or with the modal
+    damping ratios ζ_i of docs/model.md §7 ("damping", one per mode)."""
 
     def __init__(self, node):
-        node.obj(MODEL_KEYS)
+        node.obj(MODEL_KEYS, ("damping", "more_contacts"))
         lists = {k: node[k].items(at_least=1, at_most=MAX_MODES) for k in MODEL_KEYS[:4]}
         n = len(lists["frequencies"])
         for k in MODEL_KEYS[1:4]:
@@ -350,15 +358,73 @@ class Model:
         self.point = not any(isinstance(t, str) and t.startswith("[") for t in
                              [self.texts["stop"], self.texts["restitution"], self.texts["amplitude"],
                               self.texts["frequency"]] + [t for k in MODEL_KEYS[:4] for t in self.texts[k]])
+        self.zeta = None
+        if node.has("damping"):
+            items = node["damping"].items(exactly=n)
+            self.zeta = [decimal(x) for x in items]
+            for k, z in enumerate(self.zeta):
+                if not (lo(z) >= 0 and hi(z) < 1):
+                    items[k].fail("a damping ratio must lie in [0, 1)")
+            self.texts["damping"] = node["damping"].v
+            self.point = self.point and not any(isinstance(t, str) and t.startswith("[") for t in node["damping"].v)
         self.sA = sum((ci * ti for ci, ti in zip(self.c, self.TA)), ZERO)
         self.sB = sum((ci * ti for ci, ti in zip(self.c, self.TB)), ZERO)
+        # Every contact as (c_j, T_j, e_j, r_j, W_jj = c_j·T_j): the gap c_j·X − e_j ≥ 0 (docs/contacts.md).
+        self.contacts = [(self.c, self.TB, self.x0, self.r, self.sB)]
+        if node.has("more_contacts"):
+            for k, cn in enumerate(node["more_contacts"].items(at_least=1, at_most=MAX_MODES)):
+                cn.obj(("shape", "contact", "stop", "restitution"))
+                c = [decimal(x) for x in cn["shape"].items(exactly=n)]
+                T = [decimal(x) for x in cn["contact"].items(exactly=n)]
+                e, r = decimal(cn["stop"]), decimal(cn["restitution"])
+                if not (lo(r) >= 0 and hi(r) <= 1):
+                    cn["restitution"].fail("the restitution must lie in [0, 1]")
+                W = sum((ci * ti for ci, ti in zip(c, T)), ZERO)
+                if not positive(W):
+                    cn.fail("the contact's inverse effective mass shape·contact must be > 0")
+                self.point = self.point and not any(isinstance(t, str) and t.startswith("[") for t in
+                                                    cn.v["shape"] + cn.v["contact"] + [cn.v["stop"], cn.v["restitution"]])
+                self.contacts.append((c, T, e, r, W))
         self.T = 2 * iv.pi / self.w
+
+    def damped_flight(self, t0, X, V, s):
+        """The damped free flight (docs/model.md §7), written directly: per mode the forced response
+        U = P sin ωt + Q cos ωt solving Ü + 2σU̇ + ω_i²U = T_A f sin ωt (σ = ζω_i), plus the free decay
+        e^{−σs}(a cos ω_d s + b sin ω_d s), ω_d = ω_i√(1 − ζ²), matching X and V at t0."""
+        dual = any(isinstance(z, D) for z in (t0, s, *X, *V))
+        L = D.lift if dual else (lambda z: z)
+        t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
+        Xo, Vo = [], []
+        for i in range(self.n):
+            wi, w = self.w_i[i], self.w
+            sg = self.zeta[i] * wi
+            wd = wi * iv.sqrt(1 - self.zeta[i] ** 2)
+            det, damp = wi * wi - w * w, 2 * sg * w
+            P = L(self.TA[i] * self.f * det / (det * det + damp * damp))
+            Q = L(-self.TA[i] * self.f * damp / (det * det + damp * damp))
+            w, sg, wd = L(w), L(sg), L(wd)
+            U = lambda t: P * dsin(w * t) + Q * dcos(w * t)  # noqa: E731
+            Ud = lambda t: w * (P * dcos(w * t) - Q * dsin(w * t))  # noqa: E731
+            a = X[i] - U(t0)
+            b = (V[i] - Ud(t0) + a * sg) / wd
+            e, cd, sd = dexp(-(s * sg)), dcos(s * wd), dsin(s * wd)
+            Xo.append(U(t0 + s) + e * (a * cd + b * sd))
+            Vo.append(Ud(t0 + s) + e * ((b * wd - a * sg) * cd - (a * wd + b * sg) * sd))
+        return Xo, Vo
+
+    def acceleration(self, t, X, V):
+        """The free modal accelerations Ẍ_i = T_A,i f sin ωt − ω_i² X_i − 2ζ_iω_i Ẋ_i."""
+        load = self.f * iv.sin(self.w * t)
+        z = self.zeta or [ZERO] * self.n
+        return [self.TA[i] * load - self.w_i[i] ** 2 * X[i] - 2 * z[i] * self.w_i[i] * V[i] for i in range(self.n)]
 
     def flight(self, t0, X, V, s):
         """The closed-form free flight from (t0, X, V) over s (eqs (13)-(14)) in the cancellation-free
         form of docs/model.md §2: X(t0+s) = X cos ω_i s + V sin(ω_i s)/ω_i + T_A f K(s),
         K = [sin ωt0 (cos ωs − cos ω_i s) + cos ωt0 (sin ωs − (ω/ω_i) sin ω_i s)]/(ω_i² − ω²),
-        cos x − 1 = −2 sin²(x/2). Works on intervals and on D."""
+        cos x − 1 = −2 sin²(x/2). Works on intervals and on D. Damped: damped_flight."""
+        if self.zeta is not None:
+            return self.damped_flight(t0, X, V, s)
         if any(isinstance(z, D) for z in (t0, s, *X, *V)):
             L = D.lift
             t0, s, X, V = L(t0), L(s), [L(x) for x in X], [L(v) for v in V]
@@ -382,35 +448,55 @@ class Model:
             Vo.append(V[i] + V[i] * c_m1 - X[i] * wi * sn + kappa * Kp)
         return Xo, Vo
 
-    def contact_of(self, X):
-        """c·X (x_B, or ẋ_B of velocities)."""
+    def contact_of(self, X, j=0):
+        """c_j·X (x_B, or ẋ_B of velocities; contact j's gap plus e_j, or its gap velocity)."""
         out = ZERO
-        for ci, xi in zip(self.c, X):
+        for ci, xi in zip(self.contacts[j][0], X):
             out = xi * ci + out if not isinstance(xi, D) else xi * D(ci) + out
         return out
 
-    def impact(self, V):
-        """The restitution law (10)-(12): Ẋ⁺ = Ẋ⁻ − (1+r) T_B c·Ẋ⁻/s_B."""
-        p = self.contact_of(V) * (-(1 + self.r) / self.sB)
-        return [V[i] + p * self.TB[i] if not isinstance(p, D) else D.lift(V[i]) + p * D(self.TB[i])
+    def impact(self, V, j=0):
+        """The restitution law (10)-(12) at contact j: Ẋ⁺ = Ẋ⁻ − (1+r_j) T_j c_j·Ẋ⁻/W_jj."""
+        c, T, e, r, W = self.contacts[j]
+        p = self.contact_of(V, j) * (-(1 + r) / W)
+        return [V[i] + p * T[i] if not isinstance(p, D) else D.lift(V[i]) + p * D(T[i])
                 for i in range(self.n)]
 
-    def contact_acceleration(self, t, X):
-        a = self.sA * self.f * iv.sin(self.w * t)
+    def contact_acceleration(self, t, X, j=0):
+        c = self.contacts[j][0]
+        a = sum((ci * ti for ci, ti in zip(c, self.TA)), ZERO) * self.f * iv.sin(self.w * t)
         for i in range(self.n):
-            a = a - self.c[i] * self.w_i[i] ** 2 * X[i]
+            a = a - c[i] * self.w_i[i] ** 2 * X[i]
         return a
 
-    def derivative_bound(self, t0, X, V, order):
-        """max over s of |d^order/ds^order c·X(t0+s)|: the sum of the amplitudes times pulsation^order."""
+    def derivative_bound(self, t0, X, V, order, j=0):
+        """max over s of |d^order/ds^order c·X(t0+s)|: the sum of the amplitudes times pulsation^order.
+        Damped: a mode's free part e^{−σs}(a cos ω_d s + b sin ω_d s) is Re((a − ib) e^{(−σ+iω_d)s}),
+        |−σ + iω_d| = ω_i, so for s ≥ 0 its derivatives are at most √(a² + b²) ω_i^order."""
+        cj = self.contacts[j][0]
+        if self.zeta is not None:
+            total, fs, fc = ZERO, ZERO, ZERO
+            for i in range(self.n):
+                wi, w = self.w_i[i], self.w
+                sg = self.zeta[i] * wi
+                wd = wi * iv.sqrt(1 - self.zeta[i] ** 2)
+                det, damp = wi * wi - w * w, 2 * sg * w
+                P = self.TA[i] * self.f * det / (det * det + damp * damp)
+                Q = -self.TA[i] * self.f * damp / (det * det + damp * damp)
+                A = X[i] - P * iv.sin(w * t0) - Q * iv.cos(w * t0)
+                B = (V[i] - w * (P * iv.cos(w * t0) - Q * iv.sin(w * t0)) + sg * A) / wd
+                total += abs(cj[i]) * wi ** order * iv.sqrt(A * A + B * B)
+                fs += cj[i] * P
+                fc += cj[i] * Q
+            return total + iv.sqrt(fs * fs + fc * fc) * self.w ** order
         total, forced = ZERO, ZERO
         for i in range(self.n):
             wi = self.w_i[i]
             amp = self.TA[i] * self.f / (wi * wi - self.w * self.w)
             A = X[i] - amp * iv.sin(self.w * t0)
             B = (V[i] - amp * self.w * iv.cos(self.w * t0)) / wi
-            total += abs(self.c[i]) * wi ** order * iv.sqrt(A * A + B * B)
-            forced += self.c[i] * amp
+            total += abs(cj[i]) * wi ** order * iv.sqrt(A * A + B * B)
+            forced += cj[i] * amp
         return total + abs(forced) * self.w ** order
 
     def phase(self, t):
@@ -687,6 +773,7 @@ class Truth:
         self.not_enclosed = False  # the multipliers could not be enclosed (no stability can be claimed)
         self.min_box_width = mp.mpf(0)
         self.reason = None      # a function of the reason text that raises NotConfirmed
+        self.contacts = None    # the contact of each event (None: all at contact 0)
 
 
 def prime_factors(q):
@@ -729,6 +816,14 @@ def check_impact(cert, m, ledger):
     C = [[iv.mpf(x.num()) for x in row.items(exactly=N)] for row in cert["preconditioner"].items(exactly=N)]
     kr_nodes = cert["krawczyk"].items(exactly=N)
     flights = cert["flights"].items(exactly=count)
+    # The contact of each impact: listed for a model of several contacts, 0 otherwise.
+    several = len(m.contacts) > 1
+    if several:
+        hits = [x.integer(0, len(m.contacts) - 1) for x in cert["impact_contacts"].items(exactly=count)]
+    else:
+        if cert.has("impact_contacts"):
+            cert["impact_contacts"].fail("a model of one contact has no 'impact_contacts'")
+        hits = [0] * count
     mono_nodes = [row.items(exactly=2 * n) for row in cert["monodromy"].items(exactly=2 * n)]
     qT = q * m.T
 
@@ -745,8 +840,8 @@ def check_impact(cert, m, ledger):
             if j == count - 1:
                 tn = tn + qT
             Xe, Ve = m.flight(t, X, V, tn - t)
-            Vp = m.impact(Ve)
-            out.append(m.contact_of(X) - m.x0)
+            Vp = m.impact(Ve, hits[k])
+            out.append(m.contact_of(X, hits[j]) - m.contacts[hits[j]][2])
             out += [Xe[i] - Xn[i] for i in range(n)]
             out += [Vp[i] - Vn[i] for i in range(n)]
         return out
@@ -791,8 +886,10 @@ def check_impact(cert, m, ledger):
     for j in range(count):
         k = (j + 1) % count
         fl = flights[j]
+        cj, ck = hits[j], hits[k]
+        gap_keys = ("gaps",) if several else ("second_derivative_bound", "pieces")
         fl.obj(("from", "duration", "velocity_after", "velocity_before_next", "velocity_after_lower",
-                "speed_before_lower", "second_derivative_bound", "start_window", "end_window", "pieces"))
+                "speed_before_lower", "start_window", "end_window") + gap_keys)
         if fl["from"].integer(0, count - 1) != j:
             fl["from"].fail(f"{fl['from'].v}, expected {j}")
         where = f"flight {j} (impact {j} to impact {k})"
@@ -802,49 +899,71 @@ def check_impact(cert, m, ledger):
             tn = unpack(vec, k)[0] + (qT if j == count - 1 else 0)
             S = tn - t
             Xe, Ve = m.flight(t, X, V, S)
-            return t, X, V, tn, S, Xe, Ve, m.contact_of(V), m.contact_of(Ve), m.derivative_bound(t, X, V, 2)
+            M2 = [m.derivative_bound(t, X, V, 2, l) for l in range(len(m.contacts))]
+            return t, X, V, tn, S, Xe, Ve, m.contact_of(V, cj), m.contact_of(Ve, ck), M2
 
         t, X, V, tn, S, Xe, Ve, a, vm, M2 = quantities(U)
         tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T = quantities(E)
         ledger.check("duration", where, "> 0", S, ST)
         ledger.check("contact velocity after impact", where, "> 0", a, aT)
         ledger.check("contact velocity before impact", where, "< 0", vm, vmT)
-        ledger.check("second-derivative bound", where, "finite", M2, M2T)
+        # Each gap: its second-derivative bound and where it must be positive. One contact: the
+        # certificate's flight holds them itself (second_derivative_bound, pieces).
+        if several:
+            gap_nodes = fl["gaps"].items(exactly=len(m.contacts))
+            for l, g in enumerate(gap_nodes):
+                g.obj(("contact", "second_derivative_bound", "pieces"))
+                if g["contact"].integer(0, len(m.contacts) - 1) != l:
+                    g["contact"].fail(f"{g['contact'].v}, expected {l}")
+        else:
+            gap_nodes = [fl]
+        gap_where = [f"{where}, gap of contact {l}" if several else where for l in range(len(m.contacts))]
+        for l in range(len(m.contacts)):
+            ledger.check("second-derivative bound", gap_where[l], "finite", M2[l], M2T[l])
+            claim_upper(gap_nodes[l]["second_derivative_bound"], M2T[l], f"the bound on |g''| of {gap_where[l]}")
         claim_contains(fl["duration"], ST, f"the duration of {where}")
         claim_contains(fl["velocity_after"], aT, f"the contact velocity after impact {j}")
         claim_contains(fl["velocity_before_next"], vmT, f"the contact velocity before impact {k}")
-        claim_upper(fl["second_derivative_bound"], M2T, f"the bound on |x_B''| of {where}")
         ws, we = fl["start_window"].point(), fl["end_window"].point()
         a_low, b_low = fl["velocity_after_lower"].point(), fl["speed_before_lower"].point()
         claim_lower(fl["velocity_after_lower"], a, f"the contact velocity after impact {j} over the box")
         claim_lower(fl["speed_before_lower"], -vm, f"the contact speed before impact {k} over the box")
-        start = a_low - M2 * ws / 2   # g(s) >= s (a - M2 s/2) on (0, ws]
-        end = b_low - M2 * we / 2     # g(S - σ) >= σ (b - M2 σ/2) on (0, we]
+        start = a_low - M2[cj] * ws / 2   # g_cj(s) >= s (a - M2 s/2) on (0, ws]
+        end = b_low - M2[ck] * we / 2     # g_ck(S - σ) >= σ (b - M2 σ/2) on (0, we]
         if not (positive(ws) and positive(we)):
             raise NotConfirmed(f"{fl.path}: the windows must be > 0")
-        ledger.check("start window a - M2 ws/2", where, "> 0", start, a_low - M2T * ws / 2)
-        ledger.check("end window b - M2 we/2", where, "> 0", end, b_low - M2T * we / 2)
-        top = hi(iv.mpf(hi(S)) - we)
-        if lo(ws) < top:
-            positive_pieces(fl["pieces"], lo(ws), top,
-                            lambda s: m.contact_of(m.flight(t, X, V, s)[0]) - m.x0,
-                            lambda s: m.contact_of(m.flight(t, X, V, s)[1]), f"the gap on {where}", budget)
-        else:
-            fl["pieces"].items(at_most=MAX_PIECES)
+        ledger.check("start window a - M2 ws/2", where, "> 0", start, a_low - M2T[cj] * ws / 2)
+        ledger.check("end window b - M2 we/2", where, "> 0", end, b_low - M2T[ck] * we / 2)
+        # Every gap positive between the windows: the gap of the contact just hit from ws on, that of
+        # the contact hit next up to the end window, every other one on all of [0, S].
+        for l in range(len(m.contacts)):
+            bottom = lo(ws) if l == cj else mp.mpf(0)
+            top = hi(iv.mpf(hi(S)) - we) if l == ck else hi(S)
+            if bottom < top:
+                positive_pieces(gap_nodes[l]["pieces"], bottom, top,
+                                lambda s, l=l: m.contact_of(m.flight(t, X, V, s)[0], l) - m.contacts[l][2],
+                                lambda s, l=l: m.contact_of(m.flight(t, X, V, s)[1], l), f"the gap on {gap_where[l]}",
+                                budget)
+            else:
+                gap_nodes[l]["pieces"].items(at_most=MAX_PIECES)
         vbefore[k] = vmT
         # Flight and saltation matrices at the true orbit (docs/model.md §5.6).
+        if m.zeta is not None:
+            M = matmul(damped_saltation(m, tnT, XeT, VeT, vmT, ck), matmul(flight_jacobian(m, tT, XT, VT, ST), M))
+            continue
         Phi = [[ZERO] * (2 * n) for _ in range(2 * n)]
         for i in range(n):
             c, s = iv.cos(m.w_i[i] * ST), iv.sin(m.w_i[i] * ST)
             Phi[i][i], Phi[i][n + i], Phi[n + i][i], Phi[n + i][n + i] = c, s / m.w_i[i], -m.w_i[i] * s, c
-        aB = m.contact_acceleration(tnT, XeT)
+        aB = m.contact_acceleration(tnT, XeT, ck)
+        c_, T_, e_, r_, W_ = m.contacts[ck]
         Sal = [[ZERO] * (2 * n) for _ in range(2 * n)]
         for i in range(n):
             for l in range(n):
-                pr = (1 if i == l else 0) - (1 + m.r) * m.TB[i] * m.c[l] / m.sB
+                pr = (1 if i == l else 0) - (1 + r_) * T_[i] * c_[l] / W_
                 Sal[i][l] = pr
                 Sal[n + i][n + l] = pr
-                Sal[n + i][l] = (1 + m.r) * aB * m.TB[i] * m.c[l] / (m.sB * vmT)
+                Sal[n + i][l] = (1 + r_) * aB * T_[i] * c_[l] / (W_ * vmT)
         M = matmul(Sal, matmul(Phi, M))
     for i in range(2 * n):
         for j in range(2 * n):
@@ -853,6 +972,7 @@ def check_impact(cert, m, ledger):
     truth = Truth()
     truth.kind, truth.period = "impact", q
     truth.sequence = ["impact"] * count
+    truth.contacts = hits
     for j in range(count):
         truth.events.append(("impact", unpack(E, j)[0], vbefore[j]))
     t0, X0, V0 = unpack(E, 0)
@@ -861,7 +981,7 @@ def check_impact(cert, m, ledger):
     truth.multipliers = boxes
     truth.not_enclosed = boxes is None
     truth.min_box_width = max(hi(x) - lo(x) for x in U)
-    least_period(q, count, n, E, unpack, m)
+    least_period(q, count, n, E, unpack, m, hits)
 
     def reason(node, text):
         prefix = interval_prefix(node, text, m)
@@ -875,6 +995,31 @@ def check_impact(cert, m, ledger):
         check_width(node, g.group(3), max(hi(x) - lo(x) for x in U), "the box")
     truth.reason = reason
     return truth
+
+
+def flight_jacobian(m, t, X, V, S):
+    """∂(X, V)(t + S)/∂(X, V)(t) at fixed t and S, by forward differentiation of the flight."""
+    n = m.n
+    Xe, Ve = m.flight(t, [variable(X[i], i) for i in range(n)], [variable(V[i], n + i) for i in range(n)], S)
+    return [[D.lift(z).g.get(l, ZERO) for l in range(2 * n)] for z in Xe + Ve]
+
+
+def damped_saltation(m, t, X, Vm, vm, j):
+    """The saltation matrix of an impact, S = Dg + (f⁺ − Dg f⁻) ∇hᵀ/(∇h·f⁻): the reset
+    g(X, V) = (X, Impact(V)) with Jacobian Dg, the vector fields f = (V, Ẍ(t, X, V)) before and after,
+    ∇h = (c, 0), ∇h·f⁻ = c·V⁻."""
+    n = m.n
+    c, T, e, r, W = m.contacts[j]
+    Vp = m.impact(Vm, j)
+    Dg = [[ONE if i == l else ZERO for l in range(2 * n)] for i in range(2 * n)]
+    for i in range(n):
+        for l in range(n):
+            Dg[n + i][n + l] = (ONE if i == l else ZERO) - (1 + r) * T[i] * c[l] / W
+    fm = list(Vm) + m.acceleration(t, X, Vm)
+    fp = list(Vp) + m.acceleration(t, X, Vp)
+    jump = [fp[i] - sum((Dg[i][l] * fm[l] for l in range(2 * n)), ZERO) for i in range(2 * n)]
+    grad = list(c) + [ZERO] * n
+    return [[Dg[i][l] + jump[i] * grad[l] / vm for l in range(2 * n)] for i in range(2 * n)]
 
 
 def matmul(A, B):
@@ -913,7 +1058,7 @@ def contract(residual, krawczyk, u_mid, U, K, C, point_model):
     return U  # the ledger's Krawczyk records fail (not confirmed) before these are used
 
 
-def least_period(q, count, n, E, unpack, m):
+def least_period(q, count, n, E, unpack, m, hits):
     """The orbit's least period is q: for every prime ℓ dividing q, the orbit is not (q/ℓ)-periodic.
     A (q/ℓ)-periodic orbit has ℓ | m impacts per q periods and maps impact j onto impact j + m/ℓ
     shifted by (q/ℓ)T: some time or state difference must exclude 0."""
@@ -929,7 +1074,7 @@ def least_period(q, count, n, E, unpack, m):
             tj, Xj, Vj = unpack(E, j)
             tk, Xk, Vk = unpack(E, k)
             dt = tk + (qT if j + h >= count else 0) - tj - shift
-            if excludes_zero(dt) or any(excludes_zero(Xk[i] - Xj[i]) or excludes_zero(Vk[i] - Vj[i]) for i in range(n)):
+            if hits[k] != hits[j] or excludes_zero(dt) or any(excludes_zero(Xk[i] - Xj[i]) or excludes_zero(Vk[i] - Vj[i]) for i in range(n)):
                 apart = True
                 break
         if not apart:
@@ -992,11 +1137,16 @@ def newton_root(gap, slope, S, center, rounds=3):
 def check_sticking(cert, m, ledger):
     """The release, each flight and landing (interval Newton), the chattering tail, and the
     reaction over the sticking phase (docs/prove.md "One-DOF sticking orbits")."""
+    if len(m.contacts) > 1:
+        raise NotConfirmed("a sticking certificate needs a model of one contact")
     if m.n != 1 or not lo(m.c[0]) == 1 == hi(m.c[0]):
         raise NotConfirmed("a sticking certificate needs one mode with shape 1")
     if not hi(m.r) < 1:
         raise NotConfirmed("a sticking certificate needs 0 <= r < 1")
     plastic = lo(m.r) == 0 and hi(m.r) == 0
+    if m.zeta is not None and not plastic:
+        raise NotConfirmed("a sticking certificate of a damped model needs r = 0 (the chattering tail's bounds are "
+                           "those of the undamped model)")
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
@@ -1290,12 +1440,13 @@ def check_summary(cert, s, truth, m):
     if len(events) != len(truth.events):
         raise NotConfirmed(f"{s['events'].path}: {len(events)} events, the orbit proven has {len(truth.events)}")
     widths = [truth.min_box_width]
-    for e, (kind, time, vb) in zip(events, truth.events):
+    for k, (e, (kind, time, vb)) in enumerate(zip(events, truth.events)):
         e.obj(("kind", "contact", "time", "phase", "velocity_before"))
         if e["kind"].text() != kind:
             raise NotConfirmed(f"{e['kind'].path}: '{e['kind'].v}', the event proven there is '{kind}'")
-        if e["contact"].integer(0, 1 << 20) != 0:
-            raise NotConfirmed(f"{e['contact'].path}: {e['contact'].v}, the model has one contact (0)")
+        contact = truth.contacts[k] if truth.contacts else 0
+        if e["contact"].integer(0, 1 << 20) != contact:
+            raise NotConfirmed(f"{e['contact'].path}: {e['contact'].v}, the event proven there is at contact {contact}")
         C = claim_contains(e["time"], time, f"the time of this {kind}")
         widths.append((hi(C) - lo(C), e["time"].path))
         claim_phase(e["phase"], time, m, f"the phase of this {kind}")
@@ -1380,7 +1531,7 @@ def check(node):
                            f"{node['reason'].text()[:200] if node.has('reason') else ''})")
     kind = node["kind"].text(("impact", "sticking"))
     node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-             ("tail",) if kind == "sticking" else ())
+             ("tail",) if kind == "sticking" else ("impact_contacts",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]

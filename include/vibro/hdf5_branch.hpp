@@ -18,6 +18,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Dense>
 
@@ -41,5 +42,10 @@ struct StoredBranchPoint {
 // holds no branch, a branch without orbit states (written before they were stored), or fewer
 // than k + 1 points.
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k);
+
+// The bifurcations stored with the branch in `path` (/bifurcations: kind, value, bracket; detail
+// and contact are not read). Throws InputError naming the file and dataset when they are missing
+// or malformed.
+std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path);
 
 }  // namespace vibro

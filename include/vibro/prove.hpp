@@ -75,7 +75,7 @@ struct ProofResult {
   std::string certificate_json;  // the certificate (docs/prove.md), empty when nothing was attempted
 };
 
-// Throws std::invalid_argument for a request the prover cannot take (bad input): a damped model.
+// Throws std::invalid_argument for a request the prover cannot take (bad input).
 // Bounded in time (request.time_limit) and memory (docs/prove.md "Bounds") for every request.
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request);
 

@@ -40,6 +40,7 @@
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
 #include "frontend/run_output.hpp"
+#include "frontend/switching.hpp"
 #include "frontend/tables.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
@@ -411,7 +412,6 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
 std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::string& kind, long long period,
                                                  long long transient, const std::string& from, double time_limit,
                                                  bool handle_sigint) {
-  vibro::frontend::RequireOneContact(s.loaded, "prove");
   vibro::frontend::CheckOrbitOptions(kPython, period, 0, transient, std::nullopt, std::nullopt);
   if (!(time_limit > 0) || !std::isfinite(time_limit))
     throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
@@ -427,8 +427,6 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
       throw vibro::InputError({fmt::format("from {}: an orbit of {} modes, the scene has {}", from,
                                            req.start->X.size(), sys.dof())});
   }
-  if (sys.damped())
-    throw vibro::InputError({"vibro.prove covers undamped models only: the scene has modal damping (damping_ratios)"});
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
   req.stop_requested = guard.flag();
@@ -440,7 +438,8 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
-                                            bool handle_sigint) {
+                                            bool handle_sigint, const std::string& restart_file,
+                                            long long restart_point, const std::string& switch_side) {
   vibro::frontend::CheckContinuationOptions(kPython, to, step, max_points, period, 0);
   const auto from = vibro::SceneNumber(s.loaded.text_as_run, key);
   if (!from)
@@ -450,6 +449,33 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
   vibro::ContinuationRequest req;
   req.scene_at = [&](double v) { return vibro::frontend::SceneWith(s.origin, key, v); };
   req.from = *from;
+  // from_=FILE, point=K: Newton from the stored point's orbit (no transient); with switch=True the
+  // first orbit of the other branch through the branch-point or flip next to it (docs/orbits.md).
+  if (!restart_file.empty()) {
+    const auto pt = vibro::ReadBranchPoint(restart_file, restart_point);
+    if (pt.param != key)
+      throw vibro::InputError({fmt::format("from_ {}: the branch varies {}, not param {}", restart_file, pt.param, key)});
+    if (pt.X.size() != vibro::System(s.loaded.scene).dof())
+      throw vibro::InputError({fmt::format("from_ {}: /branch/X has {} columns (modal coordinates), the scene has "
+                                           "{} mode(s): a branch of another scene",
+                                           restart_file, pt.X.size(), vibro::System(s.loaded.scene).dof())});
+    req.from = pt.value;
+    req.orbit.start = vibro::InitialOverride{pt.section_time, pt.X, pt.V};
+    req.orbit.transient_periods = 0;
+    period = pt.period;
+    if (!switch_side.empty()) {
+      vibro::frontend::SwitchedStart sw;
+      {
+        SigintGuard guard(handle_sigint);
+        py::gil_scoped_release release;
+        sw = vibro::frontend::SwitchAtStoredPoint(req.scene_at, key, to, restart_file, restart_point, pt, switch_side,
+                                                  kPython, guard.flag());
+      }
+      req.from = sw.value;
+      req.orbit.start = vibro::InitialOverride{sw.section_time, sw.X, sw.V};
+      period = sw.period;
+    }
+  }
   req.to = to;
   req.step = step;
   req.max_points = static_cast<int>(max_points);

@@ -405,19 +405,35 @@ def _loads_arrays(rows):
     return out
 
 
-def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto", out=None, force=False):
+def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto", out=None, force=False, from_=None,
+              point=None, switch=False, side="above"):
     """Continues a periodic orbit in ``param`` up to ``to`` (``vibro continue --json``; named with a
     trailing underscore because ``continue`` is a Python keyword). The dict also holds ``table``, a
     structured array (value, sticking_fraction, stable) of the branch points, and ``loads``: each
     point's exact per-period contact loads (docs/loads.md) as arrays of shape (points, contacts),
     one per name of :data:`LOAD_FIELDS` (NaN: unknown; each point's ``loads_note`` says why). With
     several contacts each point has its contact ``sequence`` and each bifurcation the ``contact``
-    where it happens."""
+    where it happens.
+
+    ``from_=FILE, point=K`` restarts from point K of a branch stored with ``out`` (``--from``,
+    ``--point``); ``switch=True`` follows instead the other branch through the branch-point or flip
+    next to that point (the period-doubled branch at a flip), the half heading for ``to``, and at a
+    pitchfork whose two halves both do, the one on ``side`` ("above" or "below") of the old branch
+    (docs/orbits.md, "Branch switching")."""
+    if (from_ is None) != (point is None):
+        raise ValueError("from_ and point go together: the stored branch and the point K to start from")
+    if switch not in (True, False) or (switch and from_ is None):
+        raise ValueError(f"switch {switch!r}: True (with from_ and point) or False")
+    if side not in ("above", "below"):
+        raise ValueError(f"side {side!r}: expected 'above' or 'below'")
     _invoke("continue", scene, param=param, to=to, step=step, max_points=max_points, period=period, kind=kind,
-            out=out, force=force)
+            out=out, force=force, **({"from_": str(from_), "point": point, "switch": switch, "side": side}
+                                     if from_ is not None else {}))
     text, interrupted = _vibro.continue_branch(_scene(scene), param, _float("to", to), _float("step", step),
                                                _int("max_points", max_points), _int("period", period), kind,
-                                               _out(out), _main_thread())
+                                               _out(out), _main_thread(), "" if from_ is None else _path("from_", from_),
+                                               -1 if point is None else _int("point", point),
+                                               side if switch else "")
     if interrupted:
         raise _interrupted("continuation", out)
     d = _json.loads(text)

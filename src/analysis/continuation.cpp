@@ -109,6 +109,25 @@ class Problem {
     e.Jz = DF - Eigen::MatrixXd::Identity(z.size(), z.size());
     e.Jl = Fp && Fm ? Eigen::VectorXd((*Fp - *Fm) / (2 * h)) : Fp ? Eigen::VectorXd((*Fp - *F) / h)
                                                                   : Eigen::VectorXd((*F - *Fm) / h);
+    // Within h of a non-smooth point of the map in λ (a grazing: F has a square-root term past
+    // it), one of the two one-sided differences spans it and the central difference is wrong by
+    // O(1/√h): the tangent and the corrector would then leave the branch (a false fold, a
+    // boundary located h away). Each side is checked against the difference over h/2; a side
+    // whose two differences disagree beyond the O(h) of a smooth map is not used.
+    if (Fp && Fm) {
+      const Eigen::VectorXd dp = (*Fp - *F) / h, dm = (*F - *Fm) / h;
+      const double scale = 1.0 + dp.cwiseAbs().maxCoeff() + dm.cwiseAbs().maxCoeff();
+      if ((dp - dm).cwiseAbs().maxCoeff() > 1e-3 * scale) {
+        const auto smooth_side = [&](double sign, const Eigen::VectorXd& d) {
+          const auto Fh = Map(z, lambda + sign * 0.5 * h, nullptr);
+          if (!Fh) return false;
+          const Eigen::VectorXd d_half = sign * (*Fh - *F) / (0.5 * h);
+          return (d - d_half).cwiseAbs().maxCoeff() < 1e-4 * scale;
+        };
+        const bool plus = smooth_side(1.0, dp), minus = smooth_side(-1.0, dm);
+        if (plus != minus) e.Jl = plus ? dp : dm;
+      }
+    }
     e.ok = true;
     return e;
   }
@@ -198,18 +217,34 @@ Eigen::VectorXd Tangent(const Evaluation& e, const Eigen::VectorXd& previous) {
   return t;
 }
 
-// Newton on {G(y) = 0, tᵀ(y − y_pred) = 0}.
+// Newton on {G(y) = 0, tᵀ(y − y_pred) = 0}. `polish`: once converged, Newton goes on while the
+// residual still decreases (to the rounding floor of the map: the samples of a test function
+// near a branch point, where the system is ill-conditioned, so that 1e-13 in G is not 1e-13 in y).
+// `start`: Newton's first iterate when it is not the predictor y (the hyperplane still passes
+// through y).
 std::optional<Corrected> Correct(const Problem& p, Eigen::VectorXd y, const Eigen::VectorXd& t,
-                                 int& iterations) {
+                                 int& iterations, bool polish = false, const Eigen::VectorXd* start = nullptr) {
   const auto N = y.size();
   const Eigen::VectorXd pred = y;
+  if (start) y = *start;
   double last = 0;
-  for (iterations = 0; iterations < 12; ++iterations) {
+  std::optional<Corrected> best;
+  double best_res = 0;
+  for (iterations = 0; iterations < 16; ++iterations) {
     const Evaluation e = p.Evaluate(y.head(N - 1), y[N - 1]);
-    if (!e.ok) return std::nullopt;
+    if (!e.ok) return best;
     const double res = e.G.cwiseAbs().maxCoeff() / (1.0 + y.head(N - 1).cwiseAbs().maxCoeff());
-    // Converged at 1e-13, or at 1e-11 once Newton stops gaining (rounding of the map).
-    if (res < 1e-13 || (res < 1e-11 && iterations > 0 && res > 0.1 * last)) return Corrected{y, e};
+    if (best) {  // polishing: stop when Newton no longer gains
+      if (res >= 0.5 * best_res || iterations > 15) return best;
+      best = Corrected{y, e};
+      best_res = res;
+    } else if (res < 1e-13 || (res < 1e-11 && iterations > 0 && res > 0.1 * last)) {
+      // Converged at 1e-13, or at 1e-11 once Newton stops gaining (rounding of the map).
+      if (!polish || res == 0) return Corrected{y, e};
+      best = Corrected{y, e};
+      best_res = res;
+    }
+    if (iterations >= 11 && !best) return std::nullopt;  // 12 evaluations without converging
     last = res;
     Eigen::MatrixXd J(N, N);
     J.topLeftCorner(N - 1, N - 1) = e.Jz;
@@ -219,7 +254,7 @@ std::optional<Corrected> Correct(const Problem& p, Eigen::VectorXd y, const Eige
     r << e.G, t.dot(y - pred);
     y -= J.fullPivLu().solve(r);
   }
-  return std::nullopt;
+  return best;
 }
 
 // The most negative real multiplier (the flip test), or 0 when there is none.
@@ -472,59 +507,143 @@ Branch Continue(const ContinuationRequest& req) {
     return value;
   };
 
-  // A branch point: arclength hyperplanes close to it also cut the branch that crosses this one,
-  // and the corrector may land on either, so bisection cannot close in on it. The test function
-  // is instead sampled at six points of this branch kept at least ds/8 from the first estimate
-  // (s_guess), on both sides, and the root of their degree-5 interpolant in λ is the location;
-  // `bracket` is its distance to the root of the degree-3 interpolant of the four inner points.
-  // Falls back to `fallback` when a sample cannot be corrected on this branch.
-  const auto locate_fit = [&](const std::function<double(const Point&)>& test, double s_guess, double hi,
-                              double fallback, double& bracket) {
-    const double h = hi / 8.0;
-    std::vector<double> lam, val;
-    for (double k : {-3.0, -2.0, -1.0, 1.0, 2.0, 3.0}) {
-      if (stop_requested()) return fallback;
-      const double s = s_guess + k * h;
+  // The root of a test function that is smooth along this branch (det(DF − I) at a branch point),
+  // between cur (s = 0, value f0) and s = hi (value f1). Near a branch point the arclength
+  // hyperplanes also cut the branch that crosses this one, and the system the corrector solves
+  // is singular there: every sample is corrected onto this branch (near its predictor, the same
+  // events) and polished to the map's rounding floor, and none is taken closer to the root than
+  // 1e-4 of the step. (1) Regula falsi (Illinois) on the arclength brackets the root to 1e-6 of
+  // the step. (2) Eight samples at 1 to 4 times 1e-4 of the step on both sides of it; the root
+  // of the least-squares cubic in λ through them is the location. `bracket`: its distance to the
+  // root of the quartic fit, plus the rounding noise of the samples over the slope. Falls back
+  // to the regula-falsi bracket (or `fallback`) when samples leave the branch.
+  const auto locate_root = [&](const std::function<double(const Point&)>& test, double f0, double f1,
+                               const Eigen::VectorXd& y1, double hi, double fallback, double& bracket) {
+    struct TestSample {
+      double s, lambda, f;
+    };
+    // Corrected points of this branch so far, by arclength: Newton starts from the interpolation
+    // between the two nearest (close to the root the predictor alone lies outside the corrector's
+    // basin, which shrinks with the distance to the branch point, and it lands on the other branch).
+    std::vector<std::pair<double, Eigen::VectorXd>> known = {{0.0, cur.y}, {hi, y1}};
+    const auto sample = [&](double s) -> std::optional<TestSample> {
+      auto above = std::lower_bound(known.begin(), known.end(), s,
+                                    [](const auto& k, double v) { return k.first < v; });
+      if (above == known.begin()) ++above;
+      if (above == known.end()) --above;
+      const auto below = above - 1;
+      const double w = (s - below->first) / (above->first - below->first);
+      const Eigen::VectorXd guess = below->second + w * (above->second - below->second);
+      const double reach = std::min(s - below->first, above->first - s);
       int iters = 0;
-      const auto yc = Correct(p, cur.y + s * t, t, iters);
+      const auto yc = Correct(p, cur.y + s * t, t, iters, true, &guess);
       const auto pc = yc ? p.Examine(*yc) : std::nullopt;
-      // On this branch: near its predictor, the same events, ordered in λ.
-      if (!pc || !SameFamily(cur, *pc) || (pc->y - (cur.y + s * t)).norm() > 0.2 * std::abs(s) + 1e-12) return fallback;
+      if (!pc || !SameFamily(cur, *pc) || (pc->y - guess).norm() > 0.2 * std::abs(reach) + 1e-12 * (1.0 + cur.y.norm()))
+        return std::nullopt;
       const double v = test(*pc);
-      if (!std::isfinite(v)) return fallback;
-      if (!lam.empty() && (pc->y[n2] - lam.back()) * t[n2] <= 0) return fallback;
-      lam.push_back(pc->y[n2]);
-      val.push_back(v);
+      // A sample this close to the root is within the corrector's ill-conditioned zone (it may
+      // sit on the crossing branch): not trusted, neither as a value nor as a start for others.
+      if (!std::isfinite(v) || std::abs(v) < 1e-6 * std::max(std::abs(f0), std::abs(f1))) return std::nullopt;
+      known.insert(above, {s, pc->y});
+      return TestSample{s, pc->y[n2], v};
+    };
+    // (1) Illinois regula falsi on s in [a, b], with a bisection whenever two steps did not halve
+    // the bracket.
+    double a = 0, fa = f0, b = hi, fb = f1, l_a = cur.y[n2], l_b = fallback;
+    int side = 0;
+    bool bracketed = false;
+    std::vector<double> widths = {hi, hi};
+    for (int it = 0; it < 100 && b - a > 1e-3 * hi; ++it) {
+      if (stop_requested()) break;
+      const double w = b - a;
+      const bool bisect = w > 0.5 * widths[widths.size() - 2];
+      double s = bisect ? 0.5 * (a + b) : std::clamp(b - fb * w / (fb - fa), a + 1e-3 * w, b - 1e-3 * w);
+      auto x = sample(s);
+      if (!x && !bisect) x = sample(s = 0.5 * (a + b));
+      if (!x) break;
+      widths.push_back(w);
+      if ((x->f > 0) == (fa > 0)) {
+        a = s;
+        fa = x->f;
+        l_a = x->lambda;
+        if (side == -1) fb *= 0.5;
+        side = -1;
+      } else {
+        b = s;
+        fb = x->f;
+        l_b = x->lambda;
+        bracketed = true;
+        if (side == 1) fa *= 0.5;
+        side = 1;
+      }
     }
-    // The root of the interpolant through points [from, to) between lam[2] and lam[3].
-    const auto root = [&](size_t from, size_t to) {
-      const auto poly = [&](double x) {
-        double sum = 0;
-        for (size_t i = from; i < to; ++i) {
-          double w = val[i];
-          for (size_t j = from; j < to; ++j)
-            if (j != i) w *= (x - lam[j]) / (lam[i] - lam[j]);
-          sum += w;
-        }
-        return sum;
-      };
-      double a = lam[2], b = lam[3], fa = poly(a);
-      if (fa * poly(b) > 0) return std::numeric_limits<double>::quiet_NaN();
-      for (int it = 0; it < 200 && a != b; ++it) {
-        const double mid = 0.5 * (a + b), fm = poly(mid);
-        if (mid == a || mid == b) break;
-        if ((fm > 0) == (fa > 0)) {
-          a = mid;
-          fa = fm;
-        } else {
-          b = mid;
+    double s_star = 0.5 * (a + b);
+    double at = bracketed ? 0.5 * (l_a + l_b) : fallback;
+    bracket = bracketed ? std::abs(l_b - l_a) : bracket;
+    if (b - a > 1e-3 * hi || stop_requested()) return at;
+    // (2) The least-squares fit through samples on both sides: first at 2e-3 to 8e-3 of the step
+    // from the bracket's middle, then at 1e-4 to 4e-4 of it from the first fit's root.
+    for (const double h : {2e-3 * hi, 1e-4 * hi}) {
+      std::vector<TestSample> xs;
+      int below = 0, above = 0;
+      for (double k : {-4.0, -3.0, -2.0, -1.0, 1.0, 2.0, 3.0, 4.0}) {
+        if (stop_requested()) return at;
+        const double s = s_star + k * h;
+        if (s <= 0 || s >= hi) continue;
+        if (const auto x = sample(s)) {
+          xs.push_back(*x);
+          (k < 0 ? below : above) += 1;
         }
       }
-      return 0.5 * (a + b);
-    };
-    const double at = root(0, 6), inner = root(1, 5);
-    if (!std::isfinite(at) || !std::isfinite(inner)) return fallback;
-    bracket = std::abs(at - inner);
+      if (below < 2 || above < 2 || xs.size() < 6) return at;
+      double centre = 0, width = 0;
+      for (const auto& x : xs) centre += x.lambda / static_cast<double>(xs.size());
+      for (const auto& x : xs) width = std::max(width, std::abs(x.lambda - centre));
+      if (!(width > 0)) return at;
+      const auto fit_root = [&](int degree, double* noise) {
+        Eigen::MatrixXd A(xs.size(), degree + 1);
+        Eigen::VectorXd f(xs.size());
+        for (size_t i = 0; i < xs.size(); ++i) {
+          const double u = (xs[i].lambda - centre) / width;
+          for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow(u, d);
+          f[static_cast<long>(i)] = xs[i].f;
+        }
+        const Eigen::VectorXd c = A.colPivHouseholderQr().solve(f);
+        const auto poly = [&](double u, double* slope) {
+          double v = 0, dv = 0;
+          for (int d = degree; d >= 0; --d) {
+            dv = dv * u + v;
+            v = v * u + c[d];
+          }
+          if (slope) *slope = dv;
+          return v;
+        };
+        double u = -c[0] / c[1];  // Newton from the linear root
+        for (int it = 0; it < 50; ++it) {
+          double slope = 0;
+          const double v = poly(u, &slope);
+          const double du = v / slope;
+          u -= du;
+          if (std::abs(du) < 1e-17) break;
+        }
+        if (noise) {
+          double slope = 0;
+          poly(u, &slope);
+          const double rms = std::sqrt((A * c - f).squaredNorm() / static_cast<double>(xs.size()));
+          *noise = rms / std::abs(slope) * width;
+        }
+        return centre + u * width;
+      };
+      double noise = 0;
+      const double root3 = fit_root(3, &noise), root4 = fit_root(4, nullptr);
+      if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 2.0 * width)) return at;
+  bracket = std::abs(root4 - root3) + noise;
+      at = root3;
+      // The arclength of the root, for the next pass: interpolated between the samples.
+      for (size_t i = 1; i < xs.size(); ++i)
+        if ((xs[i - 1].lambda - root3) * (xs[i].lambda - root3) <= 0 && xs[i].lambda != xs[i - 1].lambda)
+          s_star = xs[i - 1].s + (root3 - xs[i - 1].lambda) / (xs[i].lambda - xs[i - 1].lambda) * (xs[i].s - xs[i - 1].s);
+    }
     return at;
   };
 
@@ -568,16 +687,39 @@ Branch Continue(const ContinuationRequest& req) {
       ds *= 0.5;
       continue;
     }
-    if (next && SameFamily(cur, *next)) {
+    // A fold between cur and next: the λ-tangent changes sign AND a real multiplier is at +1
+    // where it does (DF − I singular). A sign change without it comes from a non-smooth point
+    // between them (the map's smoothness is lost there, e.g. the square-root of a grazing): the
+    // step is refused, and the point is located as such below.
+    std::optional<Bifurcation> fold;
+    bool false_turn = false;
+    if (next && SameFamily(cur, *next) && t[n2] * Tangent(next->eval, t)[n2] < 0) {
+      double bracket = 0, nearest_one = std::numeric_limits<double>::infinity();
+      const double at = locate(
+          [&](const Point& pc, const Eigen::VectorXd& tc) {
+            nearest_one = std::numeric_limits<double>::infinity();
+            for (const auto& mu : pc.orbit.multipliers) nearest_one = std::min(nearest_one, std::abs(mu - 1.0));
+            return tc[n2];
+          },
+          ds, 0.5 * (cur.y[n2] + next->y[n2]), bracket);
+      if (nearest_one < 1e-5 && !stop_requested())
+        fold = Bifurcation{"fold", at,
+                           fmt::format("the branch turns back (λ-tangent changes sign; the nearest multiplier "
+                                       "is {:.1e} from +1)", nearest_one),
+                           bracket};
+      else
+        false_turn = !stop_requested();
+    }
+    if (false_turn && ds > ds_retry) {
+      ds *= 0.5;
+      continue;
+    }
+    if (next && SameFamily(cur, *next) && !false_turn) {
       // Smooth bifurcations between cur and next.
       const Eigen::VectorXd t_new = Tangent(next->eval, t);
       const double l_old = cur.y[n2], l_new = next->y[n2];
       double bracket = 0;
-      if (t[n2] * t_new[n2] < 0) {
-        const double at = locate([&](const Point&, const Eigen::VectorXd& tc) { return tc[n2]; }, ds,
-                                 0.5 * (l_old + l_new), bracket);
-        br.bifurcations.push_back({"fold", at, "the branch turns back (λ-tangent changes sign)", bracket});
-      }
+      if (fold) br.bifurcations.push_back(*fold);
       const auto by_multipliers = [](auto score) {
         return [score](const Point& pc, const Eigen::VectorXd&) { return score(pc.orbit.multipliers); };
       };
@@ -590,7 +732,7 @@ Branch Continue(const ContinuationRequest& req) {
       if (t[n2] * t_new[n2] > 0 && one_old * one_new < 0) {
         const double w = one_old / (one_old - one_new);
         bracket = std::abs(l_new - l_old);
-        const double at = locate_fit(det, w * ds, ds, l_old + w * (l_new - l_old), bracket);
+        const double at = locate_root(det, one_old, one_new, next->y, ds, l_old + w * (l_new - l_old), bracket);
         br.bifurcations.push_back({"branch-point", at,
                                    "a real multiplier crosses +1 and the branch does not turn back (a "
                                    "pitchfork: another branch of orbits crosses this one, e.g. where a "

@@ -57,11 +57,12 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
 int RunCheck(const std::string& path, const std::vector<std::string>& sets, bool json, bool with_quad);
 
 // `vibro continue SCENE --param KEY --to B` (cmd_continue.cpp); restart_file/restart_point:
-// --from FILE --point K ("" and -1 for none).
+// --from FILE --point K ("" and -1 for none); switch_side: with --switch, "above" or "below" (which
+// half of a pitchfork's new branch, by its x_B at the section), "" without (docs/orbits.md).
 int RunContinue(const std::string& path, std::vector<std::string> sets, bool json,
                 const std::string& key, double to, double step, int max_points,
                 vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
-                long long restart_point);
+                long long restart_point, const std::string& switch_side = "");
 
 // `vibro partition SCENE --params KEY1,KEY2 ...` (cmd_partition.cpp).
 struct PartitionArgs {

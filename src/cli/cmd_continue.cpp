@@ -2,12 +2,14 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "cli/cli_common.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
+#include "frontend/switching.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_branch.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -18,9 +20,10 @@
 int RunContinue(const std::string& path, std::vector<std::string> sets, bool json,
                 const std::string& key, double to, double step, int max_points,
                 vibro::OrbitRequest orbit, const std::string& out, const std::string& restart_file,
-                long long restart_point) {
+                long long restart_point, const std::string& switch_side) {
   vibro::frontend::CheckContinuationOptions(vibro::frontend::Naming::kCli, to, step, max_points, orbit.period,
                                             orbit.transient_periods);
+  std::optional<vibro::frontend::SwitchedStart> switched;
   if (!restart_file.empty()) {
     // Restart from a stored point: its parameter value, period and section state (Newton from
     // there, no transient).
@@ -33,7 +36,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     orbit.transient_periods = 0;
     orbit.period = pt.period;
   }
-  const auto loaded = vibro::LoadScene(path, sets);
+  auto loaded = vibro::LoadScene(path, sets);
   if (!restart_file.empty()) {
     // The stored state must be one this scene can start from, as [initial] is checked.
     const vibro::System at(loaded.scene);
@@ -62,6 +65,22 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
                                              "its velocity {}",
                                              restart_file, restart_point, j, g, gv)});
     }
+  }
+  if (!restart_file.empty() && !switch_side.empty()) {
+    // The other branch through the bifurcation next to the stored point: its first orbit.
+    try {
+      switched = vibro::frontend::SwitchAtStoredPoint(
+          [&](double v) { return vibro::frontend::SceneWith(path, sets, key, v); }, key, to, restart_file,
+          restart_point, vibro::ReadBranchPoint(restart_file, restart_point), switch_side,
+          vibro::frontend::Naming::kCli, &vibro::cli::StopFlag());
+    } catch (const vibro::frontend::SwitchFailed& e) {
+      fmt::print(stderr, "vibro: {}; nothing was written\n", e.what());
+      return kExitNumerical;
+    }
+    sets.back() = vibro::frontend::Assignment(key, switched->value);
+    orbit.start = vibro::InitialOverride{switched->section_time, switched->X, switched->V};
+    orbit.period = switched->period;
+    loaded = vibro::LoadScene(path, sets);
   }
   const auto from = vibro::SceneNumber(loaded.text_as_run, key);
   if (!from)
@@ -106,6 +125,9 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
                orbit.kind == vibro::OrbitKind::kSticking   ? "--kind impact or --kind auto, "
                : orbit.kind == vibro::OrbitKind::kImpact ? "--kind sticking or --kind auto, "
                                                          : "--kind sticking|impact, ");
+  if (switched && !json)
+    fmt::print("switch       {} at {} = {:.15g}: the new branch (period {}) starts at {} = {:.15g}, {}\n",
+               switched->kind, key, switched->at, switched->period, key, switched->value, switched->half);
   if (json) {
     fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
@@ -133,9 +155,10 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
                  several ? p.sequence : p.signature);
     }
     for (const auto& b : branch.bifurcations)
-      fmt::print("bifurcation  {} at {} = {:.15g}: {}\n", b.kind, key, b.value, b.detail);
+      fmt::print("bifurcation  {} at {} = {:#.17g} (bracket {:.1e}): {}\n", b.kind, key, b.value, b.bracket, b.detail);
     for (const auto& r : branch.relabels)
-      fmt::print("relabel      {} → {} at {} = {:.15g} (no bifurcation): {}\n", r.from, r.to, key, r.value, r.detail);
+      fmt::print("relabel      {} → {} at {} = {:#.17g} (bracket {:.1e}; no bifurcation): {}\n", r.from, r.to, key,
+                 r.value, r.bracket, r.detail);
     fmt::print("end          {}\n", branch.end);
     if (branch.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "

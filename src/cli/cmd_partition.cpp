@@ -85,7 +85,8 @@ int RunPartition(const std::string& path, const std::vector<std::string>& sets, 
       fmt::print("{} = {:.10g}: {}\n", keys[0], c.value1, c.status);
       for (const auto& x : c.crossings)
         fmt::print("  sticking fraction {:<6g} at {} = {:.12g}\n", x.level, keys[1], x.value);
-      for (const auto& b : c.bifurcations) fmt::print("  {:<17} at {} = {:.12g}\n", b.kind, keys[1], b.value);
+      for (const auto& b : c.bifurcations)
+        fmt::print("  {:<17} at {} = {:#.17g} (bracket {:.1e})\n", b.kind, keys[1], b.value, b.bracket);
       PrintCellLoads(c, keys[1]);
       for (const auto& sp : c.sequences)
         fmt::print("  sequence {} for {} in [{:.12g}, {:.12g}]\n", sp.sequence, keys[1], sp.from, sp.to);

@@ -91,7 +91,6 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     auto at = sets;
     at.push_back(vibro::frontend::Assignment(pt.param, pt.value));
     const auto loaded = vibro::LoadScene(path, at);
-    vibro::frontend::RequireOneContact(loaded, "prove");
     const vibro::System sys(loaded.scene);
     if (pt.X.size() != sys.dof())
       throw vibro::InputError({fmt::format("--branch {}: point {} has {} modes, the scene has {}", args.branch, k,
@@ -181,7 +180,6 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
   }
   if (!args.branch.empty()) return RunProveBranch(path, sets, json, args);
   const auto loaded = vibro::LoadScene(path, sets);
-  vibro::frontend::RequireOneContact(loaded, "prove");
   const vibro::System sys(loaded.scene);
   vibro::ProofRequest req = args.request;
   if (!args.from.empty()) {

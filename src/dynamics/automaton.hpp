@@ -180,6 +180,20 @@ class Automaton {
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
+      const std::vector<ContactSpec> specs = Contacts(scene);
+      for (size_t j = 0; j < models_.size(); ++j) {
+        if (j >= specs.size()) {
+          labels_.push_back(fmt::format("contact {}", j));
+          continue;
+        }
+        // As `vibro simulate` prints it (modal form: the contact's coordinate a_jᵀX).
+        const ContactSpec& k = specs[j];
+        labels_.push_back(fmt::format("{} {} {}",
+                                      scene.modal         ? fmt::format("a{}·X", j)
+                                      : k.partner >= 0 ? fmt::format("q{} - q{}", k.dof, k.partner)
+                                                       : fmt::format("q{}", k.dof),
+                                      k.side == Side::kBelow ? ">=" : "<=", k.position));
+      }
     }
     const auto poll = [this] { return StopPolled(); };
     engine_->SetStopPoll(poll);
@@ -276,7 +290,8 @@ class Automaton {
   // non-finite state, a clock that goes backwards. The first violation is kept and ends the run
   // as a numerical failure naming it (Guarded()); the run is never reported ok.
   S GapTolerance(const Vec& X) const;
-  void CheckFreeGap(const S& gap, const Vec& X, double t, const char* where);
+  // contact: the contact whose gap it is (several contacts: named in the message), −1 the [stop].
+  void CheckFreeGap(const S& gap, const Vec& X, double t, const char* where, int contact = -1);
   void CheckSegment(const ClockT<S>& from, const S& sigma);
   void CheckEventClock();
   bool Guarded();
@@ -293,6 +308,7 @@ class Automaton {
   int active_ = 0;              // sticking: the held contact; free flight: the start contact
   std::vector<S> gaps_;         // several contacts: every gap (0 for the held one)
   std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
+  std::vector<std::string> labels_;  // several contacts: each one's constraint, "q0 - q2 >= -1"
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
@@ -397,9 +413,10 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     p.Evaluate(sigma, Xs_, Vs_);
     if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
-      for (const ModelT<S>* c : models_)
-        CheckFreeGap(c->ContactDisplacement(Xs_) - c->x0, Xs_,
-                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight");
+      for (size_t j = 0; j < models_.size(); ++j)
+        CheckFreeGap(models_[j]->ContactDisplacement(Xs_) - models_[j]->x0, Xs_,
+                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight",
+                     multi() ? static_cast<int>(j) : -1);
     const Sample s{{k, 0.0},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_),
                    D(Xs_, dx_),
@@ -420,9 +437,10 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     p.Evaluate(sigma, Xs_, Vs_);
     if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
-      for (const ModelT<S>* c : models_)
-        CheckFreeGap(c->ContactDisplacement(Xs_) - c->x0, Xs_,
-                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight");
+      for (size_t j = 0; j < models_.size(); ++j)
+        CheckFreeGap(models_[j]->ContactDisplacement(Xs_) - models_[j]->x0, Xs_,
+                     R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight",
+                     multi() ? static_cast<int>(j) : -1);
     const Sample s{{k, R::to_double(off)},
                    R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off),
                    D(Xs_, dx_),
@@ -459,7 +477,8 @@ void Automaton<S>::EnterSticking(StickStart how) {
   if (multi()) {
     gaps_[static_cast<size_t>(active_)] = 0;
     for (size_t j = 0; j < models_.size(); ++j)
-      if (static_cast<int>(j) != active_) gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+      if (static_cast<int>(j) != active_ && !(gaps_[j] == S(0) && starts_[j] != FlightStart::kGeneric))
+        gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;
   }
   mode_ = Mode::kSticking;
   stick_start_ = how;
@@ -536,14 +555,22 @@ S Automaton<S>::GapTolerance(const Vec& X) const {
 }
 
 template <class S>
-void Automaton<S>::CheckFreeGap(const S& gap, const Vec& X, double t, const char* where) {
+void Automaton<S>::CheckFreeGap(const S& gap, const Vec& X, double t, const char* where, int contact) {
   if (!violation_.empty() || gap >= -GapTolerance(X)) return;
   if (!R::isfinite(gap)) return;  // a non-finite state is reported by CheckSegment
+  const std::string hint = cvode_ ? ": tighten run.rtol and run.atol, or use run.engine = \"exact\"" : "";
+  if (contact < 0) {
+    violation_ = fmt::format(
+        "state below the stop: x_B − x0 = {:.3g} in {} at t = {:.17g} (tolerance {:.3g}); the {} "
+        "engine crossed the stop without detecting the contact{}",
+        R::to_double(gap), where, t, R::to_double(GapTolerance(X)), cvode_ ? "CVODE" : "exact", hint);
+    return;
+  }
   violation_ = fmt::format(
-      "state below the stop: x_B − x0 = {:.3g} in {} at t = {:.17g} (tolerance {:.3g}); the {} "
-      "engine crossed the stop without detecting the contact{}",
-      R::to_double(gap), where, t, R::to_double(GapTolerance(X)), cvode_ ? "CVODE" : "exact",
-      cvode_ ? ": tighten run.rtol and run.atol, or use run.engine = \"exact\"" : "");
+      "contact {} ({}) violated: its gap is {:.3g} in {} at t = {:.17g} (tolerance {:.3g}); the {} "
+      "engine crossed it without detecting the contact{}",
+      contact, labels_[static_cast<size_t>(contact)], R::to_double(gap), where, t,
+      R::to_double(GapTolerance(X)), cvode_ ? "CVODE" : "exact", hint);
 }
 
 // After a segment from clock `from` over local time `sigma`, with X_, V_, gap_ and clock_ updated.
@@ -571,13 +598,23 @@ void Automaton<S>::CheckSegment(const ClockT<S>& from, const S& sigma) {
     return;
   }
   if (mode_ == Mode::kFree) {
-    CheckFreeGap(gap_, X_, AbsTime(clock_), "the state at the end of a flight");
+    if (multi()) {
+      for (size_t j = 0; j < gaps_.size(); ++j)
+        CheckFreeGap(gaps_[j], X_, AbsTime(clock_), "the state at the end of a flight", static_cast<int>(j));
+    } else {
+      CheckFreeGap(gap_, X_, AbsTime(clock_), "the state at the end of a flight");
+    }
   } else {
     const S off = M(active_).ContactDisplacement(X_) - M(active_).x0;
     if (R::abs(off) > GapTolerance(X_))
-      violation_ = fmt::format("sticking state off the stop: x_B − x0 = {:.3g} at t = {:.17g} "
-                               "(tolerance {:.3g})",
-                               R::to_double(off), AbsTime(clock_), R::to_double(GapTolerance(X_)));
+      violation_ = multi()
+                       ? fmt::format("sticking state off contact {} ({}): its gap is {:.3g} at t = {:.17g} "
+                                     "(tolerance {:.3g})",
+                                     active_, labels_[static_cast<size_t>(active_)], R::to_double(off),
+                                     AbsTime(clock_), R::to_double(GapTolerance(X_)))
+                       : fmt::format("sticking state off the stop: x_B − x0 = {:.3g} at t = {:.17g} "
+                                     "(tolerance {:.3g})",
+                                     R::to_double(off), AbsTime(clock_), R::to_double(GapTolerance(X_)));
   }
 }
 

@@ -145,16 +145,21 @@ template <class S>
 void Automaton<S>::ClassifyInitialContacts() {
   // Which gaps are closed (within the rounding of the initial state, as
   // System::StopTolerance for one contact); one closed contact is classified as the single stop
-  // is, on its own model; none starts a free flight.
+  // is, on its own model; none starts a free flight. The decision is taken within double's
+  // rounding whatever S, as for the single stop (ClassifyInitialState): the quad engine solves
+  // the problem the double one is given, whose data are double, so a start on several stops in
+  // double (e.g. at rest on preloaded stops) is on them in quad too, not 1e-17 above them.
+  const S eps_d(std::numeric_limits<double>::epsilon());
+  const auto closed_tol = [&](const ModelT<S>& c) {
+    return S(System::kStopUlps) * eps_d * (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
+  };
   int on = -1, closed = 0;
   for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
     const ModelT<S>& c = M(j);
     const S g = c.ContactDisplacement(X_) - c.x0;
-    const S tol = S(System::kStopUlps) * Eps<S>() *
-                  (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
     gaps_[static_cast<size_t>(j)] = g;
     starts_[static_cast<size_t>(j)] = FlightStart::kGeneric;
-    if (g <= tol) {
+    if (g <= closed_tol(c)) {
       on = j;
       ++closed;
     }
@@ -163,14 +168,15 @@ void Automaton<S>::ClassifyInitialContacts() {
     // Several closed gaps: those moving away leave, the others are at rest on their stops and the
     // acceleration LCP decides which stick (their stick events follow the initial section).
     std::vector<int> Z0;
+    std::vector<char> is_closed(models_.size(), 0);
+    for (int j = 0; j < static_cast<int>(models_.size()); ++j)
+      is_closed[static_cast<size_t>(j)] = gaps_[static_cast<size_t>(j)] <= closed_tol(M(j)) ? 1 : 0;
     for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
       const ModelT<S>& c = M(j);
-      const S tol = S(System::kStopUlps) * Eps<S>() *
-                    (R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum());
-      if (!(gaps_[static_cast<size_t>(j)] <= tol)) continue;
+      if (!is_closed[static_cast<size_t>(j)]) continue;
       gaps_[static_cast<size_t>(j)] = 0;
       X_ -= c.contact * ((c.ContactDisplacement(X_) - c.x0) / c.s_B);
-      const S vtol = S(System::kStopUlps) * Eps<S>() * c.shape.cwiseProduct(V_).cwiseAbs().sum();
+      const S vtol = S(System::kStopUlps) * eps_d * c.shape.cwiseProduct(V_).cwiseAbs().sum();
       if (c.ContactVelocity(V_) > vtol) starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
       else Z0.push_back(j);
     }
@@ -220,8 +226,22 @@ void Automaton<S>::UpdateGaps(PropagatorT<S>& p, const S& sigma) {
       gaps_[j] = models_[j]->ContactDisplacement(X_) - models_[j]->x0;  // constant at rest
     else
       gaps_[j] = p.GapOf(jj, sigma);
+    // A start kind (a zero divided out at the segment's start, MODEL §11.2.3) holds for a gap that
+    // is 0 where the next segment starts: one the segment left (σ > 0, the gap open again) starts
+    // generic; one still at its zero within rounding keeps it (σ within the window of its start).
+    // A kind kept past its zero would let the next search divide out a zero that is not there and
+    // skip the gap's next root (issue 37: a pair's departure while another contact stuck, its gap
+    // flown through after that contact's release).
+    if (sigma > S(0) && !(mode_ == Mode::kSticking && (jj == active_ || Held(jj)))) {
+      if (gaps_[j] > S(0)) starts_[j] = FlightStart::kGeneric;
+      else if (starts_[j] != FlightStart::kGeneric) gaps_[j] = S(0);
+    }
   }
-  if (mode_ == Mode::kFree) gap_ = gaps_[static_cast<size_t>(active_)];
+  if (sigma > S(0) && mode_ == Mode::kSticking) stick_start_ = StickStart::kGeneric;
+  if (mode_ == Mode::kFree) {
+    gap_ = gaps_[static_cast<size_t>(active_)];
+    flight_start_ = starts_[static_cast<size_t>(active_)];
+  }
 }
 
 // Whether the free flow over a chattering tail at the active contact keeps every other gap open
@@ -491,10 +511,15 @@ bool Automaton<S>::EnterActiveSet(std::vector<int> Z0, const std::vector<int>& w
       }
     }
   }
+  // Every gap from the state, but those at an exact zero with a start kind (a contact that bounced
+  // or lifted off at this instant) stay 0: their next search divides that zero out, and a gap
+  // rounded to ±1e-17 from the state would instead be searched from scratch (a false touch).
   const auto refresh_gaps = [&] {
-    for (size_t j = 0; j < models_.size(); ++j)
+    for (size_t j = 0; j < models_.size(); ++j) {
+      if (gaps_[j] == S(0) && starts_[j] != FlightStart::kGeneric) continue;
       gaps_[j] = std::find(stick.begin(), stick.end(), static_cast<int>(j)) != stick.end()
                      ? S(0) : models_[j]->ContactDisplacement(X_) - models_[j]->x0;
+    }
     for (const int j : Z0) gaps_[static_cast<size_t>(j)] = 0;
   };
   if (stick.empty()) {  // every contact leaves: a free flight

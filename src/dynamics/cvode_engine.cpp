@@ -562,9 +562,8 @@ void CvodeEngine::Begin(const SegmentStart& s) {
     const auto& cd = m.contacts[static_cast<size_t>(j)];
     return s.gaps ? (*s.gaps)[static_cast<size_t>(j)] : cd.c.dot(s.X) - cd.stop;
   };
-  // Another contact's start kind is a known zero only while its gap is 0: the automaton keeps the
-  // kind after the gap has opened (the exact engine then only skips a root-free window), and a
-  // gap divided out from a non-zero value would be tracked from 0.
+  // Another contact's start kind is a known zero only while its gap is 0 (the automaton resets the
+  // kind once the gap has opened): a gap divided out from a non-zero value would be tracked from 0.
   const auto start_of = [&](int j) {
     if (j == s.contact) return s.flight_start;
     const FlightStart k = s.starts ? (*s.starts)[static_cast<size_t>(j)] : FlightStart::kGeneric;

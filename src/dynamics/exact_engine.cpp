@@ -4,6 +4,11 @@
 
 namespace vibro::detail {
 
+long long& ThreadProbeCount() {
+  thread_local long long count = 0;
+  return count;
+}
+
 template class ExactEngineT<double>;
 
 }  // namespace vibro::detail

@@ -18,6 +18,11 @@
 
 namespace vibro::detail {
 
+// The probes of the certified searches (jets with their bounds, one per step) made by the exact
+// engines of this thread so far, each engine's added when it is destroyed: the benchmarks' probes
+// per event (docs/performance.md).
+long long& ThreadProbeCount();
+
 template <class S>
 class ExactEngineT final : public PropagatorT<S> {
  public:
@@ -36,6 +41,7 @@ class ExactEngineT final : public PropagatorT<S> {
   bool HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const override;
   bool HeldReactionBound(const S& H, S& M, S* m5 = nullptr) const override;
   bool HeldReactionTaylor(const S& sigma, S* d) const override;
+  ~ExactEngineT() override { ThreadProbeCount() += probes_; }
 
   // Gap g = x_B − x0 and its derivatives at local time sigma, with a bound on |g'''| over
   // [sigma, sigma + H] (free flight), and with rest > H the far bound over a window of up to
@@ -134,6 +140,7 @@ class ExactEngineT final : public PropagatorT<S> {
   mutable std::vector<TaylorMode> taylor_;
   mutable bool taylor_ready_ = false;
   S gap0_{0};
+  long long probes_ = 0;  // probes of the certified searches (ThreadProbeCount)
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
 };
@@ -472,7 +479,11 @@ template <class S>
 template <class ProbeFn>
 SegmentResultT<S> ExactEngineT<S>::Search(const ProbeFn& probe, const S& from, const S& sigma_max,
                                           SegmentEnd end) {
-  const auto rs = FirstRootPolled<S>(probe, from, sigma_max, h_cap_,
+  const auto counted = [&](const S& u, const S& H, const S& rest) {
+    ++probes_;
+    return probe(u, H, rest);
+  };
+  const auto rs = FirstRootPolled<S>(counted, from, sigma_max, h_cap_,
                                      [this] { return this->StopRequested(); });
   if (rs.stopped)
     return {SegmentEnd::kFailure, rs.result.sigma, "stopped inside a root search", S(-1), true};
@@ -494,7 +505,10 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
   SegmentResultT<S> best{SegmentEnd::kLimit, sigma_max, {}};
   for (int j = 0; j < static_cast<int>(contacts_.size()); ++j) {
     if (j == skip_) continue;
-    const FlightStart start = starts_[static_cast<size_t>(j)];
+    // A start kind is a known zero only while the gap is 0 (the automaton resets it once the gap
+    // opens; a zero divided out from a non-zero gap would skip its next root).
+    const FlightStart start = gap0s_[static_cast<size_t>(j)] == S(0) ? starts_[static_cast<size_t>(j)]
+                                                                      : FlightStart::kGeneric;
     const S w = start == FlightStart::kGeneric
                     ? S(0)
                     : CertifiedWindow<S>(start, StartJet<S>(*contacts_[static_cast<size_t>(j)].m, X0_, V0_,
@@ -531,6 +545,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
   S w(0);
   if (stick_start_ != StickStart::kGeneric) {
     const ProbeT<S> p = probe(S(0), h_cap_, S(0));
+    ++probes_;
     const auto cap = [&](const S& x) { return x < h_cap_ ? x : h_cap_; };
     if (stick_start_ == StickStart::kRising) {
       const S v = p.jet.g1, a = p.jet.g2, M = p.M;
@@ -558,7 +573,8 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
     // A gap that starts at zero (an impact or a departure at this contact while the other was
     // held) divides out its known zero as a flight does (docs/model.md §2.1).
     S wk(0);
-    const FlightStart start = starts_[static_cast<size_t>(k)];
+    const FlightStart start = gap0s_[static_cast<size_t>(k)] == S(0) ? starts_[static_cast<size_t>(k)]
+                                                                      : FlightStart::kGeneric;
     if (start != FlightStart::kGeneric) wk = CertifiedWindow<S>(start, HeldGapStartJet(k), h_cap_);
     if (wk >= best.sigma) continue;
     auto r = Search([this, k](const S& u, const S& H, const S&) { return HeldGapProbe(k, u, H); },

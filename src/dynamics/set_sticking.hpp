@@ -118,7 +118,8 @@ class SetStickingT final : public PropagatorT<S> {
       }
       for (size_t k = 0; k < held_.size(); ++k) {
         if (held_[k] || static_cast<int>(k) == skip_ || weights_[k].size() == 0 || weights_[k].cwiseAbs().maxCoeff() == S(0)) continue;
-        const FlightStart start = starts_[k];
+        // A known zero only while the gap is 0 (as the exact engine's flights).
+        const FlightStart start = gap0_[k] == S(0) ? starts_[k] : FlightStart::kGeneric;
         S w(0);
         if (start != FlightStart::kGeneric) w = CertifiedWindow<S>(start, GapStartJet(k), h_cap_);
         if (w >= best.sigma) continue;

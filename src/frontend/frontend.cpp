@@ -14,16 +14,6 @@
 
 namespace vibro::frontend {
 
-void RequireOneContact(const LoadedScene& loaded, const char* command) {
-  const size_t m = loaded.scene.contacts.size();
-  if (m <= 1) return;
-  throw InputError({fmt::format(
-      "{}: contact: {} [[contact]] tables; `{}` takes scenes with one contact (proofs with several "
-      "contacts are not implemented yet); simulate, attractors, basin, sweep, score, orbit, continue, "
-      "check, validate and partition take them (docs/contacts.md)",
-      loaded.source, m, command)});
-}
-
 LoadedScene SceneOrigin::Load(const std::vector<std::string>& more_sets) const {
   if (!text) {
     std::vector<std::string> problems;

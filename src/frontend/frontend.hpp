@@ -26,10 +26,6 @@ struct SceneOrigin {
   LoadedScene Load(const std::vector<std::string>& more_sets = {}) const;
 };
 
-// Commands not extended to several contacts yet (prove): InputError naming the scene
-// and its [[contact]] tables when it has several (docs/contacts.md).
-void RequireOneContact(const LoadedScene& loaded, const char* command);
-
 // The override "KEY=VALUE" with VALUE in its shortest round-trip form ("2.8", not
 // "2.7999999999999998"; ".0" added to integral values, which TOML would read as integers): the
 // value is exactly `value`, and the scene stored in an output reads as the user would write it.

@@ -334,4 +334,35 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   }
 }
 
+std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
+  h5::Silence();
+  store::ProbeInChild(path, {"/bifurcations"});
+  const h5::Handle file = h5::OpenFile(path, false);
+  if (!file) throw store::CannotOpen(path);
+  const h5::Handle g = h5::TryOpenGroup(file.get(), "/bifurcations");
+  if (!g) throw InputError({fmt::format("{}: no group /bifurcations in this file (not a continuation branch)", path)});
+  const auto bad = [&](const std::string& what, const std::string& expected) {
+    return InputError({fmt::format("{}: /bifurcations/{}: expected {}", path, what, expected)});
+  };
+  if (!h5::DatasetShape(g.get(), "value") || h5::DatasetClass(g.get(), "value") != h5::Class::kFloat)
+    throw bad("value", "a float64 dataset");
+  if (!h5::IsStringDataset(g.get(), "kind")) throw bad("kind", "a dataset of strings");
+  std::vector<double> value, bracket;
+  std::vector<std::string> kind;
+  try {
+    value = h5::ReadDatasetDoubles(g.get(), "value");
+    kind = h5::ReadDatasetStrings(g.get(), "kind");
+    if (h5::DatasetShape(g.get(), "bracket")) bracket = h5::ReadDatasetDoubles(g.get(), "bracket");
+  } catch (const std::exception& e) {
+    throw InputError({fmt::format("{}: /bifurcations cannot be read: {}", path, e.what())});
+  }
+  if (kind.size() != value.size()) throw bad("kind", fmt::format("one entry per value ({}), found {}", value.size(), kind.size()));
+  std::vector<Bifurcation> out;
+  for (size_t i = 0; i < value.size(); ++i) {
+    if (!std::isfinite(value[i])) throw bad(fmt::format("value[{}]", i), fmt::format("a finite number, found {}", value[i]));
+    out.push_back({kind[i], value[i], "", i < bracket.size() ? bracket[i] : 0.0});
+  }
+  return out;
+}
+
 }  // namespace vibro

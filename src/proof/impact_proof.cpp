@@ -20,6 +20,8 @@ namespace {
 
 struct Layout {
   int n, m;
+  std::vector<int> contacts;  // the contact of each impact (all 0 for one contact)
+  int contact(int j) const { return contacts.empty() ? 0 : contacts[static_cast<std::size_t>(j)]; }
   std::size_t size() const { return static_cast<std::size_t>(m * (2 * n + 1)); }
   std::size_t t(int j) const { return static_cast<std::size_t>(j * (2 * n + 1)); }
   std::size_t x(int j, int i) const { return t(j) + 1 + static_cast<std::size_t>(i); }
@@ -42,8 +44,9 @@ std::vector<T> Residual(const IntervalModel& mdl, const Layout& L, int q, const 
     const auto X = Slice(u, L.x(j, 0), L.n), V = Slice(u, L.v(j, 0), L.n);
     const T tn = j == L.m - 1 ? u[L.t(k)] + qT : u[L.t(k)];
     const auto e = Flight(mdl, t, X, V, tn - t);
-    const auto Vp = Impact(mdl, e.V);
-    res.push_back(ContactSum(mdl, X) - T(mdl.stop));
+    const int cj = L.contact(j), ck = L.contact(k);
+    const auto Vp = Impact(mdl, e.V, ck);
+    res.push_back(ContactSum(mdl, X, cj) - T(mdl.contacts[static_cast<std::size_t>(cj)].stop));
     for (int i = 0; i < L.n; ++i) res.push_back(e.X[static_cast<std::size_t>(i)] - u[L.x(k, i)]);
     for (int i = 0; i < L.n; ++i) res.push_back(Vp[static_cast<std::size_t>(i)] - u[L.v(k, i)]);
   }
@@ -145,7 +148,8 @@ Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vecto
 Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, const ProofRequest& request,
                          const Budget& budget) {
   Outcome out;
-  const Layout L{mdl.n, static_cast<int>(guess.times.size())};
+  const Layout L{mdl.n, static_cast<int>(guess.times.size()), guess.contacts};
+  const bool several = mdl.contact_count() > 1;
   const int q = guess.period;
   if (L.size() > kMaxUnknowns) {  // memory and time grow as the square and the cube of the unknowns
     out.reason = fmt::format("{} impacts in {} period(s) and {} mode(s): {} unknowns, more than the {} the prover "
@@ -229,69 +233,123 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
     const Interval tn = j == L.m - 1 ? U[L.t(kk)] + qT : U[L.t(kk)];
     const Interval S = tn - t;
     const auto e = Flight(mdl, t, X, V, S);
-    const Interval a = ContactSum(mdl, V), vminus = ContactSum(mdl, e.V);
-    const Interval M2 = DerivativeBound(mdl, t, X, V, 2);
+    const int cj = L.contact(j), ck = L.contact(kk);
+    const Interval a = ContactSum(mdl, V, cj), vminus = ContactSum(mdl, e.V, ck);
     const std::string where = fmt::format("flight {} (impact {} to impact {})", j, j, kk);
+    // The second-derivative bound of every gap (one contact: the stop's only).
+    std::vector<Interval> M2;
+    for (int l = 0; l < mdl.contact_count(); ++l) M2.push_back(DerivativeBound(mdl, t, X, V, 2, l));
+    const auto gap_where = [&](int l) { return several ? fmt::format("{}, gap of contact {}", where, l) : where; };
     ok = ledger.Check(S.Positive(), "duration", where, S, "> 0") &&
          ledger.Check(a.Positive(), "contact velocity after impact", where, a, "> 0") &&
-         ledger.Check(vminus.Negative(), "contact velocity before impact", where, vminus, "< 0") &&
-         ledger.Check(M2.finite(), "second-derivative bound", where, M2, "finite");
+         ledger.Check(vminus.Negative(), "contact velocity before impact", where, vminus, "< 0");
+    for (int l = 0; l < mdl.contact_count() && ok; ++l)
+      ok = ledger.Check(M2[static_cast<std::size_t>(l)].finite(), "second-derivative bound", gap_where(l),
+                        M2[static_cast<std::size_t>(l)], "finite");
     if (!ok) break;
     v_before[static_cast<std::size_t>(kk)] = vminus;
-    // Windows: g(s) ≥ s(a − M2 s/2) > 0 on (0, ws]; g(S−σ) ≥ σ(b − M2 σ/2) > 0 on (0, we].
+    // Windows: g(s) ≥ s(a − M2 s/2) > 0 on (0, ws] for the gap of the contact just hit;
+    // g(S−σ) ≥ σ(b − M2 σ/2) > 0 on (0, we] for the gap of the contact hit next.
     // The bounds a ≤ ẋ_B⁺ and b ≤ −ẋ_B⁻ are taken a little below the enclosures, so that a checker
     // whose enclosures are a little wider still finds them valid.
+    const Interval& M2s = M2[static_cast<std::size_t>(cj)];
+    const Interval& M2e = M2[static_cast<std::size_t>(ck)];
     const double a_low = a.lo() * (1 - 1e-9), b_low = -vminus.hi() * (1 - 1e-9);
-    const double ws = a_low / M2.hi(), we = b_low / M2.hi();
-    const Interval start_margin = Interval(a_low) - M2 * Interval(ws) / Interval(2.0);
-    const Interval end_margin = Interval(b_low) - M2 * Interval(we) / Interval(2.0);
+    const double ws = a_low / M2s.hi(), we = b_low / M2e.hi();
+    const Interval start_margin = Interval(a_low) - M2s * Interval(ws) / Interval(2.0);
+    const Interval end_margin = Interval(b_low) - M2e * Interval(we) / Interval(2.0);
     ok = ledger.Check(start_margin.Positive(), "start window a - M2 ws/2", where, start_margin, "> 0") &&
          ledger.Check(end_margin.Positive(), "end window b - M2 we/2", where, end_margin, "> 0");
     if (!ok) break;
-    Json pieces = Json::array();
-    // The end window covers s ≥ S* − we ≥ S.hi − we; the pieces overlap it by 0.1 we, so that a checker
-    // whose enclosure of S is a little wider still finds them covering.
-    const double mid_lo = ws, mid_hi = S.hi() - 0.9 * we;
-    if (mid_lo < mid_hi) {
-      const auto gap = [&](double s) { return ContactSum(mdl, Flight(mdl, t, X, V, Interval(s)).X) - mdl.stop; };
-      const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X, V, s).V); };
-      const auto pos = ProvePositive(mid_lo, mid_hi, step, request.max_depth, budget, gap, slope);
-      if (!pos.proven) {
-        ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", where, pos.failed_at), pos.failed_value, "> 0");
-        out.reason = fmt::format("the gap is not proven positive on {}: {} (a grazing or a missed contact?)", where,
-                                 pos.reason);
-        ok = false;
-        break;
+    // Every gap positive between the windows. The end window covers s ≥ S* − we ≥ S.hi − we; the
+    // pieces overlap it by 0.1 we, so that a checker whose enclosure of S is a little wider still
+    // finds them covering. The gap of a contact not hit at either end is proven positive on all of
+    // [0, S] (and a little beyond S.hi, for the same reason).
+    Json gaps = Json::array(), pieces = Json::array();
+    for (int l = 0; l < mdl.contact_count() && ok; ++l) {
+      const double lo_s = l == cj ? ws : 0.0;
+      const double hi_s = l == ck ? S.hi() - 0.9 * we : S.hi() + 1e-9 * (1 + S.hi());
+      Json these = Json::array();
+      if (lo_s < hi_s) {
+        const auto& stop = mdl.contacts[static_cast<std::size_t>(l)].stop;
+        const auto gap = [&](double s) { return ContactSum(mdl, Flight(mdl, t, X, V, Interval(s)).X, l) - stop; };
+        const auto slope = [&](const Interval& s) { return ContactSum(mdl, Flight(mdl, t, X, V, s).V, l); };
+        const auto pos = ProvePositive(lo_s, hi_s, step, request.max_depth, budget, gap, slope);
+        if (!pos.proven) {
+          ledger.Check(false, "gap", fmt::format("{} at s = {:.17g}", gap_where(l), pos.failed_at), pos.failed_value, "> 0");
+          out.reason = fmt::format("the gap{} is not proven positive on {}: {} (a grazing or a missed contact?)",
+                                   several ? fmt::format(" of contact {}", l) : "", where, pos.reason);
+          ok = false;
+          break;
+        }
+        for (const auto& [lo, hi] : pos.pieces) these.push_back({lo, hi});
       }
-      for (const auto& [lo, hi] : pos.pieces) pieces.push_back({lo, hi});
+      if (several)
+        gaps.push_back({{"contact", l}, {"second_derivative_bound", M2[static_cast<std::size_t>(l)].hi()}, {"pieces", these}});
+      else
+        pieces = these;
     }
-    flights.push_back({{"from", j}, {"duration", Pair(S)}, {"velocity_after", Pair(a)},
-                       {"velocity_before_next", Pair(vminus)}, {"velocity_after_lower", a_low},
-                       {"speed_before_lower", b_low}, {"second_derivative_bound", M2.hi()},
-                       {"start_window", ws}, {"end_window", we}, {"pieces", pieces}});
+    if (!ok) break;
+    Json flight = {{"from", j}, {"duration", Pair(S)}, {"velocity_after", Pair(a)},
+                   {"velocity_before_next", Pair(vminus)}, {"velocity_after_lower", a_low},
+                   {"speed_before_lower", b_low}, {"start_window", ws}, {"end_window", we}};
+    if (several) {
+      flight["gaps"] = gaps;
+    } else {
+      flight["second_derivative_bound"] = M2s.hi();
+      flight["pieces"] = pieces;
+    }
+    flights.push_back(flight);
     // Monodromy: the flight (per mode [[cos, sin/ω_i], [−ω_i sin, cos]]) and the saltation matrix of
     // the impact at its end (docs/model.md §5.6).
     const auto n = static_cast<std::size_t>(L.n);
     Matrix Phi(2 * n, std::vector<Interval>(2 * n)), Sal(2 * n, std::vector<Interval>(2 * n));
-    for (std::size_t i = 0; i < n; ++i) {
-      const Interval c = Cos(mdl.omega[i] * S), s = Sin(mdl.omega[i] * S);
-      Phi[i][i] = c;
-      Phi[i][n + i] = s / mdl.omega[i];
-      Phi[n + i][i] = -(mdl.omega[i] * s);
-      Phi[n + i][n + i] = c;
-    }
-    const Interval aB = ContactAcceleration(mdl, tn, e.X);
-    const Interval one_r = Interval(1.0) + mdl.restitution;
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t l = 0; l < n; ++l) {
-        const Interval pr = Interval(i == l ? 1.0 : 0.0) - one_r * mdl.contact[i] * mdl.shape[l] / mdl.s_B;
-        Sal[i][l] = pr;
-        Sal[n + i][n + l] = pr;
-        Sal[n + i][l] = one_r * aB * mdl.contact[i] * mdl.shape[l] / (mdl.s_B * vminus);
+    const auto& hit = mdl.contacts[static_cast<std::size_t>(ck)];
+    const Interval one_r = Interval(1.0) + hit.restitution;
+    if (mdl.damped()) {
+      // Per mode [[h1, h2], [−ω_i² h2, h3]] (enclosure.hpp); the saltation matrix of the impact,
+      // S = Dg + (f⁺ − Dg f⁻) ∇hᵀ/(∇h·f⁻) with Dg = diag(I, Π), ∇h = (c, 0): its lower-left block is
+      // (Ẍ⁺ − Π Ẍ⁻) cᵀ/ẋ_B⁻, the damping force changing with the velocity at the impact.
+      for (std::size_t i = 0; i < n; ++i) {
+        const Interval decay = Exp(-(mdl.sigma[i] * S)), sd = Sin(mdl.omega_d[i] * S), cd = Cos(mdl.omega_d[i] * S);
+        const Interval h2 = decay * sd / mdl.omega_d[i], ratio = mdl.sigma[i] / mdl.omega_d[i] * sd;
+        Phi[i][i] = decay * (cd + ratio);
+        Phi[i][n + i] = h2;
+        Phi[n + i][i] = -(Sqr(mdl.omega[i]) * h2);
+        Phi[n + i][n + i] = decay * (cd - ratio);
       }
+      const auto before = Acceleration(mdl, tn, e.X, e.V), after = Acceleration(mdl, tn, e.X, Impact(mdl, e.V, ck));
+      for (std::size_t i = 0; i < n; ++i) {
+        Interval jump = after[i];
+        for (std::size_t l = 0; l < n; ++l) {
+          const Interval pr = Interval(i == l ? 1.0 : 0.0) - one_r * hit.contact[i] * hit.shape[l] / hit.W;
+          Sal[i][l] = pr;
+          Sal[n + i][n + l] = pr;
+          jump -= pr * before[l];
+        }
+        for (std::size_t l = 0; l < n; ++l) Sal[n + i][l] = jump * hit.shape[l] / vminus;
+      }
+    } else {
+      for (std::size_t i = 0; i < n; ++i) {
+        const Interval c = Cos(mdl.omega[i] * S), s = Sin(mdl.omega[i] * S);
+        Phi[i][i] = c;
+        Phi[i][n + i] = s / mdl.omega[i];
+        Phi[n + i][i] = -(mdl.omega[i] * s);
+        Phi[n + i][n + i] = c;
+      }
+      const Interval aB = ContactAcceleration(mdl, tn, e.X, ck);
+      for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t l = 0; l < n; ++l) {
+          const Interval pr = Interval(i == l ? 1.0 : 0.0) - one_r * hit.contact[i] * hit.shape[l] / hit.W;
+          Sal[i][l] = pr;
+          Sal[n + i][n + l] = pr;
+          Sal[n + i][l] = one_r * aB * hit.contact[i] * hit.shape[l] / (hit.W * vminus);
+        }
+    }
     M = Product(Sal, Product(Phi, M));
   }
   out.certificate["flights"] = flights;
+  if (several) out.certificate["impact_contacts"] = L.contacts;
   if (!ok) {
     if (out.reason.empty()) out.reason = ledger.failed();
     out.certificate["inequalities"] = ledger.list();
@@ -299,7 +357,7 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
   }
   for (int j = 0; j < L.m; ++j) {
     const Interval& t = U[L.t(j)];
-    events.push_back({{"kind", "impact"}, {"contact", 0}, {"time", Pair(t)}, {"phase", Pair(Phase(mdl, t))},
+    events.push_back({{"kind", "impact"}, {"contact", L.contact(j)}, {"time", Pair(t)}, {"phase", Pair(Phase(mdl, t))},
                       {"velocity_before", Pair(v_before[static_cast<std::size_t>(j)])}});
   }
   // The least period is q: for every prime ℓ | q, shifting by q/ℓ periods does not map the impacts
@@ -313,7 +371,7 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
     for (int j = 0; j < L.m && !apart; ++j) {
       const int kk = (j + h) % L.m;
       const Interval dt = U[L.t(kk)] + (j + h >= L.m ? qT : Interval(0.0)) - U[L.t(j)] - Interval(p) * mdl.period;
-      apart = dt.Positive() || dt.Negative();
+      apart = L.contact(kk) != L.contact(j) || dt.Positive() || dt.Negative();
       for (int i = 0; i < L.n && !apart; ++i) {
         const Interval dx = U[L.x(kk, i)] - U[L.x(j, i)], dv = U[L.v(kk, i)] - U[L.v(j, i)];
         apart = dx.Positive() || dx.Negative() || dv.Positive() || dv.Negative();

@@ -150,6 +150,11 @@ Interval Asin(const Interval& x) {
   arb_asin(A(y), CA(x), kPrec);
   return y;
 }
+Interval Exp(const Interval& x) {
+  Interval y;
+  arb_exp(A(y), CA(x), kPrec);
+  return y;
+}
 Interval Abs(const Interval& x) {
   Interval y;
   arb_abs(A(y), CA(x));

@@ -58,6 +58,7 @@ class Interval {
   friend Interval Cos(const Interval& x);
   friend Interval Sqrt(const Interval& x);   // of the non-negative part
   friend Interval Asin(const Interval& x);
+  friend Interval Exp(const Interval& x);
   friend Interval Abs(const Interval& x);
   friend Interval Sqr(const Interval& x);
   friend Interval Union(const Interval& a, const Interval& b);  // convex hull

@@ -52,6 +52,8 @@ struct ImpactGuess {
   int period = 0;
   std::vector<double> times;
   std::vector<Eigen::VectorXd> X, V;
+  // The contact of each impact (a model of several contacts); empty: all at contact 0.
+  std::vector<int> contacts;
   // Over a parameter interval: |u(end) − u(start)| per unknown (t_j, X_j, V_j), which the box must
   // cover beyond the default radius; empty for one parameter value.
   std::vector<double> spread;

@@ -23,29 +23,55 @@ using proof::Json;
 std::string Decimal(double x) { return fmt::format("{}", x); }
 
 proof::IntervalModel ModelOf(const System& sys) {
-  std::vector<std::string> omega, forcing, contact, shape;
+  std::vector<std::string> omega, forcing, contact, shape, damping;
   for (int i = 0; i < sys.dof(); ++i) {
     omega.push_back(Decimal(sys.omega()(i)));
     forcing.push_back(Decimal(sys.forcing()(i)));
     contact.push_back(Decimal(sys.contact()(i)));
     shape.push_back(Decimal(sys.contact_shape()(i)));
+    if (sys.damped()) damping.push_back(Decimal(sys.damping()(i)));
   }
-  return proof::IntervalModel::FromDecimals(omega, forcing, contact, shape, Decimal(sys.stop()),
-                                            Decimal(sys.restitution()), Decimal(sys.amplitude()),
-                                            Decimal(sys.frequency()));
+  auto model = proof::IntervalModel::FromDecimals(omega, forcing, contact, shape, Decimal(sys.stop()),
+                                                  Decimal(sys.restitution()), Decimal(sys.amplitude()),
+                                                  Decimal(sys.frequency()), damping);
+  // Contacts 1, 2, ... of a scene with several (docs/contacts.md): gap c_jᵀX − e_j, projection T_j.
+  for (int j = 1; j < sys.contact_count(); ++j) {
+    const auto& c = sys.contacts()[static_cast<std::size_t>(j)];
+    std::vector<std::string> cs, ct;
+    for (int i = 0; i < sys.dof(); ++i) {
+      cs.push_back(Decimal(c.shape(i)));
+      ct.push_back(Decimal(c.contact(i)));
+    }
+    model.AddContact(cs, ct, Decimal(c.stop), Decimal(c.restitution));
+  }
+  return model;
 }
 
 Json ModelJson(const proof::IntervalModel& m) {
-  return {{"frequencies", m.omega_text}, {"forcing", m.forcing_text},   {"contact", m.contact_text},
-          {"shape", m.shape_text},       {"stop", m.stop_text},         {"restitution", m.restitution_text},
-          {"amplitude", m.amplitude_text}, {"frequency", m.frequency_text}};
+  Json j = {{"frequencies", m.omega_text}, {"forcing", m.forcing_text},   {"contact", m.contact_text},
+            {"shape", m.shape_text},       {"stop", m.stop_text},         {"restitution", m.restitution_text},
+            {"amplitude", m.amplitude_text}, {"frequency", m.frequency_text}};
+  if (m.damped()) j["damping"] = m.damping_text;  // ζ_i, docs/model.md §7
+  if (m.contact_count() > 1) {
+    Json more = Json::array();
+    for (std::size_t k = 1; k < m.contacts.size(); ++k) {
+      const auto& c = m.contacts[k];
+      more.push_back({{"shape", c.shape_text}, {"contact", c.contact_text}, {"stop", c.stop_text},
+                      {"restitution", c.restitution_text}});
+    }
+    j["more_contacts"] = more;  // contacts 1, 2, ... (contact 0 is the fields above)
+  }
+  return j;
 }
 
 // The impacts of one period of an orbit (time, state just after), as the simulator meets them.
 class ImpactRecorder final : public Observer {
  public:
   void OnEvent(const Event& e) override {
-    if (e.kind == EventKind::kImpact) times.push_back(e.t);
+    if (e.kind == EventKind::kImpact) {
+      times.push_back(e.t);
+      if (e.simultaneous) simultaneous = true;
+    }
     else if (e.kind != EventKind::kGrazing) other = ToString(e.kind);
     else grazing = true;
   }
@@ -53,14 +79,17 @@ class ImpactRecorder final : public Observer {
     if (r.kind == ResetKind::kImpact) {
       X.push_back(r.X_after);
       V.push_back(r.V_after);
+      contacts.push_back(r.contact);
+      if (r.simultaneous) simultaneous = true;
     } else if (r.kind == ResetKind::kPlasticLeave) {
       ++plastic_departures;
     }
   }
   std::vector<double> times;
   std::vector<Eigen::VectorXd> X, V;
+  std::vector<int> contacts;
   std::string other;
-  bool grazing = false;
+  bool grazing = false, simultaneous = false;
   int plastic_departures = 0;
 };
 
@@ -86,7 +115,8 @@ int LeastPeriod(const proof::ImpactGuess& g, double T) {
       const auto close = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
         return (a - b).cwiseAbs().maxCoeff() <= 1e-7 * (1 + a.cwiseAbs().maxCoeff());
       };
-      repeats = std::abs(dt) <= 1e-7 * T && close(g.X[k], g.X[i]) && close(g.V[k], g.V[i]);
+      repeats = std::abs(dt) <= 1e-7 * T && close(g.X[k], g.X[i]) && close(g.V[k], g.V[i]) &&
+                (g.contacts.empty() || g.contacts[k] == g.contacts[i]);
     }
     if (repeats) return p;
   }
@@ -133,6 +163,9 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   if (run.status != RunStatus::kOk) f.failure = "the orbit found could not be followed over one period: " + run.message;
   else if (!rec.other.empty()) f.failure = "the orbit found has a " + rec.other + " event: it is not an impacting orbit";
   else if (rec.grazing) f.failure = "the orbit found grazes the stop: a grazing orbit cannot be proven";
+  else if (rec.simultaneous)
+    f.failure = "the orbit found has a simultaneous impact of two contacts: an orbit through a simultaneous impact "
+                "is not proven (the impact map has no derivative there, docs/prove.md)";
   else if (rec.plastic_departures > 0)
     f.failure = fmt::format("r = 0: the orbit found has {} plastic impact(s) per {} period(s), each leaving the stop "
                             "at once with zero contact velocity; impacting orbits with plastic impacts are not proven "
@@ -149,6 +182,7 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   f.guess.times = rec.times;
   f.guess.X = rec.X;
   f.guess.V = rec.V;
+  if (sys.contact_count() > 1) f.guess.contacts = rec.contacts;
   // The least period: the orbit's own (asked for none), or a refusal of a period it does not have.
   const int least = LeastPeriod(f.guess, sys.period());
   if (least < f.guess.period) {
@@ -161,6 +195,7 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
     f.guess.times.resize(keep);
     f.guess.X.resize(keep);
     f.guess.V.resize(keep);
+    if (!f.guess.contacts.empty()) f.guess.contacts.resize(keep);
     f.guess.period = least;
   }
   const std::size_t unknowns = f.guess.times.size() * static_cast<std::size_t>(2 * sys.dof() + 1);
@@ -169,6 +204,15 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
                             "{} the prover takes (docs/prove.md \"Bounds\")", f.guess.times.size(), f.guess.period,
                             sys.dof(), unknowns, proof::kMaxUnknowns);
   return f;
+}
+
+// An impact of the orbit at a contact with r = 0.
+bool PlasticImpact(const System& sys, const proof::ImpactGuess& g) {
+  for (std::size_t j = 0; j < g.times.size(); ++j) {
+    const int c = g.contacts.empty() ? 0 : g.contacts[j];
+    if (sys.contacts()[static_cast<std::size_t>(c)].restitution == 0) return true;
+  }
+  return false;
 }
 
 // Every enclosure of a time or of the section in the summary is at most box_width wide (docs/prove.md).
@@ -182,6 +226,18 @@ double WidestClaim(const Json& summary) {
       for (const auto& p : summary["section"][key]) widen(p);
   }
   return w;
+}
+
+// Contacts 1, 2, ... alike (the parameter interval of a branch is one of contact 0's or the forcing's).
+bool SameMoreContacts(const proof::IntervalModel& a, const proof::IntervalModel& b) {
+  if (a.contacts.size() != b.contacts.size()) return false;
+  for (std::size_t c = 1; c < a.contacts.size(); ++c) {
+    const auto &x = a.contacts[c], &y = b.contacts[c];
+    if (x.shape_text != y.shape_text || x.contact_text != y.contact_text || x.stop_text != y.stop_text ||
+        x.restitution_text != y.restitution_text)
+      return false;
+  }
+  return true;
 }
 
 ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::IntervalModel& model,
@@ -233,8 +289,6 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
 }  // namespace
 
 ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
-  if (system.damped())
-    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
   const proof::Budget budget(request.time_limit, request.stop_requested);
   const auto model = ModelOf(system);
   proof::Outcome outcome;
@@ -242,7 +296,13 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
   const bool one_dof = system.dof() == 1 && system.contact_shape()(0) == 1;
   const auto sticking = [&]() {
     kind = "sticking";
-    if (one_dof) {
+    if (system.contact_count() > 1) {
+      outcome.reason = "sticking orbits of a model with several contacts are not proven by this version "
+                       "(docs/prove.md)";
+    } else if (one_dof && system.damped() && system.restitution() > 0) {
+      outcome.reason = "sticking orbits with chattering (r > 0) of a damped model are not proven by this version "
+                       "(docs/prove.md)";
+    } else if (one_dof) {
       outcome = proof::ProveSticking1Dof(model, request, budget);  // r = 0, or r > 0 with chattering
     } else {
       outcome.reason = "sticking orbits of a model with more than one mode are not proven by this version "
@@ -251,7 +311,7 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
   };
   if (request.kind == OrbitKind::kSticking) {
     sticking();
-  } else if (request.kind == OrbitKind::kAuto && one_dof && system.restitution() == 0) {
+  } else if (request.kind == OrbitKind::kAuto && one_dof && system.restitution() == 0 && system.contact_count() == 1) {
     sticking();  // r = 0, one mode: every impact is plastic, an orbit with impacts sticks or departs
   } else {
     const auto found = FindImpactOrbit(system, scene, request, budget);
@@ -265,7 +325,8 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
       kind = "impact";
       if (found.sticking) outcome.reason = "the orbit found sticks: it is not an impacting orbit (try --kind sticking)";
       else if (!found.failure.empty()) outcome.reason = found.failure;
-      else if (system.restitution() == 0) outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
+      else if (PlasticImpact(system, found.guess))
+        outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
       else outcome = proof::ProveImpactOrbit(model, found.guess, request, budget);
     }
   }
@@ -279,8 +340,6 @@ namespace vibro {
 std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo,
                                                        const ProofRequest& lo, const System& system_hi,
                                                        const Scene& scene_hi, const ProofRequest& hi) {
-  if (system_lo.damped() || system_hi.damped())
-    throw std::invalid_argument("vibro prove covers undamped models only: the scene has modal damping (damping_ratios)");
   const proof::Budget budget(lo.time_limit, lo.stop_requested);
   auto model = ModelOf(system_lo);
   const auto model_hi = ModelOf(system_hi);
@@ -301,7 +360,8 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   between(stop, model_hi.stop_text, "stop position");
   between(restitution, model_hi.restitution_text, "restitution");
   const bool same_structure = model.omega_text == model_hi.omega_text && model.forcing_text == model_hi.forcing_text &&
-                              model.contact_text == model_hi.contact_text && model.shape_text == model_hi.shape_text;
+                              model.contact_text == model_hi.contact_text && model.shape_text == model_hi.shape_text &&
+                              model.damping_text == model_hi.damping_text && SameMoreContacts(model, model_hi);
   if (!same_structure || differs.size() != 1) {
     outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
                      "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
@@ -342,8 +402,14 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   std::function<bool(const std::string&, const std::string&, double, double, int)> piece =
       [&](const std::string& x0, const std::string& x1, double f0, double f1, int depth) -> bool {
     *field = "[" + x0 + ", " + x1 + "]";
-    const auto m = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
-                                                      structure.shape_text, stop, restitution, amplitude, frequency);
+    const auto m0 = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
+                                                      structure.shape_text, stop, restitution, amplitude, frequency,
+                                                      structure.damping_text);
+    auto m = m0;
+    for (std::size_t c = 1; c < structure.contacts.size(); ++c) {
+      const auto& k = structure.contacts[c];
+      m.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
+    }
     const auto at = [&](double f, const auto& lo_v, const auto& hi_v) { return lo_v + f * (hi_v - lo_v); };
     proof::ImpactGuess g = g_lo;
     for (std::size_t j = 0; j < g.times.size(); ++j) {
@@ -376,10 +442,14 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   if (piece(first, last, 0.0, 1.0, 0) && !budget.interrupted()) return results;
   outcome.reason = "not proven over the whole interval: " + failure;
   *field = whole;
-  return {Wrap(outcome, "impact", proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text,
-                                                                        structure.contact_text, structure.shape_text, stop,
-                                                                        restitution, amplitude, frequency),
-               lo, budget, "during the proof")};
+  auto whole_model = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text,
+                                                        structure.contact_text, structure.shape_text, stop, restitution,
+                                                        amplitude, frequency, structure.damping_text);
+  for (std::size_t c = 1; c < structure.contacts.size(); ++c) {
+    const auto& k = structure.contacts[c];
+    whole_model.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
+  }
+  return {Wrap(outcome, "impact", whole_model, lo, budget, "during the proof")};
 }
 
 }  // namespace vibro

@@ -165,20 +165,32 @@ def shooting_truth(cert):
     wi = [mpf(x) for x in md["frequencies"]]
     TA, TB, c = ([mpf(x) for x in md[k]] for k in ("forcing", "contact", "shape"))
     x0, r, f, w = (mpf(md[k]) for k in ("stop", "restitution", "amplitude", "frequency"))
+    zeta = [mpf(x) for x in md.get("damping", ["0"] * len(wi))]
     n, q = len(wi), cert["period"]
-    sB = sum(ci * ti for ci, ti in zip(c, TB))
     per = 2 * n + 1
     m = len(cert["midpoint"]) // per
     T = 2 * pi / w
+    # Every contact (c_j, T_j, e_j, r_j, W_jj), and the contact of each impact.
+    contacts = [(c, TB, x0, r)] + [([mpf(x) for x in k["shape"]], [mpf(x) for x in k["contact"]], mpf(k["stop"]),
+                                    mpf(k["restitution"])) for k in md.get("more_contacts", [])]
+    contacts = [(cc, tt, e, rr, sum(x * y for x, y in zip(cc, tt))) for cc, tt, e, rr in contacts]
+    hits = cert.get("impact_contacts", [0] * m)
 
     def flight(t0, X, V, t):
+        """X_i = U_i(t) + e^{-σs}(a cos ω_d s + b sin ω_d s), U_i = P sin ωt + Q cos ωt (σ = 0 undamped)."""
         Xo, Vo = [], []
         for i in range(n):
-            amp = TA[i] * f / (wi[i] ** 2 - w ** 2)
-            a, b = X[i] - amp * sin(w * t0), (V[i] - amp * w * cos(w * t0)) / wi[i]
+            sg, wd = zeta[i] * wi[i], wi[i] * sqrt(1 - zeta[i] ** 2)
+            det, dmp = wi[i] ** 2 - w ** 2, 2 * zeta[i] * wi[i] * w
+            P, Q = TA[i] * f * det / (det ** 2 + dmp ** 2), -TA[i] * f * dmp / (det ** 2 + dmp ** 2)
+            U, Ud = P * sin(w * t0) + Q * cos(w * t0), w * (P * cos(w * t0) - Q * sin(w * t0))
+            a = X[i] - U
+            b = (V[i] - Ud + sg * a) / wd
             s = t - t0
-            Xo.append(amp * sin(w * t) + a * cos(wi[i] * s) + b * sin(wi[i] * s))
-            Vo.append(amp * w * cos(w * t) - a * wi[i] * sin(wi[i] * s) + b * wi[i] * cos(wi[i] * s))
+            e = mp.exp(-sg * s)
+            Xo.append(P * sin(w * t) + Q * cos(w * t) + e * (a * cos(wd * s) + b * sin(wd * s)))
+            Vo.append(w * (P * cos(w * t) - Q * sin(w * t)) +
+                      e * ((b * wd - sg * a) * cos(wd * s) - (a * wd + sg * b) * sin(wd * s)))
         return Xo, Vo
 
     def unpack(u, j):
@@ -192,10 +204,11 @@ def shooting_truth(cert):
             tn, Xn, Vn = unpack(u, k)
             tn = tn + (q * T if j == m - 1 else 0)
             Xe, Ve = flight(t, X, V, tn)
-            p = -(1 + r) * sum(ci * v for ci, v in zip(c, Ve)) / sB
-            out.append(sum(ci * x for ci, x in zip(c, X)) - x0)
+            cj, ck = contacts[hits[j]], contacts[hits[k]]
+            p = -(1 + ck[3]) * sum(ci * v for ci, v in zip(ck[0], Ve)) / ck[4]
+            out.append(sum(ci * x for ci, x in zip(cj[0], X)) - cj[2])
             out += [Xe[i] - Xn[i] for i in range(n)]
-            out += [Ve[i] + p * TB[i] - Vn[i] for i in range(n)]
+            out += [Ve[i] + p * ck[1][i] - Vn[i] for i in range(n)]
         return out
 
     u = mp.findroot(F, [mpf(x) for x in cert["midpoint"]], tol=mpf(10) ** -45)
@@ -206,7 +219,7 @@ def shooting_truth(cert):
         t, X, V = unpack(u, prev)
         tn = unpack(u, j)[0] + (q * T if prev == m - 1 else 0)
         Ve = flight(t, X, V, tn)[1]
-        events.append(("impact", unpack(u, j)[0], sum(ci * v for ci, v in zip(c, Ve))))
+        events.append(("impact", unpack(u, j)[0], sum(ci * v for ci, v in zip(contacts[hits[j]][0], Ve))))
     t0, X0, V0 = unpack(u, 0)
     return {"events": events, "section": (t0, X0, V0), "w": w}
 
@@ -701,6 +714,88 @@ for amp in ("3",):
     summary_edits(label, cert, truth, full=False)
     ledger_edits(label, cert, count=3)
     proof_data_edits(label, cert, [["box", 4], ["preconditioner", 3, 7], ["flights", 1, "end_window"]])
+
+# Damped models (docs/model.md §7): the damped chain's impacting orbit, against Newton on its shooting
+# map with the damped flight written here; edits of the damping ratios.
+for amp in ("3",):
+    label = f"chain2_damped f={amp}"
+    cert = prove(f"chain2_damped_{amp}", "chain2_damped.toml", "--kind", "impact", "--set", f"excitation.amplitude={amp}")
+    if cert is None or not timed_check(label, cert):
+        continue
+    st = shooting_truth(cert)
+    truth = {"events": st["events"], "section": st["section"], "w": st["w"], "multipliers": None}
+    summary_edits(label, cert, truth, full=False)
+    ledger_edits(label, cert, count=3)
+    proof_data_edits(label, cert, [["box", 2], ["preconditioner", 1, 4], ["flights", 0, "start_window"],
+                                   ["flights", 2, "second_derivative_bound"], ["monodromy", 3, 1]])
+    zeta = cert["model"]["damping"]
+    for what, value, expected in (("a damping ratio moved by 1e-6", [mp.nstr(mpf(zeta[0]) + mpf("1e-6"), 20)] + zeta[1:],
+                                   "rejected"),
+                                  ("the damping ratios swapped", zeta[::-1] if zeta[0] != zeta[1] else
+                                   [mp.nstr(mpf(zeta[0]) * 2, 20), zeta[1]], "rejected"),
+                                  ("a damping ratio of 1", ["1"] + zeta[1:], "malformed"),
+                                  ("a damping ratio of -0.1", ["-0.1"] + zeta[1:], "malformed"),
+                                  ("damping of the wrong length", zeta + ["0.02"], "malformed"),
+                                  ("damping a number", 0.02, "malformed")):
+        run(f"{label} model.damping: {what}", mutate(cert, ["model", "damping"], value), expected)
+    undamped = copy.deepcopy(cert)
+    del undamped["model"]["damping"]
+    run(f"{label}: the damping left out", undamped, "rejected")
+
+# Several contacts: the damped tube in its two-sided support (docs/prove.md), against Newton on its
+# shooting map; the contacts of the events and of the model edited.
+tube_path = os.path.join(TMP, "tube.toml")
+with open(tube_path, "w") as fh:
+    fh.write("""title = "tube"
+[structure]
+mass = [[2.0, 0.0], [0.0, 1.0]]
+stiffness = [[4.0, -1.0], [-1.0, 1.0]]
+forcing_dof = 0
+damping_ratios = [0.02, 0.02]
+[[contact]]
+dof = 1
+side = "below"
+position = -0.1
+restitution = 0.7
+[[contact]]
+dof = 1
+side = "above"
+position = 0.1
+restitution = 0.7
+[excitation]
+amplitude = 0.3
+frequency = 0.9
+[initial]
+displacement = [0.0, 0.0]
+velocity = [0.0, 0.0]
+""")
+cert = prove("tube", tube_path)
+if cert is not None and timed_check("tube (two contacts, damped)", cert):
+    st = shooting_truth(cert)
+    truth = {"events": st["events"], "section": st["section"], "w": st["w"], "multipliers": None}
+    summary_edits("tube", cert, truth, full=False)
+    ledger_edits("tube", cert, count=3)
+    proof_data_edits("tube", cert, [["box", 1], ["flights", 0, "gaps", 1, "pieces", 0], ["flights", 1, "end_window"],
+                                    ["flights", 0, "gaps", 0, "second_derivative_bound"]])
+    hits = cert["impact_contacts"]
+    more = cert["model"]["more_contacts"][0]
+    for what, path, value, expected in (
+            ("an event at the other contact", ["summary", "events", 0, "contact"], 1 - hits[0], "rejected"),
+            ("the impacts swapped between the contacts", ["impact_contacts"], hits[::-1], "rejected"),
+            ("an impact at contact 2 (there is none)", ["impact_contacts", 0], 2, "malformed"),
+            ("contact 1's stop moved by 1e-6", ["model", "more_contacts", 0, "stop"],
+             mp.nstr(mpf(more["stop"]) + mpf("1e-6"), 20), "rejected"),
+            ("contact 1's restitution moved by 1e-6", ["model", "more_contacts", 0, "restitution"],
+             mp.nstr(mpf(more["restitution"]) - mpf("1e-6"), 20), "rejected"),
+            ("contact 1's shape of the wrong length", ["model", "more_contacts", 0, "shape"], more["shape"][:1],
+             "malformed"),
+            ("contact 1 given an unknown key", ["model", "more_contacts", 0], dict(more, side="above"), "malformed"),
+            ("a flight's gaps of the wrong contact", ["flights", 0, "gaps", 1, "contact"], 0, "malformed"),
+            ("a flight's gaps of contact 1 emptied", ["flights", 0, "gaps", 1, "pieces"], [], "malformed")):
+        run(f"tube: {what}", mutate(cert, path, value), expected)
+    single = copy.deepcopy(cert)
+    del single["model"]["more_contacts"]
+    run("tube: the second contact left out of the model", single, "rejected")
 
 # A branch: points and a segment whose parameter is an interval.
 branch = os.path.join(TMP, "branch.h5")

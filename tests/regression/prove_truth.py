@@ -1,0 +1,178 @@
+"""Independent truths for the prover's tests (docs/prove.md): for the model a certificate states (its
+exact decimals: modal damping and several contacts included), Newton at 50 digits on the orbit's
+multiple-shooting map, with the modal flight written here in its standard form
+    X_i(t) = U_i(t) + e^{-σ_i s}(a_i cos ω_d,i s + b_i sin ω_d,i s),   U_i = P_i sin ωt + Q_i cos ωt,
+each impact at its contact j with the law V⁺ = V⁻ − (1 + r_j)(c_j·V⁻/W_jj) T_j; the Floquet multipliers
+as the eigenvalues of the stroboscopic map's Jacobian by central differences (h = 1e-20: error
+~1e-30), each impact located by a root finder at 50 digits; the determinant of that Jacobian against
+its closed form Π r_j² · e^{-qT Σ 2σ_i} (docs/model.md §5.6). Nothing here reads vibro's sources.
+"""
+from mpmath import mp, mpf, sin, cos, exp, sqrt, pi, eig, matrix
+
+mp.dps = 50
+
+
+def inside(x, pair):
+    return mpf(pair[0]) <= x <= mpf(pair[1])
+
+
+class Truth:
+    """The damped modal model of a certificate, at 50 digits."""
+
+    def __init__(self, md):
+        self.wi = [mpf(x) for x in md["frequencies"]]
+        self.TA, self.TB, self.c = ([mpf(x) for x in md[k]] for k in ("forcing", "contact", "shape"))
+        self.x0, self.r, self.f, self.w = (mpf(md[k]) for k in ("stop", "restitution", "amplitude", "frequency"))
+        self.zeta = [mpf(x) for x in md.get("damping", ["0"] * len(self.wi))]
+        self.n = len(self.wi)
+        self.T = 2 * pi / self.w
+        # Every contact (c_j, T_j, e_j, r_j, W_jj = c_j·T_j): contact 0 is the model's own fields.
+        more = [([mpf(x) for x in k["shape"]], [mpf(x) for x in k["contact"]], mpf(k["stop"]), mpf(k["restitution"]))
+                for k in md.get("more_contacts", [])]
+        self.contacts = [(c, T, e, r, sum(x * y for x, y in zip(c, T)))
+                         for c, T, e, r in [(self.c, self.TB, self.x0, self.r)] + more]
+
+    def state(self, t0, X, V, t):
+        """The free flight from (t0, X, V) to time t."""
+        Xo, Vo = [], []
+        w = self.w
+        for i in range(self.n):
+            wi, z = self.wi[i], self.zeta[i]
+            sg, wd = z * wi, wi * sqrt(1 - z * z)
+            # Ü + 2σU̇ + ω_i²U = T_A f sin ωt with U = P sin ωt + Q cos ωt.
+            A = matrix([[wi ** 2 - w ** 2, -2 * sg * w], [2 * sg * w, wi ** 2 - w ** 2]])
+            P, Q = mp.lu_solve(A, matrix([self.TA[i] * self.f, 0]))
+            U = lambda t_: P * sin(w * t_) + Q * cos(w * t_)  # noqa: E731
+            Ud = lambda t_: w * (P * cos(w * t_) - Q * sin(w * t_))  # noqa: E731
+            a = X[i] - U(t0)
+            b = (V[i] - Ud(t0) + sg * a) / wd
+            s = t - t0
+            e = exp(-sg * s)
+            Xo.append(U(t) + e * (a * cos(wd * s) + b * sin(wd * s)))
+            Vo.append(Ud(t) + e * ((b * wd - sg * a) * cos(wd * s) - (a * wd + sg * b) * sin(wd * s)))
+        return Xo, Vo
+
+    def gap(self, X, j=0):
+        c, T, e, r, W = self.contacts[j]
+        return sum(ci * x for ci, x in zip(c, X)) - e
+
+    def rate(self, V, j=0):
+        return sum(ci * v for ci, v in zip(self.contacts[j][0], V))
+
+    def impact(self, V, j=0):
+        c, T, e, r, W = self.contacts[j]
+        p = -(1 + r) * self.rate(V, j) / W
+        return [V[i] + p * T[i] for i in range(self.n)]
+
+
+def orbit_truth(cert):
+    """Newton on the multiple-shooting map from the certificate's midpoint; the multipliers by
+    central differences of the stroboscopic map; the closed-form determinant."""
+    m = Truth(cert["model"])
+    n, q = m.n, cert["period"]
+    per = 2 * n + 1
+    count = len(cert["midpoint"]) // per
+    hits = cert.get("impact_contacts", [0] * count)
+
+    def unpack(u, j):
+        return u[j * per], u[j * per + 1:j * per + 1 + n], u[j * per + 1 + n:(j + 1) * per]
+
+    def F(*u):
+        out = []
+        for j in range(count):
+            k = (j + 1) % count
+            t, X, V = unpack(u, j)
+            tn, Xn, Vn = unpack(u, k)
+            tn = tn + (q * m.T if j == count - 1 else 0)
+            Xe, Ve = m.state(t, X, V, tn)
+            Vp = m.impact(Ve, hits[k])
+            out.append(m.gap(X, hits[j]))
+            out += [Xe[i] - Xn[i] for i in range(n)] + [Vp[i] - Vn[i] for i in range(n)]
+        return out
+
+    u = mp.findroot(F, [mpf(x) for x in cert["midpoint"]], tol=mpf(10) ** -45)
+    u = [u[i] for i in range(len(u))]
+    times = [unpack(u, j)[0] for j in range(count)]
+    vbefore = []
+    for j in range(count):
+        prev = (j - 1) % count
+        t, X, V = unpack(u, prev)
+        tn = times[j] + (q * m.T if prev == count - 1 else 0)
+        vbefore.append(m.rate(m.state(t, X, V, tn)[1], hits[j]))
+    # Every gap stays positive between the impacts (sampled): the orbit found is an orbit.
+    positive = True
+    for j in range(count):
+        t, X, V = unpack(u, j)
+        tn = times[(j + 1) % count] + (q * m.T if j == count - 1 else 0)
+        for k in range(1, 200):
+            Xk = m.state(t, X, V, t + (tn - t) * k / 200)[0]
+            if any(m.gap(Xk, l) <= 0 for l in range(len(m.contacts))):
+                positive = False
+    # Stroboscopic map from t_s, a little after impact 0, over q periods.
+    t0, X0, V0 = unpack(u, 0)
+    ts = t0 + (times[1 % count] + (q * m.T if count == 1 else 0) - t0) / 3
+
+    def strobe(z):
+        t, X, V = ts, z[:n], z[n:]
+        for j in range(1, count + 1):
+            tg = times[j % count] + (q * m.T if j == count else 0)
+            hit = hits[j % count]
+            tl = mp.findroot(lambda tt: m.gap(m.state(t, X, V, tt)[0], hit), tg, tol=mpf(10) ** -48)
+            Xe, Ve = m.state(t, X, V, tl)
+            t, X, V = tl, Xe, m.impact(Ve, hit)
+        Xe, Ve = m.state(t, X, V, ts + q * m.T)
+        return Xe + Ve
+
+    Xs, Vs = m.state(t0, X0, V0, ts)
+    z0 = Xs + Vs
+    h = mpf("1e-20")
+    J = matrix(2 * n, 2 * n)
+    for col in range(2 * n):
+        zp, zm = list(z0), list(z0)
+        zp[col] += h
+        zm[col] -= h
+        a, b = strobe(zp), strobe(zm)
+        for row in range(2 * n):
+            J[row, col] = (a[row] - b[row]) / (2 * h)
+    mult = eig(J, left=False, right=False)
+    det_closed = mp.fprod(m.contacts[h][3] ** 2 for h in hits) * exp(-q * m.T * sum(2 * z * wi for z, wi in zip(m.zeta, m.wi)))
+    det_fd = mp.det(J)
+    return {"times": times, "vbefore": vbefore, "hits": hits, "section": (t0, X0, V0), "multipliers": list(mult), "m": m,
+            "positive": positive, "det": (det_fd, det_closed)}
+
+
+def compare(label, s, tr, expect):
+    """Every claim of the summary contains the truth."""
+    m = tr["m"]
+    expect(tr["positive"], f"{label}: the 50-digit orbit keeps the gap positive between its impacts")
+    det_fd, det_closed = tr["det"]
+    expect(abs(det_fd - det_closed) <= mpf("1e-20") * (1 + abs(det_closed)),
+           f"{label}: det of the stroboscopic Jacobian {mp.nstr(det_fd, 15)} = r^2m e^(-qT sum 2 sigma) "
+           f"{mp.nstr(det_closed, 15)}")
+    ev = s["events"]
+    expect(len(ev) == len(tr["times"]), f"{label}: {len(ev)} events, the truth has {len(tr['times'])} impacts")
+    for j, e in enumerate(ev[:len(tr["times"])]):
+        t = tr["times"][j]
+        expect(e["contact"] == tr["hits"][j], f"{label}: impact {j} at contact {e['contact']}, the truth's {tr['hits'][j]}")
+        expect(inside(t, e["time"]), f"{label}: impact {j} time {mp.nstr(t, 20)} in {e['time']}")
+        ph = (m.w * t) % (2 * pi)
+        expect(inside(ph, e["phase"]), f"{label}: impact {j} phase {mp.nstr(ph, 20)} in {e['phase']}")
+        expect(inside(tr["vbefore"][j], e["velocity_before"]),
+               f"{label}: impact {j} velocity before {mp.nstr(tr['vbefore'][j], 20)} in {e['velocity_before']}")
+    t0, X0, V0 = tr["section"]
+    sec = s["section"]
+    expect(inside(t0, sec["time"]) and all(inside(x, p) for x, p in zip(X0, sec["X"])) and
+           all(inside(v, p) for v, p in zip(V0, sec["V"])), f"{label}: the section state contains the truth")
+    claims = s["multipliers"]
+    used = set()
+    for mu in tr["multipliers"]:
+        hit = next((k for k, c in enumerate(claims) if k not in used and inside(mp.re(mu), c["re"]) and
+                    inside(mp.im(mu), c["im"])), None)
+        expect(hit is not None, f"{label}: the multiplier {mp.nstr(mu, 15)} lies in a claimed enclosure ({claims})")
+        if hit is not None:
+            used.add(hit)
+    moduli = [abs(mu) for mu in tr["multipliers"]]
+    want = "unstable" if max(moduli) > 1 else "stable"
+    expect(s["stability"] in (want, "undecided"), f"{label}: stability {s['stability']} (moduli {moduli})")
+    width = max(mpf(p[1]) - mpf(p[0]) for p in [sec["time"]] + sec["X"] + sec["V"])
+    expect(width <= mpf("1e-9"), f"{label}: the section enclosed within 1e-9 ({mp.nstr(width, 3)})")
