@@ -1,14 +1,25 @@
 #!/usr/bin/python3
 """Events to the bit: run every shipped scene with two `vibro` binaries and compare their /events.
 
-    scripts/compare_events.py OLD_VIBRO NEW_VIBRO [--periods 60] [--precision double,quad]
-                              [--scenes GLOB ...] [--keep DIR]
+    scripts/compare_events.py OLD_VIBRO NEW_VIBRO [--periods 60] [--quad-periods N]
+                              [--precision double,quad] [--scenes GLOB ...] [--keep DIR]
 
-Each scene (data/scenes/**/*.toml and data/benchmarks/*.toml, or the --scenes globs) is simulated
-by both binaries with `--out`, double and quad precision, the same overrides; every /events column
+Each scene (by default every data/scenes/**/*.toml and data/benchmarks/*.toml) is simulated by
+both binaries with `--out`, double and quad precision, the same overrides; every /events column
 of the two files is compared bit for bit (NaN equal to NaN). Prints one line per scene and
 precision: `identical`, or the columns that differ with their largest relative difference.
 Exit 0 when every column of every scene is identical, 1 otherwise, 2 on bad arguments.
+
+  --periods N       run.periods of every run (default 60).
+  --quad-periods N  run.periods of the quad runs only (default: --periods). Quad costs ~100× double:
+                    the 50-mode beam takes over 13 minutes at 60 periods on a loaded machine, so a
+                    quick check may run quad shorter, e.g. `--quad-periods 5`; the full default
+                    stays the release check.
+  --scenes GLOB ... only the scenes these globs match (`**` recursive; a relative glob is taken from
+                    the current folder, else from the repository), e.g.
+                    `--scenes 'data/scenes/*chain*.toml' data/benchmarks/fig8.toml`.
+  --precision LIST  double, quad or both (default double,quad).
+  --keep DIR        keep the HDF5 files in DIR.
 
 Each binary runs with the libvibro.so beside it (LD_LIBRARY_PATH = its folder): compare copies
 made by scripts/snapshot_build.sh, or build folders. A change to the engine or the automaton that should leave single-stop scenes untouched is checked
@@ -73,6 +84,7 @@ def main():
     p.add_argument("old")
     p.add_argument("new")
     p.add_argument("--periods", type=int, default=60)
+    p.add_argument("--quad-periods", type=int, help="run.periods of the quad runs (default: --periods)")
     p.add_argument("--precision", default="double,quad")
     p.add_argument("--scenes", nargs="*")
     p.add_argument("--keep", help="keep the HDF5 files in this folder")
@@ -85,9 +97,24 @@ def main():
             print(f"compare_events: {exe}: no libvibro.so beside it (copy a build with "
                   "scripts/snapshot_build.sh, not the binary alone)", file=sys.stderr)
             return 2
+    for n in (a.periods, a.quad_periods):
+        if n is not None and n < 1:
+            print(f"compare_events: periods must be >= 1, not {n}", file=sys.stderr)
+            return 2
+    bad_prec = [q for q in a.precision.split(",") if q not in ("double", "quad")]
+    if bad_prec:
+        print(f"compare_events: --precision: {','.join(bad_prec)} is not double or quad", file=sys.stderr)
+        return 2
     patterns = a.scenes or [os.path.join(ROOT, "data/scenes/**/*.toml"),
                             os.path.join(ROOT, "data/benchmarks/*.toml")]
-    scenes = sorted({s for pat in patterns for s in glob.glob(pat, recursive=True)})
+
+    def matches(pat):
+        found = glob.glob(pat, recursive=True)
+        if not found and not os.path.isabs(pat):
+            found = glob.glob(os.path.join(ROOT, pat), recursive=True)
+        return [os.path.abspath(f) for f in found]
+
+    scenes = sorted({s for pat in patterns for s in matches(pat)})
     if not scenes:
         print("compare_events: no scene matches", file=sys.stderr)
         return 2
@@ -102,7 +129,8 @@ def main():
                 out = os.path.join(tmp, f"{os.path.basename(scene)}.{prec}.{tag}.h5")
                 if os.path.exists(out):
                     os.remove(out)
-                rc, last = run(exe, scene, prec, a.periods, out)
+                periods = a.quad_periods if prec == "quad" and a.quad_periods else a.periods
+                rc, last = run(exe, scene, prec, periods, out)
                 outs.append((rc, out, last))
             (rc0, o0, l0), (rc1, o1, l1) = outs
             if rc0 != rc1:

@@ -25,8 +25,9 @@ Accuracy is measured against vibro's exact engine with chatter_switch = 1e-9 (th
 
 Usage: /usr/bin/python3 benchmarks/peers/run_all.py [--vibro build/vibro] [--out docs/peers]
        [--periods 20] [--scenes a.toml,b.toml] [--quick] [--event-driven] [--replot]
-Writes PREFIX.csv (one row per run), PREFIX.png (error against CPU time per scene, whole
-processes and calls) and prints the table of docs/peers.md (table.py). Needs Debian's
+Writes PREFIX.csv (one row per run), PREFIX.json (when, from which commit and binary, the command
+line, the machine's load), PREFIX.png (error against CPU time per scene, whole processes and calls)
+and prints the table of docs/peers.md (table.py). Needs Debian's
 python3-scipy, python3-siconos, python3-h5py, python3-matplotlib and vibro's Python module
 (build/python). About 10 minutes; --quick: a smoke run of one setting per engine on two scenes.
 """
@@ -39,6 +40,7 @@ import resource
 import subprocess
 import sys
 import tempfile
+import time
 
 import numpy as np
 
@@ -219,9 +221,16 @@ def main():
     if args.replot:
         with open(args.out + ".csv", newline="") as fh:
             rows = list(csv.DictReader(fh))
-        plot(rows, list(dict.fromkeys(r["scene"] for r in rows)), args.out + ".png")
+        provenance = None
+        if os.path.exists(args.out + ".json"):
+            with open(args.out + ".json") as fh:
+                provenance = json.load(fh)
+        plot(rows, list(dict.fromkeys(r["scene"] for r in rows)), args.out + ".png", provenance)
         return
     plugin = siconos_peer.build_plugin()
+    provenance = run_provenance(args)
+    print(f"run of {provenance['date']} at commit {provenance['commit']} ({provenance['vibro_version']}), "
+          f"load {provenance['load_start']}", flush=True)
     rows = []
     for label, scene in scenes:
         p = Problem.from_vibro(args.vibro, scene, label, periods=args.periods)
@@ -252,16 +261,36 @@ def main():
                   f"(x{c / base[1]:7.3g}, vs whole x{c / base[0]:7.3g})  event {err:8.1e}  state {st:8.1e}  {status}",
                   flush=True)
     write_csv(rows, args.out + ".csv")
+    provenance["load_end"] = os.getloadavg()[0]
+    with open(args.out + ".json", "w") as fh:
+        json.dump(provenance, fh, indent=1)
+        fh.write("\n")
     print(args.out + ".csv")
-    plot(rows, [s[0] for s in scenes], args.out + ".png")
+    plot(rows, [s[0] for s in scenes], args.out + ".png", provenance)
     table.print_tables(rows)
+
+
+def run_provenance(args):
+    """When and from what the run was made: its date (UTC), the checkout's commit (with "+changes"
+    when the tree differs from it), `vibro --version`, the command line and the load average."""
+    def git(*a):
+        r = subprocess.run(["git", "-C", ROOT, *a], capture_output=True, text=True)
+        return r.stdout.strip() if r.returncode == 0 else ""
+    commit = git("rev-parse", "--short=7", "HEAD") or "unknown"
+    if git("status", "--porcelain", "--untracked-files=no"):
+        commit += "+changes"
+    version = subprocess.run([args.vibro, "--version"], capture_output=True, text=True).stdout.strip()
+    return {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "commit": commit,
+            "vibro_version": version, "command": " ".join([os.path.relpath(sys.argv[0], ROOT)] + sys.argv[1:]),
+            "periods": args.periods, "repeat": args.repeat, "vibro_repeat": args.vibro_repeat,
+            "load_start": os.getloadavg()[0], "cpus": os.cpu_count()}
 
 
 STYLE = {"vibro exact": ("*", "k"), "vibro CVODE": ("o", "tab:blue"), "SciPy DOP853": ("s", "tab:orange"),
          "Siconos Moreau–Jean": ("^", "tab:green"), "Siconos event-driven": ("v", "tab:purple")}
 
 
-def plot(rows, labels, path):
+def plot(rows, labels, path, provenance=None):
     """Error against CPU per scene: filled markers the whole processes, hollow ones the calls."""
     plt = pyplot()
     cols = 4
@@ -292,8 +321,9 @@ def plot(rows, labels, path):
     leg.axis("off")
     for ax in list(axes.flat)[len(labels) + 1:]:
         ax.axis("off")
+    when = (f", {provenance['date']}, commit {provenance['commit']}" if provenance else "")
     fig.suptitle("vibro and its peers: error of the first 12 stick/release times against vibro's exact engine "
-                 "vs CPU time (one run of benchmarks/peers/run_all.py)", fontsize=10)
+                 f"vs CPU time (one run of benchmarks/peers/run_all.py{when})", fontsize=10)
     save_figure(fig, path)
 
 

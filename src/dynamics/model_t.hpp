@@ -83,16 +83,18 @@ struct ModelT {
   S ReactionRate(const Vec& X, const Vec& V, const S& phase) const {
     return ReactionRateTrig(X, V, Real<S>::sin(phase), Real<S>::cos(phase));
   }
-  // The same with sin φ, cos φ at hand; undamped, without allocation (the products are summed in
-  // the order of the vector expression).
+  // The same with sin φ, cos φ at hand, without allocation: the products are summed in the order
+  // of the vector expression; damped, the free acceleration is kept in a per-thread scratch vector
+  // (the same element-wise operations as the temporaries it replaces, so the same doubles).
   S ReactionRateTrig(const Vec& X, const Vec& V, const S& sin_phase, const S& cos_phase) const {
     S rate = shape.dot(omega.cwiseAbs2().cwiseProduct(V)) - s_A * f * w * cos_phase;
     if (damped) {
-      const Vec w2 = omega.cwiseAbs2();
-      const Vec DV = S(2) * zeta.cwiseProduct(omega).cwiseProduct(V);
-      const Vec free_acc = -w2.cwiseProduct(X) - DV + forcing * (f * sin_phase);
-      const Vec acc = free_acc - contact * (shape.dot(free_acc) / s_B);
-      rate += shape.dot(S(2) * zeta.cwiseProduct(omega).cwiseProduct(acc));
+      thread_local Vec free_acc;
+      free_acc.resize(X.size());
+      free_acc = -omega.cwiseAbs2().cwiseProduct(X) - S(2) * zeta.cwiseProduct(omega).cwiseProduct(V) +
+                 forcing * (f * sin_phase);
+      const S pull = shape.dot(free_acc) / s_B;
+      rate += shape.dot(S(2) * zeta.cwiseProduct(omega).cwiseProduct(free_acc - contact * pull));
     }
     return rate / s_B;
   }

@@ -48,17 +48,23 @@ S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, b
   }
   cuts[nc++] = H;
   S lo(0);
+  // p(lo), known without evaluating p again: the first Newton step starts at lo. At lo = 0 it is g
+  // to the bit when g', g'' and M are finite (0·y = ±0 and g + ±0 = g; x − x = 0 tests finiteness);
+  // at a cut it is the value just computed there.
+  S plo = (g1 - g1 == S(0) && g2 - g2 == S(0) && M - M == S(0)) ? g : p(S(0));
   for (int i = 0; i < nc; ++i) {
     S hi = cuts[i];
-    if (p(hi) > 0) {
+    const S phi = p(hi);
+    if (phi > 0) {
       lo = hi;
+      plo = phi;
       continue;
     }
     // Safeguarded Newton on a monotone stretch, p(lo) > 0 ≥ p(hi).
     const S kEps = Eps<S>();
     S x = lo;
     for (int it = 0; it < 200 && hi - lo > 4 * kEps * hi; ++it) {
-      const S px = p(x);
+      const S px = it == 0 ? plo : p(x);
       (px > 0 ? lo : hi) = x;
       const S dp = g1 + x * (g2 - S(0.5) * M * x);
       S next = dp != 0 ? S(x - px / dp) : S(S(0.5) * (lo + hi));

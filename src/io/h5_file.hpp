@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <utility>
@@ -154,6 +155,9 @@ std::vector<std::string> ReadDatasetStrings(Id loc, const std::string& name);
 // A chunked, deflated dataset of `cols` columns (cols = 0: one-dimensional) that grows by rows
 // buffered in memory and written at Flush. It has no chunk cache: Flush writes the rows' chunks
 // to the file at once, so that a file's flush (FlushFile) writes metadata only.
+// Flush is Stage (the buffered rows set aside: no HDF5 call) then WriteStaged (the HDF5 calls,
+// which a writer thread may make while the rows that follow are buffered: the store's
+// write-behind, docs/output.md). rows() counts the staged rows as written.
 class Column {
  public:
   static constexpr Size kAnyCols = ~Size{0};
@@ -168,19 +172,24 @@ class Column {
 
   Size cols() const { return cols_; }
   Size rows() const { return rows_ + pending(); }
-  Size pending() const { return buf_.size() / (elem_size_ * std::max<Size>(cols_, 1)); }
-  Size pending_bytes() const { return buf_.size(); }
+  Size pending() const { return used_ / (elem_size_ * std::max<Size>(cols_, 1)); }
+  Size pending_bytes() const { return used_; }
 
   template <class T>
   void Push(const T& v) {
-    const auto* p = reinterpret_cast<const unsigned char*>(&v);
-    buf_.insert(buf_.end(), p, p + sizeof(T));
+    Append(&v, sizeof(T));
   }
-  void PushRow(const Eigen::VectorXd& v) {
-    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
-    buf_.insert(buf_.end(), p, p + sizeof(double) * static_cast<size_t>(v.size()));
+  void PushRow(const Eigen::VectorXd& v) { Append(v.data(), sizeof(double) * static_cast<size_t>(v.size())); }
+  void Flush() {
+    Stage();
+    WriteStaged();
   }
-  void Flush();
+  // Sets the buffered rows aside for WriteStaged (the rows staged before must have been written);
+  // whole_chunks: only those that fill whole chunks of the dataset (written once, never read back
+  // and compressed again when the next rows come), the others stay buffered.
+  void Stage(bool whole_chunks = false);
+  // Writes the staged rows (nothing when none are staged).
+  void WriteStaged();
   void Truncate(Size rows);
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
   void Read(Size first, Size n, void* out) const;
@@ -194,8 +203,17 @@ class Column {
   size_t elem_size_ = 8;
   std::string name_;
   Size cols_ = 0;
-  Size rows_ = 0;
-  std::vector<unsigned char> buf_;
+  Size rows_ = 0;          // rows written or staged
+  Size staged_first_ = 0;  // the first staged row
+  Size chunk_rows_ = 0;    // rows per chunk (0: unknown, a dataset opened)
+  std::vector<unsigned char> buf_, staged_;  // buf_: its first used_ bytes are rows
+  size_t used_ = 0;
+
+  void Append(const void* p, size_t bytes) {
+    if (buf_.size() - used_ < bytes) buf_.resize(std::max<size_t>({2 * buf_.size(), used_ + bytes, 4096}));
+    std::memcpy(buf_.data() + used_, p, bytes);
+    used_ += bytes;
+  }
 };
 
 // Reads every attribute and every dataset (up to `max_bytes` each) of the file at `path`, for a

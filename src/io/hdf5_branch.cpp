@@ -59,6 +59,7 @@ H5Table LoadsTable(const std::vector<const std::vector<ContactLoads>*>& rows, co
 }  // namespace
 
 void Hdf5Store::WriteBranch(const Branch& b) {
+  impl_->Sync();
   const size_t N = b.points.size();
   size_t m = 1, k = 1;
   for (const auto& pt : b.points) {
@@ -265,6 +266,7 @@ StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {
 void Hdf5Store::WritePartition(const std::string& param1, const std::string& param2,
                                const std::vector<double>& levels,
                                const std::vector<PartitionColumn>& columns) {
+  impl_->Sync();
   const h5::Handle g = h5::CreateGroup(impl_->file.get(), "/partition");
   h5::WriteString(g.get(), "param1", param1);
   h5::WriteString(g.get(), "param2", param2);

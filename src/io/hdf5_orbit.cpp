@@ -8,6 +8,7 @@
 namespace vibro {
 
 void Hdf5Store::WriteOrbit(const OrbitResult& orbit) {
+  impl_->Sync();
   const h5::Handle g = h5::OpenOrCreateGroup(impl_->file.get(), "/orbit");
   const h5::Id o = g.get();
   h5::WriteInt(o, "period", orbit.period);

@@ -179,19 +179,22 @@ void Hdf5Store::Impl::OpenColumns() {
 void Hdf5Store::Impl::MaybeFlush() {
   if ((++calls & 1023u) != 0) return;
   const auto now = std::chrono::steady_clock::now();
-  // Also when the rows held reach 8 MiB: a fast run would otherwise grow its buffers for a whole
-  // interval (143 MiB for 20 000 periods of Fig. 8), and the page faults and copies of that growth
-  // cost more than the writes.
-  constexpr size_t kFlushBytes = size_t{8} << 20;
+  // Also when the rows held reach 4 MiB, their whole chunks: a fast run would otherwise grow its
+  // buffers for a whole interval (143 MiB for 20 000 periods of Fig. 8), and the page faults and
+  // copies of that growth cost more than the writes; and the writer thread compresses and writes
+  // them while the simulation computes the next rows (a short run would otherwise leave it all to
+  // Finish).
+  constexpr size_t kFlushBytes = size_t{4} << 20;
   size_t pending = 0;
   for (h5::Column* c : Columns()) pending += c->pending_bytes();
-  if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval || pending >= kFlushBytes)
-    Flush();
+  if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) FlushBehind(false);
+  else if (pending >= kFlushBytes) FlushBehind(true);
 }
 
-void Hdf5Store::Impl::WriteCheckpoint() {
-  if (!last_checkpoint) return;
-  const Checkpoint& c = *last_checkpoint;
+void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoint_at, h5::Size n_events,
+                                      h5::Size n_samples, h5::Size n_sections) {
+  if (!checkpoint_at) return;
+  const Checkpoint& c = *checkpoint_at;
   const h5::Id g = checkpoint.get();
   h5::WriteInt(g, "period", c.clock.period);
   h5::WriteDouble(g, "offset", c.clock.offset);
@@ -227,10 +230,9 @@ void Hdf5Store::Impl::WriteCheckpoint() {
     h5::WriteDoubles(g, "reaction_integral", c.reaction_integral);
     h5::WriteDoubles(g, "reaction_max", c.reaction_max);
   }
-  h5::WriteInt(g, "events", static_cast<long long>(cp_events));
-  h5::WriteInt(g, "samples", static_cast<long long>(cp_samples));
-  h5::WriteInt(g, "sections", static_cast<long long>(cp_sections));
-  checkpoint_on_disk = true;  // at the end of this flush
+  h5::WriteInt(g, "events", static_cast<long long>(n_events));
+  h5::WriteInt(g, "samples", static_cast<long long>(n_samples));
+  h5::WriteInt(g, "sections", static_cast<long long>(n_sections));
 }
 
 std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
@@ -243,6 +245,7 @@ std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
 }
 
 void Hdf5Store::Impl::Close() {
+  Sync();
   for (h5::Column* c : Columns()) *c = h5::Column();
   cells.reset();
   cells_group.Reset();
@@ -254,17 +257,43 @@ void Hdf5Store::Impl::Close() {
   file.Reset();
 }
 
-void Hdf5Store::Impl::Flush() {
+void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events,
+                                              h5::Size n_samples, h5::Size n_sections) {
   const auto t0 = std::chrono::steady_clock::now();
   // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
   // then, when there is room for it, the metadata that makes them part of the file.
-  for (h5::Column* c : Columns()) c->Flush();
-  WriteCheckpoint();
+  for (h5::Column* col : Columns()) col->WriteStaged();
+  WriteCheckpoint(c, n_events, n_samples, n_sections);
   CheckRoom();
   h5::FlushFile(file.get());
-  last_flush = std::chrono::steady_clock::now();
   ++stats.flushes;
-  stats.flush_seconds += std::chrono::duration<double>(last_flush - t0).count();
+  stats.flush_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void Hdf5Store::Impl::Flush() {
+  Sync();
+  for (h5::Column* c : Columns()) c->Stage();
+  if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
+  WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections);
+  last_flush = std::chrono::steady_clock::now();
+}
+
+void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
+  Sync();
+  // Only the staged rows and copies of the checkpoint go to the writer: the columns' buffers and
+  // the checkpoint fields stay the simulation's. The checkpoint's rows are all in the file only
+  // when every row before it is staged (a flush of whole chunks may leave some buffered): it is
+  // written with the interval's flushes, which stage every row.
+  for (h5::Column* c : Columns()) c->Stage(whole_chunks);
+  if (whole_chunks) {
+    writer.Start([this] { WriteStagedAndMetadata(std::nullopt, 0, 0, 0); });
+    return;
+  }
+  if (last_checkpoint) checkpoint_on_disk = true;
+  writer.Start([this, c = last_checkpoint, e = cp_events, s = cp_samples, x = cp_sections] {
+    WriteStagedAndMetadata(c, e, s, x);
+  });
+  last_flush = std::chrono::steady_clock::now();
 }
 
 void Hdf5Store::Impl::CheckRoom() {
@@ -352,6 +381,7 @@ void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
 
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   auto& m = *impl_;
+  m.Sync();
   const h5::Id f = m.file.get();
   h5::WriteString(f, "status", ToString(r.status));
   h5::WriteString(f, "message", r.message);
@@ -530,6 +560,9 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }
 
-Hdf5Store::Stats Hdf5Store::stats() const { return impl_->stats; }
+Hdf5Store::Stats Hdf5Store::stats() const {
+  impl_->Sync();  // the writer thread's flush under way counted
+  return impl_->stats;
+}
 
 }  // namespace vibro

@@ -13,6 +13,7 @@
 
 #include "io/file_lock.hpp"
 #include "io/h5_file.hpp"
+#include "io/write_behind.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/scene_file.hpp"
@@ -122,14 +123,27 @@ struct Hdf5Store::Impl {
   std::optional<store::CellTable> cells;
   h5::Size zcols = 0;
 
+  // Last member, destroyed first: its thread ends before the file's handles close.
+  store::WriteBehind writer;
   void OpenGroups();
   void OpenColumns();
+  // Every HDF5 call of the store's own thread comes after Sync(): the writer thread's flush under
+  // way ends first (and its WriteError is thrown here).
+  void Sync() { writer.Wait(); }
+  // A run's periodic flush, on the writer thread (write-behind): the rows buffered so far are set
+  // aside and written while the run goes on.
   void MaybeFlush();
   void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
-  void WriteCheckpoint();
+  // The checkpoint `c` (none: nothing) with the row counts at it.
+  void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections);
   std::vector<h5::Column*> Columns();
   void Close();
-  void Flush();
+  void Flush();  // in the store's thread, after Sync()
+ private:
+  void FlushBehind(bool whole_chunks);
+  // Writes the staged rows, then the checkpoint and the file's metadata (either thread).
+  void WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples,
+                              h5::Size n_sections);
 };
 
 }  // namespace vibro

@@ -145,6 +145,7 @@ void WriteAttractorTable(h5::Id f, const StudyResult& st) {
 
 void Hdf5Store::BeginStudy(const StudyGrid& grid) {
   auto& m = *impl_;
+  m.Sync();
   const h5::Id f = m.file.get();
   m.basin = h5::CreateGroup(f, "/basin");
   const h5::Id b = m.basin.get();
@@ -346,6 +347,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::ResumeStudy(const std::string& path, const
 
 void Hdf5Store::WriteStudy(const StudyResult& st, const StudyGrid& grid) {
   auto& m = *impl_;
+  m.Sync();
   const h5::Id f = m.file.get();
   if (!m.basin) {
     m.basin = h5::CreateGroup(f, "/basin");

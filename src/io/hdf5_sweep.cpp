@@ -7,6 +7,7 @@
 namespace vibro {
 
 void Hdf5Store::WriteSweep(const std::vector<SweepPoint>& sweep, const SweepSpec& spec) {
+  impl_->Sync();
   const h5::Handle g = h5::CreateGroup(impl_->file.get(), "/sweep");
   const h5::Size n = sweep.size(), rec = static_cast<h5::Size>(std::max(spec.record, 1));
   std::vector<double> value, sp, xB(n * rec, std::numeric_limits<double>::quiet_NaN()), vB = xB;

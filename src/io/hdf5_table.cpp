@@ -14,6 +14,7 @@ const H5Table::Array* H5Table::Find(const std::string& name) const {
 }
 
 void Hdf5Store::WriteTable(const std::string& group, const H5Table& t) {
+  impl_->Sync();
   const h5::Handle g = h5::CreateGroup(impl_->file.get(), group);
   for (const auto& a : t.arrays) {
     const std::vector<h5::Size> dims(a.dims.begin(), a.dims.end());
@@ -34,6 +35,7 @@ void Hdf5Store::WriteTable(const std::string& group, const H5Table& t) {
 
 void Hdf5Store::WriteGroup(const std::string& group,
                            const std::vector<std::pair<std::string, std::vector<double>>>& values) {
+  impl_->Sync();
   const h5::Handle g = h5::OpenOrCreateGroup(impl_->file.get(), group);
   for (const auto& [name, v] : values) h5::WriteDoubles(g.get(), name, v);
 }

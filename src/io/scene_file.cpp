@@ -6,6 +6,7 @@
 #include "vibro/scene_file.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
@@ -985,10 +986,17 @@ std::optional<double> SceneNumber(const std::string& text, const std::string& ke
 LoadedScene LoadScene(const std::string& path, const std::vector<std::string>& overrides) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError({fmt::format("{}: cannot read the scene file", path)});
-  // At most one byte more than a scene may hold (/dev/zero, a FIFO, a huge file end here).
-  std::string buffer(kMaxSceneBytes + 1, '\0');
-  in.read(buffer.data(), static_cast<std::streamsize>(buffer.size()));
-  buffer.resize(static_cast<size_t>(in.gcount()));
+  // At most one byte more than a scene may hold (/dev/zero, a FIFO, a huge file end here), read
+  // in pieces: a buffer of the largest size, zeroed, would cost every run 1 MiB of fresh pages
+  // (a third of a short run's CPU, docs/performance.md "Start-up").
+  std::string buffer;
+  std::array<char, 16384> piece{};
+  while (buffer.size() <= kMaxSceneBytes) {
+    in.read(piece.data(), static_cast<std::streamsize>(piece.size()));
+    const auto got = static_cast<size_t>(in.gcount());
+    buffer.append(piece.data(), std::min(got, kMaxSceneBytes + 1 - buffer.size()));
+    if (got < piece.size()) break;
+  }
   return ParseScene(buffer, path, overrides);
 }
 

@@ -1,0 +1,87 @@
+// The store's write-behind (docs/output.md, "Writing"): one writer thread that runs one job at a
+// time (a flush of the rows set aside), while the simulation goes on buffering the rows that
+// follow. The HDF5 library is not thread-safe: the store calls Wait() before any HDF5 call of its
+// own, so that the library is only ever used by one thread at a time. A job's exception (a
+// WriteError: full disk, I/O error) is thrown again by the next Wait() in the store's thread.
+#pragma once
+
+#include <signal.h>
+
+#include <condition_variable>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
+
+namespace vibro::store {
+
+class WriteBehind {
+ public:
+  WriteBehind() = default;
+  WriteBehind(const WriteBehind&) = delete;
+  WriteBehind& operator=(const WriteBehind&) = delete;
+  ~WriteBehind() {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      done_.wait(lock, [&] { return !job_; });
+      stop_ = true;
+    }
+    ready_.notify_one();
+    if (thread_.joinable()) thread_.join();
+  }
+
+  // Waits for the job under way, if any; rethrows its exception.
+  void Wait() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [&] { return !job_; });
+    if (error_) {
+      const std::exception_ptr e = error_;
+      error_ = nullptr;
+      std::rethrow_exception(e);
+    }
+  }
+
+  // Runs `job` on the writer thread (started on the first call); the caller has called Wait().
+  void Start(std::function<void()> job) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      job_ = std::move(job);
+    }
+    if (!thread_.joinable()) thread_ = std::thread([this] { Loop(); });
+    ready_.notify_one();
+  }
+
+ private:
+  void Loop() {
+    // Stop requests (SIGINT, SIGTERM, ...) are for the simulation's thread, never this one (a
+    // write interrupted by a handler here would fail for no reason).
+    sigset_t all;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, nullptr);
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      ready_.wait(lock, [&] { return job_ || stop_; });
+      if (!job_) return;
+      lock.unlock();
+      std::exception_ptr error;
+      try {
+        job_();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      job_ = nullptr;
+      error_ = error;
+      done_.notify_all();
+    }
+  }
+
+  std::mutex mutex_;
+  std::condition_variable ready_, done_;
+  std::function<void()> job_;
+  std::exception_ptr error_;
+  bool stop_ = false;
+  std::thread thread_;
+};
+
+}  // namespace vibro::store
