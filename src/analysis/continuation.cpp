@@ -207,6 +207,41 @@ std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene
   return out;
 }
 
+// The stroboscopic state (docs/output.md, `strobe`): every contact's coordinate w_jᵀq = σ_j c_jᵀX
+// at the time t ≡ t_s (mod qT), t_s the scene's start time (initial.time), the last such time up
+// to the section t0 (the orbit is qT-periodic: any one gives the same state). The same forcing
+// phase as a sweep's section points t_s + kT (src/studies/studies.cpp), wherever the section sits.
+// NaN per contact when the period could not be simulated.
+std::vector<double> StrobeOf(const System& sys, const Scene& scene, double t0, const Eigen::VectorXd& X,
+                             const Eigen::VectorXd& V, int q) {
+  struct Last final : Observer {
+    std::optional<Eigen::VectorXd> X;
+    void OnSection(const Sample& s) override { X = s.X; }
+  } last;
+  const double cycle = q * 2.0 * M_PI / sys.frequency();
+  const double origin = scene.initial_time + std::floor((t0 - scene.initial_time) / cycle) * cycle;
+  std::vector<double> out(static_cast<size_t>(sys.contact_count()), std::numeric_limits<double>::quiet_NaN());
+  Eigen::VectorXd at = X;
+  if (t0 - origin > 0) {  // otherwise the section is a strobe time itself
+    Scene sc = scene;
+    sc.run.periods = q;
+    sc.run.samples_per_period = 0;
+    const InitialOverride here{t0, X, V};
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.section_origin = origin;
+    opt.observers = {&last};
+    opt.loads = false;
+    if (Simulate(sys, sc, opt).status != RunStatus::kOk || !last.X) return out;
+    at = *last.X;
+  }
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
+    out[static_cast<size_t>(j)] = (c.spec.side == Side::kAbove ? -1.0 : 1.0) * c.shape.dot(at);
+  }
+  return out;
+}
+
 // Unit null vector of the 2n × (2n+1) matrix [Jz Jλ], oriented like `previous`.
 Eigen::VectorXd Tangent(const Evaluation& e, const Eigen::VectorXd& previous) {
   Eigen::MatrixXd A(e.Jz.rows(), e.Jz.cols() + 1);
@@ -447,6 +482,7 @@ Branch Continue(const ContinuationRequest& req) {
       b.q_dot = sys.mode_shapes() * b.V;
     }
     b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
+    b.strobe = StrobeOf(sys, *scene, b.section_time, b.X, b.V, p.period());
     b.sequence = pt.orbit.sequence;
     auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
     b.loads = std::move(loads.contacts);
