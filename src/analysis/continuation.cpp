@@ -565,6 +565,11 @@ Branch Continue(const ContinuationRequest& req) {
     // between the two nearest (close to the root the predictor alone lies outside the corrector's
     // basin, which shrinks with the distance to the branch point, and it lands on the other branch).
     std::vector<std::pair<double, Eigen::VectorXd>> known = {{0.0, cur.y}, {hi, y1}};
+    // |df/ds| near the root: the secant of the bracket (from the unmodified end values). A sample
+    // closer to the root than 3e-5 of the step, |f| < 3e-5·hi·slope, is too close (below); where
+    // it fell says where the root is.
+    double root_slope = std::abs(f1 - f0) / hi;
+    std::optional<std::pair<double, double>> too_close;  // (s, λ) of the last such sample
     const auto sample = [&](double s) -> std::optional<TestSample> {
       auto above = std::lower_bound(known.begin(), known.end(), s,
                                     [](const auto& k, double v) { return k.first < v; });
@@ -582,44 +587,62 @@ Branch Continue(const ContinuationRequest& req) {
       const double v = test(*pc);
       // A sample this close to the root is within the corrector's ill-conditioned zone (it may
       // sit on the crossing branch): not trusted, neither as a value nor as a start for others.
-      if (!std::isfinite(v) || std::abs(v) < 1e-6 * std::max(std::abs(f0), std::abs(f1))) return std::nullopt;
+      // The zone's width is a fraction of the step (the corrector's error grows as the distance
+      // to the crossing shrinks), not of |f|, which may be far larger at one end of the step
+      // (e.g. next to a Neimark-Sacker point, where the multipliers are large).
+      if (!std::isfinite(v)) return std::nullopt;
+      if (std::abs(v) < 3e-5 * hi * root_slope) {
+        too_close = std::make_pair(s, pc->y[n2]);
+        return std::nullopt;
+      }
       known.insert(above, {s, pc->y});
       return TestSample{s, pc->y[n2], v};
     };
     // (1) Illinois regula falsi on s in [a, b], with a bisection whenever two steps did not halve
     // the bracket.
     double a = 0, fa = f0, b = hi, fb = f1, l_a = cur.y[n2], l_b = fallback;
+    double fa_true = f0, fb_true = f1;
     int side = 0;
-    bool bracketed = false;
+    bool bracketed = false, near = false;
     std::vector<double> widths = {hi, hi};
     for (int it = 0; it < 100 && b - a > 1e-3 * hi; ++it) {
       if (stop_requested()) break;
       const double w = b - a;
       const bool bisect = w > 0.5 * widths[widths.size() - 2];
       double s = bisect ? 0.5 * (a + b) : std::clamp(b - fb * w / (fb - fa), a + 1e-3 * w, b - 1e-3 * w);
+      too_close.reset();
       auto x = sample(s);
+      if (!x && too_close) {  // the root is within 3e-5 of the step of s: fitted around s below
+        near = true;
+        break;
+      }
       if (!x && !bisect) x = sample(s = 0.5 * (a + b));
+      if (!x && too_close) {
+        near = true;
+        break;
+      }
       if (!x) break;
       widths.push_back(w);
       if ((x->f > 0) == (fa > 0)) {
         a = s;
-        fa = x->f;
+        fa = fa_true = x->f;
         l_a = x->lambda;
         if (side == -1) fb *= 0.5;
         side = -1;
       } else {
         b = s;
-        fb = x->f;
+        fb = fb_true = x->f;
         l_b = x->lambda;
         bracketed = true;
         if (side == 1) fa *= 0.5;
         side = 1;
       }
+      root_slope = std::abs(fb_true - fa_true) / (b - a);
     }
-    double s_star = 0.5 * (a + b);
-    double at = bracketed ? 0.5 * (l_a + l_b) : fallback;
+    double s_star = near ? too_close->first : 0.5 * (a + b);
+    double at = near ? too_close->second : bracketed ? 0.5 * (l_a + l_b) : fallback;
     bracket = bracketed ? std::abs(l_b - l_a) : bracket;
-    if (b - a > 1e-3 * hi || stop_requested()) return at;
+    if ((!near && b - a > 1e-3 * hi) || stop_requested()) return at;
     // (2) The least-squares fit through samples on both sides: first at 2e-3 to 8e-3 of the step
     // from the bracket's middle, then at 1e-4 to 4e-4 of it from the first fit's root.
     for (const double h : {2e-3 * hi, 1e-4 * hi}) {

@@ -239,3 +239,25 @@ def test_one_bifurcation_per_transition(tmp_path):
     seqs = {p["sequence"] for p in b["points"]}
     assert seqs == {"0:impact 0:stick 0:release 1:impact 1:stick 1:release",
                     "0:impact*2 0:stick 0:release 1:impact*2 1:stick 1:release"}, seqs
+
+
+def test_branch_point_next_to_large_multipliers_whatever_the_step(tmp_path):
+    """Scene E (r = 0.7) from w = 0.55 to 0.7: its branch point near 0.57702 lies next to a
+    Neimark-Sacker point, where det(DF - I) is a thousand times larger at one end of the step than
+    near the root; with --step 0.002 the location fell back to a regula-falsi bracket 3.6e-5 off.
+    Every step locates both branch points to 1e-12, with a bracket below 1e-11."""
+    path = tmp_path / "tube.toml"
+    path.write_text(SCENE_E.replace("restitution = 0.0", "restitution = 0.7").replace("frequency = 0.9",
+                                                                                        "frequency = 0.55"))
+    found = []
+    for step in (0, 0.0005, 0.001, 0.002, 0.003, 0.005):
+        b = json.loads(vibro("continue", path, "--param", "excitation.frequency", "--to", 0.7, "--step", step,
+                             "--json"))
+        bps = sorted((x for x in b["bifurcations"] if x["kind"] == "branch-point"), key=lambda x: x["value"])
+        assert len(bps) == 2, (step, b["bifurcations"])
+        assert all(x["bracket"] < 1e-11 for x in bps), (step, bps)
+        found.append([x["value"] for x in bps])
+    for k, ref in enumerate((0.5770188788193565, 0.5967668051586875)):
+        values = [f[k] for f in found]
+        assert max(values) - min(values) < 1e-12 * ref, values
+        assert abs(values[0] - ref) < 1e-12 * ref, values

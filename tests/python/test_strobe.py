@@ -36,6 +36,14 @@ def vibro(*args, code=0):
     return p.stdout
 
 
+@pytest.fixture(autouse=True)
+def _keep_mpmath_precision():
+    """mpmath's working precision is global: left as found for the other test files."""
+    dps = mp.mp.dps
+    yield
+    mp.mp.dps = dps
+
+
 def strobe_truth(a, r, w, t_s):
     """x(t_s) on the symmetric orbit at amplitude a."""
     phi, V = symmetric_orbit(a, r, w)
