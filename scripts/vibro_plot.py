@@ -3,7 +3,8 @@
 
 Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB (x_B against t,
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
-PREFIX_section (a run with several contacts: PREFIX_gaps, every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
+PREFIX_section (a run with several contacts: PREFIX_gaps, every gap, and PREFIX_phase and
+PREFIX_section of every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation (and PREFIX_branch_loads: mean contact force and work rate along it), PREFIX_partition for a
 partition (and PREFIX_partition_loads: the work rate over its plane), PREFIX_basin for a basin study, PREFIX_sweep for
 a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
@@ -981,6 +982,30 @@ def parse_size(value):
     return (w, h)
 
 
+MAX_TITLE = 500  # characters: a longer title does not fit any picture
+
+
+def check_title(title, font_size):
+    """--title: typeset once before anything is drawn (matplotlib's mathtext between $ signs), so
+    that a title it cannot typeset, or one too long for a picture, is refused naming the title
+    (exit 2, nothing written) instead of failing in the middle of the pictures."""
+    if not title:
+        return
+    shown = repr(title if len(title) <= 60 else title[:57] + "...")
+    if len(title) > MAX_TITLE:
+        refuse(f"--title {shown}: {len(title)} characters, at most {MAX_TITLE} (a title longer than any "
+               "picture is wide)")
+    fig = plt.figure(figsize=(6.0, 4.0))
+    try:
+        fig.suptitle(title, fontsize=font_size)
+        fig.canvas.draw()
+    except Exception as e:  # noqa: BLE001 (mathtext raises ValueError, fonts RuntimeError, ...)
+        first = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        refuse(f"--title {shown}: matplotlib cannot typeset it ({type(e).__name__}: {first})")
+    finally:
+        plt.close(fig)
+
+
 def read_everything(path):
     """Reads every attribute and dataset of the file (raises what h5py raises on damage)."""
     def visit(_name, obj):
@@ -1007,12 +1032,15 @@ def main():
     ap.add_argument("--font-size", type=float, default=10.0, help="font size in points")
     ap.add_argument("--coordinate", default="x_B", help="x_B, X1..Xn (modal) or q0..q(N-1) (physical)")
     args = ap.parse_args()
+    if not 10 <= args.dpi <= 2400:
+        refuse(f"--dpi {args.dpi}: expected 10 to 2400 dots per inch")
     if args.size is not None:
         OPTIONS["size"] = parse_size(args.size)
     if not (np.isfinite(args.font_size) and 1 <= args.font_size <= 72):
         print(f"vibro plot: --font-size {args.font_size:g}: expected a size in points, 1 to 72", file=sys.stderr)
         sys.exit(2)
     OPTIONS["title"], OPTIONS["font_size"] = args.title, args.font_size
+    check_title(args.title, args.font_size)
     # Editable text: SVG keeps <text> elements and PDF embeds TrueType fonts, not glyph outlines.
     matplotlib.rcParams.update({"svg.fonttype": "none", "pdf.fonttype": 42, "ps.fonttype": 42,
                                 "font.size": args.font_size, "axes.formatter.useoffset": False})
@@ -1047,12 +1075,17 @@ def main():
         print(f"vibro plot: {args.file}: a corrupt file ({type(e).__name__}: {e}); nothing was written",
               file=sys.stderr)
         sys.exit(2)
-    try:
-        draw(args, save, window)
-    except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+    def remove_written():
         for w in written:
             if os.path.exists(w):
                 os.remove(w)
+    try:
+        draw(args, save, window)
+    except SystemExit:
+        remove_written()  # a refusal after a picture: nothing is kept either
+        raise
+    except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+        remove_written()
         print(f"vibro plot: {args.file}: cannot be drawn, its data are damaged ({type(e).__name__}: {e}); "
               "nothing was written", file=sys.stderr)
         sys.exit(2)
@@ -1069,6 +1102,171 @@ def scene_contacts(f):
         return []
 
 
+def gap_coordinates(f, contacts):
+    """Per contact j (docs/contacts.md): (a_j, σ_j, d_j, name) with g_j = σ_j (a_jᵀX − d_j) on the
+    modal state X: a_j = Φᵀw_j in the physical form (w_j picks q_dof, minus q_partner for an impact
+    pair); in the modal form a_0 = σ_0 (1, …, 1) and a_j = `modal` on the kept modes (the lowest
+    frequencies)."""
+    n = len(f["model"].attrs["frequencies"])
+    out = []
+    if "mode_shapes" in f["model"].attrs:
+        phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, n)
+    else:
+        import tomllib
+        freqs = np.asarray(tomllib.loads(text(f.attrs["scene"]))["structure"]["frequencies"], dtype=float)
+        kept = np.argsort(freqs, kind="stable")[:n]
+    for j, c in enumerate(contacts):
+        sigma = 1.0 if c.get("side", "below") == "below" else -1.0
+        if "mode_shapes" in f["model"].attrs:
+            dofs = c.get("dofs", [c.get("dof", 0)])
+            w = np.zeros(phi.shape[0])
+            w[int(dofs[0])] = 1.0
+            if len(dofs) > 1:
+                w[int(dofs[1])] = -1.0
+            a = phi.T @ w
+            where = f"q{dofs[0]}" + (f" − q{dofs[1]}" if len(dofs) > 1 else "")
+        else:
+            a = sigma * np.ones(n) if j == 0 else np.asarray(c["modal"], dtype=float)[kept]
+            where = f"a{j}·X"
+        out.append((a, sigma, float(c["position"]), where))
+    return out
+
+
+def dense_states(f, t_from, t_to, per_period=600):
+    """Several contacts: the modal state X, Ẋ on a dense grid of [t_from, t_to], exact: the free
+    flight (docs/model.md §2, §7) forward from each stored sample in flight to the first event
+    after it, and backward from the next sample in flight to the last event before it, so that
+    both sides of every impact are on the grid at its instant. While a contact holds, and between
+    two events inside one sample step, the stored samples alone (straight between them); a NaN
+    row breaks the curve where the state between two events is not known."""
+    model = f["model"]
+    T = float(f.attrs["forcing_period"])
+    per_period = max(50, min(per_period, int(2e5 * T / (t_to - t_from))))
+    t = f["samples/t"][:]
+    lo = max(0, np.searchsorted(t, t_from) - 1)
+    hi = min(len(t), np.searchsorted(t, t_to) + 1)
+    ts = t[lo:hi]
+    Xs, Vs, ms = f["samples/X"][lo:hi], f["samples/V"][lo:hi], f["samples/mode"][lo:hi]
+    ev_t = f["events/t"][:]
+    n = Xs.shape[1]
+    gap = np.full((1, n), np.nan)
+    out_t, out_X, out_V = [], [], []
+
+    def emit(tt, X, V):
+        out_t.append(np.atleast_1d(tt))
+        out_X.append(np.atleast_2d(X))
+        out_V.append(np.atleast_2d(V))
+    for k in range(len(ts) - 1):
+        a, b = ts[k], ts[k + 1]
+        emit(a, Xs[k], Vs[k])
+        if b <= a:
+            continue
+        evs = ev_t[np.searchsorted(ev_t, a, side="right"):np.searchsorted(ev_t, b, side="left")]
+        m = max(2, int(np.ceil(per_period * (b - a) / T)))
+        grid = np.linspace(a, b, m, endpoint=False)[1:]
+        if len(evs) == 0:
+            if ms[k] == 0:
+                emit(grid, *free_flight(model, Xs[k], Vs[k], a, grid))
+            continue
+        if ms[k] == 0:
+            head = np.append(grid[grid < evs[0]], evs[0])
+            emit(head, *free_flight(model, Xs[k], Vs[k], a, head))
+        if len(evs) > 1 or ms[k] != 0 or ms[k + 1] != 0:
+            emit([np.nan], gap, gap)  # the state between the events is not known
+        if ms[k + 1] == 0:
+            tail = np.insert(grid[grid > evs[-1]], 0, evs[-1])
+            emit(tail, *free_flight(model, Xs[k + 1], Vs[k + 1], b, tail))
+    if len(ts):
+        emit(ts[-1], Xs[-1], Vs[-1])
+    tt, XX, VV = np.concatenate(out_t), np.concatenate(out_X), np.concatenate(out_V)
+    sel = np.isnan(tt) | ((tt >= t_from) & (tt <= t_to))
+    return tt[sel], XX[sel], VV[sel]
+
+
+def plot_contacts_run(f, title, save, window, contacts, coordinate):
+    """Several contacts: PREFIX_phase and PREFIX_section of every gap g_j (one panel each), or of
+    --coordinate (then also PREFIX_<coordinate>, that coordinate against t with every contact's
+    impacts marked and its sticking shaded), from dense_states."""
+    T = float(f.attrs["forcing_period"])
+    status = text(f.attrs["status"])
+    t = f["samples/t"][:]
+    t_from, t_to = time_window(t, T, window)
+    span = f"{t_from:.6g} ≤ t ≤ {t_to:.6g}"
+    tt, XX, VV = dense_states(f, t_from, t_to)
+    sX, sV = f["section/X"][:], f["section/V"][:]
+    k = np.arange(len(sX))
+    if coordinate != "x_B":
+        w, sym = coordinate_choices(f)[coordinate]
+        labels = f["model"].attrs["dof_labels"] if "dof_labels" in f["model"].attrs else []
+        what = (f"physical displacement {coordinate} ({text(labels[int(coordinate[1:])])})"
+                if coordinate.startswith("q") and len(labels) else
+                f"physical displacement {coordinate}" if coordinate.startswith("q") else f"modal coordinate {coordinate}")
+        ev_t, kinds, ev_c = f["events/t"][:], f["events/kind"][:], f["events/contact"][:]
+        kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+        fig, ax = figure(figsize=(9, 3.8))
+        ax.plot(tt, XX @ w, lw=1, color=OKABE_ITO[0], label=f"${sym}$")
+        for j in range(len(contacts)):
+            sticks = ev_t[(ev_c == j) & (kinds == kind_of["stick"])]
+            releases = ev_t[(ev_c == j) & (kinds == kind_of["release"])]
+            for n_, s0 in enumerate(sticks):
+                later = releases[releases > s0]
+                e = later[0] if len(later) else t_to
+                if e >= t_from and s0 <= t_to:
+                    ax.axvspan(max(s0, t_from), min(e, t_to), color=STICK_SHADE, alpha=0.25, lw=0,
+                               label="sticking" if n_ == 0 and j == 0 else None)
+            imp = (ev_c == j) & (kinds == kind_of["impact"]) & (ev_t >= t_from) & (ev_t <= t_to)
+            if imp.any():
+                known = np.isfinite(tt)
+                ax.plot(ev_t[imp], np.interp(ev_t[imp], tt[known], (XX @ w)[known]), "v^os"[j % 4], ms=3.5,
+                        color=OKABE_ITO[(j + 1) % 7], label=f"impacts on contact {j} ({imp.sum()})")
+        ax.set_xlabel("$t$")
+        ax.set_ylabel(f"${sym}$")
+        ax.set_xlim(t_from, t_to)
+        absolute_time(ax)
+        set_title(ax, title, f"{what}, {span} ({status})")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
+        save(fig, coordinate)
+        panels = [(w, 0.0, 1.0, sym, None)]
+    else:
+        panels = [(a, d, sigma, f"g_{{{j}}}", f"contact {j}: {where} {'≥' if sigma > 0 else '≤'} {d:g}")
+                  for j, (a, sigma, d, where) in enumerate(gap_coordinates(f, contacts))]
+
+    def grid_of(m):
+        fig, axes = figure(1, m, figsize=(4.2 * m + 1.0, 4.4), squeeze=False)
+        if fig.get_layout_engine() is None:
+            fig.set_layout_engine("constrained")
+        return fig, axes[0]
+    fig, axes = grid_of(len(panels))
+    for ax, (a, d, sigma, sym, name) in zip(axes, panels):
+        ax.plot(sigma * (XX @ a - d), sigma * (VV @ a), lw=0.8, color=OKABE_ITO[0])
+        if name:
+            ax.axvline(0, color="k", lw=1.2)
+            ax.set_title(name, fontsize=fs(9), loc="left")
+        ax.set_xlabel(f"${sym}$")
+        ax.set_ylabel(f"$\\dot {sym}$")
+    detail = f"phase portrait{'s of the gaps' if coordinate == 'x_B' else ''}, {span}"
+    if len(axes) == 1:
+        set_title(axes[0], title, detail)
+    elif OPTIONS["title"] != "":
+        fig.suptitle(OPTIONS["title"] if OPTIONS["title"] is not None else f"{title}\n{detail}", fontsize=fs(10))
+    save(fig, "phase")
+
+    fig, axes = grid_of(len(panels))
+    for ax, (a, d, sigma, sym, name) in zip(axes, panels):
+        sc = ax.scatter(sigma * (sX @ a - d), sigma * (sV @ a), c=k, s=6, cmap="viridis")
+        if name:
+            ax.set_title(name, fontsize=fs(9), loc="left")
+        ax.set_xlabel(f"${sym}(t_0 + kT)$")
+        ax.set_ylabel(f"$\\dot {sym}(t_0 + kT)$")
+    fig.colorbar(sc, ax=list(axes), label="period $k$")
+    detail = f"stroboscopic section{' of the gaps' if coordinate == 'x_B' else ''}, {len(sX)} periods"
+    if len(axes) == 1:
+        set_title(axes[0], title, detail)
+    elif OPTIONS["title"] != "":
+        fig.suptitle(OPTIONS["title"] if OPTIONS["title"] is not None else f"{title}\n{detail}", fontsize=fs(10))
+    save(fig, "section")
+
+
 def plot_gaps(f, title, save, window, contacts):
     """Several contacts (docs/contacts.md): every gap g_j = σ_j (w_jᵀq − d_j) against t, one panel
     per contact, from the stored samples (exact states) and the contact's own events (g_j = 0 at
@@ -1078,18 +1276,7 @@ def plot_gaps(f, title, save, window, contacts):
     t = f["samples/t"][:]
     t_from, t_to = time_window(t, T, window)
     X = f["samples/X"][:]
-    if "mode_shapes" in f["model"].attrs:
-        phi = np.asarray(f["model"].attrs["mode_shapes"], dtype=float).reshape(-1, X.shape[1])
-        q = X @ phi.T  # physical q = Φ X
-    else:
-        # The modal form (docs/contacts.md, "the modal form"): contact j reads w_jᵀq = a_jᵀX, with
-        # a_0 = σ_0 (1, …, 1) and a_j = `modal` on the kept modes (the lowest frequencies).
-        import tomllib
-        freqs = np.asarray(tomllib.loads(text(f.attrs["scene"]))["structure"]["frequencies"], dtype=float)
-        kept = np.argsort(freqs, kind="stable")[:X.shape[1]]
-        sigma0 = 1.0 if contacts[0].get("side", "below") == "below" else -1.0
-        q = np.stack([X @ (sigma0 * np.ones(X.shape[1]) if j == 0 else np.asarray(c["modal"], dtype=float)[kept])
-                      for j, c in enumerate(contacts)], axis=1)  # column j: contact j's coordinate
+    gaps = gap_coordinates(f, contacts)
     ev_t, kinds, ev_c = f["events/t"][:], f["events/kind"][:], f["events/contact"][:]
     kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
     m = len(contacts)
@@ -1097,18 +1284,8 @@ def plot_gaps(f, title, save, window, contacts):
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
     for j, (c, ax) in enumerate(zip(contacts, axes[:, 0])):
-        if "mode_shapes" not in f["model"].attrs:
-            w = np.eye(q.shape[1])[j]  # the modal form's column of contact j
-            where = f"a{j}·X"
-        else:
-            dofs = c.get("dofs", [c.get("dof", 0)])
-            w = np.zeros(q.shape[1])
-            w[int(dofs[0])] = 1.0
-            if len(dofs) > 1:
-                w[int(dofs[1])] = -1.0
-            where = f"q{dofs[0]}" + (f" − q{dofs[1]}" if len(dofs) > 1 else "")
-        sigma = 1.0 if c.get("side", "below") == "below" else -1.0
-        g = sigma * (q @ w - float(c["position"]))
+        a, sigma, d, where = gaps[j]
+        g = sigma * (X @ a - d)
         mine = ev_c == j
         zero_t = ev_t[mine & np.isin(kinds, [kind_of["impact"], kind_of["accumulation"], kind_of["stick"],
                                             kind_of["release"], kind_of["grazing"]])]
@@ -1187,21 +1364,37 @@ def plot_loads(f, title, save):
     save(fig, "loads")
 
 
+def refuse(message):
+    """Bad input: one line, exit 2 (main() removes any picture written)."""
+    print(f"vibro plot: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def check_options(f, args, window):
+    """Every option checked against the file before anything is drawn: a refused plot writes
+    nothing (docs/cli.md)."""
+    dense = "samples" in f and len(f["samples/t"]) > 1
+    if args.coordinate != "x_B":
+        why = coordinate_error(f, args.coordinate)
+        if why is None and not dense:
+            why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
+        if why is not None:
+            refuse(f"--coordinate {args.coordinate}: {why}")
+    if args.overlay and "sweep" not in f:
+        refuse(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over")
+    if dense:
+        time_window(f["samples/t"][:], float(f.attrs["forcing_period"]), window)
+
+
 def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
+        check_options(f, args, window)
         varied = set()
         for g, attr in (("branch", "param"), ("sweep", "param"), ("partition", "param1"),
                         ("partition", "param2")):
             if g in f:
                 varied.add(text(f[g].attrs[attr]))
         title = make_title(f, varied)
-        if args.coordinate != "x_B":
-            why = coordinate_error(f, args.coordinate)
-            if why is None and len(f["samples/t"]) < 2:
-                why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
-            if why is not None:
-                print(f"vibro plot: --coordinate {args.coordinate}: {why}", file=sys.stderr)
-                sys.exit(2)
         if "basin" in f:
             plot_basin(f, title, save)
         if "branch" in f:
@@ -1212,18 +1405,12 @@ def draw(args, save, window):
             plot_partition_loads(f, title, save)
         if "sweep" in f:
             plot_sweep(f, title, save, args.overlay)
-        elif args.overlay:
-            print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
-            sys.exit(2)
         if "events" in f and "impulse" in f["events"]:
             plot_loads(f, title, save)
         contacts = scene_contacts(f)
         if len(contacts) > 1 and len(f["samples/t"]) > 1:
-            if args.coordinate != "x_B":
-                print(f"vibro plot: --coordinate {args.coordinate}: a run with several contacts is drawn as "
-                      "its gaps (PREFIX_gaps, docs/contacts.md)", file=sys.stderr)
-                sys.exit(2)
             plot_gaps(f, title, save, window, contacts)
+            plot_contacts_run(f, title, save, window, contacts, args.coordinate)
         elif len(f["samples/t"]) > 1:
             plot_run(f, title, save, window, args.coordinate)
         elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):

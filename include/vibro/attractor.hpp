@@ -27,9 +27,13 @@ struct Attractor {
   // impact, end = release); end = start + ω·duration, so end may exceed 2π·period when a phase
   // wraps. Sorted by start.
   std::vector<std::pair<double, double>> stick_phases;
-  // Contact velocity just before each impact of one period, and the phases of the impacts
-  // (impact-periodic orbits).
+  // The contact (0-based [[contact]] index; 0 for the [stop]) of each sticking phase.
+  std::vector<int> stick_contacts;
+  // Contact velocity just before each impact of one period (several contacts: the gap velocity
+  // ġ_j), the phases of the impacts and their contacts, in the order they happen (impact-periodic
+  // orbits).
   std::vector<double> impact_phases, impact_velocities;
+  std::vector<int> impact_contacts;
   // "not-periodic" from a recorder: the longest period p the classification tried (run.max_period,
   // or less on a record shorter than 3p + 1 periods), so that no period is claimed beyond it.
   std::optional<int> searched_period;

@@ -29,6 +29,29 @@ struct CheckReport {
   std::string exact_kind, cvode_kind, orbit_status, quad_kind;  // quad_kind empty: not run
 };
 
+// The events of one kind of a periodic orbit as a cyclic list (a periodic orbit has no first
+// event): each event's contact and two values (an impact: its phase and the contact velocity
+// before it; a sticking phase: its start and end phases).
+struct CyclicEvent {
+  int contact;
+  double a, b;
+};
+
+// The list in the canonical rotation of its contact word (contact_sequence.hpp,
+// CanonicalRotation); of the rotations that give it (a word u^m), the one whose first event has
+// the least phase `a` modulo 2π.
+std::vector<CyclicEvent> CanonicalCyclic(const std::vector<CyclicEvent>& events);
+
+// Another record of the same cyclic list rotated to match `ref` event by event: of the rotations
+// whose contacts are those of `ref` in order, the one with the least largest difference (phases
+// `a`, and `b` when b_is_phase, modulo 2π: each record counts phases from the forcing period it
+// starts in). Unrotated when the lengths differ or no rotation has the contacts of `ref` in
+// order (a different orbit: the comparison then shows the disagreement).
+std::vector<CyclicEvent> AlignedCyclic(const std::vector<CyclicEvent>& ref, const std::vector<CyclicEvent>& other,
+                                       bool b_is_phase);
+
+// Impacts and sticking phases are compared as cyclic lists, contact by contact: the exact run's
+// in CanonicalCyclic order, every other record AlignedCyclic to it.
 // Tolerances: CVODE against exact, 100·rtol^(2/3) (the law of docs/engines.md, "What each rtol buys");
 // Poincaré solver against exact, 1e-9; the leading multiplier against the decay rate observed in
 // the exact transient, 10 % (+ 0.02); the exact engine against the quad engine (with_quad),

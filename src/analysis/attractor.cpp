@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <tuple>
 
 namespace vibro {
 
@@ -288,18 +290,21 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   // before it. The window is p periods (the whole record without a period).
   const int p = period > 0 ? period : static_cast<int>(n) - 1;
   const long long from = K - p;
-  std::vector<std::pair<double, double>> phases;
-  const Event* last_stick = nullptr;
+  // Each release closes the phase of its own contact (several contacts may stick in turn).
+  std::vector<std::tuple<double, double, int>> phases;  // start, end, contact
+  std::map<int, const Event*> last_stick;
   double per_orbit = 0.0;  // periodic: the durations of the phases released in the window
   for (const auto& e : events_) {
-    if (e.kind == EventKind::kStick) last_stick = &e;
-    if (e.kind == EventKind::kRelease && in_window(e, from, K) && last_stick) {
-      const double duration = (static_cast<double>(e.clock.period - last_stick->clock.period) * T +
-                               e.clock.offset - last_stick->clock.offset);
-      const double start = Phase(last_stick->clock, p);
-      phases.emplace_back(start, start + w * duration);
+    if (e.kind == EventKind::kStick) last_stick[e.contact] = &e;
+    const auto open = last_stick.find(e.contact);
+    if (e.kind == EventKind::kRelease && in_window(e, from, K) && open != last_stick.end() && open->second) {
+      const Event& stick = *open->second;
+      const double duration = (static_cast<double>(e.clock.period - stick.clock.period) * T +
+                               e.clock.offset - stick.clock.offset);
+      const double start = Phase(stick.clock, p);
+      phases.emplace_back(start, start + w * duration, e.contact);
       per_orbit += duration;
-      last_stick = nullptr;
+      open->second = nullptr;
     }
   }
   std::sort(phases.begin(), phases.end());
@@ -362,7 +367,10 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     return a;
   }
   a.sticking_fraction = stuck / (period * T);
-  a.stick_phases = phases;
+  for (const auto& [start, end, contact] : phases) {
+    a.stick_phases.emplace_back(start, end);
+    a.stick_contacts.push_back(contact);
+  }
   if (accumulations == 0) a.impacts_per_period = impacts;
   if (released)
     a.kind = "sticking-periodic";
@@ -375,6 +383,7 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
       if (e.kind != EventKind::kImpact || !in_window(e, from, K)) continue;
       a.impact_phases.push_back(Phase(e.clock, period));
       a.impact_velocities.push_back(e.v_before);
+      a.impact_contacts.push_back(e.contact);
     }
   }
   return a;

@@ -98,7 +98,71 @@ std::optional<double> ObservedDecay(const std::vector<Eigen::VectorXd>& z) {
   return std::exp((m * sxy - sx * sy) / (m * sxx - sx * sx));
 }
 
+std::vector<CyclicEvent> ImpactsOf(const Attractor& x) {
+  std::vector<CyclicEvent> out;
+  for (size_t i = 0; i < x.impact_phases.size(); ++i)
+    out.push_back({i < x.impact_contacts.size() ? x.impact_contacts[i] : 0, x.impact_phases[i],
+                   i < x.impact_velocities.size() ? x.impact_velocities[i] : std::nan("")});
+  return out;
+}
+
+std::vector<CyclicEvent> StickPhasesOf(const Attractor& x) {
+  std::vector<CyclicEvent> out;
+  for (size_t i = 0; i < x.stick_phases.size(); ++i)
+    out.push_back({i < x.stick_contacts.size() ? x.stick_contacts[i] : 0, x.stick_phases[i].first,
+                   x.stick_phases[i].second});
+  return out;
+}
+
+// A phase difference modulo 2π (each record counts phases from the forcing period it starts in).
+double PhaseDistance(double x, double y) {
+  const double d = x - y;
+  return std::abs(d - 2.0 * M_PI * std::round(d / (2.0 * M_PI)));
+}
+
+std::vector<CyclicEvent> Rotated(const std::vector<CyclicEvent>& v, size_t r) {
+  std::vector<CyclicEvent> out(v.begin() + static_cast<std::ptrdiff_t>(r), v.end());
+  out.insert(out.end(), v.begin(), v.begin() + static_cast<std::ptrdiff_t>(r));
+  return out;
+}
+
 }  // namespace
+
+std::vector<CyclicEvent> CanonicalCyclic(const std::vector<CyclicEvent>& v) {
+  if (v.size() < 2) return v;
+  std::vector<std::string> word;
+  for (const auto& e : v) word.push_back(std::to_string(e.contact) + ":impact");
+  const std::vector<std::string> canon = CanonicalRotation(word);
+  std::optional<size_t> best;
+  for (size_t r = 0; r < v.size(); ++r) {
+    bool same = true;
+    for (size_t i = 0; i < v.size() && same; ++i) same = word[(r + i) % v.size()] == canon[i];
+    if (same && (!best || std::fmod(v[r].a, 2.0 * M_PI) < std::fmod(v[*best].a, 2.0 * M_PI))) best = r;
+  }
+  return Rotated(v, best.value_or(0));
+}
+
+std::vector<CyclicEvent> AlignedCyclic(const std::vector<CyclicEvent>& ref, const std::vector<CyclicEvent>& v,
+                                       bool b_is_phase) {
+  if (v.size() != ref.size() || v.empty()) return v;
+  std::optional<size_t> best;
+  double best_d = 0;
+  for (size_t r = 0; r < v.size(); ++r) {
+    double d = 0;
+    bool same = true;
+    for (size_t i = 0; i < v.size() && same; ++i) {
+      const CyclicEvent& x = v[(r + i) % v.size()];
+      same = x.contact == ref[i].contact;
+      d = std::max({d, PhaseDistance(x.a, ref[i].a),
+                    b_is_phase ? PhaseDistance(x.b, ref[i].b) : std::abs(x.b - ref[i].b)});
+    }
+    if (same && (!best || d < best_d)) {
+      best = r;
+      best_d = d;
+    }
+  }
+  return Rotated(v, best.value_or(0));
+}
 
 CheckReport CrossCheck(const System& sys, const Scene& scene, bool with_quad) {
   CheckReport rep;
@@ -213,34 +277,50 @@ CheckReport CrossCheck(const System& sys, const Scene& scene, bool with_quad) {
     return a.impacts_per_period ? std::optional<double>(static_cast<double>(*a.impacts_per_period))
                                 : std::nullopt;
   };
+  // Impacts and sticking phases are cyclic lists (a periodic orbit has no first event): the exact
+  // run's in the canonical rotation of its contact sequence, each other record rotated to match
+  // it, contact by contact. Scenes with [[contact]] tables name each event's contact.
+  const bool named = sys.contact_count() > 1 || !scene.contacts.empty();
+  const auto label = [named](const char* what, size_t i, int contact) {
+    return named ? fmt::format("{} {} (contact {})", what, i + 1, contact) : fmt::format("{} {}", what, i + 1);
+  };
+  const auto nth_a = [](const std::vector<CyclicEvent>& v, size_t i) -> std::optional<double> {
+    return i < v.size() ? std::optional<double>(v[i].a) : std::nullopt;
+  };
+  const auto nth_b = [](const std::vector<CyclicEvent>& v, size_t i) -> std::optional<double> {
+    return i < v.size() ? std::optional<double>(v[i].b) : std::nullopt;
+  };
+  // A row per value, and one per event whose contact differs from the exact run's.
+  const auto compare_events = [&](const char* what, const char* a_name, const char* b_name, bool b_is_phase,
+                                  const auto& of) {
+    const std::vector<CyclicEvent> e = CanonicalCyclic(of(ex.attractor)), c = AlignedCyclic(e, of(cv.attractor), b_is_phase),
+                                   o = AlignedCyclic(e, of(orbit.summary), b_is_phase),
+                                   q = qd ? AlignedCyclic(e, of(qa), b_is_phase) : std::vector<CyclicEvent>{};
+    for (size_t i = 0; i < e.size(); ++i) {
+      const auto differs = [&](const std::vector<CyclicEvent>& v) { return i < v.size() && v[i].contact != e[i].contact; };
+      if (differs(c) || (have_orbit && differs(o)) || (qd && differs(q))) {
+        std::string note;
+        const auto at = [&](const char* who, const std::vector<CyclicEvent>& v) {
+          if (differs(v)) note += fmt::format("{}{} at contact {}", note.empty() ? "" : "; ", who, v[i].contact);
+        };
+        at("cvode", c);
+        if (have_orbit) at("orbit", o);
+        if (qd) at("quad", q);
+        add({label(what, i, e[i].contact) + " contact", {}, {}, {}, 0, 0, false, note, {}});
+      }
+      compare(label(what, i, e[i].contact) + " " + a_name, nth_a(e, i), nth_a(c, i), nth_a(o, i),
+              qd ? nth_a(q, i) : std::nullopt);
+      compare(label(what, i, e[i].contact) + " " + b_name, nth_b(e, i), nth_b(c, i), nth_b(o, i),
+              qd ? nth_b(q, i) : std::nullopt);
+    }
+  };
   if (ex.attractor.kind == "impact-periodic") {
     compare("impacts per period", ipp(ex.attractor), ipp(cv.attractor), ipp(orbit.summary),
             ipp(qa));
     // Each impact of the orbit: its phase and the contact velocity just before it.
-    const auto nth = [](const std::vector<double>& v, size_t i) -> std::optional<double> {
-      return i < v.size() ? std::optional<double>(v[i]) : std::nullopt;
-    };
-    for (size_t i = 0; i < ex.attractor.impact_phases.size(); ++i) {
-      compare(fmt::format("impact {} phase", i + 1), nth(ex.attractor.impact_phases, i),
-              nth(cv.attractor.impact_phases, i), nth(orbit.summary.impact_phases, i),
-              qd ? nth(qa.impact_phases, i) : std::nullopt);
-      compare(fmt::format("impact {} velocity before", i + 1),
-              nth(ex.attractor.impact_velocities, i), nth(cv.attractor.impact_velocities, i),
-              nth(orbit.summary.impact_velocities, i),
-              qd ? nth(qa.impact_velocities, i) : std::nullopt);
-    }
+    compare_events("impact", "phase", "velocity before", false, ImpactsOf);
   }
-  const auto& pe = ex.attractor.stick_phases;
-  for (size_t i = 0; i < pe.size(); ++i) {
-    const auto at = [&](const Attractor& a, bool start) -> std::optional<double> {
-      if (i >= a.stick_phases.size()) return std::nullopt;
-      return start ? a.stick_phases[i].first : a.stick_phases[i].second;
-    };
-    compare(fmt::format("stick phase {} start", i + 1), at(ex.attractor, true), at(cv.attractor, true),
-            at(orbit.summary, true), qd ? at(qa, true) : std::nullopt);
-    compare(fmt::format("stick phase {} end (release)", i + 1), at(ex.attractor, false),
-            at(cv.attractor, false), at(orbit.summary, false), qd ? at(qa, false) : std::nullopt);
-  }
+  compare_events("stick phase", "start", "end (release)", true, StickPhasesOf);
   if (have_orbit) {
     double lead = 0;
     for (const auto& m : orbit.multipliers) lead = std::max(lead, std::abs(m));

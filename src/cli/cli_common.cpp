@@ -30,8 +30,8 @@ void PrintLoads(const vibro::LoadsSummary& s) {
                pm(c.work_rate, c.work_rate_ci), pm(c.contact_fraction, c.contact_fraction_ci));
 }
 
-void PrintAttractor(const vibro::Attractor& a, double restitution) {
-  fmt::print("{}", vibro::cli::AttractorText(a, restitution));
+void PrintAttractor(const vibro::Attractor& a, double restitution, bool named) {
+  fmt::print("{}", vibro::cli::AttractorText(a, restitution, "", named));
 }
 
 void PrintLyapunov(const vibro::LyapunovSpectrum& s) { fmt::print("{}", vibro::cli::LyapunovText(s)); }

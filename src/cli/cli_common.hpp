@@ -33,8 +33,8 @@ inline constexpr int kExitInterrupted = 130;
 // The exit code of a run's status.
 int ExitCode(vibro::RunStatus s);
 // Prints an attractor's summary; restitution NaN when unknown (then the velocities after impact
-// are not printed).
-void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""));
+// are not printed); `named`: each event names its contact (cli/text_format.hpp).
+void PrintAttractor(const vibro::Attractor& a, double restitution = std::nan(""), bool named = false);
 // Prints the contact loads of a run per contact, with their intervals (docs/loads.md).
 void PrintLoads(const vibro::LoadsSummary& s);
 // Prints the Lyapunov exponents of a run with their 95 % intervals, and whether it is chaotic.

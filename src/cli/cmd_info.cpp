@@ -33,7 +33,7 @@ int RunInfo(const std::string& path, bool json) {
                run.checkpoint->counts.accumulations, run.checkpoint->counts.sticks,
                run.checkpoint->counts.releases);
   if (!run.attractor.kind.empty())
-    PrintAttractor(run.attractor);
+    PrintAttractor(run.attractor, std::nan(""), run.scene_text.find("[[contact]]") != std::string::npos);
   else if (std::find(run.groups.begin(), run.groups.end(), "attractor") == run.groups.end())
     fmt::print("attractor    none (a study, branch or partition: see the groups above)\n");
   else

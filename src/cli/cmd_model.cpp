@@ -45,6 +45,24 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
   fmt::print("stop x0, r          {:.10g}, {:.10g}\n", sys.stop(), sys.restitution());
   fmt::print("excitation f, ω, T  {:.10g}, {:.10g}, {:.10g}\n", sys.amplitude(), sys.frequency(),
              sys.period());
+  // Scenes with [[contact]] tables: every contact, as written and in the modal coordinates
+  // (docs/contacts.md; contact 0's are the lines above).
+  if (!loaded.scene.contacts.empty() || sys.contact_count() > 1) {
+    for (int j = 0; j < sys.contact_count(); ++j) {
+      const vibro::ContactModel& k = sys.contacts()[static_cast<size_t>(j)];
+      const std::string gap = loaded.scene.modal ? fmt::format("a{}·X", j)
+                              : k.spec.partner >= 0 ? fmt::format("q{} - q{}", k.spec.dof, k.spec.partner)
+                                                    : fmt::format("q{}", k.spec.dof);
+      fmt::print("{:<20}{} {} {:.10g}, r {:.10g}\n", fmt::format("contact {}", j), gap,
+                 k.spec.side == vibro::Side::kBelow ? ">=" : "<=", k.spec.position, k.restitution);
+      fmt::print("  shape c_j         {}\n", Vec(k.shape));
+      fmt::print("  contact T_j       {}\n", Vec(k.contact));
+      fmt::print("  stop e_j          {:.10g}\n", k.stop);
+      fmt::print("  s_A, W_jj         {:.10g}, {:.10g}\n", k.s_A, k.s_B);
+      fmt::print("  constrained ω'_k  {}\n", Vec(k.constrained.frequencies));
+      fmt::print("  flexibility       {:.10g}\n", k.flexibility);
+    }
+  }
   if (sys.physical()) {
     for (int i = 0; i < sys.dof(); ++i)
       fmt::print("mode shape ψ_{}{}     {}\n", i + 1,

@@ -46,7 +46,8 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                  : req.guess_phase         ? "Newton started at the guess"
                                            : "Newton started at the start state");
     // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
-    PrintAttractor(orbit.summary, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
+    PrintAttractor(orbit.summary, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution,
+                   !loaded.scene.contacts.empty());
     if (!orbit.sequence.empty()) fmt::print("sequence     {}\n", orbit.sequence);
     const std::string mu = vibro::cli::FormatMultipliers(orbit.multipliers);
     fmt::print("multipliers  {}\n", !orbit.no_jacobian.empty() ? "none: " + orbit.no_jacobian

@@ -97,7 +97,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
                  result.chatter.accumulations_predicted, result.chatter.max_estimated_error,
                  vibro::ChatterTolerance(loaded.scene.run), result.chatter.impacts_followed);
     // Several contacts: each impact has its contact's restitution (the sequence names the contacts).
-    PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution);
+    PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution,
+                   !loaded.scene.contacts.empty());
     PrintLoads(load_summary);
     if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)

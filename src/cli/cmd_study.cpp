@@ -97,7 +97,9 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
       const auto& a = study.attractors[k];
       fmt::print("attractor {}: basin fraction {:.4f} ± {:.4f}, example ({}, {}) = ({:.6g}, {:.6g})\n",
                  k, a.basin_fraction, a.basin_fraction_error, cx.name, cy.name, a.example[0], a.example[1]);
-      fmt::print("{}", vibro::cli::AttractorText(a.attractor, loaded.scene.restitution, "  "));
+      fmt::print("{}", vibro::cli::AttractorText(a.attractor,
+                                                 loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution,
+                                                 "  ", !loaded.scene.contacts.empty()));
       const std::string mu = vibro::cli::FormatMultipliers(a.orbit.multipliers, 4);
       fmt::print("  orbit        {}{}{}{}\n", a.orbit.status,
                  a.orbit.stable ? (*a.orbit.stable ? ", stable" : ", unstable") : "",

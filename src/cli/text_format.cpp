@@ -47,7 +47,7 @@ std::string FormatMultipliers(const std::vector<std::complex<double>>& raw, int 
   return out;
 }
 
-std::string AttractorText(const Attractor& a, double restitution, const std::string& indent) {
+std::string AttractorText(const Attractor& a, double restitution, const std::string& indent, bool named) {
   std::string s = fmt::format("{}attractor    {}", indent, a.kind);
   if (a.period) s += fmt::format(", period {}", *a.period);
   if (a.impacts_per_period)
@@ -62,15 +62,24 @@ std::string AttractorText(const Attractor& a, double restitution, const std::str
     s += fmt::format("{}recurrence   the section repeats with period {} (to {:.1e}): rerun with "
                      "--set run.max_period={} to classify it\n",
                      indent, *a.recurrence_period, a.recurrence_distance.value_or(0.0), *a.recurrence_period);
+  // The contact of event k, when known: "contact J, " (named) or "".
+  const auto who = [named](const std::vector<int>& contacts, size_t k) {
+    return named && k < contacts.size() ? fmt::format("contact {}, ", contacts[k]) : std::string();
+  };
   if (!a.stick_phases.empty() || a.impact_phases.empty()) {
     std::string p;
-    for (const auto& [b, e] : a.stick_phases) p += fmt::format("{}[{:.6f}, {:.6f}]", p.empty() ? "" : " ", b, e);
+    for (size_t k = 0; k < a.stick_phases.size(); ++k) {
+      const auto& [b, e] = a.stick_phases[k];
+      const std::string c = who(a.stick_contacts, k);
+      p += fmt::format("{}{}[{:.6f}, {:.6f}]", p.empty() ? "" : (named ? "; " : " "),
+                       c.empty() ? "" : c.substr(0, c.size() - 2) + " ", b, e);
+    }
     s += fmt::format("{}stick phases {}\n", indent, p.empty() ? "none" : p);
   }
   for (size_t k = 0; k < a.impact_phases.size(); ++k) {
     const double before = k < a.impact_velocities.size() ? a.impact_velocities[k] : std::nan("");
-    s += fmt::format("{}{}phase {:.6f}, ẋ_B before {:.6g}{}\n", indent, k == 0 ? "impacts      " : "             ",
-                     a.impact_phases[k], before,
+    s += fmt::format("{}{}{}phase {:.6f}, {} before {:.6g}{}\n", indent, k == 0 ? "impacts      " : "             ",
+                     who(a.impact_contacts, k), a.impact_phases[k], named ? "ġ" : "ẋ_B", before,
                      std::isnan(restitution) ? "" : fmt::format(", after {:.6g}", -restitution * before));
   }
   return s;

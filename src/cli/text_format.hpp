@@ -25,8 +25,11 @@ std::string FormatMultipliers(const std::vector<std::complex<double>>& multiplie
 
 // The attractor lines of `simulate`, `orbit` and the studies: kind, period, impacts per orbit
 // period, sticking fraction, stick phases, and for impact orbits each impact's phase with the
-// contact velocity before and after it (after = −r·before, the impact law, docs/model.md §3).
-std::string AttractorText(const Attractor& attractor, double restitution, const std::string& indent = "");
+// contact velocity before and after it (after = −r·before, the impact law, docs/model.md §3;
+// restitution NaN: not printed). `named`: each stick phase and impact names its contact (scenes
+// with [[contact]] tables; the velocity is then the contact's gap velocity ġ_j).
+std::string AttractorText(const Attractor& attractor, double restitution, const std::string& indent = "",
+                          bool named = false);
 
 // The line "lyapunov     λ1 ± h1, ... per unit time (N periods)[: chaotic]" of `simulate` and the
 // studies (−inf for a direction collapsed by sticking; "none: why" without exponents).

@@ -529,6 +529,12 @@ void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v,
   if (!v.empty()) CheckWrite(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), obj, name);
 }
 
+void WriteInts(Id obj, const std::string& name, const std::vector<int>& v) {
+  Handle a = NewAttr(obj, name, H5T_STD_I32LE, {v.size()});
+  static_assert(sizeof(int) == 4);
+  if (!v.empty()) CheckWrite(H5Awrite(a.get(), H5T_NATIVE_INT32, v.data()), obj, name);
+}
+
 void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v) {
   std::vector<const char*> p;
   for (const auto& x : v) p.push_back(x.c_str());

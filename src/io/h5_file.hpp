@@ -121,6 +121,7 @@ void WriteInt(Id obj, const std::string& name, long long value);  // int64
 void WriteBool(Id obj, const std::string& name, bool value);
 // A float64 array, (n) or (n / cols, cols) when cols > 1.
 void WriteDoubles(Id obj, const std::string& name, const std::vector<double>& v, Size cols = 1);
+void WriteInts(Id obj, const std::string& name, const std::vector<int>& v);  // int32 (n)
 void WriteStringArray(Id obj, const std::string& name, const std::vector<std::string>& v);
 std::string ReadString(Id obj, const std::string& name);  // "" when absent
 std::optional<std::int64_t> ReadInt(Id obj, const std::string& name);

@@ -250,6 +250,21 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       for (size_t i = 0; i + 1 < ph.size(); i += 2) out.attractor.stick_phases.emplace_back(ph[i], ph[i + 1]);
       out.attractor.impact_phases = h5::ReadDoubles(ag.get(), "impact_phases");
       out.attractor.impact_velocities = h5::ReadDoubles(ag.get(), "impact_velocities");
+      // The contact of each sticking phase and impact (absent in files written before they were
+      // stored: then unknown, empty).
+      const auto contacts = [&](const char* name, size_t count) {
+        std::vector<int> c;
+        for (double x : h5::ReadDoubles(ag.get(), name)) {
+          if (!(x >= 0 && x < 1e6 && x == std::floor(x)))
+            throw std::runtime_error(fmt::format("/attractor {}: {} is not a contact index", name, x));
+          c.push_back(static_cast<int>(x));
+        }
+        if (!c.empty() && c.size() != count)
+          throw std::runtime_error(fmt::format("/attractor {}: {} values for {} events", name, c.size(), count));
+        return c;
+      };
+      out.attractor.stick_contacts = contacts("stick_contacts", out.attractor.stick_phases.size());
+      out.attractor.impact_contacts = contacts("impact_contacts", out.attractor.impact_phases.size());
     }
     out.command = h5::ReadString(f, "command");
     out.git_commit = h5::ReadString(f, "git_commit");

@@ -402,9 +402,11 @@ void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
     phases.push_back(e);
   }
   h5::WriteDoubles(g.get(), "stick_phases", phases, 2);
+  h5::WriteInts(g.get(), "stick_contacts", a.stick_contacts);
   if (a.kind == "impact-periodic") {
     h5::WriteDoubles(g.get(), "impact_phases", a.impact_phases);
     h5::WriteDoubles(g.get(), "impact_velocities", a.impact_velocities);
+    h5::WriteInts(g.get(), "impact_contacts", a.impact_contacts);
   }
   m.Flush();
   g.Reset();

@@ -30,9 +30,11 @@ nlohmann::json AttractorObject(const Attractor& a) {
   auto phases = nlohmann::json::array();
   for (const auto& [s, e] : a.stick_phases) phases.push_back({s, e});
   j["stick_phases"] = phases;
+  j["stick_contacts"] = a.stick_contacts;
   if (a.kind == "impact-periodic") {
     j["impact_phases"] = a.impact_phases;
     j["impact_velocities"] = a.impact_velocities;
+    j["impact_contacts"] = a.impact_contacts;
   }
   if (a.searched_period) {
     j["searched_period"] = *a.searched_period;
@@ -168,11 +170,13 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
     auto phases = nlohmann::json::array();
     for (const auto& [s, e] : o.summary.stick_phases) phases.push_back({s, e});
     j["stick_phases"] = phases;
+    j["stick_contacts"] = o.summary.stick_contacts;
     j["impacts_per_period"] = OrNull(o.summary.impacts_per_period);
   }
   if (kind != OrbitKind::kSticking) {
     j["impact_phases"] = o.summary.impact_phases;
     j["impact_velocities"] = o.summary.impact_velocities;
+    j["impact_contacts"] = o.summary.impact_contacts;
   }
   auto mu = nlohmann::json::array();
   for (const auto& m : o.multipliers) mu.push_back({m.real(), m.imag()});
@@ -286,6 +290,7 @@ std::string BranchJson(const Branch& b) {
     points.push_back({{"value", pt.value},
                       {"sticking_fraction", OrNull(pt.summary.sticking_fraction)},
                       {"stick_phases", phases},
+                      {"stick_contacts", pt.summary.stick_contacts},
                       {"impacts_per_period", OrNull(pt.summary.impacts_per_period)},
                       {"stable", pt.stable},
                       {"floquet_multipliers", mu},
@@ -450,6 +455,23 @@ std::string ModelJson(const System& s) {
   j["s_A"] = s.s_A();
   j["s_B"] = s.s_B();
   j["static_flexibility"] = s.flexibility();
+  // Every contact (docs/contacts.md): as written, and in the modal coordinates.
+  auto contacts = nlohmann::json::array();
+  for (const ContactModel& k : s.contacts()) {
+    contacts.push_back({{"dof", k.spec.dof >= 0 ? nlohmann::json(k.spec.dof) : nlohmann::json(nullptr)},
+                        {"partner", k.spec.partner >= 0 ? nlohmann::json(k.spec.partner) : nlohmann::json(nullptr)},
+                        {"side", k.spec.side == Side::kBelow ? "below" : "above"},
+                        {"position", k.spec.position},
+                        {"restitution", k.restitution},
+                        {"shape", Array(k.shape)},
+                        {"contact", Array(k.contact)},
+                        {"stop", k.stop},
+                        {"s_A", k.s_A},
+                        {"s_B", k.s_B},
+                        {"constrained_frequencies", Array(k.constrained.frequencies)},
+                        {"static_flexibility", k.flexibility}});
+  }
+  j["contacts"] = contacts;
   if (s.physical()) {
     // mode_shapes[i] = ψ_i over the physical DOFs (unit component at B for contact modes).
     auto shapes = nlohmann::json::array();

@@ -236,7 +236,8 @@ std::string KindName(int code) {
 }
 
 // Layout: state, kind, period (0: none), impacts (−1: none), sticking fraction (NaN: none),
-// periods, stop, #stick phases, pairs, #impacts, phases, velocities, #z, z.
+// periods, stop, #stick phases, pairs, #impacts, phases, velocities, contacts known (1 or 0),
+// [stick contacts, impact contacts], #z, z.
 void PackCell(const CellResult& c, std::vector<double>& out) {
   const Attractor& a = c.attractor;
   out.push_back(static_cast<double>(c.state));
@@ -254,6 +255,14 @@ void PackCell(const CellResult& c, std::vector<double>& out) {
   out.push_back(static_cast<double>(a.impact_phases.size()));
   out.insert(out.end(), a.impact_phases.begin(), a.impact_phases.end());
   out.insert(out.end(), a.impact_velocities.begin(), a.impact_velocities.end());
+  // The contacts of the stick phases and impacts, or none (unknown).
+  const bool contacts = a.stick_contacts.size() == a.stick_phases.size() &&
+                        a.impact_contacts.size() == a.impact_phases.size();
+  out.push_back(contacts ? 1.0 : 0.0);
+  if (contacts) {
+    out.insert(out.end(), a.stick_contacts.begin(), a.stick_contacts.end());
+    out.insert(out.end(), a.impact_contacts.begin(), a.impact_contacts.end());
+  }
   out.push_back(static_cast<double>(c.z.size()));
   out.insert(out.end(), c.z.data(), c.z.data() + c.z.size());
 }
@@ -274,6 +283,10 @@ CellResult UnpackCell(const double*& p) {
   a.impact_phases.assign(p, p + ni);
   a.impact_velocities.assign(p + ni, p + 2 * ni);
   p += 2 * ni;
+  if (*p++ != 0.0) {
+    for (size_t i = 0; i < a.stick_phases.size(); ++i) a.stick_contacts.push_back(static_cast<int>(*p++));
+    for (size_t i = 0; i < ni; ++i) a.impact_contacts.push_back(static_cast<int>(*p++));
+  }
   const size_t nz = count();
   c.z = Eigen::Map<const Eigen::VectorXd>(p, static_cast<Eigen::Index>(nz));
   p += nz;

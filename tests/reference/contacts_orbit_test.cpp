@@ -11,16 +11,21 @@
 //    impact leaves;
 //  * the Floquet multipliers of a 2-DOF orbit against the Lyapunov exponents of a run on it, which
 //    re-orthonormalise the same tangent every period instead of taking eigenvalues;
+//  * `vibro check` on symmetric orbits (issue 37, item 7): impacts compared as cyclic lists, each
+//    named by its contact, against the closed form (T1)-(T2) and against the symmetry x → −x,
+//    t → t + T/2 of a symmetric 2-DOF scene; a mirrored or shifted record is not taken for the orbit;
 //  * simultaneous impacts: coupled contacts (W_jk ≠ 0) leave the map without a Jacobian, which
 //    the orbit says instead of multipliers; decoupled ones (W_jk = 0) give the product of the
 //    single impacts' saltations, checked against quad finite differences.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 
 #include <gtest/gtest.h>
 
 #include "support.hpp"
+#include "vibro/check.hpp"
 #include "vibro/lyapunov.hpp"
 #include "vibro/orbit_from_state.hpp"
 #include "vibro/poincare.hpp"
@@ -339,6 +344,105 @@ TEST(ContactsOrbit, FloquetMultipliersOfATwoDofOrbitMatchItsLyapunovExponents) {
   EXPECT_NEAR(s.exponents[1], want, 1e-4);
   EXPECT_TRUE(std::isinf(s.exponents[2]) && s.exponents[2] < 0);
   EXPECT_TRUE(std::isinf(s.exponents[3]) && s.exponents[3] < 0);
+}
+
+const CheckRow* Row(const CheckReport& rep, const std::string& name) {
+  for (const auto& row : rep.rows)
+    if (row.quantity == name) return &row;
+  return nullptr;
+}
+
+// `vibro check` lists the impacts of the symmetric orbit from contact 0 (the canonical rotation
+// of "0:impact 1:impact"), whichever stop each method's record starts after, and every method
+// agrees: the phases of (T1)-(T2), φ + π on the lower stop (contact 0) and φ on the upper one.
+TEST(ContactsOrbit, CheckComparesTheImpactsOfASymmetricOrbitCyclically) {
+  // The issue's reproduction (a = 4, r = 0.8, ω = 2.5) and another symmetric orbit that is the
+  // attractor from rest.
+  for (const auto& [w1, a, delta, r, w] : {std::array<double, 5>{1, 4, 1, 0.8, 2.5}, std::array<double, 5>{1.3, 1.5, 0.5, 0.6, 2}}) {
+    SCOPED_TRACE(testing::Message() << "(ω1, a, Δ, r, ω) = (" << w1 << ", " << a << ", " << delta << ", " << r << ", " << w << ")");
+    const auto orbits = SymmetricOrbits(w1, a, delta, r, w);
+    ASSERT_FALSE(orbits.empty());
+    Scene scene = TwoSided(w1, a, delta, r, w);
+    scene.run.periods = 200;
+    const CheckReport rep = CrossCheck(System(scene), scene);
+    std::string failed;
+    for (const auto& row : rep.rows)
+      if (!row.ok) failed += row.quantity + ": " + row.note + "\n";
+    EXPECT_TRUE(rep.ok) << failed;
+    const CheckRow* lower = Row(rep, "impact 1 (contact 0) phase");
+    const CheckRow* upper = Row(rep, "impact 2 (contact 1) phase");
+    ASSERT_TRUE(lower && upper && lower->exact && upper->exact && lower->orbit && upper->orbit);
+    EXPECT_NEAR(*lower->exact, Wrap(orbits[0].phi + M_PIl), 1e-9);
+    EXPECT_NEAR(*upper->exact, Wrap(orbits[0].phi), 1e-9);
+    EXPECT_NEAR(*lower->orbit, Wrap(orbits[0].phi + M_PIl), 1e-11);
+    EXPECT_NEAR(*upper->orbit, Wrap(orbits[0].phi), 1e-11);
+    for (const char* v : {"impact 1 (contact 0) velocity before", "impact 2 (contact 1) velocity before"}) {
+      const CheckRow* row = Row(rep, v);
+      ASSERT_TRUE(row && row->exact) << v;
+      EXPECT_NEAR(*row->exact, static_cast<double>(-orbits[0].V), 1e-9) << v;
+    }
+  }
+}
+
+// A tube in a loose support (issue 37, scene E): the scene is symmetric under q → −q, so its
+// period-1 orbit hits the stops at −0.1 (contact 0) and +0.1 (contact 1) half a period apart with
+// the same speed; `vibro check` agrees across methods whichever stop each record starts after.
+TEST(ContactsOrbit, CheckAgreesOnTheSymmetricOrbitOfATubeInALooseSupport) {
+  Scene s;
+  Eigen::MatrixXd M(2, 2), K(2, 2);
+  M << 2, 0, 0, 1;
+  K << 4, -1, -1, 1;
+  s.physical = PhysicalStructureSpec{M, K, 0, 0};
+  s.damping_ratios = Eigen::VectorXd::Constant(2, 0.02);
+  s.contacts = {ContactSpec{1, -1, Side::kBelow, -0.1, 0.7}, ContactSpec{1, -1, Side::kAbove, 0.1, 0.7}};
+  s.amplitude = 0.3;
+  s.frequency = 0.9;
+  s.run.samples_per_period = 0;
+  const CheckReport rep = CrossCheck(System(s), s);
+  std::string failed;
+  for (const auto& row : rep.rows)
+    if (!row.ok) failed += row.quantity + ": " + row.note + "\n";
+  EXPECT_TRUE(rep.ok) << failed;
+  const CheckRow *p0 = Row(rep, "impact 1 (contact 0) phase"), *p1 = Row(rep, "impact 2 (contact 1) phase");
+  const CheckRow *v0 = Row(rep, "impact 1 (contact 0) velocity before"),
+                 *v1 = Row(rep, "impact 2 (contact 1) velocity before");
+  ASSERT_TRUE(p0 && p1 && v0 && v1 && p0->orbit && p1->orbit && v0->orbit && v1->orbit);
+  EXPECT_NEAR(Wrap(*p0->orbit - *p1->orbit), M_PI, 1e-10);
+  EXPECT_NEAR(*v0->orbit, *v1->orbit, 1e-10);
+}
+
+// The cyclic comparison finds the same orbit in any rotation, and only the same orbit: the
+// record of the mirrored orbit (the stops swapped: contact 0 at the phase of contact 1), of the
+// orbit half a period later with the contacts kept, or with another event, stays different.
+TEST(ContactsOrbit, CyclicComparisonTellsADifferentOrbit) {
+  const auto o = SymmetricOrbits(1, 4, 1, 0.8, 2.5).at(0);
+  const double up = Wrap(o.phi), down = Wrap(o.phi + M_PIl), V = -static_cast<double>(o.V);
+  const std::vector<CyclicEvent> truth{{1, up, V}, {0, down, V}};  // as a record after the lower stop lists it
+  const auto ref = CanonicalCyclic(truth);
+  ASSERT_EQ(ref.size(), 2u);
+  EXPECT_EQ(ref[0].contact, 0);
+  EXPECT_EQ(ref[0].a, down);
+  const auto largest = [&](const std::vector<CyclicEvent>& v) {
+    double d = 0;
+    for (size_t i = 0; i < ref.size(); ++i) {
+      if (v[i].contact != ref[i].contact) return 1e300;
+      d = std::max({d, std::abs(std::remainder(v[i].a - ref[i].a, 2 * M_PI)), std::abs(v[i].b - ref[i].b)});
+    }
+    return d;
+  };
+  // The same orbit, listed from either stop, with phases counted 2π later.
+  EXPECT_EQ(largest(AlignedCyclic(ref, truth, false)), 0.0);
+  EXPECT_EQ(largest(AlignedCyclic(ref, {{0, down + 2 * M_PI, V}, {1, up, V}}, false)), 0.0);
+  // The mirrored orbit: the same phases on the other stops.
+  EXPECT_NEAR(largest(AlignedCyclic(ref, {{0, up, V}, {1, down, V}}, false)), M_PI, 1e-12);
+  // Another orbit with the same contacts: impacts 0.3 later.
+  EXPECT_NEAR(largest(AlignedCyclic(ref, {{1, up + 0.3, V}, {0, down + 0.3, V}}, false)), 0.3, 1e-12);
+  // Another speed.
+  EXPECT_NEAR(largest(AlignedCyclic(ref, {{1, up, V * 1.01}, {0, down, V * 1.01}}, false)), 0.01 * -V, 1e-12);
+  // Two impacts on the same stop: no rotation has the contacts of the orbit.
+  EXPECT_EQ(largest(AlignedCyclic(ref, {{0, up, V}, {0, down, V}}, false)), 1e300);
+  // A third impact: not rotated (the check reports it missing in that method).
+  EXPECT_EQ(AlignedCyclic(ref, {{1, up, V}, {0, down, V}, {0, down + 0.1, V}}, false).size(), 3u);
 }
 
 }  // namespace

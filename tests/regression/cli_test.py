@@ -31,6 +31,22 @@ for f in sorted(os.listdir(scenes)):
               len(j["constrained_frequencies"]) == j["modes_kept"] - 1, p.stdout)
     p = run("model", path)
     check(f"model {f} (text)", p.returncode == 0 and "frequencies" in p.stdout, p.stderr)
+    # Every contact of the scene file (its [[contact]] tables, or the [stop] as one), with the
+    # side, position and restitution written there (issue 37: contact 0 only was shown).
+    import tomllib
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    tables = doc.get("contact", [])
+    pj = run("model", path, "--json")
+    if pj.returncode == 0 and tables:
+        cs = json.loads(pj.stdout).get("contacts", [])
+        check(f"model {f} --json lists every contact", len(cs) == len(tables) and all(
+              c["side"] == t.get("side", "below") and c["position"] == t["position"] and
+              c["restitution"] == t.get("restitution", 0.0) for c, t in zip(cs, tables)), (cs, tables))
+        shown = [l for l in p.stdout.splitlines() if l.startswith("contact ") and not l.startswith("contact T_B")]
+        check(f"model {f} (text) lists every contact",
+              [l.split()[1] for l in shown] == [str(j) for j in range(len(tables))] and
+              all(f"r {t.get('restitution', 0.0):g}" in l for l, t in zip(shown, tables)), p.stdout)
 
 def several_contacts(path):
     """Whether the scene has two or more [[contact]] tables (docs/contacts.md)."""

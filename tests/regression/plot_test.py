@@ -198,7 +198,7 @@ with tempfile.TemporaryDirectory() as d:
           len({vibro_plot.BIFURCATION_MARKERS[k] for k in set(kinds)}) == len(set(kinds)), kinds)
 
     # Several contacts (docs/contacts.md): PREFIX_gaps, one panel per contact, the gaps drawn from
-    # the samples open; --coordinate is refused.
+    # the samples open; PREFIX_phase and PREFIX_section of every gap; --coordinate draws its own.
     beam = simulate(d, "beam3", "contacts_beam3.toml", "run.periods=6", "run.samples_per_period=64")
     p = plot(beam, "beam3", "--format", "svg")
     texts = svg_texts(os.path.join(d, "beam3_gaps.svg")) if p.returncode == 0 else []
@@ -210,7 +210,67 @@ with tempfile.TemporaryDirectory() as d:
         q = X @ np.asarray(f["model"].attrs["mode_shapes"]).reshape(-1, X.shape[1]).T
     check("several contacts: the samples keep q0 between its stops at -0.1 and 0.1",
           (q[:, 0] >= -0.1 - 1e-9).all() and (q[:, 0] <= 0.1 + 1e-9).all(), (q[:, 0].min(), q[:, 0].max()))
+    check("several contacts: PREFIX_phase and PREFIX_section of every gap",
+          all(os.path.exists(os.path.join(d, f"beam3_{k}.svg")) for k in ("phase", "section")) and
+          sum(t.startswith("contact ") for t in svg_texts(os.path.join(d, "beam3_phase.svg"))) == 5, p.stderr)
     p = plot(beam, "beam3q", "--coordinate", "q1")
-    check("several contacts: --coordinate refused (exit 2)", p.returncode == 2 and "gaps" in p.stderr, p.stderr)
+    check("several contacts: --coordinate q1 draws PREFIX_q1, _phase and _section",
+          p.returncode == 0 and all(os.path.exists(os.path.join(d, f"beam3q_{k}.png")) for k in ("q1", "phase", "section")),
+          p.stderr)
+    # The dense states between coarse samples (free flights forward to each event and back from the
+    # next sample) against the physics and a finely sampled run of the same scene: every gap stays
+    # open, the contact of each impact is closed at its instant on both sides, and the dense q
+    # reach the extremes the engine's fine samples reach.
+    coarse = simulate(d, "beam3c", "contacts_beam3.toml", "run.periods=6", "run.samples_per_period=32")
+    fine = simulate(d, "beam3f", "contacts_beam3.toml", "run.periods=6", "run.samples_per_period=2048")
+    with h5py.File(coarse) as f:
+        contacts = vibro_plot.scene_contacts(f)
+        gaps = vibro_plot.gap_coordinates(f, contacts)
+        T = float(f.attrs["forcing_period"])
+        t0, t1 = f["samples/t"][0], f["samples/t"][-1]
+        tt, XX, VV = vibro_plot.dense_states(f, t0, t1, per_period=4000)
+        ev_t, ev_c, kinds = f["events/t"][:], f["events/contact"][:], f["events/kind"][:]
+        impact = h5py.check_enum_dtype(f["events/kind"].dtype)["impact"]
+        psi = np.asarray(f["model"].attrs["mode_shapes"]).reshape(-1, XX.shape[1])
+    known = np.isfinite(tt)
+    lowest = min(float((sigma * (XX[known] @ a - dd)).min()) for a, sigma, dd, _ in gaps)
+    check("several contacts: the dense states keep every gap open", lowest >= -1e-9, lowest)
+    worst = 0.0
+    for te, j in zip(ev_t[kinds == impact], ev_c[kinds == impact]):
+        a, sigma, dd, _ = gaps[j]
+        at = known & (np.abs(tt - te) <= 1e-12 * max(1.0, abs(te)))
+        if at.any():
+            worst = max(worst, float(np.abs(sigma * (XX[at] @ a - dd)).max()))
+    check("several contacts: each impact's gap is closed at its instant in the dense states",
+          worst <= 1e-9 and (kinds == impact).sum() > 0, worst)
+    with h5py.File(fine) as f:
+        qf = f["samples/X"][:] @ psi.T
+    qd = XX[known] @ psi.T
+    # 2048 samples a period resolve an extreme to about (2π/2048)²/8 of the range: 1e-6.
+    off = max(max(abs(qd[:, i].max() - qf[:, i].max()), abs(qd[:, i].min() - qf[:, i].min())) / np.ptp(qf[:, i])
+              for i in range(qf.shape[1]))
+    check("several contacts: the dense q of 32 samples a period reach the extremes of 2048", off <= 1e-4, off)
+    # A refused plot writes nothing (issue 38): every option is checked before the first picture,
+    # here options that were refused only after PREFIX_loads had been written.
+    for prefix, options, why in (("refq", ("--coordinate", "q7"), "q7"),
+                                 ("refw", ("--time-window", "1e300,1e301"), "--time-window"),
+                                 ("refo", ("--overlay", beam), "--overlay")):
+        p = plot(beam, prefix, *options)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"several contacts: plot {' '.join(options[:1])} refused (exit 2, says why), nothing written",
+              p.returncode == 2 and why in p.stderr and not made, (p.returncode, p.stderr, made))
+    p = plot(c3, "refw3", "--time-window", "1e300,1e301")
+    made = [n for n in os.listdir(d) if n.startswith("refw3")]
+    check("--time-window outside the run: exit 2, nothing written", p.returncode == 2 and not made,
+          (p.returncode, p.stderr, made))
+    # A title matplotlib cannot typeset, or too long for any picture: named, not "data damaged".
+    for prefix, title, why in (("reft1", "$\\frac{$", "cannot typeset"), ("reft2", "x" * 10000, "10000 characters")):
+        p = plot(c3, prefix, "--title", title)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"--title {title[:12]!r}: exit 2 naming the title, nothing written",
+              p.returncode == 2 and "--title" in p.stderr and why in p.stderr and "damaged" not in p.stderr
+              and len(p.stderr.strip().splitlines()) == 1 and not made, (p.returncode, p.stderr[:300], made))
+    p = plot(c3, "okt", "--title", "$\\omega = 1.2$, $x_B$")
+    check("--title with mathtext that typesets: exit 0", p.returncode == 0, p.stderr)
 
 finish()
