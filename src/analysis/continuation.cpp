@@ -738,9 +738,65 @@ Branch Continue(const ContinuationRequest& req) {
   struct Transition {
     size_t index, points;
     Point before;
+    Eigen::VectorXd tangent;  // at `before`
+    double phase;             // of the section `before` is at
     std::vector<std::string> via;
   };
   std::optional<Transition> transition;
+
+  // A sticking entry (R at a landing reaches 0) located by the landing reaction itself: R is
+  // smooth along the branch up to the transition, where the bisection on the events stops short
+  // (the orbit degenerates: a flight of vanishing length before the landing, whose speed is below
+  // what decides an impact from a grazing). Six points behind `base` (arclength k·h, k = 1..6, h
+  // 1e-6 of the span), R at their landings, and the root of the least-squares cubic in λ through
+  // them, which must lie within `bracket` of `at` or 10 sample spans of it; `bracket` becomes its distance to the
+  // quadratic fit's root plus the samples' rounding noise over the slope. Unchanged otherwise.
+  const auto refine_entry = [&](const Point& base, const Eigen::VectorXd& tb, double section_phase, double& at,
+                                double& bracket) {
+    if (section_phase != p.phase() || !std::isfinite(base.probe.entry_reaction_raw)) return;
+    std::vector<double> ls, rs;
+    const double h = 1e-6 * std::abs(span);
+    for (int k = 1; k <= 6; ++k) {
+      if (stop_requested()) return;
+      int iters = 0;
+      const auto yc = Correct(p, base.y - (k * h) * tb, tb, iters, true);
+      const auto pc = yc ? p.Examine(*yc) : std::nullopt;
+      if (!pc || !SameFamily(base, *pc) || !std::isfinite(pc->probe.entry_reaction_raw)) return;
+      ls.push_back(pc->y[n2]);
+      rs.push_back(pc->probe.entry_reaction_raw);
+    }
+    const double centre = ls.front(), width = std::abs(ls.back() - ls.front());
+    if (!(width > 0)) return;
+    const auto fit_root = [&](int degree, double* noise) {
+      Eigen::MatrixXd A(static_cast<long>(ls.size()), degree + 1);
+      Eigen::VectorXd f(static_cast<long>(ls.size()));
+      for (size_t i = 0; i < ls.size(); ++i) {
+        for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow((ls[i] - centre) / width, d);
+        f[static_cast<long>(i)] = rs[i];
+      }
+      const Eigen::VectorXd c = A.colPivHouseholderQr().solve(f);
+      double u = -c[0] / c[1], dv = 0;
+      for (int it = 0; it < 50; ++it) {
+        double v = 0;
+        dv = 0;
+        for (int d = degree; d >= 0; --d) {
+          dv = dv * u + v;
+          v = v * u + c[d];
+        }
+        const double du = v / dv;
+        u -= du;
+        if (std::abs(du) < 1e-17) break;
+      }
+      if (noise) *noise = std::sqrt((A * c - f).squaredNorm() / static_cast<double>(ls.size())) / std::abs(dv) * width;
+      return centre + u * width;
+    };
+    double noise = 0;
+    const double root3 = fit_root(3, &noise), root2 = fit_root(2, nullptr);
+    // The events' bisection may stop short of the root by much more than its bracket.
+    if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 10.0 * width)) return;
+    at = root3;
+    bracket = std::abs(root3 - root2) + noise;
+  };
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
@@ -987,11 +1043,15 @@ Branch Continue(const ContinuationRequest& req) {
         }
         merged.value = 0.5 * (lo_v + hi_v);
         merged.bracket = hi_v - lo_v;
+        if (merged.kind == "sticking-entry")
+          refine_entry(before, transition->tangent, transition->phase, merged.value, merged.bracket);
         br.points.resize(transition->points);
         kind = merged.kind;
       } else {
-        br.bifurcations.push_back({kind, at, detail, bracket, contact});
-        transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, {}};
+        double value = at, width = bracket;
+        if (kind == "sticking-entry") refine_entry(cur, t, p.phase(), value, width);
+        br.bifurcations.push_back({kind, value, detail, width, contact});
+        transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, t, p.phase(), {}};
       }
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
