@@ -8,7 +8,8 @@ Columns: value, time (the section time of each point), displacement_1..n and vel
 scene's [initial] convention (physical DOFs q, q_dot for a physical scene, modal X, V otherwise),
 period, stable, sticking_fraction (empty when the orbit does not stick), and sequence (each
 point's contact sequence, when the branch is of a scene with several contacts: /branch/sequence
-holds a non-empty entry). Writes to stdout without OUT.csv. Exit 2 when the file holds no branch
+holds a non-empty entry), then strobe_0..strobe_{m-1} (each contact's coordinate at the start's
+forcing phase, /branch/strobe: for plots, `vibro validate` reads past them). Writes to stdout without OUT.csv. Exit 2 when the file holds no branch
 with orbit states.
 """
 import csv
@@ -29,11 +30,13 @@ def main(argv):
             x, v = (b["q"][()], b["q_dot"][()]) if "q" in b else (b["X"][()], b["V"][()])
             stable, sp = b["stable"][()], b["sticking_fraction"][()]
             period = int(b.attrs["period"])
+            strobe = b["strobe"][()] if "strobe" in b else None  # (N, contacts); absent in older files
             sequence = None
             if "sequence" in b:
                 sequence = [s.decode() if isinstance(s, bytes) else str(s) for s in b["sequence"][()]]
                 if not any(sequence):
-                    sequence = None
+                    strobe = b["strobe"][()] if "strobe" in b else None  # (N, contacts); absent in older files
+            sequence = None
     except (OSError, KeyError) as e:
         print(f"{argv[1]}: not a branch with orbit states (vibro continue --out): {e}", file=sys.stderr)
         return 2
@@ -42,12 +45,14 @@ def main(argv):
     n = x.shape[1]
     w.writerow(["value", "time"] + [f"displacement_{i + 1}" for i in range(n)]
                + [f"velocity_{i + 1}" for i in range(n)] + ["period", "stable", "sticking_fraction"]
-               + (["sequence"] if sequence else []))
+               + (["sequence"] if sequence else [])
+               + ([f"strobe_{j}" for j in range(strobe.shape[1])] if strobe is not None else []))
     for i in range(len(value)):
         w.writerow([repr(float(value[i])), repr(float(t0[i]))] + [repr(float(a)) for a in x[i]]
                    + [repr(float(a)) for a in v[i]]
                    + [period, int(stable[i]), "" if np.isnan(sp[i]) else repr(float(sp[i]))]
-                   + ([sequence[i]] if sequence else []))
+                   + ([sequence[i]] if sequence else [])
+                   + (["" if np.isnan(a) else repr(float(a)) for a in strobe[i]] if strobe is not None else []))
     if out is not sys.stdout:
         out.close()
     return 0

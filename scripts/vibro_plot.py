@@ -453,8 +453,10 @@ BIFURCATION_MARKERS = {"fold": "s", "flip": "D", "neimark-sacker": "*", "rising"
 BIF_COLOURS = [OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4], OKABE_ITO[5], OKABE_ITO[7], OKABE_ITO[6]]
 
 
-def draw_branch(ax, f, y):
-    """A continuation branch: solid where stable, dashed where unstable; bifurcations marked."""
+def draw_branch(ax, f, y, color=BRANCH, name=None, markers=True):
+    """A continuation branch: solid where stable, dashed where unstable; bifurcations marked.
+    `name` labels the curve (one of several drawn on the axes); `markers` False leaves the
+    bifurcations to another curve."""
     b = f["branch"]
     value = b["value"][:]
     stable = b["stable"][:].astype(bool)
@@ -462,12 +464,16 @@ def draw_branch(ax, f, y):
     for i in range(1, len(value) + 1):
         if i == len(value) or stable[i] != stable[start]:
             j = min(i + 1, len(value))
-            ax.plot(value[start:j], y[start:j], "-" if stable[start] else "--", color=BRANCH, lw=1.4)
+            ax.plot(value[start:j], y[start:j], "-" if stable[start] else "--", color=color, lw=1.4)
             start = i
-    if stable.any():
-        ax.plot([], [], "-", color=BRANCH, label="stable")
-    if (~stable).any():
-        ax.plot([], [], "--", color=BRANCH, label="unstable")
+    if name is not None:
+        ax.plot([], [], "-", color=color, label=name)
+    if markers and stable.any():
+        ax.plot([], [], "-", color="0.3" if name else color, label="stable")
+    if markers and (~stable).any():
+        ax.plot([], [], "--", color="0.3" if name else color, label="unstable")
+    if not markers:
+        return
     bif = f["bifurcations"]
     kinds = [text(k) for k in bif["kind"][:]]
     seen = set()
@@ -518,9 +524,41 @@ def mark_sequences(fig, ax, f):
         fig.subplots_adjust(bottom=0.12 + 0.022 * (len(lines) + 1))
 
 
+def draw_strobe(ax, f):
+    """The stroboscopic state along a branch (/branch/strobe, docs/output.md): each contact's
+    coordinate at t ≡ t0 (mod the orbit's period), t0 the scene's initial.time, the phase of a
+    sweep's x_B(t0 + kT), whatever the section. Contacts on the same coordinate (equal columns)
+    share one curve."""
+    b = f["branch"]
+    strobe = np.atleast_2d(b["strobe"][()])
+    if strobe.shape[0] != len(b["value"]):
+        strobe = strobe.T
+    curves = []  # [column, contacts]
+    for j in range(strobe.shape[1]):
+        for c in curves:
+            if np.allclose(strobe[:, j], strobe[:, c[0]], rtol=0, atol=1e-12, equal_nan=True):
+                c[1].append(j)
+                break
+        else:
+            curves.append([j, [j]])
+    period = int(b.attrs["period"])
+    at = "t_0 + kT" if period == 1 else f"t_0 + {period}kT"
+    if len(curves) == 1:
+        draw_branch(ax, f, strobe[:, 0])
+        ax.set_ylabel(f"$x_B({at})$" if strobe.shape[1] == 1
+                      else f"contacts {', '.join(map(str, curves[0][1]))} at ${at}$")
+        return
+    for k, (j, contacts) in enumerate(curves):
+        draw_branch(ax, f, strobe[:, j], color=OKABE_ITO[(k + 4) % len(OKABE_ITO)],
+                    name="contact " + ", ".join(map(str, contacts)), markers=k == len(curves) - 1)
+    ax.set_ylabel(f"contact coordinate at ${at}$")
+
+
 def plot_branch(f, title, save):
-    """Bifurcation diagram of a continuation: the sticking fraction (sticking orbits) or x_B at
-    the section (impact orbits), and the largest |μ| when the orbits have multipliers."""
+    """Bifurcation diagram of a continuation: the sticking fraction (sticking orbits) or the
+    stroboscopic state (impact orbits: every contact's coordinate at the start's forcing phase,
+    /branch/strobe; x_B at the section in older files), and the largest |μ| when the orbits have
+    multipliers."""
     b = f["branch"]
     param = text(b.attrs["param"])
     value = b["value"][:]
@@ -534,7 +572,9 @@ def plot_branch(f, title, save):
     if has_sp:
         draw_branch(ax1, f, sp)
         ax1.set_ylabel("sticking fraction")
-    else:
+    elif "strobe" in b:
+        draw_strobe(ax1, f)
+    else:  # a file written before /branch/strobe: x_B at the section (it jumps where the section moves)
         draw_branch(ax1, f, b["x_B"][:])
         ax1.set_ylabel("$x_B$ at the section")
     mark_sequences(fig, ax1, f)

@@ -52,6 +52,11 @@ struct BranchPoint {
   std::string signature;  // events over a period (orbit_probe.hpp: C, P, I, G, S, R)
   double x_B = 0;         // contact displacement at the section point
   double section_phase = 0;  // ωt0 of the section, mod 2π·period
+  // The stroboscopic state: each contact's coordinate (w_jᵀq, the physical coordinate the
+  // [[contact]] constrains; x_B for a [stop]) at t ≡ initial.time (mod period·T), the forcing
+  // phase of a sweep's section points, whatever the section (docs/output.md). One per contact;
+  // NaN when the period could not be simulated.
+  std::vector<double> strobe;
   // The whole orbit, so that a point can be checked, restarted or plotted later:
   double section_time = 0;          // t0 of the section (a free state of the orbit)
   Eigen::VectorXd X, V;             // modal state at t0, (n)

@@ -79,6 +79,7 @@
 #pragma once
 
 #include <atomic>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,11 @@ struct SimulationOptions {
   // The sticking phases' ∫R dt and max R of the events (docs/loads.md), computed when observers are
   // given; false leaves them NaN (only to measure their cost, benchmarks/loads_bench.cpp).
   bool loads = true;
+  // Section points at origin + kT (k ≥ 1) instead of start + kT: a start (`initial`, required)
+  // inside the period [origin, origin + T) is no section point, and run.periods counts from
+  // origin. The state at a fixed forcing phase whatever the start (the stroboscopic state of a
+  // branch point, docs/output.md).
+  std::optional<double> section_origin;
 };
 
 // Runs the scene's initial state for scene.run.periods forcing periods with the scene's engine.

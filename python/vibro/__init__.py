@@ -405,13 +405,28 @@ def _loads_arrays(rows):
     return out
 
 
+def _strobe_array(points):
+    """Each branch point's stroboscopic state (its ``strobe`` list: every contact's coordinate at
+    t ≡ initial.time mod the orbit's period, docs/output.md) as an array (points, contacts); NaN
+    where the JSON has null."""
+    m = max([0] + [len(p.get("strobe") or []) for p in points])
+    out = _np.full((len(points), m), _np.nan)
+    for i, p in enumerate(points):
+        for j, x in enumerate(p.get("strobe") or []):
+            if x is not None:
+                out[i, j] = x
+    return out
+
+
 def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto", out=None, force=False, from_=None,
               point=None, switch=False, side="above"):
     """Continues a periodic orbit in ``param`` up to ``to`` (``vibro continue --json``; named with a
     trailing underscore because ``continue`` is a Python keyword). The dict also holds ``table``, a
     structured array (value, sticking_fraction, stable) of the branch points, and ``loads``: each
     point's exact per-period contact loads (docs/loads.md) as arrays of shape (points, contacts),
-    one per name of :data:`LOAD_FIELDS` (NaN: unknown; each point's ``loads_note`` says why). With
+    one per name of :data:`LOAD_FIELDS` (NaN: unknown; each point's ``loads_note`` says why), and
+    ``strobe``, shape (points, contacts): each contact's coordinate at the forcing phase of the
+    start, t ≡ initial.time (mod the orbit's period), as a sweep's ``x_B`` (docs/output.md). With
     several contacts each point has its contact ``sequence`` and each bifurcation the ``contact``
     where it happens.
 
@@ -439,6 +454,7 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     d = _json.loads(text)
     d["table"] = _branch_table(d.get("points", []))
     d["loads"] = _loads_arrays(d.get("points", []))
+    d["strobe"] = _strobe_array(d.get("points", []))
     return d
 
 

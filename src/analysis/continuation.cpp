@@ -207,6 +207,41 @@ std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene
   return out;
 }
 
+// The stroboscopic state (docs/output.md, `strobe`): every contact's coordinate w_jᵀq = σ_j c_jᵀX
+// at the time t ≡ t_s (mod qT), t_s the scene's start time (initial.time), the last such time up
+// to the section t0 (the orbit is qT-periodic: any one gives the same state). The same forcing
+// phase as a sweep's section points t_s + kT (src/studies/studies.cpp), wherever the section sits.
+// NaN per contact when the period could not be simulated.
+std::vector<double> StrobeOf(const System& sys, const Scene& scene, double t0, const Eigen::VectorXd& X,
+                             const Eigen::VectorXd& V, int q) {
+  struct Last final : Observer {
+    std::optional<Eigen::VectorXd> X;
+    void OnSection(const Sample& s) override { X = s.X; }
+  } last;
+  const double cycle = q * 2.0 * M_PI / sys.frequency();
+  const double origin = scene.initial_time + std::floor((t0 - scene.initial_time) / cycle) * cycle;
+  std::vector<double> out(static_cast<size_t>(sys.contact_count()), std::numeric_limits<double>::quiet_NaN());
+  Eigen::VectorXd at = X;
+  if (t0 - origin > 0) {  // otherwise the section is a strobe time itself
+    Scene sc = scene;
+    sc.run.periods = q;
+    sc.run.samples_per_period = 0;
+    const InitialOverride here{t0, X, V};
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.section_origin = origin;
+    opt.observers = {&last};
+    opt.loads = false;
+    if (Simulate(sys, sc, opt).status != RunStatus::kOk || !last.X) return out;
+    at = *last.X;
+  }
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
+    out[static_cast<size_t>(j)] = (c.spec.side == Side::kAbove ? -1.0 : 1.0) * c.shape.dot(at);
+  }
+  return out;
+}
+
 // Unit null vector of the 2n × (2n+1) matrix [Jz Jλ], oriented like `previous`.
 Eigen::VectorXd Tangent(const Evaluation& e, const Eigen::VectorXd& previous) {
   Eigen::MatrixXd A(e.Jz.rows(), e.Jz.cols() + 1);
@@ -458,6 +493,7 @@ Branch Continue(const ContinuationRequest& req) {
       b.q_dot = sys.mode_shapes() * b.V;
     }
     b.impacts = ImpactsOf(sys, *scene, b.section_time, b.X, b.V, p.period());
+    b.strobe = StrobeOf(sys, *scene, b.section_time, b.X, b.V, p.period());
     b.sequence = pt.orbit.sequence;
     auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
     b.loads = std::move(loads.contacts);
@@ -540,6 +576,11 @@ Branch Continue(const ContinuationRequest& req) {
     // between the two nearest (close to the root the predictor alone lies outside the corrector's
     // basin, which shrinks with the distance to the branch point, and it lands on the other branch).
     std::vector<std::pair<double, Eigen::VectorXd>> known = {{0.0, cur.y}, {hi, y1}};
+    // |df/ds| near the root: the secant of the bracket (from the unmodified end values). A sample
+    // closer to the root than 3e-5 of the step, |f| < 3e-5·hi·slope, is too close (below); where
+    // it fell says where the root is.
+    double root_slope = std::abs(f1 - f0) / hi;
+    std::optional<std::pair<double, double>> too_close;  // (s, λ) of the last such sample
     const auto sample = [&](double s) -> std::optional<TestSample> {
       auto above = std::lower_bound(known.begin(), known.end(), s,
                                     [](const auto& k, double v) { return k.first < v; });
@@ -557,44 +598,62 @@ Branch Continue(const ContinuationRequest& req) {
       const double v = test(*pc);
       // A sample this close to the root is within the corrector's ill-conditioned zone (it may
       // sit on the crossing branch): not trusted, neither as a value nor as a start for others.
-      if (!std::isfinite(v) || std::abs(v) < 1e-6 * std::max(std::abs(f0), std::abs(f1))) return std::nullopt;
+      // The zone's width is a fraction of the step (the corrector's error grows as the distance
+      // to the crossing shrinks), not of |f|, which may be far larger at one end of the step
+      // (e.g. next to a Neimark-Sacker point, where the multipliers are large).
+      if (!std::isfinite(v)) return std::nullopt;
+      if (std::abs(v) < 3e-5 * hi * root_slope) {
+        too_close = std::make_pair(s, pc->y[n2]);
+        return std::nullopt;
+      }
       known.insert(above, {s, pc->y});
       return TestSample{s, pc->y[n2], v};
     };
     // (1) Illinois regula falsi on s in [a, b], with a bisection whenever two steps did not halve
     // the bracket.
     double a = 0, fa = f0, b = hi, fb = f1, l_a = cur.y[n2], l_b = fallback;
+    double fa_true = f0, fb_true = f1;
     int side = 0;
-    bool bracketed = false;
+    bool bracketed = false, near = false;
     std::vector<double> widths = {hi, hi};
     for (int it = 0; it < 100 && b - a > 1e-3 * hi; ++it) {
       if (stop_requested()) break;
       const double w = b - a;
       const bool bisect = w > 0.5 * widths[widths.size() - 2];
       double s = bisect ? 0.5 * (a + b) : std::clamp(b - fb * w / (fb - fa), a + 1e-3 * w, b - 1e-3 * w);
+      too_close.reset();
       auto x = sample(s);
+      if (!x && too_close) {  // the root is within 3e-5 of the step of s: fitted around s below
+        near = true;
+        break;
+      }
       if (!x && !bisect) x = sample(s = 0.5 * (a + b));
+      if (!x && too_close) {
+        near = true;
+        break;
+      }
       if (!x) break;
       widths.push_back(w);
       if ((x->f > 0) == (fa > 0)) {
         a = s;
-        fa = x->f;
+        fa = fa_true = x->f;
         l_a = x->lambda;
         if (side == -1) fb *= 0.5;
         side = -1;
       } else {
         b = s;
-        fb = x->f;
+        fb = fb_true = x->f;
         l_b = x->lambda;
         bracketed = true;
         if (side == 1) fa *= 0.5;
         side = 1;
       }
+      root_slope = std::abs(fb_true - fa_true) / (b - a);
     }
-    double s_star = 0.5 * (a + b);
-    double at = bracketed ? 0.5 * (l_a + l_b) : fallback;
+    double s_star = near ? too_close->first : 0.5 * (a + b);
+    double at = near ? too_close->second : bracketed ? 0.5 * (l_a + l_b) : fallback;
     bracket = bracketed ? std::abs(l_b - l_a) : bracket;
-    if (b - a > 1e-3 * hi || stop_requested()) return at;
+    if ((!near && b - a > 1e-3 * hi) || stop_requested()) return at;
     // (2) The least-squares fit through samples on both sides: first at 2e-3 to 8e-3 of the step
     // from the bracket's middle, then at 1e-4 to 4e-4 of it from the first fit's root.
     for (const double h : {2e-3 * hi, 1e-4 * hi}) {
@@ -690,9 +749,65 @@ Branch Continue(const ContinuationRequest& req) {
   struct Transition {
     size_t index, points;
     Point before;
+    Eigen::VectorXd tangent;  // at `before`
+    double phase;             // of the section `before` is at
     std::vector<std::string> via;
   };
   std::optional<Transition> transition;
+
+  // A sticking entry (R at a landing reaches 0) located by the landing reaction itself: R is
+  // smooth along the branch up to the transition, where the bisection on the events stops short
+  // (the orbit degenerates: a flight of vanishing length before the landing, whose speed is below
+  // what decides an impact from a grazing). Six points behind `base` (arclength k·h, k = 1..6, h
+  // 1e-6 of the span), R at their landings, and the root of the least-squares cubic in λ through
+  // them, which must lie within `bracket` of `at` or 10 sample spans of it; `bracket` becomes its distance to the
+  // quadratic fit's root plus the samples' rounding noise over the slope. Unchanged otherwise.
+  const auto refine_entry = [&](const Point& base, const Eigen::VectorXd& tb, double section_phase, double& at,
+                                double& bracket) {
+    if (section_phase != p.phase() || !std::isfinite(base.probe.entry_reaction_raw)) return;
+    std::vector<double> ls, rs;
+    const double h = 1e-6 * std::abs(span);
+    for (int k = 1; k <= 6; ++k) {
+      if (stop_requested()) return;
+      int iters = 0;
+      const auto yc = Correct(p, base.y - (k * h) * tb, tb, iters, true);
+      const auto pc = yc ? p.Examine(*yc) : std::nullopt;
+      if (!pc || !SameFamily(base, *pc) || !std::isfinite(pc->probe.entry_reaction_raw)) return;
+      ls.push_back(pc->y[n2]);
+      rs.push_back(pc->probe.entry_reaction_raw);
+    }
+    const double centre = ls.front(), width = std::abs(ls.back() - ls.front());
+    if (!(width > 0)) return;
+    const auto fit_root = [&](int degree, double* noise) {
+      Eigen::MatrixXd A(static_cast<long>(ls.size()), degree + 1);
+      Eigen::VectorXd f(static_cast<long>(ls.size()));
+      for (size_t i = 0; i < ls.size(); ++i) {
+        for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow((ls[i] - centre) / width, d);
+        f[static_cast<long>(i)] = rs[i];
+      }
+      const Eigen::VectorXd c = A.colPivHouseholderQr().solve(f);
+      double u = -c[0] / c[1], dv = 0;
+      for (int it = 0; it < 50; ++it) {
+        double v = 0;
+        dv = 0;
+        for (int d = degree; d >= 0; --d) {
+          dv = dv * u + v;
+          v = v * u + c[d];
+        }
+        const double du = v / dv;
+        u -= du;
+        if (std::abs(du) < 1e-17) break;
+      }
+      if (noise) *noise = std::sqrt((A * c - f).squaredNorm() / static_cast<double>(ls.size())) / std::abs(dv) * width;
+      return centre + u * width;
+    };
+    double noise = 0;
+    const double root3 = fit_root(3, &noise), root2 = fit_root(2, nullptr);
+    // The events' bisection may stop short of the root by much more than its bracket.
+    if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 10.0 * width)) return;
+    at = root3;
+    bracket = std::abs(root3 - root2) + noise;
+  };
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
@@ -955,11 +1070,15 @@ Branch Continue(const ContinuationRequest& req) {
         }
         merged.value = 0.5 * (lo_v + hi_v);
         merged.bracket = hi_v - lo_v;
+        if (merged.kind == "sticking-entry")
+          refine_entry(before, transition->tangent, transition->phase, merged.value, merged.bracket);
         br.points.resize(transition->points);
         kind = merged.kind;
       } else {
-        br.bifurcations.push_back({kind, at, detail, bracket, contact});
-        transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, {}};
+        double value = at, width = bracket;
+        if (kind == "sticking-entry") refine_entry(cur, t, p.phase(), value, width);
+        br.bifurcations.push_back({kind, value, detail, width, contact});
+        transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, t, p.phase(), {}};
       }
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).

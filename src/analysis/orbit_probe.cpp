@@ -326,8 +326,10 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
     const auto k = static_cast<size_t>(ev[i].contact);
     keep(p.impact_speed, p.at.impact_speed, ev[i].speed / (speed_max[k] > 0 ? speed_max[k] : 1.0), ev[i].contact);
   }
-  for (const auto& [c, R] : rec.entry_reactions)
+  for (const auto& [c, R] : rec.entry_reactions) {
     keep(p.entry_reaction, p.at.entry_reaction, std::max(R, 0.0) / R_scale(static_cast<size_t>(c)), c);
+    p.entry_reaction_raw = std::min(p.entry_reaction_raw, R);
+  }
   // 4. The section: its margin in the flight it lies in, and the middle of the longest flight.
   if (!flights.empty() && flights.front().from <= 0.0) {
     const auto& f = flights.front();

@@ -49,6 +49,7 @@ struct OrbitProbe {
   double shortest_stick = kNone;      // duration / (qT)
   double interior_reaction = kNone;   // min interior local minimum of R / max R
   double entry_reaction = kNone;      // min R at the start of a sticking phase / max R
+  double entry_reaction_raw = kNone;  // the same R, not scaled (smooth along a branch: a root to fit)
   double flight_gap = kNone;          // min interior local minimum of x_B − x0 / range of x_B
   double release_to_stick = kNone;    // shortest time from a release to the next stick / (qT)
   double impact_speed = kNone;        // min |ẋ_B⁻| of isolated impacts / max |ẋ_B|

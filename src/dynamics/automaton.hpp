@@ -203,6 +203,10 @@ class Automaton {
       t0_ = opt.initial->time;
       X_ = opt.initial->X.cast<S>();
       V_ = opt.initial->V.cast<S>();
+      if (opt.section_origin) {  // periods counted from the origin: the start is inside one
+        t0_ = *opt.section_origin;
+        start_offset_ = S(opt.initial->time) - S(t0_);
+      }
     } else {
       const auto init = sys.Initial(scene);
       X_ = init.X.cast<S>();
@@ -349,6 +353,7 @@ class Automaton {
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
+  S start_offset_{0};  // SimulationOptions::section_origin: where the start is in period 0
   S phase0_{0};
   bool cvode_;
   double switch_ratio_;      // "threshold": plastic below this fraction of the first speed
@@ -959,8 +964,11 @@ RunResult Automaton<S>::Run() {
       }
     }
   } else {
+    clock_ = {0, start_offset_};
     ClassifyInitialState();
-    if (!opt_.observers.empty()) {
+    if (start_offset_ > 0) {
+      sample_index_ = 0;  // the start is no section point; samples from the first one after it
+    } else if (!opt_.observers.empty()) {
       const Sample s{ToClock(clock_), t0_, D(X_, dx_), D(V_, dv_),
                      R::to_double(m_.side * m_.ContactDisplacement(X_)), mode_};
       for (auto* o : opt_.observers) o->OnSection(s);

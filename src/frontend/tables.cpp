@@ -6,6 +6,7 @@
 
 #include <fmt/format.h>
 
+#include "vibro/branch_csv.hpp"
 #include "vibro/contact_sequence.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -68,10 +69,10 @@ std::vector<ClaimedPoint> BranchTable(const std::map<std::string, std::vector<do
   size_t rows = 0;
   bool first = true;
   for (const auto& [name, values] : columns) {
-    if (std::find(known.begin(), known.end(), name) == known.end())
+    if (std::find(known.begin(), known.end(), name) == known.end() && !IsStrobeColumn(name))
       problems.push_back(fmt::format("branch: unknown column '{}' (expected value, time, displacement_1..{}, "
                                      "velocity_1..{}, and optionally period, stable, sticking_fraction, "
-                                     "sequence)",
+                                     "sequence, strobe_0..)",
                                      name, n, n));
     if (!first && values.size() != rows)
       problems.push_back(fmt::format("branch: column '{}' has {} rows, the others {}", name, values.size(), rows));

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 #include <optional>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -13,6 +14,12 @@
 #include "vibro/scene_file.hpp"
 
 namespace vibro {
+
+bool IsStrobeColumn(const std::string& name) {
+  constexpr std::string_view kPrefix = "strobe_";
+  return name.size() > kPrefix.size() && name.size() <= kPrefix.size() + 6 && name.starts_with(kPrefix) &&
+         std::all_of(name.begin() + kPrefix.size(), name.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
 
 std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
   CsvText in(path, "branch");
@@ -40,10 +47,11 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
         known.push_back(fmt::format("velocity_{}", i));
       }
       for (size_t c = 0; c < cells.size(); ++c) {
+        if (IsStrobeColumn(cells[c])) continue;  // no claim (plots)
         if (std::find(known.begin(), known.end(), cells[c]) == known.end())
           problems.push_back(fmt::format("{}: unknown column '{}' (expected value, time, displacement_1..{}, "
                                          "velocity_1..{}, and optionally period, stable, sticking_fraction, "
-                                         "sequence)",
+                                         "sequence, strobe_0..)",
                                          where(c), cells[c], n, n));
         else if (column.count(cells[c]))
           problems.push_back(fmt::format("{}: column '{}' given twice", where(c), cells[c]));

@@ -69,6 +69,9 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   H5Table t;
   std::vector<double> value, sp, xb, phase, lead, stable, count, t0, offsets{0}, ip, ivb, iva;
   std::vector<double> mu(N * m * 2, kNaN), sticks(N * k * 2, kNaN);
+  size_t contacts = 1;  // the stroboscopic state: (N, contacts), NaN where not simulated
+  for (const auto& pt : b.points) contacts = std::max(contacts, pt.strobe.size());
+  std::vector<double> strobe(N * contacts, kNaN);
   std::vector<std::string> events, sequence;
   std::vector<double> icontact;
   std::vector<const Eigen::VectorXd*> X, V, q, qd;
@@ -78,6 +81,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
     sp.push_back(pt.summary.sticking_fraction.value_or(kNaN));
     xb.push_back(pt.x_B);
     phase.push_back(pt.section_phase);
+    for (size_t j = 0; j < pt.strobe.size(); ++j) strobe[i * contacts + j] = pt.strobe[j];
     stable.push_back(pt.stable ? 1 : 0);
     events.push_back(pt.signature);
     sequence.push_back(pt.sequence);
@@ -114,6 +118,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   col("sticking_fraction", sp);
   col("x_B", xb);
   col("section_phase", phase);
+  t.arrays.push_back({"strobe", {N, contacts}, strobe});
   col("max_multiplier", lead);
   col("stable", stable, 'u');
   t.arrays.push_back({"multipliers", {N, m, 2}, mu});

@@ -266,6 +266,14 @@ std::string ValidationJson(const std::vector<PointCheck>& checks) {
 }
 
 namespace {
+
+// A branch point's stroboscopic state, one entry per contact (null: not simulated).
+nlohmann::json StrobeJson(const std::vector<double>& strobe) {
+  auto a = nlohmann::json::array();
+  for (const double x : strobe) a.push_back(std::isfinite(x) ? nlohmann::json(x) : nlohmann::json());
+  return a;
+}
+
 nlohmann::json BranchObject(const Branch& b) {
   nlohmann::json j;
   j["status"] = b.status;
@@ -287,7 +295,8 @@ nlohmann::json BranchObject(const Branch& b) {
                       {"events", pt.signature},
                       {"sequence", pt.sequence},
                       {"x_B", pt.x_B},
-                      {"section_phase", pt.section_phase}});
+                      {"section_phase", pt.section_phase},
+                      {"strobe", StrobeJson(pt.strobe)}});
     AddPointLoads(points.back(), pt.loads, pt.loads_note);
   }
   j["points"] = points;
