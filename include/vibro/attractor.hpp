@@ -66,6 +66,16 @@ class AttractorRecorder final : public Observer {
   // repeats no earlier one within run.period_tolerance (most calls during a transient).
   bool Settled(double remainder) const;
 
+  // The event log is bounded (memory for any input, e.g. a tiny clearance with 10⁹ impacts per
+  // time unit): past `max_events` the oldest events are dropped, and with them every section
+  // point whose windows they belonged to, so that the classification looks only at periods whose
+  // events are all kept (a record of fewer periods: "not-periodic" when not even one is whole).
+  // The default is what fits in 256 MB; counts and loads are not the recorder's and stay whole.
+  static constexpr size_t kDefaultMaxEvents = (size_t{256} << 20) / sizeof(Event);
+  void set_max_events(size_t n) { max_events_ = n < 1 ? 1 : n; }
+  // Events dropped so far by the bound (0 on every run whose record fits).
+  long long events_dropped() const { return events_dropped_; }
+
  private:
   struct Section {
     long long k;
@@ -88,6 +98,8 @@ class AttractorRecorder final : public Observer {
   double tolerance_;
   std::deque<Section> sections_;
   std::deque<Event> events_;
+  size_t max_events_ = kDefaultMaxEvents;
+  long long events_dropped_ = 0;
   // Ring of the last section points (2n values and the mode each), oldest at ring_next_ once full;
   // it grows with the record, so a short run allocates only what it records.
   std::vector<double> ring_;

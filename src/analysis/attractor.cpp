@@ -16,7 +16,17 @@ AttractorRecorder::AttractorRecorder(const System& system, const Scene& scene)
       max_period_(scene.run.max_period),
       tolerance_(scene.run.period_tolerance) {}
 
-void AttractorRecorder::OnEvent(const Event& e) { events_.push_back(e); }
+void AttractorRecorder::OnEvent(const Event& e) {
+  if (events_.size() >= max_events_) {
+    // The oldest event goes, and every section point that begins a window holding it: a window
+    // (k·T, …] starting at a kept point k > period of the dropped event has all its events.
+    const long long dropped = events_.front().clock.period;
+    events_.pop_front();
+    ++events_dropped_;
+    while (!sections_.empty() && sections_.front().k <= dropped) sections_.pop_front();
+  }
+  events_.push_back(e);
+}
 
 void AttractorRecorder::OnSection(const Sample& s) {
   const auto keep = static_cast<size_t>(4 * max_period_ + 2);  // four windows of the longest period

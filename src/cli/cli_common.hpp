@@ -45,9 +45,11 @@ using vibro::frontend::NotANumericKey;
 // `vibro model SCENE` (cmd_model.cpp).
 int RunModel(const std::string& path, const std::vector<std::string>& sets, bool json);
 
-// `vibro simulate SCENE [--out FILE [--resume | --extend N]]` (cmd_simulate.cpp); extend 0: none.
+// `vibro simulate SCENE [--out FILE [--resume | --extend N]]` (cmd_simulate.cpp); extend 0: none;
+// time_limit: seconds for the whole run (0: none), see frontend/run_budget.hpp.
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume, long long extend, int blocks = 10);
+                const std::string& out, bool resume, long long extend, int blocks = 10,
+                double time_limit = 86400.0);
 
 // `vibro orbit SCENE` (cmd_orbit.cpp).
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,

@@ -10,6 +10,7 @@
 #include "cli/cli_common.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signals.hpp"
+#include "frontend/run_budget.hpp"
 #include "frontend/run_output.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -21,7 +22,7 @@
 #include "vibro/system.hpp"
 
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume, long long extend, int blocks) {
+                const std::string& out, bool resume, long long extend, int blocks, double time_limit) {
   vibro::frontend::RunContinuation how;
   how.resume = resume;
   if (extend > 0) how.extend = extend;
@@ -45,6 +46,9 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);
   vibro::cli::PeriodProgress periods(*progress, loaded.scene.run.periods);
   if (progress->active()) options.observers.push_back(&periods);
+  // The time and disk limits against the run's event rate: LimitError, exit 3 (main.cpp).
+  vibro::frontend::RunBudget budget(sys, loaded.scene, time_limit, out, "--time-limit");
+  options.observers.push_back(&budget);
   const auto result = vibro::Simulate(sys, loaded.scene, options);
   progress.reset();
   const auto attractor = recorder.Classify();

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <new>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "cli/stop_signals.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
+#include "frontend/run_budget.hpp"
 #include "vibro/child_process.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/poincare.hpp"
@@ -101,6 +103,7 @@ int main(int argc, char** argv) {
   bool resume = false;
   long long extend = 0;
   int blocks = 10;
+  double simulate_time_limit = vibro::frontend::RunBudget::kDefaultTimeLimit;
   if (Wanted(simulate)) {
     add_scene_options(simulate);
     simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
@@ -110,6 +113,11 @@ int main(int argc, char** argv) {
     simulate->add_option("--blocks", blocks,
                          "batch means of the contact loads over N blocks of periods (docs/loads.md; default 10)")
         ->check(CLI::Range(2, 100000));
+    simulate->add_option("--time-limit", simulate_time_limit,
+                         "seconds for the whole run (default 86400, one day; 0: none): a run whose event rate "
+                         "would take it past the limit, or past its disk's free space with --out, ends at once "
+                         "with exit 3")
+        ->check(CLI::Range(0.0, 1e12));
   }
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
@@ -347,7 +355,8 @@ int main(int argc, char** argv) {
 
   try {
     if (*model) return RunModel(scene_path, sets, json);
-    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks);
+    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
+                                        simulate_time_limit);
     if (*info) return RunInfo(file_path, json);
     if (*orbit) {
       orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact
@@ -431,6 +440,12 @@ int main(int argc, char** argv) {
   } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
     fmt::print(stderr, "vibro: {}; nothing was written\n", OneLine(e.what()));
     return kExitInterrupted;
+  } catch (const vibro::frontend::LimitError& e) {  // an event rate past the run's limits
+    fmt::print(stderr, "vibro: {}\n", OneLine(e.what()));
+    return kExitNumerical;
+  } catch (const std::bad_alloc&) {  // no input gives exit 1: memory is a limit like time
+    fmt::print(stderr, "vibro: out of memory (the system refused an allocation); what was written is kept\n");
+    return kExitNumerical;
   } catch (const std::exception& e) {
     fmt::print(stderr, "vibro: internal error: {}\n", OneLine(e.what()));
     return kExitInternal;

@@ -110,7 +110,7 @@ def hang_then_stop(name, args, flush, out, grace=GRACE):
 
 default = os.path.join(scenes, "default.toml")
 out = os.path.join(tmp, "simulate.h5")
-hang_then_stop("simulate", ["simulate", default, "--set", "run.periods=100000000", "--out", out],
+hang_then_stop("simulate", ["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000", "--out", out],
                3, out)
 # A basin's flushes: 1 at creation, 2 after each batch of cells (one batch here: 64 cells, under
 # the first batch's 256 on any machine), 3 in the final write (the label map and the attractor

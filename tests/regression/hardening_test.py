@@ -142,8 +142,8 @@ def interrupt(args, delay, sig=signal.SIGTERM, repeat=1, gap=0.0, after=None):
 
 # ---- stop requests, every long command, several moments ----
 long_commands = {
-    "simulate": (["simulate", default, "--set", "run.periods=100000000"], "/section/t"),
-    "simulate-cvode": (["simulate", default, "--set", "run.periods=100000000", "--set", 'run.engine="cvode"'],
+    "simulate": (["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000"], "/section/t"),
+    "simulate-cvode": (["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000", "--set", 'run.engine="cvode"'],
                        "/section/t"),
     "continue": (["continue", chain3, "--param", "excitation.frequency", "--to", "0.3", "--step", "1e-4",
                   "--max-points", "100000"], "/branch/value"),
@@ -199,7 +199,7 @@ for gap in (0.0, 0.002, 0.02, 0.1):
     out = os.path.join(tmp, "double.h5")
     if os.path.exists(out):
         os.remove(out)
-    rc, took, err = interrupt(["simulate", default, "--set", "run.periods=100000000", "--out", out], 0.5,
+    rc, took, err = interrupt(["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000", "--out", out], 0.5,
                               signal.SIGINT, repeat=2, gap=gap, after=file_exists(out))
     check(f"two SIGINTs {gap} s apart: exit 130", rc == 130, f"{rc} {err[-300:]}")
     with h5py.File(out, "r") as f:
@@ -375,10 +375,10 @@ check("failing sweep: the last point has the run's status and no period",
 
 # ---- corrupt files given to --resume: exit 2, file untouched ----
 run_file = os.path.join(tmp, "run.h5")
-rc, _, _ = interrupt(["simulate", default, "--set", "run.periods=100000000", "--out", run_file], 0.5,
+rc, _, _ = interrupt(["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000", "--out", run_file], 0.5,
                     after=file_exists(run_file))
 check("resume source: interrupted run", rc == 130 and status(run_file) == "interrupted", rc)
-resume_args = ["simulate", default, "--set", "run.periods=100000000", "--resume", "--out"]
+resume_args = ["simulate", default, "--time-limit", "0", "--set", "run.periods=100000000", "--resume", "--out"]
 
 wide = os.path.join(tmp, "wide.h5")
 shutil.copy(run_file, wide)

@@ -19,7 +19,8 @@ from checks import check, finish  # noqa: E402
 
 vibro, scenes = sys.argv[1], sys.argv[2]
 fig8 = os.path.join(scenes, "fig08_preload.toml")
-endless = ["simulate", fig8, "--set", "run.periods=1000000000", "--set", "run.samples_per_period=0"]
+endless = ["simulate", fig8, "--set", "run.periods=1000000000", "--set", "run.samples_per_period=0", "--time-limit",
+           "0"]
 LINE_SECONDS = 5.0
 
 # --- stderr a pipe: whole lines ----------------------------------------------------------------------

@@ -129,6 +129,56 @@ TEST(Hardening, EventLogOfTheWholeWindowMustRepeat) {
   }
 }
 
+// The event log is bounded (issue 38: a tiny clearance gives 10⁹ impacts per time unit): the
+// motion that sticks every 7 periods, now with 200 impacts a period. With room for 40 periods of
+// events the oldest are dropped and the classification is that of the whole record (period 7,
+// sticking fraction 0.2/7); with room for only 15 periods (fewer than the three windows of 7 a
+// period needs) or less than one period, no period is claimed: the kept record is too short,
+// and never a wrong one (period 1 from two alike periods).
+TEST(Hardening, BoundedEventLogClassifiesOnlyWholePeriods) {
+  const Scene scene = TwoDof(1.3);
+  const System sys(scene);
+  const double T = sys.period();
+  const Eigen::VectorXd z = (Eigen::VectorXd(4) << 0.4, 0.1, -0.2, 0.3).finished();
+  constexpr int kImpacts = 200;
+  const auto run = [&](size_t max_events, long long K, AttractorRecorder& rec) {
+    rec.set_max_events(max_events);
+    for (long long k = 0; k <= K; ++k) {
+      Section(rec, sys, k, z, Mode::kFree);
+      if (k == K) break;
+      const auto kd = static_cast<double>(k);
+      if (k % 7 == 3) {
+        rec.OnEvent({EventKind::kStick, {k, 0.1 * T}, (kd + 0.1) * T, 1.0, 0.0, 0.0});
+        rec.OnEvent({EventKind::kRelease, {k, 0.3 * T}, (kd + 0.3) * T, 1.0, 0.0, 0.0});
+      }
+      for (int i = 0; i < kImpacts; ++i) {
+        const double s = (0.4 + 0.5 * i / kImpacts) * T;
+        rec.OnEvent({EventKind::kImpact, {k, s}, kd * T + s, 1.0, -0.2, 0.15});
+      }
+    }
+  };
+  for (long long K : {300LL, 301LL, 306LL}) {
+    AttractorRecorder rec(sys, scene);
+    run(40 * kImpacts, K, rec);
+    EXPECT_GT(rec.events_dropped(), 0) << "K = " << K;
+    const Attractor a = rec.Classify();
+    ASSERT_TRUE(a.period.has_value()) << "K = " << K;
+    EXPECT_EQ(*a.period, 7) << "K = " << K;
+    EXPECT_EQ(a.kind, "sticking-periodic") << "K = " << K;
+    ASSERT_TRUE(a.sticking_fraction.has_value());
+    EXPECT_NEAR(*a.sticking_fraction, 0.2 / 7, 1e-12) << "K = " << K;
+  }
+  for (size_t room : {size_t{15 * kImpacts}, size_t{kImpacts / 2}, size_t{1}}) {
+    AttractorRecorder rec(sys, scene);
+    run(room, 301, rec);
+    const Attractor a = rec.Classify();
+    EXPECT_FALSE(a.period.has_value()) << "room " << room << ", period " << a.period.value_or(0);
+    EXPECT_EQ(a.kind, "not-periodic") << "room " << room;
+  }
+  // Unbounded by default for every record that fits in 256 MB.
+  EXPECT_GE(AttractorRecorder::kDefaultMaxEvents * sizeof(Event), size_t{250} << 20);
+}
+
 // Studies classify short records (a cell stopped early, fewer than the 4·max_period + 1 = 129
 // periods the recorder can hold): the motion that sticks every 7 periods is never "period 1"
 // there either: it is period 7 once the record holds three windows of 7 periods (22 section
