@@ -1393,7 +1393,7 @@ NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
 
 def summary_shape(s, n):
     """The summary's form, before any proof is checked (a malformed one is refused at once)."""
-    s.obj(SUMMARY_KEYS, ("stability_note",))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
     s["verdict"].text(("proven",))
     s["kind"].text(("impact", "sticking"))
     s["period"].integer(1, 1 << 20)
@@ -1425,7 +1425,7 @@ def summary_shape(s, n):
 
 def check_summary(cert, s, truth, m):
     """Every claim of the summary against the checker's truth."""
-    s.obj(SUMMARY_KEYS, ("stability_note",))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
     s["verdict"].text(("proven",))
     if s["kind"].text() != truth.kind:
         raise NotConfirmed(f"{s['kind'].path}: '{s['kind'].v}', the orbit proven is of kind '{truth.kind}'")
@@ -1508,7 +1508,21 @@ def check_summary(cert, s, truth, m):
     if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
             truth.multipliers == "zero":
         raise NotConfirmed(f"{s['stability_note'].path}: '{note}' is not about this orbit")
-    truth.reason(s["reason"], s["reason"].text())
+    # Asked for a period Q that the least period divides: the orbit is also the period-Q orbit, and
+    # the reason says so (docs/prove.md "The period is the least period").
+    text = s["reason"].text()
+    if s.has("requested_period"):
+        Q = s["requested_period"].integer(2, 1 << 20)
+        if Q <= period or Q % period:
+            raise NotConfirmed(f"{s['requested_period'].path}: {Q} is not a multiple of the least period {period} "
+                               f"above it")
+        suffix = f"; its least period {period} divides the requested period {Q}, so it is also the period-{Q} orbit"
+        if not text.endswith(suffix):
+            raise NotConfirmed(f"{s['reason'].path}: does not end with '{suffix}'")
+        text = text[:-len(suffix)]
+    elif "; its least period" in text:
+        raise NotConfirmed(f"{s['reason'].path}: states a requested period the summary does not have")
+    truth.reason(s["reason"], text)
 
 
 # ---- One certificate --------------------------------------------------------------------------
@@ -1535,7 +1549,7 @@ def check(node):
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]
-    s.obj(SUMMARY_KEYS, ("stability_note",))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
     for key in ("verdict", "reason", "kind", "period"):
         if node[key].v != s[key].v or type(node[key].v) is not type(s[key].v):
             raise NotConfirmed(f"{node[key].path} = {node[key].v!r} and {s[key].path} = {s[key].v!r} differ")

@@ -942,6 +942,30 @@ def parse_size(value):
     return (w, h)
 
 
+MAX_TITLE = 500  # characters: a longer title does not fit any picture
+
+
+def check_title(title, font_size):
+    """--title: typeset once before anything is drawn (matplotlib's mathtext between $ signs), so
+    that a title it cannot typeset, or one too long for a picture, is refused naming the title
+    (exit 2, nothing written) instead of failing in the middle of the pictures."""
+    if not title:
+        return
+    shown = repr(title if len(title) <= 60 else title[:57] + "...")
+    if len(title) > MAX_TITLE:
+        refuse(f"--title {shown}: {len(title)} characters, at most {MAX_TITLE} (a title longer than any "
+               "picture is wide)")
+    fig = plt.figure(figsize=(6.0, 4.0))
+    try:
+        fig.suptitle(title, fontsize=font_size)
+        fig.canvas.draw()
+    except Exception as e:  # noqa: BLE001 (mathtext raises ValueError, fonts RuntimeError, ...)
+        first = str(e).strip().splitlines()[0] if str(e).strip() else ""
+        refuse(f"--title {shown}: matplotlib cannot typeset it ({type(e).__name__}: {first})")
+    finally:
+        plt.close(fig)
+
+
 def read_everything(path):
     """Reads every attribute and dataset of the file (raises what h5py raises on damage)."""
     def visit(_name, obj):
@@ -968,12 +992,15 @@ def main():
     ap.add_argument("--font-size", type=float, default=10.0, help="font size in points")
     ap.add_argument("--coordinate", default="x_B", help="x_B, X1..Xn (modal) or q0..q(N-1) (physical)")
     args = ap.parse_args()
+    if not 10 <= args.dpi <= 2400:
+        refuse(f"--dpi {args.dpi}: expected 10 to 2400 dots per inch")
     if args.size is not None:
         OPTIONS["size"] = parse_size(args.size)
     if not (np.isfinite(args.font_size) and 1 <= args.font_size <= 72):
         print(f"vibro plot: --font-size {args.font_size:g}: expected a size in points, 1 to 72", file=sys.stderr)
         sys.exit(2)
     OPTIONS["title"], OPTIONS["font_size"] = args.title, args.font_size
+    check_title(args.title, args.font_size)
     # Editable text: SVG keeps <text> elements and PDF embeds TrueType fonts, not glyph outlines.
     matplotlib.rcParams.update({"svg.fonttype": "none", "pdf.fonttype": 42, "ps.fonttype": 42,
                                 "font.size": args.font_size, "axes.formatter.useoffset": False})
@@ -1008,12 +1035,17 @@ def main():
         print(f"vibro plot: {args.file}: a corrupt file ({type(e).__name__}: {e}); nothing was written",
               file=sys.stderr)
         sys.exit(2)
-    try:
-        draw(args, save, window)
-    except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+    def remove_written():
         for w in written:
             if os.path.exists(w):
                 os.remove(w)
+    try:
+        draw(args, save, window)
+    except SystemExit:
+        remove_written()  # a refusal after a picture: nothing is kept either
+        raise
+    except (OSError, KeyError, ValueError, IndexError, TypeError) as e:
+        remove_written()
         print(f"vibro plot: {args.file}: cannot be drawn, its data are damaged ({type(e).__name__}: {e}); "
               "nothing was written", file=sys.stderr)
         sys.exit(2)
@@ -1292,21 +1324,37 @@ def plot_loads(f, title, save):
     save(fig, "loads")
 
 
+def refuse(message):
+    """Bad input: one line, exit 2 (main() removes any picture written)."""
+    print(f"vibro plot: {message}", file=sys.stderr)
+    sys.exit(2)
+
+
+def check_options(f, args, window):
+    """Every option checked against the file before anything is drawn: a refused plot writes
+    nothing (docs/cli.md)."""
+    dense = "samples" in f and len(f["samples/t"]) > 1
+    if args.coordinate != "x_B":
+        why = coordinate_error(f, args.coordinate)
+        if why is None and not dense:
+            why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
+        if why is not None:
+            refuse(f"--coordinate {args.coordinate}: {why}")
+    if args.overlay and "sweep" not in f:
+        refuse(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over")
+    if dense:
+        time_window(f["samples/t"][:], float(f.attrs["forcing_period"]), window)
+
+
 def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
+        check_options(f, args, window)
         varied = set()
         for g, attr in (("branch", "param"), ("sweep", "param"), ("partition", "param1"),
                         ("partition", "param2")):
             if g in f:
                 varied.add(text(f[g].attrs[attr]))
         title = make_title(f, varied)
-        if args.coordinate != "x_B":
-            why = coordinate_error(f, args.coordinate)
-            if why is None and len(f["samples/t"]) < 2:
-                why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
-            if why is not None:
-                print(f"vibro plot: --coordinate {args.coordinate}: {why}", file=sys.stderr)
-                sys.exit(2)
         if "basin" in f:
             plot_basin(f, title, save)
         if "branch" in f:
@@ -1317,9 +1365,6 @@ def draw(args, save, window):
             plot_partition_loads(f, title, save)
         if "sweep" in f:
             plot_sweep(f, title, save, args.overlay)
-        elif args.overlay:
-            print(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over", file=sys.stderr)
-            sys.exit(2)
         if "events" in f and "impulse" in f["events"]:
             plot_loads(f, title, save)
         contacts = scene_contacts(f)

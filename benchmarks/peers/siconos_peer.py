@@ -1,36 +1,39 @@
 #!/usr/bin/python3
-"""The scenes with Siconos (Debian python3-siconos 4.4): Moreau–Jean time-stepping and the
-event-driven scheme (EventDriven + LsodarOSI), against vibro.
+"""The scenes with Siconos (Debian python3-siconos 4.4): Moreau–Jean time-stepping (and, on
+request, the event-driven scheme EventDriven + LsodarOSI), against vibro.
 
 The model is the modal system of problem.py written as a LagrangianLinearTIDS with the modal
-masses (M = diag(1/T_B), K = diag(ω²/T_B), C = diag(2ζω/T_B)), the force (T_A/T_B) f sin ωt
-(a Python override of computeFExt, SWIG director) and one Interaction: LagrangianLinearTIR with
-y = 1ᵀX − x0 ≥ 0 and a NewtonImpactNSL with the scene's restitution r.
+masses (M = diag(1/T_B), K = diag(ω²/T_B), C = diag(2ζω/T_B)) and one Interaction per contact:
+LagrangianLinearTIR with y_j = c_jᵀX − e_j ≥ 0 and a NewtonImpactNSL with the contact's
+restitution. The force (T_A/T_B) f sin ωt is a Siconos plugin, compiled C
+(benchmarks/peers/forcing_plugin.c, built once by build_plugin and attached with
+setComputeFExtFunction, its parameters in the system's z vector), as Siconos' own examples do: no
+Python is called while Siconos integrates, only between steps to read the impulses.
 
-Moreau–Jean (θ = 0.5, LCP at velocity level, fixed step h = T/steps): no events; the contact
-is "on" in the steps where the LCP impulse λ is positive. Stick/release milestones are the
-changes of this state that last at least 3 steps (a chattering impact is one "on" step), dated at
-the first step of the change; the sticking fraction is the share of "on" steps of the last periods.
+Moreau–Jean (θ = 0.5, LCP at velocity level, fixed step h = T/steps): no events; a contact is
+"on" in the steps where its LCP impulse λ is positive. Stick/release milestones of each contact
+are the changes of this state that last at least 3 steps (a chattering impact is one "on" step),
+dated at the first step of the change; the milestones of all contacts are merged in time order.
 
-Event-driven (LSODAR with root finding, an impact LCP and an acceleration-level LCP): the
-contact sticks when the post-impact velocity is below the simulation's TOL_ED and leaves when
-the acceleration-level contact force λ₂ vanishes. Milestones are the changes of index set 2
-(the "sticking" set). Two measures are needed to get it running at all on this model:
+Event-driven (LSODAR with root finding, an impact LCP and an acceleration-level LCP; one contact
+only): the contact sticks when the post-impact velocity is below the simulation's TOL_ED and
+leaves when the acceleration-level contact force λ₂ vanishes. Milestones are the changes of index
+set 2 (the "sticking" set). Two measures are needed to get it running at all on this model:
   * LsodarOSI.computeRhs(t_event) before processEvents: without it EventDriven 4.4 throws in
     updateIndexSetsWithDoubleCondition at the first sticking entry of any system with a
-    stiffness (it works for the bouncing ball under gravity, which has none; see README);
+    stiffness (it works for the bouncing ball under gravity, which has none; --diagnose);
   * setMaxNstep(1e5): sticking phases need many LSODAR steps per call.
 LsodarOSI.setTol(itol, rtol, atol) of 4.4 sets atol = rtol (its atol argument is ignored);
 TOL_ED is a static member of EventDriven, so it is set before every run.
 
 Standalone: benchmarks/peers/siconos_peer.py [--vibro build/vibro] [--scenes a.toml,b.toml]
-            benchmarks/peers/siconos_peer.py --diagnose   (the evidence quoted in the README)
+            benchmarks/peers/siconos_peer.py --diagnose   (the event-driven scheme's failures)
 (benchmarks/peers/run_all.py runs it beside vibro and SciPy and writes the table.)
 """
 import argparse
-import math
 import os
 import re
+import subprocess
 import sys
 import tempfile
 import time
@@ -40,8 +43,21 @@ import siconos.kernel as sk
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from bench_common import DEFAULT_VIBRO, cpu_self, milestone_error, run_vibro  # noqa: E402
+from bench_common import DEFAULT_VIBRO, ROOT, cpu_self, milestone_error, run_vibro  # noqa: E402
 from problem import PeerResult, Problem  # noqa: E402
+
+PLUGIN_SOURCE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "forcing_plugin.c")
+PLUGIN_DIR = os.path.join(ROOT, "build", "peers")
+
+
+def build_plugin(directory=PLUGIN_DIR):
+    """Compiles forcing_plugin.c into DIRECTORY/forcing_plugin.so (when missing or older than the
+    source); returns the path without the extension, as Siconos takes it."""
+    os.makedirs(directory, exist_ok=True)
+    so = os.path.join(directory, "forcing_plugin.so")
+    if not os.path.exists(so) or os.path.getmtime(so) < os.path.getmtime(PLUGIN_SOURCE):
+        subprocess.run(["cc", "-O2", "-shared", "-fPIC", "-o", so, PLUGIN_SOURCE, "-lm"], check=True)
+    return so[:-3]
 
 
 class _CaptureStdout:
@@ -64,58 +80,57 @@ class _CaptureStdout:
         return False
 
 
-def _system(p):
+def _system(p, plugin):
     M, K, C, force_vec = p.lagrangian()
-    f, omega = p.f, p.omega
-
-    class Forced(sk.LagrangianLinearTIDS):
-        def computeFExt(self, t, fExt=None):
-            value = force_vec * (f * math.sin(omega * t))
-            target = fExt if fExt is not None else self.fExt()
-            for i, v in enumerate(value):
-                target[i] = v
-
-    ds = Forced(p.X0.copy(), p.V0.copy(), M, K, C)
-    ds.setFExtPtr(np.zeros(p.n))
-    inter = sk.Interaction(sk.NewtonImpactNSL(p.r),
-                           sk.LagrangianLinearTIR(np.ones((1, p.n)), np.array([-p.x0])))
+    ds = sk.LagrangianLinearTIDS(p.X0.copy(), p.V0.copy(), M, K, C)
+    ds.setzPtr(np.concatenate(([p.f, p.omega], force_vec)))
+    ds.setComputeFExtFunction(plugin, "forcing")
+    inters = [sk.Interaction(sk.NewtonImpactNSL(float(p.r[j])),
+                             sk.LagrangianLinearTIR(p.C[j].reshape(1, p.n), np.array([-p.e[j]])))
+              for j in range(p.m)]
     nsds = sk.NonSmoothDynamicalSystem(0.0, p.t_end)
     nsds.insertDynamicalSystem(ds)
-    nsds.link(inter, ds)
-    return ds, inter, nsds
+    for inter in inters:
+        nsds.link(inter, ds)
+    return ds, inters, nsds
 
 
-def moreau_jean(p, steps_per_period, last_periods=5, min_run=3):
+def moreau_jean(p, steps_per_period, plugin=None, last_periods=5, min_run=3):
     res = PeerResult()
     c0 = cpu_self()
-    ds, inter, nsds = _system(p)
+    ds, inters, nsds = _system(p, plugin or build_plugin())
     h = p.T / steps_per_period
     s = sk.TimeStepping(nsds, sk.TimeDiscretisation(0.0, h), sk.MoreauJeanOSI(0.5), sk.LCP())
-    state, run_start, run_len = False, 0.0, 0  # debounced contact state, run of the other value
+    m = p.m
+    state, run_start, run_len = [False] * m, [0.0] * m, [0] * m  # debounced state, run of the other value
     on_steps = total = 0
     t_last = p.t_end - last_periods * p.T
+    milestones = []
     t = 0.0
     try:
         while s.hasNextEvent():
             s.computeOneStep()
             t = s.nextTime()
-            on = inter.lambda_(1)[0] > 0
-            if t > t_last + 0.5 * h:
-                total += 1
-                on_steps += on
-            if on != state:
-                if run_len == 0:
-                    run_start = t - h
-                run_len += 1
-                if run_len == min_run:
-                    (res.stick if on else res.release)(run_start)
-                    state, run_len = on, 0
-            else:
-                run_len = 0
+            for j, inter in enumerate(inters):
+                on = inter.lambda_(1)[0] > 0
+                if j == 0 and t > t_last + 0.5 * h:
+                    total += 1
+                    on_steps += on
+                if on != state[j]:
+                    if run_len[j] == 0:
+                        run_start[j] = t - h
+                    run_len[j] += 1
+                    if run_len[j] == min_run:
+                        milestones.append((run_start[j], 3 if on else 4, j))
+                        state[j], run_len[j] = on, 0
+                else:
+                    run_len[j] = 0
             s.nextStep()
         res.end = (np.array(ds.q()).copy(), np.array(ds.velocity()).copy())
     except Exception as e:  # noqa: BLE001 (SWIG raises a bare std::exception)
         res.status = f"exception at t = {t:.6g}: {e}"
+    for tm, kind, j in sorted(milestones):
+        (res.stick if kind == 3 else res.release)(tm, j)
     res.t_reached = t
     res.sp_steps = on_steps / max(total, 1)
     res.cpu = cpu_self() - c0
@@ -123,11 +138,13 @@ def moreau_jean(p, steps_per_period, last_periods=5, min_run=3):
 
 
 def event_driven(p, rtol=None, tol_ed=1e-6, td_steps=16, max_steps=100000, wall_limit=60.0,
-                 fix_free_acceleration=True):
-    """rtol None keeps LsodarOSI's default tolerances (rtol 10ε, atol 100ε)."""
+                 fix_free_acceleration=True, plugin=None):
+    """rtol None keeps LsodarOSI's default tolerances (rtol 10ε, atol 100ε). One contact only."""
+    if p.m != 1:
+        raise ValueError("the event-driven peer takes one contact")
     res = PeerResult()
     c0, w0 = cpu_self(), time.time()
-    ds, inter, nsds = _system(p)
+    ds, _, nsds = _system(p, plugin or build_plugin())
     s = sk.EventDriven(nsds, sk.TimeDiscretisation(0.0, p.T / td_steps))
     osi = sk.LsodarOSI()
     s.insertIntegrator(osi)
@@ -224,7 +241,7 @@ def diagnose(vibro):
     ref8 = run_vibro(vibro, "fig08_preload.toml", 2, ['run.engine="exact"', "run.chatter_switch=1e-9"])
     print("   (vibro's first sticks on Fig. 8: " + ", ".join(f"{t:.5f}" for t, k in zip(*ref8.events) if k == 3) + ")")
     for scene in ("fig08_preload.toml", "fig11_clearance.toml"):
-        p = Problem(vibro, scene, periods=6)
+        p = Problem.from_vibro(vibro, scene, periods=6)
         ref = run_vibro(vibro, scene, p.periods, ['run.engine="exact"', "run.chatter_switch=1e-9"])
         res = event_driven(p, 1e-8, td_steps=16)
         h = p.T / 16
@@ -248,14 +265,14 @@ def main():
         return
     print(f"{'scene':24s} {'scheme':14s} {'CPU [s]':>8s} {'error/T':>9s}  status")
     for scene in args.scenes.split(","):
-        p = Problem(args.vibro, scene, periods=args.periods)
+        p = Problem.from_vibro(args.vibro, scene, periods=args.periods)
         ref = run_vibro(args.vibro, scene, p.periods, ['run.engine="exact"', "run.chatter_switch=1e-9"])
         print(f"{scene:24s} {'vibro exact':14s} {ref.cpu:8.3f} {0.0:9.1e}  (whole process)")
         for steps in (100, 1000, 10000):
             res = moreau_jean(p, steps)
             err = milestone_error(res.times[:12], ref.milestones(12), p.T)
             print(f"{scene:24s} {'MJ T/' + str(steps):14s} {res.cpu:8.3f} {err:9.1e}  {res.status}", flush=True)
-        for rtol in (None, 1e-6, 1e-8, 1e-10):
+        for rtol in ((None, 1e-6, 1e-8, 1e-10) if p.m == 1 else ()):
             res = event_driven(p, rtol)
             err = milestone_error(res.times[:12], ref.milestones(12), p.T)
             print(f"{scene:24s} {'ED ' + (f'{rtol:g}' if rtol else 'default'):14s} {res.cpu:8.3f} {err:9.1e}  "

@@ -27,8 +27,11 @@ namespace vibro {
 struct LyapunovSpectrum {
   // Per unit time, largest first, 2n of them; −∞ for directions collapsed by sticking.
   std::vector<double> exponents;
-  // 95 % confidence interval of each exponent from the block means (Student's t); equal to
-  // (−∞, −∞) for a collapsed direction, empty when there are fewer than two blocks.
+  // 95 % interval of each exponent (docs/model.md §5.8): the larger of the batch-means interval
+  // of the block means (Student's t) and the bound of the boundary term (the deviation of the
+  // running sum from its chord: a periodic or quasi-periodic motion), widened by the rounding of
+  // the tangent maps; equal to (−∞, −∞) for a collapsed direction, empty when there are fewer
+  // than two blocks.
   std::vector<std::pair<double, double>> ci;
   long long periods = 0;  // forcing periods measured (the second half of the run)
   int blocks = 0;         // blocks of periods behind the interval
@@ -49,6 +52,7 @@ class LyapunovObserver final : public Observer {
 
  private:
   static constexpr int kBlocks = 10;
+  static constexpr double kRoundingMargin = 4;
   void EndPeriod(long long k);
   TangentTracker tangent_;
   double period_;            // T
@@ -73,6 +77,24 @@ class LyapunovObserver final : public Observer {
   Eigen::MatrixXd block_sums_;  // Σ log|R_ii| per block, (2n, kBlocks)
   Eigen::VectorXi block_periods_;
   long long measured_ = 0, singular_ = 0;
+
+  // The boundary term (docs/model.md §5.8): per exponent, the upper and lower convex hulls of the
+  // points (n, S_n), S_n = Σ log|R_ii| over the first n periods measured, so that the largest
+  // and smallest deviation of S_n from the chord S_N·n/N are known for the final N without
+  // keeping every S_n. At most kHullCap vertices each (beyond, every other interior vertex is
+  // dropped: the deviation is then found among the vertices kept).
+  static constexpr size_t kHullCap = 256;
+  struct Hull {
+    std::vector<std::pair<double, double>> upper, lower;  // (n, S_n), n increasing
+    double sum = 0, abs_sum = 0;                          // S_n and Σ|log|R_ii|| so far
+  };
+  void AddToHulls(Eigen::Index i, double log_r);
+  std::vector<Hull> hulls_;
+  // Rounding: Σ over the periods measured of ‖J‖_F·(factors + 1) / |R_ii|, per exponent: a
+  // perturbation δJ of the period's tangent map moves log|R_ii| by at most ‖δJ‖ / |R_ii| (first
+  // order), and δJ grows with the number of factors of the map.
+  Eigen::VectorXd rounding_;
+  long long factors_ = 0;  // stretches and resets applied to the frame since the period began
 };
 
 }  // namespace vibro

@@ -66,7 +66,10 @@ struct ProofResult {
   bool interrupted = false;
   std::string reason;            // not proven: which inequality failed, where; proven: what holds
   std::string kind;              // "impact" or "sticking" ("" when no proof was attempted)
-  int period = 0;                // forcing periods (0 when unknown)
+  int period = 0;                // forcing periods (0 when unknown): the orbit's least period
+  // --period Q of an orbit whose least period `period` divides Q: Q (the orbit is proven, and is
+  // also the period-Q orbit); 0 otherwise.
+  int requested_period = 0;
   std::vector<ProvenEvent> events;                      // one period, in time order
   std::vector<std::pair<Enclosure, Enclosure>> multipliers;  // (re, im) of each Floquet multiplier
   std::string stability = "undecided";  // "stable" | "unstable" | "undecided"

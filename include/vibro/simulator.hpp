@@ -16,6 +16,10 @@
 //                    certified root over all gaps) or t hits the period boundary (the engine never
 //                    skips a root; trivial roots at the start of a flight are divided out per gap,
 //                    docs/model.md §2.1)
+//                    A gap's start kind holds while the gap is 0: a segment that opens it makes
+//                    it generic (a zero divided out where there is none would skip the next root)
+//       impacts alternating between two contacts, each closing slower, flights < 1e-9 T, more
+//                    than three in a row → undetermined (two contacts chattering to one point)
 //       several gaps 0 at one instant (within rounding), closing → the impact LCP on them
 //                    (docs/contacts.md): emit an impact per contact, flagged simultaneous; the
 //                    contacts left at rest → the acceleration LCP (rest) below
@@ -57,6 +61,8 @@
 //                    with g = g' = g'' = 0, g''' > 0 under the flow of the others
 //       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
 //       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, docs/model.md §5.7): stay stuck
+//     start on several stops (gaps closed within double's rounding, whatever the precision):
+//                    those moving away leave, the others → rest below
 //     rest (contacts Z0 at zero gap and zero gap velocity): project onto them, solve the
 //                    acceleration LCP a = a⁰ + Wλ, 0 ≤ λ ⊥ a ≥ 0: λ_j > 0 → stick (emit stick for
 //                    the new ones), else leave at zero velocity (emit release if it was held);

@@ -137,13 +137,14 @@ class SigintGuard {
 };
 
 // Progress reported to a Python callable progress(done, total) from any thread of a computation
-// (the GIL released): at most every kInterval seconds, the GIL taken for the call, the calls of
+// (the GIL released): kInterval seconds or more after the end of the previous call (never a call
+// due at once when a slow one returns: the work goes on between calls), the GIL taken for the call, the calls of
 // several threads serialised (a thread finding another one calling skips its report). An
 // exception raised by the callable stops the computation (as Ctrl-C does) and is raised again by
 // Finish(), after one last report of the state reached, with the GIL held.
 class ProgressRelay {
  public:
-  static constexpr double kInterval = 0.1;  // at most ten calls a second
+  static constexpr double kInterval = 0.1;  // at least this long between two calls
 
   ProgressRelay(py::object callback, SigintGuard& guard) : callback_(std::move(callback)), guard_(guard) {}
   ProgressRelay(const ProgressRelay&) = delete;
@@ -167,10 +168,11 @@ class ProgressRelay {
     std::unique_lock lock(mutex_, std::try_to_lock);
     if (!lock.owns_lock()) return;
     if (!Take()) return;
-    const auto now = Clock::now();
-    if (failed_ || std::chrono::duration<double>(now - last_).count() < kInterval) return;
-    last_ = now;
+    if (failed_ || std::chrono::duration<double>(Clock::now() - last_).count() < kInterval) return;
     Call();
+    // The interval counts from the end of the call: a callback slower than kInterval gets fewer
+    // calls, and the computation still has kInterval of every kInterval + (the call's duration).
+    last_ = Clock::now();
   }
 
   // The last report (the state reached), with the GIL held; raises the callback's exception.

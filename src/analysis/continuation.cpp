@@ -300,9 +300,12 @@ NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
     return v;
   };
   const auto on = [&](int c) { return m > 1 ? fmt::format(" on contact {}", c) : std::string(); };
+  // Both sequences: the events per period and, with several contacts, the contact sequences.
   const std::string change =
-      hi ? fmt::format("events per period {} → {}", lo.probe.signature, hi->probe.signature)
-         : fmt::format("events per period {}; the orbit does not go on", lo.probe.signature);
+      hi ? fmt::format("events per period {} → {}{}", lo.probe.signature, hi->probe.signature,
+                       m > 1 ? fmt::format("; contact sequence {} → {}", lo.orbit.sequence, hi->orbit.sequence) : "")
+         : fmt::format("events per period {}{}; the orbit does not go on", lo.probe.signature,
+                       m > 1 ? fmt::format("; contact sequence {}", lo.orbit.sequence) : "");
   if (lo.probe.shortest_stick < 1e-6)
     return {"sticking-lost",
             fmt::format("a sticking phase{} shrinks to zero ({:.1e} of the period); {}", on(lo.probe.at.shortest_stick),
@@ -670,6 +673,15 @@ Branch Continue(const ContinuationRequest& req) {
     return true;
   };
   bool section_fresh = false;  // the section was just moved to the middle of a flight of cur
+  // The last non-smooth transition while no smooth step has followed it: its bifurcation's index,
+  // the number of points before the orbit past it, the orbit before it, and the intermediate
+  // event sequences met since (docs/orbits.md: one transition, one bifurcation).
+  struct Transition {
+    size_t index, points;
+    Point before;
+    std::vector<std::string> via;
+  };
+  std::optional<Transition> transition;
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
@@ -702,7 +714,7 @@ Branch Continue(const ContinuationRequest& req) {
             return tc[n2];
           },
           ds, 0.5 * (cur.y[n2] + next->y[n2]), bracket);
-      if (nearest_one < 1e-5 && !stop_requested())
+      if (nearest_one < 1e-3 && !stop_requested())
         fold = Bifurcation{"fold", at,
                            fmt::format("the branch turns back (λ-tangent changes sign; the nearest multiplier "
                                        "is {:.1e} from +1)", nearest_one),
@@ -783,6 +795,7 @@ Branch Continue(const ContinuationRequest& req) {
       t = t_new;
       section_fresh = false;
       record(cur);
+      transition.reset();
       ds = std::min(ds * 1.5, ds_max);
     } else if (ds > ds_retry) {
       ds *= 0.5;  // the corrector may just need a shorter step, or jumped to another orbit
@@ -873,7 +886,54 @@ Branch Continue(const ContinuationRequest& req) {
                              cur.y[n2], p.no_jacobian(), kind, detail);
         kind = "no-jacobian";
       }
-      br.bifurcations.push_back({kind, at, detail, bracket, contact});
+      // No test quantity vanishes and no orbit is found past the point: nothing says that the
+      // motion changes there (the corrector may just fail, e.g. on a strongly unstable orbit). Not a
+      // bifurcation: the branch ends with what is known.
+      if (kind == "non-smooth" && !past) {
+        double lead = 0;
+        for (const auto& mu : cur.orbit.multipliers) lead = std::max(lead, std::abs(mu));
+        br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}) and no test quantity vanishes "
+                             "there ({}; largest |multiplier| {:.3g}): not a bifurcation",
+                             at, bracket, detail.substr(detail.find('(') + 1, detail.find(')') - detail.find('(') - 1),
+                             lead);
+        return Finish(br, p);
+      }
+      // One transition, one bifurcation: a transition found again within 1e-6 (relative) of the
+      // last one with no smooth step between them (the orbits met between are of no extent, e.g.
+      // the two contacts of a symmetric orbit changing at one value, seen one after the other) is
+      // merged into it; the points recorded between them are dropped.
+      if (transition && transition->index + 1 == br.bifurcations.size() &&
+          std::abs(at - br.bifurcations.back().value) <= 1e-6 * std::max(1.0, std::abs(at))) {
+        Bifurcation& merged = br.bifurcations.back();
+        const double lo_v = std::min(merged.value - 0.5 * merged.bracket, at - 0.5 * bracket);
+        const double hi_v = std::max(merged.value + 0.5 * merged.bracket, at + 0.5 * bracket);
+        transition->via.push_back(m > 1 ? cur.orbit.sequence : cur.probe.signature);
+        const Point& before = transition->before;
+        const auto cut = merged.detail.find("; events per period");
+        std::string via;
+        for (const auto& v : transition->via) via += (via.empty() ? "" : ", ") + v;
+        merged.detail = fmt::format(
+            "{}; events per period {} → {}{} (one transition: met {} times within {:.1e}, through {})",
+            merged.detail.substr(0, cut), before.probe.signature, past ? past->probe.signature : "none",
+            m > 1 ? fmt::format("; contact sequence {} → {}", before.orbit.sequence, past ? past->orbit.sequence : "none")
+                  : "",
+            transition->via.size() + 1, hi_v - lo_v, via);
+        if (merged.kind == "non-smooth") merged.kind = kind;
+        if (merged.contact != contact && merged.contact >= 0 && contact >= 0) {
+          const std::string one = fmt::format(" on contact {}", merged.contact);
+          if (const auto k = merged.detail.find(one); k != std::string::npos)
+            merged.detail.replace(k, one.size(), fmt::format(" on contacts {} and {}", std::min(merged.contact, contact),
+                                                             std::max(merged.contact, contact)));
+          merged.contact = -1;
+        }
+        merged.value = 0.5 * (lo_v + hi_v);
+        merged.bracket = hi_v - lo_v;
+        br.points.resize(transition->points);
+        kind = merged.kind;
+      } else {
+        br.bifurcations.push_back({kind, at, detail, bracket, contact});
+        transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, {}};
+      }
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
       // (Not when the orbit past it is itself at a sticking-lost boundary: e.g. a symmetric orbit

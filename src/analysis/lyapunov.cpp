@@ -35,12 +35,15 @@ LyapunovObserver::LyapunovObserver(const System& sys, const Scene& scene)
   frame_ = Eigen::MatrixXd::Identity(m, m);
   block_sums_ = Eigen::MatrixXd::Zero(m, kBlocks);
   block_periods_ = Eigen::VectorXi::Zero(kBlocks);
+  hulls_.resize(static_cast<size_t>(m));
+  rounding_ = Eigen::VectorXd::Zero(m);
   shapes_.resize(sys.dof(), sys.contact_count());
   for (int j = 0; j < sys.contact_count(); ++j) shapes_.col(j) = sys.contacts()[static_cast<size_t>(j)].shape;
 }
 
 void LyapunovObserver::OnReset(const Reset& r) {
   tangent_.OnReset(r);
+  ++factors_;
   if (r.kind == ResetKind::kPlasticStick || r.kind == ResetKind::kAccumulation) {
     stuck_ = true;
     if (std::find(period_stuck_.begin(), period_stuck_.end(), r.contact) == period_stuck_.end())
@@ -59,11 +62,13 @@ void LyapunovObserver::OnSection(const Sample& s) {
   last_k_ = k;
   stuck_ = false;
   period_stuck_.clear();
+  factors_ = 0;
   tangent_.Restart(frame_);
 }
 
 void LyapunovObserver::OnStretch(const Stretch& s) {
   tangent_.OnStretch(s);
+  ++factors_;
   if (pending_ >= 0) {
     EndPeriod(pending_);
     pending_ = -1;
@@ -81,7 +86,16 @@ void LyapunovObserver::EndPeriod(long long k) {
     if (k >= first_measured_) {
       const auto b = static_cast<int>(
           std::min<long long>(kBlocks - 1, (k - first_measured_) * kBlocks / std::max<long long>(1, window_)));
-      for (Eigen::Index i = 0; i < packed.cols(); ++i) block_sums_(i, b) += std::log(std::abs(packed(i, i)));
+      // The period's map is a product of `factors_` flights, impacts and phases (and the QR): a
+      // relative error of about dim·ε each (see Spectrum).
+      const double norm = tangent_.jacobian().norm() * static_cast<double>(factors_ + 1);
+      for (Eigen::Index i = 0; i < packed.cols(); ++i) {
+        const double r = std::abs(packed(i, i));
+        const double log_r = std::log(r);
+        block_sums_(i, b) += log_r;
+        AddToHulls(i, log_r);
+        rounding_[i] += norm / r;
+      }
       ++block_periods_[b];
       ++measured_;
       collapsed_ = collapsed_ || stuck_;
@@ -92,7 +106,37 @@ void LyapunovObserver::EndPeriod(long long k) {
   last_k_ = k;
   stuck_ = false;
   period_stuck_.clear();
+  factors_ = 0;
   tangent_.Restart(frame_);
+}
+
+void LyapunovObserver::AddToHulls(Eigen::Index i, double log_r) {
+  Hull& h = hulls_[static_cast<size_t>(i)];
+  if (h.upper.empty()) {
+    h.upper.emplace_back(0.0, 0.0);
+    h.lower.emplace_back(0.0, 0.0);
+  }
+  const double n = h.upper.back().first + 1;
+  h.sum += log_r;
+  h.abs_sum += std::abs(log_r);
+  const std::pair<double, double> p{n, h.sum};
+  // Monotone chain: a vertex goes when it lies on the wrong side of the line from the one before
+  // it to the new point.
+  const auto cross = [](const auto& o, const auto& a, const auto& b) {
+    return (a.first - o.first) * (b.second - o.second) - (a.second - o.second) * (b.first - o.first);
+  };
+  while (h.upper.size() >= 2 && cross(h.upper[h.upper.size() - 2], h.upper.back(), p) >= 0) h.upper.pop_back();
+  while (h.lower.size() >= 2 && cross(h.lower[h.lower.size() - 2], h.lower.back(), p) <= 0) h.lower.pop_back();
+  h.upper.push_back(p);
+  h.lower.push_back(p);
+  for (auto* v : {&h.upper, &h.lower}) {
+    if (v->size() <= kHullCap) continue;
+    size_t kept = 1;
+    for (size_t j = 1; j + 1 < v->size(); ++j)
+      if (j % 2 == 0) (*v)[kept++] = (*v)[j];
+    (*v)[kept++] = v->back();
+    v->resize(kept);
+  }
 }
 
 // J = Q R by Householder reflections (Eigen's householder_qr_inplace_unblocked and householderQ,
@@ -162,6 +206,9 @@ LyapunovSpectrum LyapunovObserver::Spectrum() const {
     if (block_periods_[b] > 0) full.push_back(b);
   out.blocks = static_cast<int>(full.size());
   std::vector<std::pair<double, std::pair<double, double>>> rows;
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  const auto n = static_cast<double>(measured_);
+  const auto dim = static_cast<double>(m);
   for (int i = 0; i < kept; ++i) {
     const double mean = block_sums_.row(i).sum() / time;
     std::pair<double, double> ci{mean, mean};
@@ -171,8 +218,26 @@ LyapunovSpectrum LyapunovObserver::Spectrum() const {
         const double x = block_sums_(i, b) / (block_periods_[b] * period_) - mean;
         ss += x * x;
       }
-      const double half = StudentT975(static_cast<int>(full.size()) - 1) *
-                          std::sqrt(ss / static_cast<double>(full.size() - 1) / static_cast<double>(full.size()));
+      const double batch = StudentT975(static_cast<int>(full.size()) - 1) *
+                           std::sqrt(ss / static_cast<double>(full.size() - 1) / static_cast<double>(full.size()));
+      // The boundary term: on a periodic or quasi-periodic motion S_n = n·λT + g_n − g_0 with g
+      // bounded, so the estimate is off by (g_N − g_0)/(NT), which the spread of S_n about its
+      // chord bounds once the window has seen g's range (the oscillation of a complex pair's
+      // two exponents, a frame still turning towards its limit).
+      const Hull& h = hulls_[static_cast<size_t>(i)];
+      const double slope = h.sum / n;
+      double above = 0, below = 0;
+      for (const auto& [x, y] : h.upper) above = std::max(above, y - slope * x);
+      for (const auto& [x, y] : h.lower) below = std::min(below, y - slope * x);
+      const double boundary = (above - below) / time;
+      // Rounding: each factor of a period's tangent map (and its QR) is computed to a relative
+      // accuracy of about dim·ε, which moves log|R_ii| by up to that times ‖J‖/|R_ii| (first
+      // order; rounding_ sums ‖J‖_F·(factors + 1)/|R_ii| over the periods), taken kRoundingMargin
+      // times; the orbit followed is itself off its exact self by the rounding of the state,
+      // which this margin covers too. The sums of log|R_ii| are exact to n·ε·Σ|log|R_ii||.
+      const double rounding =
+          (kRoundingMargin * dim * kEps * rounding_[i] + n * kEps * h.abs_sum) / time;
+      const double half = std::max(batch, boundary) + rounding;
       ci = {mean - half, mean + half};
     }
     rows.push_back({mean, ci});

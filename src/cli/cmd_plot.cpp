@@ -53,8 +53,13 @@ int RunPlot(const std::string& path, const std::string& prefix, const std::strin
     remove_new();
     throw;
   }
-  // The script exits with 2 for bad input (an overlay that is not a continuation branch).
-  if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) return kExitBadInput;
+  // The script exits with 2 for bad input (an option the file cannot honour, an overlay that is
+  // not a continuation branch), having checked every option before drawing; whatever it may
+  // have written all the same goes: a refused plot leaves nothing.
+  if (WIFEXITED(rc) && WEXITSTATUS(rc) == kExitBadInput) {
+    remove_new();
+    return kExitBadInput;
+  }
   // Killed by a signal: h5py's HDF5 library crashed on a file that vibro's own contained read
   // survived. That is the file's damage: bad input, nothing kept.
   if (WIFSIGNALED(rc)) {

@@ -210,6 +210,9 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
     fmt::print("reason       {}\n", result.reason);
     if (result.proven) {
       fmt::print("period       {} ({} orbit, box width {})\n", result.period, result.kind, Outward(result.box_width, true, 3));
+      if (result.requested_period > 0)
+        fmt::print("least period {} divides the requested {}: the orbit is also period-{}\n", result.period,
+                   result.requested_period, result.requested_period);
       for (const auto& e : result.events)
         fmt::print("event        {:<8} contact {}  phase {}  velocity before {}\n", e.kind, e.contact, Range(e.phase),
                    Range(e.velocity_before));

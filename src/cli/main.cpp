@@ -73,6 +73,15 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "vibro " VIBRO_VERSION " (commit " VIBRO_GIT_COMMIT ")");
 
+  // Only the invoked subcommand gets its options (the first argument that is not an option names
+  // it): CLI11 builds each option at a cost, and building all of them was a third of what
+  // `vibro --version` executed (docs/performance.md, "Start-up"). Every subcommand is still
+  // declared, so `vibro --help` lists them and a wrong name is refused as before.
+  std::string invoked;
+  for (int i = 1; i < argc && invoked.empty(); ++i)
+    if (argv[i][0] != '-') invoked = argv[i];
+  const auto Wanted = [&invoked](const CLI::App* cmd) { return cmd->get_name() == invoked; };
+
   std::string scene_path;
   std::vector<std::string> sets;
   bool json = false;
@@ -85,96 +94,103 @@ int main(int argc, char** argv) {
   };
 
   CLI::App* model = app.add_subcommand("model", "print the structural model derived from a scene");
-  add_scene_options(model);
+  if (Wanted(model)) add_scene_options(model);
+
   CLI::App* simulate = app.add_subcommand("simulate", "simulate a scene and summarise its attractor");
-  add_scene_options(simulate);
   std::string out_path;
   bool resume = false;
-  simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
-  simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
   long long extend = 0;
-  simulate->add_option("--extend", extend,
-                       "continue the run stored in --out (finished or interrupted) for N more periods")
-      ->check(CLI::Range(1LL, 1LL << 53));
   int blocks = 10;
-  simulate->add_option("--blocks", blocks,
-                       "batch means of the contact loads over N blocks of periods (docs/loads.md; "
-                       "default 10)")
-      ->check(CLI::Range(2, 100000));
+  if (Wanted(simulate)) {
+    add_scene_options(simulate);
+    simulate->add_option("--out", out_path, "write the run to this HDF5 file (docs/output.md)");
+    simulate->add_flag("--resume", resume, "continue the interrupted run stored in --out");
+    simulate->add_option("--extend", extend, "continue the run stored in --out (finished or interrupted) for N more periods")
+        ->check(CLI::Range(1LL, 1LL << 53));
+    simulate->add_option("--blocks", blocks,
+                         "batch means of the contact loads over N blocks of periods (docs/loads.md; default 10)")
+        ->check(CLI::Range(2, 100000));
+  }
 
   CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
-  add_scene_options(orbit);
   vibro::OrbitRequest orbit_req;
-  std::string orbit_kind = "auto", orbit_guess;
-  orbit->add_option("--kind", orbit_kind, "auto | sticking | impact (default auto: the kind of the attractor or of the start state)")
-      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
-  orbit->add_option("--transient", orbit_req.transient_periods,
-                    "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
-      ->check(CLI::NonNegativeNumber);
-  orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
-  orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")->check(InRange(vibro::frontend::kImpactsLimit));
-  orbit->add_option("--guess", orbit_guess,
-                    "PHASE[,VELOCITY]: Newton starts on the stop leaving at ωt = PHASE with contact velocity VELOCITY (with --transient N: after N periods from there)");
-  std::string orbit_out;
-  orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
+  std::string orbit_kind = "auto", orbit_guess, orbit_out;
+  if (Wanted(orbit)) {
+    add_scene_options(orbit);
+    orbit->add_option("--kind", orbit_kind, "auto | sticking | impact (default auto: the kind of the attractor or of the start state)")
+        ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+    orbit->add_option("--transient", orbit_req.transient_periods,
+                      "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
+        ->check(CLI::NonNegativeNumber);
+    orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")
+        ->check(InRange(vibro::frontend::kPeriodLimit));
+    orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")
+        ->check(InRange(vibro::frontend::kImpactsLimit));
+    orbit->add_option("--guess", orbit_guess,
+                      "PHASE[,VELOCITY]: Newton starts on the stop leaving at ωt = PHASE with contact velocity VELOCITY (with --transient N: after N periods from there)");
+    orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
+  }
 
   CLI::App* prove = app.add_subcommand("prove", "prove a periodic orbit with interval arithmetic and write a certificate");
-  add_scene_options(prove);
   ProveArgs prove_args;
   std::string prove_kind = "auto";
-  prove->add_option("--kind", prove_kind, "auto | sticking | impact (default auto: the kind of the orbit found)")
-      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
-  prove->add_option("--period", prove_args.request.period, "period in forcing periods (default: the orbit's own)")
-      ->check(InRange(vibro::frontend::kPeriodLimit));
-  auto* prove_from = prove->add_option("--from", prove_args.from, "start from the orbit stored by `vibro orbit --out ORBIT.h5`");
-  prove->add_option("--transient", prove_args.request.transient_periods,
-                    "periods simulated before the orbit search (default 200)")
-      ->check(CLI::NonNegativeNumber)->excludes(prove_from);
-  prove->add_option("--branch", prove_args.branch,
-                    "prove every point of the branch stored by `vibro continue --out FILE.h5`")
-      ->excludes(prove_from);
-  prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
-  prove->add_option("--time-limit", prove_args.request.time_limit,
-                    "seconds for the whole command: the transient, the orbit search and the proof (with --branch: "
-                    "every point and segment); past it: not proven, exit 4 (default 60)")
-      ->check(CLI::Range(0.001, 1e6));
+  if (Wanted(prove)) {
+    add_scene_options(prove);
+    prove->add_option("--kind", prove_kind, "auto | sticking | impact (default auto: the kind of the orbit found)")
+        ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+    prove->add_option("--period", prove_args.request.period, "period in forcing periods (default: the orbit's own)")
+        ->check(InRange(vibro::frontend::kPeriodLimit));
+    CLI::Option* from = prove->add_option("--from", prove_args.from, "start from the orbit stored by `vibro orbit --out ORBIT.h5`");
+    prove->add_option("--transient", prove_args.request.transient_periods, "periods simulated before the orbit search (default 200)")
+        ->check(CLI::NonNegativeNumber)
+        ->excludes(from);
+    prove->add_option("--branch", prove_args.branch, "prove every point of the branch stored by `vibro continue --out FILE.h5`")
+        ->excludes(from);
+    prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
+    prove->add_option("--time-limit", prove_args.request.time_limit,
+                      "seconds for the whole command: the transient, the orbit search and the proof (with --branch: "
+                      "every point and segment); past it: not proven, exit 4 (default 60)")
+        ->check(CLI::Range(0.001, 1e6));
+  }
 
   CLI::App* cont = app.add_subcommand("continue", "continue a periodic orbit in one parameter");
-  add_scene_options(cont);
-  std::string cont_param;
+  std::string cont_param, cont_kind = "auto", cont_out, cont_from, cont_side = "above";
   double cont_to = 0, cont_step = 0;
-  int cont_points = 1000, cont_period = 0;
-  cont->add_option("--param", cont_param, "the numeric scene key to vary, e.g. excitation.amplitude")->required();
-  cont->add_option("--to", cont_to, "end value of the parameter")->check(kFinite)->required();
-  cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)")->check(kFinite);
-  cont->add_option("--max-points", cont_points, "most points on the branch")->check(InRange(vibro::frontend::kMaxPointsLimit));
-  cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
-  std::string cont_kind = "auto", cont_out, cont_from;
+  int cont_points = 1000, cont_period = 0, cont_transient = 200;
   long long cont_point = -1;
-  int cont_transient = 200;
-  cont->add_option("--out", cont_out, "write the branch and its bifurcations to HDF5");
-  cont->add_option("--kind", cont_kind, "auto | sticking | impact (default auto)")
-      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
-  cont->add_option("--transient", cont_transient, "periods simulated before the first Newton (default 200; 0: from [initial])")
-      ->check(CLI::NonNegativeNumber);
-  auto* cont_from_opt = cont->add_option("--from", cont_from, "restart from a branch stored by vibro continue --out");
-  auto* cont_point_opt =
-      cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(cont_from_opt);
   bool cont_switch = false;
-  std::string cont_side = "above";
-  auto* cont_switch_opt = cont->add_flag("--switch", cont_switch,
-                                         "follow the other branch through the branch-point or flip of --from next to "
-                                         "point K (the period-doubled branch at a flip)")
-                              ->needs(cont_point_opt);
-  cont->add_option("--side", cont_side,
-                   "with --switch at a pitchfork whose two halves both head for --to: the half whose x_B at the "
-                   "section lies above (default) or below the old branch's")
-      ->check(CLI::IsMember({"above", "below"}))
-      ->needs(cont_switch_opt);
-  StudyArgs study_args;
+  if (Wanted(cont)) {
+    add_scene_options(cont);
+    cont->add_option("--param", cont_param, "the numeric scene key to vary, e.g. excitation.amplitude")->required();
+    cont->add_option("--to", cont_to, "end value of the parameter")->check(kFinite)->required();
+    cont->add_option("--step", cont_step, "initial arclength step (default |to − from|/50)")->check(kFinite);
+    cont->add_option("--max-points", cont_points, "most points on the branch")->check(InRange(vibro::frontend::kMaxPointsLimit));
+    cont->add_option("--period", cont_period, "period of the orbit (default: from a transient)")
+        ->check(InRange(vibro::frontend::kPeriodLimit));
+    cont->add_option("--out", cont_out, "write the branch and its bifurcations to HDF5");
+    cont->add_option("--kind", cont_kind, "auto | sticking | impact (default auto)")
+        ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+    cont->add_option("--transient", cont_transient, "periods simulated before the first Newton (default 200; 0: from [initial])")
+        ->check(CLI::NonNegativeNumber);
+    CLI::Option* from = cont->add_option("--from", cont_from, "restart from a branch stored by vibro continue --out");
+    CLI::Option* point =
+        cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(from);
+    CLI::Option* to_switch = cont->add_flag("--switch", cont_switch,
+                                            "follow the other branch through the branch-point or flip of --from next to "
+                                            "point K (the period-doubled branch at a flip)")
+                                 ->needs(point);
+    cont->add_option("--side", cont_side,
+                     "with --switch at a pitchfork whose two halves both head for --to: the half whose x_B at the "
+                     "section lies above (default) or below the old branch's")
+        ->check(CLI::IsMember({"above", "below"}))
+        ->needs(to_switch);
+  }
+
   CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
   CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
+  StudyArgs study_args;
   for (CLI::App* cmd : {attractors, basin}) {
+    if (!Wanted(cmd)) continue;
     add_scene_options(cmd);
     cmd->add_option("--x", study_args.x, "first coordinate: x_B, v_B, X<i>, V<i> (default x_B)");
     cmd->add_option("--y", study_args.y, "second coordinate (default v_B)");
@@ -184,103 +200,136 @@ int main(int argc, char** argv) {
     cmd->add_flag("--full-periods", study_args.full_periods,
                   "run every cell for run.periods periods (no early stop when it settles)");
   }
-  attractors->add_option("--samples", study_args.samples, "random initial states (default 200)")->check(InRange(vibro::frontend::kSamplesLimit));
-  attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
-  basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")->check(InRange(vibro::frontend::kGridLimit))->delimiter(',')->expected(2);
-  basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
-  basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
+  if (Wanted(attractors)) {
+    attractors->add_option("--samples", study_args.samples, "random initial states (default 200)")
+        ->check(InRange(vibro::frontend::kSamplesLimit));
+    attractors->add_option("--seed", study_args.seed, "seed of the random initial states (default 1)");
+  }
+  if (Wanted(basin)) {
+    basin->add_option("--grid", study_args.grid, "NX,NY cells (default 64,64)")
+        ->check(InRange(vibro::frontend::kGridLimit))
+        ->delimiter(',')
+        ->expected(2);
+    basin->add_option("--out", study_args.out, "write the label map and attractor table to HDF5");
+    basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
+  }
+
   CLI::App* partition = app.add_subcommand(
       "partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries");
-  add_scene_options(partition);
   PartitionArgs part;
   double part_from2 = 0;
-  partition->add_option("--params", part.spec.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
-  partition->add_option("--range1", part.spec.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--steps1", part.spec.steps1, "steps of KEY1 (default 20: 21 columns)")->check(InRange(vibro::frontend::kSteps1Limit));
-  partition->add_option("--range2", part.spec.range2, "C,D: range of KEY2 (each column is continued in it)")->check(kFinite)
-      ->delimiter(',')->required();
-  auto* from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)")->check(kFinite);
-  partition->add_option("--sticking-fraction", part.spec.levels, "S1,S2,...: levels to trace")->check(kFinite)->delimiter(',')->required();
-  partition->add_option("--period", part.spec.period, "period of the sticking orbits (default: from a transient)")->check(InRange(vibro::frontend::kPeriodLimit));
-  partition->add_option("--threads", part.spec.threads, "threads (default: all cores)")->check(InRange(vibro::frontend::kThreadsLimit));
-  partition->add_option("--out", part.out, "write the partition to HDF5");
+  CLI::Option* from2_opt = nullptr;
+  if (Wanted(partition)) {
+    add_scene_options(partition);
+    partition->add_option("--params", part.spec.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
+    partition->add_option("--range1", part.spec.range1, "A,B: range of KEY1")->check(kFinite)->delimiter(',')->required();
+    partition->add_option("--steps1", part.spec.steps1, "steps of KEY1 (default 20: 21 columns)")
+        ->check(InRange(vibro::frontend::kSteps1Limit));
+    partition->add_option("--range2", part.spec.range2, "C,D: range of KEY2 (each column is continued in it)")
+        ->check(kFinite)
+        ->delimiter(',')
+        ->required();
+    from2_opt = partition->add_option("--from2", part_from2, "where each column's branch starts (default: the scene's KEY2)")
+                    ->check(kFinite);
+    partition->add_option("--sticking-fraction", part.spec.levels, "S1,S2,...: levels to trace")
+        ->check(kFinite)
+        ->delimiter(',')
+        ->required();
+    partition->add_option("--period", part.spec.period, "period of the sticking orbits (default: from a transient)")
+        ->check(InRange(vibro::frontend::kPeriodLimit));
+    partition->add_option("--threads", part.spec.threads, "threads (default: all cores)")->check(InRange(vibro::frontend::kThreadsLimit));
+    partition->add_option("--out", part.out, "write the partition to HDF5");
+  }
+
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
-  add_scene_options(sweep);
-  std::string sweep_param;
+  std::string sweep_param, sweep_out;
   double sweep_from = 0, sweep_to = 0;
   int sweep_steps = 50, sweep_record = 16;
   bool sweep_one_way = false;
-  sweep->add_option("--param", sweep_param, "numeric scene key to vary")->required();
-  sweep->add_option("--from", sweep_from, "first value")->check(kFinite)->required();
-  sweep->add_option("--to", sweep_to, "last value")->check(kFinite)->required();
-  sweep->add_option("--steps", sweep_steps, "steps between them (default 50)")->check(InRange(vibro::frontend::kSweepStepsLimit));
-  sweep->add_option("--record", sweep_record, "section points kept per value (default 16)")->check(InRange(vibro::frontend::kRecordLimit));
-  sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
-  std::string sweep_out;
-  sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
+  if (Wanted(sweep)) {
+    add_scene_options(sweep);
+    sweep->add_option("--param", sweep_param, "numeric scene key to vary")->required();
+    sweep->add_option("--from", sweep_from, "first value")->check(kFinite)->required();
+    sweep->add_option("--to", sweep_to, "last value")->check(kFinite)->required();
+    sweep->add_option("--steps", sweep_steps, "steps between them (default 50)")->check(InRange(vibro::frontend::kSweepStepsLimit));
+    sweep->add_option("--record", sweep_record, "section points kept per value (default 16)")->check(InRange(vibro::frontend::kRecordLimit));
+    sweep->add_flag("--one-way", sweep_one_way, "only upwards (default: up, then down)");
+    sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
+  }
+
   CLI::App* validate = app.add_subcommand("validate", "confirm or refute, point by point, a branch of orbits from another tool");
   ValidateArgs val;
   std::string val_kind = "auto";
-  validate->add_option("SCENE", val.scene, "scene file (TOML)")->required();
-  validate->add_option("BRANCH", val.csv, "branch CSV: value,time,displacement_1..n,velocity_1..n[,period,stable,sticking_fraction]")
-      ->required();
-  validate->add_option("--set", val.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
-      ->take_all()
-      ->allow_extra_args(false);
-  validate->add_option("--param", val.param, "the numeric scene key the column value sets")->required();
-  validate->add_option("--kind", val_kind, "auto | sticking | impact (default auto: any)")
-      ->check(CLI::IsMember({"auto", "sticking", "impact"}));
-  validate->add_option("--period", val.period, "period of the orbits where a row claims none (default: the first return)");
-  validate->add_option("--tolerance", val.tolerance, "largest relative distance from a claimed state to the orbit (default 1e-6)");
-  validate->add_option("--sticking-tolerance", val.sticking_tolerance, "largest difference of sticking fractions (default 1e-6)");
-  validate->add_flag("--json", val.json, "print one JSON object on stdout");
-  validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
+  if (Wanted(validate)) {
+    validate->add_option("SCENE", val.scene, "scene file (TOML)")->required();
+    validate->add_option("BRANCH", val.csv, "branch CSV: value,time,displacement_1..n,velocity_1..n[,period,stable,sticking_fraction]")
+        ->required();
+    validate->add_option("--set", val.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
+        ->take_all()
+        ->allow_extra_args(false);
+    validate->add_option("--param", val.param, "the numeric scene key the column value sets")->required();
+    validate->add_option("--kind", val_kind, "auto | sticking | impact (default auto: any)")
+        ->check(CLI::IsMember({"auto", "sticking", "impact"}));
+    validate->add_option("--period", val.period, "period of the orbits where a row claims none (default: the first return)");
+    validate->add_option("--tolerance", val.tolerance, "largest relative distance from a claimed state to the orbit (default 1e-6)");
+    validate->add_option("--sticking-tolerance", val.sticking_tolerance, "largest difference of sticking fractions (default 1e-6)");
+    validate->add_flag("--json", val.json, "print one JSON object on stdout");
+    validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
+  }
+
   CLI::App* score = app.add_subcommand("score", "score another simulator's events against vibro's run of the scene");
   ScoreArgs sco;
-  score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
-  score->add_option("EVENTS", sco.csv, "events CSV: t,kind[,velocity]")->required();
-  score->add_option("--set", sco.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
-      ->take_all()
-      ->allow_extra_args(false);
-  score->add_option("--window", sco.window, "match events at most WINDOW·T apart (default 0.05)");
-  score->add_option("--tolerance", sco.tolerance, "a time error above TOLERANCE·T is a divergence (default 1e-6)");
-  score->add_flag("--json", sco.json, "print one JSON object on stdout");
+  if (Wanted(score)) {
+    score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
+    score->add_option("EVENTS", sco.csv, "events CSV: t,kind[,velocity]")->required();
+    score->add_option("--set", sco.sets, "override a scene key, KEY=VALUE in TOML syntax (repeatable)")
+        ->take_all()
+        ->allow_extra_args(false);
+    score->add_option("--window", sco.window, "match events at most WINDOW·T apart (default 0.05)");
+    score->add_option("--tolerance", sco.tolerance, "a time error above TOLERANCE·T is a divergence (default 1e-6)");
+    score->add_flag("--json", sco.json, "print one JSON object on stdout");
+  }
+
   CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
-  add_scene_options(check);
   std::string check_precision = "double";
-  check->add_option("--precision", check_precision,
-                    "quad: add the quad-precision exact engine as a fourth opinion (the reference)")
-      ->check(CLI::IsMember({"double", "quad"}));
+  if (Wanted(check)) {
+    add_scene_options(check);
+    check->add_option("--precision", check_precision, "quad: add the quad-precision exact engine as a fourth opinion (the reference)")
+        ->check(CLI::IsMember({"double", "quad"}));
+  }
 
   std::string file_path, plot_prefix;
   CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
-  info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
-  info->add_flag("--json", json, "print one JSON object on stdout");
+  if (Wanted(info)) {
+    info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
+    info->add_flag("--json", json, "print one JSON object on stdout");
+  }
+
   CLI::App* plot = app.add_subcommand("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
-  plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
-  plot->add_option("--out", plot_prefix, "prefix of the files (default: FILE without .h5)");
-  std::string plot_overlay;
-  plot->add_option("--overlay", plot_overlay,
-                   "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
-  std::string plot_format = "png", plot_window;
-  int plot_dpi = 150;
-  plot->add_option("--format", plot_format, "png | pdf | svg (default png)")
-      ->check(CLI::IsMember({"png", "pdf", "svg"}));
-  plot->add_option("--dpi", plot_dpi, "resolution of PNG files (default 150)")->check(CLI::Range(20, 2400));
-  plot->add_option("--time-window", plot_window, "A,B: time plots show A <= t <= B (default: the last 5 periods)");
+  std::string plot_overlay, plot_format = "png", plot_window, plot_size, plot_coordinate = "x_B";
   std::optional<std::string> plot_title;
-  std::string plot_size, plot_coordinate = "x_B";
+  int plot_dpi = 150;
   double plot_font_size = 10;
-  plot->add_option("--title", plot_title, "title of every picture ('' for none; default: the scene's title, values and what is drawn)");
-  plot->add_option("--size", plot_size, "W,H of every picture in inches, or W,H with cm (8.5cm,6cm) (default: each picture's own)");
-  plot->add_option("--font-size", plot_font_size, "font size in points (default 10)")->check(CLI::Range(1.0, 72.0));
-  plot->add_option("--coordinate", plot_coordinate,
-                   "x_B | X1..Xn (modal) | q0..q(N-1) (physical, when the file stores mode shapes): "
-                   "drawn by the time plot, phase portrait and section (default x_B)");
+  if (Wanted(plot)) {
+    plot->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
+    plot->add_option("--out", plot_prefix, "prefix of the files (default: FILE without .h5)");
+    plot->add_option("--overlay", plot_overlay, "a continuation branch (HDF5 with /branch) drawn over a sweep's plot");
+    plot->add_option("--format", plot_format, "png | pdf | svg (default png)")->check(CLI::IsMember({"png", "pdf", "svg"}));
+    plot->add_option("--dpi", plot_dpi, "resolution of PNG files (default 150)")->check(CLI::Range(20, 2400));
+    plot->add_option("--time-window", plot_window, "A,B: time plots show A <= t <= B (default: the last 5 periods)");
+    plot->add_option("--title", plot_title,
+                     "title of every picture ('' for none; default: the scene's title, values and what is drawn)");
+    plot->add_option("--size", plot_size,
+                     "W,H of every picture in inches, or W,H with cm (8.5cm,6cm) (default: each picture's own)");
+    plot->add_option("--font-size", plot_font_size, "font size in points (default 10)")->check(CLI::Range(1.0, 72.0));
+    plot->add_option("--coordinate", plot_coordinate,
+                     "x_B | X1..Xn (modal) | q0..q(N-1) (physical, when the file stores mode shapes): "
+                     "drawn by the time plot, phase portrait and section (default x_B)");
+  }
 
   bool force = false;
   for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
-    cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
+    if (Wanted(cmd)) cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
 
   try {
     app.parse(argc, argv);

@@ -180,6 +180,7 @@ class Automaton {
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
+      pair_speed_.assign(models_.size(), S(-1));
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
         if (j >= specs.size()) {
@@ -222,6 +223,7 @@ class Automaton {
   // cancellation), and what follows an event at contact k.
   void UpdateGaps(PropagatorT<S>& p, const S& sigma);
   bool OnContactMulti(int k);
+  bool PairChatter(int k);
   bool ImpactWhileHeld(int k);
   // Sticking on two or more contacts at once (docs/contacts.md): the held set's propagator, a
   // contact closing while the set is held, and the acceleration LCP that decides which contacts
@@ -236,6 +238,17 @@ class Automaton {
   int TryHeldAccumulation(int k);
   bool SimultaneousImpact(const std::vector<int>& Z);
   S Phase(const ClockT<S>& c) const { return phase0_ + m_.w * c.offset; }
+  // sin φ, cos φ of a phase (Real<S>::sin and cos, the same values), kept for the last phase asked:
+  // an impact's reaction, its tail prediction and the next flight's start share them.
+  const S* SinCos(const S& phase) {
+    if (!sincos_valid_ || !(phase == sincos_phase_)) {
+      sincos_[0] = R::sin(phase);
+      sincos_[1] = R::cos(phase);
+      sincos_phase_ = phase;
+      sincos_valid_ = true;
+    }
+    return sincos_;
+  }
   double AbsTime(const ClockT<S>& c) const {
     return R::to_double(S(t0_) + S(static_cast<double>(c.period)) * period_ + c.offset);
   }
@@ -309,6 +322,11 @@ class Automaton {
   std::vector<S> gaps_;         // several contacts: every gap (0 for the held one)
   std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
   std::vector<std::string> labels_;  // several contacts: each one's constraint, "q0 - q2 >= -1"
+  // Several contacts: impacts alternating between two contacts (PairChatter): the last one's
+  // contact and time, how many alternations in a row, each contact's last closing speed (−1: none).
+  int pair_last_ = -1, pair_cascade_ = 0;
+  double pair_t_ = 0;
+  std::vector<S> pair_speed_;
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
@@ -342,6 +360,9 @@ class Automaton {
   std::string violation_;           // the first physics invariant broken (empty: none)
   ClockT<S> last_event_{-1, S(0)};  // clock of the last event emitted (monotone)
   RunResult result_;
+  S sincos_[2] = {S(0), S(1)}, sincos_phase_{0};  // SinCos's memory
+  bool sincos_valid_ = false;
+  Vec tail_w_;  // PredictTail's scratch (no allocation per impact)
   ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
   bool stretch_loads_ = false;  // the sticking segment under way searches max R per stretch
 };
@@ -643,7 +664,8 @@ template <class S>
 bool Automaton<S>::TryAccumulation(const S& reaction) {
   const ModelT<S>& m = multi() ? M(active_) : m_;
   const S phase_k = Phase(clock_);
-  const TailPrediction<S> tail = PredictTail<S>(m, X_, V_, phase_k, chatter_tol_);
+  const S* sc = SinCos(phase_k);
+  const TailPrediction<S> tail = PredictTail<S>(m, X_, V_, sc[0], sc[1], chatter_tol_, tail_w_);
   last_tail_ = tail;
   last_jump_failure_.clear();
   if (!tail.accepted) {
@@ -652,7 +674,8 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   }
   const S delta = tail.delta;
   const SegmentStartT<S> start{Mode::kFree, phase_k, clock_.offset, X_, V_, S(0),
-                               FlightStart::kAfterImpact, StickStart::kGeneric, active_};
+                               FlightStart::kAfterImpact, StickStart::kGeneric, active_,
+                               nullptr, nullptr, -1, sc};
   // First pass without output: the jump is taken only if R(t∞) > 0 after the projection.
   engine_->Begin(start);
   const auto probe = engine_->Advance(delta, false, {});
@@ -678,7 +701,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   // Commit: the same flow with dense output, then the state at t∞.
   const Vec X_k = X_, V_k = V_;
   engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_k, V_k, S(0), FlightStart::kAfterImpact,
-                  StickStart::kGeneric, active_});
+                  StickStart::kGeneric, active_, nullptr, nullptr, -1, sc});
   const ClockT<S> from = clock_;
   // Samples inside the tail show the state projected onto the stop: the free flow over Δ∞ sums
   // the tail's impacts into one impulse at its end and dips below the stop on the way; the true
@@ -727,6 +750,7 @@ bool Automaton<S>::OnContact() {
   X_ -= m.contact * ((m.ContactDisplacement(X_) - m.x0) / m.s_B);
   gap_ = 0;
   const S phase = Phase(clock_);
+  const S* sc = SinCos(phase);  // shared with the tail's prediction and the next flight's Begin
   const S v_minus = m.ContactVelocity(V_);
   const S floor = ContactSpeedFloor();
   const S r = m.r;
@@ -739,7 +763,7 @@ bool Automaton<S>::OnContact() {
   const bool unresolved = cvode_ && accumulating && chatter_last_ > 0 &&
                           -v_minus < S(resolution_ratio_) * chatter_first_;
   if (accumulating && chatter_last_ > 0 && (touch || unresolved)) {
-    const S Rc = m.Reaction(X_, V_, phase);
+    const S Rc = m.ReactionSin(X_, V_, sc[0]);
     if (Rc > 0) {
       return Fail(
           fmt::format(
@@ -757,7 +781,7 @@ bool Automaton<S>::OnContact() {
   }
   if (touch) {
     // Tangential touch (docs/model.md §2.1): no impact.
-    const S Rc = m.Reaction(X_, V_, phase);
+    const S Rc = m.ReactionSin(X_, V_, sc[0]);
     Xb_ = X_;
     Vb_ = V_;
     const Vec& Xb = Xb_;
@@ -769,7 +793,7 @@ bool Automaton<S>::OnContact() {
       Emit(EventKind::kStick, S(0), S(0));
     } else {
       m.ProjectOntoStop(X_, V_);
-      const S rate = m.ReactionRate(X_, V_, phase);
+      const S rate = m.ReactionRateTrig(X_, V_, sc[0], sc[1]);
       if (Rc < 0) {
         Depart(FlightStart::kDeparture);
         NotifyReset(ResetKind::kGrazing, Xb, Vb);
@@ -803,7 +827,7 @@ bool Automaton<S>::OnContact() {
     const Vec& Vb = Vb_;
     m.ProjectOntoStop(X_, V_);
     Emit(EventKind::kImpact, v_minus, S(0));
-    const S Rc = m.Reaction(X_, V_, phase);
+    const S Rc = m.ReactionSin(X_, V_, sc[0]);
     if (Rc > 0) {
       EnterSticking(StickStart::kGeneric);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
@@ -812,7 +836,7 @@ bool Automaton<S>::OnContact() {
       chatter_first_ = chatter_last_ = 0;
       Depart(FlightStart::kDeparture);
       NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
-    } else if (m.ReactionRate(X_, V_, phase) > 0) {
+    } else if (m.ReactionRateTrig(X_, V_, sc[0], sc[1]) > 0) {
       EnterSticking(StickStart::kRising);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, S(0), S(0));
@@ -828,7 +852,7 @@ bool Automaton<S>::OnContact() {
   Vb_ = V_;
   const Vec& Vb = Vb_;
   m.ApplyImpact(V_, r);
-  const S Rc = m.Reaction(X_, V_, phase);
+  const S Rc = m.ReactionSin(X_, V_, sc[0]);
   NotifyReset(ResetKind::kImpact, X_, Vb);
   Emit(EventKind::kImpact, v_minus, m.ContactVelocity(V_));
   if (accumulating && Rc > 0) {
@@ -947,8 +971,9 @@ RunResult Automaton<S>::Run() {
     SetStickingT<S>* set = mode_ == Mode::kSticking && !held_set_.empty() ? SetEngine() : nullptr;
     if (mode_ == Mode::kSticking && !held_set_.empty() && !set) break;  // failed: reason kept
     PropagatorT<S>& p = set ? *set : (mode_ == Mode::kSticking && Resting()) ? *Resting() : *engine_;
-    p.Begin({mode_, Phase(clock_), clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
-             multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr});
+    const S phase_now = Phase(clock_);
+    p.Begin({mode_, phase_now, clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
+             multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr, -1, SinCos(phase_now)});
     const ClockT<S> from = clock_;
     // Loads of a phase held on one contact or on a set of contacts at once (docs/loads.md).
     const bool loads = mode_ == Mode::kSticking && held_set_.empty() && opt_.loads && !opt_.observers.empty();
@@ -974,15 +999,15 @@ RunResult Automaton<S>::Run() {
            seg.undetermined ? RunStatus::kUndetermined : RunStatus::kNumericalFailure);
       break;
     }
-    p.Evaluate(seg.sigma, X_, V_);
+    // One contact in free flight: the state and the gap from one pass over the modes.
+    const bool free_gap = !multi() && mode_ == Mode::kFree;
+    if (free_gap) gap_ = p.EvaluateWithGap(seg.sigma, X_, V_);
+    else p.Evaluate(seg.sigma, X_, V_);
     if (loads) loads_.Segment(active_, M(active_), p, Phase(from), seg.sigma, X_, V_);
     if (set_loads)
       loads_.SetSegment(held_set_, models_, Phase(from), seg.sigma, X_, V_,
                         [set](int c) { return SetForce<S>{set, c}; });
-    if (multi())
-      UpdateGaps(p, seg.sigma);
-    else if (mode_ == Mode::kFree)
-      gap_ = p.Gap(seg.sigma);
+    if (multi()) UpdateGaps(p, seg.sigma);
     if (!opt_.observers.empty()) {
       for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma), active_});
     }

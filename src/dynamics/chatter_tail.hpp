@@ -46,30 +46,31 @@ struct TailPrediction {
 // The terms of E are computed cheapest first and the prediction is refused as soon as their sum
 // exceeds the target (early in a sequence, most impacts), so that `error` of a refused prediction
 // is a lower bound of E.
+// sp, cp = sin φ, cos φ of the phase; W scratch (no allocation per impact).
 template <class S>
 TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
-                              const typename ModelT<S>::Vec& V, const S& phase, const S& target) {
-  using Vec = typename ModelT<S>::Vec;
+                              const typename ModelT<S>::Vec& V, const S& sp, const S& cp,
+                              const S& target, typename ModelT<S>::Vec& W) {
   using R = Real<S>;
   TailPrediction<S> t;
   t.speed = m.ContactVelocity(V);
   if (!(t.speed > 0) || !(m.r > 0) || !(m.r < 1)) return t;
-  const Vec W = V - m.contact * (t.speed / m.s_B);  // ΠẊ: the stuck velocity
-  t.reaction = m.Reaction(X, W, phase);
+  W = V - m.contact * (t.speed / m.s_B);  // ΠẊ: the stuck velocity
+  t.reaction = m.ReactionSin(X, W, sp);
   if (!(t.reaction > 0)) return t;
   t.delta0 = S(2) * t.speed / ((S(1) - m.r) * m.s_B * t.reaction);
   const S d = t.delta0;
   t.error = d * m.contact_stiffness * d * d / 4;
   if (m.damped) t.error += d * R::abs(m.contact_damping) * d / 2;
   if (!(t.error <= target)) return t;
-  t.rate = m.ReactionRate(X, W, phase);
+  t.rate = m.ReactionRateTrig(X, W, sp, cp);
   t.epsilon = -t.rate * t.delta0 / t.reaction;
   t.delta = t.delta0 * (S(1) + t.epsilon / 3);
   t.error += d * S(0.3) * t.epsilon * t.epsilon;
   if (!(t.error <= target) || !(R::abs(t.epsilon) <= S(kTailEpsilonMax))) return t;
 
   // Free second derivative of R at the start and a bound on |R'''| over [0, 2Δ0].
-  const S sp = R::sin(phase), cp = R::cos(phase), H = S(2) * t.delta0;
+  const S H = S(2) * t.delta0;
   S r2 = m.s_A * m.f * m.w * m.w * sp, M3 = R::abs(m.s_A * m.f) * m.w * m.w * m.w;
   for (int i = 0; i < m.dof(); ++i) {
     if (m.shape[i] == S(0)) continue;
@@ -86,6 +87,13 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
   t.error += d * (R::abs(r2) * d * d / (S(2) * t.reaction) + M3 * d * d * d / (S(6) * t.reaction));
   t.accepted = R::isfinite(t.error) && t.error <= target;
   return t;
+}
+
+template <class S>
+TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
+                              const typename ModelT<S>::Vec& V, const S& phase, const S& target) {
+  typename ModelT<S>::Vec W;
+  return PredictTail<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), target, W);
 }
 
 // Gradient of the jump time for the Jacobian of the jump (docs/model.md §5.6), length 2n in (X, Ẋ).

@@ -36,6 +36,7 @@ class ExactEngineT final : public PropagatorT<S> {
                             const StretchCallbackT<S>& on_stretch) override;
   void Evaluate(S sigma, Vec& X, Vec& V) const override;
   S Gap(S sigma) const override;
+  S EvaluateWithGap(S sigma, Vec& X, Vec& V) const override;
   S GapOf(int j, S sigma) const override;
   bool HeldReaction(const S& sigma, S& R, S& rate) const override;
   bool HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) const override;
@@ -285,7 +286,7 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
   taylor_ready_ = false;
   mode_ = s.mode;
   phase_ = s.phase;
-  trig_ = PhaseTrigT<S>(s.phase);
+  trig_ = s.phase_sincos ? PhaseTrigT<S>(s.phase_sincos[0], s.phase_sincos[1]) : PhaseTrigT<S>(s.phase);
   gap0_ = s.gap;
   flight_start_ = s.flight_start;
   stick_start_ = s.stick_start;
@@ -472,7 +473,7 @@ S ExactEngineT<S>::FlightWindow() const {
   // docs/model.md §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
   if (flight_start_ == FlightStart::kGeneric) return S(0);
   const ModelT<S>& m = contacts_.size() == 1 ? m_ : *contacts_[static_cast<size_t>(start_contact_)].m;
-  return CertifiedWindow<S>(flight_start_, StartJet<S>(m, X0_, V0_, phase_, h_cap_), h_cap_);
+  return CertifiedWindow<S>(flight_start_, StartJet<S>(m, X0_, V0_, trig_.s, trig_.c, h_cap_), h_cap_);
 }
 
 template <class S>
@@ -512,7 +513,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
     const S w = start == FlightStart::kGeneric
                     ? S(0)
                     : CertifiedWindow<S>(start, StartJet<S>(*contacts_[static_cast<size_t>(j)].m, X0_, V0_,
-                                                            phase_, h_cap_),
+                                                            trig_.s, trig_.c, h_cap_),
                                          h_cap_);
     if (w >= best.sigma) continue;
     auto r = Search([this, j](const S& u, const S& H, const S& rest) { return GapProbe(j, u, H, rest); },
@@ -764,6 +765,32 @@ template <class S>
 S ExactEngineT<S>::Gap(S sigma) const {
   if (mode_ != Mode::kFree) return S(0);
   return GapProbe(start_contact_, sigma, S(0), S(0)).jet.g;
+}
+
+// Evaluate and Gap in one pass over the modes: the same flows, the same sums (GapProbeOf's g).
+template <class S>
+S ExactEngineT<S>::EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
+  if (mode_ != Mode::kFree) {
+    Evaluate(sigma, X, V);
+    return S(0);
+  }
+  const auto n = m_.dof();
+  X.resize(n);
+  V.resize(n);
+  const ModelT<S>& mc = *contacts_[static_cast<size_t>(start_contact_)].m;
+  const auto& c = mc.shape;
+  const ForcingTrigT<S> fw(omega_, sigma);
+  S dq_sum(0);
+  for (int i = 0; i < n; ++i) {
+    const auto st =
+        Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
+    X[i] = X0_[i] + st.dq;
+    V[i] = st.v;
+    if (c[i] == S(0)) continue;
+    dq_sum += mc.unit_shape ? st.dq : S(c[i] * st.dq);
+  }
+  const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(start_contact_)] : gap0_;
+  return g0 + dq_sum;
 }
 
 template <class S>

@@ -23,8 +23,7 @@ using FlightJet = FlightJetT<double>;
 // c_i are 0 or 1: docs/contacts.md).
 template <class S, bool kWeighted>
 [[gnu::always_inline]] inline FlightJetT<S> StartJetOf(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
-                         const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
-  const S sp = Real<S>::sin(phase), cp = Real<S>::cos(phase);
+                         const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H) {
   FlightJetT<S> j{S(0), S(0), S(0), S(0), S(0)};
   for (int i = 0; i < m.dof(); ++i) {
     if (m.shape[i] == S(0)) continue;
@@ -54,10 +53,17 @@ template <class S, bool kWeighted>
   return j;
 }
 
+// With sp, cp = sin φ, cos φ of the flight's phase, already at hand.
+template <class S>
+[[gnu::always_inline]] inline FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
+                       const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H) {
+  return m.unit_shape ? StartJetOf<S, false>(m, X, V, sp, cp, H) : StartJetOf<S, true>(m, X, V, sp, cp, H);
+}
+
 template <class S>
 [[gnu::always_inline]] inline FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                        const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
-  return m.unit_shape ? StartJetOf<S, false>(m, X, V, phase, H) : StartJetOf<S, true>(m, X, V, phase, H);
+  return StartJet<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), H);
 }
 
 // σ_w ≤ H with no root of g in (0, σ_w): after an impact g(σ)/σ ≥ g' + g''σ/2 − M3σ²/6; after a

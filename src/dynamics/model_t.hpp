@@ -60,6 +60,10 @@ struct ModelT {
 
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (the paper's eq. (5); docs/model.md §7).
   [[gnu::always_inline]] S Reaction(const Vec& X, const Vec& V, const S& phase) const {
+    return ReactionSin(X, V, Real<S>::sin(phase));
+  }
+  // The same with sin φ at hand.
+  [[gnu::always_inline]] S ReactionSin(const Vec& X, const Vec& V, const S& sin_phase) const {
     S elastic(0);
     if (unit_shape) {  // the contact of the scaling (every c_i is 0 or 1): no products by c_i
       for (Eigen::Index i = 0; i < X.size(); ++i) {
@@ -72,16 +76,21 @@ struct ModelT {
         elastic += shape[i] * (omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i]);
       }
     }
-    return (elastic - s_A * f * Real<S>::sin(phase)) / s_B;
+    return (elastic - s_A * f * sin_phase) / s_B;
   }
 
   // Ṙ along the sticking flow (docs/model.md §4.2; damped constrained acceleration of §7).
   S ReactionRate(const Vec& X, const Vec& V, const S& phase) const {
-    const Vec w2 = omega.cwiseAbs2();
-    S rate = shape.dot(w2.cwiseProduct(V)) - s_A * f * w * Real<S>::cos(phase);
+    return ReactionRateTrig(X, V, Real<S>::sin(phase), Real<S>::cos(phase));
+  }
+  // The same with sin φ, cos φ at hand; undamped, without allocation (the products are summed in
+  // the order of the vector expression).
+  S ReactionRateTrig(const Vec& X, const Vec& V, const S& sin_phase, const S& cos_phase) const {
+    S rate = shape.dot(omega.cwiseAbs2().cwiseProduct(V)) - s_A * f * w * cos_phase;
     if (damped) {
+      const Vec w2 = omega.cwiseAbs2();
       const Vec DV = S(2) * zeta.cwiseProduct(omega).cwiseProduct(V);
-      const Vec free_acc = -w2.cwiseProduct(X) - DV + forcing * (f * Real<S>::sin(phase));
+      const Vec free_acc = -w2.cwiseProduct(X) - DV + forcing * (f * sin_phase);
       const Vec acc = free_acc - contact * (shape.dot(free_acc) / s_B);
       rate += shape.dot(S(2) * zeta.cwiseProduct(omega).cwiseProduct(acc));
     }

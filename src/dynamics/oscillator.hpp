@@ -32,6 +32,7 @@ template <class S>
 struct PhaseTrigT {
   S s, c;
   explicit PhaseTrigT(const S& phase) : s(Real<S>::sin(phase)), c(Real<S>::cos(phase)) {}
+  PhaseTrigT(const S& sin_phase, const S& cos_phase) : s(sin_phase), c(cos_phase) {}
 };
 
 // The forcing's angle ωσ at one local time σ, shared by every mode evaluated at that σ (one

@@ -52,6 +52,9 @@ struct SegmentStartT {
   const std::vector<FlightStart>* starts = nullptr;
   // A contact left out of the search (the contact of a chattering tail: its flow dips below).
   int skip = -1;
+  // sin φ and cos φ of `phase` when the caller has them (Real<S>::sin and cos of the same phase,
+  // so the same values): the engine does not evaluate them again.
+  const S* phase_sincos = nullptr;
 };
 
 enum class SegmentEnd {
@@ -100,6 +103,12 @@ class PropagatorT {
   virtual void Evaluate(S sigma, Vec& X, Vec& V) const = 0;
   // Free flight: x_B − x0 at sigma without cancellation (increments from the start).
   virtual S Gap(S sigma) const = 0;
+  // Evaluate and Gap at once (free flight; the exact engine evaluates each mode's flow once for
+  // both, with the same values as the two calls).
+  virtual S EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
+    Evaluate(sigma, X, V);
+    return Gap(sigma);
+  }
   // The gap of contact j at sigma (free flight: without cancellation from its start value;
   // sticking: of a contact that is not held). Gap(σ) is GapOf(start contact, σ).
   virtual S GapOf(int j, S sigma) const { return j == 0 ? Gap(sigma) : S(0); }

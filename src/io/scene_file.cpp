@@ -14,7 +14,6 @@
 #include <limits>
 #include <map>
 #include <optional>
-#include <regex>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -692,10 +691,39 @@ void ApplyOverride(toml::table& root, const std::string& text, std::vector<std::
   table->insert_or_assign(key.substr(start), std::move(*parsed.get("value")));
 }
 
+// The length of the float token [-+]?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)? that starts at text[i]
+// (0: none, the longest match as a regular expression would take it), and whether it has a
+// fraction or an exponent (an integer is not rewritten). Scanned by hand: compiling the
+// equivalent std::regex cost every process that reads a scene about 1.9 M instructions, an eighth
+// of a whole 20-period run of Fig. 8 (docs/performance.md, "Start-up").
+size_t FloatToken(const std::string& text, size_t i, bool& fraction_or_exponent) {
+  const auto digit = [&](size_t k) { return k < text.size() && std::isdigit(static_cast<unsigned char>(text[k])); };
+  size_t j = i;
+  if (j < text.size() && (text[j] == '-' || text[j] == '+')) ++j;
+  const size_t first_digit = j;
+  while (digit(j)) ++j;
+  fraction_or_exponent = false;
+  if (j == first_digit) return 0;
+  if (j < text.size() && text[j] == '.' && digit(j + 1)) {
+    j += 2;
+    while (digit(j)) ++j;
+    fraction_or_exponent = true;
+  }
+  if (j < text.size() && (text[j] == 'e' || text[j] == 'E')) {
+    size_t k = j + 1;
+    if (k < text.size() && (text[k] == '-' || text[k] == '+')) ++k;
+    if (digit(k)) {
+      while (digit(k)) ++k;
+      j = k;
+      fraction_or_exponent = true;
+    }
+  }
+  return j - i;
+}
+
 // toml++ writes every float with 17 significant digits (2.8 → 2.7999999999999998): rewrite each
 // float token outside strings in its shortest round-trip form, kept a TOML float.
 std::string ShortestFloats(const std::string& text) {
-  static const std::regex kFloat(R"([-+]?[0-9]+(\.[0-9]+)?([eE][-+]?[0-9]+)?)");
   std::string out;
   out.reserve(text.size());
   for (size_t i = 0; i < text.size();) {
@@ -711,16 +739,15 @@ std::string ShortestFloats(const std::string& text) {
     const bool starts = (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+') &&
                         (i == 0 || !(std::isalnum(static_cast<unsigned char>(text[i - 1])) ||
                                      text[i - 1] == '_' || text[i - 1] == '.' || text[i - 1] == ':'));
-    std::smatch m;
-    if (starts && std::regex_search(text.begin() + static_cast<long>(i), text.end(), m, kFloat,
-                                    std::regex_constants::match_continuous) &&
-        (m[1].matched || m[2].matched)) {
-      const size_t end = i + static_cast<size_t>(m.length(0));
+    bool fraction_or_exponent = false;
+    const size_t length = starts ? FloatToken(text, i, fraction_or_exponent) : 0;
+    if (length > 0 && fraction_or_exponent) {
+      const size_t end = i + length;
       const bool word_follows = end < text.size() && (std::isalnum(static_cast<unsigned char>(text[end])) ||
                                                       text[end] == '_' || text[end] == '-' || text[end] == ':');
       if (!word_follows) {  // not a date, a time or part of a bare key
         // strtod, not stod: a subnormal or overflowing token is kept as written, never thrown on.
-        const std::string token = m.str(0);
+        const std::string token = text.substr(i, length);
         const double value = std::strtod(token.c_str(), nullptr);
         std::string shortest = std::isfinite(value) && value != 0.0 ? fmt::format("{}", value) : token;
         if (shortest.find_first_of(".eEni") == std::string::npos) shortest += ".0";

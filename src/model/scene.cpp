@@ -75,7 +75,9 @@ void CheckModal(const ModalStructureSpec& m, Checker& c) {
                           i, m.contact[i]));
 }
 
-void CheckPhysical(const PhysicalStructureSpec& p, Checker& c) {
+// `own_contact_dof`: contact_dof is the scene's (a [stop]); with [[contact]] tables it is
+// contact[0]'s DOF, checked (and located) there.
+void CheckPhysical(const PhysicalStructureSpec& p, bool own_contact_dof, Checker& c) {
   const auto N = p.mass.rows();
   const bool square_m = p.mass.rows() == p.mass.cols() && N > 0;
   const bool square_k = p.stiffness.rows() == p.stiffness.cols() && p.stiffness.rows() > 0;
@@ -97,8 +99,9 @@ void CheckPhysical(const PhysicalStructureSpec& p, Checker& c) {
               fmt::format("same size as structure.mass ({0}×{0})", N));
   c.Require(p.forcing_dof >= 0 && p.forcing_dof < N, "structure.forcing_dof",
             std::to_string(p.forcing_dof), fmt::format("a DOF index in [0, {})", N));
-  c.Require(p.contact_dof >= 0 && p.contact_dof < N, "structure.contact_dof",
-            std::to_string(p.contact_dof), fmt::format("a DOF index in [0, {})", N));
+  if (own_contact_dof)
+    c.Require(p.contact_dof >= 0 && p.contact_dof < N, "structure.contact_dof",
+              std::to_string(p.contact_dof), fmt::format("a DOF index in [0, {})", N));
 }
 
 // Magnitudes the double arithmetic of the engines can square and sum without overflow.
@@ -218,7 +221,7 @@ std::vector<InputIssue> Validate(const Scene& s) {
     CheckModal(*s.modal, c);
     n_listed = s.modal->frequencies.size();
   } else if (s.physical) {
-    CheckPhysical(*s.physical, c);
+    CheckPhysical(*s.physical, s.contacts.empty(), c);
     n_listed = s.physical->mass.rows();
   } else {
     c.Require(false, "structure", "",

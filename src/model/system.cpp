@@ -80,8 +80,10 @@ System::System(const Scene& scene) {
       omega_[i] = all_omega[k];
       if (scene.damping_ratios.size() > 0) zeta_[i] = scene.damping_ratios[k];
       // The component the first contact sees, σ_0 w_0ᵀφ (w_0 = e_B for a [stop]).
-      double phiB = phi[p.contact_dof];
-      if (first) {
+      double phiB = 0;
+      if (!first) {
+        phiB = phi[p.contact_dof];
+      } else {
         phiB = phi[first->dof];
         if (first->partner >= 0) phiB -= phi[first->partner];
         phiB *= sigma0;

@@ -64,6 +64,16 @@ Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, c
 // One-DOF, r = 0: the release phase is fixed by the model (docs/model.md §4.4), so no guess.
 Outcome ProveSticking1Dof(const IntervalModel& model, const ProofRequest& request, const Budget& budget);
 
+// A proof of an orbit of least period p (outcome.summary["period"]) asked for at a period Q that p
+// divides: the summary gains "requested_period": Q and the reason says that the orbit is also the
+// period-Q orbit (docs/prove.md "The period is the least period").
+inline void StateLeastPeriod(Outcome& outcome, int requested) {
+  const int p = outcome.summary["period"].get<int>();
+  outcome.summary["requested_period"] = requested;
+  outcome.reason += "; its least period " + std::to_string(p) + " divides the requested period " +
+                    std::to_string(requested) + ", so it is also the period-" + std::to_string(requested) + " orbit";
+}
+
 // ωt mod 2π, enclosed (the integer number of turns taken from the midpoint).
 Interval Phase(const IntervalModel& model, const Interval& t);
 // Floquet multipliers of an enclosed monodromy matrix (2n × 2n) and the verdict on stability.

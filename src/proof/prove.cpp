@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "proof/proof_common.hpp"
+#include "proof/prove_api.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -94,6 +95,7 @@ class ImpactRecorder final : public Observer {
 
 struct Found {
   std::string failure;  // "" when an impacting orbit was found
+  int requested = 0;    // --period Q of an orbit whose least period p < Q divides Q: Q (the proof is at p)
   bool sticking = false;
   bool stopped = false;  // the budget ended the search (time limit or stop request): no result
   proof::ImpactGuess guess;
@@ -185,11 +187,9 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   // The least period: the orbit's own (asked for none), or a refusal of a period it does not have.
   const int least = LeastPeriod(f.guess, sys.period());
   if (least < f.guess.period) {
-    if (request.period > 0) {
-      f.failure = fmt::format("the orbit found has period {}, not {}: its impacts repeat after {} forcing period(s) "
-                              "(prove it with --period {})", least, request.period, least, least);
-      return f;
-    }
+    // Asked for a period Q that the orbit's least period p divides: the orbit is proven at p (a
+    // p-periodic orbit is Q-periodic), and the result says so.
+    if (request.period > 0) f.requested = request.period;
     const auto keep = f.guess.times.size() * static_cast<std::size_t>(least) / static_cast<std::size_t>(f.guess.period);
     f.guess.times.resize(keep);
     f.guess.X.resize(keep);
@@ -264,6 +264,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
   result.summary_json = summary.dump();
   result.kind = kind;
   if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
+  if (summary.contains("requested_period")) result.requested_period = summary["requested_period"].get<int>();
   const auto enclosure = [](const Json& p) { return Enclosure{p[0].get<double>(), p[1].get<double>()}; };
   for (const auto& e : summary["events"])
     result.events.push_back({e["kind"].get<std::string>(), enclosure(e["phase"]), enclosure(e["velocity_before"]),
@@ -287,7 +288,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
 
 }  // namespace
 
-ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
+ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
   const proof::Budget budget(request.time_limit, request.stop_requested);
   const auto model = ModelOf(system);
   proof::Outcome outcome;
@@ -327,6 +328,7 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
       else if (PlasticImpact(system, found.guess))
         outcome.reason = "r = 0: every impact is plastic (try --kind sticking)";
       else outcome = proof::ProveImpactOrbit(model, found.guess, request, budget);
+      if (outcome.proven && found.requested > 0) proof::StateLeastPeriod(outcome, found.requested);
     }
   }
   return Wrap(outcome, kind, model, request, budget, stage);
@@ -336,8 +338,9 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 
 namespace vibro {
 
-std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
-                                                const System& system_hi, const Scene& scene_hi, const ProofRequest& hi) {
+std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo,
+                                                       const ProofRequest& lo, const System& system_hi,
+                                                       const Scene& scene_hi, const ProofRequest& hi) {
   const proof::Budget budget(lo.time_limit, lo.stop_requested);
   auto model = ModelOf(system_lo);
   const auto model_hi = ModelOf(system_hi);
@@ -451,3 +454,10 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
 }
 
 }  // namespace vibro
+
+namespace {
+const VibroProveApi kApi{sizeof(vibro::ProofResult), sizeof(vibro::ProofRequest), &vibro::proof::ProveOrbit,
+                         &vibro::proof::ProveOrbitOverInterval};
+}  // namespace
+
+extern "C" __attribute__((visibility("default"))) const VibroProveApi* vibro_prove_api() { return &kApi; }

@@ -289,8 +289,9 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
   if (!ledger.Check(turns.InsideOpen(k - 1, k), "landing time / T", st, turns, fmt::format("inside ({}, {})", k - 1, k)))
     return finish(ledger.failed() + " (the landing meets a release phase)");
   const int q = static_cast<int>(k);
-  if (request.period > 0 && request.period != q)
-    return finish(fmt::format("the sticking orbit through the release has period {}, not {}", q, request.period));
+  if (request.period > 0 && request.period % q != 0)
+    return finish(fmt::format("the sticking orbit through the release has period {}, which does not divide {}", q,
+                              request.period));
   const Interval kT = Interval(k) * mdl.period;
   const Interval M2R = Abs(kappa) * Sqr(w) / TB;  // |R''| ≤ |κ| ω²/T_B
   const double rate_low = -rate.hi() * (1 - 1e-9);
@@ -332,6 +333,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
                                  q, flights.size(), t_end.width())
                    : fmt::format("exactly one period-{} sticking orbit through the release: release, {} flight(s) with "
                                  "plastic landings, sticking with R > 0 until the next release", q, flights.size());
+  if (request.period > q) StateLeastPeriod(out, request.period);
   return out;
 }
 

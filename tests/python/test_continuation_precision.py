@@ -194,3 +194,48 @@ def test_preload_grazing_whatever_the_end_value(tmp_path):
         g = b["bifurcations"][0]
         assert abs(mp.mpf(g["value"]) - a_g) < 1e-12 * a_g, (args, g, mp.nstr(a_g, 20))
         assert g["bracket"] < 1e-11, (args, g)
+
+
+SCENE_E = """
+[structure]
+mass = [[2.0, 0.0], [0.0, 1.0]]
+stiffness = [[4.0, -1.0], [-1.0, 1.0]]
+forcing_dof = 0
+damping_ratios = [0.02, 0.02]
+[[contact]]
+dof = 1
+side = "below"
+position = -0.1
+restitution = 0.0
+[[contact]]
+dof = 1
+side = "above"
+position = 0.1
+restitution = 0.0
+[excitation]
+amplitude = 0.3
+frequency = 0.9
+[initial]
+displacement = [0.0, 0.0]
+velocity = [0.0, 0.0]
+"""
+
+
+def test_one_bifurcation_per_transition(tmp_path):
+    """A tube in a loose support (r = 0 at both stops), continued in w from 0.9 down to 0.4: the
+    symmetric orbit's landings change on both contacts at once, near w = 0.4953695 (and back near
+    0.4211), each reported once, naming both contact sequences; no branch point there, and every
+    point's sequence is one of the branch's two."""
+    path = tmp_path / "tube.toml"
+    path.write_text(SCENE_E)
+    b = json.loads(vibro("continue", path, "--param", "excitation.frequency", "--to", 0.4, "--json"))
+    near = [x for x in b["bifurcations"] if abs(x["value"] - 0.4953695) < 1e-6]
+    assert len(near) == 1, b["bifurcations"]
+    assert near[0]["kind"] == "sticking-entry" and "contact sequence" in near[0]["detail"], near[0]
+    assert near[0]["bracket"] < 1e-7, near[0]
+    assert not [x for x in b["bifurcations"] if x["kind"] == "branch-point"], b["bifurcations"]
+    values = sorted(x["value"] for x in b["bifurcations"])
+    assert all(v2 - v1 > 1e-6 for v1, v2 in zip(values, values[1:])), values
+    seqs = {p["sequence"] for p in b["points"]}
+    assert seqs == {"0:impact 0:stick 0:release 1:impact 1:stick 1:release",
+                    "0:impact*2 0:stick 0:release 1:impact*2 1:stick 1:release"}, seqs

@@ -32,9 +32,20 @@ def test_prove_proves_a_chattering_orbit_and_says_why_it_does_not_prove_another(
     assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
 
 
-def test_prove_refuses_a_damped_scene_and_a_bad_period():
-    with pytest.raises(ValueError, match="undamped"):
-        vibro.prove(os.path.join(SCENES, "chain2_damped.toml"))
+def test_prove_proves_a_damped_two_contact_orbit_and_refuses_a_bad_period(tmp_path):
+    """Damped models and several contacts (issue 40): the tube in its two-sided loose support, as
+    the command proves it; its certificate confirmed."""
+    scene = os.path.join(SCENES, "tube_loose_support.toml")
+    cert = tmp_path / "tube.json"
+    r = vibro.prove(scene, out=cert)
+    p = subprocess.run([CLI, "prove", scene, "--json"], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert r == json.loads(p.stdout)
+    assert r["verdict"] == "proven" and sorted(e["contact"] for e in r["events"]) == [0, 1]
+    c = subprocess.run([sys.executable, CHECKER, str(cert)], capture_output=True, text=True, timeout=600)
+    assert c.returncode == 0, c.stdout + c.stderr
+    r = vibro.prove(os.path.join(SCENES, "chain2_damped.toml"))
+    assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
     with pytest.raises(ValueError):
         vibro.prove(os.path.join(SCENES, "fig04_subharmonic.toml"), period=-1)
 

@@ -11,6 +11,9 @@ through the real `vibro` binary.
   the double and the quad run inside every gap, the gaps recomputed here from /samples/X and the
   model's mode shapes; status ok; double's events equal quad's and both equal those of the
   independent 40-digit reference (tests/reference/contacts/reference.py, compare.py).
+* tests/scenes/contacts_pair_chatter_one_point.toml (scene C): two contacts chattering into one
+  accumulation point end `undetermined` in every engine (double, quad, CVODE), where the
+  independent reference raises Undetermined, with a message that names both contacts.
 * --search N: the first N scenes of tests/reference/contacts/random_search.py (seed 1), the same
   checks on random scenes with 3-6 contacts, impact pairs included.
 """
@@ -96,6 +99,36 @@ def main():
         for prec, tol in (("double", 1e-11), ("quad", 1e-12)):
             res = compare.compare(ref, runs[prec][0], runs[prec][1], tol=tol, vtol=1e-9)
             check(f"scene B {prec}: the reference's events", res.ok and res.matched > 150, res)
+
+    # Scene C: two contacts chattering into one accumulation point: undetermined in every engine,
+    # where the independent reference stops (it raises Undetermined for such a sequence), with a
+    # message that names both contacts and never says they are dependent.
+    c = os.path.join(args.scenes, "contacts_pair_chatter_one_point.toml")
+    import reference
+    try:
+        reference.main([c, "--out", os.path.join(tmp, "C_reference.csv")])
+    except SystemExit:
+        pass
+    sim = reference.Simulation(reference.Scene("C", open(c).read()))
+    t_ref = None
+    try:
+        sim.run(10)
+    except reference.Undetermined as e:
+        t_ref = float(str(e).rsplit("t = ", 1)[1])
+    check("scene C: the reference finds two contacts chattering to one point", t_ref is not None)
+    for label, sets in (("double", []), ("quad", ['run.precision="quad"']), ("cvode", ['run.engine="cvode"'])):
+        out = os.path.join(tmp, f"C_{label}.h5")
+        p = simulate(args.vibro, c, out, *sets)
+        ev, T, status = compare.read_h5(out)
+        check(f"scene C {label}: undetermined (exit 3), never ok", status == "undetermined" and p.returncode == 3,
+              (status, p.returncode, p.stderr))
+        check(f"scene C {label}: the message names both contacts, not dependence",
+              "contacts 0 (q1 - q0 >= -0.394224) and 1 (q0 >= -0.461731) chatter together" in p.stderr
+              and "dependent" not in p.stderr, p.stderr)
+        if t_ref is not None and ev:
+            tol = 1e-6 if label == "cvode" else 1e-11
+            check(f"scene C {label}: stops where the reference does", abs(ev[-1].t - t_ref) <= tol * T,
+                  (ev[-1].t, t_ref))
 
     if args.search:
         code = random_search.main([args.vibro, "--count", str(args.search), "--seed", "1",

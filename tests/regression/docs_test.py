@@ -185,17 +185,30 @@ def check_titles(root):
         with open(path, "rb") as f:
             scene = tomllib.load(f)
         title = scene.get("title", "")
+        contacts = scene.get("contact", [])
         for sym, value in re.findall(r"(?<![\w.])(r|omega|ω|f|x0)\s*=\s*([-+]?[0-9.]+(?:[eE][-+]?\d+)?)", title):
             table, key = keys[sym]
+            if table == "stop" and contacts:
+                # A [[contact]] scene: the title's r (or x0) is every contact's restitution (or position).
+                actual = [c.get(key) for c in contacts]
+                claims += 1
+                expect(all(a is not None and abs(float(value) - a) <= 1e-9 * max(1.0, abs(a)) for a in actual),
+                       f"{rel}: the title says {sym} = {value}, contact[].{key} are {actual}")
+                continue
             actual = scene.get(table, {}).get(key)
             claims += 1
             expect(actual is not None and abs(float(value) - actual) <= 1e-9 * max(1.0, abs(actual)),
                    f"{rel}: the title says {sym} = {value}, {table}.{key} is {actual}")
         x0 = scene.get("stop", {}).get("position")
+        # A contact's gap at the origin: position < 0 below (clearance), position > 0 above (clearance).
+        opens = [(-1 if c.get("side", "below") == "below" else 1) * c["position"] > 0 for c in contacts
+                 if "position" in c]
         if "preload" in title:
-            expect(x0 is not None and x0 > 0, f"{rel}: the title says preload, stop.position is {x0}")
+            expect((x0 is not None and x0 > 0) or (opens and not all(opens)),
+                   f"{rel}: the title says preload, stop.position is {x0}, contacts open at 0: {opens}")
         if "clearance" in title:
-            expect(x0 is not None and x0 < 0, f"{rel}: the title says clearance, stop.position is {x0}")
+            expect((x0 is not None and x0 < 0) or (opens and any(opens)),
+                   f"{rel}: the title says clearance, stop.position is {x0}, contacts open at 0: {opens}")
         stored = os.path.splitext(path)[0] + ".h5"
         if "benchmarks" in rel and os.path.exists(stored):
             with h5py.File(stored, "r") as f:

@@ -250,5 +250,27 @@ with tempfile.TemporaryDirectory() as d:
     off = max(max(abs(qd[:, i].max() - qf[:, i].max()), abs(qd[:, i].min() - qf[:, i].min())) / np.ptp(qf[:, i])
               for i in range(qf.shape[1]))
     check("several contacts: the dense q of 32 samples a period reach the extremes of 2048", off <= 1e-4, off)
+    # A refused plot writes nothing (issue 38): every option is checked before the first picture,
+    # here options that were refused only after PREFIX_loads had been written.
+    for prefix, options, why in (("refq", ("--coordinate", "q7"), "--coordinate"),
+                                 ("refw", ("--time-window", "1e300,1e301"), "--time-window"),
+                                 ("refo", ("--overlay", beam), "--overlay")):
+        p = plot(beam, prefix, *options)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"several contacts: plot {' '.join(options[:1])} refused (exit 2, says why), nothing written",
+              p.returncode == 2 and why in p.stderr and not made, (p.returncode, p.stderr, made))
+    p = plot(c3, "refw3", "--time-window", "1e300,1e301")
+    made = [n for n in os.listdir(d) if n.startswith("refw3")]
+    check("--time-window outside the run: exit 2, nothing written", p.returncode == 2 and not made,
+          (p.returncode, p.stderr, made))
+    # A title matplotlib cannot typeset, or too long for any picture: named, not "data damaged".
+    for prefix, title, why in (("reft1", "$\\frac{$", "cannot typeset"), ("reft2", "x" * 10000, "10000 characters")):
+        p = plot(c3, prefix, "--title", title)
+        made = [n for n in os.listdir(d) if n.startswith(prefix)]
+        check(f"--title {title[:12]!r}: exit 2 naming the title, nothing written",
+              p.returncode == 2 and "--title" in p.stderr and why in p.stderr and "damaged" not in p.stderr
+              and len(p.stderr.strip().splitlines()) == 1 and not made, (p.returncode, p.stderr[:300], made))
+    p = plot(c3, "okt", "--title", "$\\omega = 1.2$, $x_B$")
+    check("--title with mathtext that typesets: exit 0", p.returncode == 0, p.stderr)
 
 finish()

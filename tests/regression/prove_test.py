@@ -444,7 +444,8 @@ except subprocess.TimeoutExpired:
     expect(False, "--time-limit 0.001 over a search of 10^6 periods was still running after 120 s")
 
 # Bounded memory for any --period: Fig. 5 with --period 4096 under a 2 GiB address-space limit
-# (it ended with bad_alloc, exit 1, at 8 GB); the orbit found has period 1, which is said.
+# (it ended with bad_alloc, exit 1, at 8 GB); the orbit found has least period 1: it is proven at
+# period 1, and the result says that 1 divides the period asked for (issue 40).
 
 
 def limit_memory():
@@ -452,12 +453,27 @@ def limit_memory():
 
 
 for period in ("4096", "2"):
-    p = subprocess.run([VIBRO, "prove", fig5, "--period", period, "--kind", "impact", "--json"], capture_output=True,
-                       text=True, timeout=600, preexec_fn=limit_memory)
+    path = os.path.join(TMP, f"fig05_period{period}.json")
+    p = subprocess.run([VIBRO, "prove", fig5, "--period", period, "--kind", "impact", "--json", "--out", path],
+                       capture_output=True, text=True, timeout=600, preexec_fn=limit_memory)
     s = json.loads(p.stdout) if p.stdout.strip() else {}
-    expect(p.returncode == 4 and "has period 1, not " + period in s.get("reason", ""),
-           f"--period {period} on Fig. 5 (a period-1 orbit): not proven, the true period said, under 2 GiB "
+    expect(p.returncode == 0 and s.get("period") == 1 and s.get("requested_period") == int(period) and
+           f"its least period 1 divides the requested period {period}" in s.get("reason", ""),
+           f"--period {period} on Fig. 5 (a period-1 orbit): proven with its least period 1 stated, under 2 GiB "
            f"(exit {p.returncode}: {s.get('reason')} {p.stderr[-200:]})")
+    code, v = check(path)
+    expect(code == 0, f"--period {period}: the checker confirms the least period and the statement ({v})")
+    if code == 0:
+        cert = json.load(open(path))
+        checked_mutant(cert, lambda c: c["summary"].__setitem__("requested_period", 3), f"period{period}_requested_3")
+        checked_mutant(cert, lambda c: c["summary"].pop("requested_period"), f"period{period}_no_requested")
+        checked_mutant(cert, lambda c: (c.__setitem__("period", 2), c["summary"].__setitem__("period", 2)),
+                       f"period{period}_claimed_2")
+code, s, err = prove("fig04_subharmonic.toml", "--period", "4")
+expect(code == 0 and s["period"] == 2 and s.get("requested_period") == 4,
+       f"Fig. 4 --period 4: its period-2 sticking orbit proven, least period 2 stated (exit {code}: {s and s['reason']})")
+code, s, err = prove("fig04_subharmonic.toml", "--period", "3")
+expect(code == 4 and "does not divide 3" in s["reason"], f"Fig. 4 --period 3: not proven ({s and s['reason']})")
 
 # The messages give the true reason (issue 37 item 12): an undamped r = 0 2-DOF orbit whose plastic
 # impacts leave the stop at once was "the orbit found has no impact".

@@ -106,6 +106,28 @@ TEST(SceneFile, EveryConstraintIsRejected) {
   ExpectRejected(kPhysical, "structure.mass=[[1.0, 0.0], [0.0]]", "structure.mass", "equal length");
 }
 
+// A [[contact]] table's DOF out of range: one located line about contact[0].dof, and none about
+// structure.contact_dof, a key the scene does not have (issue 38).
+TEST(SceneFile, ContactDofOutOfRangeIsReportedOnceWhereItIsWritten) {
+  const std::string text = R"([structure]
+mass = [[1.0, 0.0], [0.0, 1.0]]
+stiffness = [[2.0, -1.0], [-1.0, 1.0]]
+forcing_dof = 0
+[[contact]]
+dof = 2
+side = "above"
+position = 1.0
+restitution = 0.5
+[excitation]
+amplitude = 1.5
+frequency = 1.2
+)";
+  const auto problems = Problems(text, {});
+  ASSERT_EQ(problems.size(), 1u) << (problems.empty() ? "accepted" : problems.front() + " / " + problems.back());
+  EXPECT_THAT(problems[0], AllOf(HasSubstr("scene.toml:6"), HasSubstr("contact[0].dof"), HasSubstr("[0, 2)")));
+  EXPECT_THAT(problems[0], ::testing::Not(HasSubstr("contact_dof")));
+}
+
 TEST(SceneFile, InitialStateMustBeAdmissible) {
   // x_B = 1ᵀX = 0.9 < x0 = 1: inside the stop.
   auto p = Problems(kModal, {"initial.displacement=[0.5, 0.4]", "initial.velocity=[0.0, 0.0]"});

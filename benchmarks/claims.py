@@ -1,0 +1,279 @@
+#!/usr/bin/python3
+"""The claims check: every speed figure the README and docs/ quote that a benchmark of this tree
+can measure, measured again in one run and printed beside the figure as the docs state it.
+
+The claimed values are read from the documents themselves (each claim is a pattern over one
+document's text), so a figure edited in the docs is checked as edited, and a claim whose text is no
+longer found is reported (`missing`), never skipped silently. The measurements come from the
+project's Google Benchmark programs, run once each with `--benchmark_repetitions=R` so that every
+figure has a spread (the smallest and the largest of the R repetitions) besides its median:
+
+  vibro_bench          events/s of the exact engine, the store's share of the speed, the cost per
+                       event with several contacts, the Lyapunov exponents' cost, proof, orbit and
+                       continuation times, the basin's cells/s;
+  vibro_loads_bench    loads/plain;
+  vibro_startup_bench  a whole process's CPU over /bin/true.
+
+Verdict per claim: `holds` when the claimed value (or range) and the measured [min, max], each
+widened by the tolerance (default 10 %: the machine is shared), overlap; `faster` or `slower` when
+the measurement lies wholly above or below (a rate above its claim is `faster`, a time below its
+claim too). The figures of the peers' comparison come from benchmarks/peers/run_all.py (about ten
+minutes) and are checked against its CSV, docs/peers.csv, when --peers is given (it runs it).
+
+Usage: /usr/bin/python3 benchmarks/claims.py [--build build] [--repetitions 5] [--tolerance 0.1]
+       [--quick] [--peers]
+--quick: one short repetition per benchmark (a smoke run: the output's form, not the figures).
+Exit status 0 when it ran (whatever the verdicts), 2 when a benchmark program failed.
+"""
+import argparse
+import json
+import os
+import re
+import statistics
+import subprocess
+import sys
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+class Claim:
+    """One quoted figure: doc, a regex whose group 1 is the figure (a number with k/M/ms/µs, or a
+    range a–b), what measures it, and whether larger is better (a rate) or worse (a time)."""
+
+    def __init__(self, name, doc, pattern, measure, unit, scale=1.0, rate=True, invert=False):
+        self.name, self.doc, self.pattern, self.measure = name, doc, pattern, measure
+        self.unit, self.scale, self.rate, self.invert = unit, scale, rate, invert
+
+
+# measure = (program, benchmark name, counter) or ("ratio", (program, name, counter), (program, name, counter))
+VB, LB, SB = "vibro_bench", "vibro_loads_bench", "vibro_startup_bench"
+CLAIMS = [
+    Claim("start-up: vibro --version over /bin/true", "README.md",
+          r"`vibro --version` costs ([0-9.–]+) ms of CPU more than a bare process", (SB, "BM_VibroVersion", "over_bare_ms"),
+          "ms", rate=False),
+    Claim("start-up: 20-period Fig. 8 run over /bin/true", "README.md",
+          r"a 20-period run ([0-9.–]+) ms", (SB, "BM_VibroSimulate20Periods", "over_bare_ms"), "ms", rate=False),
+    Claim("events/s, Fig. 8 (BM_Events1Dof)", "README.md", r"\| Fig\. 8, 1 DOF \| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Events1Dof", "events/s"), "events/s"),
+    Claim("events/s, Fig. 5 end to end", "README.md", r"\| Fig\. 5, end to end \| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Fig5StickingEndToEnd", "events/s"), "events/s"),
+    Claim("events/s, 2-DOF chain", "README.md", r"\| 2-DOF chain \| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Events2Dof", "events/s"), "events/s"),
+    Claim("events/s, 3-DOF chain", "README.md", r"\| 3-DOF chain \| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Events3Dof", "events/s"), "events/s"),
+    Claim("events/s, 10-DOF stiff chain", "README.md", r"\| 10-DOF stiff chain[^|]*\| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Events10DofStiff", "events/s"), "events/s"),
+    Claim("µs per event, 50-mode beam", "README.md", r"\| 50-node beam, 50 modes \| ([0-9.]+) µs per event",
+          (VB, "BM_BeamModes/50", "events/s"), "µs", scale=1e6, rate=False, invert=True),
+    Claim("HDF5 store: share of the speed kept", "README.md", r"HDF5 store keeps ([0-9.]+) of its",
+          ("ratio", (VB, "BM_Fig8Store", "events/s"), (VB, "BM_Fig8NoStore", "events/s")), ""),
+    Claim("HDF5 store: share of the speed kept", "docs/performance.md",
+          r"a long run keeps \*\*([0-9.]+)\*\* of its", ("ratio", (VB, "BM_Fig8Store", "events/s"),
+                                                            (VB, "BM_Fig8NoStore", "events/s")), ""),
+    Claim("several contacts: µs per event, 1 contact", "docs/contacts.md", r"1, 2, 4 and 8 contacts[^:]*:\s+([0-9.]+),",
+          (VB, "BM_ChainContacts/1", "s/event"), "µs", scale=1e6, rate=False),
+    Claim("several contacts: µs per event, 2 contacts", "docs/contacts.md",
+          r"1, 2, 4 and 8 contacts[^:]*:\s+[0-9.]+, ([0-9.]+),", (VB, "BM_ChainContacts/2", "s/event"), "µs",
+          scale=1e6, rate=False),
+    Claim("several contacts: µs per event, 4 contacts", "docs/contacts.md",
+          r"1, 2, 4 and 8 contacts[^:]*:\s+[0-9.]+, [0-9.]+, ([0-9.]+) and", (VB, "BM_ChainContacts/4", "s/event"),
+          "µs", scale=1e6, rate=False),
+    Claim("several contacts: µs per event, 8 contacts", "docs/contacts.md",
+          r"1, 2, 4 and 8 contacts[^:]*:\s+[0-9.]+, [0-9.]+, [0-9.]+ and ([0-9.]+) µs", (VB, "BM_ChainContacts/8", "s/event"),
+          "µs", scale=1e6, rate=False),
+    Claim("loads/plain, Fig. 8", "docs/loads.md", r"\| Fig\. 8 \(`fig08_preload.toml`\) \|[^|]*\|[^|]*\| ([0-9.]+) \|",
+          (LB, "BM_LoadsFig8", "loads/plain"), ""),
+    Claim("loads/plain, 3-DOF chain as BM_Events3Dof", "docs/loads.md",
+          r"\| 3-DOF chain as `BM_Events3Dof`[^|]*\|[^|]*\|[^|]*\| ([0-9.]+) \|", (LB, "BM_LoadsChain3", "loads/plain"), ""),
+    Claim("loads/plain, 3-DOF chain r = 0.5", "docs/loads.md",
+          r"\| 3-DOF chain, r = 0\.5 \(chattering, sticking\) \|[^|]*\|[^|]*\| ([0-9.]+) \|",
+          (LB, "BM_LoadsChain3Chattering", "loads/plain"), ""),
+    Claim("loads/plain, chain3.toml", "docs/loads.md",
+          r"\| 3-DOF chain, r = 0 \(`chain3.toml`[^|]*\|[^|]*\|[^|]*\| ([0-9.]+) \|",
+          (LB, "BM_LoadsChain3Sticking", "loads/plain"), ""),
+    Claim("Lyapunov cost, Fig. 8", "docs/performance.md", r"\| Fig\. 8, 1 DOF \(`fig08_preload.toml`\) \| [0-9.]+ \| \*\*([0-9.]+)\*\* \|",
+          (VB, "BM_LyapunovCost_Fig8", "with/without"), "", rate=False),
+    Claim("Lyapunov cost, 2-DOF chain", "docs/performance.md", r"\| 2-DOF chain \(`chain2.toml`\) \| [0-9.]+ \| \*\*([0-9.]+)\*\* \|",
+          (VB, "BM_LyapunovCost_Chain2", "with/without"), "", rate=False),
+    Claim("Lyapunov cost, 3-DOF chain as BM_Events3Dof", "docs/performance.md",
+          r"\| 3-DOF chain as `BM_Events3Dof`[^|]*\| [0-9.]+ \| \*\*([0-9.]+)\*\* \|",
+          (VB, "BM_LyapunovCost_Chain3", "with/without"), "", rate=False),
+    Claim("Lyapunov cost, chain3.toml", "docs/performance.md",
+          r"\| 3-DOF chain as shipped \(`chain3.toml`[^|]*\| [0-9.]+ \| \*\*([0-9.]+)\*\* \|",
+          (VB, "BM_LyapunovCost_Chain3Sticking", "with/without"), "", rate=False),
+    Claim("Lyapunov cost, chaotic 2-DOF", "docs/performance.md",
+          r"\| chaotic 2-DOF \(`chaotic/chain2_sticking.toml`\) \| [0-9.]+ \| \*\*([0-9.]+)\*\* \|",
+          (VB, "BM_LyapunovCost_Chain2Chaotic", "with/without"), "", rate=False),
+    Claim("proof time, Fig. 5 single-impact orbit", "docs/prove.md", r"Fig\. 5's single-impact orbit ([0-9.]+) ms",
+          (VB, "BM_Prove1DofImpact", "cpu_time"), "ms", rate=False),
+    Claim("proof time, Fig. 4 sticking orbit", "docs/prove.md", r"Fig\. 4's sticking orbit ([0-9.]+) ms",
+          (VB, "BM_Prove1DofSticking", "cpu_time"), "ms", rate=False),
+    Claim("proof time, Fig. 8 chattering orbit", "docs/prove.md", r"then the tail\) ([0-9.]+) ms",
+          (VB, "BM_Prove1DofChattering", "cpu_time"), "ms", rate=False),
+    Claim("proof time, 2-DOF six-impact orbit", "docs/prove.md", r"\(f = 5\) ([0-9.]+) ms",
+          (VB, "BM_Prove2DofImpact", "cpu_time"), "ms", rate=False),
+    Claim("orbit solve, 1-DOF", "docs/orbits.md", r"one run\): 1-DOF ([0-9.]+) ms", (VB, "BM_Orbit1Dof", "cpu_time"),
+          "ms", rate=False),
+    Claim("orbit solve, 2-DOF", "docs/orbits.md", r"\n2-DOF ([0-9.]+) ms", (VB, "BM_Orbit2Dof", "cpu_time"), "ms", rate=False),
+    Claim("orbit solve, 3-DOF", "docs/orbits.md", r"3-DOF ([0-9.]+) ms, damped", (VB, "BM_Orbit3Dof", "cpu_time"), "ms",
+          rate=False),
+    Claim("orbit solve, 10-DOF stiff chain", "docs/orbits.md", r"10-DOF stiff chain ([0-9.]+) ms",
+          (VB, "BM_Orbit10Dof", "cpu_time"), "ms", rate=False),
+    Claim("continuation, 1-DOF points/s", "docs/orbits.md", r"dense branches\): 1-DOF ([0-9 ]+) points/s",
+          (VB, "BM_Continue1Dof/1000", "points_per_s"), "points/s"),
+    Claim("continuation, 2-DOF points/s", "docs/orbits.md", r"\n2-DOF ([0-9 ]+)/s", (VB, "BM_Continue2Dof/1000", "points_per_s"),
+          "points/s"),
+    Claim("continuation, 3-DOF points/s", "docs/orbits.md", r"3-DOF ([0-9 ]+)/s, so", (VB, "BM_Continue3Dof/1000", "points_per_s"),
+          "points/s"),
+    Claim("basin cells/s, 1 thread, early stops", "docs/performance.md", r"\| early stops \(default\) \| ([0-9 ]+) cells/s",
+          (VB, "Basin/threads:1/early_stop:1", "cells/s"), "cells/s"),
+    Claim("basin cells/s, 2 threads, early stops", "docs/performance.md",
+          r"\| early stops \(default\) \| [0-9 ]+ cells/s \| ([0-9 ]+) cells/s", (VB, "Basin/threads:2/early_stop:1", "cells/s"), "cells/s"),
+]
+NOT_REMEASURED = [
+    ("docs/performance.md", "before/after tables against commit eca2cf0 and the other engines before a change",
+     "history: the ratios against an older commit need that commit built; the current rates are checked above"),
+    ("docs/chattering.md", "chattering treatment before/after (ms per run)", "history of one change"),
+    ("docs/engines.md", "CVODE settings' cost (ms per run)", "measured by benchmarks/work_precision.py"),
+    ("README.md, docs/studies.md", "the 512 × 512 basin in 9.7 s / 21 s",
+     "a minute-long CLI run: docs/performance.md gives its command; cells/s of the same study are checked above"),
+    ("README.md, docs/peers.md", "the peers' ratios", "benchmarks/peers/run_all.py (--peers)"),
+]
+
+NUMBER = re.compile(r"([0-9][0-9 ]*(?:\.[0-9]+)?)\s*([kM]?)")
+
+
+def parse_claim(text, scale_unit):
+    """(lo, hi) of a figure as written: '1.42 M', '823k', '1.36–1.38', '2 860'."""
+    parts = re.split(r"–|-(?=[0-9])", text.strip())
+    values = []
+    for p in parts:
+        m = NUMBER.match(p.strip())
+        if not m:
+            return None
+        v = float(m.group(1).replace(" ", ""))
+        v *= {"": 1.0, "k": 1e3, "M": 1e6}[m.group(2)]
+        values.append(v)
+    return min(values), max(values)
+
+
+def run_benchmarks(build, program, names, repetitions, quick):
+    """{benchmark name: {counter: [value per repetition]}} of one program run."""
+    exe = os.path.join(build, "benchmarks", program)
+    pattern = "^(" + "|".join(re.escape(n) for n in sorted(set(names))) + ")(/min_time:.*|/real_time|/manual_time)*$"
+    cmd = [exe, f"--benchmark_filter={pattern}", "--benchmark_format=json",
+           f"--benchmark_repetitions={1 if quick else repetitions}", "--benchmark_report_aggregates_only=false"]
+    if quick:
+        cmd.append("--benchmark_min_time=0.01")
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError(f"{program} failed (exit {p.returncode}): {p.stderr[-500:]}")
+    out = {}
+    for b in json.loads(p.stdout)["benchmarks"]:
+        if b.get("run_type") != "iteration":
+            continue
+        name = "/".join(x for x in b["run_name"].split("/")
+                        if not re.match(r"(min_time:|repeats:|real_time$|manual_time$)", x))
+        row = out.setdefault(name, {})
+        to_ms = {"ns": 1e-6, "us": 1e-3, "ms": 1.0, "s": 1e3}[b.get("time_unit", "ns")]
+        row.setdefault("cpu_time", []).append(b["cpu_time"] * to_ms)  # CPU per iteration, ms
+        for k, v in b.items():
+            if isinstance(v, (int, float)) and k not in ("cpu_time", "real_time", "iterations", "repetitions",
+                                                         "repetition_index", "threads", "family_index",
+                                                         "per_family_instance_index"):
+                row.setdefault(k, []).append(float(v))
+    return out
+
+
+def measured(claim, results):
+    """(median, min, max) of a claim's measurement in its unit, or None."""
+    m = claim.measure
+    if m[0] == "ratio":
+        num, den = (results.get(x[0], {}).get(x[1], {}).get(x[2]) for x in m[1:])
+        if not num or not den:
+            return None
+        vals = [a / b for a, b in zip(num, den)]
+    else:
+        vals = results.get(m[0], {}).get(m[1], {}).get(m[2])
+        if not vals:
+            return None
+        vals = [(1.0 / v if claim.invert else v) * claim.scale for v in vals]
+    return statistics.median(vals), min(vals), max(vals)
+
+
+def verdict(claim, lo_hi, meas, tol):
+    lo, hi = lo_hi
+    med, mlo, mhi = meas
+    if mhi * (1 + tol) >= lo and mlo * (1 - tol) <= hi:
+        return "holds"
+    above = mlo * (1 - tol) > hi
+    return ("faster" if above else "slower") if claim.rate else ("slower" if above else "faster")
+
+
+def show(x):
+    if x is None:
+        return "—"
+    a = abs(x)
+    if a >= 1e6:
+        return f"{x / 1e6:.3g} M"
+    if a >= 1e4:
+        return f"{x / 1e3:.3g}k"
+    if a >= 100:
+        return f"{x:.0f}"
+    return f"{x:.3g}"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--build", default=os.path.join(ROOT, "build"))
+    ap.add_argument("--repetitions", type=int, default=5)
+    ap.add_argument("--tolerance", type=float, default=0.10)
+    ap.add_argument("--quick", action="store_true", help="one short repetition each (a smoke run)")
+    ap.add_argument("--peers", action="store_true", help="also run benchmarks/peers/run_all.py")
+    args = ap.parse_args()
+    texts = {}
+    for c in CLAIMS:
+        if c.doc not in texts:
+            with open(os.path.join(ROOT, c.doc), encoding="utf-8") as fh:
+                texts[c.doc] = fh.read()
+    wanted = {}
+    for c in CLAIMS:
+        for x in ([c.measure[1], c.measure[2]] if c.measure[0] == "ratio" else [c.measure]):
+            wanted.setdefault(x[0], set()).add(x[1])
+    results = {}
+    failed = False
+    for program, names in wanted.items():
+        try:
+            results[program] = run_benchmarks(args.build, program, names, args.repetitions, args.quick)
+        except (RuntimeError, OSError, json.JSONDecodeError) as e:
+            print(f"error: {e}", file=sys.stderr)
+            failed = True
+    print(f"claims check: {len(CLAIMS)} figures, {1 if args.quick else args.repetitions} repetition(s) each, "
+          f"tolerance {args.tolerance:.0%}{' (quick: the form only, not the figures)' if args.quick else ''}")
+    print(f"{'claim':46s} | {'where':20s} | {'claimed':>13s} | {'measured median [min, max]':>30s} | verdict")
+    counts = {}
+    for c in CLAIMS:
+        found = re.findall(c.pattern, texts[c.doc])
+        lo_hi = parse_claim(found[0], c.unit) if len(found) == 1 else None
+        meas = measured(c, results)
+        if lo_hi is None:
+            v = "missing" if not found else ("ambiguous" if len(found) > 1 else "unreadable")
+        elif meas is None:
+            v = "not measured"
+        else:
+            v = verdict(c, lo_hi, meas, args.tolerance)
+        counts[v] = counts.get(v, 0) + 1
+        claimed = "—" if lo_hi is None else (show(lo_hi[0]) if lo_hi[0] == lo_hi[1] else
+                                             f"{show(lo_hi[0])}–{show(lo_hi[1])}")
+        got = "—" if meas is None else f"{show(meas[0])} [{show(meas[1])}, {show(meas[2])}]"
+        print(f"{c.name:46s} | {c.doc:20s} | {claimed + ' ' + c.unit:>13s} | {got + ' ' + c.unit:>30s} | {v}")
+    for doc, what, why in NOT_REMEASURED:
+        print(f"not re-measured: {doc}: {what} ({why})")
+    print("summary: " + ", ".join(f"{k} {n}" for k, n in sorted(counts.items())))
+    if args.peers:
+        subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "peers", "run_all.py")], check=False)
+    return 2 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,65 @@
+#!/usr/bin/env python3
+"""Every shipped scene's orbit is proven or refused with a reason docs/prove.md lists (issue 40).
+
+For each data/scenes/*.toml (contacts_*.toml included), `vibro prove SCENE --out CERT` must end in
+one of two ways:
+- exit 0, "proven", and the independent checker confirms the certificate;
+- exit 4, "not-proven", with a reason that contains one of the refusals listed in docs/prove.md
+  ("What is not proven") — each phrase below is looked up in that page, so a refusal the page does
+  not list fails the test.
+Usage: prove_scenes_test.py VIBRO CHECKER ROOT
+"""
+import glob
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+VIBRO, CHECKER, ROOT = sys.argv[1:4]
+TMP = tempfile.mkdtemp(prefix="vibro_prove_scenes_")
+# The refusals of docs/prove.md, as the prover words them.
+REFUSALS = (
+    "sticking orbits of a model with more than one mode are not proven by this version",
+    "sticking orbits of a model with several contacts are not proven by this version",
+    "sticking orbits with chattering (r > 0) of a damped model are not proven by this version",
+    "the Poincaré solver found no orbit to prove",
+    "an orbit through a simultaneous impact is not proven",
+    "a grazing orbit cannot be proven",
+    "impacting orbits with plastic impacts are not proven by this version",
+)
+failures = []
+
+
+def expect(cond, what):
+    print(("ok    " if cond else "FAIL  ") + what, flush=True)
+    if not cond:
+        failures.append(what)
+
+
+doc = open(os.path.join(ROOT, "docs", "prove.md"), encoding="utf-8").read()
+for phrase in REFUSALS:
+    expect(phrase in doc, f"docs/prove.md lists the refusal '{phrase}'")
+
+scenes = sorted(glob.glob(os.path.join(ROOT, "data", "scenes", "*.toml")))
+expect(len(scenes) >= 15, f"{len(scenes)} shipped scenes")
+proven = 0
+for scene in scenes:
+    name = os.path.basename(scene)
+    cert = os.path.join(TMP, name.replace(".toml", ".json"))
+    p = subprocess.run([VIBRO, "prove", scene, "--json", "--time-limit", "60", "--out", cert], capture_output=True,
+                       text=True, timeout=600)
+    s = json.loads(p.stdout) if p.stdout.strip() else {}
+    if p.returncode == 0:
+        c = subprocess.run([sys.executable, CHECKER, cert], capture_output=True, text=True, timeout=900)
+        expect(s.get("verdict") == "proven" and c.returncode == 0,
+               f"{name}: proven, and the checker confirms ({c.stdout.strip()[:160]})")
+        proven += 1
+    else:
+        reason = s.get("reason", "")
+        listed = [r for r in REFUSALS if r in reason]
+        expect(p.returncode == 4 and s.get("verdict") == "not-proven" and listed,
+               f"{name}: refused with a listed reason (exit {p.returncode}: {reason[:200]} {p.stderr[-200:]})")
+print(f"{proven} of {len(scenes)} scenes proven, the others refused with a listed reason")
+print(f"{len(failures)} failure(s)")
+sys.exit(1 if failures else 0)
