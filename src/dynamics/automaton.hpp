@@ -181,6 +181,7 @@ class Automaton {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
       pair_speed_.assign(models_.size(), S(-1));
+      last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
         if (j >= specs.size()) {
@@ -231,7 +232,10 @@ class Automaton {
   bool Held(int j) const { return std::find(held_set_.begin(), held_set_.end(), j) != held_set_.end(); }
   SetStickingT<S>* SetEngine();
   SetStickingT<S>* SetEngineFor(const std::vector<int>& set, std::string& why);
-  bool ImpactWhileSetHeld(int k);
+  // `resting`: free contacts at zero gap, at rest or closing, that the impact at k reaches (they
+  // join its LCP); `was`: the held contacts (the set, or the single held contact).
+  bool ImpactWhileSetHeld(int k, const std::vector<int>& was, const std::vector<int>& resting = {});
+  std::vector<int> RestingBeside(int k) const;
   bool EnterActiveSet(std::vector<int> Z0, const std::vector<int>& was_held, bool emit_sticks = true);
   void ProjectOntoSet(const std::vector<int>& Z);
   int HeldChatter(int k, const S& speed, const S& floor);
@@ -255,6 +259,17 @@ class Automaton {
   Clock ToClock(const ClockT<S>& c) const { return {c.period, R::to_double(c.offset)}; }
   // What may resolve an undetermined sequence: quad precision where it is not already in use (it
   // runs every scene the double engine runs, damped sticking of several modes included).
+  // Several contacts: " at contact j (its constraint)", and the held ones; one contact: "".
+  std::string AtContact() const {
+    if (!multi()) return "";
+    std::string s = fmt::format(" at contact {} ({})", active_, labels_[static_cast<size_t>(active_)]);
+    if (held_set_.size() > 1) {
+      std::string who;
+      for (const int j : held_set_) who += (who.empty() ? "" : ", ") + std::to_string(j);
+      s += fmt::format(", contacts {} held", who);
+    }
+    return s;
+  }
   std::string UndeterminedHint() const {
     if (std::is_same_v<S, double>)
       return fmt::format("Use run.precision = \"quad\"{}, or move the parameter",
@@ -327,6 +342,10 @@ class Automaton {
   int pair_last_ = -1, pair_cascade_ = 0;
   double pair_t_ = 0;
   std::vector<S> pair_speed_;
+  // Several contacts: each contact's last impact time (a tail beside a recent impact of another
+  // contact is not one contact's chattering tail, RecentOtherImpact).
+  std::vector<double> last_impact_t_;
+  bool RecentOtherImpact(int k, const S& delta) const;
   std::vector<EventCounts> counts_;  // per contact
   S period_;
   double t0_;
@@ -404,6 +423,7 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
   Count(result_.counts, kind, simultaneous);
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
+  if (multi() && kind == EventKind::kImpact) last_impact_t_[static_cast<size_t>(contact)] = e.t;
   for (auto* o : opt_.observers) o->OnEvent(e);
 }
 
@@ -693,8 +713,9 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     ++result_.chatter.impacts_followed;
     return false;
   }
-  // Several contacts (MODEL §11.6): the tail holds only if every other gap stays open over it.
-  if (multi() && !TailClearOfOtherContacts(delta)) {
+  // Several contacts (MODEL §11.6): the tail holds only if every other gap stays open over it,
+  // and no other contact took part in the sequence.
+  if (multi() && (RecentOtherImpact(active_, delta) || !TailClearOfOtherContacts(delta))) {
     ++result_.chatter.impacts_followed;
     return false;
   }
@@ -994,8 +1015,8 @@ RunResult Automaton<S>::Run() {
     stretch_loads_ = false;
     if (seg.end == SegmentEnd::kFailure) {
       if (StopPolled()) continue;  // reported as an interruption at the top of the loop
-      Fail(fmt::format("{} (t = {:.17g}, mode {})", seg.message, AbsTime(clock_),
-                       mode_ == Mode::kFree ? "free flight" : "sticking"),
+      Fail(fmt::format("{} (t = {:.17g}, mode {}{})", seg.message, AbsTime(clock_),
+                       mode_ == Mode::kFree ? "free flight" : "sticking", AtContact()),
            seg.undetermined ? RunStatus::kUndetermined : RunStatus::kNumericalFailure);
       break;
     }
@@ -1016,9 +1037,9 @@ RunResult Automaton<S>::Run() {
     if (!Guarded()) break;
     stalled = seg.sigma <= tiny ? stalled + 1 : 0;
     if (stalled > 1000) {
-      Fail(fmt::format("no progress at t = {:.17g}: 1000 consecutive events without time "
+      Fail(fmt::format("no progress at t = {:.17g}{}: 1000 consecutive events without time "
                        "advancing (degenerate contact)",
-                       AbsTime(clock_)));
+                       AbsTime(clock_), AtContact()));
       break;
     }
     if (seg.end == SegmentEnd::kLimit) {
@@ -1031,9 +1052,9 @@ RunResult Automaton<S>::Run() {
     if (seg.end == SegmentEnd::kContact) {
       if (!(multi() ? OnContactMulti(seg.contact) : OnContact())) break;
       if (grazing_streak_ > 1000) {
-        Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}: the contact is "
+        Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}{}: the contact is "
                          "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
-                         AbsTime(clock_),
+                         AbsTime(clock_), AtContact(),
                          cvode_ ? "; tighten run.rtol or use run.engine = \"exact\""
                                 : " (e.g. next to a rising bifurcation); move the parameter slightly"));
         break;

@@ -261,6 +261,18 @@ bool Automaton<S>::TailClearOfOtherContacts(const S& delta) {
   return r.end == SegmentEnd::kLimit;
 }
 
+// Whether another contact had an impact within 10 tail lengths Δ∞ before now: the sequence at k is
+// then interleaved with that contact's impacts (two contacts chattering together, whose joint tail
+// is not predicted, MODEL §11.6), not one contact's tail. Its impacts are followed instead: they
+// either end (the tail at k alone is predicted a few impacts later) or meet PairChatter.
+template <class S>
+bool Automaton<S>::RecentOtherImpact(int k, const S& delta) const {
+  const double now = AbsTime(clock_), window = 10 * R::to_double(delta);
+  for (size_t j = 0; j < last_impact_t_.size(); ++j)
+    if (static_cast<int>(j) != k && now - last_impact_t_[j] < window) return true;
+  return false;
+}
+
 // Two contacts chattering at once toward one accumulation point (MODEL §11.6, docs/contacts.md):
 // impacts that alternate between two contacts, each closing slower than the last one at the same
 // contact, with flights below 1e-9 T. Their tail is not predicted (no geometric tail with one
@@ -299,7 +311,15 @@ bool Automaton<S>::PairChatter(int k) {
 template <class S>
 bool Automaton<S>::OnContactMulti(int k) {
   if (!PairChatter(k)) return false;
-  if (mode_ == Mode::kSticking) return held_set_.empty() ? ImpactWhileHeld(k) : ImpactWhileSetHeld(k);
+  if (mode_ == Mode::kSticking) {
+    // A free contact resting at zero gap beside the held ones (e.g. one that left at zero velocity
+    // at this instant) is reached by the impact's impulse: it joins the LCP, or the impulse would
+    // drive it through its stop unseen (its start divides that zero out).
+    const std::vector<int> was = held_set_.empty() ? std::vector<int>{active_} : held_set_;
+    const std::vector<int> resting = RestingBeside(k);
+    if (!resting.empty() || !held_set_.empty()) return ImpactWhileSetHeld(k, was, resting);
+    return ImpactWhileHeld(k);
+  }
   // Contacts closed at the same instant, within the rounding of their gaps and a window of a few
   // ulps of the period at their closing speed (MODEL §11.2.3): one impact LCP (§11.4).
   std::vector<int> Z{k};
@@ -711,6 +731,7 @@ int Automaton<S>::TryHeldAccumulation(int k) {
   }
   if (!(error <= chatter_tol_)) return 0;
   const S delta = delta0 * (S(1) + eps / 3);
+  if (RecentOtherImpact(k, delta)) return 0;
   // The held flow over the tail, k left out: nothing else may happen in it.
   PropagatorT<S>* p = held_set_.empty() ? engine_.get() : static_cast<PropagatorT<S>*>(SetEngine());
   if (!p) return -1;
@@ -739,15 +760,30 @@ int Automaton<S>::TryHeldAccumulation(int k) {
 // their speed after); those left at rest, and k if it lands plastically or arrives tangentially,
 // go to the acceleration LCP (S3).
 template <class S>
-bool Automaton<S>::ImpactWhileSetHeld(int k) {
+std::vector<int> Automaton<S>::RestingBeside(int k) const {
+  std::vector<int> out;
+  for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+    if (j == k || j == active_ || Held(j)) continue;
+    const ModelT<S>& c = M(j);
+    const S scale = R::abs(c.x0) + c.shape.cwiseProduct(X_).cwiseAbs().sum();
+    const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * c.shape.cwiseProduct(V_).cwiseAbs().sum();
+    if (gaps_[static_cast<size_t>(j)] <= S(System::kStopUlps) * Eps<S>() * scale && c.ContactVelocity(V_) <= floor)
+      out.push_back(j);
+  }
+  return out;
+}
+
+template <class S>
+bool Automaton<S>::ImpactWhileSetHeld(int k, const std::vector<int>& was, const std::vector<int>& resting) {
   const ModelT<S>& mk = M(k);
-  const std::vector<int> was = held_set_;
   X_ -= mk.contact * ((mk.ContactDisplacement(X_) - mk.x0) / mk.s_B);
-  ProjectOntoSet(was);
+  std::vector<int> Z = was;
+  Z.insert(Z.end(), resting.begin(), resting.end());
+  ProjectOnto<S>(models_, Z, X_, V_);  // the held and resting contacts at g = ġ = 0
   gaps_[static_cast<size_t>(k)] = 0;
+  for (const int j : resting) gaps_[static_cast<size_t>(j)] = 0;
   const S v_minus = mk.ContactVelocity(V_);
   const S floor = S(1000 * std::numeric_limits<double>::epsilon()) * mk.shape.cwiseProduct(V_).cwiseAbs().sum();
-  std::vector<int> Z = was;
   Z.push_back(k);
   if (!(v_minus < -floor)) {
     Emit(EventKind::kGrazing, v_minus, v_minus, k);
@@ -761,17 +797,32 @@ bool Automaton<S>::ImpactWhileSetHeld(int k) {
     q[a] = (S(1) + ma.r) * ma.ContactVelocity(V_);
   }
   Vec P;
-  if (!SolveLcp<S>(Delassus(models_, Z), q, Vec::Constant(z, S(64) * Eps<S>() * (R::abs(q[z - 1]) + S(1e-300))), P))
-    return Fail(fmt::format("contact {} hits at t = {:.17g} while {} contacts stick: the impact law "
-                            "has no solution (dependent contacts)",
-                            k, AbsTime(clock_), was.size()));
+  if (!SolveLcp<S>(Delassus(models_, Z), q, Vec::Constant(z, S(64) * Eps<S>() * (R::abs(q[z - 1]) + S(1e-300))), P)) {
+    std::string who;
+    for (size_t a = 0; a + 1 < Z.size(); ++a) who += (who.empty() ? "" : ", ") + std::to_string(Z[a]);
+    return Fail(fmt::format("contact {} ({}) hits at t = {:.17g} while contacts {} are at rest: the impact "
+                            "law has no solution (dependent contacts)",
+                            k, labels_[static_cast<size_t>(k)], AbsTime(clock_), who));
+  }
   Vb_ = V_;
   for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
-  for (Eigen::Index a = 0; a + 1 < z; ++a) loads_.AddImpulse(Z[static_cast<size_t>(a)], P[a]);  // held ones
+  for (size_t a = 0; a < was.size(); ++a) loads_.AddImpulse(was[a], P[static_cast<Eigen::Index>(a)]);  // held ones
   NotifyReset(ResetKind::kHeldSet, X_, Vb_);
   const S vk = mk.ContactVelocity(V_);
   Emit(EventKind::kImpact, v_minus, vk, k);
   std::vector<int> rest, stay;
+  for (size_t a = 0; a < resting.size(); ++a) {
+    // A resting free contact: pushed against its stop (an impact of zero speed, P > 0) or off it.
+    const int j = resting[a];
+    const S vj = M(j).ContactVelocity(V_);
+    const S Pj = P[static_cast<Eigen::Index>(was.size() + a)];
+    if (Pj > S(0)) Emit(EventKind::kImpact, M(j).ContactVelocity(Vb_), vj, j, true, Pj);
+    if (vj > floor) {
+      starts_[static_cast<size_t>(j)] = FlightStart::kAfterImpact;
+    } else {
+      rest.push_back(j);
+    }
+  }
   for (const int j : was) {
     const S vj = M(j).ContactVelocity(V_);
     if (vj > floor) {  // pushed off its stop
@@ -789,7 +840,8 @@ bool Automaton<S>::ImpactWhileSetHeld(int k) {
   const double t = held_chatter_t_;
   const S last = chatter_last_;
   if (!EnterActiveSet(rest, stay)) return false;
-  if (vk > floor && mode_ == Mode::kSticking && held_set_ == was) {
+  const bool same_hold = held_set_.empty() ? was.size() == 1 && active_ == was.front() : held_set_ == was;
+  if (vk > floor && mode_ == Mode::kSticking && same_hold) {
     // The set holds and k bounced: a chattering sequence beside it, its bookkeeping kept.
     held_chatter_ = followed;
     held_chatter_contact_ = contact;

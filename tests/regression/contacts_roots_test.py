@@ -130,6 +130,28 @@ def main():
             check(f"scene C {label}: stops where the reference does", abs(ev[-1].t - t_ref) <= tol * T,
                   (ev[-1].t, t_ref))
 
+    # Scenes the random search found (tests/reference/contacts/random_search.py, seed 1), each run
+    # through the search's own checks: every sample inside every gap, no numerical failure, double's
+    # events equal to quad's up to where a run left undetermined stopped.
+    for name in ("contacts_resting_beside_held",):
+        path = os.path.join(args.scenes, name + ".toml")
+        with open(path) as fh:
+            text = fh.read()
+        work = os.path.join(tmp, name)
+        os.makedirs(work, exist_ok=True)
+        _, kind, msg = random_search.check((args.vibro, 0, text, scene_contacts(path), work))
+        check(f"{name}: the random search's checks", kind != "fail", msg)
+    # contacts_resting_beside_held: contact 0 (r = 0) left at zero velocity beside held contact 1 is
+    # pushed against its stop by contact 4's impact: it takes part in that impact (was flown through
+    # by 0.0042).
+    out = os.path.join(tmp, "resting_double.h5")
+    p = simulate(args.vibro, os.path.join(args.scenes, "contacts_resting_beside_held.toml"), out)
+    ev, T, status = compare.read_h5(out)
+    check("resting beside held: double ends ok", status == "ok" and p.returncode == 0, (status, p.stderr))
+    resting = [e for e in ev if 4.849 < e.t < 4.8491 and e.contact == 0 and e.kind == "impact" and abs(e.vb) < 1e-12]
+    check("resting beside held: contact 0, at rest, takes part in contact 4's impact near t = 4.849", resting,
+          [e for e in ev if 4.849 < e.t < 4.8491])
+
     if args.search:
         code = random_search.main([args.vibro, "--count", str(args.search), "--seed", "1",
                                    "--keep", os.path.join(tmp, "search")])

@@ -252,7 +252,7 @@ with tempfile.TemporaryDirectory() as d:
     check("several contacts: the dense q of 32 samples a period reach the extremes of 2048", off <= 1e-4, off)
     # A refused plot writes nothing (issue 38): every option is checked before the first picture,
     # here options that were refused only after PREFIX_loads had been written.
-    for prefix, options, why in (("refq", ("--coordinate", "q7"), "--coordinate"),
+    for prefix, options, why in (("refq", ("--coordinate", "q7"), "q7"),
                                  ("refw", ("--time-window", "1e300,1e301"), "--time-window"),
                                  ("refo", ("--overlay", beam), "--overlay")):
         p = plot(beam, prefix, *options)
