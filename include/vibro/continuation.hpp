@@ -20,6 +20,7 @@
 #include <atomic>
 #include <complex>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,9 @@ struct Bifurcation {
   std::string detail;
   double bracket = 0;  // width of the final λ bracket (the location's uncertainty)
   int contact = -1;    // the contact where a non-smooth point happens (several contacts), −1: none
+  // A Neimark–Sacker point: θ/2π of its multipliers e^{±iθ}, θ ∈ (0, π), per period of the orbit
+  // (`period` forcing periods); NaN for other kinds.
+  double rotation_number = std::numeric_limits<double>::quiet_NaN();
 };
 
 // A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering

@@ -54,6 +54,18 @@ std::string ScoreJson(const ScoreReport& report, const Scene& scene);
 // reaction_integral_per_period, mean_force, dissipated_power, work_rate, contact_fraction; null
 // when unknown), and "loads_note" when there is one.
 std::string BranchJson(const Branch& branch);
+// A branch started by switching at a bifurcation of a stored branch (`vibro continue --switch`):
+// BranchJson plus "switch": {"kind", "at" (the bifurcation's λ as located), "start" (λ of the new
+// branch's first orbit), "period", "direction" (±1: the side of λ it leaves towards), "half" (in
+// words), "x_B_offset", "distance" (from the old orbit at the same λ)}.
+struct SwitchRecord {
+  std::string kind;
+  double at = 0, start = 0;
+  int period = 0, direction = 0;
+  std::string half;
+  double x_B_offset = 0, distance = 0;
+};
+std::string BranchJson(const Branch& branch, const SwitchRecord& switched);
 // `vibro partition --json`: {"params", "levels", "columns": [{"value1", "status", "crossings":
 // [{"level", "value"}], "bifurcations": [{"kind", "value"}], "end_down", "end_up", "points":
 // [{"value2", "sticking_fraction", "stable", "loads": [...], "loads_note"?}]}]} (the cells, with

@@ -442,6 +442,7 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
                                             const std::string& kind, const std::string& out,
                                             bool handle_sigint, const std::string& restart_file,
                                             long long restart_point, const std::string& switch_side) {
+  std::optional<vibro::frontend::SwitchedStart> switched;  // the switch, for the JSON
   vibro::frontend::CheckContinuationOptions(kPython, to, step, max_points, period, 0);
   const auto from = vibro::SceneNumber(s.loaded.text_as_run, key);
   if (!from)
@@ -473,6 +474,7 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
         sw = vibro::frontend::SwitchAtStoredPoint(req.scene_at, key, to, restart_file, restart_point, pt, switch_side,
                                                   kPython, guard.flag());
       }
+      switched = sw;
       req.from = sw.value;
       req.orbit.start = vibro::InitialOverride{sw.section_time, sw.X, sw.V};
       period = sw.period;
@@ -498,6 +500,10 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
     store->Finish(r, vibro::frontend::NoAttractor());  // a branch has no single attractor (the points are in /branch)
     store.reset();  // closed without the GIL
   }
+  if (switched)
+    return {vibro::BranchJson(branch, {switched->kind, switched->at, switched->value, switched->period,
+                                       switched->direction, switched->half, switched->x_B_offset, switched->distance}),
+            branch.status == "interrupted"};
   return {vibro::BranchJson(branch), branch.status == "interrupted"};
 }
 

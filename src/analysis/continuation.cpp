@@ -272,6 +272,17 @@ double LeadingComplex(const std::vector<std::complex<double>>& mu) {
   return best;
 }
 
+// The argument θ ∈ (0, π) of the complex multiplier of largest modulus (0 when none).
+double LeadingComplexAngle(const std::vector<std::complex<double>>& mu) {
+  double best = 0, angle = 0;
+  for (const auto& m : mu)
+    if (std::abs(m.imag()) >= 1e-9 && std::abs(m) > best) {
+      best = std::abs(m);
+      angle = std::abs(std::arg(m));
+    }
+  return angle;
+}
+
 // Whether the orbit has a sticking phase (from its events: the attractor summary of an orbit
 // next to a non-smooth point may fail to see its period within tolerance).
 bool Sticks(const Point& a) { return a.probe.signature.find_first_of("CPS") != std::string::npos; }
@@ -763,9 +774,25 @@ Branch Continue(const ContinuationRequest& req) {
       const double ns_new = LeadingComplex(next->orbit.multipliers);
       if (ns_old > 0 && ns_new > 0 && (ns_old - 1) * (ns_new - 1) < 0) {
         const double w = (ns_old - 1) / (ns_old - ns_new);
-        const double at = locate(by_multipliers([](const auto& mu) { return LeadingComplex(mu) - 1; }),
-                                 ds, l_old + w * (l_new - l_old), bracket);
-        br.bifurcations.push_back({"neimark-sacker", at, "a complex pair of multipliers crosses the unit circle", bracket});
+        // The rotation number θ/2π of the pair e^{±iθ} there: from the tested point nearest to |μ| = 1.
+        double theta = 0, nearest = std::numeric_limits<double>::infinity();
+        const auto ns_test = [&](const Point& pc, const Eigen::VectorXd&) {
+          const double f = LeadingComplex(pc.orbit.multipliers) - 1;
+          if (std::abs(f) < nearest) {
+            nearest = std::abs(f);
+            theta = LeadingComplexAngle(pc.orbit.multipliers);
+          }
+          return f;
+        };
+        ns_test(cur, t);
+        ns_test(*next, t);
+        const double at = locate(ns_test, ds, l_old + w * (l_new - l_old), bracket);
+        br.bifurcations.push_back({"neimark-sacker", at,
+                                   fmt::format("a complex pair of multipliers crosses the unit circle at e^(±iθ), "
+                                               "rotation number θ/2π = {:.10f} per period of the orbit",
+                                               theta / (2 * M_PI)),
+                                   bracket});
+        br.bifurcations.back().rotation_number = theta / (2 * M_PI);
       }
       for (double level : req.levels) {
         const double a = sp(cur) - level, b2 = sp(*next) - level;

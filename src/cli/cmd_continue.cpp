@@ -129,7 +129,12 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     fmt::print("switch       {} at {} = {:.15g}: the new branch (period {}) starts at {} = {:.15g}, {}\n",
                switched->kind, key, switched->at, switched->period, key, switched->value, switched->half);
   if (json) {
-    fmt::print("{}\n", vibro::BranchJson(branch));
+    if (switched)
+      fmt::print("{}\n", vibro::BranchJson(branch, {switched->kind, switched->at, switched->value, switched->period,
+                                                     switched->direction, switched->half, switched->x_B_offset,
+                                                     switched->distance}));
+    else
+      fmt::print("{}\n", vibro::BranchJson(branch));
   } else {
     // Each point's exact mean contact force and normal work rate, per contact (docs/loads.md).
     size_t contacts = 0;

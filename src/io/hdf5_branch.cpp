@@ -148,9 +148,10 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   WriteTable("/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
-  std::vector<double> bv, bb, bc;
+  std::vector<double> bv, bb, bc, rot;
   std::vector<std::string> kind, detail;
   for (const auto& x : b.bifurcations) {
+    rot.push_back(x.rotation_number);
     bv.push_back(x.value);
     bb.push_back(x.bracket);
     bc.push_back(x.contact);
@@ -160,6 +161,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   bt.arrays.push_back({"value", {bv.size()}, bv});
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
   bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
+  bt.arrays.push_back({"rotation_number", {rot.size()}, rot});  // Neimark–Sacker points; NaN elsewhere
   bt.strings = {{"kind", kind}, {"detail", detail}};
   WriteTable("/bifurcations", bt);
 

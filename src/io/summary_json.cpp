@@ -265,7 +265,8 @@ std::string ValidationJson(const std::vector<PointCheck>& checks) {
   return j.dump();
 }
 
-std::string BranchJson(const Branch& b) {
+namespace {
+nlohmann::json BranchObject(const Branch& b) {
   nlohmann::json j;
   j["status"] = b.status;
   j["param"] = b.param;
@@ -291,9 +292,11 @@ std::string BranchJson(const Branch& b) {
   }
   j["points"] = points;
   auto bif = nlohmann::json::array();
-  for (const auto& x : b.bifurcations)
+  for (const auto& x : b.bifurcations) {
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket},
                    {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()}});
+    if (std::isfinite(x.rotation_number)) bif.back()["rotation_number"] = x.rotation_number;
+  }
   j["bifurcations"] = bif;
   auto rel = nlohmann::json::array();
   for (const auto& x : b.relabels)
@@ -301,6 +304,17 @@ std::string BranchJson(const Branch& b) {
   j["relabels"] = rel;
   j["end"] = b.end;
   j["quad_evaluations"] = b.quad_evaluations;
+  return j;
+}
+}  // namespace
+
+std::string BranchJson(const Branch& b) { return BranchObject(b).dump(); }
+
+std::string BranchJson(const Branch& b, const SwitchRecord& sw) {
+  auto j = BranchObject(b);
+  j["switch"] = {{"kind", sw.kind},           {"at", sw.at},         {"start", sw.start},
+                 {"period", sw.period},       {"direction", sw.direction}, {"half", sw.half},
+                 {"x_B_offset", sw.x_B_offset}, {"distance", sw.distance}};
   return j.dump();
 }
 
