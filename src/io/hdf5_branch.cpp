@@ -68,7 +68,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   }
   H5Table t;
   std::vector<double> value, sp, xb, phase, lead, stable, count, t0, offsets{0}, ip, ivb, iva;
-  std::vector<double> mu(N * m * 2, kNaN), sticks(N * k * 2, kNaN);
+  std::vector<double> mu(N * m * 2, kNaN), sticks(N * k * 2, kNaN), stick_contacts(N * k, -1);
   size_t contacts = 1;  // the stroboscopic state: (N, contacts), NaN where not simulated
   for (const auto& pt : b.points) contacts = std::max(contacts, pt.strobe.size());
   std::vector<double> strobe(N * contacts, kNaN);
@@ -96,6 +96,9 @@ void Hdf5Store::WriteBranch(const Branch& b) {
     for (size_t j = 0; j < pt.summary.stick_phases.size(); ++j) {
       sticks[(i * k + j) * 2] = pt.summary.stick_phases[j].first;
       sticks[(i * k + j) * 2 + 1] = pt.summary.stick_phases[j].second;
+      // The contact each phase sticks on (docs/output.md); -1 pads, as NaN pads the phases.
+      if (j < pt.summary.stick_contacts.size())
+        stick_contacts[i * k + j] = static_cast<double>(pt.summary.stick_contacts[j]);
     }
     t0.push_back(pt.section_time);
     X.push_back(&pt.X);
@@ -130,6 +133,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
     t.arrays.push_back(Rows("q_dot", qd));
   }
   t.arrays.push_back({"stick_phases", {N, k, 2}, sticks});
+  t.arrays.push_back({"stick_contacts", {N, k}, stick_contacts, 'i'});
   col("stick_phase_count", count, 'i');
   col("impact_offsets", offsets, 'i');
   col("impact_phase", ip);

@@ -283,8 +283,8 @@ def check_cpp(root, exe):
 # A block whose info string says `file=NAME` (```toml file=bad.toml) is written to NAME first, for
 # the commands after it. `<!-- docs-output: skip REASON -->` before a block leaves it out (a hand
 # edit between commands); the reason is printed.
-# Comparison: the shown lines must be printed, in order; lines may be left out (a "..." line says
-# so), never changed. Numbers are compared as written, except those that legitimately vary: a
+# Comparison: the shown lines are the printed ones, whole and in order; lines may be left out only
+# where a line "…" (or "...") marks the elision (one or more lines), never changed. Numbers are compared as written, except those that legitimately vary: a
 # number followed by a time unit (s, ms, µs: timings) matches any number, and numbers below 1e-12
 # in magnitude on both sides (rounding residue: Newton residuals, errors at rounding level) match.
 # All commands of a page run in one scratch directory holding links to data/, scripts/ and
@@ -326,18 +326,45 @@ def same_line(shown, printed):
     return True
 
 
+ELISION = ("...", "…")
+
+
 def shown_in(shown_lines, printed_lines):
-    """None when every shown line is printed, in order; else the first shown line that is not."""
-    j = 0
-    for line in shown_lines:
-        if line.strip() in ("...", "…"):
+    """None when the shown lines are the printed ones, whole: line for line, except that a line
+    "…" (or "...") stands for one or more printed lines deliberately left out. Else what differs:
+    the first shown line that is not printed where it stands, or the printed lines the page does
+    not show. Blank lines at the end of either are ignored."""
+    def trim(v):
+        v = list(v)
+        while v and not v[-1].strip():
+            v.pop()
+        return v
+    shown, printed = trim(shown_lines), trim(printed_lines)
+    from functools import lru_cache
+
+    @lru_cache(maxsize=None)
+    def match(i, j):
+        if i == len(shown):
+            return j == len(printed)
+        if shown[i].strip() in ELISION:
+            return any(match(i + 1, k) for k in range(j + 1, len(printed) + 1))
+        return j < len(printed) and same_line(shown[i], printed[j]) and match(i + 1, j + 1)
+    if match(0, 0):
+        return None
+    # Where it goes wrong: the longest run of shown lines that matches from the start.
+    i = j = 0
+    while i < len(shown):
+        if shown[i].strip() in ELISION:
+            k = next((k for k in range(j + 1, len(printed) + 1) if match(i + 1, k)), None)
+            if k is None:
+                nxt = shown[i + 1] if i + 1 < len(shown) else None
+                return nxt if nxt is not None else "… (nothing printed to elide)"
+            return None  # unreachable: match(0, 0) would be true
+        if j < len(printed) and same_line(shown[i], printed[j]):
+            i, j = i + 1, j + 1
             continue
-        while j < len(printed_lines) and not same_line(line, printed_lines[j]):
-            j += 1
-        if j == len(printed_lines):
-            return line
-        j += 1
-    return None
+        return shown[i]
+    return f"(not shown: {printed[j]!r}{' and more' if j + 1 < len(printed) else ''})"
 
 
 def output_examples(path):
@@ -400,7 +427,7 @@ def output_examples(path):
 def check_outputs(root, vibro):
     import tempfile
     runs = skipped = 0
-    mutation_checked = False
+    mutation_checked = dropped_checked = False
     for path in doc_files(root):
         rel_doc = os.path.relpath(path, root)
         examples = output_examples(path)
@@ -434,7 +461,7 @@ def check_outputs(root, vibro):
                     runs += 1
                     missing = shown_in(shown, printed)
                     check(f"{rel_doc}:{line}: `{cmd}` prints what the page shows", missing is None,
-                          f"shown but not printed: {missing!r}\nprinted:\n" + "\n".join(printed))
+                          f"differs at: {missing!r}\nprinted:\n" + "\n".join(printed))
                     # The comparison can fail: the shown output with one digit changed must not pass.
                     if missing is None and not mutation_checked:
                         for n, l in enumerate(shown):
@@ -446,8 +473,32 @@ def check_outputs(root, vibro):
                                       changed[n])
                                 mutation_checked = True
                                 break
+                    # ... and so must the shown output with one printed line left out unmarked.
+                    kept = [n for n, l in enumerate(shown) if l.strip() and l.strip() not in ELISION]
+                    if missing is None and not dropped_checked and len(kept) >= 2:
+                        short = shown[:kept[-2]] + shown[kept[-2] + 1:]
+                        check(f"{rel_doc}:{line}: a line left out without '…' is seen",
+                              shown_in(short, printed) is not None, shown[kept[-2]])
+                        dropped_checked = True
     check(f"the docs show commands with their output ({runs} commands run, {skipped} blocks skipped)",
-          runs >= 10 and mutation_checked, runs)
+          runs >= 10 and mutation_checked and dropped_checked, runs)
+
+
+def check_comparison():
+    """The whole-transcript comparison on made-up transcripts whose verdict is known."""
+    printed = ["status ok", "t_end 1.5 (2 periods)", "events 3 impacts", "output f.h5 (0.01 s writing)"]
+    cases = [(printed, True), (printed[:1] + ["…"] + printed[3:], True), (["…"], True),
+             (printed[:1] + ["..."] + printed[2:], True), (printed + [""], True),
+             (printed[:2] + printed[3:], False),          # a line left out, unmarked
+             (printed[:3], False),                        # the last line left out, unmarked
+             (printed[1:], False),                        # the first line left out, unmarked
+             (printed[:2] + ["…"] + printed[2:], False),  # "…" must stand for at least one line
+             (printed + ["…"], False),
+             (printed[:1] + ["events 3 impacts", "…"], False),  # out of order
+             (["status ok", "t_end 1.6 (2 periods)", "…"], False)]
+    for shown, passes in cases:
+        got = shown_in(shown, printed) is None
+        check(f"the comparison {'accepts' if passes else 'refuses'} {shown!r}", got == passes, shown_in(shown, printed))
 
 
 def main():
@@ -459,6 +510,7 @@ def main():
     elif what == "cli":
         check_cli(root, sys.argv[3])
     elif what == "output":
+        check_comparison()
         check_outputs(root, sys.argv[3])
     elif what == "cpp":
         check_cpp(root, sys.argv[3])
