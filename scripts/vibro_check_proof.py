@@ -386,6 +386,11 @@ class Model:
                                                     cn.v["shape"] + cn.v["contact"] + [cn.v["stop"], cn.v["restitution"]])
                 self.contacts.append((c, T, e, r, W))
         self.T = 2 * iv.pi / self.w
+        # Every parameter a point or an interval of relative width < 2^-100 (a physical scene's
+        # enclosed modal data).
+        every = self.w_i + self.TA + self.TB + self.c + [self.x0, self.r, self.f, self.w] + (self.zeta or []) + \
+            [x for c_, T_, e_, r_, _ in self.contacts[1:] for x in c_ + T_ + [e_, r_]]
+        self.thin = all(hi(x) - lo(x) <= mp.mpf(2) ** -100 * (1 + abs(mid(x))) for x in every)
 
     def damped_flight(self, t0, X, V, s):
         """The damped free flight (docs/model.md §7), written directly: per mode the forced response
@@ -871,7 +876,7 @@ def check_impact(cert, m, ledger):
     # 2. The true orbit, enclosed tightly: Newton at 192 bits from the midpoint, then Krawczyk's
     # test of the checker's own on a box of relative radius 2^-120 around it, inside U (so the
     # zero there is the one of U). A parameter interval has a set of orbits: K(U) ∩ U, iterated.
-    E = contract(residual, krawczyk, u_mid, U, K, C, m.point)
+    E = contract(residual, krawczyk, u_mid, U, K, C, m.point, m.thin)
     # The Krawczyk records and the certificate's list: inside the box, containing the true orbit.
     for p in range(N):
         ledger.check("krawczyk", names[p], "inside the box", K[p], E[p], box=U[p])
@@ -1026,15 +1031,19 @@ def matmul(A, B):
     return [[sum((A[i][k] * B[k][j] for k in range(len(B))), ZERO) for j in range(len(B[0]))] for i in range(len(A))]
 
 
-def contract(residual, krawczyk, u_mid, U, K, C, point_model):
+def contract(residual, krawczyk, u_mid, U, K, C, point_model, thin_model=False):
     """The checker's enclosure of the zero in U. K(U) ⊂ int U has been tested by the caller (the
     ledger rejects it otherwise). For a model of point parameters: Newton at 192 bits from the
     midpoint with the preconditioner C, then Krawczyk's test on a box of relative radius 2^-120
-    around the point; that box lies in U, so its zero is U's. Otherwise (or should that fail):
-    K(U) ∩ U, intersected with K of itself three times."""
+    around the point; that box lies in U, so its zero is U's. For a thin model (a physical scene's
+    enclosed modal data) the same with radius 2^-100 or 2^-80, which holds the zeros of every model
+    of the set. Otherwise (or should that fail): K(U) ∩ U, intersected with K of itself three times."""
     N = len(U)
     if all(lo(K[p]) > lo(U[p]) and hi(K[p]) < hi(U[p]) for p in range(N)):
-        if point_model:
+        # A model of intervals as thin as a physical scene's enclosed modal data (~1e-33): its set of
+        # orbits is as thin, and a box of radius 2^-100 or 2^-80 holds it all (Krawczyk for every
+        # model of the set at once).
+        if point_model or thin_model:
             u = [mp.mpf(x) for x in u_mid]
             for _ in range(8):
                 F = [mid(value(r)) for r in residual([iv.mpf(x) for x in u])]
@@ -1042,11 +1051,12 @@ def contract(residual, krawczyk, u_mid, U, K, C, point_model):
                 u = [u[p] - du[p] for p in range(N)]
                 if max(abs(du[p]) / (1 + abs(u[p])) for p in range(N)) < mp.mpf(2) ** (20 - PREC):
                     break
-            V = [iv.mpf([x - mp.mpf(2) ** -120 * (1 + abs(x)), x + mp.mpf(2) ** -120 * (1 + abs(x))]) for x in u]
-            if all(inside(V[p], U[p]) for p in range(N)):
-                KV = krawczyk(u, V)
-                if all(lo(KV[p]) > lo(V[p]) and hi(KV[p]) < hi(V[p]) for p in range(N)):
-                    return [meet(KV[p], V[p]) for p in range(N)]
+            for e in (120,) if point_model else (100, 80):
+                V = [iv.mpf([x - mp.mpf(2) ** -e * (1 + abs(x)), x + mp.mpf(2) ** -e * (1 + abs(x))]) for x in u]
+                if all(inside(V[p], U[p]) for p in range(N)):
+                    KV = krawczyk(u, V)
+                    if all(lo(KV[p]) > lo(V[p]) and hi(KV[p]) < hi(V[p]) for p in range(N)):
+                        return [meet(KV[p], V[p]) for p in range(N)]
         E = [meet(K[p], U[p]) for p in range(N)]
         for _ in range(3):
             Kn = krawczyk([mid(x) for x in E], E)
@@ -1393,7 +1403,7 @@ NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
 
 def summary_shape(s, n):
     """The summary's form, before any proof is checked (a malformed one is refused at once)."""
-    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period", "modal_data"))
     s["verdict"].text(("proven",))
     s["kind"].text(("impact", "sticking"))
     s["period"].integer(1, 1 << 20)
@@ -1425,7 +1435,7 @@ def summary_shape(s, n):
 
 def check_summary(cert, s, truth, m):
     """Every claim of the summary against the checker's truth."""
-    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period", "modal_data"))
     s["verdict"].text(("proven",))
     if s["kind"].text() != truth.kind:
         raise NotConfirmed(f"{s['kind'].path}: '{s['kind'].v}', the orbit proven is of kind '{truth.kind}'")
@@ -1533,6 +1543,129 @@ IMPACT_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczyk", "fli
 STICKING_KEYS = ("release", "flights", "sticking")
 
 
+def check_structure(node, m):
+    """The scene as written (docs/prove.md): a physical scene's mass and stiffness matrices, its
+    contacts and its eigenpair boxes. Proves that each box holds exactly one eigenpair (λ, ψ) of
+    K ψ = λ M ψ with ψ scaled to a unit component at contact 0 (Krawczyk's test on
+    F(λ, ψ) = ((K − λM)ψ, σ_0 w_0ᵀψ − 1)), that M is positive definite (so the N disjoint boxes hold
+    every eigenvalue) and the boxes ascend, and that the model's modal data contain the values
+    docs/model.md §1.3 builds from the kept (lowest) modes: ω = √λ, m = ψᵀMψ, T_A = ψ(A)/m,
+    T_B = 1/m, c = 1, and for contact j ≥ 1 c_j = σ_j w_jᵀψ, T_j = c_j/m; the damping ratios are
+    the scene's, mode by mode."""
+    node.obj(("mass", "stiffness", "forcing_dof", "contacts", "modes", "kept"), ("damping",))
+    rows = node["mass"].items(at_least=1, at_most=MAX_MODES)
+    N = len(rows)
+    Mx = [[decimal(x) for x in r.items(exactly=N)] for r in rows]
+    Kx = [[decimal(x) for x in r.items(exactly=N)] for r in node["stiffness"].items(exactly=N)]
+    A = node["forcing_dof"].integer(0, N - 1)
+    kept = node["kept"].integer(1, N)
+    if kept != m.n:
+        node["kept"].fail(f"{kept} kept modes, the model has {m.n}")
+    contacts = []
+    for cn in node["contacts"].items(exactly=len(m.contacts)):
+        cn.obj(("dof", "partner", "side"))
+        d, q = cn["dof"].integer(0, N - 1), cn["partner"].integer(-1, N - 1)
+        if q == d:
+            cn["partner"].fail("an impact pair of a DOF with itself")
+        contacts.append((d, q, ONE if cn["side"].text(("below", "above")) == "below" else -ONE))
+    for a in range(N):
+        for b in range(a):
+            for X, key in ((Mx, "mass"), (Kx, "stiffness")):
+                if not (lo(X[a][b]) == lo(X[b][a]) and hi(X[a][b]) == hi(X[b][a])):
+                    node[key].fail(f"not symmetric at ({a}, {b})")
+    # M positive definite (interval Cholesky): det(K − λM) has degree N.
+    L = [[ZERO] * N for _ in range(N)]
+    for j in range(N):
+        d = Mx[j][j] - sum((L[j][k] * L[j][k] for k in range(j)), ZERO)
+        if not positive(d):
+            raise NotConfirmed(f"{node['mass'].path}: not proven positive definite (pivot {j}: {show_iv(d)})")
+        L[j][j] = iv.sqrt(d)
+        for i in range(j + 1, N):
+            L[i][j] = (Mx[i][j] - sum((L[i][k] * L[j][k] for k in range(j)), ZERO)) / L[j][j]
+    d0, q0, s0 = contacts[0]
+
+    def w(vec, d, q, sgn):
+        return sgn * (vec[d] - (vec[q] if q >= 0 else ZERO))
+
+    lam, psi = [], []
+    for k, mn in enumerate(node["modes"].items(exactly=N)):
+        mn.obj(("eigenvalue", "vector"))
+        U = [decimal(mn["eigenvalue"])] + [decimal(x) for x in mn["vector"].items(exactly=N)]
+        if not all(finite(x) for x in U):
+            mn.fail("not finite")
+        c = [mid(x) for x in U]
+
+        def F(u):
+            res = [sum(((Kx[a][b] - u[0] * Mx[a][b]) * u[1 + b] for b in range(N)), ZERO) for a in range(N)]
+            return res + [w(u[1:], d0, q0, s0) - ONE]
+
+        def J(u):
+            rows_ = [[-sum((Mx[a][b] * u[1 + b] for b in range(N)), ZERO)] + [Kx[a][b] - u[0] * Mx[a][b] for b in range(N)]
+                     for a in range(N)]
+            last = [ZERO] + [s0 * ((ONE if b == d0 else ZERO) - (ONE if b == q0 else ZERO)) for b in range(N)]
+            return rows_ + [last]
+
+        try:
+            Y = mp.inverse(mp.matrix([[mid(x) for x in row] for row in J([iv.mpf(x) for x in c])]))
+        except ZeroDivisionError:
+            raise NotConfirmed(f"{mn.path}: the eigenpair's Jacobian is singular at the box's midpoint")
+        def krawczyk(c, U):
+            Fc, JU = F([iv.mpf(x) for x in c]), J(U)
+            out = []
+            for p_ in range(P):
+                acc = iv.mpf(c[p_]) - sum((iv.mpf(Y[p_, l]) * Fc[l] for l in range(P)), ZERO)
+                for l in range(P):
+                    e = (ONE if l == p_ else ZERO) - sum((iv.mpf(Y[p_, r]) * JU[r][l] for r in range(P)), ZERO)
+                    acc += e * (U[l] - iv.mpf(c[l]))
+                out.append(acc)
+            return out
+
+        P = N + 1
+        Kr = krawczyk(c, U)
+        if not all(lo(Kr[p_]) > lo(U[p_]) and hi(Kr[p_]) < hi(U[p_]) for p_ in range(P)):
+            bad = next(p_ for p_ in range(P) if not (lo(Kr[p_]) > lo(U[p_]) and hi(Kr[p_]) < hi(U[p_])))
+            raise NotConfirmed(f"{mn.path}: Krawczyk's test fails: the box does not provably hold one eigenpair of "
+                               f"K ψ = λ M ψ (unknown {bad}: K = {show_iv(Kr[bad])} not inside {show_iv(U[bad])})")
+        # The eigenpair in the box, enclosed tightly: Newton at 192 bits from the midpoint, then
+        # Krawczyk's test on a box of relative radius 2^-120 around it inside U (its eigenpair is U's).
+        E = [meet(Kr[p_], U[p_]) for p_ in range(P)]
+        u = list(c)
+        for _ in range(8):
+            du = [sum((Y[p_, l] * mid(f) for l, f in enumerate(F([iv.mpf(x) for x in u]))), mp.mpf(0)) for p_ in range(P)]
+            u = [u[p_] - du[p_] for p_ in range(P)]
+        V = [iv.mpf([x - mp.mpf(2) ** -120 * (1 + abs(x)), x + mp.mpf(2) ** -120 * (1 + abs(x))]) for x in u]
+        if all(inside(V[p_], U[p_]) for p_ in range(P)):
+            KV = krawczyk(u, V)
+            if all(lo(KV[p_]) > lo(V[p_]) and hi(KV[p_]) < hi(V[p_]) for p_ in range(P)):
+                E = [meet(KV[p_], V[p_]) for p_ in range(P)]
+        lam.append(E[0])
+        psi.append(E[1:])
+    if not positive(lam[0]) or any(not hi(lam[k]) < lo(lam[k + 1]) for k in range(N - 1)):
+        raise NotConfirmed(f"{node['modes'].path}: the eigenvalue boxes are not positive and disjoint in ascending order")
+    zeta = None
+    if node.has("damping"):
+        zeta = [decimal(x) for x in node["damping"].items(exactly=N)]
+    for i in range(kept):
+        v = psi[i]
+        mi = sum((v[a] * Mx[a][b] * v[b] for a in range(N) for b in range(N)), ZERO)
+        truths = [("frequencies", m.w_i[i], iv.sqrt(lam[i])), ("forcing", m.TA[i], v[A] / mi),
+                  ("contact", m.TB[i], ONE / mi), ("shape", m.c[i], ONE)]
+        for j in range(1, len(m.contacts)):
+            d, q, sg = contacts[j]
+            cj = w(v, d, q, sg)
+            truths += [(f"more_contacts[{j - 1}].shape", m.contacts[j][0][i], cj),
+                       (f"more_contacts[{j - 1}].contact", m.contacts[j][1][i], cj / mi)]
+        for what, claimed, truth in truths:
+            if not inside(truth, claimed):
+                raise NotConfirmed(f"model.{what}[{i}] = {show_iv(claimed)} does not contain {show_iv(truth)}, the "
+                                   f"value of mode {i} of the scene's matrices")
+        z = zeta[i] if zeta is not None else ZERO
+        zm = m.zeta[i] if m.zeta is not None else ZERO
+        if not (inside(z, zm) and inside(zm, z)):
+            raise NotConfirmed(f"model.damping[{i}] = {show_iv(zm)} is not the scene's damping ratio {show_iv(z)} of "
+                               f"mode {i}")
+
+
 def check(node):
     """Checks one certificate; returns how many inequalities were recomputed."""
     if not isinstance(node.v, dict):
@@ -1545,15 +1678,21 @@ def check(node):
                            f"{node['reason'].text()[:200] if node.has('reason') else ''})")
     kind = node["kind"].text(("impact", "sticking"))
     node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-             ("tail",) if kind == "sticking" else ("impact_contacts",))
+             (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]
-    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period"))
+    s.obj(SUMMARY_KEYS, ("stability_note", "requested_period", "modal_data"))
     for key in ("verdict", "reason", "kind", "period"):
         if node[key].v != s[key].v or type(node[key].v) is not type(s[key].v):
             raise NotConfirmed(f"{node[key].path} = {node[key].v!r} and {s[key].path} = {s[key].v!r} differ")
     m = Model(node["model"])
+    if node.has("structure"):
+        check_structure(node["structure"], m)
+    claimed = s["modal_data"].text(("given", "enclosed")) if s.has("modal_data") else "given"
+    if claimed != ("enclosed" if node.has("structure") else "given"):
+        raise NotConfirmed(f"{s['modal_data'].path if s.has('modal_data') else s.path}: modal data '{claimed}' "
+                           f"but the certificate {'carries' if node.has('structure') else 'has no'} structure")
     summary_shape(s, m.n)
     ledger = Ledger(node["inequalities"])
     if kind == "impact":

@@ -73,6 +73,9 @@ struct ProofResult {
   std::vector<ProvenEvent> events;                      // one period, in time order
   std::vector<std::pair<Enclosure, Enclosure>> multipliers;  // (re, im) of each Floquet multiplier
   std::string stability = "undecided";  // "stable" | "unstable" | "undecided"
+  // "enclosed": a physical scene's modal data, enclosed from its mass and stiffness matrices (the
+  // theorem is about the scene as written, docs/prove.md); "given": the modal form's numbers.
+  std::string modal_data = "given";
   double box_width = 0;          // widest side of the box, and of every enclosure of a time or the section
   std::string summary_json;      // the `vibro prove --json` object (docs/prove.md)
   std::string certificate_json;  // the certificate (docs/prove.md), empty when nothing was attempted

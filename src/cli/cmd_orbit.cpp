@@ -40,6 +40,10 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
     fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
                orbit.newton_iterations, orbit.residual);
+    // --period Q of an orbit whose least period p divides Q: it is the period-p orbit.
+    if (converged && orbit.summary.period && *orbit.summary.period < orbit.period)
+      fmt::print("least period {}: the orbit repeats every {} period(s); found as a period-{} orbit (multipliers over "
+                 "{} periods)\n", *orbit.summary.period, *orbit.summary.period, orbit.period, orbit.period);
     if (orbit.distance_from_start)
       fmt::print("from start   distance {:.3g} ({})\n", *orbit.distance_from_start,
                  req.transient_periods > 0 ? fmt::format("after a transient of {} periods", req.transient_periods)

@@ -221,6 +221,9 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
         fmt::print("multipliers  {}\n", result.kind == "sticking" ? "none (one-DOF sticking orbit: superstable)"
                                                                   : "not enclosed (the stability is undecided)");
       fmt::print("stability    {}\n", result.stability);
+      if (result.modal_data == "enclosed")
+        fmt::print("modal data   enclosed from the scene's mass and stiffness matrices (every eigenpair; the theorem "
+                   "is about the scene as written)\n");
     }
     if (!args.out.empty()) fmt::print("certificate  {} (check it: vibro_check_proof.py {})\n", args.out, args.out);
   }

@@ -164,6 +164,9 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
   j["status"] = o.status;
   if (!o.message.empty()) j["message"] = o.message;
   j["period"] = o.period;
+  // The orbit's least period (docs/orbits.md): a divisor of `period`, smaller when --period Q found an
+  // orbit of a period that divides Q; null when no orbit converged.
+  j["least_period"] = o.status == "converged" ? OrNull(o.summary.period) : nlohmann::json(nullptr);
   // kAuto: both sets of fields (the orbit's kind is attractor_kind).
   if (kind != OrbitKind::kImpact) {
     j["sticking_fraction"] = OrNull(o.summary.sticking_fraction);

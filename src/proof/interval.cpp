@@ -2,11 +2,13 @@
 // Working precision 128 bits: the prover's boxes are 1e-12 wide, far above the balls' radii.
 #include "proof/interval.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 #include <acb.h>
 #include <acb_mat.h>
 #include <arb.h>
+#include <arb_mat.h>
 #include <fmt/format.h>
 
 namespace vibro::proof {
@@ -171,6 +173,43 @@ Interval Union(const Interval& a, const Interval& b) {
   return y;
 }
 
+namespace {
+// An end of `x` as an exact decimal of about `digits` significant digits: floor(lo·10^k) − 1 (or
+// ceil(hi·10^k) + 1) times 10^−k, every rounding directed outward.
+std::string DecimalEnd(const arb_struct* x, int digits, bool upper) {
+  arf_t end, scale, y;
+  arf_init(end);
+  arf_init(scale);
+  arf_init(y);
+  if (upper) arb_get_ubound_arf(end, x, kPrec);
+  else arb_get_lbound_arf(end, x, kPrec);
+  const double mag = std::abs(arf_get_d(end, ARF_RND_NEAR));
+  const long k = mag > 0 ? digits - 1 - static_cast<long>(std::floor(std::log10(mag))) : digits;
+  fmpz_t p;
+  fmpz_init(p);
+  fmpz_ui_pow_ui(p, 10, static_cast<ulong>(k >= 0 ? k : -k));
+  arf_set_fmpz(scale, p);
+  const arf_rnd_t rnd = upper ? ARF_RND_CEIL : ARF_RND_FLOOR;
+  if (k >= 0) arf_mul(y, end, scale, 4 * kPrec, rnd);
+  else arf_div(y, end, scale, 4 * kPrec, rnd);
+  arf_get_fmpz(p, y, rnd);
+  if (upper) fmpz_add_ui(p, p, 1);
+  else fmpz_sub_ui(p, p, 1);
+  char* digits_text = fmpz_get_str(nullptr, 10, p);
+  std::string out = fmt::format("{}e{}", digits_text, -k);
+  flint_free(digits_text);
+  fmpz_clear(p);
+  arf_clear(end);
+  arf_clear(scale);
+  arf_clear(y);
+  return out;
+}
+}  // namespace
+
+std::string Interval::DecimalText(int digits) const {
+  return fmt::format("[{}, {}]", DecimalEnd(CA(*this), digits, false), DecimalEnd(CA(*this), digits, true));
+}
+
 std::string Interval::ToString() const { return fmt::format("[{:.17g}, {:.17g}]", lo(), hi()); }
 
 std::optional<std::vector<ComplexInterval>> Eigenvalues(const std::vector<std::vector<Interval>>& a,
@@ -205,6 +244,79 @@ std::optional<std::vector<ComplexInterval>> Eigenvalues(const std::vector<std::v
   _acb_vec_clear(e_approx, n);
   acb_mat_clear(m);
   acb_mat_clear(r_approx);
+  return out;
+}
+
+std::optional<std::vector<EigenpairEnclosure>> PencilEigenpairs(const std::vector<std::vector<Interval>>& K,
+                                                                const std::vector<std::vector<Interval>>& M,
+                                                                const std::vector<double>& approx,
+                                                                const std::vector<std::vector<double>>& vectors) {
+  const slong n = static_cast<slong>(K.size());
+  arb_mat_t k, m, a;
+  arb_mat_init(k, n, n);
+  arb_mat_init(m, n, n);
+  arb_mat_init(a, n, n);
+  acb_mat_t ac, r, r_approx;
+  acb_mat_init(ac, n, n);
+  acb_mat_init(r, n, n);
+  acb_mat_init(r_approx, n, n);
+  acb_ptr e = _acb_vec_init(n), e_approx = _acb_vec_init(n);
+  for (slong i = 0; i < n; ++i) {
+    const auto ui = static_cast<size_t>(i);
+    acb_set_d(e_approx + i, approx[ui]);
+    for (slong j = 0; j < n; ++j) {
+      const auto uj = static_cast<size_t>(j);
+      arb_set(arb_mat_entry(k, i, j), CA(K[ui][uj]));
+      arb_set(arb_mat_entry(m, i, j), CA(M[ui][uj]));
+      acb_set_d(acb_mat_entry(r_approx, i, j), vectors[ui][uj]);
+    }
+  }
+  // A = M⁻¹K encloses M⁻¹K for every M, K in the balls: its eigenpairs are the pencil's. Rump's
+  // method encloses every eigenvalue, certified simple, and a right eigenvector of each.
+  std::optional<std::vector<EigenpairEnclosure>> out;
+  if (arb_mat_solve(a, m, k, kPrec) != 0) {
+    acb_mat_set_arb_mat(ac, a);
+    // Approximations at the working precision (QR from the doubles' ones; kept if QR fails), so
+    // that the enclosures are as tight as the balls allow (~1e-35), not as the doubles (~1e-16).
+    acb_mat_t mid_a;
+    acb_mat_init(mid_a, n, n);
+    acb_mat_get_mid(mid_a, ac);
+    acb_ptr e_fine = _acb_vec_init(n);
+    acb_mat_t r_fine;
+    acb_mat_init(r_fine, n, n);
+    _acb_vec_set(e_fine, e_approx, n);
+    acb_mat_set(r_fine, r_approx);
+    if (acb_mat_approx_eig_qr(e_fine, nullptr, r_fine, mid_a, nullptr, 0, kPrec) != 0) {
+      _acb_vec_set(e_approx, e_fine, n);
+      acb_mat_set(r_approx, r_fine);
+    }
+    _acb_vec_clear(e_fine, n);
+    acb_mat_clear(r_fine);
+    acb_mat_clear(mid_a);
+    if (acb_mat_eig_simple_rump(e, nullptr, r, ac, e_approx, r_approx, kPrec) != 0) {
+      out.emplace();
+      for (slong i = 0; i < n; ++i) {
+        EigenpairEnclosure pair;
+        arb_set(A(pair.value.re), acb_realref(e + i));
+        arb_set(A(pair.value.im), acb_imagref(e + i));
+        for (slong j = 0; j < n; ++j) {
+          ComplexInterval z;
+          arb_set(A(z.re), acb_realref(acb_mat_entry(r, j, i)));
+          arb_set(A(z.im), acb_imagref(acb_mat_entry(r, j, i)));
+          pair.vector.push_back(std::move(z));
+        }
+        out->push_back(std::move(pair));
+      }
+    }
+  }
+  _acb_vec_clear(e, n);
+  _acb_vec_clear(e_approx, n);
+  acb_mat_clear(ac);
+  acb_mat_clear(r);
+  acb_mat_clear(r_approx);
+  arb_mat_clear(k);
+  arb_mat_clear(m);
+  arb_mat_clear(a);
   return out;
 }
 

@@ -65,6 +65,10 @@ class Interval {
 
   // "[lo, hi]" with 17 significant digits, outward.
   std::string ToString() const;
+  // "[lo, hi]" as exact decimals of `digits` significant digits ("7962252170181254e-16"), each end
+  // rounded outward and moved one more unit of its last digit out: a text interval that contains
+  // this one with a margin (for the modal data of a physical scene, docs/prove.md).
+  std::string DecimalText(int digits) const;
 
   // The Arb ball inside (an arb_struct): for interval.cpp only.
   void* raw();
@@ -86,6 +90,23 @@ struct ComplexInterval {
 std::optional<std::vector<ComplexInterval>> Eigenvalues(const std::vector<std::vector<Interval>>& a,
                                                         const std::vector<std::complex<double>>& approx,
                                                         const std::vector<std::vector<std::complex<double>>>& vectors);
+
+// An eigenvalue and a right eigenvector of a matrix pencil, enclosed.
+struct EigenpairEnclosure {
+  ComplexInterval value;
+  std::vector<ComplexInterval> vector;
+};
+
+// Enclosures of all N eigenpairs of the pencil K φ = λ M φ (N × N interval matrices, row-major,
+// M invertible), for every K and M in the intervals, when every eigenvalue is simple: λ_k and one
+// eigenvector φ_k each (its scaling is the library's: only directions are meaningful). `approx`
+// are approximate eigenvalues and `vectors` approximate eigenvectors (columns, row-major N × N).
+// nullopt when that cannot be certified (M not provably invertible, an eigenvalue not provably
+// simple).
+std::optional<std::vector<EigenpairEnclosure>> PencilEigenpairs(const std::vector<std::vector<Interval>>& K,
+                                                                const std::vector<std::vector<Interval>>& M,
+                                                                const std::vector<double>& approx,
+                                                                const std::vector<std::vector<double>>& vectors);
 
 // "arb 2.x.y, flint 2.9.0": the interval library as linked.
 std::string LibraryVersions();

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
 #include "proof/prove_api.hpp"
 #include "vibro/observer.hpp"
@@ -22,7 +23,9 @@ using proof::Json;
 // scene written in decimals, the decimal the user wrote).
 std::string Decimal(double x) { return fmt::format("{}", x); }
 
-proof::IntervalModel ModelOf(const System& sys) {
+// The model of the proof: the scene's modal data as decimals, or for a physical scene the
+// enclosures of its modal data (`enclosed`, proof/modal_enclosure.hpp).
+proof::IntervalModel ModelOf(const System& sys, const proof::ModalEnclosure* enclosed = nullptr) {
   std::vector<std::string> omega, forcing, contact, shape, damping;
   for (int i = 0; i < sys.dof(); ++i) {
     omega.push_back(Decimal(sys.omega()(i)));
@@ -30,6 +33,12 @@ proof::IntervalModel ModelOf(const System& sys) {
     contact.push_back(Decimal(sys.contact()(i)));
     shape.push_back(Decimal(sys.contact_shape()(i)));
     if (sys.damped()) damping.push_back(Decimal(sys.damping()(i)));
+  }
+  if (enclosed != nullptr) {
+    omega = enclosed->omega;
+    forcing = enclosed->forcing;
+    contact = enclosed->contact;
+    shape = enclosed->shape;
   }
   auto model = proof::IntervalModel::FromDecimals(omega, forcing, contact, shape, Decimal(sys.stop()),
                                                   Decimal(sys.restitution()), Decimal(sys.amplitude()),
@@ -42,9 +51,19 @@ proof::IntervalModel ModelOf(const System& sys) {
       cs.push_back(Decimal(c.shape(i)));
       ct.push_back(Decimal(c.contact(i)));
     }
+    if (enclosed != nullptr) {
+      cs = enclosed->more_shape[static_cast<std::size_t>(j - 1)];
+      ct = enclosed->more_contact[static_cast<std::size_t>(j - 1)];
+    }
     model.AddContact(cs, ct, Decimal(c.stop), Decimal(c.restitution));
   }
   return model;
+}
+
+// A physical scene's modal data enclosed (empty failure and structure for the modal form).
+proof::ModalEnclosure EnclosureOf(const System& sys, const Scene& scene) {
+  if (!scene.physical) return {};
+  return proof::EncloseModalData(sys, scene);
 }
 
 Json ModelJson(const proof::IntervalModel& m) {
@@ -240,7 +259,8 @@ bool SameMoreContacts(const proof::IntervalModel& a, const proof::IntervalModel&
 }
 
 ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::IntervalModel& model,
-                 const ProofRequest& request, const proof::Budget& budget, const std::string& stage) {
+                 const ProofRequest& request, const proof::Budget& budget, const std::string& stage,
+                 const Json& structure = nullptr) {
   ProofResult result;
   if (budget.interrupted()) {  // no verdict, nothing proven, no certificate
     result.interrupted = true;
@@ -261,6 +281,8 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
   if (!summary.contains("section")) summary["section"] = nullptr;
   if (!summary.contains("stability")) summary["stability"] = "undecided";
   if (outcome.proven) summary["box_width"] = WidestClaim(summary);
+  // The modal data: the scene's (modal form), or enclosed from its matrices (physical form).
+  summary["modal_data"] = structure.is_null() ? "given" : "enclosed";
   result.summary_json = summary.dump();
   result.kind = kind;
   if (summary["period"].is_number_integer()) result.period = summary["period"].get<int>();
@@ -271,6 +293,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
                              e["contact"].get<int>()});
   for (const auto& m : summary["multipliers"]) result.multipliers.emplace_back(enclosure(m["re"]), enclosure(m["im"]));
   result.stability = summary["stability"].get<std::string>();
+  result.modal_data = summary["modal_data"].get<std::string>();
   if (summary.contains("box_width")) result.box_width = summary["box_width"].get<double>();
   Json cert = {{"format", "vibro-proof-certificate/1"},
                {"verdict", summary["verdict"]},
@@ -281,6 +304,7 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
                {"libraries", proof::LibraryVersions()},
                {"precision_bits", 128},
                {"summary", summary}};
+  if (!structure.is_null()) cert["structure"] = structure;
   for (const auto& [key, value] : outcome.certificate.items()) cert[key] = value;
   result.certificate_json = cert.dump(1);
   return result;
@@ -290,8 +314,13 @@ ProofResult Wrap(proof::Outcome outcome, const std::string& kind, const proof::I
 
 ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request) {
   const proof::Budget budget(request.time_limit, request.stop_requested);
-  const auto model = ModelOf(system);
+  const auto enclosed = EnclosureOf(system, scene);
   proof::Outcome outcome;
+  if (!enclosed.failure.empty()) {
+    outcome.reason = enclosed.failure;
+    return Wrap(outcome, "", ModelOf(system), request, budget, "during the proof");
+  }
+  const auto model = ModelOf(system, scene.physical ? &enclosed : nullptr);
   std::string kind, stage = "during the proof";
   const bool one_dof = system.dof() == 1 && system.contact_shape()(0) == 1;
   const auto sticking = [&]() {
@@ -331,7 +360,7 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
       if (outcome.proven && found.requested > 0) proof::StateLeastPeriod(outcome, found.requested);
     }
   }
-  return Wrap(outcome, kind, model, request, budget, stage);
+  return Wrap(outcome, kind, model, request, budget, stage, enclosed.structure);
 }
 
 }  // namespace vibro
@@ -342,9 +371,15 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
                                                        const ProofRequest& lo, const System& system_hi,
                                                        const Scene& scene_hi, const ProofRequest& hi) {
   const proof::Budget budget(lo.time_limit, lo.stop_requested);
-  auto model = ModelOf(system_lo);
-  const auto model_hi = ModelOf(system_hi);
+  const auto enclosed = EnclosureOf(system_lo, scene_lo), enclosed_hi = EnclosureOf(system_hi, scene_hi);
   proof::Outcome outcome;
+  if (!enclosed.failure.empty() || !enclosed_hi.failure.empty()) {
+    outcome.reason = enclosed.failure.empty() ? enclosed_hi.failure : enclosed.failure;
+    return {Wrap(outcome, "impact", ModelOf(system_lo), lo, budget, "during the proof")};
+  }
+  auto model = ModelOf(system_lo, scene_lo.physical ? &enclosed : nullptr);
+  const auto model_hi = ModelOf(system_hi, scene_hi.physical ? &enclosed_hi : nullptr);
+  const Json& scene_structure = enclosed.structure;  // a physical scene's matrices and eigenpair boxes
   // The one scalar that differs, as the interval between its two decimals.
   using proof::Interval;
   std::vector<std::string> differs;
@@ -366,19 +401,19 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   if (!same_structure || differs.size() != 1) {
     outcome.reason = "the two ends differ in more than one scalar of the modal model (a parameter interval is proven "
                      "for the amplitude, the forcing frequency, the stop position or the restitution alone)";
-    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof", scene_structure)};
   }
   const auto a = FindImpactOrbit(system_lo, scene_lo, lo, budget);
   const auto b = a.stopped ? Found{} : FindImpactOrbit(system_hi, scene_hi, hi, budget);
   if (a.stopped || b.stopped || budget.passed())
-    return {Wrap(outcome, "impact", model, lo, budget, "during the orbit search at the ends of the interval")};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the orbit search at the ends of the interval", scene_structure)};
   if (!a.failure.empty() || !b.failure.empty() || a.sticking || b.sticking) {
     outcome.reason = "no impacting orbit at one end: " + (a.failure.empty() ? b.failure : a.failure);
-    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof", scene_structure)};
   }
   if (a.guess.times.size() != b.guess.times.size() || a.guess.period != b.guess.period) {
     outcome.reason = "the orbits at the two ends have different impact sequences";
-    return {Wrap(outcome, "impact", model, lo, budget, "during the proof")};
+    return {Wrap(outcome, "impact", model, lo, budget, "during the proof", scene_structure)};
   }
   // The parameter interval [p_lo, p_hi] is proven whole, or halved (at a decimal shared by both
   // halves) up to kMaxSplit times, each piece with the orbits interpolated between the two ends.
@@ -427,7 +462,7 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
     auto o = proof::ProveImpactOrbit(m, g, lo, budget);
     if (o.proven) {
       o.reason = "for every " + differs.front() + " in " + *field + ": " + o.reason;
-      results.push_back(Wrap(o, "impact", m, lo, budget, "during the proof"));
+      results.push_back(Wrap(o, "impact", m, lo, budget, "during the proof", scene_structure));
       return true;
     }
     const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
@@ -450,7 +485,7 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
     const auto& k = structure.contacts[c];
     whole_model.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
   }
-  return {Wrap(outcome, "impact", whole_model, lo, budget, "during the proof")};
+  return {Wrap(outcome, "impact", whole_model, lo, budget, "during the proof", scene_structure)};
 }
 
 }  // namespace vibro

@@ -55,14 +55,16 @@ def several_contacts(path):
         return len(tomllib.load(fh).get("contact", [])) > 1
 
 
-# Several contacts: the command not yet extended to them (prove) is refused with exit 2 naming
-# the contacts (docs/contacts.md); simulate (either engine), orbit, continue and check run them.
+# Several contacts: every command takes them; `prove` proves the orbit (exit 0) or says why not
+# (exit 4, a reason docs/prove.md lists; prove.scenes checks each); simulate (either engine), orbit,
+# continue and check run them.
 for f in sorted(os.listdir(scenes)):
     path = os.path.join(scenes, f)
     if not f.endswith(".toml") or not several_contacts(path):
         continue
     p = run("prove", path)
-    check(f"prove {f} refused", p.returncode == 2 and "[[contact]] tables" in p.stderr, p.stderr)
+    check(f"prove {f}: a verdict (proven, or not proven with its reason)",
+          p.returncode in (0, 4) and p.stdout.startswith("verdict"), p.stdout[-300:] + p.stderr)
     # `orbit` takes them: the orbit each scene settles on, with its contact sequence.
     p = run("orbit", path, "--json")
     j = json.loads(p.stdout) if p.returncode == 0 else {}
@@ -171,6 +173,30 @@ with tempfile.TemporaryDirectory() as d:
     check("unstable impact orbit reported unstable", j.get("status") == "converged"
           and j.get("stable") is False and "impact_phases" in j
           and max(abs(complex(*m)) for m in j["floquet_multipliers"]) > 1, p.stdout + p.stderr)
+
+# The least period (issue 40): --period 2 on Fig. 5 finds the period-1 orbit and says so. Truth: the
+# period-1 orbit itself (--period 1): the same impact phase once per period, and its multipliers squared.
+fig5 = os.path.join(scenes, "fig05_coexistence.toml")
+p1 = run("orbit", fig5, "--json", "--kind", "impact", "--period", "1")
+p2 = run("orbit", fig5, "--json", "--kind", "impact", "--period", "2")
+j1 = json.loads(p1.stdout) if p1.returncode == 0 else {}
+j2 = json.loads(p2.stdout) if p2.returncode == 0 else {}
+ok = j1.get("status") == j2.get("status") == "converged"
+if ok:
+    mu1 = sorted((complex(*m) ** 2 for m in j1["floquet_multipliers"]), key=lambda z: (z.real, z.imag))
+    mu2 = sorted((complex(*m) for m in j2["floquet_multipliers"]), key=lambda z: (z.real, z.imag))
+    ok = (j1["period"] == j1["least_period"] == 1 and j2["period"] == 2 and j2["least_period"] == 1
+          and len(j2["impact_phases"]) in (1, 2) and all(abs(x - j1["impact_phases"][0]) < 1e-8 for x in j2["impact_phases"])
+          and len(mu1) == len(mu2) and all(abs(a - b) < 1e-8 for a, b in zip(mu1, mu2)))
+check("orbit --period 2 on Fig. 5: the period-1 orbit, least_period 1 (JSON)", ok, p1.stdout + p2.stdout + p2.stderr)
+p = run("orbit", fig5, "--kind", "impact", "--period", "2")
+check("orbit --period 2 on Fig. 5: a 'least period 1' line", p.returncode == 0 and "least period 1:" in p.stdout, p.stdout)
+p = run("orbit", fig5, "--kind", "impact", "--period", "1")
+check("orbit --period 1: no 'least period' line", p.returncode == 0 and "least period" not in p.stdout, p.stdout)
+p = run("orbit", os.path.join(scenes, "fig04_subharmonic.toml"), "--json")
+j = json.loads(p.stdout) if p.returncode == 0 else {}
+check("orbit on Fig. 4's period-2 orbit: least_period 2", j.get("period") == 2 and j.get("least_period") == 2,
+      p.stdout + p.stderr)
 
 # Studies: coexisting attractors of Fig. 5, the same for one and two threads; a basin map and its plot.
 fig5 = os.path.join(scenes, "fig05_coexistence.toml")

@@ -37,6 +37,9 @@ import time
 
 from mpmath import mp, mpf, asin, sin, cos, sqrt, atan2, pi, hypot, fmod
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prove_truth import scene_model  # noqa: E402
+
 mp.dps = 60
 VIBRO, CHECKER, SCENES = sys.argv[1], sys.argv[2], sys.argv[3]
 TMP = tempfile.mkdtemp(prefix="vibro_checker_test_")
@@ -161,7 +164,7 @@ def shooting_truth(cert):
     """Newton at 50 digits on the multiple-shooting map of an impacting orbit, written here in the
     standard form of the modal flight X_i = U_i(t) + a_i cos ω_i s + b_i sin ω_i s, from the
     certificate's midpoint: the true times and states after each impact, and the velocities before."""
-    md = cert["model"]
+    md = scene_model(cert)  # a physical scene: its modal data at 50 digits from its matrices
     wi = [mpf(x) for x in md["frequencies"]]
     TA, TB, c = ([mpf(x) for x in md[k]] for k in ("forcing", "contact", "shape"))
     x0, r, f, w = (mpf(md[k]) for k in ("stop", "restitution", "amplitude", "frequency"))

@@ -65,10 +65,59 @@ class Truth:
         return [V[i] + p * T[i] for i in range(self.n)]
 
 
+def scene_model(cert):
+    """The modal model the theorem is about, at 50 digits: the certificate's model, or for a physical
+    scene (a certificate with "structure": its mass and stiffness matrices, contacts and damping) the
+    modal data of those matrices computed here (docs/model.md §1.3): the eigenpairs of M⁻¹K (mpmath's
+    eig), ascending; ψ scaled to a unit component at contact 0 (σ_0 w_0ᵀψ = 1); m = ψᵀMψ, ω = √λ,
+    T_A = ψ(A)/m, T_B = 1/m, c = 1; contact j ≥ 1: c_j = σ_j w_jᵀψ, T_j = c_j/m. The stops,
+    restitutions, amplitude and frequency are the model's decimals."""
+    md = cert["model"]
+    st = cert.get("structure")
+    if st is None:
+        return md
+    M = matrix([[mpf(x) for x in row] for row in st["mass"]])
+    K = matrix([[mpf(x) for x in row] for row in st["stiffness"]])
+    N = M.rows
+    E, ER = eig(mp.inverse(M) * K)
+    order = sorted(range(N), key=lambda k: mp.re(E[k]))
+    cs = [(c["dof"], c["partner"], 1 if c["side"] == "below" else -1) for c in st["contacts"]]
+
+    def w(v, c):
+        d, p, sg = c
+        return sg * (v[d] - (v[p] if p >= 0 else 0))
+
+    out = {k: md[k] for k in ("stop", "restitution", "amplitude", "frequency")}
+    for key in ("frequencies", "forcing", "contact", "shape"):
+        out[key] = []
+    more = [{"shape": [], "contact": [], "stop": k["stop"], "restitution": k["restitution"]}
+            for k in md.get("more_contacts", [])]
+    s = lambda x: mp.nstr(mp.re(x), 45)  # noqa: E731
+    for i in range(st["kept"]):
+        k = order[i]
+        phi = [ER[a, k] for a in range(N)]
+        b = w(phi, cs[0])
+        psi = [x / b for x in phi]
+        mi = sum(psi[a] * M[a, c] * psi[c] for a in range(N) for c in range(N))
+        out["frequencies"].append(s(sqrt(mp.re(E[k]))))
+        out["forcing"].append(s(psi[st["forcing_dof"]] / mi))
+        out["contact"].append(s(1 / mi))
+        out["shape"].append("1")
+        for j, mc in enumerate(more, start=1):
+            cj = w(psi, cs[j])
+            mc["shape"].append(s(cj))
+            mc["contact"].append(s(cj / mi))
+    if more:
+        out["more_contacts"] = more
+    if "damping" in st:
+        out["damping"] = st["damping"][:st["kept"]]
+    return out
+
+
 def orbit_truth(cert):
     """Newton on the multiple-shooting map from the certificate's midpoint; the multipliers by
     central differences of the stroboscopic map; the closed-form determinant."""
-    m = Truth(cert["model"])
+    m = Truth(scene_model(cert))
     n, q = m.n, cert["period"]
     per = 2 * n + 1
     count = len(cert["midpoint"]) // per

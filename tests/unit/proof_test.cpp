@@ -1,6 +1,7 @@
 // The prover's interval layer (src/proof/interval.cpp on Arb), its closed-form enclosures and its
 // certified tests, against truths computed another way: decimals that doubles cannot hold, libm at
 // sample points, conservation of energy, finite differences, known spectra.
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -140,6 +141,41 @@ TEST(Spectrum, StabilityIsClaimedOnlyAwayFromTheUnitCircle) {
 
 // A proof's budget (budget.hpp): the stop request ends it, the time limit ends it and the runs its
 // orbit search starts (they poll ProcessStopFlag(), which is the watchdog's flag inside Watch).
+// The tube's pencil (docs/prove.md, "The scene as written"): M = diag(2, 1), K = [[4, -1], [-1, 1]],
+// det(K − λM) = 2λ² − 6λ + 3, so λ = (3 ∓ √3)/2 and φ ∝ (1, 4 − 2λ) (first row: (4 − 2λ)φ_0 = φ_1).
+TEST(Spectrum, ThePencilsEigenpairsEncloseTheClosedForm) {
+  const std::vector<std::vector<Interval>> M = {{2.0, 0.0}, {0.0, 1.0}}, K = {{4.0, -1.0}, {-1.0, 1.0}};
+  const double s3 = std::sqrt(3.0);
+  const std::vector<double> approx = {(3 - s3) / 2, (3 + s3) / 2};
+  // Starting vectors (columns), as a double eigensolver would give them.
+  const std::vector<std::vector<double>> vectors = {{1.0, 1.0}, {4 - 2 * approx[0], 4 - 2 * approx[1]}};
+  auto pairs = PencilEigenpairs(K, M, approx, vectors);
+  ASSERT_TRUE(pairs.has_value());
+  ASSERT_EQ(pairs->size(), 2u);
+  std::sort(pairs->begin(), pairs->end(), [](const auto& x, const auto& y) { return x.value.re.mid() < y.value.re.mid(); });
+  for (std::size_t k = 0; k < 2; ++k) {
+    const Interval exact = (Interval(3.0) + Interval(k == 0 ? -1.0 : 1.0) * Sqrt(Interval(3.0))) / Interval(2.0);
+    const auto& p = (*pairs)[k];
+    // The exact eigenvalue lies in the enclosure, which is tight (at the working precision, 128 bits).
+    const Interval d = p.value.re - exact;
+    EXPECT_TRUE(d.Contains(0.0)) << d.ToString();
+    EXPECT_LT(Abs(d).hi(), 1e-30) << d.ToString();
+    EXPECT_TRUE(p.value.im.Contains(0.0));
+    // The enclosed direction: φ_1/φ_0 = 4 − 2λ (a complex quotient of the enclosures).
+    const auto& v = p.vector;
+    const Interval den = Sqr(v[0].re) + Sqr(v[0].im);
+    const Interval ratio = (v[1].re * v[0].re + v[1].im * v[0].im) / den - (Interval(4.0) - Interval(2.0) * exact);
+    EXPECT_TRUE(ratio.Contains(0.0)) << ratio.ToString();
+    EXPECT_LT(Abs(ratio).hi(), 1e-28) << ratio.ToString();
+  }
+  // A repeated eigenvalue (M = I, K = I) is not certified simple: no enclosure.
+  const std::vector<std::vector<Interval>> I = {{1.0, 0.0}, {0.0, 1.0}};
+  EXPECT_FALSE(PencilEigenpairs(I, I, {1.0, 1.0}, {{1.0, 0.0}, {0.0, 1.0}}).has_value());
+  // A singular mass matrix: no enclosure.
+  const std::vector<std::vector<Interval>> S = {{1.0, 1.0}, {1.0, 1.0}};
+  EXPECT_FALSE(PencilEigenpairs(K, S, approx, vectors).has_value());
+}
+
 TEST(Budget, AStopRequestAndTheTimeLimitEndTheProofAndTheRunsOfItsSearch) {
   std::atomic<bool> stop{false};
   const Budget stoppable(60, &stop);
