@@ -805,8 +805,13 @@ Branch Continue(const ContinuationRequest& req) {
     const double root3 = fit_root(3, &noise), root2 = fit_root(2, nullptr);
     // The events' bisection may stop short of the root by much more than its bracket.
     if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 10.0 * width)) return;
+    // R is smooth only where the fits of degree 2 and 3 agree: where it is not (a 1-DOF column's
+    // f_st, where SP ~ |f − f_st|^(1/3), docs/model.md §6.3) their roots part by more than the
+    // events' bracket, and the bisection's location stands.
+    const double fit_bracket = std::abs(root3 - root2) + noise;
+    if (!(fit_bracket < bracket)) return;
     at = root3;
-    bracket = std::abs(root3 - root2) + noise;
+    bracket = fit_bracket;
   };
 
   while (static_cast<int>(br.points.size()) < req.max_points) {
