@@ -35,8 +35,7 @@ def main(argv):
             if "sequence" in b:
                 sequence = [s.decode() if isinstance(s, bytes) else str(s) for s in b["sequence"][()]]
                 if not any(sequence):
-                    strobe = b["strobe"][()] if "strobe" in b else None  # (N, contacts); absent in older files
-            sequence = None
+                    sequence = None
     except (OSError, KeyError) as e:
         print(f"{argv[1]}: not a branch with orbit states (vibro continue --out): {e}", file=sys.stderr)
         return 2

@@ -431,15 +431,17 @@ def test_continued_branch_exported_and_validated(tmp_path):
     with open(tmp_path / "b.csv") as fh:
         rows = list(csv.reader(fh))
     header, body = rows[0], rows[1:]
-    assert header[-1] == "sequence" and len(body) >= 5
-    assert all(sorted(r[-1].split()) == ["0:impact", "1:impact"] for r in body), body
+    # The sequence column, then the strobe_J columns (which validate reads past).
+    k = header.index("sequence")
+    assert header[k + 1:] == ["strobe_0", "strobe_1"] and len(body) >= 5, header
+    assert all(sorted(r[k].split()) == ["0:impact", "1:impact"] for r in body), body
     p, j = validate_json(str(tmp_path / "b.csv"))
     assert p.returncode == 0, p.stdout + p.stderr
     assert all(pt["verdict"] == "confirmed" and pt["distance"] < 1e-9 for pt in j["points"])
     # Every point against the closed form: the largest |multiplier| is r² (a complex pair).
     assert all(abs(max(abs(complex(a, b)) for a, b in pt["floquet_multipliers"]) - R ** 2) < 1e-9
                for pt in j["points"])
-    body[len(body) // 2][-1] = "0:impact 0:impact"
+    body[len(body) // 2][k] = "0:impact 0:impact"
     write_csv(tmp_path / "w.csv", body, header)
     p, j = validate_json(str(tmp_path / "w.csv"))
     assert p.returncode == 4

@@ -139,9 +139,19 @@ with tempfile.TemporaryDirectory() as d:
             check("mpirun -np 2: same file as one process", not diff, diff)
 
     # --- Interruption and resume -----------------------------------------------------------------
+    # A grid nine times larger, so that one thread is still far from done at the store's first
+    # flush however fast the machine (the small grid takes 1.6 s on a quiet machine, under one
+    # flush interval), with its own uninterrupted reference.
+    igrid = grid_args(nxy="672,480")
+    iref = os.path.join(d, "iref.h5")
+    p = run("basin", fig5, *igrid, "--threads", "2", "--out", iref, "--json")
+    check("large basin exit 0", p.returncode == 0, p.stderr)
+    iref_json = json.loads(p.stdout) if p.returncode == 0 else {}
+    iref_content = content(iref)
+    n_icells = 672 * 480
     for sig, code, label in ((signal.SIGINT, 130, "SIGINT"), (signal.SIGKILL, -9, "SIGKILL")):
         path = os.path.join(d, f"{label}.h5")
-        proc = start("basin", fig5, *grid, "--threads", "1", "--out", path)
+        proc = start("basin", fig5, *igrid, "--threads", "1", "--out", path)
         flushed = wait_for_cells(path, proc, 300)
         proc.send_signal(sig)
         out, err = proc.communicate(timeout=120)
@@ -149,24 +159,24 @@ with tempfile.TemporaryDirectory() as d:
         check(f"{label}: exit {code}", proc.returncode == code, (proc.returncode, err))
         with h5py.File(path, "r") as f:
             done = f["basin/cells/index"].shape[0]
-            check(f"{label}: some cells kept, not all", 0 < done < n_cells, done)
+            check(f"{label}: some cells kept, not all", 0 < done < n_icells, done)
             if sig == signal.SIGINT:
                 check("SIGINT: status interrupted", f.attrs["status"] == "interrupted", f.attrs["status"])
                 check("SIGINT: message says how to continue", "--resume" in f.attrs["message"], f.attrs["message"])
                 lab = f["basin/labels"][()]
                 check("SIGINT: labels of the done cells, −3 elsewhere",
-                      (lab != -3).sum() == done and (lab == -3).sum() == n_cells - done, (lab != -3).sum())
+                      (lab != -3).sum() == done and (lab == -3).sum() == n_icells - done, (lab != -3).sum())
             else:
                 check("SIGKILL: status running", f.attrs["status"] == "running", f.attrs["status"])
-        p = run("basin", fig5, *grid, "--threads", "2", "--out", path, "--resume", "--json")
+        p = run("basin", fig5, *igrid, "--threads", "2", "--out", path, "--resume", "--json")
         check(f"{label}: resume exit 0", p.returncode == 0, p.stderr)
         if p.returncode == 0:
-            check(f"{label}: resumed JSON equals the uninterrupted one", json.loads(p.stdout) == ref_json)
+            check(f"{label}: resumed JSON equals the uninterrupted one", json.loads(p.stdout) == iref_json)
             c = content(path)
-            for key in [k for k in ref_content if k.startswith(("/attractors", "basin/labels", "basin@"))]:
-                check(f"{label}: resumed {key}", c.get(key) == ref_content[key], key)
+            for key in [k for k in iref_content if k.startswith(("/attractors", "basin/labels", "basin@"))]:
+                check(f"{label}: resumed {key}", c.get(key) == iref_content[key], key)
             check(f"{label}: resumed cell table equals the uninterrupted one (as a set)",
-                  cells_by_index(path) == cells_by_index(ref))
+                  cells_by_index(path) == cells_by_index(iref))
             with h5py.File(path, "r") as f:
                 check(f"{label}: resumed status ok", f.attrs["status"] == "ok", f.attrs["status"])
 
@@ -175,19 +185,19 @@ with tempfile.TemporaryDirectory() as d:
     p = run("basin", fig5, *grid, "--out", ref, "--resume")
     check("resume of a finished study: exit 2", p.returncode == 2 and "nothing to resume" in p.stderr, p.stderr)
     half = os.path.join(d, "half.h5")
-    proc = start("basin", fig5, *grid, "--threads", "1", "--out", half)
+    proc = start("basin", fig5, *igrid, "--threads", "1", "--out", half)
     wait_for_cells(half, proc, 300)
     proc.send_signal(signal.SIGINT)
     proc.communicate(timeout=120)
     p = run("basin", fig5, *grid_args(nxy="100,160"), "--out", half, "--resume")
     check("resume with another grid: exit 2 naming --grid", p.returncode == 2 and "--grid" in p.stderr, p.stderr)
-    p = run("basin", fig5, *grid_args(x_range="1,2.5"), "--out", half, "--resume")
+    p = run("basin", fig5, *grid_args(nxy="672,480", x_range="1,2.5"), "--out", half, "--resume")
     check("resume with another range: exit 2 naming --x-range", p.returncode == 2 and "--x-range" in p.stderr, p.stderr)
-    p = run("basin", fig5, *grid, "--set", "excitation.amplitude=1.2", "--out", half, "--resume")
+    p = run("basin", fig5, *igrid, "--set", "excitation.amplitude=1.2", "--out", half, "--resume")
     check("resume with another scene: exit 2", p.returncode == 2 and "different scene" in p.stderr, p.stderr)
-    p = run("basin", fig5, *grid, "--full-periods", "--out", half, "--resume")
+    p = run("basin", fig5, *igrid, "--full-periods", "--out", half, "--resume")
     check("resume with --full-periods changed: exit 2", p.returncode == 2 and "--full-periods" in p.stderr, p.stderr)
-    p = run("basin", fig5, *grid, "--resume")
+    p = run("basin", fig5, *igrid, "--resume")
     check("--resume without --out: exit 2", p.returncode == 2 and "--out" in p.stderr, p.stderr)
     with h5py.File(half, "r") as f:
         check("refused resumes leave the file as it was", f.attrs["status"] == "interrupted", f.attrs["status"])
