@@ -51,7 +51,10 @@ def test_orbit_continue_sweep_equal_cli():
     want = cli_json("continue", path, "--param", "excitation.amplitude", "--to", "2.0", "--max-points", "40")
     table = branch.pop("table")
     loads = branch.pop("loads")
+    strobe = branch.pop("strobe")
     assert branch == want
+    # The strobe array is the points' stroboscopic states, per contact.
+    assert [p["strobe"] for p in want["points"]] == [list(row) for row in strobe]
     # The loads arrays are the points' loads, per contact.
     assert [p["loads"][0]["work_rate"] for p in want["points"]] == list(loads["work_rate"][:, 0])
     # The table is the points' columns.
