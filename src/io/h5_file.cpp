@@ -755,15 +755,19 @@ void Column::Stage(bool whole_chunks) {
   if (whole_chunks && chunk_rows_ > 0) n = (rows_ + n) / chunk_rows_ * chunk_rows_ - std::min(rows_, (rows_ + n) / chunk_rows_ * chunk_rows_);
   if (n == 0) return;
   staged_first_ = rows_;
-  const size_t bytes = static_cast<size_t>(n) * elem_size_ * std::max<Size>(cols_, 1);
-  staged_.assign(buf_.data(), buf_.data() + bytes);
-  std::memmove(buf_.data(), buf_.data() + bytes, used_ - bytes);
-  used_ -= bytes;
+  const size_t bytes = static_cast<size_t>(n) * elem_size_ * std::max<Size>(cols_, 1), rest = used_ - bytes;
+  // The staged rows stay where they are: the buffers swap, and only the rows after them (less than
+  // a chunk when whole_chunks) are copied to the front of the other one.
+  if (staged_.size() < rest) staged_.resize(std::max(rest, buf_.size()));
+  if (rest > 0) std::memcpy(staged_.data(), buf_.data() + bytes, rest);
+  std::swap(buf_, staged_);
+  staged_bytes_ = bytes;
+  used_ = rest;
   rows_ += n;
 }
 
 void Column::WriteStaged() {
-  const hsize_t n = staged_.size() / (elem_size_ * std::max<Size>(cols_, 1));
+  const hsize_t n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
   if (n == 0) return;
   const int rank = cols_ > 0 ? 2 : 1;
   const hsize_t dims[2] = {staged_first_ + n, cols_}, start[2] = {staged_first_, 0}, count[2] = {n, cols_};
@@ -773,12 +777,12 @@ void Column::WriteStaged() {
   Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
   CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, staged_.data()), dset_.get(),
              name_);
-  staged_.clear();
+  staged_bytes_ = 0;
 }
 
 void Column::Truncate(Size rows) {
   used_ = 0;
-  staged_.clear();
+  staged_bytes_ = 0;
   const hsize_t dims[2] = {rows, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;

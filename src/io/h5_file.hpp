@@ -177,7 +177,12 @@ class Column {
 
   template <class T>
   void Push(const T& v) {
-    Append(&v, sizeof(T));
+    if (buf_.size() - used_ >= sizeof(T)) {  // the common case: a store of a constant size, inlined
+      std::memcpy(buf_.data() + used_, &v, sizeof(T));
+      used_ += sizeof(T);
+    } else {
+      Append(&v, sizeof(T));
+    }
   }
   void PushRow(const Eigen::VectorXd& v) { Append(v.data(), sizeof(double) * static_cast<size_t>(v.size())); }
   void Flush() {
@@ -206,8 +211,10 @@ class Column {
   Size rows_ = 0;          // rows written or staged
   Size staged_first_ = 0;  // the first staged row
   Size chunk_rows_ = 0;    // rows per chunk (0: unknown, a dataset opened)
-  std::vector<unsigned char> buf_, staged_;  // buf_: its first used_ bytes are rows
-  size_t used_ = 0;
+  // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
+  // Stage swaps the two (no copy of the staged rows, only of the rows after them).
+  std::vector<unsigned char> buf_, staged_;
+  size_t used_ = 0, staged_bytes_ = 0;
 
   void Append(const void* p, size_t bytes) {
     if (buf_.size() - used_ < bytes) buf_.resize(std::max<size_t>({2 * buf_.size(), used_ + bytes, 4096}));
