@@ -21,7 +21,8 @@ claim too). The figures of the peers' comparison come from benchmarks/peers/run_
 minutes) and are checked against its CSV, docs/peers.csv, when --peers is given (it runs it).
 
 Usage: /usr/bin/python3 benchmarks/claims.py [--build build] [--repetitions 5] [--tolerance 0.1]
-       [--quick] [--peers]
+       [--quick] [--peers] [--save m.json | --load m.json]
+--save/--load: keep one run's measurements and check the docs against them again after an edit.
 --quick: one short repetition per benchmark (a smoke run: the output's form, not the figures).
 Exit status 0 when it ran (whatever the verdicts), 2 when a benchmark program failed.
 """
@@ -32,6 +33,7 @@ import re
 import statistics
 import subprocess
 import sys
+import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -67,11 +69,81 @@ CLAIMS = [
           (VB, "BM_Events10DofStiff", "events/s"), "events/s"),
     Claim("µs per event, 50-mode beam", "docs/index.md", r"\| 50-node beam, 50 modes \| ([0-9.]+) µs per event",
           (VB, "BM_BeamModes/50", "events/s"), "µs", scale=1e6, rate=False, invert=True),
-    Claim("HDF5 store: share of the speed kept", "docs/index.md", r"HDF5 store keeps ([0-9.]+) of its",
-          ("ratio", (VB, "BM_Fig8Store", "events/s"), (VB, "BM_Fig8NoStore", "events/s")), ""),
-    Claim("HDF5 store: share of the speed kept", "docs/performance.md",
-          r"a long run keeps \*\*([0-9.]+)\*\* of its", ("ratio", (VB, "BM_Fig8Store", "events/s"),
-                                                            (VB, "BM_Fig8NoStore", "events/s")), ""),
+    Claim("HDF5 store: speed kept, simulation thread", "docs/index.md", r"HDF5 store keeps ([0-9.–]+) of its",
+          (VB, "BM_Fig8StoreRatio", "store_speed_thread_cpu"), ""),
+    Claim("HDF5 store: speed kept, simulation thread", "docs/performance.md",
+          r"a long run keeps \*\*([0-9.–]+)\*\* of its", (VB, "BM_Fig8StoreRatio", "store_speed_thread_cpu"), ""),
+    Claim("HDF5 store: speed kept, process CPU", "docs/performance.md",
+          r"speed on the simulation's thread, ([0-9.–]+) of it counted", (VB, "BM_Fig8StoreRatio", "store_speed_process_cpu"), ""),
+    Claim("HDF5 store: speed kept, wall time", "docs/performance.md",
+          r"whole process's CPU and ([0-9.–]+) in wall", (VB, "BM_Fig8StoreRatio", "store_speed_wall"), ""),
+    Claim("events/s without the store (output.md)", "docs/output.md", r"over 2000 periods: ([0-9.]+ ?[kM]) events/s without",
+          (VB, "BM_Fig8NoStore", "events/s"), "events/s"),
+    Claim("events/s with the store (output.md)", "docs/output.md", r"without it, ([0-9.]+ ?[kM]) events/s\s+with it",
+          (VB, "BM_Fig8Store", "events/s"), "events/s"),
+    Claim("samples/s without the store (output.md)", "docs/output.md", r"64 samples per period ([0-9.]+ ?[kM]) →",
+          (VB, "BM_Fig8NoStoreSamples64", "samples/s"), "samples/s"),
+    Claim("samples/s with the store (output.md)", "docs/output.md", r"64 samples per period [0-9.]+ ?[kM] → ([0-9.]+ ?[kM]) samples/s",
+          (VB, "BM_Fig8StoreSamples64", "samples/s"), "samples/s"),
+    Claim("events/s now, Fig. 5 end to end (perf. table)", "docs/performance.md",
+          r"\| Fig\. 5 sticking case, 200 periods, end to end \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|",
+          (VB, "BM_Fig5StickingEndToEnd", "events/s"), "events/s"),
+    Claim("events/s now, Fig. 8 (perf. table)", "docs/performance.md",
+          r"\| Fig\. 8, 1-DOF, 200 periods \(`BM_Events1Dof`\) \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|",
+          (VB, "BM_Events1Dof", "events/s"), "events/s"),
+    Claim("events/s now, 2-DOF chain (perf. table)", "docs/performance.md",
+          r"\| 2-DOF chain, 200 periods \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|", (VB, "BM_Events2Dof", "events/s"), "events/s"),
+    Claim("events/s now, 3-DOF chain (perf. table)", "docs/performance.md",
+          r"\| 3-DOF chain \(r = 0\.5\), 200 periods \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|", (VB, "BM_Events3Dof", "events/s"),
+          "events/s"),
+    Claim("events/s now, 10-DOF stiff chain (perf. table)", "docs/performance.md",
+          r"\| 10-DOF stiff chain \(ω_10/ω_1 = 625\), 50 periods \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|",
+          (VB, "BM_Events10DofStiff", "events/s"), "events/s"),
+    Claim("events/s now, Fig. 8 no store (perf. table)", "docs/performance.md",
+          r"\| Fig\. 8, 2000 periods, no store \(`BM_Fig8NoStore`\) \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|",
+          (VB, "BM_Fig8NoStore", "events/s"), "events/s"),
+    Claim("events/s now, Fig. 8 HDF5 store (perf. table)", "docs/performance.md",
+          r"\| Fig\. 8, 2000 periods, HDF5 store \(`BM_Fig8Store`\) \| [0-9 .]+[kM]? \| ([0-9 .]+[kM]?) \|",
+          (VB, "BM_Fig8Store", "events/s"), "events/s"),
+    Claim("start-up: vibro --version (perf. table)", "docs/performance.md",
+          r"\| `vibro --version` \| [^|]+ \| \*\*([0-9.–]+) ms\*\*", (SB, "BM_VibroVersion", "over_bare_ms"), "ms", rate=False),
+    Claim("start-up: 20-period run (perf. table)", "docs/performance.md",
+          r"\| `vibro simulate fig08_preload\.toml --set run\.periods=20` \| [^|]+ \| \*\*([0-9.–]+) ms\*\*",
+          (SB, "BM_VibroSimulate20Periods", "over_bare_ms"), "ms", rate=False),
+    Claim("libraries at start-up: ldd lines", "docs/performance.md", r"`ldd build/vibro` lists ([0-9]+) lines",
+          ("command", "ldd"), "lines", rate=False),
+    Claim("engine limit: Fig. 8 events/s", "docs/performance.md",
+          r"\| Fig\. 8 events/s \(`BM_Events1Dof`\) \| [^|]+ \| ([0-9.]+ ?[kM]) \|", (VB, "BM_Events1Dof", "events/s"),
+          "events/s"),
+    Claim("engine limit: sincos limit events/s", "docs/performance.md",
+          r"\| sincos limit events/s \(`BM_Limit_Sincos`\) \| [^|]+ \| ([0-9.]+ ?[kM]) \|",
+          (VB, "BM_Limit_Sincos", "events/s"), "events/s"),
+    Claim("engine limit: engine / limit", "docs/performance.md",
+          r"\| \*\*engine / limit\*\* \(per round\) \| [^|]+ \| \*\*([0-9.]+)\*\*",
+          ("ratio", (VB, "BM_Events1Dof", "events/s"), (VB, "BM_Limit_Sincos", "events/s")), ""),
+    Claim("engine limit: probes per event", "docs/performance.md", r"\| probes per event \| [^|]+ \| ([0-9.]+) \|",
+          (VB, "BM_Events1Dof", "probes/event"), "", rate=False),
+    Claim("engine limit: one sincos", "docs/performance.md", r"\| one sincos \| [^|]+ \| ([0-9.]+) ns \|",
+          (VB, "BM_Limit_Sincos", "s/sincos"), "ns", scale=1e9, rate=False),
+    Claim("engine limit: one probe alone", "docs/performance.md", r"\| one probe alone \| [^|]+ \| ([0-9.]+) ns",
+          (VB, "BM_Fig8GapProbe", "s/probe"), "ns", scale=1e9, rate=False),
+    Claim("engine limit: run CPU per probe", "docs/performance.md", r"\| run CPU per probe \| [^|]+ \| ([0-9.]+) ns",
+          (VB, "BM_Events1Dof", "s/probe"), "ns", scale=1e9, rate=False),
+    Claim("basin cells/s, 1 thread, full periods", "docs/performance.md",
+          r"every cell runs 100 periods\) \| ([0-9 ]+) cells/s", (VB, "Basin/threads:1/early_stop:0", "cells/s"), "cells/s"),
+    Claim("basin cells/s, 2 threads, full periods", "docs/performance.md",
+          r"every cell runs 100 periods\) \| [0-9 ]+ cells/s \| ([0-9 ]+) cells/s", (VB, "Basin/threads:2/early_stop:0", "cells/s"),
+          "cells/s"),
+    Claim("continuation, 1-DOF points/s (perf.)", "docs/performance.md", r"dense branches, the same run\): 1-DOF\s+([0-9 ]+) points/s",
+          (VB, "BM_Continue1Dof/1000", "points_per_s"), "points/s"),
+    Claim("continuation, 3-DOF re-parse / set in place", "docs/orbits.md", r"which is\s+([0-9.]+) times faster",
+          ("ratio", (VB, "BM_Continue3Dof/1000", "points_per_s"), (VB, "BM_Continue3DofReparse/1000", "points_per_s")), ""),
+    Claim("proof time, damped 2-DOF three-impact orbit", "docs/prove.md", r"three-impact orbit \(f = 3\) ([0-9.]+) ms",
+          (VB, "BM_Prove2DofDampedImpact", "cpu_time"), "ms", rate=False),
+    Claim("proof time, damped 3-DOF clearance chain", "docs/prove.md", r"clearance\s+chain ([0-9.]+) ms",
+          (VB, "BM_Prove3DofDampedImpact", "cpu_time"), "ms", rate=False),
+    Claim("proof time, damped tube with two contacts", "docs/prove.md", r"tube with two contacts ([0-9.]+) ms",
+          (VB, "BM_Prove2DofTwoSidedTube", "cpu_time"), "ms", rate=False),
     Claim("several contacts: µs per event, 1 contact", "docs/contacts.md", r"1, 2, 4 and 8 contacts[^:]*:\s+([0-9.]+),",
           (VB, "BM_ChainContacts/1", "s/event"), "µs", scale=1e6, rate=False),
     Claim("several contacts: µs per event, 2 contacts", "docs/contacts.md",
@@ -83,6 +155,13 @@ CLAIMS = [
     Claim("several contacts: µs per event, 8 contacts", "docs/contacts.md",
           r"1, 2, 4 and 8 contacts[^:]*:\s+[0-9.]+, [0-9.]+, [0-9.]+ and ([0-9.]+) µs", (VB, "BM_ChainContacts/8", "s/event"),
           "µs", scale=1e6, rate=False),
+    Claim("loads: Fig. 8 events/s without loads", "docs/loads.md",
+          r"\| Fig\. 8 \(`fig08_preload.toml`\) \| ([0-9.]+ ?[kM]) \|", (LB, "BM_LoadsFig8", "plain_events/s"), "events/s"),
+    Claim("loads: Fig. 8 events/s with loads", "docs/loads.md",
+          r"\| Fig\. 8 \(`fig08_preload.toml`\) \| [^|]+ \| ([0-9.]+ ?[kM]) \|", (LB, "BM_LoadsFig8", "loads_events/s"), "events/s"),
+    Claim("loads: chain3.toml events/s without loads", "docs/loads.md",
+          r"\| 3-DOF chain, r = 0 \(`chain3.toml`[^|]*\| ([0-9.]+ ?[kM]) \|", (LB, "BM_LoadsChain3Sticking", "plain_events/s"),
+          "events/s"),
     Claim("loads/plain, Fig. 8", "docs/loads.md", r"\| Fig\. 8 \(`fig08_preload.toml`\) \|[^|]*\|[^|]*\| ([0-9.]+) \|",
           (LB, "BM_LoadsFig8", "loads/plain"), ""),
     Claim("loads/plain, 3-DOF chain as BM_Events3Dof", "docs/loads.md",
@@ -140,6 +219,14 @@ NOT_REMEASURED = [
     ("docs/index.md, docs/studies.md", "the 512 × 512 basin in 9.7 s / 21 s",
      "a minute-long CLI run: docs/performance.md gives its command; cells/s of the same study are checked above"),
     ("README.md, docs/index.md, docs/peers.md", "the peers' ratios", "benchmarks/peers/run_all.py (--peers)"),
+    ("docs/performance.md", "the beam's mode sweep (µs per event and per probe, 1-50 modes)",
+     "benchmarks/mode_sweep.py writes docs/mode_sweep.csv; the 50-mode cost is checked above"),
+    ("docs/performance.md", "modal truncation and work-precision CPU (ms per run)",
+     "benchmarks/modal_truncation.py and work_precision.py, whole CLI runs"),
+    ("docs/index.md, docs/python.md", "quickstart.sh and test.sh times (minutes)", "a fresh Debian install"),
+    ("docs/cli.md", "a sweep's Lyapunov cost (0.85 s against 0.62 s of CPU)", "a whole CLI sweep; the per-run "
+     "Lyapunov cost is checked above"),
+    ("docs/validation.md", "vibro score's preparation per row (0.1-0.4 ms)", "an order of magnitude for the stop's latency"),
 ]
 
 NUMBER = re.compile(r"([0-9][0-9 ]*(?:\.[0-9]+)?)\s*([kM]?)")
@@ -164,7 +251,8 @@ def run_benchmarks(build, program, names, repetitions, quick):
     exe = os.path.join(build, "benchmarks", program)
     pattern = "^(" + "|".join(re.escape(n) for n in sorted(set(names))) + ")(/min_time:.*|/real_time|/manual_time)*$"
     cmd = [exe, f"--benchmark_filter={pattern}", "--benchmark_format=json",
-           f"--benchmark_repetitions={1 if quick else repetitions}", "--benchmark_report_aggregates_only=false"]
+           f"--benchmark_repetitions={1 if quick else repetitions}", "--benchmark_report_aggregates_only=false",
+           "--benchmark_enable_random_interleaving=true"]
     if quick:
         cmd.append("--benchmark_min_time=0.01")
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -187,6 +275,12 @@ def run_benchmarks(build, program, names, repetitions, quick):
     return out
 
 
+def ldd_lines(build):
+    """Lines of `ldd build/vibro`: the libraries every vibro process maps at start-up."""
+    p = subprocess.run(["ldd", os.path.join(build, "vibro")], capture_output=True, text=True)
+    return len([x for x in p.stdout.splitlines() if x.strip()])
+
+
 def measured(claim, results):
     """(median, min, max) of a claim's measurement in its unit, or None."""
     m = claim.measure
@@ -195,6 +289,10 @@ def measured(claim, results):
         if not num or not den:
             return None
         vals = [a / b for a, b in zip(num, den)]
+    elif m[0] == "command":
+        vals = results.get("command", {}).get(m[1], {}).get(claim.unit)
+        if not vals:
+            return None
     else:
         vals = results.get(m[0], {}).get(m[1], {}).get(m[2])
         if not vals:
@@ -232,6 +330,9 @@ def main():
     ap.add_argument("--tolerance", type=float, default=0.10)
     ap.add_argument("--quick", action="store_true", help="one short repetition each (a smoke run)")
     ap.add_argument("--peers", action="store_true", help="also run benchmarks/peers/run_all.py")
+    ap.add_argument("--save", metavar="JSON", help="write the measurements to JSON (to check edited docs later)")
+    ap.add_argument("--load", metavar="JSON", help="check the docs against the measurements of an earlier --save "
+                    "instead of measuring")
     args = ap.parse_args()
     texts = {}
     for c in CLAIMS:
@@ -240,16 +341,31 @@ def main():
                 texts[c.doc] = fh.read()
     wanted = {}
     for c in CLAIMS:
+        if c.measure[0] == "command":
+            continue
         for x in ([c.measure[1], c.measure[2]] if c.measure[0] == "ratio" else [c.measure]):
             wanted.setdefault(x[0], set()).add(x[1])
-    results = {}
     failed = False
+    if args.load:
+        with open(args.load, encoding="utf-8") as fh:
+            saved = json.load(fh)
+        results, args.repetitions, args.quick = saved["results"], saved["repetitions"], saved["quick"]
+        wanted = {}
+        print(f"measurements of {saved['when']} (commit {saved['commit']}), read from {args.load}")
+    else:
+        results = {"command": {"ldd": {"lines": [float(ldd_lines(args.build))]}}}
     for program, names in wanted.items():
         try:
             results[program] = run_benchmarks(args.build, program, names, args.repetitions, args.quick)
         except (RuntimeError, OSError, json.JSONDecodeError) as e:
             print(f"error: {e}", file=sys.stderr)
             failed = True
+    if args.save:
+        commit = subprocess.run(["git", "-C", ROOT, "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+        with open(args.save, "w", encoding="utf-8") as fh:
+            json.dump({"when": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()), "commit": commit,
+                       "load_average": os.getloadavg()[0], "repetitions": args.repetitions, "quick": args.quick,
+                       "results": results}, fh, indent=1)
     print(f"claims check: {len(CLAIMS)} figures, {1 if args.quick else args.repetitions} repetition(s) each, "
           f"tolerance {args.tolerance:.0%}{' (quick: the form only, not the figures)' if args.quick else ''}")
     print(f"{'claim':46s} | {'where':20s} | {'claimed':>13s} | {'measured median [min, max]':>30s} | verdict")

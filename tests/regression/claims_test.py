@@ -10,6 +10,7 @@ import os
 import re
 import subprocess
 import sys
+import tempfile
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
@@ -20,8 +21,9 @@ VERDICTS = {"holds", "faster", "slower"}
 
 def main():
     build = sys.argv[1]
-    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "benchmarks", "claims.py"), "--quick", "--build", build],
-                       capture_output=True, text=True, timeout=1500)
+    saved = os.path.join(tempfile.mkdtemp(prefix="vibro_claims_"), "m.json")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "benchmarks", "claims.py"), "--quick", "--build", build,
+                        "--save", saved], capture_output=True, text=True, timeout=1500)
     check("claims.py --quick: exit 0", p.returncode == 0, p.stderr[-2000:])
     lines = p.stdout.splitlines()
     m = re.match(r"claims check: (\d+) figures", lines[0] if lines else "")
@@ -35,6 +37,13 @@ def main():
         check(f"{name}: measured, with its spread", re.search(r"\[.+, .+\]", got) is not None, row)
         check(f"{name}: a verdict", verdict in VERDICTS, row)
     check("a summary line", any(ln.startswith("summary: ") for ln in lines), lines[-3:])
+    # The saved measurements, checked again without measuring, give the same rows.
+    q = subprocess.run(["/usr/bin/python3", os.path.join(ROOT, "benchmarks", "claims.py"), "--load", saved],
+                       capture_output=True, text=True, timeout=60)
+    check("--load: exit 0", q.returncode == 0, q.stderr[-2000:])
+    again = [ln for ln in q.stdout.splitlines() if ln.count(" | ") == 4]
+    check("--load: the same rows as the run that saved them", again == [ln for ln in lines if ln.count(" | ") == 4],
+          (len(again), len(rows)))
     finish()
 
 
