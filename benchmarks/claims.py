@@ -17,8 +17,11 @@ figure has a spread (the smallest and the largest of the R repetitions) besides 
 Verdict per claim: `holds` when the claimed value (or range) and the measured [min, max], each
 widened by the tolerance (default 10 %: the machine is shared), overlap; `faster` or `slower` when
 the measurement lies wholly above or below (a rate above its claim is `faster`, a time below its
-claim too). The figures of the peers' comparison come from benchmarks/peers/run_all.py (about ten
-minutes) and are checked against its CSV, docs/peers.csv, when --peers is given (it runs it).
+claim too). A range over scenes (the peers' ratios) must match the measured [min, max] at both
+ends within the tolerance, else `differs`. The peers' figures are read from the CSV of the peers run,
+docs/peers.csv (benchmarks/peers/run_all.py, about 25 minutes on a loaded machine): the quoted ranges
+of ×CW (the peer's in-process call against a whole vibro process, at the peer's most accurate
+setting) must be that CSV's; --peers runs the peers first, so that they are checked against a new run.
 
 Usage: /usr/bin/python3 benchmarks/claims.py [--build build] [--repetitions 5] [--tolerance 0.1]
        [--quick] [--peers] [--save m.json | --load m.json]
@@ -42,9 +45,12 @@ class Claim:
     """One quoted figure: doc, a regex whose group 1 is the figure (a number with k/M/ms/µs, or a
     range a–b), what measures it, and whether larger is better (a rate) or worse (a time)."""
 
-    def __init__(self, name, doc, pattern, measure, unit, scale=1.0, rate=True, invert=False):
+    def __init__(self, name, doc, pattern, measure, unit, scale=1.0, rate=True, invert=False, whole_range=False):
         self.name, self.doc, self.pattern, self.measure = name, doc, pattern, measure
         self.unit, self.scale, self.rate, self.invert = unit, scale, rate, invert
+        # whole_range: the figure is a range over scenes; both of its ends must match the measured
+        # [min, max] (not merely overlap it).
+        self.whole_range = whole_range
 
 
 # measure = (program, benchmark name, counter) or ("ratio", (program, name, counter), (program, name, counter))
@@ -211,6 +217,46 @@ CLAIMS = [
     Claim("basin cells/s, 2 threads, early stops", "docs/performance.md",
           r"\| early stops \(default\) \| [0-9 ]+ cells/s \| ([0-9 ]+) cells/s", (VB, "Basin/threads:2/early_stop:1", "cells/s"), "cells/s"),
 ]
+# The peers' figures, read from the peers run's CSV (docs/peers.csv; --peers runs it again first):
+# per scene the peer's most accurate setting (as benchmarks/peers/table.py), its in-process call
+# against a whole vibro process (×CW), as a range over the chattering and several-contact scenes.
+PEERS_CSV = os.path.join(ROOT, "docs", "peers.csv")
+CHATTERING_AND_CONTACTS = ("fig08_preload.toml", "fig05_coexistence.toml", "chain2.toml", "chain2_damped.toml",
+                           "contacts_two_sided_1dof.toml", "contacts_preload_clearance_1dof.toml",
+                           "contacts_chain2.toml", "contacts_impact_pair.toml", "contacts_beam3.toml")
+NON_CHATTERING = ("fig04_subharmonic.toml", "fig11_clearance.toml")
+for doc, scipy_pat, siconos_pat, quiet_pat in (
+        ("README.md", r"in-process call costing ([0-9–]+) times a whole", r"Moreau–Jean[^.]*?reaches [^ ]+ T at ([0-9–]+) times",
+         r"SciPy reaches 1e-13 T at ([0-9–]+) times"),
+        ("docs/index.md", r"in-process call costing\s+([0-9–]+) times a whole", r"Moreau–Jean[^.]*?reaches [^ ]+ T at ([0-9–]+) times",
+         r"SciPy reaches 1e-13 T at ([0-9–]+) times"),
+        ("docs/peers.md", r"its call costs ([0-9–]+) times a whole vibro process \(×CW\)",
+         r"its call costs ([0-9–]+) times a whole vibro process\. Where", None)):
+    CLAIMS.append(Claim("peers: SciPy best, call vs vibro process", doc, scipy_pat,
+                        ("peers", "SciPy DOP853", CHATTERING_AND_CONTACTS), "×", whole_range=True))
+    CLAIMS.append(Claim("peers: Siconos T/1e4, call vs vibro process", doc, siconos_pat,
+                        ("peers", "Siconos Moreau–Jean", CHATTERING_AND_CONTACTS), "×", whole_range=True))
+    if quiet_pat:
+        CLAIMS.append(Claim("peers: SciPy best on Fig. 4 and 11", doc, quiet_pat,
+                            ("peers", "SciPy DOP853", NON_CHATTERING), "×", whole_range=True))
+
+
+def peers_ratios(engine, scenes):
+    """×CW of `engine`'s most accurate completed run on each scene of docs/peers.csv."""
+    import csv
+    if not os.path.exists(PEERS_CSV):
+        return None
+    with open(PEERS_CSV, newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    vals = []
+    for f in scenes:
+        runs = [r for r in rows if r["scene_file"] == f and r["engine"] == engine and r["status"] == "ok"
+                and r["event_error"] not in ("", "nan")]
+        if runs:
+            vals.append(float(min(runs, key=lambda r: float(r["event_error"]))["call_vs_whole"]))
+    return vals or None
+
+
 NOT_REMEASURED = [
     ("docs/performance.md", "before/after tables against commit eca2cf0 and the other engines before a change",
      "history: the ratios against an older commit need that commit built; the current rates are checked above"),
@@ -218,7 +264,8 @@ NOT_REMEASURED = [
     ("docs/engines.md", "CVODE settings' cost (ms per run)", "measured by benchmarks/work_precision.py"),
     ("docs/index.md, docs/studies.md", "the 512 × 512 basin in 9.7 s / 21 s",
      "a minute-long CLI run: docs/performance.md gives its command; cells/s of the same study are checked above"),
-    ("README.md, docs/index.md, docs/peers.md", "the peers' ratios", "benchmarks/peers/run_all.py (--peers)"),
+    ("docs/peers.md", "the peers' tables (each scene and setting)", "printed from docs/peers.csv by "
+     "benchmarks/peers/table.py; the ranges the docs quote are checked above against that CSV (--peers runs it anew)"),
     ("docs/performance.md", "the beam's mode sweep (µs per event and per probe, 1-50 modes)",
      "benchmarks/mode_sweep.py writes docs/mode_sweep.csv; the 50-mode cost is checked above"),
     ("docs/performance.md", "modal truncation and work-precision CPU (ms per run)",
@@ -289,6 +336,10 @@ def measured(claim, results):
         if not num or not den:
             return None
         vals = [a / b for a, b in zip(num, den)]
+    elif m[0] == "peers":
+        vals = peers_ratios(m[1], m[2])
+        if not vals:
+            return None
     elif m[0] == "command":
         vals = results.get("command", {}).get(m[1], {}).get(claim.unit)
         if not vals:
@@ -304,6 +355,10 @@ def measured(claim, results):
 def verdict(claim, lo_hi, meas, tol):
     lo, hi = lo_hi
     med, mlo, mhi = meas
+    if claim.whole_range:
+        if abs(lo - mlo) <= tol * mlo and abs(hi - mhi) <= tol * mhi:
+            return "holds"
+        return "differs"
     if mhi * (1 + tol) >= lo and mlo * (1 - tol) <= hi:
         return "holds"
     above = mlo * (1 - tol) > hi
@@ -341,11 +396,13 @@ def main():
                 texts[c.doc] = fh.read()
     wanted = {}
     for c in CLAIMS:
-        if c.measure[0] == "command":
+        if c.measure[0] in ("command", "peers"):
             continue
         for x in ([c.measure[1], c.measure[2]] if c.measure[0] == "ratio" else [c.measure]):
             wanted.setdefault(x[0], set()).add(x[1])
     failed = False
+    if args.peers and not args.load:  # first, so that the peers' claims are checked against this run
+        subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "peers", "run_all.py")], check=False)
     if args.load:
         with open(args.load, encoding="utf-8") as fh:
             saved = json.load(fh)
@@ -388,8 +445,6 @@ def main():
     for doc, what, why in NOT_REMEASURED:
         print(f"not re-measured: {doc}: {what} ({why})")
     print("summary: " + ", ".join(f"{k} {n}" for k, n in sorted(counts.items())))
-    if args.peers:
-        subprocess.run([sys.executable, os.path.join(ROOT, "benchmarks", "peers", "run_all.py")], check=False)
     return 2 if failed else 0
 
 

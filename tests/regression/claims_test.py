@@ -16,7 +16,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-VERDICTS = {"holds", "faster", "slower"}
+VERDICTS = {"holds", "faster", "slower", "differs"}
 
 
 def main():
