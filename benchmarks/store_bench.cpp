@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <time.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -36,6 +37,10 @@ long long OneRun(const vibro::System& sys, const vibro::LoadedScene& loaded, con
   return r.counts.impacts + r.counts.accumulations + r.counts.sticks + r.counts.releases;
 }
 
+// A file of this process's own: two benchmark processes at once (the claims check beside another
+// build's) must not share one (the store refuses a file another process writes).
+std::string TmpPath(const std::string& stem) { return "/tmp/" + stem + "_" + std::to_string(getpid()) + ".h5"; }
+
 vibro::LoadedScene Fig8(int samples_per_period, int periods = 2000) {
   return vibro::LoadScene(std::string(VIBRO_SCENES_DIR) + "/fig08_preload.toml",
                           {"run.periods=" + std::to_string(periods),
@@ -45,7 +50,7 @@ vibro::LoadedScene Fig8(int samples_per_period, int periods = 2000) {
 void Run(benchmark::State& state, bool with_store, int samples_per_period) {
   const auto loaded = Fig8(samples_per_period);
   const vibro::System sys(loaded.scene);
-  const std::string path = "/tmp/vibro_store_bench.h5";
+  const std::string path = TmpPath("vibro_store_bench");
   long long events = 0, samples = 0;
   for (auto _ : state) {
     events += OneRun(sys, loaded, with_store ? path : "");
@@ -72,7 +77,7 @@ double Seconds(clockid_t clock) {
 void BM_Fig8StoreRatio(benchmark::State& state) {
   const auto loaded = Fig8(0, 20000);
   const vibro::System sys(loaded.scene);
-  const std::string path = "/tmp/vibro_store_ratio_bench.h5";
+  const std::string path = TmpPath("vibro_store_ratio_bench");
   double plain[3] = {0, 0, 0}, stored[3] = {0, 0, 0};
   bool plain_first = true;
   const auto timed = [&](double* sums, const std::string& p) {
