@@ -1,0 +1,23 @@
+// Bifurcation points proven (docs/prove.md "Bifurcation points"): the parameter of the point
+// enclosed in an interval at most 1e-10 wide, exactly one point in it, the crossing transversal.
+#pragma once
+
+#include <string>
+
+#include "proof/proof_common.hpp"
+
+namespace vibro::proof {
+
+// The model is the symmetric two-sided one-DOF oscillator: one undamped mode, contact 1 contact 0
+// mirrored (c_1 = −c_0, e_1 = e_0 < 0, r_1 = r_0). `mirrored`: the scene's structure says
+// c_1 = −c_0 exactly (two stops on one DOF, opposite sides), when the model's c are enclosures.
+// Otherwise false, with the reason in `why`.
+bool SymmetricTwoSided(const IntervalModel& model, bool mirrored, std::string& why);
+
+// The symmetry-breaking pitchfork of the symmetric orbit (bifurcation_proof.cpp), near `located`,
+// the amplitude (frequency = false) or the forcing frequency: proven, `interval_text` is
+// "[lo, hi]" (exact decimals) holding exactly one pitchfork, crossed transversally.
+Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located,
+                       const Budget& budget, std::string& interval_text);
+
+}  // namespace vibro::proof
