@@ -1758,7 +1758,7 @@ def symmetric_model(node, m):
     return c0[0], e0, r0
 
 
-def pitchfork_at(m, c0, e0, r, P, frequency, root):
+def pitchfork_at(m, c0, e0, r, P, frequency, root, fold=False):
     """The symmetric orbit and g = det(DH + I) at the parameter interval P, with dg/dp: (defined,
     v, g, dg/dp, det DH, τ, the flight (s ↦ (y, ẏ)) of the half period).
     The orbit from (T1)-(T2) in the time s = Ωt (ẍ + x = a' sin w's, a' = F/Ω², w' = ω/Ω, v' = v/Ω):
@@ -1783,6 +1783,23 @@ def pitchfork_at(m, c0, e0, r, P, frequency, root):
     k2 = T2(1 - r) / (T2(2) * w1)
     A, B, C = k1 * k1 + k2 * k2, T2(-2) * Delta * k1, Delta * Delta - Kamp * Kamp
     disc = B * B - T2(4) * A * C
+    if fold:  # every real root V over P: −B/2A ± √max(disc, 0)/2A, and the flight of each
+        if not positive(A.v):
+            return None
+        spread = iv.sqrt(iv.mpf([0, max(hi(disc.v), 0)])) / (2 * A.v)
+        Vf = -B.v / (2 * A.v) + iv.mpf([-1, 1]) * spread
+        U0v, U1v = Delta.v - k1.v * Vf, w1.v * k2.v * Vf
+        yv, ydv, w1v, Dv = Delta.v - U0v, -(r * Vf) - U1v, w1.v, Delta.v
+
+        def fold_flight(S):
+            sw, cw, s1, c1 = iv.sin(w1v * S), iv.cos(w1v * S), iv.sin(S), iv.cos(S)
+            return (U0v * cw + U1v / w1v * sw + yv * c1 + ydv * s1,
+                    -(U0v * w1v) * sw + U1v * cw - yv * s1 + ydv * c1)
+
+        # In the time t and the speed v = ΩV: A = A'/Ω², B = B'/Ω, C = C' (docs/prove.md), so the
+        # discriminant in v is this one over Ω².
+        return {"V": Vf * Wm, "g": disc.v / (Wm * Wm), "slope": disc.g[2] / (Wm * Wm), "det": ZERO, "theta": theta.v, "flight": fold_flight,
+                "Delta": Dv}
     if not positive(disc.v) or not positive(A.v):
         return None
     sq = t_sqrt(disc)
@@ -1867,7 +1884,8 @@ def check_bifurcation(node):
         check_structure(node["structure"], m)
     b = node["bifurcation"]
     b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
-    b["type"].text(("pitchfork",))
+    kind = b["type"].text(("pitchfork", "fold"))
+    fold = kind == "fold"
     name = b["parameter"].text(("amplitude", "frequency"))
     ends = b["interval"].items(exactly=2)
     plo, phi = decimal(ends[0]), decimal(ends[1])
@@ -1886,42 +1904,52 @@ def check_bifurcation(node):
     claimed_speed = b["speed"].pair()
     at_lo = at_hi = over = None
     for root in (1, -1):
-        over = pitchfork_at(m, c0, e0, r, iv.mpf([lo(plo), hi(phi)]), frequency, root)
-        if over is not None and inside(over["V"], claimed_speed):
-            at_lo = pitchfork_at(m, c0, e0, r, plo, frequency, root)
-            at_hi = pitchfork_at(m, c0, e0, r, phi, frequency, root)
+        over = pitchfork_at(m, c0, e0, r, iv.mpf([lo(plo), hi(phi)]), frequency, root, fold)
+        if over is not None and (fold or inside(over["V"], claimed_speed)):
+            at_lo = pitchfork_at(m, c0, e0, r, plo, frequency, root, fold)
+            at_hi = pitchfork_at(m, c0, e0, r, phi, frequency, root, fold)
             break
         over = None
     if at_lo is None or at_hi is None or over is None:
         raise NotConfirmed(f"{b['interval'].path}: the symmetric orbit is not defined over the whole interval "
                            "(a discriminant, a speed or a denominator not positive)")
     gl, gh = at_lo["g"], at_hi["g"]
+    g_name = "the discriminant of the symmetric orbits' quadratic" if fold else "det(DH + I)"
     if not ((positive(gl) and negative(gh)) or (negative(gl) and positive(gh))):
-        raise NotConfirmed(f"{b['interval'].path}: det(DH + I) does not change sign over the interval "
-                           f"({show_iv(gl)} at {ends[0].v}, {show_iv(gh)} at {ends[1].v}): no pitchfork there")
+        raise NotConfirmed(f"{b['interval'].path}: {g_name} does not change sign over the interval "
+                           f"({show_iv(gl)} at {ends[0].v}, {show_iv(gh)} at {ends[1].v}): no {kind} there")
     if not excludes_zero(over["slope"]):
-        raise NotConfirmed(f"{b['interval'].path}: d det(DH + I)/dp = {show_iv(over['slope'])} may vanish: "
+        raise NotConfirmed(f"{b['interval'].path}: d/dp of {g_name} = {show_iv(over['slope'])} may vanish: "
                            "uniqueness and transversality not confirmed")
     # The claims contain the checker's enclosures: over the interval, the hull of 16 pieces (an
     # enclosure over the whole interval at once overestimates by its dependency effects).
     cuts = [lo(plo) + (hi(phi) - lo(plo)) * k / 16 for k in range(17)]
-    parts = [pitchfork_at(m, c0, e0, r, iv.mpf([cuts[k], cuts[k + 1]]), frequency, root) for k in range(16)]
+    parts = [pitchfork_at(m, c0, e0, r, iv.mpf([cuts[k], cuts[k + 1]]), frequency, root, fold) for k in range(16)]
     if any(q is None for q in parts):
         raise NotConfirmed(f"{b['interval'].path}: the symmetric orbit is not defined over a piece of the interval")
 
     def hull(key):
         return iv.mpf([min(lo(q[key]) for q in parts), max(hi(q[key]) for q in parts)])
 
-    over = dict(over, slope=hull("slope"), V=hull("V"), det=hull("det"))
-    for claim, E, what in ((b["g_at_ends"][0], gl, "det(DH + I) at the lower end"),
-                           (b["g_at_ends"][1], gh, "det(DH + I) at the upper end"),
-                           (b["slope"], over["slope"], "d det(DH + I)/dp"), (b["speed"], over["V"], "the speed")):
-        claim_contains(claim, E, what)
-    for claim, E, what in ((s["g_at_ends"][0], gl, "det(DH + I) at the lower end"),
-                           (s["g_at_ends"][1], gh, "det(DH + I) at the upper end"),
-                           (s["slope"], over["slope"], "d det(DH + I)/dp"), (s["speed"], over["V"], "the speed"),
-                           (s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH")):
-        claim_contains(claim, E, what)
+    over = dict(over, slope=hull("slope"), V=over["V"] if fold else hull("V"), det=hull("det"))
+    claims = ((b["g_at_ends"][0], gl, f"{g_name} at the lower end"),
+              (b["g_at_ends"][1], gh, f"{g_name} at the upper end"),
+              (b["slope"], over["slope"], f"d/dp of {g_name}"),
+              (s["g_at_ends"][0], gl, f"{g_name} at the lower end"),
+              (s["g_at_ends"][1], gh, f"{g_name} at the upper end"),
+              (s["slope"], over["slope"], f"d/dp of {g_name}"))
+    if fold:
+        # The claimed speeds (of every merging orbit over the interval) meet the checker's enclosure.
+        for claim, E, what in claims:
+            claim_contains(claim, E, what)
+        for claim in (b["speed"], s["speed"]):
+            if meet(claim.pair(), over["V"]) is None:
+                raise NotConfirmed(f"{claim.path} = {show_pair(claim.v)} does not meet the speeds of the merging "
+                                   f"orbits, which the checker encloses in {show_iv(over['V'])}")
+    else:
+        for claim, E, what in claims + ((b["speed"], over["V"], "the speed"), (s["speed"], over["V"], "the speed"),
+                                        (s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH")):
+            claim_contains(claim, E, what)
     # The orbit over the whole interval: Δ − y > 0 and y + Δ > 0 on the open flight (time s = Ωt),
     # windows at the impacts where ẏ < 0 (y leaves +Δ downwards and reaches −Δ downwards).
     th, fl, Dv = over["theta"], over["flight"], over["Delta"]

@@ -381,8 +381,8 @@ def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, tim
 
 def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
     """Proves a bifurcation point (``vibro prove --bifurcation KIND:KEY=VALUE --json``, docs/prove.md
-    "Bifurcation points"): ``kind`` and ``value`` as ``continue_`` reports the point (e.g. a
-    "branch-point" of the symmetric two-sided oscillator), ``param`` the scene key it varies
+    "Bifurcation points"): ``kind`` and ``value`` as ``continue_`` reports the point (a
+    "branch-point" or a "fold" of the symmetric two-sided oscillator), ``param`` the scene key it varies
     ("excitation.amplitude" or "excitation.frequency"). The dict has ``verdict``, ``reason`` and, when
     proven, ``bifurcation``, ``interval`` (two decimals, at most 1e-10 apart, holding exactly one such
     point), ``slope`` (the derivative that proves the crossing transversal) and

@@ -227,9 +227,12 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
       const auto pair = [](const nlohmann::json& p) {
         return Range(vibro::Enclosure{p[0].get<double>(), p[1].get<double>()});
       };
-      fmt::print("transversal  d det(DH + I)/d{} in {}\n", s["parameter"].get<std::string>(), pair(s["slope"]));
-      fmt::print("multipliers  of the half-period map at the point: -1 and {} (the period map: +1 and their squares)\n",
-                 pair(s["half_map_multipliers"][1]));
+      const bool fold = s["bifurcation"] == "fold";
+      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : "det(DH + I)", s["parameter"].get<std::string>(),
+                 pair(s["slope"]));
+      if (s.contains("half_map_multipliers"))
+        fmt::print("multipliers  of the half-period map at the point: -1 and {} (the period map: +1 and their "
+                   "squares)\n", pair(s["half_map_multipliers"][1]));
     }
     if (!args.out.empty()) fmt::print("certificate  {} (check it: vibro_check_proof.py {})\n", args.out, args.out);
   }

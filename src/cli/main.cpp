@@ -158,7 +158,8 @@ int main(int argc, char** argv) {
         "--bifurcation", prove_args.bifurcation,
         "prove the bifurcation point stored by `vibro continue --out BRANCH.h5` (BRANCH.h5, with --point K: its "
         "bifurcation K, default 0) or given as KIND:KEY=VALUE (e.g. branch-point:excitation.amplitude=3.286): its "
-        "parameter enclosed in an interval <= 1e-10 wide, one point in it, crossed transversally")
+        "parameter enclosed in an interval <= 1e-10 wide, one point in it, crossed transversally (the pitchfork "
+        "and the fold of the symmetric two-sided 1-DOF oscillator)")
         ->excludes(from);
     prove->add_option("--point", prove_args.point, "with --bifurcation BRANCH.h5: the bifurcation K (0-based, in the "
                       "order `vibro continue` lists them)")

@@ -51,7 +51,9 @@ D Sqrt(const D& a) {
 // The symmetric orbit and g = det(DH + I) at the parameter `p` (an interval), with derivatives.
 struct Branch {
   bool defined = false;  // Ω² − ω², the 2 × 2 determinant, A and the discriminant are nonzero/positive
+  bool quadratic = false;  // the quadratic is set up (A > 0): disc, A, B, p0, p1, q0, q1 hold
   D disc, v, U0, U1, g, detDH, K, tau, omega, Omega, Delta, r;
+  D A, B, p0, p1, q0, q1;
 };
 
 Branch Evaluate(const IntervalModel& m, bool frequency, const Interval& p, int root) {
@@ -81,6 +83,18 @@ Branch Evaluate(const IntervalModel& m, bool frequency, const Interval& p, int r
   const D C = p0 * p0 + (q0 / w) * (q0 / w) - Kamp * Kamp;
   if (!A.v.Positive()) return b;
   b.disc = B * B - K(Interval(4.0)) * A * C;
+  b.quadratic = true;
+  b.A = A;
+  b.B = B;
+  b.p0 = p0;
+  b.p1 = p1;
+  b.q0 = q0;
+  b.q1 = q1;
+  b.tau = tau;
+  b.omega = w;
+  b.Omega = W;
+  b.Delta = Delta;
+  b.r = r;
   if (!b.disc.v.Positive()) return b;
   const D sq = Sqrt(b.disc);
   b.v = (-B + (root > 0 ? sq : -sq)) / (two * A);
@@ -247,6 +261,112 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
                          {"g_at_ends", Json::array({Pair(bl.g.v), Pair(bh.g.v)})},
                          {"slope", Pair(bp.g.d)},
                          {"speed", Pair(bp.v.v)},
+                         {"window", eps}}}};
+    return out;
+  }
+  out.reason = last.empty() ? "the time limit was reached" : last;
+  return out;
+}
+
+
+// The fold of the symmetric orbit: the two roots of the quadratic merge (the stable and the unstable
+// symmetric orbits meet; H has the multiplier +1 there). Its parameters are the zeros of the
+// discriminant disc(p): exactly one in [p_lo, p_hi] when disc changes sign between the ends and
+// disc' excludes 0 over the interval; disc' = −4A ∂Q/∂p at the double root, so disc' ≠ 0 is the
+// fold's transversality (the branch turns back with nonzero curvature). The orbits exist over the
+// interval: for every real root v (in −B/2A ± √max(disc, 0)/2A), v > 0 and both gaps are positive.
+Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequency, double located,
+                           const Budget& budget, std::string& interval_text) {
+  Outcome out;
+  const char* name = frequency ? "frequency" : "amplitude";
+  std::string why;
+  if (!SymmetricTwoSided(model, mirrored, why)) {
+    out.reason = "the fold is proven for the symmetric two-sided one-DOF oscillator only: " + why;
+    return out;
+  }
+  std::string last;
+  for (double half = 1e-12 * (1 + std::abs(located)); 2 * half <= 1e-10 && !budget.passed(); half *= 4) {
+    const std::string lo = Dec(located - half), hi = Dec(located + half);
+    const Interval plo = Interval::Decimal(lo), phi = Interval::Decimal(hi);
+    const Interval P = Union(plo, phi);
+    const auto bl = Evaluate(model, frequency, plo, 1), bh = Evaluate(model, frequency, phi, 1);
+    auto bp = Evaluate(model, frequency, P, 1);
+    if (!bl.quadratic || !bh.quadratic || !bp.quadratic) {
+      last = fmt::format("the symmetric orbit's quadratic is not defined over {} in [{}, {}]", name, lo, hi);
+      continue;
+    }
+    const bool opposite =
+        (bl.disc.v.Positive() && bh.disc.v.Negative()) || (bl.disc.v.Negative() && bh.disc.v.Positive());
+    if (!opposite) {
+      last = fmt::format("the discriminant has no proven sign change over {} in [{}, {}] (enclosures {} and {}): no "
+                         "fold is proven there", name, lo, hi, bl.disc.v.ToString(), bh.disc.v.ToString());
+      continue;
+    }
+    if (bp.disc.d.Contains(0.0)) {
+      last = fmt::format("d disc/d{} over [{}, {}] is {}: it is not proven nonzero", name, lo, hi, bp.disc.d.ToString());
+      continue;
+    }
+    // Every real root over the interval: v ∈ −B/2A ± √max(disc, 0)/2A.
+    const Interval two_a = Interval(2.0) * bp.A.v;
+    const double top = std::max(bp.disc.v.hi(), 0.0);
+    const Interval spread = Sqrt(Interval::Hull(0.0, top)) / two_a;
+    const Interval v = -bp.B.v / two_a + Interval::Hull(-1.0, 1.0) * spread;
+    if (!v.Positive()) {
+      last = "the speed of the merging orbits is not proven positive";
+      continue;
+    }
+    bp.v.v = v;
+    bp.U0.v = bp.p0.v + bp.p1.v * v;
+    bp.U1.v = bp.q0.v + bp.q1.v * v;
+    const Interval tau = bp.tau.v;
+    double eps = tau.lo() / 64;
+    bool windows = false;
+    for (int k = 0; k < 12 && !windows; ++k, eps /= 2) {
+      const auto start = FlightAt(bp, Interval::Hull(0.0, eps));
+      const auto end = FlightAt(bp, Interval::Hull(tau.lo() - eps, tau.hi()));
+      windows = start.yd.Negative() && end.yd.Negative();
+      if (windows) break;
+    }
+    if (!windows) {
+      last = "the velocity just after and just before the impacts is not proven negative";
+      continue;
+    }
+    const auto upper = ProvePositive(
+        eps, tau.lo(), tau.lo() / 32, 30, budget, [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
+        [&](const Interval& s) { return -FlightAt(bp, s).yd; });
+    const auto lower = ProvePositive(
+        0.0, tau.lo() - eps, tau.lo() / 32, 30, budget,
+        [&](double s) { return FlightAt(bp, Interval(s)).y + bp.Delta.v; },
+        [&](const Interval& s) { return FlightAt(bp, s).yd; });
+    if (!upper.proven || !lower.proven) {
+      last = "a gap is not proven positive between the impacts: " + (upper.proven ? lower.reason : upper.reason);
+      continue;
+    }
+    interval_text = "[" + lo + ", " + hi + "]";
+    out.proven = true;
+    out.reason = fmt::format(
+        "exactly one {} in [{}, {}] at which the two symmetric orbits merge (a fold of the symmetric branch: the "
+        "discriminant of their quadratic changes sign there, and its derivative, {}, is nonzero over the whole "
+        "interval: the fold is nondegenerate)",
+        name, lo, hi, bp.disc.d.ToString());
+    out.summary = {{"bifurcation", "fold"},
+                   {"parameter", name},
+                   {"located", located},
+                   {"interval", Json::array({lo, hi})},
+                   {"width", phi.hi() - plo.lo()},
+                   {"box_width", phi.hi() - plo.lo()},
+                   {"g_at_ends", Json::array({Pair(bl.disc.v), Pair(bh.disc.v)})},
+                   {"slope", Pair(bp.disc.d)},
+                   {"speed", Pair(v)},
+                   {"period", 1}};
+    out.certificate = {{"bifurcation",
+                        {{"type", "fold"},
+                         {"parameter", name},
+                         {"interval", Json::array({lo, hi})},
+                         {"root", 0},
+                         {"g_at_ends", Json::array({Pair(bl.disc.v), Pair(bh.disc.v)})},
+                         {"slope", Pair(bp.disc.d)},
+                         {"speed", Pair(v)},
                          {"window", eps}}}};
     return out;
   }

@@ -1,5 +1,6 @@
 // Bifurcation points proven (docs/prove.md "Bifurcation points"): the parameter of the point
-// enclosed in an interval at most 1e-10 wide, exactly one point in it, the crossing transversal.
+// enclosed in an interval at most 1e-10 wide, exactly one point in it, the crossing transversal:
+// the pitchfork and the fold of the symmetric two-sided one-DOF oscillator.
 #pragma once
 
 #include <string>
@@ -19,5 +20,9 @@ bool SymmetricTwoSided(const IntervalModel& model, bool mirrored, std::string& w
 // "[lo, hi]" (exact decimals) holding exactly one pitchfork, crossed transversally.
 Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located,
                        const Budget& budget, std::string& interval_text);
+
+// The fold of the symmetric orbit (the two symmetric orbits merge), likewise.
+Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequency, double located,
+                           const Budget& budget, std::string& interval_text);
 
 }  // namespace vibro::proof

@@ -512,9 +512,9 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
   const bool mirrored = scene.physical.has_value() && contacts.size() == 2 && contacts[0].dof == contacts[1].dof && contacts[0].partner < 0 &&
                         contacts[1].partner < 0 && contacts[0].side != contacts[1].side;
   std::string interval;
-  if (request.kind != "branch-point") {
-    outcome.reason = "a " + request.kind + " is not proven by this version (it proves the symmetry-breaking pitchfork, "
-                     "a branch point of the symmetric two-sided one-DOF oscillator; docs/prove.md)";
+  if (request.kind != "branch-point" && request.kind != "fold") {
+    outcome.reason = "a " + request.kind + " is not proven by this version (it proves the symmetry-breaking pitchfork "
+                     "and the fold of the symmetric two-sided one-DOF oscillator; docs/prove.md)";
   } else if (!amplitude && !frequency) {
     outcome.reason = "the parameter " + request.parameter + " is not proven by this version (the amplitude or the "
                      "forcing frequency; docs/prove.md)";
@@ -530,7 +530,9 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
       }
       return m;
     }();
-    outcome = proof::ProvePitchfork(model, mirrored, frequency, request.value, budget, interval);
+    outcome = request.kind == "fold"
+                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, budget, interval)
+                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, budget, interval);
     if (outcome.proven) {
       // The certificate's model carries the parameter as the proven interval.
       (amplitude ? model.amplitude_text : model.frequency_text) = interval;

@@ -9,6 +9,9 @@ form, its landing located by mpmath's findroot at 50 digits, DH by central diffe
 and the parameter where det(DH + I) = 0 found by findroot. It reproduces the stated values
 a = 3.2860503573579958 (r = 0.6, ω = 2) and 4.6039339095958478 (r = 0.8, ω = 2.5).
 
+The fold of the symmetric orbit (r = 0.8, ω = 2.5), where the two roots of (T2) merge: the closed form
+a_fold = |1 − ω²| k2/√(k1² + k2²) (the discriminant of (T2) vanishes), 0.32055656759202667.
+
 Checked: the proven interval contains the truth and is at most 1e-10 wide (amplitude and forcing
 frequency); the checker confirms each certificate and rejects it with the interval moved by 1e-9,
 narrowed to exclude the truth, widened past 1e-10, with the slope claim moved, or with the model
@@ -117,7 +120,8 @@ def mutants(label, cert, truth):
              ("the slope claim moved past its truth", lambda c: c["bifurcation"].__setitem__(
                  "slope", [c["bifurcation"]["slope"][1] + 1e-9, c["bifurcation"]["slope"][1] + 2e-9])),
              ("a restitution edited", lambda c: c["model"]["more_contacts"][0].__setitem__("restitution", "0.61")),
-             ("another kind of point", lambda c: c["bifurcation"].__setitem__("type", "fold"))]
+             ("another kind of point", lambda c: c["bifurcation"].__setitem__(
+                 "type", "pitchfork" if c["bifurcation"]["type"] == "fold" else "fold"))]
     for what, edit in cases:
         c = copy.deepcopy(cert)
         edit(c)
@@ -174,6 +178,35 @@ subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--
                capture_output=True, text=True, timeout=600)
 proven_bifurcation("pitchfork in the frequency", scene, branch, w_truth)
 
+# ---- The fold of the symmetric orbit (r = 0.8, ω = 2.5): the two roots of (T2) merge where its
+# discriminant vanishes, |K| = Δ k2/√(k1² + k2²), so a_fold = |1 − ω²| k2/√(k1² + k2²) --------------
+r, w = mpf("0.8"), mpf("2.5")
+k1, k2 = (1 + r) * tan(pi / w / 2) / 2, (1 - r) / (2 * w)
+fold_truth = abs(1 - w * w) * k2 / sqrt(k1 * k1 + k2 * k2)
+V, phi = symmetric_orbit(mpf(1), r, w)
+scene = scene_file("fold.toml", two_sided("1.0", r, w))
+branch = os.path.join(H.tmp, "fold.h5")
+p = subprocess.run([VIBRO, "continue", scene, "--param", "excitation.amplitude", "--to", "0.2", "--out", branch,
+                    "--transient", "0", "--kind", "impact", "--period", "1", "--set",
+                    f"initial.time={mp.nstr(phi / w, 17)}", "--set", "initial.displacement=[0.9999999]", "--set",
+                    f"initial.velocity=[{mp.nstr(-r * V, 17)}]"], capture_output=True, text=True, timeout=600)
+expect(p.returncode == 0 and "fold at" in p.stdout, f"fold: continue locates it (exit {p.returncode}: {p.stderr[-200:]})")
+out = os.path.join(H.tmp, "fold.json")
+code, s, err = prove(scene, "--bifurcation", branch, out=out)
+expect(code == 0 and s and s["verdict"] == "proven" and s["bifurcation"] == "fold",
+       f"fold: proven (exit {code}: {s and s['reason']} {err[-300:]})")
+if code == 0:
+    lo, hi = bracket(s["interval"])
+    expect(lo <= fold_truth <= hi and hi - lo <= mpf("1e-10"),
+           f"fold: the interval {s['interval']} contains the closed form {mp.nstr(fold_truth, 20)}, ≤ 1e-10 wide")
+    code, v = H.check(out)
+    expect(code == 0 and v["verdict"] == "confirmed", f"fold: the checker confirms ({v})")
+    mutants("fold", json.load(open(out)), fold_truth)
+for past in (mpf("1e-9"), mpf("-1e-9")):
+    code, s, err = prove(scene, "--bifurcation", f"fold:excitation.amplitude={mp.nstr(fold_truth + past, 20)}")
+    expect(code == 4 and s and s["verdict"] == "not-proven" and "no fold is proven" in s["reason"],
+           f"fold: {mp.nstr(past, 2)} past the point: not proven (exit {code}: {s and s['reason']})")
+
 # ---- Soundness: 1e-9 past the point, nothing is proven ----------------------------------------
 truth = cases[0][0]
 scene = scene_file("sound.toml", two_sided("3.0", "0.6", "2.0"))
@@ -192,9 +225,9 @@ asym = scene_file("asym.toml", two_sided("3.0", "0.6", "2.0", r_above="0.7"))
 code, s, err = prove(asym, "--bifurcation", f"branch-point:excitation.amplitude={mp.nstr(truth, 20)}")
 expect(code == 4 and s and "restitutions differ" in s["reason"], f"asymmetric restitutions: refused with the reason "
        f"(exit {code}: {s and s['reason']})")
-code, s, err = prove(scene, "--bifurcation", "fold:excitation.amplitude=3.0")
-expect(code == 4 and s and "fold is not proven by this version" in s["reason"],
-       f"a fold: refused with the reason (exit {code}: {s and s['reason']})")
+code, s, err = prove(scene, "--bifurcation", "grazing:excitation.amplitude=3.0")
+expect(code == 4 and s and "grazing is not proven by this version" in s["reason"],
+       f"a grazing: refused with the reason (exit {code}: {s and s['reason']})")
 code, s, err = prove(scene, "--bifurcation", branches[0], "--point", "7")
 expect(code == 2 and "--point 7" in err, f"--point beyond the bifurcations: bad input (exit {code}: {err[-200:]})")
 code, s, err = prove(scene, "--bifurcation", "branch-point:excitation.amplitude=x")
