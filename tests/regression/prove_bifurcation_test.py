@@ -172,6 +172,16 @@ for truth, r, w in cases:
     proven_bifurcation(label, scene, branch, truth, "--point", "0")
     branches.append(branch)
 
+# Mass 2, stiffness 8 (Ω = 2), stops at ±0.5, ω = 4: in the time Ωt and the displacement x/Δ this is
+# the unit oscillator with a' = a/(mΩ²Δ) = a/4 and ω' = 2, so its pitchfork is 4 × the r = 0.6, ω = 2 one.
+scaled = scene_file("scaled.toml", two_sided("12.0", "0.6", "4.0").replace("mass = [[1.0]]", "mass = [[2.0]]")
+                    .replace("stiffness = [[1.0]]", "stiffness = [[8.0]]").replace("position = -1.0", "position = -0.5")
+                    .replace("position = 1.0", "position = 0.5"))
+branch = os.path.join(H.tmp, "scaled.h5")
+subprocess.run([VIBRO, "continue", scaled, "--param", "excitation.amplitude", "--to", "14", "--out", branch],
+               capture_output=True, text=True, timeout=600)
+proven_bifurcation("pitchfork of the scaled oscillator", scaled, branch, 4 * cases[0][0])
+
 scene = scene_file("freq.toml", two_sided("3.0", "0.6", "2.0"))
 branch = os.path.join(H.tmp, "freq.h5")
 subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--to", "1.7", "--out", branch],
@@ -230,6 +240,8 @@ expect(code == 4 and s and "grazing is not proven by this version" in s["reason"
        f"a grazing: refused with the reason (exit {code}: {s and s['reason']})")
 code, s, err = prove(scene, "--bifurcation", branches[0], "--point", "7")
 expect(code == 2 and "--point 7" in err, f"--point beyond the bifurcations: bad input (exit {code}: {err[-200:]})")
+code, s, err = prove(scene, "--bifurcation", branches[0], "--branch", branches[0])
+expect(code == 2 and "excludes" in err, f"--bifurcation with --branch: bad input (exit {code}: {err[-200:]})")
 code, s, err = prove(scene, "--bifurcation", "branch-point:excitation.amplitude=x")
 expect(code == 2 and "not a number" in err, f"a value that is not a number: bad input (exit {code}: {err[-200:]})")
 
