@@ -19,6 +19,9 @@
 // transversality of the crossing. The orbit is an orbit over the whole interval: the quadratic's
 // discriminant and v are positive, and both gaps are positive between the impacts (certified
 // positivity, with windows at the impacts where the velocity has its sign).
+//
+// The fold of the symmetric orbit (ProveSymmetricFold, at the end of this file) is the zero of the
+// quadratic's discriminant, where its two roots merge.
 #include <cmath>
 
 #include <fmt/format.h>
