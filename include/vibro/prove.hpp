@@ -101,6 +101,9 @@ struct BifurcationRequest {
   std::string kind;       // as `vibro continue` names it: "branch-point" (a pitchfork), "fold", ...
   std::string parameter;  // the scene key varied: "excitation.amplitude" or "excitation.frequency"
   double value = 0;       // the located value
+  // Its uncertainty (`continue`'s bracket): the value is refined by Newton within it before the
+  // proof; 0 (a value given directly): the interval is centred on `value` itself.
+  double bracket = 0;
   double time_limit = 60.0;
   const std::atomic<bool>* stop_requested = nullptr;
 };

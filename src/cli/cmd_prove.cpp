@@ -195,6 +195,7 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     const auto& b = list[static_cast<std::size_t>(args.point)];
     req.kind = b.kind;
     req.value = b.value;
+    req.bracket = b.bracket;
     req.parameter = vibro::ReadBranchPoint(src, 0).param;
   }
   auto at = sets;

@@ -23,6 +23,8 @@
 // The fold of the symmetric orbit (ProveSymmetricFold, at the end of this file) is the zero of the
 // quadratic's discriminant, where its two roots merge.
 #include <cmath>
+#include <functional>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -145,6 +147,24 @@ Flight FlightAt(const Branch& b, const Interval& s) {
 
 std::string Dec(double x) { return fmt::format("{}", x); }
 
+// The point's parameter by Newton (in the midpoints) on the scalar whose zero it is, from `located`,
+// kept within `bracket` (the uncertainty of the location that `continue` reports) of it; `located`
+// itself when the bracket is 0 or Newton leaves it.
+double Refine(const std::function<std::optional<D>(double)>& f, double located, double bracket) {
+  if (!(bracket > 0)) return located;
+  double p = located;
+  for (int it = 0; it < 40; ++it) {
+    const auto y = f(p);
+    if (!y || !y->v.finite() || !y->d.finite()) return located;
+    const double step = y->v.mid() / y->d.mid();
+    if (!std::isfinite(step)) return located;
+    p -= step;
+    if (!(std::abs(p - located) <= bracket + 1e-10 * (1 + std::abs(located)))) return located;
+    if (std::abs(step) <= 1e-16 * (1 + std::abs(p))) break;
+  }
+  return p;
+}
+
 }  // namespace
 
 bool SymmetricTwoSided(const IntervalModel& m, bool mirrored, std::string& why) {
@@ -163,7 +183,7 @@ bool SymmetricTwoSided(const IntervalModel& m, bool mirrored, std::string& why) 
   return why.empty();
 }
 
-Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located,
+Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located, double bracket,
                        const Budget& budget, std::string& interval_text) {
   Outcome out;
   const char* name = frequency ? "frequency" : "amplitude";
@@ -186,10 +206,16 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
     out.reason = fmt::format("no symmetric orbit at {} = {}: nothing to prove", name, Dec(located));
     return out;
   }
-  // Intervals around the located value, widened while ≤ 1e-10 wide.
+  // Intervals around the located value (refined within its bracket), widened while ≤ 1e-10 wide.
+  const double center = Refine(
+      [&](double p) -> std::optional<D> {
+        const auto b = Evaluate(model, frequency, Interval(p), root);
+        return b.defined ? std::optional<D>(b.g) : std::nullopt;
+      },
+      located, bracket);
   std::string last;
-  for (double half = 1e-12 * (1 + std::abs(located)); 2 * half <= 1e-10 && !budget.passed(); half *= 4) {
-    const std::string lo = Dec(located - half), hi = Dec(located + half);
+  for (double half = 1e-12 * (1 + std::abs(center)); 2 * half <= 1e-10 && !budget.passed(); half *= 4) {
+    const std::string lo = Dec(center - half), hi = Dec(center + half);
     const Interval plo = Interval::Decimal(lo), phi = Interval::Decimal(hi);
     const Interval P = Union(plo, phi);
     const auto bl = Evaluate(model, frequency, plo, root), bh = Evaluate(model, frequency, phi, root);
@@ -248,6 +274,7 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
     out.summary = {{"bifurcation", "pitchfork"},
                    {"parameter", name},
                    {"located", located},
+                   {"center", center},
                    {"interval", Json::array({lo, hi})},
                    {"width", phi.hi() - plo.lo()},
                    {"box_width", phi.hi() - plo.lo()},
@@ -279,7 +306,7 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
 // fold's transversality (the branch turns back with nonzero curvature). The orbits exist over the
 // interval: for every real root v (in −B/2A ± √max(disc, 0)/2A), v > 0 and both gaps are positive.
 Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequency, double located,
-                           const Budget& budget, std::string& interval_text) {
+                           double bracket, const Budget& budget, std::string& interval_text) {
   Outcome out;
   const char* name = frequency ? "frequency" : "amplitude";
   std::string why;
@@ -287,9 +314,15 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
     out.reason = "the fold is proven for the symmetric two-sided one-DOF oscillator only: " + why;
     return out;
   }
+  const double center = Refine(
+      [&](double p) -> std::optional<D> {
+        const auto b = Evaluate(model, frequency, Interval(p), 1);
+        return b.quadratic ? std::optional<D>(b.disc) : std::nullopt;
+      },
+      located, bracket);
   std::string last;
-  for (double half = 1e-12 * (1 + std::abs(located)); 2 * half <= 1e-10 && !budget.passed(); half *= 4) {
-    const std::string lo = Dec(located - half), hi = Dec(located + half);
+  for (double half = 1e-12 * (1 + std::abs(center)); 2 * half <= 1e-10 && !budget.passed(); half *= 4) {
+    const std::string lo = Dec(center - half), hi = Dec(center + half);
     const Interval plo = Interval::Decimal(lo), phi = Interval::Decimal(hi);
     const Interval P = Union(plo, phi);
     const auto bl = Evaluate(model, frequency, plo, 1), bh = Evaluate(model, frequency, phi, 1);
@@ -355,6 +388,7 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
     out.summary = {{"bifurcation", "fold"},
                    {"parameter", name},
                    {"located", located},
+                   {"center", center},
                    {"interval", Json::array({lo, hi})},
                    {"width", phi.hi() - plo.lo()},
                    {"box_width", phi.hi() - plo.lo()},

@@ -18,11 +18,12 @@ bool SymmetricTwoSided(const IntervalModel& model, bool mirrored, std::string& w
 // The symmetry-breaking pitchfork of the symmetric orbit (bifurcation_proof.cpp), near `located`,
 // the amplitude (frequency = false) or the forcing frequency: proven, `interval_text` is
 // "[lo, hi]" (exact decimals) holding exactly one pitchfork, crossed transversally.
-Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located,
+// `bracket`: the location's uncertainty; the value is refined by Newton within it (0: not refined).
+Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency, double located, double bracket,
                        const Budget& budget, std::string& interval_text);
 
 // The fold of the symmetric orbit (the two symmetric orbits merge), likewise.
 Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequency, double located,
-                           const Budget& budget, std::string& interval_text);
+                           double bracket, const Budget& budget, std::string& interval_text);
 
 }  // namespace vibro::proof

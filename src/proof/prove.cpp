@@ -531,8 +531,9 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
       return m;
     }();
     outcome = request.kind == "fold"
-                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, budget, interval)
-                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, budget, interval);
+                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
+                                              interval)
+                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
     if (outcome.proven) {
       // The certificate's model carries the parameter as the proven interval.
       (amplitude ? model.amplitude_text : model.frequency_text) = interval;
