@@ -1960,7 +1960,7 @@ def check_bifurcation(node):
         eps /= 2
     else:
         raise NotConfirmed(f"{node.path}: the velocity at the impacts is not confirmed negative")
-    for gap, a, z in ((lambda y: Dv - y, eps, lo(th)), (lambda y: y + Dv, mp.mpf(0), lo(th) - eps)):
+    for gap, a, z in ((lambda y: Dv - y, eps, hi(th)), (lambda y: y + Dv, mp.mpf(0), lo(th) - eps)):
         stack = [(a, z)]
         pieces = 0
         while stack:

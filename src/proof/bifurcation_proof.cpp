@@ -251,7 +251,7 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
       continue;
     }
     const auto upper = ProvePositive(
-        eps, tau.lo(), tau.lo() / 32, 30, budget,
+        eps, tau.hi(), tau.lo() / 32, 30, budget,
         [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
         [&](const Interval& s) { return -FlightAt(bp, s).yd; });
     const auto lower = ProvePositive(
@@ -368,7 +368,7 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
       continue;
     }
     const auto upper = ProvePositive(
-        eps, tau.lo(), tau.lo() / 32, 30, budget, [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
+        eps, tau.hi(), tau.lo() / 32, 30, budget, [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
         [&](const Interval& s) { return -FlightAt(bp, s).yd; });
     const auto lower = ProvePositive(
         0.0, tau.lo() - eps, tau.lo() / 32, 30, budget,
