@@ -387,7 +387,9 @@ void ExpectIdentical(const LoadsSummary& a, const LoadsSummary& b, const std::st
     EXPECT_EQ(x.work_rate_ci, y.work_rate_ci) << label;
     EXPECT_EQ(x.impulse_per_period_ci, y.impulse_per_period_ci) << label;
     EXPECT_EQ(x.contact_fraction_ci.has_value(), y.contact_fraction_ci.has_value()) << label;
-    if (x.contact_fraction_ci && y.contact_fraction_ci) EXPECT_EQ(*x.contact_fraction_ci, *y.contact_fraction_ci) << label;
+    if (x.contact_fraction_ci && y.contact_fraction_ci) {
+      EXPECT_EQ(*x.contact_fraction_ci, *y.contact_fraction_ci) << label;
+    }
   }
 }
 
