@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The loads of a resumed or extended run are those of the whole run (docs/loads.md §5), through
 the real binary: a run interrupted (SIGINT once its file holds a checkpoint past a given period)
-and resumed, and a run extended (finished, or interrupted), report in JSON the same `loads` and
+and resumed (or killed and resumed), and a run extended (finished, or interrupted), report in JSON the same `loads` and
 `loads_window`, to the bit, as the run that went through the total length from the start; with one
 contact (Fig. 8, short runs of one period per row and long ones whose rows are merged into buckets)
 and with two (the impact pair). The per-period rows the file keeps (/loads) are checked against
@@ -51,8 +51,8 @@ def same_loads(label, got, want):
                   (x.get(key), y.get(key)))
 
 
-def interrupt(args, path, past_period):
-    """Runs vibro with `args`, sends SIGINT once the file is running with a checkpoint past
+def interrupt(args, path, past_period, sig=signal.SIGINT):
+    """Runs vibro with `args`, sends `sig` once the file is running with a checkpoint past
     `past_period` (a flush of this invocation reached the disk) and returns the exit code and stderr."""
     proc = subprocess.Popen([vibro, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 600
@@ -64,7 +64,7 @@ def interrupt(args, path, past_period):
                     break
         except Exception:  # noqa: BLE001 (not created yet, or a flush in progress)
             pass
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(sig)
     _, err = proc.communicate(timeout=600)
     return proc.returncode, err
 
@@ -204,6 +204,16 @@ with tempfile.TemporaryDirectory() as d:
     check("pair interrupted inside the run", status == "interrupted" and 300 < stopped < pair_total, (status, stopped))
     got = summary("pair resumed", "simulate", pair, "--set", f"run.periods={pair_total}", "--out", path, "--resume")
     same_loads(f"pair resumed at period {stopped}", got, pair_ref)
+    # Killed (the file as its last flush left it, status "running"), then resumed.
+    path = os.path.join(d, "pair_killed.h5")
+    code, err = interrupt(["simulate", pair, "--set", f"run.periods={pair_total}", "--out", path], path, 300,
+                          signal.SIGKILL)
+    check("pair killed: exit -9", code == -signal.SIGKILL, (code, err[-2000:]))
+    stopped, status = checkpoint_period(path)
+    check("pair killed inside the run", status == "running" and 300 < stopped < pair_total, (status, stopped))
+    got = summary("pair killed, resumed", "simulate", pair, "--set", f"run.periods={pair_total}", "--out", path,
+                  "--resume")
+    same_loads(f"pair killed, resumed at period {stopped}", got, pair_ref)
     path = os.path.join(d, "pair_ext.h5")
     summary("pair 2000", "simulate", pair, "--set", "run.periods=2000", "--out", path)
     got = summary("pair 2000 +3000", "simulate", pair, "--out", path, "--extend", "3000")
