@@ -326,7 +326,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   std::optional<vibro::frontend::RunOutput> output;
   {
     py::gil_scoped_release release;
-    output.emplace(out, loaded, sys, how, attractor_recorder, options, kPython);
+    output.emplace(out, loaded, sys, how, attractor_recorder, &loads, options, kPython);
   }
   std::string json;
   bool interrupted = false;
