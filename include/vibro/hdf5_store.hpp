@@ -11,6 +11,7 @@
 // flush: after a kill -9 it opens as it is and holds everything up to the last flush.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "vibro/attractor.hpp"
+#include "vibro/loads.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/poincare.hpp"
@@ -72,6 +74,11 @@ struct StoredRun {
   std::string scene_text, engine, chatter, status, message, created, version;
   long long events = 0, samples = 0, sections = 0;
   std::optional<Checkpoint> checkpoint;
+  // The per-period loads the file holds (/loads, docs/loads.md §5): those of the periods
+  // [loads_known_from, checkpoint period), given back by Hdf5Store::ReplayLoads (set by Resume and
+  // Extend; a file written before /loads, or whose /loads does not reach its checkpoint, has
+  // loads_known_from = the checkpoint's period).
+  long long loads_known_from = 0;
   std::vector<Event> tail_events;  // events of the last periods before the checkpoint
   std::vector<Clock> tail_section_clocks;
   std::vector<Eigen::VectorXd> tail_section_X, tail_section_V;
@@ -98,7 +105,7 @@ struct H5Table {
   const Array* Find(const std::string& name) const;
 };
 
-class Hdf5Store final : public Observer {
+class Hdf5Store final : public Observer, public LoadsSink {
  public:
   // Creates (truncates) `path` and writes the header. Throws InputError when the destination
   // cannot be written (read-only, missing directory, full disk): nothing is computed then.
@@ -121,6 +128,13 @@ class Hdf5Store final : public Observer {
   void OnSample(const Sample& s) override;
   void OnSection(const Sample& s) override;
   void OnCheckpoint(const Checkpoint& c) override;
+  // The loads of each period as it ends (LoadsRecorder::SetSink): /loads, one row per period,
+  // from the run's first period (or, resumed from a file without them, from its checkpoint's).
+  // A period out of sequence ends the table's rows (a resume then finds it short: unknown).
+  void OnPeriodLoads(long long period, const std::vector<LoadsRow>& rows) override;
+  // A resumed or extended run: the stored rows of /loads, periods [StoredRun::loads_known_from,
+  // checkpoint period), one call per period in order (read in blocks).
+  void ReplayLoads(const std::function<void(const std::vector<LoadsRow>&)>& each) const;
 
   // Writes /orbit: scalars period, newton_iterations (int64), stable (bool), residual,
   // section_time (float64) as scalar attributes, the section point X, V and the multipliers

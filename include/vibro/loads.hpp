@@ -4,6 +4,7 @@
 // of periods.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -38,6 +39,31 @@ struct LoadsSummary {
   int blocks = 0;                           // blocks asked for
   long long block_periods = 0;              // periods per block (0: no interval)
   std::string note;                         // why there is no interval, when there is none
+  // False when the periods of the run before `known_from` are not known (a run resumed or
+  // extended from a file that does not store them, docs/loads.md §5): the window is then cut to
+  // the periods from known_from on, and `coverage` says so.
+  bool whole_run = true;
+  long long known_from = 0;
+  std::string coverage;
+};
+
+// The sums of one contact over one period (or, in a LoadsRecorder's buckets, over several):
+// impacts, impulse, ∫R dt, energy dissipated, normal work, time held.
+struct LoadsRow {
+  double impacts = 0, impulse = 0, reaction = 0, energy = 0, work = 0, held = 0;
+  // A phase held together with other contacts touched this period without an account (a run
+  // without loads, SimulationOptions::loads): its ∫R dt and duration are unknown, so are the
+  // reaction, mean force and contact fraction (docs/loads.md).
+  bool partial = false;
+};
+
+// Where a LoadsRecorder gives each period's rows (one per contact) once the period has ended:
+// the store of a run (vibro/hdf5_store.hpp) keeps them, so that a resumed or extended run
+// gives them back (LoadsRecorder::Resumed) and reports the loads of the whole run.
+class LoadsSink {
+ public:
+  virtual ~LoadsSink() = default;
+  virtual void OnPeriodLoads(long long period, const std::vector<LoadsRow>& rows) = 0;
 };
 
 // An observer of a run. The first `skip` periods of the run (a transient) are left out of the means.
@@ -60,13 +86,18 @@ class LoadsRecorder final : public Observer {
   static constexpr long long kMinBlockPeriods = 2;
 
   // Per-period sums of one contact (time in units of time; row k = period first + k).
-  struct Row {
-    double impacts = 0, impulse = 0, reaction = 0, energy = 0, work = 0, held = 0;
-    // A phase held together with other contacts touched this period without an account (a run
-    // without loads, SimulationOptions::loads): its ∫R dt and duration are unknown, so are the
-    // reaction, mean force and contact fraction (docs/loads.md).
-    bool partial = false;
-  };
+  using Row = LoadsRow;
+
+  // Every period's rows, once it has ended, go to `sink` too (nullptr: nowhere).
+  void SetSink(LoadsSink* sink) { sink_ = sink; }
+  // A run resumed at checkpoint `cp` (or extended from it), that began at period `run_first`:
+  // the rows of the periods [known_from, cp.clock.period) follow through ReplayPeriod, one call
+  // per period in order (they come from the run's store, not to the sink); the periods before
+  // known_from are unknown (a store that did not keep them), and the window analysed starts
+  // at known_from at the earliest (LoadsSummary::whole_run false when that cuts it). Call before
+  // the run's first event.
+  void Resumed(long long run_first, long long known_from, const Checkpoint& cp);
+  void ReplayPeriod(const std::vector<Row>& rows);
 
   // Memory (for tests): periods per bucket (1 until the first merge) and rows held per contact
   // (buckets and the head kept apart), never more than bucket_cap + bucket_cap/16.
@@ -75,6 +106,9 @@ class LoadsRecorder final : public Observer {
 
  private:
   Row& At(int contact, long long period);
+  void ClosePeriod();  // the open period's rows to the sink and into the buckets
+  long long Begin() const { return std::max(first_ + skip_, known_from_); }
+  LoadsSummary SummaryOfClosed(int blocks) const;
   void Merge();  // every contact's buckets pairwise: bucket_ doubles
   double period_;
   long long skip_, cap_, head_periods_;
@@ -85,7 +119,10 @@ class LoadsRecorder final : public Observer {
   long long bucket_ = 1;
   std::vector<std::vector<Row>> head_;  // [contact][period − begin] for the first head_periods_, once merged
   std::vector<Row> rest_;               // [contact]: periods begin + [head_periods_, bucket_), once bucket_ > head
-  Row skipped_;                         // where the periods before begin go
+  std::vector<Row> open_;               // [contact]: the sums of period open_period_ so far
+  long long open_period_ = -1;          // the period being summed (the ones before are closed)
+  LoadsSink* sink_ = nullptr;
+  long long known_from_ = -1;           // the first period known (a resumed run: see Resumed)
   long long first_ = -1, last_ = -1;    // periods seen: [first_, last_)
   std::vector<double> open_reaction_, open_held_;  // open phases' parts already counted
 };

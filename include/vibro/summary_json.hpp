@@ -29,7 +29,8 @@ std::string ModelJson(const System& system);
 // `loads`: per contact (docs/loads.md), "loads": [{"contact", "impacts_per_period",
 // "impulse_per_period", "reaction_integral_per_period", "mean_force", "dissipated_power",
 // "work_rate", "contact_fraction", each with "…_ci": [lo, hi] (null when the run is too short)}],
-// and "loads_window": {"first_period", "periods", "blocks", "block_periods", "note"}.
+// and "loads_window": {"first_period", "periods", "blocks", "block_periods", "note", "whole_run",
+// "known_from" and "coverage" when not whole_run}.
 std::string SimulationJson(const Scene& scene, const RunResult& result, const Attractor& attractor,
                            const LyapunovSpectrum* lyapunov = nullptr, const LoadsSummary* loads = nullptr);
 

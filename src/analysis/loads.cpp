@@ -99,21 +99,57 @@ void LoadsRecorder::Merge() {
 
 LoadsRecorder::Row& LoadsRecorder::At(int contact, long long period) {
   if (first_ < 0) first_ = period;
-  if (period < first_) period = first_;  // never: events come in time order
+  if (open_period_ < 0) {
+    open_period_ = first_;
+    open_.assign(rows_.size(), Row{});
+  }
+  if (period < open_period_) period = open_period_;  // never: events come in time order
+  while (open_period_ < period) ClosePeriod();
   last_ = std::max(last_, period + 1);
-  const long long begin = first_ + skip_;
-  if (period < begin) {  // not analysed
-    skipped_ = Row{};
-    return skipped_;
+  return open_[static_cast<size_t>(contact)];
+}
+
+void LoadsRecorder::ClosePeriod() {
+  const long long period = open_period_;
+  if (sink_) sink_->OnPeriodLoads(period, open_);
+  const long long begin = Begin();
+  if (period >= begin) {  // analysed: added to its bucket (the periods before begin are not kept)
+    auto k = (period - begin) / bucket_;
+    while (k >= cap_) {
+      Merge();
+      k = (period - begin) / bucket_;
+    }
+    for (size_t j = 0; j < rows_.size(); ++j) {
+      auto& r = rows_[j];
+      if (static_cast<long long>(r.size()) <= k) r.resize(static_cast<size_t>(k) + 1);
+      Add(r[static_cast<size_t>(k)], open_[j]);
+    }
   }
-  auto k = (period - begin) / bucket_;
-  while (k >= cap_) {
-    Merge();
-    k = (period - begin) / bucket_;
+  std::fill(open_.begin(), open_.end(), Row{});
+  ++open_period_;
+}
+
+void LoadsRecorder::Resumed(long long run_first, long long known_from, const Checkpoint& cp) {
+  first_ = run_first;
+  known_from_ = std::max(run_first, known_from);
+  open_period_ = known_from_;
+  last_ = known_from_;
+  open_.assign(rows_.size(), Row{});
+  // The parts of the phases open at the checkpoint that its period boundary counted already.
+  for (size_t j = 0; j < rows_.size(); ++j) {
+    const bool open = j < cp.reaction_integral.size() && std::isfinite(cp.reaction_integral[j]);
+    open_reaction_[j] = open ? cp.reaction_integral[j] : 0;
+    open_held_[j] = open && j < cp.stick_duration.size() ? cp.stick_duration[j] : 0;
   }
-  for (auto& r : rows_)
-    if (static_cast<long long>(r.size()) <= k) r.resize(static_cast<size_t>(k) + 1);
-  return rows_[static_cast<size_t>(contact)][static_cast<size_t>(k)];
+}
+
+void LoadsRecorder::ReplayPeriod(const std::vector<Row>& rows) {
+  for (size_t j = 0; j < open_.size() && j < rows.size(); ++j) open_[j] = rows[j];
+  LoadsSink* sink = sink_;
+  sink_ = nullptr;  // the store has them
+  ClosePeriod();
+  sink_ = sink;
+  last_ = open_period_;
 }
 
 void LoadsRecorder::OnEvent(const Event& e) {
@@ -155,6 +191,8 @@ void LoadsRecorder::OnCheckpoint(const Checkpoint& cp) {
     // before what this recorder sees, and are counted from here on.
     first_ = cp.clock.period;
     last_ = first_;
+    open_period_ = first_;
+    open_.assign(rows_.size(), Row{});
     for (size_t j = 0; j < rows_.size() && j < cp.reaction_integral.size(); ++j) {
       const bool open = std::isfinite(cp.reaction_integral[j]);
       open_reaction_[j] = open ? cp.reaction_integral[j] : 0;
@@ -163,8 +201,8 @@ void LoadsRecorder::OnCheckpoint(const Checkpoint& cp) {
     return;
   }
   // A period boundary: the part of each open phase since the last account goes to the period
-  // that ends here.
-  if (cp.clock.period <= first_) return;
+  // that ends here, and that period is closed.
+  if (cp.clock.period <= std::max(first_, open_period_)) return;
   const long long ended = cp.clock.period - 1;
   // Held with other contacts, without an account (SimulationOptions::loads off): unknown.
   for (const int j : cp.held)
@@ -180,16 +218,30 @@ void LoadsRecorder::OnCheckpoint(const Checkpoint& cp) {
     }
   }
   last_ = std::max(last_, cp.clock.period);
+  while (open_period_ < cp.clock.period) ClosePeriod();
 }
 
 LoadsSummary LoadsRecorder::Summary(int blocks) const {
+  // A run stopped inside a period: that period's sums so far count as its own (closed in a copy).
+  if (open_period_ >= 0 && open_period_ < last_) {
+    LoadsRecorder closed(*this);
+    closed.sink_ = nullptr;
+    while (closed.open_period_ < closed.last_) closed.ClosePeriod();
+    return closed.SummaryOfClosed(blocks);
+  }
+  return SummaryOfClosed(blocks);
+}
+
+LoadsSummary LoadsRecorder::SummaryOfClosed(int blocks) const {
   LoadsSummary s;
   s.blocks = blocks;
-  if (first_ < 0 || last_ <= first_) {
+  if (first_ < 0 || last_ <= std::max(first_, known_from_)) {
     s.note = "no complete period recorded";
     return s;
   }
-  const long long begin = std::min(first_ + skip_, last_);
+  const long long begin = std::min(Begin(), last_);
+  s.known_from = std::max(first_, known_from_);
+  s.whole_run = known_from_ <= first_ + skip_;
   s.first_period = begin;
   s.periods = last_ - begin;
   const long long n = s.periods;
@@ -296,6 +348,11 @@ LoadsSummary LoadsRecorder::Summary(int blocks) const {
                             "are unknown", s.note.empty() ? "" : "; ", j);
     s.contacts.push_back(c);
   }
+  if (!s.whole_run)
+    s.coverage = fmt::format("the periods before {} are not known (the run was resumed or extended from a file "
+                             "that does not hold its per-period loads, docs/loads.md §5): the loads cover "
+                             "periods {}..{} only, not the window from period {} of the whole run",
+                             known_from_, s.first_period, s.first_period + s.periods, first_ + skip_);
   return s;
 }
 

@@ -17,6 +17,7 @@ void PrintLoads(const vibro::LoadsSummary& s) {
     fmt::print("loads        periods {}..{}{}\n", s.first_period, s.first_period + s.periods,
                s.block_periods > 0 ? fmt::format(", 95 % intervals from {} blocks of {} periods", s.blocks, s.block_periods)
                                    : "; " + s.note);
+  if (!s.whole_run) fmt::print("loads        not the whole run: {}\n", s.coverage);
   const auto pm = [](double v, const vibro::ContactLoads::Interval& ci) {
     return ci ? fmt::format("{:.6g} ± {:.2g}", v, 0.5 * (ci->second - ci->first)) : fmt::format("{:.6g}", v);
   };

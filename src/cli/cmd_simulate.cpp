@@ -32,7 +32,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
   options.observers.push_back(&recorder);
-  // Contact loads (docs/loads.md) over the periods of this invocation, the first tenth left out.
+  // Contact loads (docs/loads.md) over the run's periods, the first tenth left out (a resumed or
+  // extended run: the whole run's, from the periods its file holds).
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers.push_back(&loads);
   std::optional<vibro::LyapunovObserver> lyapunov;
@@ -40,7 +41,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).
-  std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, options,
+  std::optional<vibro::frontend::RunOutput> output(std::in_place, out, loaded, sys, how, recorder, &loads, options,
                                                    vibro::frontend::Naming::kCli);
 
   std::optional<vibro::cli::Progress> progress(std::in_place, "simulate", json);

@@ -62,8 +62,8 @@ LoadedScene SceneToRun(const LoadedScene& given, const std::string& out, const R
 }
 
 RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const System& sys,
-                     const RunContinuation& how, AttractorRecorder& recorder, SimulationOptions& options,
-                     Naming naming) {
+                     const RunContinuation& how, AttractorRecorder& recorder, LoadsRecorder* loads,
+                     SimulationOptions& options, Naming naming) {
   if (out.empty()) return;
   const auto header = HeaderOf(loaded, sys);
   if (!how.resume && !how.extend) {
@@ -83,7 +83,14 @@ RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const Sy
                           sys.ContactDisplacement(stored_.tail_section_X[i]), stored_.tail_section_modes[i]});
     }
     for (const auto& e : stored_.tail_events) recorder.OnEvent(e);
+    // The loads of the periods before the checkpoint, as the run that went through summed them
+    // (runs start at period 0).
+    if (loads) {
+      loads->Resumed(0, stored_.loads_known_from, *stored_.checkpoint);
+      store_->ReplayLoads([&](const std::vector<LoadsRow>& rows) { loads->ReplayPeriod(rows); });
+    }
   }
+  if (loads) loads->SetSink(store_.get());
   options.observers.push_back(store_.get());
 }
 

@@ -38,11 +38,14 @@ class RunOutput {
  public:
   // Creates `out` (nothing when empty), or opens it to resume or extend: the stored run's
   // checkpoint becomes options.resume_from, and the stored tail of sections and events is
-  // given to `recorder` (the classification sees the history it would have had). Appends the
-  // store to options.observers. Throws InputError as Hdf5Store::Create, Resume and Extend do,
-  // their options named as `naming` writes them.
+  // given to `recorder` (the classification sees the history it would have had), and the stored
+  // per-period loads to `loads` (its loads are those of the whole run, docs/loads.md §5). The
+  // store keeps the periods' loads of `loads` as they end (LoadsRecorder::SetSink). Appends the
+  // store to options.observers (after `loads`, which must be there already: a period's loads
+  // reach the store before the checkpoint that ends it). Throws InputError as
+  // Hdf5Store::Create, Resume and Extend do, their options named as `naming` writes them.
   RunOutput(const std::string& out, const LoadedScene& loaded, const System& system, const RunContinuation& how,
-            AttractorRecorder& recorder, SimulationOptions& options, Naming naming);
+            AttractorRecorder& recorder, LoadsRecorder* loads, SimulationOptions& options, Naming naming);
   RunOutput(const RunOutput&) = delete;
   RunOutput& operator=(const RunOutput&) = delete;
 

@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <optional>
 #include <stdexcept>
@@ -133,9 +134,43 @@ void StateTable::Push(const Sample& s) {
   mode.Push(static_cast<std::int8_t>(s.mode));
 }
 
+void LoadsTable::Create(h5::Id g, h5::Size contacts) {
+  impacts = h5::Column(g, "impacts", h5::Type::F64(), contacts);
+  impulse = h5::Column(g, "impulse", h5::Type::F64(), contacts);
+  reaction = h5::Column(g, "reaction_integral", h5::Type::F64(), contacts);
+  energy = h5::Column(g, "energy_dissipated", h5::Type::F64(), contacts);
+  work = h5::Column(g, "work", h5::Type::F64(), contacts);
+  held = h5::Column(g, "held", h5::Type::F64(), contacts);
+  partial = h5::Column(g, "partial", h5::Type::I8(), contacts);
+}
+
+void LoadsTable::Open(h5::Id g) {
+  impacts = h5::Column::Open(g, "impacts", h5::Type::F64(), h5::Column::kAnyCols);
+  const h5::Size n = impacts.cols();
+  impulse = h5::Column::Open(g, "impulse", h5::Type::F64(), n);
+  reaction = h5::Column::Open(g, "reaction_integral", h5::Type::F64(), n);
+  energy = h5::Column::Open(g, "energy_dissipated", h5::Type::F64(), n);
+  work = h5::Column::Open(g, "work", h5::Type::F64(), n);
+  held = h5::Column::Open(g, "held", h5::Type::F64(), n);
+  partial = h5::Column::Open(g, "partial", h5::Type::I8(), n);
+}
+
+void LoadsTable::Push(const std::vector<LoadsRow>& rows) {
+  for (const LoadsRow& r : rows) impacts.Push(r.impacts);
+  for (const LoadsRow& r : rows) impulse.Push(r.impulse);
+  for (const LoadsRow& r : rows) reaction.Push(r.reaction);
+  for (const LoadsRow& r : rows) energy.Push(r.energy);
+  for (const LoadsRow& r : rows) work.Push(r.work);
+  for (const LoadsRow& r : rows) held.Push(r.held);
+  for (const LoadsRow& r : rows) partial.Push(static_cast<std::int8_t>(r.partial ? 1 : 0));
+}
+
 }  // namespace store
 
 namespace {
+
+// No /loads table at a checkpoint (WriteCheckpoint).
+constexpr h5::Size kNoLoads = ~h5::Size{0};
 
 // The event counts, as attributes of a checkpoint or of the finished file.
 void WriteCounts(h5::Id where, const EventCounts& counts) {
@@ -192,7 +227,7 @@ void Hdf5Store::Impl::MaybeFlush() {
 }
 
 void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoint_at, h5::Size n_events,
-                                      h5::Size n_samples, h5::Size n_sections) {
+                                      h5::Size n_samples, h5::Size n_sections, h5::Size n_loads) {
   if (!checkpoint_at) return;
   const Checkpoint& c = *checkpoint_at;
   const h5::Id g = checkpoint.get();
@@ -233,6 +268,9 @@ void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoin
   h5::WriteInt(g, "events", static_cast<long long>(n_events));
   h5::WriteInt(g, "samples", static_cast<long long>(n_samples));
   h5::WriteInt(g, "sections", static_cast<long long>(n_sections));
+  // The rows of /loads at the checkpoint: the periods [/loads first_period, + loads_periods).
+  if (n_loads == kNoLoads) h5::DeleteAttr(g, "loads_periods");
+  else h5::WriteInt(g, "loads_periods", static_cast<long long>(n_loads));
 }
 
 std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
@@ -241,6 +279,8 @@ std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
     for (h5::Column* c : t->All()) all.push_back(c);
   if (cells)
     for (h5::Column* c : cells->All()) all.push_back(c);
+  if (ld)
+    for (h5::Column* c : ld->All()) all.push_back(c);
   return all;
 }
 
@@ -249,6 +289,8 @@ void Hdf5Store::Impl::Close() {
   for (h5::Column* c : Columns()) *c = h5::Column();
   cells.reset();
   cells_group.Reset();
+  ld.reset();
+  loads.Reset();
   basin.Reset();
   events.Reset();
   samples.Reset();
@@ -258,12 +300,12 @@ void Hdf5Store::Impl::Close() {
 }
 
 void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events,
-                                              h5::Size n_samples, h5::Size n_sections) {
+                                              h5::Size n_samples, h5::Size n_sections, h5::Size n_loads) {
   const auto t0 = std::chrono::steady_clock::now();
   // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
   // then, when there is room for it, the metadata that makes them part of the file.
   for (h5::Column* col : Columns()) col->WriteStaged();
-  WriteCheckpoint(c, n_events, n_samples, n_sections);
+  WriteCheckpoint(c, n_events, n_samples, n_sections, n_loads);
   CheckRoom();
   h5::FlushFile(file.get());
   ++stats.flushes;
@@ -274,7 +316,7 @@ void Hdf5Store::Impl::Flush() {
   Sync();
   for (h5::Column* c : Columns()) c->Stage();
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
-  WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections);
+  WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads);
   last_flush = std::chrono::steady_clock::now();
 }
 
@@ -286,12 +328,13 @@ void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
   // written with the interval's flushes, which stage every row.
   for (h5::Column* c : Columns()) c->Stage(whole_chunks);
   if (whole_chunks) {
-    writer.Start([this] { WriteStagedAndMetadata(std::nullopt, 0, 0, 0); });
+    writer.Start([this] { WriteStagedAndMetadata(std::nullopt, 0, 0, 0, 0); });
     return;
   }
   if (last_checkpoint) checkpoint_on_disk = true;
-  writer.Start([this, c = last_checkpoint, e = cp_events, s = cp_samples, x = cp_sections] {
-    WriteStagedAndMetadata(c, e, s, x);
+  writer.Start([this, c = last_checkpoint, e = cp_events, s = cp_samples, x = cp_sections,
+                l = ld ? cp_loads : kNoLoads] {
+    WriteStagedAndMetadata(c, e, s, x, l);
   });
   last_flush = std::chrono::steady_clock::now();
 }
@@ -374,9 +417,60 @@ void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
   m.cp_events = m.ev.t.rows();
   m.cp_samples = m.sa.t.rows();
   m.cp_sections = m.se.t.rows();
+  if (m.ld) m.cp_loads = m.ld->impacts.rows();
   // The first checkpoint (the start state) reaches the disk at once: a run killed in its first
   // second can be resumed too.
   if (!m.checkpoint_on_disk) m.Flush();
+}
+
+void Hdf5Store::OnPeriodLoads(long long period, const std::vector<LoadsRow>& rows) {
+  auto& m = *impl_;
+  if (m.loads_ended || rows.empty()) return;
+  if (!m.ld) {
+    // The first period to end: /loads begins with it (the run's first period, or the checkpoint's
+    // of a run resumed from a file without /loads). Made between flushes.
+    m.Sync();
+    m.loads = h5::OpenOrCreateGroup(m.file.get(), "/loads");
+    h5::WriteInt(m.loads.get(), "first_period", period);
+    m.ld.emplace();
+    m.ld->Create(m.loads.get(), static_cast<h5::Size>(rows.size()));
+    m.loads_first = period;
+    m.cp_loads = 0;
+  }
+  if (period != m.loads_first + static_cast<long long>(m.ld->impacts.rows()) ||
+      static_cast<h5::Size>(rows.size()) != m.ld->impacts.cols()) {
+    m.loads_ended = true;  // not the next period: the rows kept end here
+    return;
+  }
+  m.ld->Push(rows);
+}
+
+void Hdf5Store::ReplayLoads(const std::function<void(const std::vector<LoadsRow>&)>& each) const {
+  auto& m = *impl_;
+  if (!m.ld) return;
+  m.Sync();
+  const h5::Size n = m.cp_loads, w = m.ld->impacts.cols();
+  constexpr h5::Size kBlock = 4096;
+  std::vector<double> c[6];
+  std::vector<std::int8_t> partial;
+  std::vector<LoadsRow> rows(static_cast<size_t>(w));
+  h5::Column* cols[6] = {&m.ld->impacts, &m.ld->impulse, &m.ld->reaction, &m.ld->energy, &m.ld->work, &m.ld->held};
+  for (h5::Size first = 0; first < n; first += kBlock) {
+    const h5::Size k = std::min(kBlock, n - first);
+    for (int q = 0; q < 6; ++q) {
+      c[q].resize(static_cast<size_t>(k * w));
+      cols[q]->Read(first, k, c[q].data());
+    }
+    partial.resize(static_cast<size_t>(k * w));
+    m.ld->partial.Read(first, k, partial.data());
+    for (h5::Size i = 0; i < k; ++i) {
+      for (h5::Size j = 0; j < w; ++j) {
+        const auto at = static_cast<size_t>(i * w + j);
+        rows[static_cast<size_t>(j)] = {c[0][at], c[1][at], c[2][at], c[3][at], c[4][at], c[5][at], partial[at] != 0};
+      }
+      each(rows);
+    }
+  }
 }
 
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
@@ -511,6 +605,35 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
       for (h5::Column* c : impl->ev.All()) c->Truncate(impl->cp_events);
       for (h5::Column* c : impl->sa.All()) c->Truncate(impl->cp_samples);
       for (h5::Column* c : impl->se.All()) c->Truncate(impl->cp_sections);
+      // /loads (docs/loads.md §5): kept when its rows reach the checkpoint (those after it
+      // dropped); a table that does not (a run whose loads were not stored to its end) is
+      // removed, and the resumed run's periods begin a new one.
+      const long long at = stored.checkpoint->clock.period;
+      stored.loads_known_from = at;
+      if (h5::TryOpenGroup(impl->file.get(), "/loads")) {
+        impl->loads = h5::OpenGroup(impl->file.get(), "/loads");
+        const auto first = h5::ReadInt(impl->loads.get(), "first_period");
+        const auto rows = h5::ReadInt(g, "loads_periods");
+        std::optional<store::LoadsTable> table;
+        try {
+          table.emplace();
+          table->Open(impl->loads.get());
+        } catch (const std::exception&) {
+          table.reset();
+        }
+        if (table && first && rows && *rows >= 0 && *first + *rows == at &&
+            table->impacts.rows() >= static_cast<h5::Size>(*rows)) {
+          for (h5::Column* c : table->All()) c->Truncate(static_cast<h5::Size>(*rows));
+          impl->ld = std::move(table);
+          impl->loads_first = *first;
+          impl->cp_loads = static_cast<h5::Size>(*rows);
+          stored.loads_known_from = *first;
+        } else {
+          table.reset();
+          impl->loads.Reset();
+          h5::DeleteLink(impl->file.get(), "/loads");
+        }
+      }
       impl->last_checkpoint = *stored.checkpoint;
       if (extend) store::WriteExtension(impl->file.get(), h);
       h5::WriteString(impl->file.get(), "status", "running");

@@ -68,6 +68,17 @@ struct StateTable {
   std::vector<h5::Column*> All() { return {&t, &period, &X, &V, &xB, &mode}; }
 };
 
+// /loads: one row per period of the run (docs/loads.md §5), each column of width `contacts` (column
+// j = contact j): the period's sums of a LoadsRecorder, from which a resumed or extended run
+// rebuilds the loads of the whole run. Attribute first_period: the period of row 0.
+struct LoadsTable {
+  h5::Column impacts, impulse, reaction, energy, work, held, partial;
+  std::vector<h5::Column*> All() { return {&impacts, &impulse, &reaction, &energy, &work, &held, &partial}; }
+  void Create(h5::Id g, h5::Size contacts);
+  void Open(h5::Id g);
+  void Push(const std::vector<LoadsRow>& rows);
+};
+
 // /basin/cells: one row per finished cell of a study, appended as batches finish (resume).
 struct CellTable {
   h5::Column index, state, kind, period, impacts, sticking_fraction, periods, stop, stick_count,
@@ -109,11 +120,17 @@ struct Hdf5Store::Impl {
   store::FileLock lock;  // first member, released last: held until the file is closed
   std::string path;
   StoreHeader header;
-  h5::Handle file, events, samples, section, checkpoint;
+  h5::Handle file, events, samples, section, checkpoint, loads;
   store::EventTable ev;
   store::StateTable sa, se;
   std::optional<Checkpoint> last_checkpoint;
   h5::Size cp_events = 0, cp_samples = 0, cp_sections = 0;  // rows at the last checkpoint
+  // /loads (absent until the first period ends): its rows from period loads_first, those at the
+  // last checkpoint, and whether a period out of sequence has ended it.
+  std::optional<store::LoadsTable> ld;
+  long long loads_first = 0;
+  h5::Size cp_loads = 0;
+  bool loads_ended = false;
   bool checkpoint_on_disk = false;  // a checkpoint has been flushed
   double flush_interval = 1.0;
   std::chrono::steady_clock::time_point last_flush;
@@ -135,7 +152,8 @@ struct Hdf5Store::Impl {
   void MaybeFlush();
   void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
   // The checkpoint `c` (none: nothing) with the row counts at it.
-  void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections);
+  void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections,
+                       h5::Size n_loads);
   std::vector<h5::Column*> Columns();
   void Close();
   void Flush();  // in the store's thread, after Sync()
@@ -143,7 +161,7 @@ struct Hdf5Store::Impl {
   void FlushBehind(bool whole_chunks);
   // Writes the staged rows, then the checkpoint and the file's metadata (either thread).
   void WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples,
-                              h5::Size n_sections);
+                              h5::Size n_sections, h5::Size n_loads);
 };
 
 }  // namespace vibro

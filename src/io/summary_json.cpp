@@ -106,7 +106,13 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
                        {"periods", s.periods},
                        {"blocks", s.blocks},
                        {"block_periods", s.block_periods},
-                       {"note", s.note}};
+                       {"note", s.note},
+                       {"whole_run", s.whole_run}};
+  // A run resumed or extended from a file without its per-period loads (docs/loads.md §5).
+  if (!s.whole_run) {
+    j["loads_window"]["known_from"] = s.known_from;
+    j["loads_window"]["coverage"] = s.coverage;
+  }
 }
 
 // A branch point's or partition cell's exact loads (no intervals): "loads", and "loads_note"

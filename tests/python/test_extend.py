@@ -178,3 +178,29 @@ def test_refusals_name_the_argument_and_leave_the_file(tmp_path):
     assert "resume needs out=FILE.h5 (the study to continue)" in str(e.value)
     assert digest(path) == before
     assert not (tmp_path / "none.h5").exists()
+
+
+def test_resumed_and_extended_loads_are_those_of_the_whole_run(tmp_path):
+    # docs/loads.md §5: the file keeps every period's loads (/loads), so a run stopped by its
+    # progress callback and resumed, and a run extended, report the loads and loads_window of the
+    # run that went through, every value to the bit.
+    total = 60000
+    scene = vibro.load_scene(FIG8, set={"run.periods": total, "run.samples_per_period": 4})
+    whole = vibro.simulate(scene).summary
+    path = str(tmp_path / "run.h5")
+    with pytest.raises(Stop):
+        vibro.simulate(scene, out=path, progress=stop_after(1000))
+    with h5py.File(path, "r") as f:
+        stopped = int(f["checkpoint"].attrs["period"])
+    assert 0 < stopped < total
+    resumed = vibro.simulate(scene, out=path, resume=True).summary
+    assert resumed["loads_window"] == whole["loads_window"] and resumed["loads_window"]["whole_run"] is True
+    assert resumed["loads"] == whole["loads"]
+    # Extended: 2 contacts, 2000 periods + 3000, against 5000 from the start.
+    pair = os.path.join(SCENES, "contacts_impact_pair.toml")
+    ext = str(tmp_path / "pair.h5")
+    vibro.simulate(vibro.load_scene(pair, set={"run.periods": 2000}), out=ext)
+    extended = vibro.simulate(vibro.load_scene(pair, set={"run.periods": 2000}), out=ext, extend=3000).summary
+    ref = vibro.simulate(vibro.load_scene(pair, set={"run.periods": 5000})).summary
+    assert extended["loads_window"] == ref["loads_window"] and ref["loads_window"]["first_period"] == 500
+    assert extended["loads"] == ref["loads"] and len(ref["loads"]) == 2

@@ -11,6 +11,7 @@
 #include <optional>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -355,6 +356,129 @@ TEST(LoadsBuckets, ResumedInTheMiddleEqualsUninterrupted) {
   // The stream does carry a phase open across the resume point for this seed (else the test
   // would not exercise the checkpoint's share).
   EXPECT_TRUE(open_at_resume);
+}
+
+// What a store keeps: every period's rows as the recorder closes it (LoadsSink).
+struct KeptRows final : LoadsSink {
+  std::vector<long long> periods;
+  std::vector<std::vector<LoadsRow>> rows;
+  void OnPeriodLoads(long long period, const std::vector<LoadsRow>& r) override {
+    periods.push_back(period);
+    rows.push_back(r);
+  }
+};
+
+void ExpectIdentical(const LoadsSummary& a, const LoadsSummary& b, const std::string& label) {
+  EXPECT_EQ(a.first_period, b.first_period) << label;
+  EXPECT_EQ(a.periods, b.periods) << label;
+  EXPECT_EQ(a.block_periods, b.block_periods) << label;
+  EXPECT_EQ(a.note, b.note) << label;
+  EXPECT_EQ(a.whole_run, b.whole_run) << label;
+  ASSERT_EQ(a.contacts.size(), b.contacts.size()) << label;
+  const auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
+  for (size_t j = 0; j < a.contacts.size(); ++j) {
+    const ContactLoads &x = a.contacts[j], &y = b.contacts[j];
+    for (const auto& [u, v] : {std::pair{x.impacts_per_period, y.impacts_per_period},
+                               {x.impulse_per_period, y.impulse_per_period},
+                               {x.reaction_integral_per_period, y.reaction_integral_per_period},
+                               {x.mean_force, y.mean_force}, {x.dissipated_power, y.dissipated_power},
+                               {x.work_rate, y.work_rate}, {x.contact_fraction, y.contact_fraction}})
+      EXPECT_TRUE(same(u, v)) << label << " contact " << j << ": " << u << " vs " << v;
+    EXPECT_EQ(x.work_rate_ci, y.work_rate_ci) << label;
+    EXPECT_EQ(x.impulse_per_period_ci, y.impulse_per_period_ci) << label;
+    EXPECT_EQ(x.contact_fraction_ci.has_value(), y.contact_fraction_ci.has_value()) << label;
+    if (x.contact_fraction_ci && y.contact_fraction_ci) {
+      EXPECT_EQ(*x.contact_fraction_ci, *y.contact_fraction_ci) << label;
+    }
+  }
+}
+
+TEST(LoadsBuckets, ReplayedRowsGiveTheWholeRunsLoadsToTheBit) {
+  // A run stopped at period `at` whose store kept every period's rows (the sink), resumed by a
+  // recorder that is given them back (Resumed, ReplayPeriod) and then sees the rest of the stream,
+  // reports the loads of the run that went through, to the bit: before and after the rows are
+  // merged into buckets, with a phase open at the resume point, with the partial period, and with
+  // the transient of a longer run (an extension: skip grows with the total).
+  const System sys(LoadScene(std::string(VIBRO_SCENES_DIR) + "/contacts_two_sided_1dof.toml", {}).scene);
+  const std::vector<double> mass = {1 / sys.contacts()[0].s_B, 1 / sys.contacts()[1].s_B};
+  constexpr long long cap = 64;
+  const long long total = 3000;
+  const Stream st = Generate(2, total, mass, {1000}, 5);
+  for (const long long skip : {0LL, 300LL}) {
+    LoadsRecorder whole(sys, skip, cap);
+    Feed(whole, st, 0, total);
+    for (const long long at : {1LL, 40LL, 200LL, 300LL, 1000LL, 1001LL, 2999LL}) {
+      const std::string label = "skip " + std::to_string(skip) + ", resumed at " + std::to_string(at);
+      // The interrupted run, with its store.
+      KeptRows kept;
+      LoadsRecorder first(sys, skip, cap);
+      first.SetSink(&kept);
+      Feed(first, st, 0, at);
+      ASSERT_EQ(kept.periods.size(), static_cast<size_t>(at)) << label;
+      for (long long p = 0; p < at; ++p) EXPECT_EQ(kept.periods[static_cast<size_t>(p)], p) << label;
+      // Resumed at the checkpoint of period `at`.
+      const Checkpoint* cp = nullptr;
+      for (const Item& it : st.items)
+        if (it.checkpoint && it.period == at) cp = &*it.checkpoint;
+      ASSERT_NE(cp, nullptr);
+      LoadsRecorder resumed(sys, skip, cap);
+      KeptRows more;
+      resumed.Resumed(0, 0, *cp);
+      for (const auto& r : kept.rows) resumed.ReplayPeriod(r);
+      resumed.SetSink(&more);
+      for (const Item& it : st.items) {
+        if (it.period < at || it.period > total) continue;
+        if (it.checkpoint) {
+          if (it.period > at) resumed.OnCheckpoint(*it.checkpoint);
+        } else if (it.period < total) {
+          resumed.OnEvent(*it.event);
+        }
+      }
+      EXPECT_EQ(more.periods.size(), static_cast<size_t>(total - at)) << label;
+      EXPECT_EQ(whole.bucket_periods(), resumed.bucket_periods()) << label;
+      for (const int blocks : {0, 2, 3, 5, 10}) ExpectIdentical(whole.Summary(blocks), resumed.Summary(blocks), label);
+      // Replayed rows are the store's: the sink is not given them again.
+      EXPECT_TRUE(more.periods.empty() || more.periods.front() == at) << label;
+    }
+  }
+}
+
+TEST(LoadsBuckets, PeriodsNotKnownCutTheWindowAndSaySo) {
+  // A run resumed at period 1000 from a store without rows: the window of the whole run (from
+  // period 300) is cut to the periods from 1000, and the summary says so; equal to a recorder
+  // that saw only those periods with its window starting there.
+  const System sys(LoadScene(std::string(VIBRO_SCENES_DIR) + "/contacts_two_sided_1dof.toml", {}).scene);
+  const std::vector<double> mass = {1 / sys.contacts()[0].s_B, 1 / sys.contacts()[1].s_B};
+  constexpr long long cap = 64;
+  const long long total = 3000, at = 1000, skip = 300;
+  const Stream st = Generate(2, total, mass, {}, 9);
+  const Checkpoint* cp = nullptr;
+  for (const Item& it : st.items)
+    if (it.checkpoint && it.period == at) cp = &*it.checkpoint;
+  ASSERT_NE(cp, nullptr);
+  LoadsRecorder resumed(sys, skip, cap), fresh(sys, 0, cap);
+  resumed.Resumed(0, at, *cp);
+  Feed(fresh, st, at, total);
+  for (const Item& it : st.items) {
+    if (it.period < at || it.period > total) continue;
+    if (it.checkpoint) {
+      if (it.period > at) resumed.OnCheckpoint(*it.checkpoint);
+    } else if (it.period < total) {
+      resumed.OnEvent(*it.event);
+    }
+  }
+  for (const int blocks : {0, 2, 10}) {
+    const LoadsSummary s = resumed.Summary(blocks), f = fresh.Summary(blocks);
+    EXPECT_FALSE(s.whole_run);
+    EXPECT_EQ(s.known_from, at);
+    EXPECT_EQ(s.first_period + s.periods, total);
+    EXPECT_GE(s.first_period, at);
+    EXPECT_NE(s.coverage.find("the periods before 1000 are not known"), std::string::npos) << s.coverage;
+    EXPECT_NE(s.coverage.find("not the window from period 300"), std::string::npos) << s.coverage;
+    LoadsSummary g = f;
+    g.whole_run = false;
+    ExpectIdentical(s, g, "cut window, blocks " + std::to_string(blocks));
+  }
 }
 
 TEST(LoadsBuckets, MemoryStaysWithinTheCap) {
