@@ -53,18 +53,41 @@ struct SampleCatcher final : Observer {
   }
 };
 
+// The contacts a section state is held on (several contacts, docs/contacts.md "Periodic orbits"):
+// gap and gap velocity zero within the rounding of the state.
+std::vector<int> HeldAtSection(const System& sys, const Eigen::VectorXd& z) {
+  std::vector<int> S;
+  if (sys.contact_count() < 2) return S;
+  const auto n = sys.dof();
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
+    const double gap = c.shape.dot(z.head(n)) - c.stop;
+    const double scale = std::abs(c.stop) + c.shape.cwiseProduct(z.head(n)).cwiseAbs().sum();
+    const double vscale = c.shape.cwiseProduct(z.tail(n)).cwiseAbs().sum() + 1e-300;
+    if (std::abs(gap) <= 1e-9 * (1.0 + scale) && std::abs(c.shape.dot(z.tail(n))) <= 1e-9 * (1.0 + vscale))
+      S.push_back(j);
+  }
+  return S;
+}
+
 // The events of the first q periods of a run from the section (the orbit's contact sequence,
 // OrbitResult::sequence), and how many directions its sticking phases collapse: 2 per independent
 // held contact shape c_j (rank of their span).
 struct SequenceRecorder final : Observer {
-  explicit SequenceRecorder(long long q) : periods(q) {}
+  explicit SequenceRecorder(long long q, double t0 = 0, std::vector<int> held = {})
+      : periods(q), start(t0), held_at_start(std::move(held)) {}
   long long periods;
+  double start;                   // the section time
+  std::vector<int> held_at_start;  // contacts held at the section: their stick there is no event of the orbit
   std::vector<Event> events;
   std::vector<int> stuck;  // contacts with a sticking phase, in order of first entry
   void OnEvent(const Event& e) override {
     if (e.clock.period >= periods) return;
     if (e.kind == EventKind::kStick && std::find(stuck.begin(), stuck.end(), e.contact) == stuck.end())
       stuck.push_back(e.contact);
+    if (e.kind == EventKind::kStick && std::abs(e.t - start) <= 1e-12 * (1.0 + std::abs(start)) &&
+        std::find(held_at_start.begin(), held_at_start.end(), e.contact) != held_at_start.end())
+      return;
     events.push_back(e);
   }
   int Collapsed(const System& sys) const {
@@ -639,10 +662,11 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   sc.run.samples_per_period = 0;
   sc.run.max_period = q;
   const InitialOverride here{out.section_time, out.X, out.V};
+  const Eigen::VectorXd z0 = Stack(out.X, out.V);
   SequenceRecorder events(q);
   const auto classify = [&](const Scene& at) {
     AttractorRecorder rec(sys, at);
-    events = SequenceRecorder(q);
+    events = SequenceRecorder(q, out.section_time, HeldAtSection(sys, z0));
     SimulationOptions opt;
     opt.initial = &here;
     opt.observers = {&rec, &events};
@@ -680,26 +704,6 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
 }
 
-namespace {
-
-// The contacts a section state is held on (several contacts, docs/contacts.md "Periodic orbits"):
-// gap and gap velocity zero within the rounding of the state.
-std::vector<int> HeldAtSection(const System& sys, const Eigen::VectorXd& z) {
-  std::vector<int> S;
-  if (sys.contact_count() < 2) return S;
-  const auto n = sys.dof();
-  for (int j = 0; j < sys.contact_count(); ++j) {
-    const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
-    const double gap = c.shape.dot(z.head(n)) - c.stop;
-    const double scale = std::abs(c.stop) + c.shape.cwiseProduct(z.head(n)).cwiseAbs().sum();
-    const double vscale = c.shape.cwiseProduct(z.tail(n)).cwiseAbs().sum() + 1e-300;
-    if (std::abs(gap) <= 1e-9 * (1.0 + scale) && std::abs(c.shape.dot(z.tail(n))) <= 1e-9 * (1.0 + vscale))
-      S.push_back(j);
-  }
-  return S;
-}
-
-}  // namespace
 
 // Newton on F(z) − z from z at the section time t0, with the analytic DF; the step is halved while
 // it would put a contact on or through its stop. A section held on contacts S (an orbit of several
