@@ -85,6 +85,9 @@ class TangentTracker final : public Observer {
   const Eigen::MatrixXd& SetFlow(const std::vector<int>& set);
   Eigen::MatrixXd SetProjection(const std::vector<int>& set) const;  // P_S, (n, n)
   void ImpactWhileSetHeld(const Reset& r);
+  // phi_ ← diag(P, P) phi_ with P the plastic projection of the contact(s) held now: directions off
+  // the held manifold collapse (a run or a Lyapunov frame that starts held, several contacts).
+  void CollapseOffHeld();
   // A saltation whose flow after is the one the run follows next (the acceleration LCP decides it
   // after the reset): S is applied when the next stretch (or reset) says which flow that is.
   struct PendingSaltation {

@@ -156,6 +156,16 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
 void TangentTracker::Restart(const Eigen::MatrixXd& start) {
   phi_ = start;
   singular_ = false;
+  // Several contacts, restarted while held (a Lyapunov frame at a period boundary): the frame's
+  // directions off the held manifold are collapsed, as at the start of a run held on contacts.
+  if (contacts_.size() > 1 && (held_ >= 0 || held_ == kSet)) CollapseOffHeld();
+}
+
+void TangentTracker::CollapseOffHeld() {
+  const auto n = sys_.dof();
+  const Eigen::MatrixXd P = held_ == kSet ? SetProjection(held_set_) : contacts_[static_cast<size_t>(held_)].Pi;
+  phi_.topRows(n) = (P * phi_.topRows(n)).eval();
+  phi_.bottomRows(n) = (P * phi_.bottomRows(n)).eval();
 }
 
 void TangentTracker::Undefined(std::string why) {
@@ -246,6 +256,10 @@ void TangentTracker::OnStretch(const Stretch& s) {
   const bool multi = contacts_.size() > 1;
   const bool on_set = multi && s.mode == Mode::kSticking && s.held && s.held->size() > 1;
   if (pending_.active) Resolve(s.mode, s.contact, on_set ? s.held : nullptr);
+  // A run that starts held (a section on a held set, or a Lyapunov frame): directions off the
+  // held manifold are collapsed as a landing collapses them (a perturbation off a held contact
+  // returns onto it): diag(P_S, P_S), a no-op on directions along the manifold.
+  const bool collapse = multi && held_ == -2 && s.mode == Mode::kSticking;
   if (s.mode == Mode::kFree) {
     // Several contacts: every way out of sticking is a reset the tracker has seen.
     if (multi && (held_ >= 0 || held_ == kSet))
@@ -259,6 +273,7 @@ void TangentTracker::OnStretch(const Stretch& s) {
       Undefined("a phase held on several contacts began without an entry the tangent map knows");
     held_ = kSet;
     held_set_ = *s.held;
+    if (collapse) CollapseOffHeld();
     phi_ = (SetFlow(held_set_) * s.duration).exp() * phi_;
   } else {
     const auto j = static_cast<size_t>(multi ? s.contact : 0);
@@ -267,6 +282,7 @@ void TangentTracker::OnStretch(const Stretch& s) {
                 "or a simultaneous plastic impact)");
     held_ = s.contact;
     held_set_.clear();
+    if (collapse) CollapseOffHeld();
     if (contacts_[j].closed_form)
       HeldFlight(contacts_[j], s.duration);
     else

@@ -76,7 +76,8 @@ def close_sets(a, b, tol):
 
 
 def main():
-    vibro, scenes = sys.argv[1], sys.argv[2]
+    vibro_exe = vibro = sys.argv[1]
+    scenes = sys.argv[2]
     mp.mp.dps = 30
     h = mp.mpf("1e-12")
     with tempfile.TemporaryDirectory() as tmp:
@@ -172,6 +173,25 @@ def main():
             got = [m for m in mus(j) if abs(m) > 1e-12]
             ok, a, b = close_sets(got, ref_mu, TOL_MU)
             check("chain: non-zero multipliers = reference", ok, (a, b))
+
+        # ---- Lyapunov spectra of runs that settle on these orbits: every exponent of a multiplier,
+        # ln|μ|/(qT), inside its interval; the held directions collapsed (−∞ or far below), not 0
+        for name, q, w in (("contacts_stacked_cradle.toml", 2, 1.5), ("contacts_two_held_chain.toml", 1, 0.5)):
+            path = os.path.join(scenes, name)
+            j, _, _ = orbit(vibro_exe, path, tmp)
+            p = subprocess.run([vibro_exe, "simulate", path, "--json", "--set", "run.periods=400"],
+                               capture_output=True, text=True, timeout=600)
+            ly = json.loads(p.stdout) if p.returncode == 0 else {}
+            ex, ci = ly.get("lyapunov_exponents", []), ly.get("lyapunov_ci", [])
+            T = 2 * math.pi / w
+            want = sorted({round(math.log(abs(complex(a, b))) / (q * T), 12) for a, b in j["floquet_multipliers"]})
+            top = [(e, c) for e, c in zip(ex, ci) if e is not None][:2]
+            inside = lambda e, c: c[0] <= want[0] <= c[1] if isinstance(c, list) else abs(e - want[0]) <= c
+            ok = len(top) == 2 and len(want) == 1 and all(inside(e, c) for e, c in top)
+            print(f"  {name}: Lyapunov {top}, ln|μ|/(qT) = {want}")
+            check(f"{name}: Lyapunov exponents contain ln|μ|/(qT)", ok, (ex, ci, want, ly.get("lyapunov_undefined")))
+            rest = [e for e in ex[2:]]
+            check(f"{name}: the held directions collapse", all(e is None or e < -1 for e in rest), ex)
 
         # ---- Python: vibro.orbit gives the CLI's answer
         try:
