@@ -116,6 +116,8 @@ struct Stretch {
   Mode mode;
   double duration;
   int contact = 0;  // sticking: the held contact (0-based [[contact]] order; 0 for the [stop])
+  // Sticking on two or more contacts at once: the held set (sorted); null or empty otherwise.
+  const std::vector<int>* held = nullptr;
 };
 enum class ResetKind {
   kImpact,         // restitution law (12), free → free
@@ -124,8 +126,14 @@ enum class ResetKind {
   kRelease,        // sticking → free at R = 0 (no jump: the saltation is the identity)
   kAccumulation,   // docs/model.md §5.4: free flight over `delta` from the post-impact state, projection
   kGrazing,        // tangential touch that stays free (the maps are singular there)
-  kHeldSet,        // two or more contacts held at once, entered or left (docs/contacts.md): no tangent
+  kHeldSet,        // two or more contacts held at once, entered or left (docs/contacts.md): see HeldSetCause
 };
+// What a kHeldSet reset is (docs/contacts.md, "Periodic orbits"): the entry into the acceleration
+// LCP after a plastic landing beside a held contact (no jump: the impact was its own kImpact
+// reset), a release from a held set (no jump), an impact while a set is held (the impact LCP:
+// V_before → V_after, `contact` the impacting one), a chattering tail's accumulation onto a set,
+// a tangential arrival beside held contacts, or contacts left at rest by a simultaneous impact.
+enum class HeldSetCause { kEntry, kRelease, kImpact, kAccumulation, kGrazing, kSimultaneous };
 struct Reset {
   ResetKind kind;
   double phase;
@@ -148,6 +156,7 @@ struct Reset {
   // impact of two or more contacts at one instant (impact LCP; `contact` is then the first of them).
   int contact = 0;
   bool simultaneous = false;
+  HeldSetCause cause = HeldSetCause::kEntry;  // kHeldSet only
 };
 
 class Observer {

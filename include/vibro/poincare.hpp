@@ -80,6 +80,26 @@ class TangentTracker final : public Observer {
                  const Eigen::VectorXd& f_plus, const Eigen::VectorXd& c, double denom);
   void ImpactWhileHeld(const Reset& r);
   void SimultaneousImpact(const Reset& r);
+  // Several contacts held at once (docs/contacts.md, "Periodic orbits"): the flow constrained to
+  // the set S, G_S = [[0, I], [−P_S Ω, −P_S D]] with P_S = I − T_S W_SS⁻¹ C_S (cached per set).
+  const Eigen::MatrixXd& SetFlow(const std::vector<int>& set);
+  Eigen::MatrixXd SetProjection(const std::vector<int>& set) const;  // P_S, (n, n)
+  void ImpactWhileSetHeld(const Reset& r);
+  // phi_ ← diag(P, P) phi_ with P the plastic projection of the contact(s) held now: directions off
+  // the held manifold collapse (a run or a Lyapunov frame that starts held, several contacts).
+  void CollapseOffHeld();
+  // A saltation whose flow after is the one the run follows next (the acceleration LCP decides it
+  // after the reset): S is applied when the next stretch (or reset) says which flow that is.
+  struct PendingSaltation {
+    bool active = false;
+    Eigen::MatrixXd dV;
+    Eigen::VectorXd f_minus, c, X, V;
+    double denom = 0, phase = 0;
+  };
+  void Defer(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus, const Eigen::VectorXd& c,
+             double denom, const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase);
+  void Resolve(Mode mode, int contact, const std::vector<int>* set);
+  Eigen::VectorXd HeldField(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase);
   double Coupling(int j, int k) const;  // W_jk, 0 within the rounding of the mode shapes
   void Undefined(std::string why);
   const System& sys_;
@@ -91,8 +111,13 @@ class TangentTracker final : public Observer {
   Eigen::VectorXd salt_u_, salt_v_;         // Saltation's work space, (2n) and (n)
   bool singular_ = false;
   std::string undefined_;
-  // Several contacts: the contact the run sticks on, −1 in free flight, −2 before the first stretch.
+  // Several contacts: the contact the run sticks on, −1 in free flight, −2 before the first stretch
+  // (or after a change of held set, which the next stretch names), kSet while held_set_ is held.
+  static constexpr int kSet = -3;
   int held_ = -2;
+  std::vector<int> held_set_;
+  std::vector<std::pair<std::vector<int>, Eigen::MatrixXd>> set_flows_;
+  PendingSaltation pending_;
 };
 
 // kAuto: the kind of the orbit found (of the attractor after a transient, or of the orbit through

@@ -53,18 +53,41 @@ struct SampleCatcher final : Observer {
   }
 };
 
+// The contacts a section state is held on (several contacts, docs/contacts.md "Periodic orbits"):
+// gap and gap velocity zero within the rounding of the state.
+std::vector<int> HeldAtSection(const System& sys, const Eigen::VectorXd& z) {
+  std::vector<int> S;
+  if (sys.contact_count() < 2) return S;
+  const auto n = sys.dof();
+  for (int j = 0; j < sys.contact_count(); ++j) {
+    const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
+    const double gap = c.shape.dot(z.head(n)) - c.stop;
+    const double scale = std::abs(c.stop) + c.shape.cwiseProduct(z.head(n)).cwiseAbs().sum();
+    const double vscale = c.shape.cwiseProduct(z.tail(n)).cwiseAbs().sum() + 1e-300;
+    if (std::abs(gap) <= 1e-9 * (1.0 + scale) && std::abs(c.shape.dot(z.tail(n))) <= 1e-9 * (1.0 + vscale))
+      S.push_back(j);
+  }
+  return S;
+}
+
 // The events of the first q periods of a run from the section (the orbit's contact sequence,
 // OrbitResult::sequence), and how many directions its sticking phases collapse: 2 per independent
 // held contact shape c_j (rank of their span).
 struct SequenceRecorder final : Observer {
-  explicit SequenceRecorder(long long q) : periods(q) {}
+  explicit SequenceRecorder(long long q, double t0 = 0, std::vector<int> held = {})
+      : periods(q), start(t0), held_at_start(std::move(held)) {}
   long long periods;
+  double start;                   // the section time
+  std::vector<int> held_at_start;  // contacts held at the section: their stick there is no event of the orbit
   std::vector<Event> events;
   std::vector<int> stuck;  // contacts with a sticking phase, in order of first entry
   void OnEvent(const Event& e) override {
     if (e.clock.period >= periods) return;
     if (e.kind == EventKind::kStick && std::find(stuck.begin(), stuck.end(), e.contact) == stuck.end())
       stuck.push_back(e.contact);
+    if (e.kind == EventKind::kStick && std::abs(e.t - start) <= 1e-12 * (1.0 + std::abs(start)) &&
+        std::find(held_at_start.begin(), held_at_start.end(), e.contact) != held_at_start.end())
+      return;
     events.push_back(e);
   }
   int Collapsed(const System& sys) const {
@@ -133,6 +156,16 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
 void TangentTracker::Restart(const Eigen::MatrixXd& start) {
   phi_ = start;
   singular_ = false;
+  // Several contacts, restarted while held (a Lyapunov frame at a period boundary): the frame's
+  // directions off the held manifold are collapsed, as at the start of a run held on contacts.
+  if (contacts_.size() > 1 && (held_ >= 0 || held_ == kSet)) CollapseOffHeld();
+}
+
+void TangentTracker::CollapseOffHeld() {
+  const auto n = sys_.dof();
+  const Eigen::MatrixXd P = held_ == kSet ? SetProjection(held_set_) : contacts_[static_cast<size_t>(held_)].Pi;
+  phi_.topRows(n) = (P * phi_.topRows(n)).eval();
+  phi_.bottomRows(n) = (P * phi_.bottomRows(n)).eval();
 }
 
 void TangentTracker::Undefined(std::string why) {
@@ -157,19 +190,99 @@ Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
   return z;
 }
 
+Eigen::MatrixXd TangentTracker::SetProjection(const std::vector<int>& set) const {
+  const auto n = sys_.dof();
+  const auto m = static_cast<Eigen::Index>(set.size());
+  Eigen::MatrixXd T(n, m), C(m, n);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    T.col(a) = contacts_[static_cast<size_t>(set[static_cast<size_t>(a)])].T;
+    C.row(a) = contacts_[static_cast<size_t>(set[static_cast<size_t>(a)])].c.transpose();
+  }
+  const Eigen::MatrixXd W = C * T;  // W_SS, positive definite for independent contacts
+  return Eigen::MatrixXd::Identity(n, n) - T * W.fullPivLu().solve(C);
+}
+
+const Eigen::MatrixXd& TangentTracker::SetFlow(const std::vector<int>& set) {
+  for (const auto& [key, G] : set_flows_)
+    if (key == set) return G;
+  // Ẍ = P_S (−ΩX − DẊ + T_A f sin φ) on the set (MODEL (S1) in docs/contacts.md's notation):
+  // the reactions λ_S = −W_SS⁻¹ C_S a_free keep C_S Ẍ = 0.
+  const auto n = sys_.dof();
+  const Eigen::MatrixXd P = SetProjection(set);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+  G.topRightCorner(n, n).setIdentity();
+  G.bottomLeftCorner(n, n) = -P * w2_.asDiagonal();
+  G.bottomRightCorner(n, n) = -P * D_.asDiagonal();
+  set_flows_.emplace_back(set, std::move(G));
+  return set_flows_.back().second;
+}
+
+// The field of the flow the tracker follows now (free, held on one contact, or on a set).
+Eigen::VectorXd TangentTracker::HeldField(const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) {
+  if (held_ == kSet) {
+    Eigen::VectorXd z = Field(Mode::kFree, X, V, phase);
+    const auto n = sys_.dof();
+    z.tail(n) = SetProjection(held_set_) * z.tail(n);
+    return z;
+  }
+  return held_ >= 0 ? Field(Mode::kSticking, X, V, phase, held_) : Field(Mode::kFree, X, V, phase);
+}
+
+void TangentTracker::Defer(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus, const Eigen::VectorXd& c,
+                           double denom, const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase) {
+  pending_.active = true;
+  pending_.dV = dV;
+  pending_.f_minus = f_minus;
+  pending_.c = c;
+  pending_.denom = denom;
+  pending_.X = X;
+  pending_.V = V;
+  pending_.phase = phase;
+  held_ = -2;  // the acceleration LCP decides the flow after: the next stretch names it
+}
+
+void TangentTracker::Resolve(Mode mode, int contact, const std::vector<int>* set) {
+  pending_.active = false;
+  Eigen::VectorXd f_plus = Field(Mode::kFree, pending_.X, pending_.V, pending_.phase);
+  const auto n = sys_.dof();
+  if (mode == Mode::kSticking && set && set->size() > 1)
+    f_plus.tail(n) = SetProjection(*set) * f_plus.tail(n);
+  else if (mode == Mode::kSticking)
+    f_plus.tail(n) = contacts_[static_cast<size_t>(contact)].Pi * f_plus.tail(n);
+  Saltation(pending_.dV, pending_.f_minus, f_plus, pending_.c, pending_.denom);
+}
+
 void TangentTracker::OnStretch(const Stretch& s) {
   const bool multi = contacts_.size() > 1;
+  const bool on_set = multi && s.mode == Mode::kSticking && s.held && s.held->size() > 1;
+  if (pending_.active) Resolve(s.mode, s.contact, on_set ? s.held : nullptr);
+  // A run that starts held (a section on a held set, or a Lyapunov frame): directions off the
+  // held manifold are collapsed as a landing collapses them (a perturbation off a held contact
+  // returns onto it): diag(P_S, P_S), a no-op on directions along the manifold.
+  const bool collapse = multi && held_ == -2 && s.mode == Mode::kSticking;
   if (s.mode == Mode::kFree) {
     // Several contacts: every way out of sticking is a reset the tracker has seen.
-    if (multi && held_ >= 0) Undefined("a sticking phase ended without a release the tangent map knows");
+    if (multi && (held_ >= 0 || held_ == kSet))
+      Undefined("a sticking phase ended without a release the tangent map knows");
     held_ = -1;
+    held_set_.clear();
     FreeFlight(s.duration, phi_);
+  } else if (on_set) {
+    // Held on a set S (docs/contacts.md, "Periodic orbits"): exp(G_S s).
+    if (held_ != -2 && !(held_ == kSet && held_set_ == *s.held))
+      Undefined("a phase held on several contacts began without an entry the tangent map knows");
+    held_ = kSet;
+    held_set_ = *s.held;
+    if (collapse) CollapseOffHeld();
+    phi_ = (SetFlow(held_set_) * s.duration).exp() * phi_;
   } else {
     const auto j = static_cast<size_t>(multi ? s.contact : 0);
     if (multi && held_ != s.contact && held_ != -2)
       Undefined("a sticking phase began without an entry the tangent map knows (several contacts held, "
                 "or a simultaneous plastic impact)");
     held_ = s.contact;
+    held_set_.clear();
+    if (collapse) CollapseOffHeld();
     if (contacts_[j].closed_form)
       HeldFlight(contacts_[j], s.duration);
     else
@@ -320,8 +433,12 @@ void TangentTracker::ImpactWhileHeld(const Reset& r) {
   const Eigen::MatrixXd I = Eigen::MatrixXd::Identity(n, n);
   if (Whk * Pk > 64 * std::numeric_limits<double>::epsilon() * std::abs(Whk * Pk)) {
     held_ = -1;
-    Saltation(I - (1.0 + K.r) * K.T * K.c.transpose() / K.s, f_minus,
-              Field(Mode::kFree, r.X_after, r.V_after, r.phase), K.c, vk);
+    const Eigen::MatrixXd dV = I - (1.0 + K.r) * K.T * K.c.transpose() / K.s;
+    // Plastic (r_k = 0): k at rest alone, stuck or leaving as the acceleration LCP decides.
+    if (K.r == 0.0)
+      Defer(dV, f_minus, K.c, vk, r.X_after, r.V_after, r.phase);
+    else
+      Saltation(dV, f_minus, Field(Mode::kFree, r.X_after, r.V_after, r.phase), K.c, vk);
     return;
   }
   Eigen::Matrix2d W;
@@ -331,12 +448,61 @@ void TangentTracker::ImpactWhileHeld(const Reset& r) {
   C_Z << H.c.transpose(), K.c.transpose();
   const Eigen::Matrix2d law = W.inverse() * Eigen::Vector2d(1.0, 1.0 + K.r).asDiagonal();
   const Eigen::MatrixXd dV = I - T_Z * law * C_Z;
+  // Plastic (r_k = 0): both at rest, the acceleration LCP on {h, k} decides which stay held (a
+  // set, one of them, or none): the flow after is the one the next stretch follows.
+  if (K.r == 0.0) {
+    Defer(dV, f_minus, K.c, vk, r.X_after, r.V_after, r.phase);
+    return;
+  }
   // The reaction of h after the impact: λ_h = −c_hᵀ a_free/W_hh.
   const Eigen::VectorXd free_after = Field(Mode::kFree, r.X_after, r.V_after, r.phase);
   const bool stays = -H.c.dot(free_after.tail(n)) / H.s > 0;
   if (!stays) held_ = -1;
   Saltation(dV, f_minus, stays ? Field(Mode::kSticking, r.X_after, r.V_after, r.phase, h) : free_after,
             K.c, vk);
+}
+
+// Contact k = r.contact closes while a set S is held (or one contact with others resting beside
+// it): the impact LCP (docs/contacts.md) W_ZZ P = −diag(1 + r) v⁻ on the contacts A that take an
+// impulse (P_a > 0), with its pattern fixed; held and resting contacts keep v = 0 (factor 1), k
+// bounces (1 + r_k). ∂g_V = I − T_A W_AA⁻¹ diag(1, …, 1 + r_k) C_A; A is read from the jump the
+// automaton took, P = W_ZZ⁻¹ C_Z (Ẋ⁺ − Ẋ⁻) over the contacts at zero gap. The guard is g_k, the flow
+// before the held one, the flow after the one the acceleration LCP chooses (the next stretch's).
+void TangentTracker::ImpactWhileSetHeld(const Reset& r) {
+  const auto n = sys_.dof();
+  const int k = r.contact;
+  std::vector<int> Z;
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    const ContactTangent& ct = contacts_[j];
+    const double gap = ct.c.dot(r.X_after) - ct.e;
+    const double tol = 1e-9 * (1.0 + std::abs(ct.e) + ct.c.cwiseProduct(r.X_after).cwiseAbs().sum());
+    if (std::abs(gap) <= tol || static_cast<int>(j) == k) Z.push_back(static_cast<int>(j));
+  }
+  const auto z = static_cast<Eigen::Index>(Z.size());
+  Eigen::MatrixXd T_Z(n, z), C_Z(z, n);
+  for (Eigen::Index a = 0; a < z; ++a) {
+    T_Z.col(a) = contacts_[static_cast<size_t>(Z[static_cast<size_t>(a)])].T;
+    C_Z.row(a) = contacts_[static_cast<size_t>(Z[static_cast<size_t>(a)])].c.transpose();
+  }
+  const Eigen::VectorXd P = (C_Z * T_Z).fullPivLu().solve(C_Z * (r.V_after - r.V_before));
+  const double scale = P.cwiseAbs().maxCoeff();
+  std::vector<int> A;
+  for (Eigen::Index a = 0; a < z; ++a)
+    if (P[a] > 1e-9 * scale || Z[static_cast<size_t>(a)] == k) A.push_back(Z[static_cast<size_t>(a)]);
+  const auto m = static_cast<Eigen::Index>(A.size());
+  Eigen::MatrixXd T_A(n, m), C_A(m, n);
+  Eigen::VectorXd factor = Eigen::VectorXd::Ones(m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    const ContactTangent& ct = contacts_[static_cast<size_t>(A[static_cast<size_t>(a)])];
+    T_A.col(a) = ct.T;
+    C_A.row(a) = ct.c.transpose();
+    if (A[static_cast<size_t>(a)] == k) factor[a] = 1.0 + ct.r;
+  }
+  const Eigen::MatrixXd dV = Eigen::MatrixXd::Identity(n, n) -
+                             T_A * (C_A * T_A).fullPivLu().solve(factor.asDiagonal() * C_A);
+  const ContactTangent& K = contacts_[static_cast<size_t>(k)];
+  const double vk = std::isnan(r.contact_velocity_before) ? K.c.dot(r.V_before) : r.contact_velocity_before;
+  Defer(dV, HeldField(r.X_before, r.V_before, r.phase), K.c, vk, r.X_after, r.V_after, r.phase);
 }
 
 // Contacts closing at one instant (docs/contacts.md, "Periodic orbits"): with W_jk = 0 the impacts are
@@ -384,6 +550,11 @@ void TangentTracker::SimultaneousImpact(const Reset& r) {
 
 void TangentTracker::OnReset(const Reset& r) {
   const auto n = sys_.dof();
+  if (pending_.active && !(r.kind == ResetKind::kHeldSet && r.cause == HeldSetCause::kEntry)) {
+    pending_.active = false;
+    Undefined("another event at the instant of a plastic landing beside a held contact: its saltation is "
+              "not implemented");
+  }
   const bool multi = contacts_.size() > 1;
   const int j = multi ? r.contact : 0;
   const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
@@ -423,8 +594,31 @@ void TangentTracker::OnReset(const Reset& r) {
       singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
       break;
     case ResetKind::kHeldSet:  // entering or leaving a set of several held contacts
-      Undefined("sticking on two or more contacts at once: its tangent map is not implemented");
-      held_ = -2;
+      switch (r.cause) {
+        case HeldSetCause::kEntry:  // after a plastic landing: its impact was deferred (no jump here)
+          if (!pending_.active) held_ = -2;
+          break;
+        case HeldSetCause::kRelease:  // λ_c = 0: the flows with and without c coincide, S = I
+          held_ = -2;
+          break;
+        case HeldSetCause::kImpact:
+          ImpactWhileSetHeld(r);
+          break;
+        case HeldSetCause::kAccumulation:
+          Undefined("a chattering accumulation onto several held contacts: its tangent map is not "
+                    "implemented");
+          held_ = -2;
+          break;
+        case HeldSetCause::kGrazing:
+          singular_ = true;  // a tangential arrival: the maps are singular there (docs/model.md §5.7)
+          held_ = -2;
+          break;
+        case HeldSetCause::kSimultaneous:
+          Undefined("contacts left at rest together by a simultaneous impact: its saltation is not "
+                    "implemented");
+          held_ = -2;
+          break;
+      }
       break;
     case ResetKind::kAccumulation: {
       // L: flow over Δ∞(z_k) from the post-impact state z_k, then projection onto the stop
@@ -484,10 +678,11 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   sc.run.samples_per_period = 0;
   sc.run.max_period = q;
   const InitialOverride here{out.section_time, out.X, out.V};
+  const Eigen::VectorXd z0 = Stack(out.X, out.V);
   SequenceRecorder events(q);
   const auto classify = [&](const Scene& at) {
     AttractorRecorder rec(sys, at);
-    events = SequenceRecorder(q);
+    events = SequenceRecorder(q, out.section_time, HeldAtSection(sys, z0));
     SimulationOptions opt;
     opt.initial = &here;
     opt.observers = {&rec, &events};
@@ -525,17 +720,47 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
 }
 
+
 // Newton on F(z) − z from z at the section time t0, with the analytic DF; the step is halved while
-// it would put the contact point on or below the stop.
+// it would put a contact on or through its stop. A section held on contacts S (an orbit of several
+// contacts whose every period has a contact held, e.g. a stacked cradle whose lower mass never
+// leaves its stop) restricts the unknowns to the held manifold {C_S X = e_S, C_S Ẋ = 0}: z = z₀ + B y
+// with B an orthonormal basis of ker diag(C_S, C_S), and Newton solves Bᵀ(DF − I)B y = −Bᵀ r
+// (F maps the manifold into itself). The monodromy reported is then DF·diag(P_S, P_S), P_S =
+// I − T_S W_SS⁻¹ C_S the plastic projection onto the set: its eigenvalues are those of DF on the
+// manifold and 2|S| zeros, the constrained directions.
 void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, Eigen::VectorXd z,
                              int q, const OrbitRequest& req, OrbitResult& out) {
   const auto n = sys.dof();
-  // Every gap open (one contact: x_B above the stop).
+  const std::vector<int> held = HeldAtSection(sys, z);
+  const auto is_held = [&](int j) { return std::find(held.begin(), held.end(), j) != held.end(); };
+  // Every gap open (one contact: x_B above the stop), the held ones excepted.
   const auto admissible = [&](const Eigen::VectorXd& zz) {
-    return std::all_of(sys.contacts().begin(), sys.contacts().end(), [&](const ContactModel& c) {
-      return c.shape.dot(zz.head(n)) > c.stop;
-    });
+    for (int j = 0; j < sys.contact_count(); ++j) {
+      const ContactModel& c = sys.contacts()[static_cast<size_t>(j)];
+      if (!is_held(j) && !(c.shape.dot(zz.head(n)) > c.stop)) return false;
+    }
+    return true;
   };
+  Eigen::MatrixXd B = Eigen::MatrixXd::Identity(2 * n, 2 * n), Pz;
+  if (!held.empty()) {
+    const auto m = static_cast<Eigen::Index>(held.size());
+    Eigen::MatrixXd C = Eigen::MatrixXd::Zero(2 * m, 2 * n), T(n, m), Cs(m, n);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      const ContactModel& c = sys.contacts()[static_cast<size_t>(held[static_cast<size_t>(a)])];
+      C.block(a, 0, 1, n) = c.shape.transpose();
+      C.block(m + a, n, 1, n) = c.shape.transpose();
+      T.col(a) = c.contact;
+      Cs.row(a) = c.shape.transpose();
+    }
+    Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
+    B = lu.kernel();
+    B = Eigen::HouseholderQR<Eigen::MatrixXd>(B).householderQ() * Eigen::MatrixXd::Identity(2 * n, B.cols());
+    const Eigen::MatrixXd P = Eigen::MatrixXd::Identity(n, n) - T * (Cs * T).fullPivLu().solve(Cs);
+    Pz = Eigen::MatrixXd::Zero(2 * n, 2 * n);
+    Pz.topLeftCorner(n, n) = P;
+    Pz.bottomRightCorner(n, n) = P;
+  }
   MapValue m;
   for (int it = 0; it <= req.max_iterations; ++it) {
     m = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q);
@@ -552,6 +777,7 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
       out.message = "the map evaluation failed (numerical failure of the simulation)";
       break;
     }
+    if (!held.empty() && m.jacobian.size() > 0) m.jacobian = m.jacobian * Pz;
     const Eigen::VectorXd r = Stack(m.X, m.V) - z;
     out.residual = r.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
     out.newton_iterations = it;
@@ -568,8 +794,8 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
       out.message = "a grazing contact on the orbit makes the map singular";
       break;
     }
-    const Eigen::MatrixXd J = m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n);
-    const Eigen::VectorXd step = -J.fullPivLu().solve(r);
+    const Eigen::MatrixXd J = B.transpose() * (m.jacobian - Eigen::MatrixXd::Identity(2 * n, 2 * n)) * B;
+    const Eigen::VectorXd step = -B * J.fullPivLu().solve(B.transpose() * r);
     double lambda = 1.0;
     Eigen::VectorXd next = z + step;
     for (int h = 0; h < 30 && !admissible(next); ++h) {
@@ -687,6 +913,26 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
     best = tK - last;
     t_mid = 0.5 * (tK + last);
   }
+  // Several contacts: an orbit whose every period has a contact held (e.g. a stacked cradle whose
+  // lower mass never leaves its stop while the upper one bounces on it) has its section in the
+  // longest stretch between two events, held or free; Newton then works on the held manifold.
+  const bool multi = sys.contact_count() > 1;
+  const auto longest_stretch = [&] {
+    double b = 0, mid = 0, prev = from;
+    for (const auto& e : ev) {
+      if (e.t - prev > b) {
+        b = e.t - prev;
+        mid = 0.5 * (e.t + prev);
+      }
+      prev = e.t;
+    }
+    if (tK - prev > b) mid = 0.5 * (tK + prev);
+    return mid;
+  };
+  if (best <= 0 && multi) {
+    best = 1;
+    t_mid = longest_stretch();
+  }
   if (best <= 0) {
     out.status = "no-orbit";
     out.message = "the orbit has no free flight (permanent contact)";
@@ -738,9 +984,30 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   } else {
     from_end();
   }
-  if (!catcher.caught || catcher.mode != Mode::kFree) {
+  if (multi && (!catcher.caught || catcher.mode != Mode::kFree)) {
+    // The flight believed free was held (a contact held since before the transient's log): the
+    // section goes to the longest stretch between events, held or not.
+    t_mid = longest_stretch();
+    if (event_at_end) {
+      catcher = SampleCatcher();
+      Scene sc = scene;
+      sc.run.periods = K + q;
+      sc.run.samples_per_period = kSamples;
+      if (req.period > 0) sc.run.max_period = std::max(sc.run.max_period, req.period);
+      if (init) sc.initial_time = init->time;
+      catcher.target_time = t_start + static_cast<double>(std::llround((t_mid + q * T - t_start) / (T / kSamples))) * (T / kSamples);
+      catcher.half_spacing = 0.5 * T / kSamples;
+      SimulationOptions opt;
+      opt.initial = init ? &*init : nullptr;
+      opt.observers = {&catcher};
+      Simulate(sys, sc, opt);
+    } else {
+      from_end();
+    }
+  }
+  if (!catcher.caught || (!multi && catcher.mode != Mode::kFree)) {
     out.status = "no-orbit";
-    out.message = "could not place the section in a free flight";
+    out.message = multi ? "could not place the section on the orbit" : "could not place the section in a free flight";
     return out;
   }
   const double t0 = catcher.t;

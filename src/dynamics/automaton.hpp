@@ -302,7 +302,7 @@ class Automaton {
   void Emit(EventKind kind, const S& v_before, const S& v_after, int contact = -1,
             bool simultaneous = false, const S& impulse = S(-1), const S& energy = S(0));
   void NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact = -1,
-                   bool simultaneous = false);
+                   bool simultaneous = false, HeldSetCause cause = HeldSetCause::kEntry);
   void EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const S& lo, const S& hi);
   void AdvanceClock(ClockT<S>& c, const S& sigma, const S& sigma_to_boundary,
                     const S& exact_offset = S(-1)) const;
@@ -434,12 +434,12 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
 
 template <class S>
 void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact,
-                               bool simultaneous) {
+                               bool simultaneous, HeldSetCause cause) {
   if (opt_.observers.empty()) return;
   if (contact < 0) contact = active_;
   const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
                 0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(M(contact).ContactVelocity(Vb)),
-                contact, simultaneous};
+                contact, simultaneous, cause};
   for (auto* o : opt_.observers) o->OnReset(r);
 }
 
@@ -1038,7 +1038,7 @@ RunResult Automaton<S>::Run() {
                         [set](int c) { return SetForce<S>{set, c}; });
     if (multi()) UpdateGaps(p, seg.sigma);
     if (!opt_.observers.empty()) {
-      for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma), active_});
+      for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma), active_, &held_set_});
     }
     AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
     CheckSegment(from, seg.sigma);

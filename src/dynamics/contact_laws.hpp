@@ -361,7 +361,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
       starts_[static_cast<size_t>(k)] = FlightStart::kDeparture;
       return true;
     }
-    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_, k, false, HeldSetCause::kGrazing);
     return EnterActiveSet({j, k}, {j});
   }
   const S Wjj(mj.s_B), Wkk(mk.s_B), Wjk = DelassusOffDiagonal(mj, mk);
@@ -398,7 +398,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
   Emit(EventKind::kImpact, v_minus, mk.ContactVelocity(V_), k, false, Pk);
   loads_.AddImpulse(j, Pj);
   if (rk == S(0)) {  // both at rest: the acceleration LCP on {j, k}
-    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_, k, false, HeldSetCause::kEntry);
     return EnterActiveSet({j, k}, {j});
   }
   // A chattering sequence at k while j sticks: predicted to its accumulation point when it can be.
@@ -455,7 +455,7 @@ bool Automaton<S>::SimultaneousImpact(const std::vector<int>& Z) {
   chatter_first_ = chatter_last_ = 0;
   mode_ = Mode::kFree;
   if (resting.size() > 1) {
-    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_, -1, false, HeldSetCause::kSimultaneous);
     return EnterActiveSet(resting, {});
   }
   if (resting.size() == 1) {
@@ -750,7 +750,7 @@ int Automaton<S>::TryHeldAccumulation(int k) {
   ++result_.chatter.accumulations_predicted;
   const double err = R::to_double(error / period_);
   if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
-  NotifyReset(ResetKind::kHeldSet, X_, V_);
+  NotifyReset(ResetKind::kHeldSet, X_, V_, k, false, HeldSetCause::kAccumulation);
   Emit(EventKind::kAccumulation, S(0), S(0), k);
   return EnterActiveSet(Z, held) ? 1 : -1;
 }
@@ -787,7 +787,7 @@ bool Automaton<S>::ImpactWhileSetHeld(int k, const std::vector<int>& was, const 
   Z.push_back(k);
   if (!(v_minus < -floor)) {
     Emit(EventKind::kGrazing, v_minus, v_minus, k);
-    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_, k, false, HeldSetCause::kGrazing);
     return EnterActiveSet(Z, was);
   }
   const auto z = static_cast<Eigen::Index>(Z.size());
@@ -807,7 +807,7 @@ bool Automaton<S>::ImpactWhileSetHeld(int k, const std::vector<int>& was, const 
   Vb_ = V_;
   for (Eigen::Index a = 0; a < z; ++a) V_ += M(Z[static_cast<size_t>(a)]).contact * P[a];
   for (size_t a = 0; a < was.size(); ++a) loads_.AddImpulse(was[a], P[static_cast<Eigen::Index>(a)]);  // held ones
-  NotifyReset(ResetKind::kHeldSet, X_, Vb_);
+  NotifyReset(ResetKind::kHeldSet, X_, Vb_, k, false, HeldSetCause::kImpact);
   const S vk = mk.ContactVelocity(V_);
   Emit(EventKind::kImpact, v_minus, vk, k);
   std::vector<int> rest, stay;
@@ -861,7 +861,7 @@ void Automaton<S>::ReleaseFromSet(const SetStickingT<S>& set, int c, const S& si
   const JetT<S> jf = set.Force(c, sigma);
   if (jf.g1 < 0 || (jf.g1 == S(0) && jf.g2 < 0)) {
     ProjectOntoSet(held_set_);
-    NotifyReset(ResetKind::kHeldSet, X_, V_);
+    NotifyReset(ResetKind::kHeldSet, X_, V_, c, false, HeldSetCause::kRelease);
     Emit(EventKind::kRelease, S(0), S(0), c);
     held_set_.erase(std::find(held_set_.begin(), held_set_.end(), c));
     starts_[static_cast<size_t>(c)] = FlightStart::kAfterRelease;
