@@ -252,6 +252,8 @@ def main(argv=None):
     ap.add_argument("--periods", type=int, default=4)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--keep", help="folder for the scenes (failing ones are left there)")
+    ap.add_argument("--only", type=lambda a: {int(x) for x in a.split(",")},
+                    help="comma-separated scene indices to run (the others are drawn, not run)")
     args = ap.parse_args(argv)
     workdir = args.keep or tempfile.mkdtemp(prefix="contacts_search_")
     os.makedirs(workdir, exist_ok=True)
@@ -260,6 +262,8 @@ def main(argv=None):
     pairs = contacts = 0
     for i in range(args.count):
         text, cs = make_scene(rng, i, args.periods)
+        if args.only is not None and i not in args.only:
+            continue
         contacts += len(cs)
         pairs += any(len(c[0]) == 2 for c in cs)
         tasks.append((os.path.abspath(args.vibro), i, text, cs, workdir))
@@ -272,7 +276,7 @@ def main(argv=None):
                 print(f"search_{index:05d}: {msg}", flush=True)
             else:
                 events += int(msg.split()[0])
-    print(f"{args.count} scenes (seed {args.seed}, {args.periods} periods, {contacts} contacts, {pairs} with an "
+    print(f"{len(tasks)} scenes (seed {args.seed}, {args.periods} periods, {contacts} contacts, {pairs} with an "
           f"impact pair): {counts['ok']} ok in both precisions, {counts['undetermined']} undetermined (reported, "
           f"events equal up to there), {counts['fail']} failed; {events} events of double matched to quad's; "
           f"scenes in {workdir}")
