@@ -180,7 +180,6 @@ class Automaton {
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
-      pair_speed_.assign(models_.size(), S(-1));
       last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
@@ -342,10 +341,9 @@ class Automaton {
   std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
   std::vector<std::string> labels_;  // several contacts: each one's constraint, "q0 - q2 >= -1"
   // Several contacts: impacts alternating between two contacts (PairChatter): the last one's
-  // contact and time, how many alternations in a row, each contact's last closing speed (−1: none).
+  // contact and time, how many alternations in a row.
   int pair_last_ = -1, pair_cascade_ = 0;
   double pair_t_ = 0;
-  std::vector<S> pair_speed_;
   // Several contacts: the impacts (contact, time) since the last event of another kind, the last
   // few (ChatteringTogether).
   std::vector<std::pair<int, double>> recent_impacts_;
