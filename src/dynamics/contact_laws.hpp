@@ -332,13 +332,11 @@ bool Automaton<S>::OnContactMulti(int k) {
     return ImpactWhileHeld(k);
   }
   // Contacts closed at the same instant, within the rounding of their gaps and a window of a few
-  // ulps of the period at their closing speed (MODEL §11.2.3): one impact LCP (§11.4). It acts on
-  // every contact at zero gap that closes or rests (velocity within the rounding floor of the
-  // model's double data): one at rest beside k, e.g. left there by its own plastic impact at this
-  // instant, takes its share of the impulse, or k's impact would drive it into its stop and a
-  // cascade of impacts at one instant would follow, as long in quad as its rounding is small. One
-  // that had an impact at this instant (within a few ulps of the period in double, the resolution
-  // of event times) is at zero gap whatever S's rounding of the flight since.
+  // ulps of the period at their closing speed (MODEL §11.2.3): one impact LCP (§11.4). A contact
+  // that had its own impact at this instant (within a few ulps of the period in double, the
+  // resolution of event times) and is not opening faster than the floor of the model's double data
+  // is at zero gap whatever S's rounding of the flight since: it takes its share of the impulse
+  // (quad otherwise met a cascade of impacts at one instant that double had merged).
   std::vector<int> Z{k};
   const S window = S(64) * Eps<S>() * period_;
   const double now = AbsTime(clock_), instant = 64 * std::numeric_limits<double>::epsilon() * R::to_double(period_);
@@ -360,7 +358,7 @@ bool Automaton<S>::OnContactMulti(int k) {
     // gap's rounding δ is a time δ/|v|), and the impact map is discontinuous there (MODEL §11.4.3):
     // the order decides the motion. The exact motion is a cascade of alternating impacts toward one
     // accumulation point, where the independent reference stops undetermined (random search scenes
-    // 111, 189, 615: quad followed the cascade, double took one simultaneous impact). Not guessed.
+    // 111, 615, 646: quad followed the cascade, double took one simultaneous impact). Not guessed.
     for (size_t a = 0; a < Z.size(); ++a)
       for (size_t b = a + 1; b < Z.size(); ++b) {
         const ModelT<S>& ma = M(Z[a]);
@@ -413,9 +411,9 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
     // alternating; which precision cut it where was a matter of rounding. Not decided, not guessed.
     const int lo = std::min(j, k), hi = std::max(j, k);
     return Fail(fmt::format("contacts {} ({}) and {} ({}) chatter together toward one accumulation point "
-                            "near t = {:.17g}: contact {} leaves its stop at {:.3g} within the rounding "
-                            "of its gap where contact {}'s sequence accumulates, each lifting the other "
-                            "off in turn. The accumulation point of two contacts chattering at once is "
+                            "near t = {:.17g}: contact {} is at its stop within the rounding of its gap, "
+                            "leaving it at {:.3g}, where contact {} is held after its impacts, as when two "
+                            "contacts lift each other off in turn. The accumulation point of two contacts chattering at once is "
                             "not predicted (docs/contacts.md): undetermined, not guessed. Move the parameter",
                             lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
                             AbsTime(clock_), k, R::to_double(v_minus), j),
