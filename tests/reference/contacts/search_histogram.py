@@ -27,8 +27,8 @@ def main(argv=None):
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.axvline(1e-7, color="#cc3311", ls="--", lw=1)
-    ax.text(1e-7, ax.get_ylim()[1] * 0.5, " tolerance 1e-7 T", color="#cc3311", va="top")
-    ax.set_xlabel("|t_double − t_quad| / T  (per matched event)")
+    ax.text(1e-7, ax.get_ylim()[1] * 0.5, "tolerance 1e-7 T ", color="#cc3311", va="top", ha="right")
+    ax.set_xlabel("|t_double − t_quad| / T  (per matched event of the scenes that pass)")
     ax.set_ylabel("events")
     ax.set_title(args.title or f"{a.size} events matched, {equal} equal to the bit (not shown), "
                  f"median {np.median(a):.1g}, largest {a.max():.1g}", fontsize=9)
