@@ -180,7 +180,6 @@ class Automaton {
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
-      pair_speed_.assign(models_.size(), S(-1));
       last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
@@ -342,10 +341,13 @@ class Automaton {
   std::vector<FlightStart> starts_;  // several contacts: how each gap starts (held flow too)
   std::vector<std::string> labels_;  // several contacts: each one's constraint, "q0 - q2 >= -1"
   // Several contacts: impacts alternating between two contacts (PairChatter): the last one's
-  // contact and time, how many alternations in a row, each contact's last closing speed (−1: none).
+  // contact and time, how many alternations in a row.
   int pair_last_ = -1, pair_cascade_ = 0;
   double pair_t_ = 0;
-  std::vector<S> pair_speed_;
+  // Several contacts: the impacts (contact, time) since the last event of another kind, the last
+  // few (ChatteringTogether).
+  std::vector<std::pair<int, double>> recent_impacts_;
+  bool ChatteringTogether(int j, int k) const;
   // Several contacts: each contact's last impact time (a tail beside a recent impact of another
   // contact is not one contact's chattering tail, RecentOtherImpact).
   std::vector<double> last_impact_t_;
@@ -429,6 +431,14 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
   if (multi() && kind == EventKind::kImpact) last_impact_t_[static_cast<size_t>(contact)] = e.t;
+  if (multi()) {
+    if (kind != EventKind::kImpact) {
+      recent_impacts_.clear();
+    } else {
+      if (recent_impacts_.size() >= 16) recent_impacts_.erase(recent_impacts_.begin());
+      recent_impacts_.emplace_back(contact, e.t);
+    }
+  }
   for (auto* o : opt_.observers) o->OnEvent(e);
 }
 

@@ -139,7 +139,7 @@ def main():
             text = fh.read()
         work = os.path.join(tmp, name)
         os.makedirs(work, exist_ok=True)
-        _, kind, msg = random_search.check((args.vibro, 0, text, scene_contacts(path), work))
+        _, kind, msg, *_ = random_search.check((args.vibro, 0, text, scene_contacts(path), work))
         check(f"{name}: the random search's checks", kind != "fail", msg)
     # contacts_resting_beside_held: contact 0 (r = 0) left at zero velocity beside held contact 1 is
     # pushed against its stop by contact 4's impact: it takes part in that impact (was flown through

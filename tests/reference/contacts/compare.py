@@ -72,6 +72,7 @@ class Result:
         self.skipped_ref = 0       # explicit chattering impacts of the reference beyond the other's
         self.skipped_other = 0
         self.skipped_kinds = 0     # reference events of kinds vibro does not report
+        self.dts = []              # |dt|/T of every matched event, in order
         self.message = ""
 
     def __str__(self):
@@ -95,6 +96,7 @@ def compare(ref, other, T, tol=1e-10, vtol=1e-7, lookahead=4):
             if o.kind == "release" and o.contact == r.contact and abs(o.t - r.t) <= tol * T:
                 res.matched += 1
                 res.max_dt = max(res.max_dt, abs(o.t - r.t) / T)
+                res.dts.append(abs(o.t - r.t) / T)
                 i += 1
                 j += 1
             else:
@@ -126,6 +128,7 @@ def compare(ref, other, T, tol=1e-10, vtol=1e-7, lookahead=4):
                 other = other[:j] + [o] + other[j:hit] + other[hit + 1:]
             res.matched += 1
             res.max_dt = max(res.max_dt, abs(o.t - r.t) / T)
+            res.dts.append(abs(o.t - r.t) / T)
             if r.kind == "impact":
                 dv = max(abs(o.vb - r.vb) / (1 + abs(r.vb)), abs(o.va - r.va) / (1 + abs(r.va)))
                 res.max_dv = max(res.max_dv, dv)
