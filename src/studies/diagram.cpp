@@ -94,6 +94,43 @@ bool SameSequence(const std::string& a, const std::string& b) {
   return SameContactSequence(CanonicalRotation(*x), CanonicalRotation(*y));
 }
 
+// A branch point's impacts as a summary (phases, speeds, contacts), for MotionDistance.
+Attractor ImpactsOf(const BranchPoint& p) {
+  Attractor a;
+  a.kind = p.summary.kind;
+  a.period = p.summary.period;
+  for (const auto& im : p.impacts) {
+    a.impact_phases.push_back(im.phase);
+    a.impact_velocities.push_back(im.v_before);
+    a.impact_contacts.push_back(im.contact);
+  }
+  a.stick_phases = p.summary.stick_phases;
+  a.sticking_fraction = p.summary.sticking_fraction;
+  return a;
+}
+
+// The impacts of the orbit at λ between two neighbouring points of a branch, linearly
+// interpolated (impacts matched as MotionDistance matches them); none when they do not match.
+std::optional<Attractor> Interpolated(const BranchPoint& a, const BranchPoint& b, double lambda) {
+  Attractor x = ImpactsOf(a), y = ImpactsOf(b);
+  if (!std::isfinite(MotionDistance(x, y))) return std::nullopt;
+  const double w = b.value == a.value ? 0.0 : (lambda - a.value) / (b.value - a.value);
+  std::vector<bool> used(y.impact_phases.size(), false);
+  for (size_t i = 0; i < x.impact_phases.size(); ++i) {
+    size_t at = 0;
+    double best = kInf;
+    for (size_t j = 0; j < y.impact_phases.size(); ++j) {
+      if (used[j] || y.impact_contacts[j] != x.impact_contacts[i]) continue;
+      const double d = std::abs(Wrap(x.impact_phases[i] - y.impact_phases[j]));
+      if (d < best) best = d, at = j;
+    }
+    used[at] = true;
+    x.impact_phases[i] += w * Wrap(y.impact_phases[at] - x.impact_phases[i]);
+    x.impact_velocities[i] += w * (y.impact_velocities[at] - x.impact_velocities[i]);
+  }
+  return x;
+}
+
 int PeriodOf(const BranchPoint& p, int fallback) { return p.summary.period.value_or(fallback); }
 
 class Builder {
@@ -207,13 +244,27 @@ int Builder::DuplicateOf(const DiagramBranch& n) const {
     bool all = true;
     for (size_t i : samples) {
       const auto& p = pts[i];
-      const auto orbits = OrbitsAt(e, p.value, false);
-      if (orbits.empty()) continue;
+      // The stored branch's orbit at λ: between its two points around λ (interpolated, within a
+      // tenth of their difference), or Newton from the nearer one.
+      bool bracketed = false, same = false;
+      const auto& ep = e.branch.points;
+      const Attractor mine = ImpactsOf(p);
+      for (size_t j = 0; j + 1 < ep.size() && !same; ++j) {
+        const double lo = std::min(ep[j].value, ep[j + 1].value), hi = std::max(ep[j].value, ep[j + 1].value);
+        if (p.value < lo - slack_ || p.value > hi + slack_) continue;
+        bracketed = true;
+        if (!SameSequence(ep[j].sequence, p.sequence)) continue;
+        const auto at = Interpolated(ep[j], ep[j + 1], p.value);
+        if (!at) continue;
+        const double spread = MotionDistance(ImpactsOf(ep[j]), ImpactsOf(ep[j + 1]));
+        same = MotionDistance(*at, mine) <= req_.identity_tolerance + 0.1 * spread;
+      }
+      if (!same && bracketed)
+        for (const auto& o : OrbitsAt(e, p.value, false))
+          same = same || (SameSequence(o.sequence, p.sequence) &&
+                          MotionDistance(o.summary, p.summary) <= req_.identity_tolerance);
+      if (!bracketed) continue;
       ++inside;
-      bool same = false;
-      for (const auto& o : orbits)
-        same = same || (SameSequence(o.sequence, p.sequence) &&
-                        MotionDistance(o.summary, p.summary) <= req_.identity_tolerance);
       if (!same) {
         all = false;
         break;
