@@ -845,9 +845,15 @@ def plot_diagram(f, title, save):
         b = g["branch"]
         val, strobe, stable = b["value"][()], b["strobe"][()][:, 0], b["stable"][()].astype(bool)
         c = colours[k % len(colours)]
-        for i in range(len(val) - 1):
-            ax.plot(val[i:i + 2], strobe[i:i + 2], "-" if stable[i] and stable[i + 1] else "--", color=c,
-                    lw=1.3, zorder=2)
+        if int(b.attrs["period"]) == 1:
+            for i in range(len(val) - 1):
+                ax.plot(val[i:i + 2], strobe[i:i + 2], "-" if stable[i] and stable[i + 1] else "--", color=c,
+                        lw=1.3, zorder=2)
+        else:
+            # A q-periodic orbit has q stroboscopic points and the branch stores one of them, which
+            # one following the section along the branch: points, not a line (filled: stable).
+            ax.plot(val[stable], strobe[stable], "o", ms=3, color=c, zorder=2)
+            ax.plot(val[~stable], strobe[~stable], "o", ms=3, mfc="none", color=c, zorder=2)
         ax.plot([], [], "-", color=c, label=f"branch {int(name)} (period {int(b.attrs['period'])}, "
                 f"{text(g.attrs['origin'])})")
         bif = g["bifurcations"]
@@ -862,7 +868,7 @@ def plot_diagram(f, title, save):
                 ax.plot([val[at]], [strobe[at]], "x", color="k", ms=8, mew=1.5, zorder=3,
                         label=None if "end" in marked else "end: grazing or non-smooth")
                 marked.add("end")
-    ax.plot([], [], "--", color="0.3", label="unstable (dashed)")
+    ax.plot([], [], "--", color="0.3", label="unstable (dashed; open circles for period > 1)")
     sym = SYMBOLS.get(param, param)
     ax.set_xlabel(axis_label(param))
     ax.set_ylabel("$x_B$ at $t \\equiv t_0$ (mod $T$)")
