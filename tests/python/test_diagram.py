@@ -295,3 +295,29 @@ def test_bad_input(tmp_path):
         assert p.returncode == 2, (args, p.stderr)
         assert where in p.stderr, (args, p.stderr)
         assert not out.exists()
+
+
+# --- (d) Python: vibro.diagram ---------------------------------------------------------------------
+
+
+def test_python_diagram():
+    vibro_py = pytest.importorskip("vibro")
+    scene = vibro_py.load_scene(os.path.join(SCENES, "contacts_two_sided_1dof.toml"),
+                                set={"contact[0].restitution": 0.6, "contact[1].restitution": 0.6,
+                                     "excitation.frequency": 2.0, "excitation.amplitude": 2.0, "run.periods": 200})
+    d = vibro_py.diagram(scene, "excitation.amplitude", 2.0, 4.0, steps=6, searches=0)
+    truth = float(pitchfork())
+    assert d["branches"]
+    for b in d["branches"]:
+        n = len(b["points"])
+        assert b["value"].shape == (n,) and b["stable"].dtype == bool and b["strobe"].shape[0] == n
+    sym = [b for b in d["branches"] if any(x["kind"] == "branch-point" and abs(x["value"] - truth) < 1e-12
+                                          for x in b["bifurcations"])]
+    assert len(sym) == 1
+    born = [b for b in d["branches"] if b["origin"] == "branch-point"]
+    assert len(born) == 2
+    # Mirror images: at their last points (a = 4, reached by both), the strobe of one is not the other's.
+    ends = [b["value"][-1] for b in born]
+    assert all(abs(e - 4.0) < 1e-12 for e in ends)
+    assert abs(born[0]["strobe"][-1, 0] - born[1]["strobe"][-1, 0]) > 1e-3
+    assert d["sweep_value"].shape == d["sweep_x_B"].shape
