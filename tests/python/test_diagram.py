@@ -73,7 +73,14 @@ def advance(a, x, v, t, duration):
             return x, v, impacts
         lo, hi = hit
         side = 1 if flight(a, x, v, t, hi)[0] > 1 else -1
-        sol = mp.findroot(lambda u: flight(a, x, v, t, u)[0] - side, ((lo + hi) / 2,), tol=mp.mpf(10) ** -35)
+        # Bisection (a root finder may return the start itself after an impact on this stop).
+        for _ in range(130):
+            mid = (lo + hi) / 2
+            if abs(flight(a, x, v, t, mid)[0]) > 1:
+                hi = mid
+            else:
+                lo = mid
+        sol = hi
         xs, vs = flight(a, x, v, t, sol)
         t = t + sol
         impacts.append((t, side, vs))
@@ -154,9 +161,9 @@ def test_symmetric_branch_and_pitchfork(two_sided):
     with h5py.File(out, "r") as f:
         value, t0, q, qd = states(f, f"{sym[0]['index']:03d}")
     checked = 0
-    for a, t, x, v in zip(value, t0, q, qd):
-        if a > truth - 0.05:
-            continue
+    below = [i for i, a in enumerate(value) if a < truth - 0.05]
+    for i in below[:: max(1, len(below) // 8)]:
+        a, t, x, v = value[i], t0[i], q[i], qd[i]
         xh, vh, impacts = advance(a, x, v, t, T / 2)
         assert impacts, "the symmetric orbit hits a stop every half period"
         assert abs(xh + x) < 1e-9 and abs(vh + v) < 1e-9, (a, x, v, xh, vh)
@@ -176,10 +183,11 @@ def test_asymmetric_branches_are_mirror_images(two_sided):
             g = f["diagram/branches"][f"{b['index']:03d}"]["branch"]
             imp[b["index"]] = (g["impact_offsets"][()], g["impact_phase"][()], g["impact_v_before"][()],
                                g["impact_contact"][()])
-    checked = 0
-    for i, (a, t, x, v) in enumerate(zip(*one)):
-        if a < truth + 0.05:
-            continue
+    checked = periodic = 0
+    # Six points spread over the branch, past its birth and before its last two (the grazing).
+    inner = [i for i, a in enumerate(one[0]) if a > truth + 0.05][:-2]
+    for i in inner[:: max(1, len(inner) // 6)]:
+        a, t, x, v = one[0][i], one[1][i], one[2][i], one[3][i]
         # y(t) = -x(t + T/2) solves the equation too (the forcing changes sign in half a period):
         # its state at t0 is minus the point's state half a period later. A periodic orbit, not
         # the point's own.
@@ -188,23 +196,36 @@ def test_asymmetric_branches_are_mirror_images(two_sided):
         xp, vp, impacts = advance(a, xm, vm, t, T)
         assert abs(xp - xm) < 1e-9 and abs(vp - vm) < 1e-9, (a, xm, vm, xp, vp)
         assert abs(xm - x) + abs(vm - v) > 1e-3  # asymmetric: not its own orbit shifted by T/2
-        # The other branch, at (nearly) the same a, has these impacts.
-        j = int(np.argmin(np.abs(two[0] - a)))
-        if abs(two[0][j] - a) > 1e-8:
-            continue
+        periodic += 1
+        # The other branch has these impacts at a: between its two points around a, linearly
+        # interpolated (its points are not at the same a: a loose 2e-2, which tells the mirror
+        # image, contacts swapped, from the branch itself).
         off, ph, vb, ct = imp[born[1]["index"]]
-        theirs = sorted((int(c), float(p) % (2 * math.pi), float(s))
-                        for p, s, c in zip(ph[off[j]:off[j + 1]], vb[off[j]:off[j + 1]], ct[off[j]:off[j + 1]]))
-        # Ours, from the mirrored orbit simulated here: contact 0 is the stop at -1 (side -1).
+
+        def listed(j):
+            return sorted((int(c), float(p) % (2 * math.pi), float(s_))
+                          for p, s_, c in zip(ph[off[j]:off[j + 1]], vb[off[j]:off[j + 1]], ct[off[j]:off[j + 1]]))
+        vals = two[0]
+        around = [j for j in range(len(vals) - 1) if min(vals[j], vals[j + 1]) <= a <= max(vals[j], vals[j + 1])]
+        if not around:
+            continue
+        j = around[0]
+        lo_, hi_ = listed(j), listed(j + 1)
+        w = (a - vals[j]) / (vals[j + 1] - vals[j]) if vals[j + 1] != vals[j] else 0.0
+        # Ours, from the mirrored orbit simulated here: contact 0 is the stop at -1 (side -1); the
+        # gap velocity just before an impact is -|x'|.
         ours = sorted((0 if side == -1 else 1, float(W * tt) % (2 * math.pi), -abs(float(vs)))
                       for tt, side, vs in impacts)
-        assert len(ours) == len(theirs)
-        for o, th in zip(ours, theirs):
-            assert o[0] == th[0]
-            dphi = abs((o[1] - th[1] + math.pi) % (2 * math.pi) - math.pi)
-            assert dphi < 1e-6 and abs(o[2] - th[2]) < 1e-6 * (1 + abs(o[2])), (a, o, th)
+        assert len(ours) == len(lo_) == len(hi_)
+        for o, l, h in zip(ours, lo_, hi_):
+            assert o[0] == l[0] == h[0], (a, ours, lo_)
+            dl = (h[1] - l[1] + math.pi) % (2 * math.pi) - math.pi
+            phase = l[1] + w * dl
+            speed = l[2] + w * (h[2] - l[2])
+            dphi = abs((o[1] - phase + math.pi) % (2 * math.pi) - math.pi)
+            assert dphi < 2e-2 and abs(o[2] - speed) < 2e-2 * (1 + abs(speed)), (a, o, phase, speed)
         checked += 1
-    assert checked >= 3
+    assert periodic >= 4 and checked >= 2, (periodic, checked)
 
 
 def test_no_branch_twice(two_sided):
