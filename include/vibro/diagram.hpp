@@ -11,13 +11,15 @@
 // - Switching. At every branch point and flip of a new branch (a flip only when the doubled
 //   period is at most max_period), SwitchBranch gives the first points of the other branch(es);
 //   each half is continued away from the bifurcation. Recursively, up to max_branches branches.
-// - Identity. A new branch is the same as a stored one when it has the same period and, at up to
-//   six of its points spread over it (away from where it was born), the stored branch's orbit at
-//   the same parameter (Newton from its nearest point) has the same cyclic contact sequence
-//   (SameContactSequence, on the CanonicalRotation every sequence is written in) and the same
-//   impacts: phases mod 2π and speeds within identity_tolerance (relative). Such a branch is
-//   counted in `duplicates` and not stored: a branch reached twice (from both ends, or through a
-//   loop of switches) is kept once.
+// - Identity. A new branch is the same as a stored one when their periods divide one another and,
+//   at up to six of its points spread over it (past the first fifth of a switched branch, where it
+//   meets its parent), the stored branch's orbit at the same parameter has the same cyclic contact
+//   sequence (SameContactSequence, on the CanonicalRotation every sequence is written in) and the
+//   same impacts, phases mod 2π and speeds: interpolated between the stored branch's two points
+//   around λ (within identity_tolerance plus a tenth of their difference), or solved by Newton
+//   from the nearer one (within identity_tolerance). Such a branch is counted in `duplicates` and
+//   not stored: a branch reached twice (from both ends, or through a loop of switches) is kept
+//   once.
 // - Coverage. A periodic attractor of the sweep at λ is covered by a stored branch of its period
 //   when the branch's orbit at λ (Newton from the branch point nearest to λ, of a segment around λ
 //   with a stable end) is stable and has the attractor's contact sequence (several contacts) and
