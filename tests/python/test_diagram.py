@@ -278,6 +278,8 @@ def test_tube_coverage(tube):
         assert c["value"] == s["value"]
         if c["branch"] is None:
             assert c["reason"], c
+            if s["kind"] == "not-periodic":
+                assert c["reason"].startswith("not periodic"), c
             continue
         covered += 1
         b = d["branches"][c["branch"]]
@@ -298,7 +300,9 @@ def test_tube_coverage(tube):
                 elif abs(v[k] - s["value"]) < 1e-12:
                     ok = ok or abs(y[k] - s["x_B"][-1]) < 1e-6
             assert ok, (s["value"], s["x_B"][-1])
-    assert covered > len(sweep) // 2
+    # Outside the chaotic windows (0.96 to 1.52, and 0.48) the sweep's attractors are periodic, and
+    # nearly all of them lie on a branch.
+    assert covered >= 20, covered
 
 
 # --- (c) bad input --------------------------------------------------------------------------------
