@@ -1666,6 +1666,317 @@ def check_structure(node, m):
                                f"mode {i}")
 
 
+
+# ---- Bifurcation points (docs/prove.md "Bifurcation points") ----------------------------------
+
+class T2:
+    """A value with its first and second derivatives in three variables (dt, dv, p), intervals:
+    what the checker needs to differentiate the half-period map's Jacobian along the branch."""
+    __slots__ = ("v", "g", "h")
+
+    def __init__(self, v, g=None, h=None):
+        self.v = v if isinstance(v, IV) else iv.mpf(v)
+        self.g = g or [ZERO] * 3
+        self.h = h or [[ZERO] * 3 for _ in range(3)]
+
+    @staticmethod
+    def lift(x):
+        return x if isinstance(x, T2) else T2(x)
+
+    def __add__(self, o):
+        o = T2.lift(o)
+        return T2(self.v + o.v, [a + b for a, b in zip(self.g, o.g)],
+                  [[a + b for a, b in zip(r, q)] for r, q in zip(self.h, o.h)])
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return T2(-self.v, [-a for a in self.g], [[-a for a in r] for r in self.h])
+
+    def __sub__(self, o):
+        return self + (-T2.lift(o))
+
+    def __rsub__(self, o):
+        return T2.lift(o) - self
+
+    def __mul__(self, o):
+        o = T2.lift(o)
+        return T2(self.v * o.v, [a * o.v + self.v * b for a, b in zip(self.g, o.g)],
+                  [[self.h[i][j] * o.v + self.g[i] * o.g[j] + self.g[j] * o.g[i] + self.v * o.h[i][j]
+                    for j in range(3)] for i in range(3)])
+
+    __rmul__ = __mul__
+
+    def fn(self, f0, f1, f2):
+        """f(self) from f, f', f'' at self.v."""
+        return T2(f0, [f1 * a for a in self.g],
+                  [[f2 * self.g[i] * self.g[j] + f1 * self.h[i][j] for j in range(3)] for i in range(3)])
+
+    def __truediv__(self, o):
+        o = T2.lift(o)
+        inv = 1 / o.v
+        return self * o.fn(inv, -inv * inv, 2 * inv * inv * inv)
+
+    def __rtruediv__(self, o):
+        return T2.lift(o) / self
+
+
+def t_sin(x):
+    s, c = iv.sin(x.v), iv.cos(x.v)
+    return x.fn(s, c, -s)
+
+
+def t_cos(x):
+    s, c = iv.sin(x.v), iv.cos(x.v)
+    return x.fn(c, -s, -c)
+
+
+def t_sqrt(x):
+    r = iv.sqrt(x.v)
+    return x.fn(r, 1 / (2 * r), -1 / (4 * r * x.v))
+
+
+def symmetric_model(node, m):
+    """(Ω, F/f or the forcing as T2-ready intervals, Δ, r) of the symmetric two-sided one-DOF
+    oscillator, or NotConfirmed: one undamped mode, contact 1 is contact 0 mirrored."""
+    if m.n != 1 or m.zeta is not None or len(m.contacts) != 2:
+        raise NotConfirmed(f"{node.path}: a pitchfork certificate is for one undamped mode and two contacts "
+                           f"(the model has {m.n} mode(s), {len(m.contacts)} contact(s))")
+    (c0, _, e0, r0, _), (c1, _, e1, r1, _) = m.contacts
+    mirrored = hi(c0[0] + c1[0]) == 0 and lo(c0[0] + c1[0]) == 0
+    if node.has("structure"):  # two stops on one DOF, on opposite sides: c_1 = −c_0 exactly
+        cs = node["structure"].v["contacts"]
+        mirrored = mirrored or (cs[0]["dof"] == cs[1]["dof"] and cs[0]["partner"] == cs[1]["partner"] == -1 and
+                                cs[0]["side"] != cs[1]["side"])
+    if not mirrored:
+        raise NotConfirmed(f"{node.path}: contact 1 is not contact 0 mirrored (c_1 = −c_0)")
+    t = node["model"].v
+    if t["stop"] != t["more_contacts"][0]["stop"] or t["restitution"] != t["more_contacts"][0]["restitution"]:
+        raise NotConfirmed(f"{node.path}: the two stops or restitutions differ: not symmetric")
+    if not negative(e0):
+        raise NotConfirmed(f"{node.path}: the clearance −e_0 is not positive")
+    return c0[0], e0, r0
+
+
+def pitchfork_at(m, c0, e0, r, P, frequency, root, fold=False):
+    """The symmetric orbit and g = det(DH + I) at the parameter interval P, with dg/dp: (defined,
+    v, g, dg/dp, det DH, τ, the flight (s ↦ (y, ẏ)) of the half period).
+    The orbit from (T1)-(T2) in the time s = Ωt (ẍ + x = a' sin w's, a' = F/Ω², w' = ω/Ω, v' = v/Ω):
+    k1 = (1 + r) tan(θ/2)/2, k2 = (1 − r)/(2w'), θ = π/w', (k1² + k2²)V² − 2Δk1V + Δ² − K² = 0,
+    sin φ = (Δ − k1V)/K, cos φ = k2V/K (K = a'/(1 − w'²)); DH by the implicit function theorem on
+    the flight written with the variables (dt, dv) of the start, p the parameter."""
+    Wm = m.w_i[0]
+    p = T2(P, [ZERO, ZERO, ONE])
+    f = p if not frequency else T2(m.f)
+    w = p if frequency else T2(m.w)
+    F = T2(c0 * m.TA[0]) * f
+    Delta = T2(-e0)
+    a1, w1 = F / (Wm * Wm), w / Wm
+    den = 1 - w1 * w1
+    if not excludes_zero(den.v):
+        return None
+    Kamp = a1 / den
+    theta = T2(iv.pi) / w1
+    half = theta * T2(iv.mpf(0.5))
+    tan_half = t_sin(half) / t_cos(half)
+    k1 = T2(1 + r) * tan_half * T2(iv.mpf(0.5))
+    k2 = T2(1 - r) / (T2(2) * w1)
+    A, B, C = k1 * k1 + k2 * k2, T2(-2) * Delta * k1, Delta * Delta - Kamp * Kamp
+    disc = B * B - T2(4) * A * C
+    if fold:  # every real root V over P: −B/2A ± √max(disc, 0)/2A, and the flight of each
+        if not positive(A.v):
+            return None
+        spread = iv.sqrt(iv.mpf([0, max(hi(disc.v), 0)])) / (2 * A.v)
+        Vf = -B.v / (2 * A.v) + iv.mpf([-1, 1]) * spread
+        U0v, U1v = Delta.v - k1.v * Vf, w1.v * k2.v * Vf
+        yv, ydv, w1v, Dv = Delta.v - U0v, -(r * Vf) - U1v, w1.v, Delta.v
+
+        def fold_flight(S):
+            sw, cw, s1, c1 = iv.sin(w1v * S), iv.cos(w1v * S), iv.sin(S), iv.cos(S)
+            return (U0v * cw + U1v / w1v * sw + yv * c1 + ydv * s1,
+                    -(U0v * w1v) * sw + U1v * cw - yv * s1 + ydv * c1)
+
+        # In the time t and the speed v = ΩV: A = A'/Ω², B = B'/Ω, C = C' (docs/prove.md), so the
+        # discriminant in v is this one over Ω².
+        return {"V": Vf * Wm, "g": disc.v / (Wm * Wm), "slope": disc.g[2] / (Wm * Wm), "det": ZERO, "theta": theta.v, "flight": fold_flight,
+                "Delta": Dv}
+    if not positive(disc.v) or not positive(A.v):
+        return None
+    sq = t_sqrt(disc)
+    V = (-B + (sq if root > 0 else -sq)) / (T2(2) * A)
+    if not positive(V.v):
+        return None
+    U0 = Delta - k1 * V           # K sin φ, in the time s
+    U1 = w1 * k2 * V              # K w' cos φ
+    # The start (time dt after the impact instant, speed V + dv): the forced part at s = dt and the
+    # free part matching x = Δ, ẋ = −r(V + dv) there (the impact instant itself moved by dt).
+    dt, dv = T2(ZERO, [ONE, ZERO, ZERO]), T2(ZERO, [ZERO, ONE, ZERO])
+
+    def forced(s):
+        return U0 * t_cos(w1 * s) + U1 / w1 * t_sin(w1 * s), -(U0 * w1) * t_sin(w1 * s) + U1 * t_cos(w1 * s)
+
+    u_start, ud_start = forced(dt)
+    y0, yd0 = Delta - u_start, -(T2(r) * (V + dv)) - ud_start
+
+    def x_at(s):  # s: time since the unperturbed impact
+        u, ud = forced(s)
+        h = s - dt
+        return (u + y0 * t_cos(h) + yd0 * t_sin(h), ud - y0 * t_sin(h) + yd0 * t_cos(h))
+
+    x1, xd1 = x_at(theta)
+    # ẍ at the landing: a' sin(w'(s)) − x with a' sin w's = (1 − w'²)(forced displacement).
+    u1, _ = forced(theta)
+    xdd = den * u1 - x1
+
+    def dp(z, k):  # ∂z/∂(dt, dv)[k] as a (value, d/dp) pair along the branch
+        return z.g[k], z.h[k][2]
+
+    def pd(a, b):  # products and quotients of (value, d/dp) pairs
+        return a[0] * b[0], a[1] * b[0] + a[0] * b[1]
+
+    def qd(a, b):
+        q = a[0] / b[0]
+        return q, (a[1] - q * b[1]) / b[0]
+
+    def neg(a):
+        return -a[0], -a[1]
+
+    def add(*zs):
+        return sum((z[0] for z in zs), ZERO), sum((z[1] for z in zs), ZERO)
+
+    arrival = (xd1.v, xd1.g[2])          # ẋ(θ⁻) = −V', with its d/dp
+    acc = (xdd.v, xdd.g[2])
+    tt = neg(qd(dp(x1, 0), arrival))
+    tv = neg(qd(dp(x1, 1), arrival))
+    vt = neg(add(dp(xd1, 0), pd(acc, tt)))
+    vv = neg(add(dp(xd1, 1), pd(acc, tv)))
+    one = (ONE, ZERO)
+    g = add(pd(add(one, tt), add(one, vv)), neg(pd(tv, vt)))
+    det = add(pd(tt, vv), neg(pd(tv, vt)))
+    # The half-period flight in the original time t = s/Ω (for the gaps).
+    W = Wm
+    U0v, U1v, yv, ydv = U0.v, U1.v, Delta.v - U0.v, -(r * V.v) - U1.v
+    w1v, Dv = w1.v, Delta.v
+
+    def flight(S):
+        sw, cw, s1, c1 = iv.sin(w1v * S), iv.cos(w1v * S), iv.sin(S), iv.cos(S)
+        return (U0v * cw + U1v / w1v * sw + yv * c1 + ydv * s1,
+                -(U0v * w1v) * sw + U1v * cw - yv * s1 + ydv * c1)
+
+    return {"V": V.v * W, "g": g[0], "slope": g[1], "det": det[0], "theta": theta.v,
+            "flight": flight, "Delta": Dv}
+
+
+def check_bifurcation(node):
+    """A bifurcation certificate: the parameter interval holds exactly one pitchfork of the
+    symmetric orbit, crossed transversally, recomputed here (g = det(DH + I) of the half-period map
+    changes sign between the interval's ends and dg/dp excludes 0 over it; the orbit exists over
+    the whole interval: both gaps positive between the impacts)."""
+    node.obj(CERT_KEYS[:-1] + ("bifurcation",), ("structure",))
+    node["libraries"].text()
+    node["precision_bits"].integer(1, 1 << 20)
+    s = node["summary"]
+    for key in ("verdict", "reason", "kind", "period"):
+        if node[key].v != s[key].v or type(node[key].v) is not type(s[key].v):
+            raise NotConfirmed(f"{node[key].path} = {node[key].v!r} and {s[key].path} = {s[key].v!r} differ")
+    m = Model(node["model"])
+    if node.has("structure"):
+        check_structure(node["structure"], m)
+    b = node["bifurcation"]
+    b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
+    kind = b["type"].text(("pitchfork", "fold"))
+    fold = kind == "fold"
+    name = b["parameter"].text(("amplitude", "frequency"))
+    ends = b["interval"].items(exactly=2)
+    plo, phi = decimal(ends[0]), decimal(ends[1])
+    if node["model"].v[name] != f"[{ends[0].v}, {ends[1].v}]":
+        raise NotConfirmed(f"{node['model'][name].path} = {node['model'].v[name]!r}: not the interval "
+                           f"{b['interval'].path} = {b['interval'].v}")
+    if not hi(phi) - lo(plo) <= mp.mpf("1e-10") or not lo(plo) < hi(phi):
+        raise NotConfirmed(f"{b['interval'].path}: {show(hi(phi) - lo(plo))} wide, not in (0, 1e-10]")
+    b["root"].integer(-1, 1)  # the prover's branch of its own quadratic (information)
+    for key in ("interval", "parameter"):
+        if s[key].v != b[key].v:
+            raise NotConfirmed(f"{s[key].path} = {s[key].v!r} and {b[key].path} = {b[key].v!r} differ")
+    c0, e0, r = symmetric_model(node, m)
+    frequency = name == "frequency"
+    # The branch: the root of (T2) whose speed the certificate claims.
+    claimed_speed = b["speed"].pair()
+    at_lo = at_hi = over = None
+    for root in (1, -1):
+        over = pitchfork_at(m, c0, e0, r, iv.mpf([lo(plo), hi(phi)]), frequency, root, fold)
+        if over is not None and (fold or inside(over["V"], claimed_speed)):
+            at_lo = pitchfork_at(m, c0, e0, r, plo, frequency, root, fold)
+            at_hi = pitchfork_at(m, c0, e0, r, phi, frequency, root, fold)
+            break
+        over = None
+    if at_lo is None or at_hi is None or over is None:
+        raise NotConfirmed(f"{b['interval'].path}: the symmetric orbit is not defined over the whole interval "
+                           "(a discriminant, a speed or a denominator not positive)")
+    gl, gh = at_lo["g"], at_hi["g"]
+    g_name = "the discriminant of the symmetric orbits' quadratic" if fold else "det(DH + I)"
+    if not ((positive(gl) and negative(gh)) or (negative(gl) and positive(gh))):
+        raise NotConfirmed(f"{b['interval'].path}: {g_name} does not change sign over the interval "
+                           f"({show_iv(gl)} at {ends[0].v}, {show_iv(gh)} at {ends[1].v}): no {kind} there")
+    if not excludes_zero(over["slope"]):
+        raise NotConfirmed(f"{b['interval'].path}: d/dp of {g_name} = {show_iv(over['slope'])} may vanish: "
+                           "uniqueness and transversality not confirmed")
+    # The claims contain the checker's enclosures: over the interval, the hull of 16 pieces (an
+    # enclosure over the whole interval at once overestimates by its dependency effects).
+    cuts = [lo(plo) + (hi(phi) - lo(plo)) * k / 16 for k in range(17)]
+    parts = [pitchfork_at(m, c0, e0, r, iv.mpf([cuts[k], cuts[k + 1]]), frequency, root, fold) for k in range(16)]
+    if any(q is None for q in parts):
+        raise NotConfirmed(f"{b['interval'].path}: the symmetric orbit is not defined over a piece of the interval")
+
+    def hull(key):
+        return iv.mpf([min(lo(q[key]) for q in parts), max(hi(q[key]) for q in parts)])
+
+    over = dict(over, slope=hull("slope"), V=over["V"] if fold else hull("V"), det=hull("det"))
+    claims = ((b["g_at_ends"][0], gl, f"{g_name} at the lower end"),
+              (b["g_at_ends"][1], gh, f"{g_name} at the upper end"),
+              (b["slope"], over["slope"], f"d/dp of {g_name}"),
+              (s["g_at_ends"][0], gl, f"{g_name} at the lower end"),
+              (s["g_at_ends"][1], gh, f"{g_name} at the upper end"),
+              (s["slope"], over["slope"], f"d/dp of {g_name}"))
+    if fold:
+        # The claimed speeds (of every merging orbit over the interval) meet the checker's enclosure.
+        for claim, E, what in claims:
+            claim_contains(claim, E, what)
+        for claim in (b["speed"], s["speed"]):
+            if meet(claim.pair(), over["V"]) is None:
+                raise NotConfirmed(f"{claim.path} = {show_pair(claim.v)} does not meet the speeds of the merging "
+                                   f"orbits, which the checker encloses in {show_iv(over['V'])}")
+    else:
+        for claim, E, what in claims + ((b["speed"], over["V"], "the speed"), (s["speed"], over["V"], "the speed"),
+                                        (s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH")):
+            claim_contains(claim, E, what)
+    # The orbit over the whole interval: Δ − y > 0 and y + Δ > 0 on the open flight (time s = Ωt),
+    # windows at the impacts where ẏ < 0 (y leaves +Δ downwards and reaches −Δ downwards).
+    th, fl, Dv = over["theta"], over["flight"], over["Delta"]
+    eps = lo(th) / 64
+    for _ in range(16):
+        if negative(fl(iv.mpf([0, eps]))[1]) and negative(fl(iv.mpf([lo(th) - eps, hi(th)]))[1]):
+            break
+        eps /= 2
+    else:
+        raise NotConfirmed(f"{node.path}: the velocity at the impacts is not confirmed negative")
+    for gap, a, z in ((lambda y: Dv - y, eps, hi(th)), (lambda y: y + Dv, mp.mpf(0), lo(th) - eps)):
+        stack = [(a, z)]
+        pieces = 0
+        while stack:
+            u, v = stack.pop()
+            pieces += 1
+            if pieces > 200000:
+                raise NotConfirmed(f"{node.path}: a gap not confirmed positive between the impacts")
+            if positive(gap(fl(iv.mpf([u, v]))[0])):
+                continue
+            if v - u < lo(th) * mp.mpf(2) ** -30:
+                raise NotConfirmed(f"{node.path}: a gap not confirmed positive near s = {show(u)}")
+            c = (u + v) / 2
+            stack += [(u, c), (c, v)]
+    return 4
+
+
 def check(node):
     """Checks one certificate; returns how many inequalities were recomputed."""
     if not isinstance(node.v, dict):
@@ -1676,7 +1987,9 @@ def check(node):
     if verdict != "proven":
         raise NotConfirmed(f"{node['verdict'].path}: the certificate claims no proof ('{verdict}': "
                            f"{node['reason'].text()[:200] if node.has('reason') else ''})")
-    kind = node["kind"].text(("impact", "sticking"))
+    kind = node["kind"].text(("impact", "sticking", "bifurcation"))
+    if kind == "bifurcation":
+        return check_bifurcation(node)
     node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
              (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)

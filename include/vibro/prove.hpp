@@ -95,4 +95,25 @@ ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequ
 std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
                                                 const System& system_hi, const Scene& scene_hi, const ProofRequest& hi);
 
+// A bifurcation point to prove (docs/prove.md "Bifurcation points"): the point located by
+// `vibro continue` (its kind and value) on a branch in `parameter`.
+struct BifurcationRequest {
+  std::string kind;       // as `vibro continue` names it: "branch-point" (a pitchfork), "fold", ...
+  std::string parameter;  // the scene key varied: "excitation.amplitude" or "excitation.frequency"
+  double value = 0;       // the located value
+  // Its uncertainty (`continue`'s bracket): the value is refined by Newton within it before the
+  // proof; 0 (a value given directly): the interval is centred on `value` itself.
+  double bracket = 0;
+  double time_limit = 60.0;
+  const std::atomic<bool>* stop_requested = nullptr;
+};
+
+// Encloses the parameter of the bifurcation in an interval at most 1e-10 wide around `value`, and
+// proves that exactly one such point lies there and that the crossing is transversal. This version
+// proves the symmetry-breaking pitchfork ("branch-point") and the fold of the symmetric orbit of the
+// symmetric two-sided one-DOF oscillator (undamped);
+// any other is "not proven" with the reason. The result's kind is "bifurcation"; its summary and
+// certificate carry the interval; scripts/vibro_check_proof.py re-verifies it.
+ProofResult ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request);
+
 }  // namespace vibro

@@ -438,6 +438,29 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
   return {r.summary_json, r.certificate_json, false};
 }
 
+// vibro.prove_bifurcation: `vibro prove --bifurcation KIND:KEY=VALUE` (docs/prove.md "Bifurcation
+// points"): the summary and the certificate as JSON texts, and whether a stop request ended it.
+std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& s, const std::string& kind,
+                                                                 const std::string& key, double value,
+                                                                 double time_limit, bool handle_sigint) {
+  if (!(time_limit > 0) || !std::isfinite(time_limit))
+    throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
+  if (!std::isfinite(value)) throw vibro::InputError({fmt::format("value {}: expected a finite number", value)});
+  vibro::BifurcationRequest req;
+  req.kind = kind;
+  req.parameter = key;
+  req.value = value;
+  req.time_limit = time_limit;
+  const vibro::Scene scene = vibro::frontend::SceneWith(s.origin, key, value);
+  const vibro::System sys(scene);
+  SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
+  req.stop_requested = guard.flag();
+  const auto r = vibro::ProveBifurcation(sys, scene, req);
+  if (r.interrupted || guard.interrupted()) return {"", "", true};
+  return {r.summary_json, r.certificate_json, false};
+}
+
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
@@ -805,6 +828,7 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("simulate", &SimulateScene);
   m.def("orbit", &Orbit);
   m.def("prove", &Prove);
+  m.def("prove_bifurcation", &ProveBifurcationPoint);
   m.def("continue_branch", &ContinueBranch);
   m.def("study", &Study);
   m.def("sweep", &SweepScene);

@@ -46,7 +46,7 @@ EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "relea
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
-__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "continue_",
+__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_",
            "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
            "EVENT_KINDS", "MODES", "LOAD_FIELDS"]
@@ -372,6 +372,26 @@ def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, tim
                                                   _int("transient", transient),
                                                   "" if from_ is None else _path("from_", from_),
                                                   _float("time_limit", time_limit), _main_thread())
+    if interrupted:
+        raise _interrupted("proof", None)
+    if out is not None:
+        with open(_path("out", out), "w", encoding="utf-8") as fh:
+            fh.write(certificate + "\n")
+    return _json.loads(text)
+
+
+def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
+    """Proves a bifurcation point (``vibro prove --bifurcation KIND:KEY=VALUE --json``, docs/prove.md
+    "Bifurcation points"): ``kind`` and ``value`` as ``continue_`` reports the point (a
+    "branch-point" or a "fold" of the symmetric two-sided oscillator), ``param`` the scene key it varies
+    ("excitation.amplitude" or "excitation.frequency"). The dict has ``verdict``, ``reason`` and, when
+    proven, ``bifurcation``, ``interval`` (two decimals, at most 1e-10 apart, holding exactly one such
+    point), ``slope`` (the derivative that proves the crossing transversal) and
+    ``half_map_multipliers``. ``out`` receives the certificate, which ``vibro_check_proof.py``
+    re-verifies."""
+    text, certificate, interrupted = _vibro.prove_bifurcation(_scene(scene), str(kind), str(param),
+                                                              _float("value", value),
+                                                              _float("time_limit", time_limit), _main_thread())
     if interrupted:
         raise _interrupted("proof", None)
     if out is not None:

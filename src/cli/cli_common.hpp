@@ -131,6 +131,9 @@ struct ProveArgs {
   vibro::ProofRequest request;
   std::string from;    // --from ORBIT.h5 ("" for none)
   std::string branch;  // --branch FILE.h5: every point of a stored branch ("" for none)
+  // --bifurcation BRANCH.h5 (with --point K: its bifurcation K) or KIND:KEY=VALUE ("" for none)
+  std::string bifurcation;
+  long long point = 0;
   std::string out;   // --out CERT.json
 };
 int RunProve(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args);

@@ -14,6 +14,7 @@
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "cli/cli_common.hpp"
 #include "cli/stop_signals.hpp"
@@ -171,6 +172,74 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
   return proven == first.points ? 0 : kExitDisagree;
 }
 
+// `vibro prove SCENE --bifurcation SOURCE`: the bifurcation point's parameter enclosed (docs/prove.md
+// "Bifurcation points"). SOURCE: BRANCH.h5 (with --point K) or KIND:KEY=VALUE.
+int ProveBifurcationPoint(const std::string& path, const std::vector<std::string>& sets, bool json,
+                          const ProveArgs& args) {
+  vibro::BifurcationRequest req;
+  req.time_limit = args.request.time_limit;
+  const auto& src = args.bifurcation;
+  const auto colon = src.find(':'), equals = src.find('=');
+  if (colon != std::string::npos && equals != std::string::npos && colon < equals && !std::filesystem::exists(src)) {
+    req.kind = src.substr(0, colon);
+    req.parameter = src.substr(colon + 1, equals - colon - 1);
+    const std::string number = src.substr(equals + 1);
+    char* end = nullptr;
+    req.value = std::strtod(number.c_str(), &end);
+    if (number.empty() || end == nullptr || *end != '\0' || !std::isfinite(req.value))
+      throw vibro::InputError({"--bifurcation " + src + ": '" + number + "' is not a number (KIND:KEY=VALUE)"});
+  } else {
+    const auto list = vibro::ReadBranchBifurcations(src);
+    if (args.point >= static_cast<long long>(list.size()))
+      throw vibro::InputError({fmt::format("--point {}: {} has {} bifurcation(s)", args.point, src, list.size())});
+    const auto& b = list[static_cast<std::size_t>(args.point)];
+    req.kind = b.kind;
+    req.value = b.value;
+    req.bracket = b.bracket;
+    req.parameter = vibro::ReadBranchPoint(src, 0).param;
+  }
+  auto at = sets;
+  at.push_back(vibro::frontend::Assignment(req.parameter, req.value));
+  const auto loaded = vibro::LoadScene(path, at);
+  const vibro::System sys(loaded.scene);
+  vibro::ProofResult result;
+  try {
+    result = vibro::ProveBifurcation(sys, loaded.scene, req);
+  } catch (const std::invalid_argument& e) {
+    throw vibro::InputError({path + ": " + e.what()});
+  }
+  if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("nothing is proven or written");
+  if (!args.out.empty()) {
+    const vibro::cli::FinalWrite writing;
+    std::ofstream file(args.out, std::ios::trunc);
+    file << result.certificate_json << "\n";
+    if (!file) throw vibro::WriteError(args.out + ": the certificate could not be written");
+  }
+  if (json) {
+    fmt::print("{}\n", result.summary_json);
+  } else {
+    fmt::print("verdict      {}\n", result.proven ? "proven" : "not proven");
+    fmt::print("reason       {}\n", result.reason);
+    if (result.proven) {
+      const auto s = nlohmann::json::parse(result.summary_json);
+      const auto& iv = s["interval"];
+      fmt::print("bifurcation  {} at {} in [{}, {}] (width {})\n", s["bifurcation"].get<std::string>(), req.parameter,
+                 iv[0].get<std::string>(), iv[1].get<std::string>(), Outward(s["width"].get<double>(), true, 3));
+      const auto pair = [](const nlohmann::json& p) {
+        return Range(vibro::Enclosure{p[0].get<double>(), p[1].get<double>()});
+      };
+      const bool fold = s["bifurcation"] == "fold";
+      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : "det(DH + I)", s["parameter"].get<std::string>(),
+                 pair(s["slope"]));
+      if (s.contains("half_map_multipliers"))
+        fmt::print("multipliers  of the half-period map at the point: -1 and {} (the period map: +1 and their "
+                   "squares)\n", pair(s["half_map_multipliers"][1]));
+    }
+    if (!args.out.empty()) fmt::print("certificate  {} (check it: vibro_check_proof.py {})\n", args.out, args.out);
+  }
+  return result.proven ? 0 : kExitDisagree;
+}
+
 int Prove(const std::string& path, const std::vector<std::string>& sets, bool json, const ProveArgs& args) {
   if (!args.out.empty()) {  // bad input before any work, and nothing created
     const auto dir = std::filesystem::path(args.out).parent_path();
@@ -179,6 +248,7 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
     if (std::filesystem::is_directory(args.out)) throw vibro::InputError({"--out " + args.out + ": a directory"});
   }
   if (!args.branch.empty()) return RunProveBranch(path, sets, json, args);
+  if (!args.bifurcation.empty()) return ProveBifurcationPoint(path, sets, json, args);
   const auto loaded = vibro::LoadScene(path, sets);
   const vibro::System sys(loaded.scene);
   vibro::ProofRequest req = args.request;

@@ -152,8 +152,21 @@ int main(int argc, char** argv) {
     prove->add_option("--transient", prove_args.request.transient_periods, "periods simulated before the orbit search (default 200)")
         ->check(CLI::NonNegativeNumber)
         ->excludes(from);
-    prove->add_option("--branch", prove_args.branch, "prove every point of the branch stored by `vibro continue --out FILE.h5`")
-        ->excludes(from);
+    CLI::Option* branch_opt =
+        prove->add_option("--branch", prove_args.branch, "prove every point of the branch stored by `vibro continue --out FILE.h5`")
+            ->excludes(from);
+    CLI::Option* bif = prove->add_option(
+        "--bifurcation", prove_args.bifurcation,
+        "prove the bifurcation point stored by `vibro continue --out BRANCH.h5` (BRANCH.h5, with --point K: its "
+        "bifurcation K, default 0) or given as KIND:KEY=VALUE (e.g. branch-point:excitation.amplitude=3.286): its "
+        "parameter enclosed in an interval <= 1e-10 wide, one point in it, crossed transversally (the pitchfork "
+        "and the fold of the symmetric two-sided 1-DOF oscillator)")
+        ->excludes(from)
+        ->excludes(branch_opt);
+    prove->add_option("--point", prove_args.point, "with --bifurcation BRANCH.h5: the bifurcation K (0-based, in the "
+                      "order `vibro continue` lists them)")
+        ->check(CLI::NonNegativeNumber)
+        ->needs(bif);
     prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
     prove->add_option("--time-limit", prove_args.request.time_limit,
                       "seconds for the whole command: the transient, the orbit search and the proof (with --branch: "

@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "proof/bifurcation_proof.hpp"
 #include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
 #include "proof/prove_api.hpp"
@@ -490,9 +491,63 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
 
 }  // namespace vibro
 
+namespace vibro {
+
+ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request) {
+  const proof::Budget budget(request.time_limit, request.stop_requested);
+  const auto enclosed = EnclosureOf(system, scene);
+  proof::Outcome outcome;
+  ProofRequest as_orbit;
+  as_orbit.time_limit = request.time_limit;
+  as_orbit.period = 1;
+  if (!enclosed.failure.empty()) {
+    outcome.reason = enclosed.failure;
+    return Wrap(outcome, "bifurcation", ModelOf(system), as_orbit, budget, "during the proof");
+  }
+  auto model = ModelOf(system, scene.physical ? &enclosed : nullptr);
+  const bool amplitude = request.parameter == "excitation.amplitude";
+  const bool frequency = request.parameter == "excitation.frequency";
+  // Two stops on one DOF, on opposite sides: c_1 = −c_0 exactly, whatever the enclosures of c.
+  const auto contacts = Contacts(scene);
+  const bool mirrored = scene.physical.has_value() && contacts.size() == 2 && contacts[0].dof == contacts[1].dof && contacts[0].partner < 0 &&
+                        contacts[1].partner < 0 && contacts[0].side != contacts[1].side;
+  std::string interval;
+  if (request.kind != "branch-point" && request.kind != "fold") {
+    outcome.reason = "a " + request.kind + " is not proven by this version (it proves the symmetry-breaking pitchfork "
+                     "and the fold of the symmetric two-sided one-DOF oscillator; docs/prove.md)";
+  } else if (!amplitude && !frequency) {
+    outcome.reason = "the parameter " + request.parameter + " is not proven by this version (the amplitude or the "
+                     "forcing frequency; docs/prove.md)";
+  } else {
+    (amplitude ? model.amplitude_text : model.frequency_text) = Decimal(request.value);
+    model = [&] {
+      auto m = proof::IntervalModel::FromDecimals(model.omega_text, model.forcing_text, model.contact_text,
+                                                  model.shape_text, model.stop_text, model.restitution_text,
+                                                  model.amplitude_text, model.frequency_text, model.damping_text);
+      for (std::size_t c = 1; c < model.contacts.size(); ++c) {
+        const auto& k = model.contacts[c];
+        m.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
+      }
+      return m;
+    }();
+    outcome = request.kind == "fold"
+                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
+                                              interval)
+                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
+    if (outcome.proven) {
+      // The certificate's model carries the parameter as the proven interval.
+      (amplitude ? model.amplitude_text : model.frequency_text) = interval;
+      outcome.summary["param"] = request.parameter;
+    }
+  }
+  return Wrap(outcome, "bifurcation", model, as_orbit, budget, "during the proof", enclosed.structure);
+}
+
+}  // namespace vibro
+
 namespace {
 const VibroProveApi kApi{sizeof(vibro::ProofResult), sizeof(vibro::ProofRequest), &vibro::proof::ProveOrbit,
-                         &vibro::proof::ProveOrbitOverInterval};
+                         &vibro::proof::ProveOrbitOverInterval, &vibro::proof::ProveBifurcation};
 }  // namespace
 
 extern "C" __attribute__((visibility("default"))) const VibroProveApi* vibro_prove_api() { return &kApi; }

@@ -17,6 +17,7 @@ namespace vibro::proof {
 ProofResult ProveOrbit(const System& system, const Scene& scene, const ProofRequest& request);
 std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const Scene& scene_lo, const ProofRequest& lo,
                                                 const System& system_hi, const Scene& scene_hi, const ProofRequest& hi);
+ProofResult ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request);
 
 }  // namespace vibro::proof
 
@@ -30,6 +31,7 @@ struct VibroProveApi {
   std::vector<vibro::ProofResult> (*prove_over_interval)(const vibro::System&, const vibro::Scene&,
                                                          const vibro::ProofRequest&, const vibro::System&,
                                                          const vibro::Scene&, const vibro::ProofRequest&);
+  vibro::ProofResult (*prove_bifurcation)(const vibro::System&, const vibro::Scene&, const vibro::BifurcationRequest&);
 };
 
 // The plugin's one exported symbol.

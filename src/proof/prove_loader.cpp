@@ -59,4 +59,8 @@ std::vector<ProofResult> ProveOrbitOverInterval(const System& system_lo, const S
   return Prover().prove_over_interval(system_lo, scene_lo, lo, system_hi, scene_hi, hi);
 }
 
+ProofResult ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request) {
+  return Prover().prove_bifurcation(system, scene, request);
+}
+
 }  // namespace vibro

@@ -70,3 +70,26 @@ def test_the_time_limit_covers_the_transient():
     assert p.returncode == 0, p.stderr
     r = json.loads(p.stdout)
     assert r["verdict"] == "not-proven" and "time limit of 1 s" in r["reason"] and "orbit search" in r["reason"]
+
+
+def test_prove_bifurcation_matches_the_command_and_its_certificate_is_confirmed(tmp_path):
+    """vibro.prove_bifurcation is `vibro prove --bifurcation KIND:KEY=VALUE --json`: the pitchfork of
+    the symmetric two-sided oscillator (r = 0.6, ω = 2; its amplitude 3.2860503573579958, the closed
+    form of docs/prove.md "Bifurcation points"), enclosed within 1e-10; 1e-9 past it nothing."""
+    scene = os.path.join(SCENES, "contacts_two_sided_1dof.toml")
+    text = open(scene).read().replace("restitution = 0.5", "restitution = 0.6").replace("frequency = 0.8",
+                                                                                        "frequency = 2.0")
+    path = tmp_path / "two_sided.toml"
+    path.write_text(text)
+    cert = tmp_path / "pitchfork.json"
+    r = vibro.prove_bifurcation(str(path), "branch-point", "excitation.amplitude", 3.2860503573579969, out=cert)
+    p = subprocess.run([CLI, "prove", str(path), "--bifurcation", "branch-point:excitation.amplitude=3.2860503573579969",
+                        "--json"], capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert r == json.loads(p.stdout)
+    lo, hi = (float(x) for x in r["interval"])
+    assert r["verdict"] == "proven" and lo <= 3.2860503573579958 <= hi and hi - lo <= 1e-10
+    c = subprocess.run([sys.executable, CHECKER, str(cert)], capture_output=True, text=True, timeout=600)
+    assert c.returncode == 0, c.stdout + c.stderr
+    r = vibro.prove_bifurcation(str(path), "branch-point", "excitation.amplitude", 3.2860503583579958)
+    assert r["verdict"] == "not-proven" and "no pitchfork is proven" in r["reason"]

@@ -19,51 +19,23 @@ Usage: prove_contacts_test.py VIBRO CHECKER
 import copy
 import json
 import os
-import subprocess
 import sys
-import tempfile
 
 from mpmath import mp, mpf, tan, sqrt, atan2, pi
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prove_truth import orbit_truth, compare  # noqa: E402
+from prove_truth import Harness, inside, orbit_truth, compare  # noqa: E402
 
 mp.dps = 50
 VIBRO, CHECKER = sys.argv[1:3]
-TMP = tempfile.mkdtemp(prefix="vibro_prove_contacts_")
-failures, passed = [], []
+H = Harness(VIBRO, CHECKER, "vibro_prove_contacts_")
+TMP = H.tmp
+expect, prove, check_doc, scene_file = H.expect, H.prove, H.check_doc, H.scene_file
 
 
-def expect(cond, what):
-    passed.append(what)
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what, flush=True)
 
 
-def inside(x, pair):
-    return mpf(pair[0]) <= x <= mpf(pair[1])
 
-
-def prove(scene, *args, out=None):
-    cmd = [VIBRO, "prove", scene, "--json", *args] + (["--out", out] if out else [])
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None), p.stderr
-
-
-def check_doc(doc):
-    path = os.path.join(TMP, "doc.json")
-    with open(path, "w") as fh:
-        json.dump(doc, fh)
-    p = subprocess.run([sys.executable, CHECKER, path, "--json"], capture_output=True, text=True, timeout=900)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None)
-
-
-def scene_file(name, text):
-    path = os.path.join(TMP, name)
-    with open(path, "w") as fh:
-        fh.write(text)
-    return path
 
 
 def proven_and_true(label, scene, *args):
@@ -283,5 +255,4 @@ code, s, err = prove(scene_file("two_sided_chatter.toml", two_sided("5.0", "0.5"
 expect(code == 4 and s and "several contacts" in s["reason"],
        f"two-sided chattering (sticking at both stops): not proven, with the reason (exit {code}: {s and s['reason']})")
 
-print(f"{len(passed) - len(failures)}/{len(passed)} checks passed")
-sys.exit(1 if failures else 0)
+H.finish()

@@ -17,48 +17,23 @@ Usage: prove_damped_test.py VIBRO CHECKER SCENES_DIR TEST_SCENES_DIR
 import copy
 import json
 import os
-import subprocess
 import sys
-import tempfile
 
 from mpmath import mp, mpf, sqrt, matrix, eigsy
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prove_truth import orbit_truth, compare  # noqa: E402
+from prove_truth import Harness, orbit_truth, compare  # noqa: E402
 
 mp.dps = 50
 VIBRO, CHECKER, SCENES, TEST_SCENES = sys.argv[1:5]
-TMP = tempfile.mkdtemp(prefix="vibro_prove_damped_")
-failures, passed = [], []
+H = Harness(VIBRO, CHECKER, "vibro_prove_damped_")
+TMP = H.tmp
+expect, prove, check, scene_file = H.expect, H.prove, H.check, H.scene_file
 
 
-def expect(cond, what):
-    passed.append(what)
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what, flush=True)
 
 
-def prove(scene, *args, out=None):
-    cmd = [VIBRO, "prove", scene, "--json", *args] + (["--out", out] if out else [])
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None), p.stderr
 
-
-def check(path):
-    p = subprocess.run([sys.executable, CHECKER, path, "--json"], capture_output=True, text=True, timeout=900)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None)
-
-
-def inside(x, pair):
-    return mpf(pair[0]) <= x <= mpf(pair[1])
-
-
-def scene_file(name, text):
-    path = os.path.join(TMP, name)
-    with open(path, "w") as fh:
-        fh.write(text)
-    return path
 
 
 def damping_edits(label, path):
@@ -159,5 +134,4 @@ periods = 200
 expect(code == 4 and s and "damped" in s["reason"], f"damped chattering: not proven with its reason (exit {code}: "
        f"{s and s['reason']} {err[-200:]})")
 
-print(f"{len(passed) - len(failures)}/{len(passed)} checks passed")
-sys.exit(1 if failures else 0)
+H.finish()

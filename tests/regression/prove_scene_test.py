@@ -16,26 +16,19 @@ at contact 0, and the modal data of docs/model.md §1.3 computed from them here;
 import copy
 import json
 import os
-import subprocess
 import sys
-import tempfile
 
 from mpmath import mp, mpf, sqrt, matrix, cholesky, eigsy, inverse
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prove_truth import orbit_truth, compare  # noqa: E402
+from prove_truth import Harness, orbit_truth, compare  # noqa: E402
 
 mp.dps = 50
 VIBRO, CHECKER, SCENES = sys.argv[1:4]
-TMP = tempfile.mkdtemp(prefix="vibro_prove_scene_")
-failures, passed = [], []
+H = Harness(VIBRO, CHECKER, "vibro_prove_scene_")
+TMP = H.tmp
+expect, prove, check_doc, scene_file = H.expect, H.prove, H.check_doc, H.scene_file
 
-
-def expect(cond, what):
-    passed.append(what)
-    if not cond:
-        failures.append(what)
-        print("FAIL:", what, flush=True)
 
 
 def bounds(text):
@@ -48,25 +41,7 @@ def encloses(text, x, width=mpf("1e-13")):
     return a <= x <= b and b - a <= width * (1 + abs(x))
 
 
-def prove(scene, *args, out=None):
-    cmd = [VIBRO, "prove", scene, "--json", *args] + (["--out", out] if out else [])
-    p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None), p.stderr
 
-
-def check_doc(doc):
-    path = os.path.join(TMP, "doc.json")
-    with open(path, "w") as fh:
-        json.dump(doc, fh)
-    p = subprocess.run([sys.executable, CHECKER, path, "--json"], capture_output=True, text=True, timeout=900)
-    return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None)
-
-
-def scene_file(name, text):
-    path = os.path.join(TMP, name)
-    with open(path, "w") as fh:
-        fh.write(text)
-    return path
 
 
 def modal_truth(M, K, forcing_dof, contacts):
@@ -262,5 +237,4 @@ expect(code == 4 and s and "could not be enclosed with every eigenvalue simple" 
        "could not be enclosed with every eigenvalue simple" in docs.replace("\n  ", " "),
        f"a repeated natural frequency: not proven, the reason docs/prove.md lists (exit {code}: {s and s['reason']} {err[-200:]})")
 
-print(f"{len(passed) - len(failures)}/{len(passed)} checks passed")
-sys.exit(1 if failures else 0)
+H.finish()

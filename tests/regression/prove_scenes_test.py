@@ -10,14 +10,15 @@ one of two ways:
 Usage: prove_scenes_test.py VIBRO CHECKER ROOT
 """
 import glob
-import json
 import os
-import subprocess
 import sys
-import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prove_truth import Harness  # noqa: E402
 
 VIBRO, CHECKER, ROOT = sys.argv[1:4]
-TMP = tempfile.mkdtemp(prefix="vibro_prove_scenes_")
+H = Harness(VIBRO, CHECKER, "vibro_prove_scenes_", verbose=True)
+TMP, expect = H.tmp, H.expect
 # The refusals of docs/prove.md, as the prover words them.
 REFUSALS = (
     "sticking orbits of a model with more than one mode are not proven by this version",
@@ -28,14 +29,6 @@ REFUSALS = (
     "a grazing orbit cannot be proven",
     "impacting orbits with plastic impacts are not proven by this version",
 )
-failures = []
-
-
-def expect(cond, what):
-    print(("ok    " if cond else "FAIL  ") + what, flush=True)
-    if not cond:
-        failures.append(what)
-
 
 doc = open(os.path.join(ROOT, "docs", "prove.md"), encoding="utf-8").read()
 for phrase in REFUSALS:
@@ -47,19 +40,17 @@ proven = 0
 for scene in scenes:
     name = os.path.basename(scene)
     cert = os.path.join(TMP, name.replace(".toml", ".json"))
-    p = subprocess.run([VIBRO, "prove", scene, "--json", "--time-limit", "60", "--out", cert], capture_output=True,
-                       text=True, timeout=600)
-    s = json.loads(p.stdout) if p.stdout.strip() else {}
-    if p.returncode == 0:
-        c = subprocess.run([sys.executable, CHECKER, cert], capture_output=True, text=True, timeout=900)
-        expect(s.get("verdict") == "proven" and c.returncode == 0,
-               f"{name}: proven, and the checker confirms ({c.stdout.strip()[:160]})")
+    code, s, err = H.prove(scene, "--time-limit", "60", out=cert)
+    s = s or {}
+    if code == 0:
+        ccode, v = H.check(cert)
+        expect(s.get("verdict") == "proven" and ccode == 0 and v and v.get("verdict") == "confirmed",
+               f"{name}: proven, and the checker confirms ({str(v)[:160]})")
         proven += 1
     else:
         reason = s.get("reason", "")
         listed = [r for r in REFUSALS if r in reason]
-        expect(p.returncode == 4 and s.get("verdict") == "not-proven" and listed,
-               f"{name}: refused with a listed reason (exit {p.returncode}: {reason[:200]} {p.stderr[-200:]})")
+        expect(code == 4 and s.get("verdict") == "not-proven" and listed,
+               f"{name}: refused with a listed reason (exit {code}: {reason[:200]} {err[-200:]})")
 print(f"{proven} of {len(scenes)} scenes proven, the others refused with a listed reason")
-print(f"{len(failures)} failure(s)")
-sys.exit(1 if failures else 0)
+H.finish()

@@ -7,6 +7,12 @@ as the eigenvalues of the stroboscopic map's Jacobian by central differences (h 
 ~1e-30), each impact located by a root finder at 50 digits; the determinant of that Jacobian against
 its closed form Π r_j² · e^{-qT Σ 2σ_i} (docs/model.md §5.6). Nothing here reads vibro's sources.
 """
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
 from mpmath import mp, mpf, sin, cos, exp, sqrt, pi, eig, matrix
 
 mp.dps = 50
@@ -14,6 +20,55 @@ mp.dps = 50
 
 def inside(x, pair):
     return mpf(pair[0]) <= x <= mpf(pair[1])
+
+
+class Harness:
+    """What every prove test does the same way: record checks, run `vibro prove SCENE --json`, run the
+    checker on a file or a document, write a scene into the test's temporary directory.
+    `verbose` prints every check (ok/FAIL), not only the failures."""
+
+    def __init__(self, vibro, checker, prefix, verbose=False):
+        self.vibro, self.checker, self.verbose = vibro, checker, verbose
+        self.tmp = tempfile.mkdtemp(prefix=prefix)
+        self.failures, self.passed = [], []
+
+    def expect(self, cond, what):
+        self.passed.append(what)
+        if self.verbose:
+            print(("ok    " if cond else "FAIL  ") + what, flush=True)
+        elif not cond:
+            print("FAIL:", what, flush=True)
+        if not cond:
+            self.failures.append(what)
+
+    def prove(self, scene, *args, out=None):
+        """(exit code, the JSON summary or None, stderr)."""
+        cmd = [self.vibro, "prove", scene, "--json", *args] + (["--out", out] if out else [])
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None), p.stderr
+
+    def check(self, path):
+        """The checker on a certificate file: (exit code, its JSON verdict or None)."""
+        p = subprocess.run([sys.executable, self.checker, path, "--json"], capture_output=True, text=True, timeout=900)
+        return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None)
+
+    def check_doc(self, doc):
+        """The checker on a certificate held in memory."""
+        path = os.path.join(self.tmp, "doc.json")
+        with open(path, "w") as fh:
+            json.dump(doc, fh)
+        return self.check(path)
+
+    def scene_file(self, name, text):
+        path = os.path.join(self.tmp, name)
+        with open(path, "w") as fh:
+            fh.write(text)
+        return path
+
+    def finish(self):
+        """The closing line and the exit status."""
+        print(f"{len(self.passed) - len(self.failures)}/{len(self.passed)} checks passed")
+        sys.exit(1 if self.failures else 0)
 
 
 class Truth:
