@@ -15,7 +15,9 @@ free flight of one DOF in mpmath (40 digits) and nothing of vibro:
 (b) the tube scene over omega in [0.4, 1.6]: every attractor of the sweep and of the searches is on
     a stable branch or reported uncovered with a reason; a covered period-1 attractor's section
     points lie on the branch's strobe.
-(c) bad input: exit 2 with a located message and nothing written.
+(c) bad input: exit 2 with a located message and nothing written;
+(d) Python: vibro.diagram returns numpy arrays per branch, the pitchfork and its two halves;
+(e) Ctrl-C after two stored branches: exit 130, the file says interrupted and keeps them.
 """
 import json
 import math
@@ -346,3 +348,31 @@ def test_python_diagram():
     assert all(abs(e - 4.0) < 1e-12 for e in ends)
     assert abs(born[0]["strobe"][-1, 0] - born[1]["strobe"][-1, 0]) > 1e-3
     assert d["sweep_value"].shape == d["sweep_x_B"].shape
+
+
+# --- (e) Ctrl-C: exit 130, the finished branches kept ----------------------------------------------
+
+
+def test_interrupt_keeps_finished_branches(tmp_path):
+    import signal
+    if not CLI:
+        pytest.skip("VIBRO_CLI is not set")
+    out = tmp_path / "int.h5"
+    p = subprocess.Popen([CLI, "diagram", os.path.join(SCENES, "tube_loose_support.toml"), "--param",
+                          "excitation.frequency", "--from", "0.4", "--to", "1.6", "--steps", "30", "--out", str(out)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # The progress report on stderr says how many branches are stored: interrupt after two.
+    seen = b""
+    while b"(2 / " not in seen:
+        chunk = p.stderr.read1(256)
+        if not chunk:
+            break
+        seen += chunk
+    assert b"(2 / " in seen, seen[-400:]
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=600)
+    assert p.returncode == 130, err
+    with h5py.File(out, "r") as f:
+        assert f["diagram"].attrs["status"] in (b"interrupted", "interrupted")
+        assert f["diagram"].attrs["branches"] >= 2
+        assert len(f["diagram/branches"]) == f["diagram"].attrs["branches"]
