@@ -825,6 +825,58 @@ def plot_sweep(f, title, save, overlay):
     save(fig, "sweep")
 
 
+def plot_diagram(f, title, save):
+    """A diagram (`vibro diagram --out`): the sweep's stroboscopic points x_B(t0 + kT) and, over
+    them, every branch's stroboscopic state (/diagram/branches/NNN/branch/strobe, contact 0: the
+    same observable at the same forcing phase), stable solid, unstable dashed, one colour per
+    branch; its branch points and flips (where branches were switched) and the ends of branches
+    that stop at a grazing or another non-smooth point marked."""
+    d, s = f["diagram"], f["sweep"]
+    param = text(d.attrs["param"])
+    fig, ax = figure(1, 1, figsize=(9.2, 5.4))
+    value, xB = s["value"][()], s["x_B"][()]
+    v = np.repeat(value, xB.shape[1])
+    ax.plot(v, xB.ravel(), ".", ms=2.5, color="0.6", lw=0, label="sweep (up and down), $x_B(t_0+kT)$", zorder=1)
+    colours = [OKABE_ITO[i % len(OKABE_ITO)] for i in (0, 1, 2, 4, 5, 6, 3, 7)]
+    names = sorted(d["branches"].keys())
+    marked = set()
+    for k, name in enumerate(names):
+        g = d["branches"][name]
+        b = g["branch"]
+        val, strobe, stable = b["value"][()], b["strobe"][()][:, 0], b["stable"][()].astype(bool)
+        c = colours[k % len(colours)]
+        if int(b.attrs["period"]) == 1:
+            for i in range(len(val) - 1):
+                ax.plot(val[i:i + 2], strobe[i:i + 2], "-" if stable[i] and stable[i + 1] else "--", color=c,
+                        lw=1.3, zorder=2)
+        else:
+            # A q-periodic orbit has q stroboscopic points and the branch stores one of them, which
+            # one following the section along the branch: points, not a line (filled: stable).
+            ax.plot(val[stable], strobe[stable], "o", ms=3, color=c, zorder=2)
+            ax.plot(val[~stable], strobe[~stable], "o", ms=3, mfc="none", color=c, zorder=2)
+        ax.plot([], [], "-", color=c, label=f"branch {int(name)} (period {int(b.attrs['period'])}, "
+                f"{text(g.attrs['origin'])})")
+        bif = g["bifurcations"]
+        for bv, bk in zip(bif["value"][()], [text(x) for x in bif["kind"][()]]):
+            if bk in ("branch-point", "flip") and len(val):
+                i = int(np.argmin(np.abs(val - bv)))
+                ax.plot([bv], [strobe[i]], BIFURCATION_MARKERS.get(bk, "o"), color="k", mfc="w", ms=7, zorder=3,
+                        label=None if bk in marked else bk)
+                marked.add(bk)
+        for end, at in ((text(g.attrs["end_first"]), 0), (text(g.attrs["end_last"]), -1)):
+            if len(val) and any(w in end for w in ("grazing", "non-smooth", "sticking", "no orbit")):
+                ax.plot([val[at]], [strobe[at]], "x", color="k", ms=8, mew=1.5, zorder=3,
+                        label=None if "end" in marked else "end: grazing or non-smooth")
+                marked.add("end")
+    ax.plot([], [], "--", color="0.3", label="unstable (dashed; open circles for period > 1)")
+    sym = SYMBOLS.get(param, param)
+    ax.set_xlabel(axis_label(param))
+    ax.set_ylabel("$x_B$ at $t \\equiv t_0$ (mod $T$)")
+    set_title(ax, title, f"diagram in ${sym}$: {len(names)} branches over the sweep")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(7.5), frameon=False)
+    save(fig, "diagram")
+
+
 def time_window(t, T, window):
     """The time plots' window: --time-window A,B within the samples t, or the last 5 periods."""
     t_from, t_to = window if window else (t[-1] - 5 * T, t[-1])
@@ -1390,7 +1442,7 @@ def draw(args, save, window):
     with h5py.File(args.file, "r") as f:
         check_options(f, args, window)
         varied = set()
-        for g, attr in (("branch", "param"), ("sweep", "param"), ("partition", "param1"),
+        for g, attr in (("branch", "param"), ("sweep", "param"), ("diagram", "param"), ("partition", "param1"),
                         ("partition", "param2")):
             if g in f:
                 varied.add(text(f[g].attrs[attr]))
@@ -1405,6 +1457,8 @@ def draw(args, save, window):
             plot_partition_loads(f, title, save)
         if "sweep" in f:
             plot_sweep(f, title, save, args.overlay)
+        if "diagram" in f:
+            plot_diagram(f, title, save)
         if "events" in f and "impulse" in f["events"]:
             plot_loads(f, title, save)
         contacts = scene_contacts(f)
@@ -1413,7 +1467,7 @@ def draw(args, save, window):
             plot_contacts_run(f, title, save, window, contacts, args.coordinate)
         elif len(f["samples/t"]) > 1:
             plot_run(f, title, save, window, args.coordinate)
-        elif not any(g in f for g in ("basin", "branch", "partition", "sweep")):
+        elif not any(g in f for g in ("basin", "branch", "partition", "sweep", "diagram")):
             print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
 
 

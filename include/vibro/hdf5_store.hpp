@@ -21,6 +21,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/diagram.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
@@ -179,7 +180,16 @@ class Hdf5Store final : public Observer, public LoadsSink {
   // none), stable (uint8), x_B, section_phase, max_multiplier, stick_phases count, events
   // (strings), multipliers (N, m, 2) as [re, im] padded with NaN; attributes param, period, end,
   // status) and /bifurcations (value, kind, detail, bracket). Call before Finish.
-  void WriteBranch(const Branch& branch);  // hdf5_branch.cpp
+  // `group` (absolute, existing): the three groups go under it (a diagram's branches,
+  // /diagram/branches/NNN/branch ...); empty: at the root.
+  void WriteBranch(const Branch& branch, const std::string& group = "");  // hdf5_branch.cpp
+
+  // Writes a diagram (hdf5_diagram.cpp, docs/diagram.md): /sweep as WriteSweep, /diagram
+  // (attributes param, from, to, status, duplicates, seeds_tried, stage times; notes), every
+  // branch under /diagram/branches/NNN as WriteBranch writes /branch (with attributes origin,
+  // parent, born_at, end_first, end_last) and the coverage table /diagram/coverage. Call before
+  // Finish.
+  void WriteDiagram(const DiagramResult& diagram, const SweepSpec& spec);
 
   // Writes `table` into the new group `group` (absolute path). Call before Finish.
   void WriteTable(const std::string& group, const H5Table& table);

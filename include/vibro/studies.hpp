@@ -169,6 +169,9 @@ struct SweepPoint {
   std::string status = "ok";     // the run's status (ToString(RunStatus))
   std::string message;           // why the run failed (status other than "ok")
   std::optional<LyapunovSpectrum> lyapunov;  // of the run (run.lyapunov), none for a failed run
+  // The run's final modal state (the next run's start), at the forcing phase of initial.time;
+  // empty for a failed run. A periodic attractor's orbit can be solved from it (`vibro diagram`).
+  Eigen::VectorXd X, V;
 };
 struct SweepRequest {
   std::function<Scene(double)> scene_at;

@@ -7,6 +7,7 @@
 #include "vibro/branch_check.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
+#include "vibro/diagram.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
@@ -79,6 +80,13 @@ std::string StudyJson(const StudyResult& study, const Coordinate& x, const Coord
 
 // `vibro sweep --json`.
 std::string SweepJson(const std::vector<SweepPoint>& sweep);
+
+// `vibro diagram --json` (docs/diagram.md): {"param", "from", "to", "status", "duplicates",
+// "seeds_tried", "seconds": {"sweep", "search", "continuation", "switching", "coverage"},
+// "branches": [BranchJson's object plus "index", "origin", "parent", "born_at", "end_first",
+// "end_last"], "coverage": [{"value", "direction", "kind", "period", "branch" (null: uncovered),
+// "distance", "reason"}], "uncovered" (count), "notes", "sweep": SweepJson's points}.
+std::string DiagramJson(const DiagramResult& diagram);
 
 // `vibro check --json`.
 std::string CheckJson(const CheckReport& report);

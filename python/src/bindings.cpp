@@ -41,6 +41,7 @@
 #include "frontend/limits.hpp"
 #include "frontend/run_output.hpp"
 #include "frontend/switching.hpp"
+#include "frontend/diagram.hpp"
 #include "frontend/tables.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/check.hpp"
@@ -645,6 +646,49 @@ std::pair<std::string, bool> SweepScene(const PyScene& s, const std::string& key
   return {json, interrupted};
 }
 
+// `vibro.diagram` (docs/diagram.md): the JSON of the diagram, and whether a stop request cut it
+// short (the branches finished so far are in it, and in `out`).
+std::pair<std::string, bool> DiagramScene(const PyScene& s, const std::string& key, double from, double to,
+                                          long long steps, long long record, long long searches, long long grid,
+                                          long long max_period, long long max_branches, long long max_points,
+                                          double coverage_tolerance, long long threads, const std::string& out,
+                                          bool handle_sigint) {
+  vibro::frontend::DiagramSpec spec;
+  spec.key = key;
+  spec.from = from;
+  spec.to = to;
+  spec.steps = steps;
+  spec.record = record;
+  spec.searches = searches;
+  spec.grid = grid;
+  spec.max_period = max_period;
+  spec.max_branches = max_branches;
+  spec.max_points = max_points;
+  spec.coverage_tolerance = coverage_tolerance;
+  spec.threads = threads;
+  auto req = vibro::frontend::PrepareDiagram(s.origin, spec, kPython);
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));  // after the checks
+  SigintGuard guard(handle_sigint);
+  std::string json;
+  bool interrupted = false;
+  {
+    py::gil_scoped_release release;
+    req.stop_requested = guard.flag();
+    const auto d = vibro::Diagram(req);
+    interrupted = guard.interrupted() || d.status == "interrupted";
+    if (store) {
+      store->WriteDiagram(d, {key, from, to, static_cast<int>(steps), static_cast<int>(record), true});
+      vibro::RunResult r;
+      r.status = interrupted ? vibro::RunStatus::kInterrupted : vibro::RunStatus::kOk;
+      r.message = interrupted ? "interrupted: the branches finished so far are kept" : "";
+      store->Finish(r, vibro::frontend::NoAttractor());
+      store.reset();  // closed without the GIL
+    }
+    json = vibro::DiagramJson(d);
+  }
+  return {json, interrupted};
+}
+
 // The JSON of the cross-check, and whether a stop request cut it short (nothing to keep).
 std::pair<std::string, bool> Check(const PyScene& s, bool handle_sigint) {
   const vibro::System sys(s.loaded.scene);
@@ -788,6 +832,7 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("continue_branch", &ContinueBranch);
   m.def("study", &Study);
   m.def("sweep", &SweepScene);
+  m.def("diagram", &DiagramScene);
   m.def("check", &Check);
   m.def("info", &Info);
   m.def("validate", &Validate);

@@ -47,6 +47,7 @@ EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "relea
 MODES = {0: "free", 1: "sticking"}
 
 __all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_",
+           "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
            "EVENT_KINDS", "MODES", "LOAD_FIELDS"]
 
@@ -475,6 +476,50 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     d["table"] = _branch_table(d.get("points", []))
     d["loads"] = _loads_arrays(d.get("points", []))
     d["strobe"] = _strobe_array(d.get("points", []))
+    return d
+
+
+def diagram(scene, param, from_, to, steps=40, record=16, searches=3, grid=6, max_period=4, max_branches=24,
+            max_points=400, coverage_tolerance=1e-3, threads=0, out=None, force=False):
+    """The whole one-parameter bifurcation diagram of ``param`` over [``from_``, ``to``] (``vibro
+    diagram --json``, docs/diagram.md): a sweep up and down and ``searches`` attractor searches
+    seed continuations both ways; every branch point and flip is switched at (periods up to
+    ``max_period``); a branch reached twice is kept once; every attractor of the sweep and the
+    searches is checked to lie on a stable branch (within ``coverage_tolerance``) or reported
+    uncovered with the reason.
+
+    Each entry of ``branches`` holds the branch as :func:`continue_` gives it (``points``,
+    ``bifurcations``, ``end``), how it was found (``origin``: "seed", "branch-point" or "flip";
+    ``parent``, ``born_at``), why each end stopped (``end_first``, ``end_last``: e.g. "grazing (the
+    orbit does not go on)"), and numpy arrays: ``value``, ``stable`` (bool), ``strobe`` (points,
+    contacts: each contact's coordinate at t ≡ initial.time mod the period, the sweep's
+    observable), ``max_multiplier``, ``sticking_fraction`` and ``table`` (structured). ``coverage``
+    lists every attractor with the branch that holds it (None: uncovered, with ``reason``);
+    ``sweep_value`` and ``sweep_x_B`` are the sweep's stroboscopic points as arrays."""
+    _invoke("diagram", scene, param=param, from_=from_, to=to, steps=steps, record=record, searches=searches,
+            grid=grid, max_period=max_period, max_branches=max_branches, max_points=max_points,
+            coverage_tolerance=coverage_tolerance, threads=threads, out=out, force=force)
+    text, interrupted = _vibro.diagram(_scene(scene), param, _float("from_", from_), _float("to", to),
+                                       _int("steps", steps), _int("record", record), _int("searches", searches),
+                                       _int("grid", grid), _int("max_period", max_period),
+                                       _int("max_branches", max_branches), _int("max_points", max_points),
+                                       _float("coverage_tolerance", coverage_tolerance), _int("threads", threads),
+                                       _out(out), _main_thread())
+    if interrupted:
+        raise _interrupted("diagram", out)
+    d = _json.loads(text)
+    for b in d["branches"]:
+        pts = b.get("points", [])
+        b["value"] = _np.array([p["value"] for p in pts], dtype=float)
+        b["stable"] = _np.array([bool(p["stable"]) for p in pts], dtype=bool)
+        b["strobe"] = _strobe_array(pts)
+        b["max_multiplier"] = _np.array([max([abs(complex(*m)) for m in p.get("floquet_multipliers") or []] or [_np.nan])
+                                         for p in pts], dtype=float)
+        b["table"] = _branch_table(pts)
+        b["sticking_fraction"] = b["table"]["sticking_fraction"]
+    sw = d.get("sweep", [])
+    d["sweep_value"] = _np.array([p["value"] for p in sw for _ in p.get("x_B", [])], dtype=float)
+    d["sweep_x_B"] = _np.array([x for p in sw for x in p.get("x_B", [])], dtype=float)
     return d
 
 

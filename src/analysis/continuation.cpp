@@ -223,13 +223,18 @@ std::vector<double> StrobeOf(const System& sys, const Scene& scene, double t0, c
   std::vector<double> out(static_cast<size_t>(sys.contact_count()), std::numeric_limits<double>::quiet_NaN());
   Eigen::VectorXd at = X;
   if (t0 - origin > 0) {  // otherwise the section is a strobe time itself
+    // The simulator takes an origin within one forcing period before the start: the start of
+    // the start's own period, j periods after `origin`, and q − j periods from there to the
+    // strobe time origin + qT (a section of a q-periodic orbit may lie in any of its q periods).
+    const double T = 2.0 * M_PI / sys.frequency();
+    const int j = std::clamp(static_cast<int>(std::floor((t0 - origin) / T)), 0, q - 1);
     Scene sc = scene;
-    sc.run.periods = q;
+    sc.run.periods = q - j;
     sc.run.samples_per_period = 0;
     const InitialOverride here{t0, X, V};
     SimulationOptions opt;
     opt.initial = &here;
-    opt.section_origin = origin;
+    opt.section_origin = origin + j * T;
     opt.observers = {&last};
     opt.loads = false;
     if (Simulate(sys, sc, opt).status != RunStatus::kOk || !last.X) return out;

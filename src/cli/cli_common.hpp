@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "frontend/commands.hpp"
+#include "frontend/diagram.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/attractor.hpp"
 #include "vibro/loads.hpp"
@@ -93,6 +94,10 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
 int RunSweep(const std::string& path, const std::vector<std::string>& sets, bool json,
              const std::string& key, double from, double to, int steps, int record, bool one_way,
              const std::string& out);
+
+// `vibro diagram SCENE --param KEY --from A --to B` (cmd_diagram.cpp).
+int RunDiagram(const std::string& path, const std::vector<std::string>& sets, bool json,
+               const vibro::frontend::DiagramSpec& spec, const std::string& out);
 
 // `vibro info FILE` (cmd_info.cpp).
 int RunInfo(const std::string& path, bool json);

@@ -207,6 +207,29 @@ int main(int argc, char** argv) {
         ->needs(to_switch);
   }
 
+  CLI::App* diagram = app.add_subcommand("diagram", "the whole one-parameter bifurcation diagram: sweep, "
+                                                     "continuation, branch switching, coverage");
+  vibro::frontend::DiagramSpec dia;
+  std::string dia_out;
+  if (Wanted(diagram)) {
+    add_scene_options(diagram);
+    diagram->add_option("--param", dia.key, "numeric scene key to vary")->required();
+    diagram->add_option("--from", dia.from, "one end of the range")->check(kFinite)->required();
+    diagram->add_option("--to", dia.to, "the other end")->check(kFinite)->required();
+    diagram->add_option("--steps", dia.steps, "steps of the sweep between them (default 40)");
+    diagram->add_option("--record", dia.record, "section points kept per sweep value (default 16)");
+    diagram->add_option("--searches", dia.searches, "attractor searches at this many values (default 3; 0: none)");
+    diagram->add_option("--grid", dia.grid, "each search: a GRID × GRID grid of (x_B, v_B) starts (default 6)");
+    diagram->add_option("--max-period", dia.max_period, "longest period continued or switched to (default 4)");
+    diagram->add_option("--max-branches", dia.max_branches, "branches stored at most (default 24)");
+    diagram->add_option("--max-points", dia.max_points, "points per continuation at most (default 400)");
+    diagram->add_option("--coverage-tolerance", dia.coverage_tolerance,
+                        "relative distance (impact phases, speeds) within which a sweep attractor lies on a branch "
+                        "(default 1e-3)");
+    diagram->add_option("--threads", dia.threads, "threads of the searches (default 0: all cores)");
+    diagram->add_option("--out", dia_out, "write the sweep, every branch and the coverage to HDF5");
+  }
+
   CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
   CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
   StudyArgs study_args;
@@ -349,7 +372,7 @@ int main(int argc, char** argv) {
   }
 
   bool force = false;
-  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep})
+  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep, diagram})
     if (Wanted(cmd)) cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
 
   try {
@@ -418,6 +441,7 @@ int main(int argc, char** argv) {
     if (*sweep)
       return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
                       sweep_record, sweep_one_way, sweep_out);
+    if (*diagram) return RunDiagram(scene_path, sets, json, dia, dia_out);
     if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
     if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
     if (*partition) {

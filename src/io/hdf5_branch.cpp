@@ -58,7 +58,7 @@ H5Table LoadsTable(const std::vector<const std::vector<ContactLoads>*>& rows, co
 
 }  // namespace
 
-void Hdf5Store::WriteBranch(const Branch& b) {
+void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   impl_->Sync();
   const size_t N = b.points.size();
   size_t m = 1, k = 1;
@@ -144,14 +144,14 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
   t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
-  WriteTable("/branch", t);
+  WriteTable(group + "/branch", t);
   std::vector<const std::vector<ContactLoads>*> loads;
   std::vector<std::string> notes;
   for (const auto& pt : b.points) {
     loads.push_back(&pt.loads);
     notes.push_back(pt.loads_note);
   }
-  WriteTable("/branch/loads", LoadsTable(loads, notes));
+  WriteTable(group + "/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
   std::vector<double> bv, bb, bc, rot;
@@ -169,7 +169,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
   bt.arrays.push_back({"rotation_number", {rot.size()}, rot});  // Neimark–Sacker points; NaN elsewhere
   bt.strings = {{"kind", kind}, {"detail", detail}};
-  WriteTable("/bifurcations", bt);
+  WriteTable(group + "/bifurcations", bt);
 
   // Signature changes that are no bifurcation (continuation.hpp, Relabel).
   H5Table rt;
@@ -185,7 +185,7 @@ void Hdf5Store::WriteBranch(const Branch& b) {
   rt.arrays.push_back({"value", {rv.size()}, rv});
   rt.arrays.push_back({"bracket", {rb.size()}, rb});
   rt.strings = {{"from", from}, {"to", to}, {"detail", rdetail}};
-  WriteTable("/relabels", rt);
+  WriteTable(group + "/relabels", rt);
 }
 
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {

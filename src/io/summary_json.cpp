@@ -416,6 +416,52 @@ std::string SweepJson(const std::vector<SweepPoint>& sweep) {
   return j.dump();
 }
 
+std::string DiagramJson(const DiagramResult& d) {
+  nlohmann::json j;
+  j["param"] = d.param;
+  j["from"] = d.from;
+  j["to"] = d.to;
+  j["status"] = d.status;
+  j["duplicates"] = d.duplicates;
+  j["seeds_tried"] = d.seeds_tried;
+  j["seconds"] = {{"sweep", d.sweep_seconds},
+                  {"search", d.search_seconds},
+                  {"continuation", d.continuation_seconds},
+                  {"switching", d.switching_seconds},
+                  {"coverage", d.coverage_seconds}};
+  auto branches = nlohmann::json::array();
+  for (size_t k = 0; k < d.branches.size(); ++k) {
+    const auto& b = d.branches[k];
+    auto o = BranchObject(b.branch);
+    o["index"] = k;
+    o["origin"] = b.origin;
+    o["parent"] = b.parent >= 0 ? nlohmann::json(b.parent) : nlohmann::json(nullptr);
+    o["born_at"] = b.born_at;
+    o["end_first"] = b.end_first;
+    o["end_last"] = b.end_last;
+    branches.push_back(std::move(o));
+  }
+  j["branches"] = branches;
+  auto coverage = nlohmann::json::array();
+  int uncovered = 0;
+  for (const auto& c : d.coverage) {
+    uncovered += c.branch < 0 ? 1 : 0;
+    coverage.push_back({{"value", c.value},
+                        {"direction", c.upward ? "up" : "down"},
+                        {"source", c.source},
+                        {"kind", c.kind},
+                        {"period", c.period > 0 ? nlohmann::json(c.period) : nlohmann::json(nullptr)},
+                        {"branch", c.branch >= 0 ? nlohmann::json(c.branch) : nlohmann::json(nullptr)},
+                        {"distance", c.distance},
+                        {"reason", c.reason}});
+  }
+  j["coverage"] = coverage;
+  j["uncovered"] = uncovered;
+  j["notes"] = d.notes;
+  j["sweep"] = nlohmann::json::parse(SweepJson(d.sweep))["points"];
+  return j.dump();
+}
+
 std::string CheckJson(const CheckReport& r) {
   nlohmann::json j;
   j["ok"] = r.ok;

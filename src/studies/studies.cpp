@@ -581,7 +581,7 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
     const bool ok = r.status == RunStatus::kOk;
     out.push_back({values[i], i < up, ok ? rec.Classify() : Attractor{}, tail.x, tail.v,
                    ToString(r.status), ok ? std::string() : r.message,
-                   ok && lyapunov ? std::optional(lyapunov->Spectrum()) : std::nullopt});
+                   ok && lyapunov ? std::optional(lyapunov->Spectrum()) : std::nullopt, {}, {}});
     if (!ok) break;
     // The next run continues from this one's final state, at a whole number of periods later.
     state = InitialOverride{sc.initial_time, r.X, r.V};
@@ -589,6 +589,8 @@ std::vector<SweepPoint> Sweep(const SweepRequest& req, const std::atomic<bool>* 
       // On the stop: re-enter through the automaton's classification of a state on the stop.
       state->X -= sys.contact() * ((sys.ContactDisplacement(r.X) - sys.stop()) / sys.s_B());
     }
+    out.back().X = state->X;
+    out.back().V = state->V;
   }
   return out;
 }

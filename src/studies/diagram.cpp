@@ -1,0 +1,569 @@
+// The automatic one-parameter diagram (see include/vibro/diagram.hpp).
+#include "vibro/diagram.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <thread>
+
+#include <fmt/format.h>
+
+#include "vibro/branch_switch.hpp"
+#include "vibro/contact_sequence.hpp"
+#include "vibro/orbit_from_state.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double Seconds(std::chrono::steady_clock::time_point since) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
+}
+
+// An angle difference in (−π, π].
+double Wrap(double d) {
+  d = std::fmod(d, 2 * M_PI);
+  if (d > M_PI) d -= 2 * M_PI;
+  if (d <= -M_PI) d += 2 * M_PI;
+  return d;
+}
+
+// The distance between two periodic motions from their summaries, invariant under a shift of
+// the time origin by whole forcing periods: impacts matched contact by contact, compared by phase
+// mod 2π (radians) and speed (relative to 1 + the largest speed); sticking phases by start mod 2π
+// and duration. ∞ when the kinds, periods or the numbers of impacts or sticking phases differ.
+double MotionDistance(const Attractor& a, const Attractor& b) {
+  if (a.kind != b.kind || a.period != b.period) return kInf;
+  if (a.impact_phases.size() != b.impact_phases.size() || a.stick_phases.size() != b.stick_phases.size()) return kInf;
+  double scale = 1;
+  for (double v : a.impact_velocities) scale = std::max(scale, 1 + std::abs(v));
+  double worst = 0;
+  std::vector<bool> used(b.impact_phases.size(), false);
+  for (size_t i = 0; i < a.impact_phases.size(); ++i) {
+    const int ci = i < a.impact_contacts.size() ? a.impact_contacts[i] : 0;
+    double best = kInf;
+    size_t at = 0;
+    for (size_t j = 0; j < b.impact_phases.size(); ++j) {
+      const int cj = j < b.impact_contacts.size() ? b.impact_contacts[j] : 0;
+      if (used[j] || cj != ci) continue;
+      const double d = std::max(std::abs(Wrap(a.impact_phases[i] - b.impact_phases[j])),
+                                std::abs(a.impact_velocities[i] - b.impact_velocities[j]) / scale);
+      if (d < best) {
+        best = d;
+        at = j;
+      }
+    }
+    if (!std::isfinite(best)) return kInf;
+    used[at] = true;
+    worst = std::max(worst, best);
+  }
+  std::vector<bool> used_s(b.stick_phases.size(), false);
+  for (size_t i = 0; i < a.stick_phases.size(); ++i) {
+    double best = kInf;
+    size_t at = 0;
+    for (size_t j = 0; j < b.stick_phases.size(); ++j) {
+      if (used_s[j]) continue;
+      const auto& [s1, e1] = a.stick_phases[i];
+      const auto& [s2, e2] = b.stick_phases[j];
+      const double d = std::max(std::abs(Wrap(s1 - s2)), std::abs((e1 - s1) - (e2 - s2)));
+      if (d < best) {
+        best = d;
+        at = j;
+      }
+    }
+    if (!std::isfinite(best)) return kInf;
+    used_s[at] = true;
+    worst = std::max(worst, best);
+  }
+  if (a.sticking_fraction && b.sticking_fraction)
+    worst = std::max(worst, std::abs(*a.sticking_fraction - *b.sticking_fraction));
+  return worst;
+}
+
+bool SameSequence(const std::string& a, const std::string& b) {
+  if (a.empty() || b.empty()) return a.empty() && b.empty();
+  std::string pa, pb;
+  const auto x = ParseContactSequence(a, -1, pa), y = ParseContactSequence(b, -1, pb);
+  if (!x || !y) return a == b;
+  // Every sequence vibro writes is in its canonical rotation; SameContactSequence compares the
+  // cyclic words whatever rotation either is in.
+  return SameContactSequence(CanonicalRotation(*x), CanonicalRotation(*y));
+}
+
+// A branch point's impacts as a summary (phases, speeds, contacts), for MotionDistance.
+Attractor ImpactsOf(const BranchPoint& p) {
+  Attractor a;
+  a.kind = p.summary.kind;
+  a.period = p.summary.period;
+  for (const auto& im : p.impacts) {
+    a.impact_phases.push_back(im.phase);
+    a.impact_velocities.push_back(im.v_before);
+    a.impact_contacts.push_back(im.contact);
+  }
+  a.stick_phases = p.summary.stick_phases;
+  a.sticking_fraction = p.summary.sticking_fraction;
+  return a;
+}
+
+// The impacts of the orbit at λ between two neighbouring points of a branch, linearly
+// interpolated (impacts matched as MotionDistance matches them); none when they do not match.
+std::optional<Attractor> Interpolated(const BranchPoint& a, const BranchPoint& b, double lambda) {
+  Attractor x = ImpactsOf(a), y = ImpactsOf(b);
+  if (!std::isfinite(MotionDistance(x, y))) return std::nullopt;
+  const double w = b.value == a.value ? 0.0 : (lambda - a.value) / (b.value - a.value);
+  std::vector<bool> used(y.impact_phases.size(), false);
+  for (size_t i = 0; i < x.impact_phases.size(); ++i) {
+    size_t at = 0;
+    double best = kInf;
+    for (size_t j = 0; j < y.impact_phases.size(); ++j) {
+      if (used[j] || y.impact_contacts[j] != x.impact_contacts[i]) continue;
+      const double d = std::abs(Wrap(x.impact_phases[i] - y.impact_phases[j]));
+      if (d < best) best = d, at = j;
+    }
+    used[at] = true;
+    x.impact_phases[i] += w * Wrap(y.impact_phases[at] - x.impact_phases[i]);
+    x.impact_velocities[i] += w * (y.impact_velocities[at] - x.impact_velocities[i]);
+  }
+  return x;
+}
+
+int PeriodOf(const BranchPoint& p, int fallback) { return p.summary.period.value_or(fallback); }
+
+class Builder {
+ public:
+  explicit Builder(const DiagramRequest& req) : req_(req) {
+    lo_ = std::min(req.from, req.to);
+    hi_ = std::max(req.from, req.to);
+    slack_ = 1e-9 * std::max(1.0, hi_ - lo_);
+  }
+
+  DiagramResult Run();
+
+ private:
+  bool Stopped() const { return req_.stop_requested && req_.stop_requested->load(); }
+  void Progress(const std::string& stage) const {
+    if (req_.progress) req_.progress(stage, static_cast<long long>(out_.branches.size()));
+  }
+
+  // The orbit of branch `b` at λ: Newton (OrbitFromState) from each of its points next to λ (the
+  // nearer end of every segment [λ_i, λ_i+1] that holds λ), with the section kept at the same
+  // forcing phase. `stable_end`: only segments with a stable end.
+  std::vector<OrbitResult> OrbitsAt(const DiagramBranch& b, double lambda, bool stable_end) const;
+  // Whether a motion at λ lies on a stored branch: (branch, distance), or (−1, reason).
+  std::pair<int, double> CoveredBy(double lambda, const Attractor& a, std::string& reason) const;
+  // The index of a stored branch that `n` repeats, or −1.
+  int DuplicateOf(const DiagramBranch& n) const;
+  // Continues from `orbit` at λ0 towards `to`, never beyond [lo, hi].
+  Branch Follow(double lambda0, double to, const OrbitRequest& orbit) const;
+  // Stores `n` unless it repeats a stored branch; then switches at its bifurcations (recursively).
+  void Add(DiagramBranch n);
+  void Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+            const std::string& source);
+
+  const DiagramRequest& req_;
+  double lo_ = 0, hi_ = 1, slack_ = 0;
+  DiagramResult out_;
+  bool full_noted_ = false;
+};
+
+std::vector<OrbitResult> Builder::OrbitsAt(const DiagramBranch& b, double lambda, bool stable_end) const {
+  std::vector<OrbitResult> found;
+  const auto& pts = b.branch.points;
+  const Scene scene = req_.scene_at(lambda);
+  const System sys(scene);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const size_t j = std::min(i + 1, pts.size() - 1);
+    if (j == i && pts.size() > 1) break;
+    const double a = std::min(pts[i].value, pts[j].value), c = std::max(pts[i].value, pts[j].value);
+    if (lambda < a - slack_ || lambda > c + slack_) continue;
+    if (stable_end && !pts[i].stable && !pts[j].stable) continue;
+    const auto& near = std::abs(pts[i].value - lambda) <= std::abs(pts[j].value - lambda) ? pts[i] : pts[j];
+    // Same forcing phase ωt0 at the new λ (the key may be the frequency).
+    const Scene at_near = req_.scene_at(near.value);
+    InitialOverride start{near.section_time * at_near.frequency / scene.frequency, near.X, near.V};
+    OrbitRequest r;
+    r.kind = OrbitKind::kAuto;
+    r.period = b.branch.period;
+    r.transient_periods = 0;
+    auto orbit = OrbitFromState(sys, scene, start, r);
+    if (orbit.status == "converged") found.push_back(std::move(orbit));
+  }
+  return found;
+}
+
+std::pair<int, double> Builder::CoveredBy(double lambda, const Attractor& a, std::string& reason) const {
+  if (a.kind == "not-periodic" || !a.period) {
+    reason = a.recurrence_period
+                 ? fmt::format("not periodic within run.max_period = {} (its section recurs after {} periods)",
+                               a.searched_period.value_or(0), *a.recurrence_period)
+                 : fmt::format("not periodic (chaotic, or a period above run.max_period = {})",
+                               a.searched_period.value_or(0));
+    return {-1, 0};
+  }
+  if (*a.period > req_.max_period) {
+    reason = fmt::format("period {} above --max-period {}", *a.period, req_.max_period);
+    return {-1, 0};
+  }
+  double nearest = kInf;
+  for (size_t k = 0; k < out_.branches.size(); ++k) {
+    const auto& b = out_.branches[k];
+    if (b.branch.points.empty() || PeriodOf(b.branch.points.front(), b.branch.period) != *a.period) continue;
+    for (const auto& orbit : OrbitsAt(b, lambda, true)) {
+      const double d = MotionDistance(orbit.summary, a);
+      if (orbit.stable && d <= req_.coverage_tolerance) return {static_cast<int>(k), d};
+      nearest = std::min(nearest, d);
+    }
+  }
+  reason = std::isfinite(nearest)
+               ? fmt::format("no stable branch within {:.1e} (nearest orbit of a branch: {:.2e})",
+                             req_.coverage_tolerance, nearest)
+               : "no stable continued branch of its period holds it";
+  return {-1, 0};
+}
+
+int Builder::DuplicateOf(const DiagramBranch& n) const {
+  const auto& pts = n.branch.points;
+  if (pts.empty()) return -1;
+  // Samples away from the birth of a switched branch (where it meets its parent).
+  const size_t first = n.origin == "seed" ? 0 : std::min(pts.size() - 1, pts.size() / 5 + 1);
+  std::vector<size_t> samples;
+  const size_t count = std::min<size_t>(6, pts.size() - first);
+  for (size_t s = 0; s < count; ++s)
+    samples.push_back(first + (count > 1 ? s * (pts.size() - 1 - first) / (count - 1) : 0));
+  for (size_t k = 0; k < out_.branches.size(); ++k) {
+    const auto& e = out_.branches[k];
+    // Periods that divide one another: a branch continued with a multiple of its orbits' least
+    // period is the same branch (the summaries compare least periods).
+    if (e.branch.points.empty() || (e.branch.period % n.branch.period != 0 && n.branch.period % e.branch.period != 0))
+      continue;
+    size_t inside = 0;
+    bool all = true;
+    for (size_t i : samples) {
+      const auto& p = pts[i];
+      // The stored branch's orbit at λ: between its two points around λ (interpolated, within a
+      // tenth of their difference), or Newton from the nearer one.
+      bool bracketed = false, same = false;
+      const auto& ep = e.branch.points;
+      const Attractor mine = ImpactsOf(p);
+      for (size_t j = 0; j + 1 < ep.size() && !same; ++j) {
+        const double lo = std::min(ep[j].value, ep[j + 1].value), hi = std::max(ep[j].value, ep[j + 1].value);
+        if (p.value < lo - slack_ || p.value > hi + slack_) continue;
+        bracketed = true;
+        if (!SameSequence(ep[j].sequence, p.sequence)) continue;
+        const auto at = Interpolated(ep[j], ep[j + 1], p.value);
+        if (!at) continue;
+        const double spread = MotionDistance(ImpactsOf(ep[j]), ImpactsOf(ep[j + 1]));
+        same = MotionDistance(*at, mine) <= req_.identity_tolerance + 0.1 * spread;
+      }
+      if (!same && bracketed)
+        for (const auto& o : OrbitsAt(e, p.value, false))
+          same = same || (SameSequence(o.sequence, p.sequence) &&
+                          MotionDistance(o.summary, p.summary) <= req_.identity_tolerance);
+      if (!bracketed) continue;
+      ++inside;
+      if (!same) {
+        all = false;
+        break;
+      }
+    }
+    if (all && inside >= std::max<size_t>(1, (samples.size() + 1) / 2)) return static_cast<int>(k);
+  }
+  return -1;
+}
+
+Branch Builder::Follow(double lambda0, double to, const OrbitRequest& orbit) const {
+  ContinuationRequest c;
+  c.scene_at = req_.scene_at;
+  c.from = lambda0;
+  c.to = to;
+  c.step = (hi_ - lo_) / 100;
+  c.max_step = (hi_ - lo_) / 40;
+  c.max_points = req_.max_points;
+  c.orbit = orbit;
+  // The continuation's stop flag: the caller's stop request, or the branch leaving [lo, hi] (it
+  // may turn back at a fold and run past the other end).
+  std::atomic<bool> halt{false};
+  bool left = false;
+  double left_at = 0;
+  c.stop_requested = &halt;
+  c.progress = [&](size_t, double v) {
+    if (v < lo_ - slack_ || v > hi_ + slack_) {
+      left = true;
+      left_at = v;
+      halt = true;
+    }
+  };
+  std::jthread relay([&](std::stop_token st) {
+    while (!st.stop_requested()) {
+      if (Stopped()) {
+        halt = true;
+        return;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  });
+  Branch br = Continue(c);
+  relay.request_stop();
+  relay.join();
+  br.param = out_.param;
+  if (left && !Stopped()) {
+    // The points beyond the range are dropped; the branch ended there, not by an interruption.
+    std::erase_if(br.points, [&](const BranchPoint& p) { return p.value < lo_ - slack_ || p.value > hi_ + slack_; });
+    std::erase_if(br.bifurcations, [&](const Bifurcation& b) { return b.value < lo_ - slack_ || b.value > hi_ + slack_; });
+    br.status = "ok";
+    br.end = fmt::format("left [{:.12g}, {:.12g}] (turned back at a fold; next point at {:.12g})", lo_, hi_, left_at);
+  }
+  return br;
+}
+
+void Builder::Add(DiagramBranch n) {
+  if (n.branch.points.empty()) return;
+  const int dup = DuplicateOf(n);
+  if (dup >= 0) {
+    ++out_.duplicates;
+    out_.notes.push_back(fmt::format("the {} at {} = {:.12g} leads to branch {} again (not stored twice)",
+                                     n.origin == "seed" ? "seed" : n.origin, out_.param, n.born_at, dup));
+    return;
+  }
+  if (static_cast<int>(out_.branches.size()) >= req_.max_branches) {
+    if (!full_noted_)
+      out_.notes.push_back(fmt::format("--max-branches {} reached: further branches were not followed",
+                                       req_.max_branches));
+    full_noted_ = true;
+    return;
+  }
+  const int index = static_cast<int>(out_.branches.size());
+  out_.branches.push_back(std::move(n));
+  Progress("switching");
+  // Switching at its branch points and flips (a copy: out_.branches grows below).
+  const DiagramBranch b = out_.branches.back();
+  for (const auto& bif : b.branch.bifurcations) {
+    if (Stopped()) return;
+    if (bif.kind != "branch-point" && bif.kind != "flip") continue;
+    // Where the branch was born: switching there leads back to its parent.
+    if (b.origin != "seed" && std::abs(bif.value - b.born_at) <= 1e-6 * std::max(1.0, std::abs(b.born_at))) continue;
+    if (bif.kind == "flip" && 2 * b.branch.period > req_.max_period) {
+      out_.notes.push_back(fmt::format("branch {}: the flip at {} = {:.12g} was not switched at (period {} above "
+                                       "--max-period {})",
+                                       index, out_.param, bif.value, 2 * b.branch.period, req_.max_period));
+      continue;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto& pts = b.branch.points;
+    const auto near = std::min_element(pts.begin(), pts.end(), [&](const BranchPoint& x, const BranchPoint& y) {
+      return std::abs(x.value - bif.value) < std::abs(y.value - bif.value);
+    });
+    SwitchRequest s;
+    s.scene_at = req_.scene_at;
+    s.kind = bif.kind;
+    s.value = bif.value;
+    s.from_value = near->value;
+    s.section_time = near->section_time;
+    s.X = near->X;
+    s.V = near->V;
+    s.period = b.branch.period;
+    s.stop_requested = req_.stop_requested;
+    const SwitchResult r = SwitchBranch(s);
+    out_.switching_seconds += Seconds(t0);
+    if (Stopped()) return;
+    if (!r.ok) {
+      out_.notes.push_back(fmt::format("branch {}: no other branch found at the {} at {} = {:.12g}: {}", index,
+                                       bif.kind, out_.param, bif.value, r.message));
+      continue;
+    }
+    for (const auto& half : r.starts) {
+      const double to = half.direction > 0 ? hi_ : lo_;
+      if (std::abs(to - half.value) <= slack_) continue;
+      OrbitRequest o;
+      o.kind = OrbitKind::kAuto;
+      o.period = half.period;
+      o.transient_periods = 0;
+      o.start = InitialOverride{half.section_time, half.X, half.V};
+      const auto t1 = std::chrono::steady_clock::now();
+      DiagramBranch child;
+      child.branch = Follow(half.value, to, o);
+      out_.continuation_seconds += Seconds(t1);
+      if (Stopped() || child.branch.status == "interrupted") return;
+      child.origin = bif.kind;
+      child.parent = index;
+      child.born_at = r.located;
+      child.end_first = fmt::format("born at the {} of branch {} at {} = {:.15g}", bif.kind, index, out_.param,
+                                    r.located);
+      child.end_last = child.branch.end;
+      if (child.branch.status == "no-orbit") {
+        out_.notes.push_back(fmt::format("branch {}: the half of the {} at {} = {:.12g} could not be continued: {}",
+                                         index, bif.kind, out_.param, r.located, child.branch.end));
+        continue;
+      }
+      Add(std::move(child));
+    }
+  }
+}
+
+void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                   const std::string& source) {
+  if (a.kind == "not-periodic" || !a.period || *a.period > req_.max_period || X.size() == 0) return;
+  std::string reason;
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool covered = CoveredBy(lambda, a, reason).first >= 0;
+  out_.coverage_seconds += Seconds(t0);
+  if (covered) return;
+  ++out_.seeds_tried;
+  const Scene scene = req_.scene_at(lambda);
+  OrbitRequest o;
+  o.kind = OrbitKind::kAuto;
+  o.period = *a.period;
+  o.transient_periods = 0;
+  o.start = InitialOverride{scene.initial_time, X, V};
+  const auto t1 = std::chrono::steady_clock::now();
+  Branch down, up;
+  const bool has_down = lambda - lo_ > slack_, has_up = hi_ - lambda > slack_;
+  if (has_down) down = Follow(lambda, lo_, o);
+  if (!Stopped() && has_up) up = Follow(lambda, hi_, o);
+  out_.continuation_seconds += Seconds(t1);
+  if (Stopped() || down.status == "interrupted" || up.status == "interrupted") return;
+  if ((has_down && down.status == "no-orbit") || (has_up && up.status == "no-orbit")) {
+    out_.notes.push_back(fmt::format("the {} attractor of the {} at {} = {:.12g} gave no orbit: {}", a.kind, source,
+                                     out_.param, lambda, (has_down ? down : up).end));
+    return;
+  }
+  DiagramBranch n;
+  n.origin = "seed";
+  n.born_at = lambda;
+  Branch& br = n.branch;
+  br.param = out_.param;
+  br.period = has_up ? up.period : down.period;
+  br.status = "ok";
+  // The points in order along the branch: the way down reversed, then the way up (its first
+  // point, the seed's orbit, is the way down's first).
+  for (auto it = down.points.rbegin(); it != down.points.rend(); ++it) br.points.push_back(*it);
+  for (size_t i = has_down && !down.points.empty() ? 1 : 0; i < up.points.size(); ++i) br.points.push_back(up.points[i]);
+  for (const Branch* h : {&down, &up}) {
+    br.bifurcations.insert(br.bifurcations.end(), h->bifurcations.begin(), h->bifurcations.end());
+    br.relabels.insert(br.relabels.end(), h->relabels.begin(), h->relabels.end());
+    br.crossings.insert(br.crossings.end(), h->crossings.begin(), h->crossings.end());
+    br.quad_evaluations += h->quad_evaluations;
+  }
+  std::sort(br.bifurcations.begin(), br.bifurcations.end(),
+            [](const Bifurcation& x, const Bifurcation& y) { return x.value < y.value; });
+  n.end_first = has_down ? down.end : "the seed lies at the end of the range";
+  n.end_last = has_up ? up.end : "the seed lies at the end of the range";
+  br.end = fmt::format("towards {:.12g}: {}; towards {:.12g}: {}", lo_, n.end_first, hi_, n.end_last);
+  Add(std::move(n));
+}
+
+DiagramResult Builder::Run() {
+  out_.param = req_.param;
+  out_.from = req_.from;
+  out_.to = req_.to;
+  // 1. The sweep, up and down.
+  auto t0 = std::chrono::steady_clock::now();
+  Progress("sweep");
+  SweepRequest sw;
+  sw.scene_at = req_.scene_at;
+  sw.from = req_.from;
+  sw.to = req_.to;
+  sw.steps = req_.sweep_steps;
+  sw.record = req_.record;
+  sw.both_ways = true;
+  out_.sweep = Sweep(sw, req_.stop_requested);
+  out_.sweep_seconds = Seconds(t0);
+  // 2. Attractor searches: a grid of starts over the sweep's range of (x_B, ẋ_B), widened.
+  struct Found {
+    double value;
+    Attractor attractor;
+    Eigen::VectorXd X, V;
+  };
+  std::vector<Found> searched;
+  t0 = std::chrono::steady_clock::now();
+  if (req_.searches > 0 && !Stopped()) {
+    Progress("search");
+    double xmin = kInf, xmax = -kInf, vmin = kInf, vmax = -kInf;
+    for (const auto& p : out_.sweep) {
+      for (double x : p.x_B) xmin = std::min(xmin, x), xmax = std::max(xmax, x);
+      for (double v : p.v_B) vmin = std::min(vmin, v), vmax = std::max(vmax, v);
+    }
+    if (!std::isfinite(xmin)) xmin = -1, xmax = 1, vmin = -1, vmax = 1;
+    const double mx = 0.25 * std::max(xmax - xmin, 1e-3), mv = 0.25 * std::max(vmax - vmin, 1e-3);
+    const Coordinate cx{"x_B", xmin - mx, xmax + mx}, cv{"v_B", vmin - mv, vmax + mv};
+    const auto grid = GridPoints(cx, cv, req_.search_grid, req_.search_grid);
+    std::vector<size_t> all(grid.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = i;
+    for (int j = 0; j < req_.searches && !Stopped(); ++j) {
+      const double lambda = req_.from + (req_.to - req_.from) * (j + 0.5) / req_.searches;
+      const Scene scene = req_.scene_at(lambda);
+      const System sys(scene);
+      StudyOptions so;
+      so.threads = req_.threads;
+      so.stop_requested = req_.stop_requested;
+      so.lyapunov = false;
+      std::vector<CellResult> cells(grid.size());
+      RunCells(sys, scene, cx, cv, grid, all, cells, so);
+      if (Stopped()) break;
+      const StudyResult st = LabelCells(sys, scene, grid, cells, so);
+      for (size_t k = 0; k < st.attractors.size(); ++k)
+        for (size_t i = 0; i < st.labels.size(); ++i)
+          if (st.labels[i] == static_cast<int>(k) && cells[i].z.size() > 0) {
+            const auto n = cells[i].z.size() / 2;
+            searched.push_back({lambda, cells[i].attractor, cells[i].z.head(n), cells[i].z.tail(n)});
+            break;
+          }
+    }
+  }
+  out_.search_seconds = Seconds(t0);
+  // 3. Seeds, in order: the sweep's attractors, then the searches'.
+  Progress("continuation");
+  for (const auto& p : out_.sweep) {
+    if (Stopped()) break;
+    if (p.status == "ok") Seed(p.value, p.attractor, p.X, p.V, p.upward ? "sweep up" : "sweep down");
+  }
+  for (const auto& f : searched) {
+    if (Stopped()) break;
+    Seed(f.value, f.attractor, f.X, f.V, "search");
+  }
+  // 4. Coverage of every attractor of the sweep and of the searches.
+  t0 = std::chrono::steady_clock::now();
+  Progress("coverage");
+  const auto cover = [&](double value, bool upward, const Attractor& a, const std::string& status) {
+    CoverageEntry c;
+    c.value = value;
+    c.upward = upward;
+    c.source = upward ? "sweep up" : "sweep down";
+    c.kind = status == "ok" ? a.kind : "failed";
+    c.period = a.period.value_or(0);
+    if (status != "ok") {
+      c.reason = "the sweep's run failed here (" + status + ")";
+    } else {
+      const auto [k, d] = CoveredBy(value, a, c.reason);
+      c.branch = k;
+      c.distance = d;
+      if (k >= 0) c.reason.clear();
+    }
+    out_.coverage.push_back(std::move(c));
+  };
+  for (const auto& p : out_.sweep) {
+    if (Stopped()) break;
+    cover(p.value, p.upward, p.attractor, p.status);
+  }
+  for (const auto& f : searched) {
+    if (Stopped()) break;
+    cover(f.value, true, f.attractor, "ok");
+    out_.coverage.back().source = "search";
+  }
+  out_.coverage_seconds += Seconds(t0);
+  if (Stopped()) out_.status = "interrupted";
+  return std::move(out_);
+}
+
+}  // namespace
+
+DiagramResult Diagram(const DiagramRequest& request) {
+  Builder b(request);
+  return b.Run();
+}
+
+}  // namespace vibro

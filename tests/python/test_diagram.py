@@ -1,0 +1,380 @@
+"""`vibro diagram` (docs/diagram.md) against independent truths written here, from the closed-form
+free flight of one DOF in mpmath (40 digits) and nothing of vibro:
+
+(a) the symmetric two-sided oscillator x'' + x = a sin(2 t), stops at -1 and +1, r = 0.6, over
+    a in [1, 8]: the diagram holds
+    - the symmetric period-1 branch: each of its points below the pitchfork is an orbit whose
+      state half a period later is minus its state (q -> -q at T/2), to 1e-9, simulated here;
+    - the pitchfork where it loses its symmetry, at the a where the half-period map H (impact on +1
+      -> impact on -1, mirrored) has the multiplier -1, solved here at 40 digits (3.28605035735799...),
+      to 1e-12;
+    - both asymmetric branches born there, mirror images of each other: the state of a point of one
+      half a period later, mirrored, is a periodic orbit (one period simulated here returns to it,
+      1e-9) that is not the point's own orbit, and its impacts are those of the other branch;
+    - no branch twice (two stored branches never hold the same orbit at the same a).
+(b) the tube scene over omega in [0.4, 1.6]: every attractor of the sweep and of the searches is on
+    a stable branch or reported uncovered with a reason; a covered period-1 attractor's section
+    points lie on the branch's strobe.
+(c) bad input: exit 2 with a located message and nothing written;
+(d) Python: vibro.diagram returns numpy arrays per branch, the pitchfork and its two halves;
+(e) Ctrl-C once the progress report shows a stored branch: exit 130, the file says interrupted and keeps them.
+"""
+import json
+import math
+import os
+import subprocess
+
+import h5py
+import mpmath as mp
+import numpy as np
+import pytest
+
+mp.mp.dps = 40
+CLI = os.environ.get("VIBRO_CLI", "")
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCENES = os.path.join(HERE, "..", "..", "data", "scenes")
+W, R = mp.mpf(2), mp.mpf("0.6")
+T = 2 * mp.pi / W
+
+
+def vibro(*args, check=True):
+    if not CLI:
+        pytest.skip("VIBRO_CLI is not set")
+    p = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True, timeout=1800)
+    if check:
+        assert p.returncode == 0, p.stderr
+    return p
+
+
+def flight(a, x0, v0, t0, s):
+    """x'' + x = a sin(W t) from (x0, v0) at t0, after time s (closed form)."""
+    U = a / (1 - W**2)
+    A = x0 - U * mp.sin(W * t0)
+    B = v0 - U * W * mp.cos(W * t0)
+    return (A * mp.cos(s) + B * mp.sin(s) + U * mp.sin(W * (t0 + s)),
+            -A * mp.sin(s) + B * mp.cos(s) + U * W * mp.cos(W * (t0 + s)))
+
+
+def advance(a, x, v, t, duration):
+    """The impact oscillator between the stops at -1 and +1 (restitution R) from (x, v) at t for
+    `duration`: impacts found by scanning and bisection of the closed-form flight, at 40 digits."""
+    a, x, v, t = mp.mpf(a), mp.mpf(x), mp.mpf(v), mp.mpf(t)
+    end = t + duration
+    impacts = []
+    while True:
+        h, s, hit = mp.mpf("2e-3"), mp.mpf(0), None
+        while t + s < end:
+            s2 = min(s + h, end - t)
+            xs = flight(a, x, v, t, s2)[0]
+            if abs(xs) > 1:
+                hit = (s, s2)
+                break
+            s = s2
+        if hit is None:
+            x, v = flight(a, x, v, t, end - t)
+            return x, v, impacts
+        lo, hi = hit
+        side = 1 if flight(a, x, v, t, hi)[0] > 1 else -1
+        # Bisection (a root finder may return the start itself after an impact on this stop).
+        for _ in range(130):
+            mid = (lo + hi) / 2
+            if abs(flight(a, x, v, t, mid)[0]) > 1:
+                hi = mid
+            else:
+                lo = mid
+        sol = hi
+        xs, vs = flight(a, x, v, t, sol)
+        t = t + sol
+        impacts.append((t, side, vs))
+        x, v = mp.mpf(side), -R * vs
+
+
+# --- (a) the truth: the pitchfork of the symmetric orbit ------------------------------------------
+
+
+def symmetric_orbit(a):
+    """Impact on +1 at tau with arrival speed V, free flight of T/2 to -1 arriving with -V. With
+    U = a/(1 - W^2) and theta = W tau: U((1 - r) sin theta + (1 + r) W cos theta) = 1 - r and
+    V = 1 - U sin theta + U W cos theta (closed form, W = 2: the flight of T/2 = pi/2 has cos = 0)."""
+    U = a / (1 - W**2)
+    rho = mp.sqrt((1 - R)**2 + ((1 + R) * W)**2)
+    phi = mp.atan2((1 + R) * W, 1 - R)
+    base = mp.asin((1 - R) / (U * rho))
+    for theta in (base - phi, mp.pi - base - phi):
+        V = 1 - U * mp.sin(theta) + U * W * mp.cos(theta)
+        tau = theta / W
+        if V <= 0:
+            continue
+        # Admissible: the flight stays strictly between the stops.
+        if all(abs(flight(a, 1, -R * V, tau, T / 2 * k / 400)[0]) < 1 for k in range(1, 400)):
+            return tau, V
+    raise AssertionError("no symmetric orbit")
+
+
+def half_map(a, tau, V):
+    """H: impact on +1 at tau with speed V -> the next impact on -1 at t' with speed V', mirrored
+    to an impact on +1 at t' - T/2 with speed V'."""
+    guess = tau + T / 2
+    t = mp.findroot(lambda u: flight(a, 1, -R * V, tau, u - tau)[0] + 1, guess, tol=mp.mpf(10) ** -35)
+    _, v = flight(a, 1, -R * V, tau, t - tau)
+    return t - T / 2, -v
+
+
+def pitchfork():
+    """The a where DH has the multiplier -1: det(DH + I) = 0 (DH by central differences)."""
+    def g(a):
+        tau, V = symmetric_orbit(a)
+        e = mp.mpf(10) ** -15
+        J = mp.matrix(2, 2)
+        for j, (dt, dv) in enumerate(((e, 0), (0, e))):
+            p = half_map(a, tau + dt, V + dv)
+            m = half_map(a, tau - dt, V - dv)
+            J[0, j] = (p[0] - m[0]) / (2 * e)
+            J[1, j] = (p[1] - m[1]) / (2 * e)
+        return (J[0, 0] + 1) * (J[1, 1] + 1) - J[0, 1] * J[1, 0]
+    return mp.findroot(g, mp.mpf("3.286"), tol=mp.mpf(10) ** -30)
+
+
+@pytest.fixture(scope="module")
+def two_sided(tmp_path_factory):
+    out = tmp_path_factory.mktemp("diagram") / "two.h5"
+    p = vibro("diagram", os.path.join(SCENES, "contacts_two_sided_1dof.toml"), "--set", "contact[0].restitution=0.6",
+              "--set", "contact[1].restitution=0.6", "--set", "excitation.frequency=2.0", "--set", "run.periods=200",
+              "--param", "excitation.amplitude", "--from", 1, "--to", 8, "--steps", 28, "--json", "--out", out)
+    return json.loads(p.stdout), out
+
+
+def states(h5, name):
+    b = h5["diagram/branches"][name]["branch"]
+    return b["value"][()], b["section_time"][()], b["q"][()][:, 0], b["q_dot"][()][:, 0]
+
+
+def test_pitchfork_closed_form():
+    a = pitchfork()
+    assert abs(a - mp.mpf("3.2860503573579958")) < mp.mpf("1e-12")
+
+
+def test_symmetric_branch_and_pitchfork(two_sided):
+    d, out = two_sided
+    truth = float(pitchfork())
+    sym = [b for b in d["branches"] if b["origin"] == "seed" and b["period"] == 1 and
+           any(x["kind"] == "branch-point" and abs(x["value"] - truth) < 1e-12 for x in b["bifurcations"])]
+    assert len(sym) == 1, [(b["index"], b["bifurcations"]) for b in d["branches"]]
+    with h5py.File(out, "r") as f:
+        value, t0, q, qd = states(f, f"{sym[0]['index']:03d}")
+    checked = 0
+    below = [i for i, a in enumerate(value) if a < truth - 0.05]
+    for i in below[:: max(1, len(below) // 8)]:
+        a, t, x, v = value[i], t0[i], q[i], qd[i]
+        xh, vh, impacts = advance(a, x, v, t, T / 2)
+        assert impacts, "the symmetric orbit hits a stop every half period"
+        assert abs(xh + x) < 1e-9 and abs(vh + v) < 1e-9, (a, x, v, xh, vh)
+        checked += 1
+    assert checked >= 5
+
+
+def test_asymmetric_branches_are_mirror_images(two_sided):
+    d, out = two_sided
+    truth = float(pitchfork())
+    born = [b for b in d["branches"] if b["origin"] == "branch-point" and abs(b["born_at"] - truth) < 1e-9]
+    assert len(born) == 2, [(b["index"], b["origin"], b["born_at"]) for b in d["branches"]]
+    with h5py.File(out, "r") as f:
+        one, two = (states(f, f"{b['index']:03d}") for b in born)
+        imp = {}
+        for b in born:
+            g = f["diagram/branches"][f"{b['index']:03d}"]["branch"]
+            imp[b["index"]] = (g["impact_offsets"][()], g["impact_phase"][()], g["impact_v_before"][()],
+                               g["impact_contact"][()])
+    checked = periodic = 0
+    # Six points spread over the branch, past its birth and before its last two (the grazing).
+    inner = [i for i, a in enumerate(one[0]) if a > truth + 0.05][:-2]
+    for i in inner[:: max(1, len(inner) // 6)]:
+        a, t, x, v = one[0][i], one[1][i], one[2][i], one[3][i]
+        # y(t) = -x(t + T/2) solves the equation too (the forcing changes sign in half a period):
+        # its state at t0 is minus the point's state half a period later. A periodic orbit, not
+        # the point's own.
+        xh, vh, _ = advance(a, x, v, t, T / 2)
+        xm, vm = -xh, -vh
+        xp, vp, impacts = advance(a, xm, vm, t, T)
+        assert abs(xp - xm) < 1e-9 and abs(vp - vm) < 1e-9, (a, xm, vm, xp, vp)
+        assert abs(xm - x) + abs(vm - v) > 1e-3  # asymmetric: not its own orbit shifted by T/2
+        periodic += 1
+        # The other branch has these impacts at a: between its two points around a, linearly
+        # interpolated (its points are not at the same a: a loose 2e-2, which tells the mirror
+        # image, contacts swapped, from the branch itself).
+        off, ph, vb, ct = imp[born[1]["index"]]
+
+        def listed(j):
+            return sorted((int(c), float(p) % (2 * math.pi), float(s_))
+                          for p, s_, c in zip(ph[off[j]:off[j + 1]], vb[off[j]:off[j + 1]], ct[off[j]:off[j + 1]]))
+        vals = two[0]
+        around = [j for j in range(len(vals) - 1) if min(vals[j], vals[j + 1]) <= a <= max(vals[j], vals[j + 1])]
+        if not around:
+            continue
+        j = around[0]
+        lo_, hi_ = listed(j), listed(j + 1)
+        w = (a - vals[j]) / (vals[j + 1] - vals[j]) if vals[j + 1] != vals[j] else 0.0
+        # Ours, from the mirrored orbit simulated here: contact 0 is the stop at -1 (side -1); the
+        # gap velocity just before an impact is -|x'|.
+        ours = sorted((0 if side == -1 else 1, float(W * tt) % (2 * math.pi), -abs(float(vs)))
+                      for tt, side, vs in impacts)
+        assert len(ours) == len(lo_) == len(hi_)
+        for o, l, h in zip(ours, lo_, hi_):
+            assert o[0] == l[0] == h[0], (a, ours, lo_)
+            dl = (h[1] - l[1] + math.pi) % (2 * math.pi) - math.pi
+            phase = l[1] + w * dl
+            speed = l[2] + w * (h[2] - l[2])
+            dphi = abs((o[1] - phase + math.pi) % (2 * math.pi) - math.pi)
+            assert dphi < 2e-2 and abs(o[2] - speed) < 2e-2 * (1 + abs(speed)), (a, o, phase, speed)
+        checked += 1
+    assert periodic >= 4 and checked >= 2, (periodic, checked)
+
+
+def test_no_branch_twice(two_sided):
+    d, out = two_sided
+    assert d["duplicates"] >= 0
+    bs = d["branches"]
+    for i in range(len(bs)):
+        for j in range(i + 1, len(bs)):
+            a, b = bs[i], bs[j]
+            if a["period"] != b["period"] or not a["points"] or not b["points"]:
+                continue
+            # Same orbit at the same a: the same values, sequences and stroboscopic states.
+            same = 0
+            for p in a["points"]:
+                for r in b["points"]:
+                    if abs(p["value"] - r["value"]) < 1e-12 and p["sequence"] == r["sequence"] and \
+                            abs((p["strobe"][0] or 0) - (r["strobe"][0] or 0)) < 1e-9:
+                        same += 1
+            assert same < max(3, len(a["points"]) // 2), (i, j, same)
+
+
+def test_ends_are_reported(two_sided):
+    d, _ = two_sided
+    for b in d["branches"]:
+        assert b["end_first"] and b["end_last"]
+    # The asymmetric branches stop at a grazing, and say so.
+    truth = float(pitchfork())
+    born = [b for b in d["branches"] if b["origin"] == "branch-point" and abs(b["born_at"] - truth) < 1e-9]
+    assert all("grazing" in b["end_last"] for b in born), [b["end_last"] for b in born]
+
+
+# --- (b) the tube: coverage ---------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tube(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tube") / "tube.h5"
+    p = vibro("diagram", os.path.join(SCENES, "tube_loose_support.toml"), "--param", "excitation.frequency",
+              "--from", 0.4, "--to", 1.6, "--steps", 30, "--json", "--out", out)
+    return json.loads(p.stdout), out
+
+
+def test_tube_coverage(tube):
+    d, out = tube
+    sweep = d["sweep"]
+    entries = [c for c in d["coverage"] if c["source"] != "search"]
+    assert len(entries) == len(sweep)
+    covered = 0
+    for c, s in zip(entries, sweep):
+        assert c["value"] == s["value"]
+        if c["branch"] is None:
+            assert c["reason"], c
+            if s["kind"] == "not-periodic":
+                assert c["reason"].startswith("not periodic"), c
+            continue
+        covered += 1
+        b = d["branches"][c["branch"]]
+        assert b["period"] % (c["period"] or 1) == 0
+        assert c["distance"] <= 1e-3
+        if c["period"] == 1:
+            # The sweep's section points (one value once settled) lie on the branch's strobe,
+            # between its two points around the value (linear interpolation).
+            v = np.array([p["value"] for p in b["points"]])
+            y = np.array([p["strobe"][0] for p in b["points"]], dtype=float)
+            ok = False
+            for k in range(len(v) - 1):
+                lo, hi = sorted((v[k], v[k + 1]))
+                if lo - 1e-12 <= s["value"] <= hi + 1e-12 and hi > lo:
+                    w = (s["value"] - v[k]) / (v[k + 1] - v[k])
+                    yi = y[k] + w * (y[k + 1] - y[k])
+                    ok = ok or abs(yi - s["x_B"][-1]) < 2e-2 * (1 + abs(yi))
+                elif abs(v[k] - s["value"]) < 1e-12:
+                    ok = ok or abs(y[k] - s["x_B"][-1]) < 1e-6
+            assert ok, (s["value"], s["x_B"][-1])
+    # Outside the chaotic windows (0.96 to 1.52, and 0.48) the sweep's attractors are periodic, and
+    # nearly all of them lie on a branch.
+    assert covered >= 20, covered
+
+
+# --- (c) bad input --------------------------------------------------------------------------------
+
+
+def test_bad_input(tmp_path):
+    out = tmp_path / "never.h5"
+    scene = os.path.join(SCENES, "tube_loose_support.toml")
+    for args, where in ((["--param", "excitation.frequency", "--from", 1, "--to", 1], "--from"),
+                        (["--param", "excitation.frequency", "--from", -1, "--to", 1], "--from -1"),
+                        (["--param", "excitation.nothing", "--from", 0.5, "--to", 1], "excitation.nothing"),
+                        (["--param", "excitation.frequency", "--from", 0.5, "--to", 1, "--max-period", 0],
+                         "--max-period")):
+        p = vibro("diagram", scene, *args, "--out", out, check=False)
+        assert p.returncode == 2, (args, p.stderr)
+        assert where in p.stderr, (args, p.stderr)
+        assert not out.exists()
+
+
+# --- (d) Python: vibro.diagram ---------------------------------------------------------------------
+
+
+def test_python_diagram():
+    vibro_py = pytest.importorskip("vibro")
+    scene = vibro_py.load_scene(os.path.join(SCENES, "contacts_two_sided_1dof.toml"),
+                                set={"contact[0].restitution": 0.6, "contact[1].restitution": 0.6,
+                                     "excitation.frequency": 2.0, "excitation.amplitude": 2.0, "run.periods": 200})
+    d = vibro_py.diagram(scene, "excitation.amplitude", 2.0, 4.0, steps=6, searches=0)
+    truth = float(pitchfork())
+    assert d["branches"]
+    for b in d["branches"]:
+        n = len(b["points"])
+        assert b["value"].shape == (n,) and b["stable"].dtype == bool and b["strobe"].shape[0] == n
+    sym = [b for b in d["branches"] if any(x["kind"] == "branch-point" and abs(x["value"] - truth) < 1e-12
+                                          for x in b["bifurcations"])]
+    assert len(sym) == 1
+    born = [b for b in d["branches"] if b["origin"] == "branch-point"]
+    assert len(born) == 2
+    # Mirror images: at their last points (a = 4, reached by both), the strobe of one is not the other's.
+    ends = [b["value"][-1] for b in born]
+    assert all(abs(e - 4.0) < 1e-12 for e in ends)
+    assert abs(born[0]["strobe"][-1, 0] - born[1]["strobe"][-1, 0]) > 1e-3
+    assert d["sweep_value"].shape == d["sweep_x_B"].shape
+
+
+# --- (e) Ctrl-C: exit 130, the finished branches kept ----------------------------------------------
+
+
+def test_interrupt_keeps_finished_branches(tmp_path):
+    import signal
+    if not CLI:
+        pytest.skip("VIBRO_CLI is not set")
+    out = tmp_path / "int.h5"
+    p = subprocess.Popen([CLI, "diagram", os.path.join(SCENES, "tube_loose_support.toml"), "--param",
+                          "excitation.frequency", "--from", "0.4", "--to", "1.6", "--steps", "30", "--out", str(out)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    # The progress report on stderr (rate-limited) says how many branches are stored: interrupt at
+    # its first report of at least one.
+    import re
+    seen = b""
+    while not re.search(rb"\(([1-9]\d*) / \d+\)", seen):
+        chunk = p.stderr.read1(256)
+        if not chunk:
+            break
+        seen += chunk
+    assert re.search(rb"\(([1-9]\d*) / \d+\)", seen), seen[-400:]
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=600)
+    assert p.returncode == 130, err
+    with h5py.File(out, "r") as f:
+        assert f["diagram"].attrs["status"] in (b"interrupted", "interrupted")
+        assert f["diagram"].attrs["branches"] >= 1
+        assert len(f["diagram/branches"]) == f["diagram"].attrs["branches"]
