@@ -87,6 +87,9 @@ void InstallStopHandlers() {
   sigemptyset(&grace.sa_mask);
   grace.sa_flags = SA_RESTART;
   sigaction(SIGALRM, &grace, nullptr);
+  // A file-size limit (ulimit -f) is a write that fails with EFBIG, reported as a full disk is
+  // (exit 3, the file keeping its last flush), not a death by SIGXFSZ (as Python ignores it too).
+  signal(SIGXFSZ, SIG_IGN);
   // Every run polls the flag, also those started deep inside another computation (an orbit
   // solve inside a continuation, the orbits of a study's classes).
   SetProcessStopFlag(&g_stop);
