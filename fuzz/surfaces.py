@@ -746,7 +746,7 @@ class Surfaces(Campaign):
         if p.returncode not in (0, 3):
             self.find("extend under ulimit -f: exit neither 0 nor 3", argv,
                       f"[extend-fsize] ulimit -f {blocks}: exit {p.returncode}: {p.stderr[-400:]}")
-        elif p.returncode == 3 and "too large" not in p.stderr and "space" not in p.stderr:
+        elif p.returncode == 3 and not any(w in p.stderr for w in ("too large", "space", "file-size limit")):
             self.find("extend under ulimit -f: exit 3 without naming the limit", argv, f"[extend-fsize] {p.stderr[-300:]}")
         i = subprocess.run([self.vibro, "info", out], capture_output=True, text=True, timeout=120)
         if i.returncode != 0:
