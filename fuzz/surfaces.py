@@ -14,7 +14,14 @@
   or a stop signal at a random moment, its certificates given to the proof checker;
 - two-writers: a second process on the output file of a running one (the same --out, with and
   without --force, and --resume), and two --resume of one interrupted file at once;
-- full-disk: runs whose output lives on a 3 MiB tmpfs (when this process may mount one).
+- full-disk: runs whose output lives on a 3 MiB tmpfs (when this process may mount one);
+- contacts: `partition`, `check`, `sweep` and `attractors` on the scenes with several contacts,
+  with random (sometimes invalid) options, a random --time-limit and stop signals;
+- sequence-column: branch CSVs of a two-contact branch given to `vibro validate` with the
+  `sequence` column mutated (garbage, unknown contact names, empty, very long, control
+  characters, numbers) and event CSVs given to `vibro score` with a mutated `contact` column;
+- extend-fsize: `simulate --extend N` of a stored run under a file-size limit (ulimit -f, the full
+  disk of a process): exit 3 naming the limit, the file readable.
 
 Each run is judged as campaign.py judges its runs (no crash, no hang, the allowed exit codes,
 exit 2 located and changing nothing, `ok` files within the physics), and against the promise of
@@ -53,7 +60,8 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from campaign import Campaign, default_stop_signals, write_report, HANG, LIVENESS  # noqa: E402
 
-CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk", "prove-branch"]
+CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk", "prove-branch",
+              "contacts", "sequence-column", "extend-fsize"]
 
 
 def read_csv(path):
@@ -109,6 +117,20 @@ class Surfaces(Campaign):
         subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "events_to_csv.py"), run, ev],
                        check=True, capture_output=True, timeout=60)
         s["events_csv"] = ev
+        # Two contacts: a branch with a sequence column, events with a contact column, a run to extend.
+        two = os.path.join(self.scenes, "contacts_two_sided_1dof.toml")
+        s["branch_seq"] = self.make(["continue", two, "--param", "excitation.amplitude", "--to", "1.2",
+                                     "--max-points", "5", "--out", os.path.join(d, "bs.h5")], os.path.join(d, "bs.h5"))
+        seq_csv = os.path.join(d, "bs.csv")
+        subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "branch_to_csv.py"), s["branch_seq"], seq_csv],
+                       check=True, capture_output=True, timeout=60)
+        s["branch_seq_csv"] = seq_csv
+        run2 = self.make(["simulate", two, "--set", "run.periods=6", "--out", os.path.join(d, "th2.h5")],
+                         os.path.join(d, "th2.h5"))
+        ev2 = os.path.join(d, "th2.csv")
+        subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "events_to_csv.py"), run2, ev2],
+                       check=True, capture_output=True, timeout=60)
+        s["events_contacts_csv"] = ev2
         self.seed_files = s
 
     # ---- from-branch ----
@@ -622,12 +644,122 @@ class Surfaces(Campaign):
             subprocess.run(["umount", "-l", d], capture_output=True)
         return True
 
+    # ---- several contacts: partition, check, sweep, attractors ----
+    def gen_contacts(self):
+        r = self.rng
+        scene = os.path.join(self.scenes, r.choice(["contacts_two_sided_1dof.toml", "contacts_chain2.toml",
+                                                     "contacts_impact_pair.toml", "contacts_beam3.toml",
+                                                     "contacts_preload_clearance_1dof.toml",
+                                                     "contacts_chain2_modal.toml"]))
+        what = r.choice(["partition", "check", "sweep", "attractors"])
+        num = lambda: r.choice(["0.5", "1", "1.2", "2.5", "-1", "0", "1e300", "nan", "3"])
+        out = self.fresh(".h5")
+        if what == "partition":
+            argv = ["partition", scene, "--params", r.choice(["excitation.amplitude,excitation.frequency",
+                                                              "excitation.frequency,excitation.amplitude",
+                                                              "contact[0].position,excitation.amplitude",
+                                                              "contact[1].restitution,excitation.frequency"]),
+                    "--range1", f"{num()},{num()}", "--range2", f"{num()},{num()}", "--steps1", r.choice(["1", "2", "0"]),
+                    "--sticking-fraction", r.choice(["0.3", "0.1,0.5", "2", "-1"]), "--threads", "1", "--out", out]
+        elif what == "check":
+            argv = ["check", scene, "--set", f"run.periods={r.choice([5, 20, 60])}"] + \
+                   (["--precision", "quad"] if r.random() < 0.2 else [])
+        elif what == "sweep":
+            argv = ["sweep", scene, "--param", r.choice(["excitation.frequency", "excitation.amplitude",
+                                                         "contact[0].restitution", "contact[1].position"]),
+                    "--from", num(), "--to", num(), "--steps", r.choice(["3", "8", "0"]), "--record",
+                    r.choice(["1", "4"]), "--out", out] + (["--one-way"] if r.random() < 0.5 else [])
+        else:
+            argv = ["attractors", scene, "--samples", r.choice(["4", "12", "0"]), "--threads", "1",
+                    "--seed", str(r.randrange(100))] + (["--x", r.choice(["x_B", "v_B", "X1", "V1", "X9"])]
+                                                        if r.random() < 0.4 else [])
+        if r.random() < 0.3:
+            argv += ["--time-limit", r.choice(["0.5", "2", "0"])]
+        signals = [(r.uniform(0.05, 2.0), r.choice([signal.SIGINT, signal.SIGTERM]))] if r.random() < 0.25 else []
+        rc, err = self.run("contacts", argv, signals=signals, limit=60, out=None, key=what)
+        if rc == 3 and "--time-limit" in argv and "time limit" not in err and "out of" not in err and \
+                "stopped" not in err and "failed" not in err.lower() and "could not" not in err:
+            self.find("contacts: exit 3 without one line saying why", [self.vibro, *argv], f"[contacts] {err[-300:]}")
+        if os.path.exists(out) and rc in (0, 3, 130):
+            i = subprocess.run([self.vibro, "info", out], capture_output=True, text=True, timeout=120)
+            if i.returncode != 0:
+                self.find("contacts: the --out file kept is unreadable", [self.vibro, *argv],
+                          f"[contacts] exit {rc}; info: {i.stderr[-300:]}")
+
+    # ---- malformed sequence / contact columns ----
+    def gen_sequence_column(self):
+        r = self.rng
+        garbage = lambda: r.choice(["", "A", "ZZ", "0", "01", "0;1", "0 1", "10", "-1", "\u00e9\u00e9", "nan", "1e9",
+                                    "0" * 5000, "x\ty", "\"0,1\"", "0,1", "below above", "c0c1", "\x01", "[]"])
+        if r.random() < 0.6:
+            header, rows = read_csv(self.seed_files["branch_seq_csv"])
+            rows = [list(x) for x in rows]
+            if "sequence" not in header:
+                header, rows = header + ["sequence"], [x + [""] for x in rows]
+            j = header.index("sequence")
+            for i in range(len(rows)):
+                if r.random() < 0.5:
+                    rows[i][j] = garbage()
+            if r.random() < 0.1:
+                header, rows = header + ["sequence"], [x + [x[j]] for x in rows]
+            path = self.fresh(".csv")
+            write_csv(path, header, rows)
+            argv = ["validate", os.path.join(self.scenes, "contacts_two_sided_1dof.toml"), path, "--param",
+                    "excitation.amplitude"] + (["--json"] if r.random() < 0.5 else [])
+        else:
+            header, rows = read_csv(self.seed_files["events_contacts_csv"])
+            rows = [list(x) for x in rows]
+            if "contact" not in header:
+                header, rows = header + ["contact"], [x + ["0"] for x in rows]
+            j = header.index("contact")
+            for i in range(len(rows)):
+                if r.random() < 0.3:
+                    rows[i][j] = r.choice([garbage(), "2", "-1", "0.5", "1e300", "", "1"])
+            path = self.fresh(".csv")
+            write_csv(path, header, rows)
+            argv = ["score", os.path.join(self.scenes, "contacts_two_sided_1dof.toml"), path,
+                    "--set", "run.periods=6"] + (["--json"] if r.random() < 0.5 else [])
+        rc, err = self.run("sequence-column", argv, limit=60, out=None, key=argv[0], content=open(path, "rb").read())
+        if rc == 2:
+            first = err.strip().splitlines()[0] if err.strip() else ""
+            if path not in first and "sequence" not in first and "contact" not in first:
+                self.find("sequence column: exit 2 not located", [self.vibro, *argv], f"[sequence-column] {err[-400:]}")
+
+    # ---- --extend under a file-size limit ----
+    def gen_extend_fsize(self):
+        r = self.rng
+        scene = r.choice([self.default, os.path.join(self.scenes, "contacts_two_sided_1dof.toml")])
+        out = self.fresh(".h5")
+        self.make(["simulate", scene, "--set", "run.periods=50", "--out", out], out)
+        size = os.path.getsize(out)
+        blocks = max(1, (size + r.choice([0, 4096, 65536, 1 << 20])) // 1024)  # ulimit -f counts 1024-byte blocks
+        argv = [self.vibro, "simulate", scene, "--out", out, "--extend", str(r.choice([1000, 100000, 1000000]))]
+        def limited():
+            default_stop_signals()
+            import resource
+            resource.setrlimit(resource.RLIMIT_FSIZE, (blocks * 1024, blocks * 1024))
+        self.runs += 1
+        self.categories["extend-fsize"] = self.categories.get("extend-fsize", 0) + 1
+        self.inputs.add(("extend-fsize", scene, blocks))
+        p = subprocess.run(argv, capture_output=True, text=True, timeout=300, preexec_fn=limited)
+        self.exits[p.returncode] = self.exits.get(p.returncode, 0) + 1
+        if p.returncode not in (0, 3):
+            self.find("extend under ulimit -f: exit neither 0 nor 3", argv,
+                      f"[extend-fsize] ulimit -f {blocks}: exit {p.returncode}: {p.stderr[-400:]}")
+        elif p.returncode == 3 and not any(w in p.stderr for w in ("too large", "space", "file-size limit")):
+            self.find("extend under ulimit -f: exit 3 without naming the limit", argv, f"[extend-fsize] {p.stderr[-300:]}")
+        i = subprocess.run([self.vibro, "info", out], capture_output=True, text=True, timeout=120)
+        if i.returncode != 0:
+            self.find("extend under ulimit -f: the file kept is unreadable", argv,
+                      f"[extend-fsize] exit {p.returncode}; info: {i.stderr[-300:]}")
+
     def main(self, runs):
         self.seeds_()
         gens = {"from-branch": (0.22, self.gen_from_branch), "validate-input": (0.22, self.gen_validate_input),
                 "score-input": (0.22, self.gen_score_input), "python-api": (0.16, self.gen_python_api),
                 "two-writers": (0.09, self.gen_two_writers), "full-disk": (0.09, self.gen_full_disk),
-                "prove-branch": (0.1, self.gen_prove_branch)}
+                "prove-branch": (0.1, self.gen_prove_branch), "contacts": (0.15, self.gen_contacts),
+                "sequence-column": (0.15, self.gen_sequence_column), "extend-fsize": (0.05, self.gen_extend_fsize)}
         if self.only:
             gens = {self.only: (1.0, gens[self.only][1])}
         total = sum(w for w, _ in gens.values())

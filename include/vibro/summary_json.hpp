@@ -49,7 +49,9 @@ std::string ValidationJson(const std::vector<PointCheck>& checks);
 // "kinds": [{"kind", "theirs", "ours", "matched", "max_time_error", "mean_time_error",
 // "max_velocity_error"}], "first_divergence": {"t", "kind", "why", "ours_t"} or null}; errors
 // relative to T (times) and to the largest impact speed (velocities).
-std::string ScoreJson(const ScoreReport& report, const Scene& scene);
+// complete = false: vibro's run was cut short (interrupted, time limit): "agrees" is null, no
+// verdict is drawn from a partial run.
+std::string ScoreJson(const ScoreReport& report, const Scene& scene, bool complete = true);
 
 // `vibro continue --json` (docs/cli.md, docs/output.md); every point holds its orbit's exact
 // per-period "loads" per contact (docs/loads.md: contact, impacts_per_period, impulse_per_period,

@@ -5,7 +5,7 @@
 //
 // Every computation and every HDF5 call releases the GIL (a file's calls are serialised by the
 // library, src/io, and must never wait for the GIL). When called from Python's main thread, SIGINT
-// (Ctrl-C) is routed to the library's stop flag for the duration of the call, also as the process's
+// (Ctrl-C) and SIGTERM are routed to the library's stop flag for the duration of the call, also as the process's
 // stop flag (vibro/stop_request.hpp) that every run polls, those deep inside an orbit solve or a
 // cross-check too: the run stops cleanly at its next check, everything is written to the output
 // file, and the result says "interrupted" (the Python layer then raises KeyboardInterrupt).
@@ -39,6 +39,7 @@
 #include "frontend/commands.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
+#include "frontend/run_budget.hpp"
 #include "frontend/run_output.hpp"
 #include "frontend/switching.hpp"
 #include "frontend/diagram.hpp"
@@ -94,22 +95,34 @@ PyScene LoadPyScene(SceneOrigin origin) {
   return {std::move(origin), std::move(loaded)};
 }
 
-// SIGINT → stop flag while a computation runs (main thread only; see the file comment).
+// SIGINT and SIGTERM → stop flag while a computation runs (main thread only; see the file comment).
 std::atomic<bool> g_sigint{false};
-extern "C" void OnSigint(int) { g_sigint.store(true); }
+std::atomic<int> g_stop_signal{0};  // the signal that stopped the computation
+extern "C" void OnStopSignal(int sig) {
+  g_stop_signal.store(sig);
+  g_sigint.store(true);
+}
 
-// Constructed with the GIL held (before the computation releases it): a SIGINT that came before
+// Constructed with the GIL held (before the computation releases it): a signal that came before
 // the handler was installed (while the scene was read or the output file created) went to
 // Python's handler and is found by PyErr_CheckSignals, after the installation, so none is lost.
+// SIGTERM stops the computation as Ctrl-C does (the Python layer raises KeyboardInterrupt, the
+// files keep what was computed), unless it is ignored (then it stays ignored); when the program
+// had set a handler of its own for it (signal.signal), the signal is raised again once that
+// handler is back, so that the handler runs as it would have.
 class SigintGuard {
  public:
   explicit SigintGuard(bool install) : installed_(install) {
     if (!installed_) return;
     g_sigint.store(false);
+    g_stop_signal.store(0);
     struct sigaction action = {};
-    action.sa_handler = OnSigint;
+    action.sa_handler = OnStopSignal;
     sigemptyset(&action.sa_mask);
     sigaction(SIGINT, &action, &previous_);
+    sigaction(SIGTERM, nullptr, &previous_term_);
+    term_routed_ = (previous_term_.sa_flags & SA_SIGINFO) != 0 || previous_term_.sa_handler != SIG_IGN;
+    if (term_routed_) sigaction(SIGTERM, &action, nullptr);
     previous_flag_ = vibro::ProcessStopFlag();
     vibro::SetProcessStopFlag(&g_sigint);
     if (PyErr_CheckSignals() != 0) {  // raised by Python's handler: a stop request, reported as one
@@ -121,6 +134,11 @@ class SigintGuard {
     if (!installed_) return;
     vibro::SetProcessStopFlag(previous_flag_);
     sigaction(SIGINT, &previous_, nullptr);
+    if (term_routed_) {
+      sigaction(SIGTERM, &previous_term_, nullptr);
+      const bool has_handler = (previous_term_.sa_flags & SA_SIGINFO) != 0 || previous_term_.sa_handler != SIG_DFL;
+      if (g_stop_signal.load() == SIGTERM && has_handler) raise(SIGTERM);
+    }
   }
   SigintGuard(const SigintGuard&) = delete;
   SigintGuard& operator=(const SigintGuard&) = delete;
@@ -132,7 +150,8 @@ class SigintGuard {
 
  private:
   bool installed_;
-  struct sigaction previous_ = {};
+  struct sigaction previous_ = {}, previous_term_ = {};
+  bool term_routed_ = false;
   const std::atomic<bool>* previous_flag_ = nullptr;
   std::atomic<bool> local_{false};  // the stop flag off the main thread (no SIGINT routed)
 };
@@ -307,8 +326,10 @@ std::string Model(const PyScene& s) {
 // vibro simulate [--out FILE [--resume | --extend N]] (src/cli/cmd_simulate.cpp): the scene, the
 // output and its checks are the command line's (frontend/run_output.hpp).
 py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, std::optional<long long> extend,
-                       const py::object& progress, bool handle_sigint, int blocks) {
+                       const py::object& progress, bool handle_sigint, int blocks, double time_limit) {
   if (!out.empty()) CheckPaths({{"out", &out}});
+  if (!(time_limit >= 0) || !(time_limit <= 1e12))
+    throw vibro::InputError({fmt::format("time_limit {}: expected seconds in [0, 1e12] (0: none)", time_limit)});
   const vibro::frontend::RunContinuation how{resume, extend};
   const auto loaded = [&] {
     py::gil_scoped_release release;  // an extension reads the file
@@ -335,6 +356,10 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   ProgressRelay relay(progress, guard);
   PeriodRelay periods(relay, loaded.scene.run.periods);
   if (relay.active()) options.observers.push_back(&periods);
+  // The time and disk limits against the run's event rate, as `vibro simulate --time-limit`:
+  // vibro.LimitError, the output file keeping what was written up to its last flush.
+  vibro::frontend::RunBudget budget(sys, loaded.scene, time_limit, out, "time_limit");
+  options.observers.push_back(&budget);
   {
     py::gil_scoped_release release;
     options.stop_requested = guard.flag();
@@ -798,6 +823,8 @@ PYBIND11_MODULE(_vibro, m) {
   m.attr("version") = VIBRO_VERSION;
   m.attr("git_commit") = VIBRO_GIT_COMMIT;
 
+  // A run ended by its limits (`vibro simulate` exits 3): vibro.LimitError.
+  py::register_exception<vibro::frontend::LimitError>(m, "LimitError", PyExc_RuntimeError);
   // Bad input (scene, option, file): ValueError with every located message, on one line ("; ").
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -806,6 +833,11 @@ PYBIND11_MODULE(_vibro, m) {
       std::string text;
       for (const auto& msg : e.messages()) text += (text.empty() ? "" : "; ") + msg;
       PyErr_SetString(PyExc_ValueError, text.c_str());
+    } catch (const std::runtime_error& e) {
+      // A worker thread the system refused (TBB: "pthread_create has failed"): MemoryError, as
+      // for a refused allocation; anything else goes on to pybind11's translation.
+      if (std::string(e.what()).rfind("pthread_create", 0) != 0) throw;
+      PyErr_SetString(PyExc_MemoryError, (std::string("the system refused a worker thread: ") + e.what()).c_str());
     }
   });
 

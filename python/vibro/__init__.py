@@ -20,6 +20,10 @@ import numpy as _np
 
 from . import _vibro
 
+#: A run ended by its limits (time, disk): ``simulate(..., time_limit=...)``, as ``vibro simulate``
+#: exits 3. Its message is one line saying why ("1.0·10⁹ impacts per time unit: ...").
+LimitError = _vibro.LimitError
+
 __version__ = _vibro.version
 git_commit = _vibro.git_commit
 
@@ -49,7 +53,7 @@ MODES = {0: "free", 1: "sticking"}
 __all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_",
            "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
-           "EVENT_KINDS", "MODES", "LOAD_FIELDS"]
+           "EVENT_KINDS", "MODES", "LOAD_FIELDS", "LimitError"]
 
 
 def _toml_value(value):
@@ -304,7 +308,7 @@ class SimulationResult:
                 f"{len(self.events)} events, {len(self.samples)} samples)")
 
 
-def simulate(scene, out=None, force=False, resume=False, extend=None, progress=None, blocks=10):
+def simulate(scene, out=None, force=False, resume=False, extend=None, progress=None, blocks=10, time_limit=86400.0):
     """Simulates the scene (``vibro simulate``); with ``out`` also writes the HDF5 file (``force``:
     replace a vibro file of another scene or command).
 
@@ -317,7 +321,10 @@ def simulate(scene, out=None, force=False, resume=False, extend=None, progress=N
     none, or a callable ``progress(done, total)`` called with the periods done, at most ten times a
     second and once at the end; None (the default) shows a bar in a Jupyter notebook only.
     ``blocks``: the contact loads' intervals are batch means over this many blocks of periods
-    (``--blocks``, docs/loads.md)."""
+    (``--blocks``, docs/loads.md). ``time_limit``: seconds for the whole run (``--time-limit``;
+    default one day, 0 for none): a run whose event rate would take it past the limit, or past
+    its disk's free space with ``out``, raises :class:`LimitError` at once with one line ("1.0·10⁹
+    impacts per time unit: ..."), ``out`` keeping what was written up to its last flush."""
     _invoke("simulate", scene, out=out, force=force, **({"resume": True} if resume else {}),
             **({"extend": extend} if extend is not None else {}))
     if not isinstance(resume, (bool, _np.bool_)):
@@ -326,10 +333,11 @@ def simulate(scene, out=None, force=False, resume=False, extend=None, progress=N
     nblocks = _int("blocks", blocks)
     if not 2 <= nblocks <= 100000:
         raise ValueError(f"blocks {blocks!r}: expected 2 to 100000 blocks (an interval needs two)")
+    limit = _float("time_limit", time_limit)
     core = _scene(scene)
     r = _with_progress(progress, "simulate", "period",
                        lambda report: _vibro.simulate(core, _out(out), bool(resume), ext, report, _main_thread(),
-                                                      nblocks))
+                                                      nblocks, limit))
     if r["interrupted"]:
         raise _interrupted("simulation", out)
     return SimulationResult(_json.loads(r["json"]), _events_array(r["events"]), _rows_array(r["samples"]),

@@ -86,8 +86,16 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
   };
   std::optional<Point> previous;
   long long done = 0;
+  long long unreached = -1;  // the first point the time limit left unattempted (-1: none)
   bool interrupted = false;
   for (long long k = 0; k < first.points && !interrupted; ++k) {
+    if (k > 0 && seconds_left() <= 0) {
+      unreached = k;
+      if (!json)
+        fmt::print("points {}..{} not proven: the time limit of {:g} s (--time-limit, for the whole command) was "
+                   "reached before them\n", k, first.points - 1, args.request.time_limit);
+      break;
+    }
     const auto pt = k == 0 ? first : vibro::ReadBranchPoint(args.branch, k);
     auto at = sets;
     at.push_back(vibro::frontend::Assignment(pt.param, pt.value));
@@ -161,7 +169,9 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
     fmt::print("{{\"branch\": {}, \"param\": {}, \"proven\": {}, \"total\": {}, \"points\": {}], "
                "\"segments_proven\": {}, \"segments\": {}]{}}}\n",
                Quoted(args.branch), Quoted(first.param), proven, first.points, points, segments_proven, segments,
-               interrupted ? fmt::format(", \"interrupted_after\": {}", done) : "");
+               interrupted ? fmt::format(", \"interrupted_after\": {}", done)
+               : unreached >= 0 ? fmt::format(", \"time_limit_reached_at\": {}", unreached)
+                                : "");
   else
     fmt::print("proven       {} of {} points, {} of the segments between them\n", proven, first.points, segments_proven);
   if (interrupted)

@@ -14,8 +14,11 @@ int RunScore(const ScoreArgs& a) {
   const auto s = vibro::frontend::ScoreEventsCsv(loaded, a.csv, a.window, a.tolerance, &vibro::cli::StopFlag(),
                                                  vibro::frontend::Naming::kCli);
   const auto& rep = s.report;
+  // A run cut short (stop request, --time-limit) draws no verdict: its missing events would count
+  // as divergences.
+  const bool complete = s.run.status != vibro::RunStatus::kInterrupted;
   if (a.json) {
-    fmt::print("{}\n", vibro::ScoreJson(rep, s.scene));
+    fmt::print("{}\n", vibro::ScoreJson(rep, s.scene, complete));
   } else {
     fmt::print("scene        {} (engine {}, chatter {}), T = {:.10g}, {} periods\n", a.scene,
                vibro::ToString(s.scene.run.engine), vibro::ToString(s.scene.run.chatter), rep.period,
@@ -33,7 +36,10 @@ int RunScore(const ScoreArgs& a) {
                  err(k.max_time_error), err(k.mean_time_error),
                  k.max_velocity_error ? fmt::format("{:.3e}", *k.max_velocity_error) : "-");
     }
-    if (rep.divergence) {
+    if (!complete) {
+      fmt::print("verdict: none: vibro's run was interrupted at t = {:.10g} (the counts above are of the events "
+                 "up to there)\n", s.run.t_end);
+    } else if (rep.divergence) {
       const auto& d = *rep.divergence;
       fmt::print("first divergence at t = {:.15g} ({}, {}): {}{}\n", d.t, vibro::ToString(d.kind),
                  d.side == "vibro" ? "vibro's event" : "their event", d.why,

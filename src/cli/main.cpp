@@ -371,6 +371,18 @@ int main(int argc, char** argv) {
                      "drawn by the time plot, phase portrait and section (default x_B)");
   }
 
+  // --time-limit, the same for every command (docs/cli.md "Time limits"): the whole command, from
+  // the reading of its input to its last write, transients included; past it the command ends as
+  // on a stop request, keeps what it computed and exits 3. simulate adds its pace check to it
+  // (frontend/run_budget.hpp); prove has its own, whose end is the verdict "not proven" (exit 4).
+  double time_limit = vibro::frontend::RunBudget::kDefaultTimeLimit;
+  for (CLI::App* cmd : {model, orbit, cont, diagram, attractors, basin, partition, sweep, validate, score, check, info, plot})
+    if (Wanted(cmd))
+      cmd->add_option("--time-limit", time_limit,
+                      "seconds for the whole command, transients included (default 86400, one day; 0: none): past "
+                      "it the command stops as on Ctrl-C, keeps what it computed and exits 3")
+          ->check(CLI::Range(0.0, 1e12));
+
   bool force = false;
   for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep, diagram})
     if (Wanted(cmd)) cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
@@ -389,103 +401,122 @@ int main(int argc, char** argv) {
     vibro::frontend::SetInvocation({cmd->get_name(), line, cmd->config_to_str(true, false), force});
   }
 
-  try {
-    if (*model) return RunModel(scene_path, sets, json);
-    if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
-                                        simulate_time_limit);
-    if (*info) return RunInfo(file_path, json);
-    if (*orbit) {
-      orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact
-                       : orbit_kind == "sticking" ? vibro::OrbitKind::kSticking
-                                                  : vibro::OrbitKind::kAuto;
-      if (!orbit_guess.empty()) {
-        const auto comma = orbit_guess.find(',');
-        try {
-          orbit_req.guess_phase = std::stod(orbit_guess.substr(0, comma));
-          if (comma != std::string::npos) orbit_req.guess_velocity = std::stod(orbit_guess.substr(comma + 1));
-        } catch (const std::exception&) {
-          throw vibro::InputError({"--guess " + orbit_guess + ": expected PHASE or PHASE,VELOCITY (numbers)"});
+  if (*simulate) time_limit = simulate_time_limit;
+  if (!*prove) vibro::cli::ArmTimeLimit(time_limit, "--time-limit");
+  const auto dispatch = [&]() -> int {
+    try {
+      if (*model) return RunModel(scene_path, sets, json);
+      if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
+                                          simulate_time_limit);
+      if (*info) return RunInfo(file_path, json);
+      if (*orbit) {
+        orbit_req.kind = orbit_kind == "impact"     ? vibro::OrbitKind::kImpact
+                         : orbit_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                                    : vibro::OrbitKind::kAuto;
+        if (!orbit_guess.empty()) {
+          const auto comma = orbit_guess.find(',');
+          try {
+            orbit_req.guess_phase = std::stod(orbit_guess.substr(0, comma));
+            if (comma != std::string::npos) orbit_req.guess_velocity = std::stod(orbit_guess.substr(comma + 1));
+          } catch (const std::exception&) {
+            throw vibro::InputError({"--guess " + orbit_guess + ": expected PHASE or PHASE,VELOCITY (numbers)"});
+          }
+          if (!std::isfinite(*orbit_req.guess_phase) ||
+              (orbit_req.guess_velocity && !std::isfinite(*orbit_req.guess_velocity)))
+            throw vibro::InputError({"--guess " + orbit_guess + ": expected finite numbers (no nan or inf)"});
+          // A guess is where Newton starts: no transient unless one is asked for.
+          if (orbit->count("--transient") == 0) orbit_req.transient_periods = 0;
         }
-        if (!std::isfinite(*orbit_req.guess_phase) ||
-            (orbit_req.guess_velocity && !std::isfinite(*orbit_req.guess_velocity)))
-          throw vibro::InputError({"--guess " + orbit_guess + ": expected finite numbers (no nan or inf)"});
-        // A guess is where Newton starts: no transient unless one is asked for.
-        if (orbit->count("--transient") == 0) orbit_req.transient_periods = 0;
+        return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
       }
-      return RunOrbit(scene_path, sets, json, orbit_req, orbit_out);
+      if (*prove) {
+        prove_args.request.kind = prove_kind == "impact"     ? vibro::OrbitKind::kImpact
+                                  : prove_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                                             : vibro::OrbitKind::kAuto;
+        return RunProve(scene_path, sets, json, prove_args);
+      }
+      if (*plot) {
+        if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)
+          throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
+        std::vector<std::string> options{"--format", plot_format, "--dpi", std::to_string(plot_dpi)};
+        if (!plot_window.empty()) options.push_back("--time-window=" + plot_window);
+        if (plot_title) options.push_back("--title=" + *plot_title);
+        if (!plot_size.empty()) options.push_back("--size=" + plot_size);
+        options.insert(options.end(), {"--font-size", fmt::format("{}", plot_font_size), "--coordinate=" + plot_coordinate});
+        return RunPlot(file_path, plot_prefix, plot_overlay, options);
+      }
+      if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
+      if (*score) return RunScore(sco);
+      if (*validate) {
+        val.kind = val_kind == "impact"     ? vibro::OrbitKind::kImpact
+                   : val_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                            : vibro::OrbitKind::kAuto;
+        return RunValidate(val);
+      }
+      if (*sweep)
+        return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
+                        sweep_record, sweep_one_way, sweep_out);
+      if (*diagram) return RunDiagram(scene_path, sets, json, dia, dia_out);
+      if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
+      if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
+      if (*partition) {
+        if (*from2_opt) part.spec.from2 = part_from2;
+        return RunPartition(scene_path, sets, json, part);
+      }
+      if (*cont) {
+        vibro::OrbitRequest req;
+        req.period = cont_period;
+        req.kind = cont_kind == "impact"     ? vibro::OrbitKind::kImpact
+                   : cont_kind == "sticking" ? vibro::OrbitKind::kSticking
+                                             : vibro::OrbitKind::kAuto;
+        req.transient_periods = cont_transient;
+        if (!cont_from.empty() && cont_point < 0)
+          throw vibro::InputError({"--from " + cont_from + ": give the point to restart from with --point K"});
+        return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out,
+                           cont_from, cont_point, cont_switch ? cont_side : std::string());
+      }
+    } catch (const vibro::InputError& e) {
+      for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", OneLine(m));
+      fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
+                 e.messages().size());
+      // Out at once, as after a failed write: an output file that could not be made on a full disk
+      // leaves HDF5 handles that its clean-up at exit must not touch (it crashed doing so).
+      std::fflush(nullptr);
+      std::_Exit(kExitBadInput);
+    } catch (const vibro::WriteError& e) {  // full disk, I/O error: the file keeps its last flush
+      fmt::print(stderr, "vibro: {}; the file keeps what was written up to its last flush\n", OneLine(e.what()));
+      // Out at once: the HDF5 library's clean-up at exit would close the failed file's handles,
+      // which vibro leaves open on purpose (and it has crashed doing so).
+      std::fflush(nullptr);
+      std::_Exit(kExitNumerical);
+    } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
+      fmt::print(stderr, "vibro: {}; nothing was written\n", OneLine(e.what()));
+      return kExitInterrupted;
+    } catch (const vibro::frontend::LimitError& e) {  // an event rate past the run's limits
+      fmt::print(stderr, "vibro: {}\n", OneLine(e.what()));
+      return kExitNumerical;
+    } catch (const std::bad_alloc&) {  // no input gives exit 1: memory is a limit like time
+      fmt::print(stderr, "vibro: out of memory (the system refused an allocation); what was written is kept\n");
+      return kExitNumerical;
+    } catch (const std::exception& e) {
+      // A worker thread the system refused (TBB's "pthread_create has failed" under ulimit -v or
+      // a process limit): a resource limit like memory, exit 3.
+      if (std::string(e.what()).rfind("pthread_create", 0) == 0) {
+        fmt::print(stderr, "vibro: out of resources (the system refused a worker thread: {}); what was written is "
+                   "kept\n", OneLine(e.what()));
+        return kExitNumerical;
+      }
+      fmt::print(stderr, "vibro: internal error: {}\n", OneLine(e.what()));
+      return kExitInternal;
     }
-    if (*prove) {
-      prove_args.request.kind = prove_kind == "impact"     ? vibro::OrbitKind::kImpact
-                                : prove_kind == "sticking" ? vibro::OrbitKind::kSticking
-                                                           : vibro::OrbitKind::kAuto;
-      return RunProve(scene_path, sets, json, prove_args);
-    }
-    if (*plot) {
-      if (plot_window.find_first_not_of("0123456789.eE+-,") != std::string::npos)
-        throw vibro::InputError({"--time-window " + plot_window + ": expected A,B (two numbers)"});
-      std::vector<std::string> options{"--format", plot_format, "--dpi", std::to_string(plot_dpi)};
-      if (!plot_window.empty()) options.push_back("--time-window=" + plot_window);
-      if (plot_title) options.push_back("--title=" + *plot_title);
-      if (!plot_size.empty()) options.push_back("--size=" + plot_size);
-      options.insert(options.end(), {"--font-size", fmt::format("{}", plot_font_size), "--coordinate=" + plot_coordinate});
-      return RunPlot(file_path, plot_prefix, plot_overlay, options);
-    }
-    if (*check) return RunCheck(scene_path, sets, json, check_precision == "quad");
-    if (*score) return RunScore(sco);
-    if (*validate) {
-      val.kind = val_kind == "impact"     ? vibro::OrbitKind::kImpact
-                 : val_kind == "sticking" ? vibro::OrbitKind::kSticking
-                                          : vibro::OrbitKind::kAuto;
-      return RunValidate(val);
-    }
-    if (*sweep)
-      return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
-                      sweep_record, sweep_one_way, sweep_out);
-    if (*diagram) return RunDiagram(scene_path, sets, json, dia, dia_out);
-    if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
-    if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);
-    if (*partition) {
-      if (*from2_opt) part.spec.from2 = part_from2;
-      return RunPartition(scene_path, sets, json, part);
-    }
-    if (*cont) {
-      vibro::OrbitRequest req;
-      req.period = cont_period;
-      req.kind = cont_kind == "impact"     ? vibro::OrbitKind::kImpact
-                 : cont_kind == "sticking" ? vibro::OrbitKind::kSticking
-                                           : vibro::OrbitKind::kAuto;
-      req.transient_periods = cont_transient;
-      if (!cont_from.empty() && cont_point < 0)
-        throw vibro::InputError({"--from " + cont_from + ": give the point to restart from with --point K"});
-      return RunContinue(scene_path, sets, json, cont_param, cont_to, cont_step, cont_points, req, cont_out,
-                         cont_from, cont_point, cont_switch ? cont_side : std::string());
-    }
-  } catch (const vibro::InputError& e) {
-    for (const auto& m : e.messages()) fmt::print(stderr, "{}\n", OneLine(m));
-    fmt::print(stderr, "vibro: {} problem(s) in the input; nothing was computed or written\n",
-               e.messages().size());
-    // Out at once, as after a failed write: an output file that could not be made on a full disk
-    // leaves HDF5 handles that its clean-up at exit must not touch (it crashed doing so).
-    std::fflush(nullptr);
-    std::_Exit(kExitBadInput);
-  } catch (const vibro::WriteError& e) {  // full disk, I/O error: the file keeps its last flush
-    fmt::print(stderr, "vibro: {}; the file keeps what was written up to its last flush\n", OneLine(e.what()));
-    // Out at once: the HDF5 library's clean-up at exit would close the failed file's handles,
-    // which vibro leaves open on purpose (and it has crashed doing so).
-    std::fflush(nullptr);
-    std::_Exit(kExitNumerical);
-  } catch (const vibro::Interrupted& e) {  // a stop request during a child's wait (a file's test read)
-    fmt::print(stderr, "vibro: {}; nothing was written\n", OneLine(e.what()));
-    return kExitInterrupted;
-  } catch (const vibro::frontend::LimitError& e) {  // an event rate past the run's limits
-    fmt::print(stderr, "vibro: {}\n", OneLine(e.what()));
-    return kExitNumerical;
-  } catch (const std::bad_alloc&) {  // no input gives exit 1: memory is a limit like time
-    fmt::print(stderr, "vibro: out of memory (the system refused an allocation); what was written is kept\n");
-    return kExitNumerical;
-  } catch (const std::exception& e) {
-    fmt::print(stderr, "vibro: internal error: {}\n", OneLine(e.what()));
     return kExitInternal;
+  };
+  const int code = dispatch();
+  // The time limit ended the command as a stop request would: exit 3, what it computed kept.
+  if (code == kExitInterrupted && vibro::cli::TimeLimitReached()) {
+    fmt::print(stderr, "{}vibro: the command stopped there and kept what it computed (as after Ctrl-C)\n",
+               vibro::cli::TimeLimitMessage());
+    return kExitNumerical;
   }
-  return kExitInternal;
+  return code;
 }

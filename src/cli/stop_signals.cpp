@@ -3,9 +3,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <thread>
+
+#include <fmt/format.h>
 
 #include "vibro/stop_request.hpp"
 
@@ -16,6 +20,13 @@ std::atomic<bool> g_stop{false};
 std::atomic<int> g_signals{0};
 std::atomic<int> g_writing{0};
 std::atomic<bool> g_discard{false};
+// The exit code of a stop that cannot wait for the command (discard mode, grace over): 130 for a
+// signal, 3 once the --time-limit was reached first.
+std::atomic<int> g_stop_exit{130};
+std::atomic<bool> g_time_up{false};
+// "vibro: the time limit of S s (--time-limit, ...) was reached" (written before the watchdog
+// starts, read by the handlers and the watchdog only).
+char g_time_message[512] = {0};
 // The file to remove on a stop in discard mode; written before g_discard is set, read by the
 // handler only (unlink and _exit are async-signal-safe).
 char g_discard_path[4096] = {0};
@@ -39,7 +50,8 @@ extern "C" void OnGraceOver(int) {
   }
   Say("\nvibro: the stop request could not be honoured in time (a library call does not return); "
       "leaving now: files keep what was last flushed\n");
-  _exit(130);
+  if (g_time_up.load()) Say(g_time_message);
+  _exit(g_stop_exit.load());
 }
 
 extern "C" void OnStopSignal(int) {
@@ -48,8 +60,9 @@ extern "C" void OnStopSignal(int) {
   if (count == 1) alarm(kGraceSeconds);
   if (g_discard.load()) {
     if (g_discard_path[0] != '\0') unlink(g_discard_path);
-    Say("\nvibro: interrupted; nothing to keep\n");
-    _exit(130);
+    if (g_time_up.load()) Say(g_time_message);
+    Say(g_time_up.load() ? "vibro: nothing to keep\n" : "\nvibro: interrupted; nothing to keep\n");
+    _exit(g_stop_exit.load());
   }
   if (count >= 3 && g_writing.load() == 0) {
     Say("\nvibro: third stop request: leaving now (files keep what was flushed)\n");
@@ -74,6 +87,9 @@ void InstallStopHandlers() {
   sigemptyset(&grace.sa_mask);
   grace.sa_flags = SA_RESTART;
   sigaction(SIGALRM, &grace, nullptr);
+  // A file-size limit (ulimit -f) is a write that fails with EFBIG, reported as a full disk is
+  // (exit 3, the file keeping its last flush), not a death by SIGXFSZ (as Python ignores it too).
+  signal(SIGXFSZ, SIG_IGN);
   // Every run polls the flag, also those started deep inside another computation (an orbit
   // solve inside a continuation, the orbits of a study's classes).
   SetProcessStopFlag(&g_stop);
@@ -105,5 +121,31 @@ void DiscardOnStop(const std::string& path) {
 }
 
 void KeepOnStop() { g_discard.store(false); }
+
+void ArmTimeLimit(double seconds, const std::string& option) {
+  if (!(seconds > 0)) return;
+  const std::string text = fmt::format("vibro: the time limit of {:g} s ({}, for the whole command) was reached\n",
+                                       seconds, option);
+  const size_t n = std::min(text.size(), sizeof g_time_message - 1);
+  std::memcpy(g_time_message, text.data(), n);
+  g_time_message[n] = '\0';
+  const auto end = std::chrono::steady_clock::now() +
+                   std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(seconds));
+  // Detached: it sleeps until the limit or the process's end, and touches only atomics.
+  std::thread([end] {
+    // Signals are for the command's own threads, never this one.
+    sigset_t all;
+    sigfillset(&all);
+    pthread_sigmask(SIG_BLOCK, &all, nullptr);
+    std::this_thread::sleep_until(end);
+    if (g_stop.load()) return;  // a stop request came first: an interruption
+    g_stop_exit.store(3);
+    g_time_up.store(true);
+    OnStopSignal(0);  // a stop request like a signal's: every loop ends, what was computed is kept
+  }).detach();
+}
+
+bool TimeLimitReached() { return g_time_up.load(); }
+const char* TimeLimitMessage() { return g_time_message; }
 
 }  // namespace vibro::cli

@@ -40,4 +40,12 @@ class FinalWrite {
 void DiscardOnStop(const std::string& path);
 void KeepOnStop();
 
+// --time-limit S of a command (docs/cli.md "Time limits"): S seconds after this call (S > 0), the
+// stop flag is set as by a signal, so that every loop of the command ends the way a stop request
+// ends it, keeping what was computed; the command then exits 3 instead of 130 (main.cpp), after
+// the line TimeLimitMessage(). `option` names the limit in that line ("--time-limit").
+void ArmTimeLimit(double seconds, const std::string& option);
+bool TimeLimitReached();
+const char* TimeLimitMessage();
+
 }  // namespace vibro::cli

@@ -1,6 +1,9 @@
 // Opening a run's or a study's output to create, resume or extend it (run_output.hpp).
 #include "frontend/run_output.hpp"
 
+#include <sys/resource.h>
+#include <sys/stat.h>
+
 #include <string>
 #include <utility>
 #include <vector>
@@ -61,6 +64,22 @@ LoadedScene SceneToRun(const LoadedScene& given, const std::string& out, const R
   return ExtendedScene(given, out, *how.extend, OptionName(naming, "--extend").c_str());
 }
 
+namespace {
+// A stored run taken up under a file-size limit (ulimit -f) that leaves it no room: refused before
+// anything is changed (the first writes rewrite the file's metadata, and one cut short by the limit
+// leaves a file no reader can open). Room: a megabyte past the file's size.
+void CheckFileSizeLimit(const std::string& out) {
+  struct rlimit limit {};
+  struct stat st {};
+  if (getrlimit(RLIMIT_FSIZE, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY || stat(out.c_str(), &st) != 0) return;
+  constexpr long long kRoom = 1LL << 20;
+  if (static_cast<long long>(st.st_size) + kRoom > static_cast<long long>(limit.rlim_cur))
+    throw WriteError(fmt::format("{}: the file-size limit of this process (ulimit -f, {} bytes) leaves no room to "
+                                 "take up the run stored there ({} bytes); nothing was changed",
+                                 out, static_cast<long long>(limit.rlim_cur), static_cast<long long>(st.st_size)));
+}
+}  // namespace
+
 RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const System& sys,
                      const RunContinuation& how, AttractorRecorder& recorder, LoadsRecorder* loads,
                      SimulationOptions& options, Naming naming) {
@@ -69,6 +88,7 @@ RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const Sy
   if (!how.resume && !how.extend) {
     store_ = Hdf5Store::Create(out, header);
   } else {
+    CheckFileSizeLimit(out);
     try {
       store_ = how.extend ? Hdf5Store::Extend(out, header, stored_) : Hdf5Store::Resume(out, header, stored_);
     } catch (const InputError& e) {

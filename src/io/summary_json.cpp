@@ -207,12 +207,12 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
   return j.dump();
 }
 
-std::string ScoreJson(const ScoreReport& r, const Scene& scene) {
+std::string ScoreJson(const ScoreReport& r, const Scene& scene, bool complete) {
   nlohmann::json j;
   j["period"] = r.period;
   j["engine"] = ToString(scene.run.engine);
   j["chatter"] = ToString(scene.run.chatter);
-  j["agrees"] = r.agrees();
+  j["agrees"] = complete ? nlohmann::json(r.agrees()) : nlohmann::json(nullptr);
   j["matched"] = r.matched;
   j["unmatched"] = r.unmatched;
   j["max_time_error"] = r.matched > 0 ? nlohmann::json(r.max_time_error) : nlohmann::json(nullptr);
