@@ -187,13 +187,13 @@ branch = os.path.join(H.tmp, "freq.h5")
 subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--to", "1.7", "--out", branch],
                capture_output=True, text=True, timeout=600)
 proven_bifurcation("pitchfork in the frequency", scene, branch, w_truth)
-# Continued the other way, to 0.6, `continue` reports that point with a wide bracket (4.9e-2 in this
-# version): the prover refines it by Newton within the bracket, then proves.
+# Continued the other way, to 0.6, `continue` locates that point to 1e-12 too (it once reported it
+# with the whole step, 4.9e-2, as its bracket; the prover refined it by Newton within the bracket).
 branch = os.path.join(H.tmp, "freq_down.h5")
 p = subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--to", "0.6", "--out", branch],
                    capture_output=True, text=True, timeout=600)
 expect(p.returncode == 0 and "branch-point" in p.stdout, f"continue to 0.6 locates the branch point ({p.stderr[-200:]})")
-proven_bifurcation("pitchfork in the frequency, located within a wide bracket", scene, branch, w_truth, "--point", "0")
+proven_bifurcation("pitchfork in the frequency, continued down", scene, branch, w_truth, "--point", "0")
 
 # ---- The fold of the symmetric orbit (r = 0.8, ω = 2.5): the two roots of (T2) merge where its
 # discriminant vanishes, |K| = Δ k2/√(k1² + k2²), so a_fold = |1 − ω²| k2/√(k1² + k2²) --------------
