@@ -218,7 +218,26 @@ if code == 0:
            f"fold: the interval {s['interval']} contains the closed form {mp.nstr(fold_truth, 20)}, ≤ 1e-10 wide")
     code, v = H.check(out)
     expect(code == 0 and v["verdict"] == "confirmed", f"fold: the checker confirms ({v})")
-    mutants("fold", json.load(open(out)), fold_truth)
+    cert = json.load(open(out))
+    mutants("fold", cert, fold_truth)
+    # The speed claim must contain the speeds of both merging orbits over the whole interval (never
+    # a mere overlap). At the fold both have v = Δ k1/(k1² + k2²) (the double root of (T2)); a claim
+    # excluding it by 1e-14, or containing it but not the speeds over the interval (≈ 1e-5 apart),
+    # is rejected.
+    v_fold = k1 / (k1 * k1 + k2 * k2)
+    c_lo, c_hi = cert["bifurcation"]["speed"]
+    expect(c_lo <= v_fold <= c_hi, f"fold: the claimed speed {cert['bifurcation']['speed']} contains the true "
+           f"{mp.nstr(v_fold, 20)}")
+    for what, claim in (("raised past the true speed", [float(v_fold + mpf("1e-14")), c_hi]),
+                        ("lowered past the true speed", [c_lo, float(v_fold - mpf("1e-14"))]),
+                        ("around the true speed only", [float(v_fold - mpf("1e-12")), float(v_fold + mpf("1e-12"))])):
+        for where in (("bifurcation",), ("summary",), ("bifurcation", "summary")):
+            c = copy.deepcopy(cert)
+            for node in where:
+                c[node]["speed"] = claim
+            code, v = check_doc(c)
+            expect(code in (1, 2) and v and v["verdict"] != "confirmed",
+                   f"fold: the speed claim in {'+'.join(where)} {what} ({claim}): rejected (exit {code}, {v})")
 for past in (mpf("1e-9"), mpf("-1e-9")):
     code, s, err = prove(scene, "--bifurcation", f"fold:excitation.amplitude={mp.nstr(fold_truth + past, 20)}")
     expect(code == 4 and s and s["verdict"] == "not-proven" and "no fold is proven" in s["reason"],
