@@ -666,8 +666,11 @@ Branch Continue(const ContinuationRequest& req) {
       int below = 0, above = 0;
       for (double k : {-4.0, -3.0, -2.0, -1.0, 1.0, 2.0, 3.0, 4.0}) {
         if (stop_requested()) return at;
+        // Past either end of the step when the root is close to it (the branch goes on smoothly
+        // there; a sample that leaves it is refused by `sample`): without them a root within 8e-3
+        // of the step's end had samples on one side only and kept the regula falsi's location.
         const double s = s_star + k * h;
-        if (s <= 0 || s >= hi) continue;
+        if (s <= -0.25 * hi || s >= 1.25 * hi) continue;
         if (const auto x = sample(s)) {
           xs.push_back(*x);
           (k < 0 ? below : above) += 1;
@@ -715,7 +718,9 @@ Branch Continue(const ContinuationRequest& req) {
       double noise = 0;
       const double root3 = fit_root(3, &noise), root4 = fit_root(4, nullptr);
       if (!std::isfinite(root3) || std::abs(root3 - at) > std::max(bracket, 2.0 * width)) return at;
-  bracket = std::abs(root4 - root3) + noise;
+      // plus the rounding of λ itself (each sample's λ is a double): a bracket below an ulp of the
+      // location could not contain the truth.
+      bracket = std::abs(root4 - root3) + noise + 2 * std::numeric_limits<double>::epsilon() * std::abs(root3);
       at = root3;
       // The arclength of the root, for the next pass: interpolated between the samples.
       for (size_t i = 1; i < xs.size(); ++i)
@@ -833,6 +838,16 @@ Branch Continue(const ContinuationRequest& req) {
                          ((next->y - (cur.y + ds * t)).norm() > 0.2 * ds || std::abs(sp(*next) - sp(cur)) > 0.02);
     if (too_far) {
       ds *= 0.5;
+      continue;
+    }
+    // A step that ends within about 1e-3 of itself of a branch point (det(DF − I) there nearly
+    // zero against its change over the step) ends where the corrector's system is nearly singular
+    // and the crossing branch is as close as this one: the point may lie on the other branch (its
+    // λ-tangent then turns there, read as a fold), and the root would be located from one side
+    // only. The step is shortened by a tenth, whatever --step asked for.
+    if (next && ds > ds_retry && SameFamily(cur, *next) &&
+        std::abs(next->eval.Jz.determinant()) < 1e-3 * std::abs(cur.eval.Jz.determinant() - next->eval.Jz.determinant())) {
+      ds *= 0.9;
       continue;
     }
     // A fold between cur and next: the λ-tangent changes sign AND a real multiplier is at +1

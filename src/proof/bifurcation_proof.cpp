@@ -378,6 +378,12 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
       last = "a gap is not proven positive between the impacts: " + (upper.proven ? lower.reason : upper.reason);
       continue;
     }
+    // The claimed speed: of both merging orbits over the whole interval (every real root of the
+    // quadratic), widened by 1e-12 of itself so that it contains the checker's own enclosure of
+    // those speeds, computed otherwise (docs/prove.md: every claim must contain it, never merely
+    // overlap it).
+    const double margin = 1e-12 * std::max(std::abs(v.lo()), std::abs(v.hi()));
+    const Interval speed = Interval::Hull(v.lo() - margin, v.hi() + margin);
     interval_text = "[" + lo + ", " + hi + "]";
     out.proven = true;
     out.reason = fmt::format(
@@ -394,7 +400,7 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
                    {"box_width", phi.hi() - plo.lo()},
                    {"g_at_ends", Json::array({Pair(bl.disc.v), Pair(bh.disc.v)})},
                    {"slope", Pair(bp.disc.d)},
-                   {"speed", Pair(v)},
+                   {"speed", Pair(speed)},
                    {"period", 1}};
     out.certificate = {{"bifurcation",
                         {{"type", "fold"},
@@ -403,7 +409,7 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
                          {"root", 0},
                          {"g_at_ends", Json::array({Pair(bl.disc.v), Pair(bh.disc.v)})},
                          {"slope", Pair(bp.disc.d)},
-                         {"speed", Pair(v)},
+                         {"speed", Pair(speed)},
                          {"window", eps}}}};
     return out;
   }

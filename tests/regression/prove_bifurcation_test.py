@@ -187,13 +187,13 @@ branch = os.path.join(H.tmp, "freq.h5")
 subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--to", "1.7", "--out", branch],
                capture_output=True, text=True, timeout=600)
 proven_bifurcation("pitchfork in the frequency", scene, branch, w_truth)
-# Continued the other way, to 0.6, `continue` reports that point with a wide bracket (4.9e-2 in this
-# version): the prover refines it by Newton within the bracket, then proves.
+# Continued the other way, to 0.6, `continue` locates that point to 1e-12 too (it once reported it
+# with the whole step, 4.9e-2, as its bracket; the prover refined it by Newton within the bracket).
 branch = os.path.join(H.tmp, "freq_down.h5")
 p = subprocess.run([VIBRO, "continue", scene, "--param", "excitation.frequency", "--to", "0.6", "--out", branch],
                    capture_output=True, text=True, timeout=600)
 expect(p.returncode == 0 and "branch-point" in p.stdout, f"continue to 0.6 locates the branch point ({p.stderr[-200:]})")
-proven_bifurcation("pitchfork in the frequency, located within a wide bracket", scene, branch, w_truth, "--point", "0")
+proven_bifurcation("pitchfork in the frequency, continued down", scene, branch, w_truth, "--point", "0")
 
 # ---- The fold of the symmetric orbit (r = 0.8, ω = 2.5): the two roots of (T2) merge where its
 # discriminant vanishes, |K| = Δ k2/√(k1² + k2²), so a_fold = |1 − ω²| k2/√(k1² + k2²) --------------
@@ -218,7 +218,26 @@ if code == 0:
            f"fold: the interval {s['interval']} contains the closed form {mp.nstr(fold_truth, 20)}, ≤ 1e-10 wide")
     code, v = H.check(out)
     expect(code == 0 and v["verdict"] == "confirmed", f"fold: the checker confirms ({v})")
-    mutants("fold", json.load(open(out)), fold_truth)
+    cert = json.load(open(out))
+    mutants("fold", cert, fold_truth)
+    # The speed claim must contain the speeds of both merging orbits over the whole interval (never
+    # a mere overlap). At the fold both have v = Δ k1/(k1² + k2²) (the double root of (T2)); a claim
+    # excluding it by 1e-14, or containing it but not the speeds over the interval (≈ 1e-5 apart),
+    # is rejected.
+    v_fold = k1 / (k1 * k1 + k2 * k2)
+    c_lo, c_hi = cert["bifurcation"]["speed"]
+    expect(c_lo <= v_fold <= c_hi, f"fold: the claimed speed {cert['bifurcation']['speed']} contains the true "
+           f"{mp.nstr(v_fold, 20)}")
+    for what, claim in (("raised past the true speed", [float(v_fold + mpf("1e-14")), c_hi]),
+                        ("lowered past the true speed", [c_lo, float(v_fold - mpf("1e-14"))]),
+                        ("around the true speed only", [float(v_fold - mpf("1e-12")), float(v_fold + mpf("1e-12"))])):
+        for where in (("bifurcation",), ("summary",), ("bifurcation", "summary")):
+            c = copy.deepcopy(cert)
+            for node in where:
+                c[node]["speed"] = claim
+            code, v = check_doc(c)
+            expect(code in (1, 2) and v and v["verdict"] != "confirmed",
+                   f"fold: the speed claim in {'+'.join(where)} {what} ({claim}): rejected (exit {code}, {v})")
 for past in (mpf("1e-9"), mpf("-1e-9")):
     code, s, err = prove(scene, "--bifurcation", f"fold:excitation.amplitude={mp.nstr(fold_truth + past, 20)}")
     expect(code == 4 and s and s["verdict"] == "not-proven" and "no fold is proven" in s["reason"],
