@@ -181,6 +181,7 @@ class Automaton {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
       last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
+      pair_first_speed_.assign(models_.size(), -1.0);
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
         if (j >= specs.size()) {
@@ -344,6 +345,7 @@ class Automaton {
   // contact and time, how many alternations in a row.
   int pair_last_ = -1, pair_cascade_ = 0;
   double pair_t_ = 0;
+  std::vector<double> pair_first_speed_;  // each contact's first closing speed in the cascade (−1: none yet)
   // Several contacts: the impacts (contact, time) since the last event of another kind, the last
   // few (ChatteringTogether).
   std::vector<std::pair<int, double>> recent_impacts_;

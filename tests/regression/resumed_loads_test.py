@@ -166,37 +166,38 @@ with tempfile.TemporaryDirectory() as d:
     same_loads("fig8 3000 +5000 --blocks 7",
                summary("fig8 +5000 b7", "simulate", fig8, "--out", path, "--extend", "5000", "--blocks", "7"), got)
 
-    # --- One contact, rows merged into buckets (72 000 periods analysed > 2^16) -------------------
-    total = 80000
-    long_ref_path = os.path.join(d, "r80k.h5")
-    long_ref = summary("fig8 80000", "simulate", fig8, "--set", f"run.periods={total}", "--out", long_ref_path)
-    means_over_rows("fig8 80000", long_ref_path, long_ref)
-    path = os.path.join(d, "i80k.h5")
+    # --- One contact, rows merged into buckets (270 000 periods analysed > 2^16) ------------------
+    # Runs long enough (seconds, not the store's first flush at 1 s) to be interrupted on any machine.
+    total = 300000
+    long_ref_path = os.path.join(d, "r_long.h5")
+    long_ref = summary(f"fig8 {total}", "simulate", fig8, "--set", f"run.periods={total}", "--out", long_ref_path)
+    means_over_rows(f"fig8 {total}", long_ref_path, long_ref)
+    path = os.path.join(d, "i_long.h5")
     code, err = interrupt(["simulate", fig8, "--set", f"run.periods={total}", "--out", path], path, 2000)
-    check("fig8 80000 interrupted: exit 130", code == 130, (code, err[-2000:]))
+    check(f"fig8 {total} interrupted: exit 130", code == 130, (code, err[-2000:]))
     stopped, status = checkpoint_period(path)
-    check("fig8 80000 interrupted inside the run", status == "interrupted" and 2000 < stopped < total,
+    check(f"fig8 {total} interrupted inside the run", status == "interrupted" and 2000 < stopped < total,
           (status, stopped))
-    old = os.path.join(d, "old_i80k.h5")
+    old = os.path.join(d, "old_i_long.h5")
     shutil.copy(path, old)
-    got = summary("fig8 80000 resumed", "simulate", fig8, "--set", f"run.periods={total}", "--out", path, "--resume")
-    same_loads(f"fig8 80000 resumed at period {stopped}", got, long_ref)
+    got = summary(f"fig8 {total} resumed", "simulate", fig8, "--set", f"run.periods={total}", "--out", path, "--resume")
+    same_loads(f"fig8 {total} resumed at period {stopped}", got, long_ref)
     # Interrupted, then extended past its length.
-    path = os.path.join(d, "i30k.h5")
-    code, err = interrupt(["simulate", fig8, "--set", "run.periods=30000", "--out", path], path, 1000)
-    check("fig8 30000 interrupted: exit 130", code == 130, (code, err[-2000:]))
+    path = os.path.join(d, "i100k.h5")
+    code, err = interrupt(["simulate", fig8, "--set", "run.periods=100000", "--out", path], path, 1000)
+    check("fig8 100000 interrupted: exit 130", code == 130, (code, err[-2000:]))
     stopped, status = checkpoint_period(path)
-    check("fig8 30000 interrupted inside the run", status == "interrupted" and 1000 < stopped < 30000,
+    check("fig8 100000 interrupted inside the run", status == "interrupted" and 1000 < stopped < 100000,
           (status, stopped))
-    got = summary("fig8 30000 interrupted +50000", "simulate", fig8, "--out", path, "--extend", "50000")
-    same_loads(f"fig8 interrupted at {stopped} of 30000, extended by 50000", got, long_ref)
+    got = summary("fig8 100000 interrupted +200000", "simulate", fig8, "--out", path, "--extend", "200000")
+    same_loads(f"fig8 interrupted at {stopped} of 100000, extended by 200000", got, long_ref)
 
     # --- Two contacts (the impact pair) --------------------------------------------------------------
-    pair_total = 12000
+    pair_total = 60000
     pair_ref_path = os.path.join(d, "pair_ref.h5")
-    pair_ref = summary("pair 12000", "simulate", pair, "--set", f"run.periods={pair_total}", "--out", pair_ref_path)
-    rows_against_events("pair 12000", pair_ref_path, 2)
-    means_over_rows("pair 12000", pair_ref_path, pair_ref)
+    pair_ref = summary(f"pair {pair_total}", "simulate", pair, "--set", f"run.periods={pair_total}", "--out", pair_ref_path)
+    rows_against_events(f"pair {pair_total}", pair_ref_path, 2)
+    means_over_rows(f"pair {pair_total}", pair_ref_path, pair_ref)
     path = os.path.join(d, "pair.h5")
     code, err = interrupt(["simulate", pair, "--set", f"run.periods={pair_total}", "--out", path], path, 300)
     check("pair interrupted: exit 130", code == 130, (code, err[-2000:]))

@@ -599,7 +599,7 @@ class Simulation:
         self.tail_target = tail_target
         self.vscale = mp.mpf(1)
         self.stats = {"tails": 0, "impacts": 0, "coupled": 0}
-        self.last_impact, self.cascade = None, 0
+        self.last_impact, self.cascade, self.cascade_first = None, 0, {}
         self.tail_damping = True      # False: the tail without its damping term (diagnostics)
 
     # tolerances
@@ -776,15 +776,20 @@ class Simulation:
         resting = [j for j in range(m.m) if j not in S and j not in closing
                    and abs(m.gap(j, eta)) <= self.gtol() and abs(m.gapvel(j, etad)) <= self.vtol()]
         Z = sorted(set(closing) | S | set(resting))
-        # alternating impacts of several contacts accumulating at one instant: not decided
+        # alternating impacts of several contacts accumulating at one instant: not decided. An
+        # accumulation only once the closing speeds have fallen below half their first value in the
+        # cascade (elastic bouncing between two close stops accumulates nowhere)
         last = self.last_impact
+        speeds = {j: -m.gapvel(j, etad) for j in closing}
         if last is not None and set(closing) != last[1] and t - last[0] < self.model.T * mp.mpf("1e-9"):
             self.cascade += 1
-            if self.cascade > 3:
+            for j, v in speeds.items():
+                self.cascade_first.setdefault(j, v)
+            if self.cascade > 3 and any(v < self.cascade_first[j] / 2 for j, v in speeds.items()):
                 raise Undetermined(f"contacts {sorted(set(closing) | last[1])} chattering to one accumulation "
                                    f"point near t = {mp.nstr(t, 17)}")
         else:
-            self.cascade = 0
+            self.cascade, self.cascade_first = 0, dict(speeds)
         self.last_impact = (t, set(closing))
         vm = [m.gapvel(j, etad) for j in Z]
         for idx, j in enumerate(Z):
