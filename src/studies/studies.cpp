@@ -6,6 +6,7 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <exception>
 
 #include <oneapi/tbb/blocked_range.h>
 #include <oneapi/tbb/global_control.h>
@@ -293,6 +294,25 @@ CellResult UnpackCell(const double*& p) {
   return c;
 }
 
+namespace {
+
+// A worker thread gets its thread-local storage of the libraries loaded after the program started
+// (Python loads libstdc++ and libvibro with dlopen) on first use, from malloc; glibc ends the whole
+// process with "cannot allocate memory for thread-local data: ABORT", exit 127, when that malloc
+// fails. The first use was the first throw (std::bad_alloc needs libstdc++'s exception globals),
+// i.e. exactly when memory had run out. Touched at the start of each parallel task, before it
+// allocates anything, a refused allocation later is a std::bad_alloc like any other (MemoryError
+// in Python, exit 3 from the command line). Two thread-local reads per task.
+void ThreadLocalsFirst() {
+  // Both are pure functions: the volatile stores keep the compiler from dropping the calls.
+  const volatile int uncaught = std::uncaught_exceptions();  // libstdc++'s exception globals
+  const volatile void* stop = ProcessStopFlag();             // libvibro's thread-local block
+  static_cast<void>(uncaught);
+  static_cast<void>(stop);
+}
+
+}  // namespace
+
 void RunCells(const System& sys, const Scene& scene, const Coordinate& a, const Coordinate& b,
               const std::vector<std::pair<double, double>>& points,
               const std::vector<size_t>& indices, std::vector<CellResult>& cells,
@@ -336,6 +356,7 @@ void RunCells(const System& sys, const Scene& scene, const Coordinate& a, const 
     limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(opt.threads));
   tbb::parallel_for(tbb::blocked_range<size_t>(0, indices.size()),
                     [&](const tbb::blocked_range<size_t>& r) {
+                      ThreadLocalsFirst();
                       for (size_t k = r.begin(); k != r.end(); ++k) cell(indices[k]);
                     });
 }
@@ -378,6 +399,7 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
     std::vector<std::optional<Attractor>> solved(m);
     std::vector<ClassOrbit> orbits(m);
     tbb::parallel_for(size_t{0}, m, [&](size_t k) {
+      ThreadLocalsFirst();
       const Attractor& a = out.attractors[k].attractor;
       if (a.kind != "sticking-periodic" && a.kind != "impact-periodic") return;
       const CellResult& c = cells[first_cell[k]];
@@ -454,6 +476,7 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
     }
     std::vector<std::optional<LyapunovSpectrum>> spectra(from.size());
     tbb::parallel_for(size_t{0}, from.size(), [&](size_t k) {
+      ThreadLocalsFirst();
       if (from[k] < cells.size()) spectra[k] = LyapunovFrom(sys, scene, cells[from[k]]);
     });
     for (size_t k = 0; k < out.attractors.size(); ++k) out.attractors[k].lyapunov = std::move(spectra[k]);
