@@ -13,10 +13,29 @@ keeps what was written to ``out`` and then raises ``KeyboardInterrupt``.
 import json as _json
 import math as _math
 import os as _os
+import sys as _sys
 import threading as _threading
 from collections.abc import Mapping as _Mapping
 
-import numpy as _np
+
+def _limit_blas_threads():
+    """One OpenBLAS thread under an address-space limit (``ulimit -v``, RLIMIT_AS), unless the user
+    chose ``OPENBLAS_NUM_THREADS``. Each OpenBLAS thread reserves a 128 MB buffer when it starts and
+    retries forever when the limit refuses it: the thread spins, and the interpreter hangs at exit
+    joining it (docs/python.md, "Under a memory limit"). vibro does not use BLAS threads; numpy
+    reads the variable once, when it is first imported, so this must run before ``import numpy``."""
+    try:
+        import resource
+        soft, _ = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError, ValueError):
+        return
+    if soft != resource.RLIM_INFINITY and "numpy" not in _sys.modules:
+        _os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+_limit_blas_threads()
+
+import numpy as _np  # noqa: E402
 
 from . import _vibro
 
