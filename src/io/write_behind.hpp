@@ -11,6 +11,9 @@
 #include <exception>
 #include <functional>
 #include <mutex>
+#include <stdexcept>
+#include <string>
+#include <system_error>
 #include <thread>
 
 namespace vibro::store {
@@ -47,7 +50,18 @@ class WriteBehind {
       std::lock_guard<std::mutex> lock(mutex_);
       job_ = std::move(job);
     }
-    if (!thread_.joinable()) thread_ = std::thread([this] { Loop(); });
+    if (!thread_.joinable()) {
+      try {
+        thread_ = std::thread([this] { Loop(); });
+      } catch (const std::system_error& e) {
+        // The system refused the thread (ulimit -v, a process limit): the job is dropped, so that
+        // Wait() and the destructor do not wait for ever for a thread that does not exist, and
+        // the refusal is reported as TBB reports its own (exit 3, MemoryError in Python).
+        std::lock_guard<std::mutex> lock(mutex_);
+        job_ = nullptr;
+        throw std::runtime_error(std::string("pthread_create has failed: ") + e.what());
+      }
+    }
     ready_.notify_one();
   }
 
