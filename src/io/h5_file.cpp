@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
+#include <new>
 #include <set>
 #include <stdexcept>
 #include <type_traits>
@@ -80,9 +81,15 @@ inline Hdf5Api LoadHdf5() {
   // the tests' hang shim does) still comes first and finds the real one with RTLD_NEXT.
   // RTLD_NODELETE: HDF5's atexit handlers stay valid however the handle is treated.
   void* lib = dlopen(VIBRO_HDF5_LIBRARY, RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
-  if (lib == nullptr)
-    throw std::runtime_error(std::string("cannot load the HDF5 library " VIBRO_HDF5_LIBRARY ": ") +
-                             dlerror());
+  if (lib == nullptr) {
+    const std::string why = dlerror();
+    // Under an address-space limit (ulimit -v) the loader cannot map the library: out of memory
+    // (exit 3, MemoryError in Python), not a broken installation.
+    if (why.find("failed to map segment") != std::string::npos ||
+        why.find("cannot allocate memory") != std::string::npos)
+      throw std::bad_alloc();
+    throw std::runtime_error("cannot load the HDF5 library " VIBRO_HDF5_LIBRARY ": " + why);
+  }
   Hdf5Api api{};
   auto entry = [&](const char* name) {
     void* p = dlsym(RTLD_DEFAULT, name);
@@ -372,6 +379,21 @@ void Silence() {
 
 // ---- Files ----
 
+namespace {
+
+// HDF5 1.10 does not check every allocation of a file's metadata cache (H5AC_create): under an
+// address-space limit (ulimit -v) that leaves it less than that, H5Fcreate and H5Fopen crash the
+// process (SIGSEGV). Address space for the cache and the first chunks is asked for first, and
+// its refusal is an out-of-memory like any other (std::bad_alloc: exit 3, MemoryError in Python).
+void EnsureHeadroom() {
+  constexpr size_t kHeadroom = size_t{16} << 20;  // reserved, never touched: address space only
+  void* probe = std::malloc(kHeadroom);
+  if (probe == nullptr) throw std::bad_alloc();
+  std::free(probe);
+}
+
+}  // namespace
+
 bool IsHdf5(const std::string& path) { return H5Fis_hdf5(path.c_str()) > 0; }
 
 Handle CreateFile(const std::string& path) {
@@ -379,6 +401,7 @@ Handle CreateFile(const std::string& path) {
   // Freed space is never reused: a flushed file never points at overwritten bytes.
   CheckStatus(H5Pset_file_space_strategy(fcpl.get(), H5F_FSPACE_STRATEGY_NONE, 0, 1), "file space");
   Handle fapl = FileAccess();
+  EnsureHeadroom();
   errno = 0;
   Handle file(H5Fcreate(path.c_str(), H5F_ACC_TRUNC, fcpl.get(), fapl.get()), H5Fclose);
   if (!file) throw std::runtime_error(errno != 0 ? std::strerror(errno) : "HDF5 could not create it");
@@ -386,6 +409,7 @@ Handle CreateFile(const std::string& path) {
 }
 
 Handle OpenFile(const std::string& path, bool write) {
+  EnsureHeadroom();
   if (!write) return Handle(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   Handle fapl = FileAccess();
   return Handle(H5Fopen(path.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose);
@@ -874,6 +898,7 @@ herr_t ProbeObject(hid_t root, const char* name, const H5O_info_t* info, void* m
 
 bool ReadEverything(const std::string& path, double max_bytes, const std::vector<std::string>& only) {
   Silence();
+  EnsureHeadroom();
   Handle file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
   if (!file) return false;
   if (only.empty())

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <new>
 #include <optional>
 #include <stdexcept>
 
@@ -390,6 +391,8 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     // Remove only a regular file this call created (never a device such as /dev/full).
     struct stat now{};
     if (!existed && stat(path.c_str(), &now) == 0 && S_ISREG(now.st_mode)) std::remove(path.c_str());
+    // Out of memory is a limit (exit 3, MemoryError in Python), not bad input.
+    if (dynamic_cast<const std::bad_alloc*>(&e) != nullptr) throw;
     throw InputError({fmt::format("{}: cannot write the output file: {}", path, e.what())});
   }
   impl->last_flush = std::chrono::steady_clock::now();
