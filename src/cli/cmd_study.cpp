@@ -1,6 +1,7 @@
 // `vibro attractors SCENE` and `vibro basin SCENE`: studies over initial states, on threads and
 // MPI ranks (docs/studies.md).
 #include <memory>
+#include <new>
 #include <optional>
 
 #include <fmt/format.h>
@@ -43,17 +44,21 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   std::vector<vibro::CellResult> cells(points.size());
   std::unique_ptr<vibro::Hdf5Store> store;
   std::optional<vibro::InputError> file_problem;
+  bool out_of_memory = false;
   if (dist.root() && !args.out.empty()) {
     try {
       store = vibro::frontend::OpenStudyOutput(args.out, vibro::frontend::HeaderOf(loaded, sys), grid, args.resume,
                                                cells, vibro::frontend::Naming::kCli);
     } catch (const vibro::InputError& e) {
       file_problem = e;
+    } catch (const std::bad_alloc&) {  // a limit (exit 3), not bad input
+      out_of_memory = true;
     } catch (const std::exception& e) {  // every rank must hear of it (no rank left waiting)
       file_problem = vibro::InputError({fmt::format("{}: cannot write the study: {}", args.out, e.what())});
     }
   }
-  if (dist.Any(file_problem.has_value())) {
+  if (dist.Any(file_problem.has_value() || out_of_memory)) {
+    if (out_of_memory) throw std::bad_alloc();
     if (file_problem) throw *file_problem;
     return kExitBadInput;  // reported by rank 0
   }
