@@ -11,7 +11,10 @@ free flight of one DOF in mpmath (40 digits) and nothing of vibro:
     - both asymmetric branches born there, mirror images of each other: the state of a point of one
       half a period later, mirrored, is a periodic orbit (one period simulated here returns to it,
       1e-9) that is not the point's own orbit, and its impacts are those of the other branch;
-    - no branch twice (two stored branches never hold the same orbit at the same a).
+    - no branch twice (two stored branches never hold the same orbit at the same a), whatever their
+      periods: no branch of period q holds an orbit whose impacts repeat after fewer periods (the
+      period-1 orbit continued as a period-3 one), and no orbit, compared over its least period,
+      lies on two branches.
 (b) the tube scene over omega in [0.4, 1.6]: every attractor of the sweep and of the searches is on
     a stable branch or reported uncovered with a reason; a covered period-1 attractor's section
     points lie on the branch's strobe.
