@@ -182,6 +182,25 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
   return proven == first.points ? 0 : kExitDisagree;
 }
 
+// A proof's refusal of its input (std::invalid_argument) as bad input located in the scene file.
+template <class F>
+vibro::ProofResult Located(const std::string& path, F&& prove) {
+  try {
+    return prove();
+  } catch (const std::invalid_argument& e) {
+    throw vibro::InputError({path + ": " + e.what()});
+  }
+}
+
+// The certificate to --out (if given), as one final write that a stop request waits for.
+void WriteCertificate(const std::string& out, const vibro::ProofResult& result) {
+  if (out.empty()) return;
+  const vibro::cli::FinalWrite writing;
+  std::ofstream file(out, std::ios::trunc);
+  file << result.certificate_json << "\n";
+  if (!file) throw vibro::WriteError(out + ": the certificate could not be written");
+}
+
 // `vibro prove SCENE --bifurcation SOURCE`: the bifurcation point's parameter enclosed (docs/prove.md
 // "Bifurcation points"). SOURCE: BRANCH.h5 (with --point K) or KIND:KEY=VALUE.
 int ProveBifurcationPoint(const std::string& path, const std::vector<std::string>& sets, bool json,
@@ -212,19 +231,9 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
   at.push_back(vibro::frontend::Assignment(req.parameter, req.value));
   const auto loaded = vibro::LoadScene(path, at);
   const vibro::System sys(loaded.scene);
-  vibro::ProofResult result;
-  try {
-    result = vibro::ProveBifurcation(sys, loaded.scene, req);
-  } catch (const std::invalid_argument& e) {
-    throw vibro::InputError({path + ": " + e.what()});
-  }
+  const vibro::ProofResult result = Located(path, [&] { return vibro::ProveBifurcation(sys, loaded.scene, req); });
   if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("nothing is proven or written");
-  if (!args.out.empty()) {
-    const vibro::cli::FinalWrite writing;
-    std::ofstream file(args.out, std::ios::trunc);
-    file << result.certificate_json << "\n";
-    if (!file) throw vibro::WriteError(args.out + ": the certificate could not be written");
-  }
+  WriteCertificate(args.out, result);
   if (json) {
     fmt::print("{}\n", result.summary_json);
   } else {
@@ -268,19 +277,9 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
       throw vibro::InputError({args.from + ": /orbit: an orbit of " + std::to_string(req.start->X.size()) +
                                " modes, the scene has " + std::to_string(sys.dof())});
   }
-  vibro::ProofResult result;
-  try {
-    result = vibro::ProveOrbit(sys, loaded.scene, req);
-  } catch (const std::invalid_argument& e) {
-    throw vibro::InputError({path + ": " + e.what()});
-  }
+  const vibro::ProofResult result = Located(path, [&] { return vibro::ProveOrbit(sys, loaded.scene, req); });
   if (result.interrupted || vibro::cli::StopRequested()) return Interrupted("nothing is proven or written");
-  if (!args.out.empty()) {
-    const vibro::cli::FinalWrite writing;
-    std::ofstream file(args.out, std::ios::trunc);
-    file << result.certificate_json << "\n";
-    if (!file) throw vibro::WriteError(args.out + ": the certificate could not be written");
-  }
+  WriteCertificate(args.out, result);
   if (json) {
     fmt::print("{}\n", result.summary_json);
   } else {

@@ -145,6 +145,32 @@ Flight FlightAt(const Branch& b, const Interval& s) {
           -(b.U0.v * w * sw) + b.U1.v * cw - y0 * W * sW + yd0 * cW};
 }
 
+// Both gaps positive between the impacts, for every parameter of the branch's interval: the
+// velocity negative in a window just after and just before the impacts (its width returned in
+// eps), then each gap proven positive over the rest of the flight. Empty when proven, else why not.
+std::string GapsPositive(const Branch& bp, const Budget& budget, double& eps) {
+  const Interval tau = bp.tau.v;
+  eps = tau.lo() / 64;
+  bool windows = false;
+  for (int k = 0; k < 12 && !windows; ++k, eps /= 2) {
+    const auto start = FlightAt(bp, Interval::Hull(0.0, eps));
+    const auto end = FlightAt(bp, Interval::Hull(tau.lo() - eps, tau.hi()));
+    windows = start.yd.Negative() && end.yd.Negative();
+    if (windows) break;
+  }
+  if (!windows) return "the velocity just after and just before the impacts is not proven negative";
+  const auto upper = ProvePositive(
+      eps, tau.hi(), tau.lo() / 32, 30, budget, [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
+      [&](const Interval& s) { return -FlightAt(bp, s).yd; });
+  const auto lower = ProvePositive(
+      0.0, tau.lo() - eps, tau.lo() / 32, 30, budget,
+      [&](double s) { return FlightAt(bp, Interval(s)).y + bp.Delta.v; },
+      [&](const Interval& s) { return FlightAt(bp, s).yd; });
+  if (!upper.proven || !lower.proven)
+    return "a gap is not proven positive between the impacts: " + (upper.proven ? lower.reason : upper.reason);
+  return "";
+}
+
 std::string Dec(double x) { return fmt::format("{}", x); }
 
 // The point's parameter by Newton (in the midpoints) on the scalar whose zero it is, from `located`,
@@ -237,29 +263,9 @@ Outcome ProvePitchfork(const IntervalModel& model, bool mirrored, bool frequency
       continue;
     }
     // Both gaps positive between the impacts, for every parameter of the interval.
-    const Interval tau = bp.tau.v;
-    double eps = tau.lo() / 64;
-    bool windows = false;
-    for (int k = 0; k < 12 && !windows; ++k, eps /= 2) {
-      const auto start = FlightAt(bp, Interval::Hull(0.0, eps));
-      const auto end = FlightAt(bp, Interval::Hull(tau.lo() - eps, tau.hi()));
-      windows = start.yd.Negative() && end.yd.Negative();
-      if (windows) break;
-    }
-    if (!windows) {
-      last = "the velocity just after and just before the impacts is not proven negative";
-      continue;
-    }
-    const auto upper = ProvePositive(
-        eps, tau.hi(), tau.lo() / 32, 30, budget,
-        [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
-        [&](const Interval& s) { return -FlightAt(bp, s).yd; });
-    const auto lower = ProvePositive(
-        0.0, tau.lo() - eps, tau.lo() / 32, 30, budget,
-        [&](double s) { return FlightAt(bp, Interval(s)).y + bp.Delta.v; },
-        [&](const Interval& s) { return FlightAt(bp, s).yd; });
-    if (!upper.proven || !lower.proven) {
-      last = "a gap is not proven positive between the impacts: " + (upper.proven ? lower.reason : upper.reason);
+    double eps = 0;
+    if (auto gaps = GapsPositive(bp, budget, eps); !gaps.empty()) {
+      last = std::move(gaps);
       continue;
     }
     interval_text = "[" + lo + ", " + hi + "]";
@@ -354,28 +360,9 @@ Outcome ProveSymmetricFold(const IntervalModel& model, bool mirrored, bool frequ
     bp.v.v = v;
     bp.U0.v = bp.p0.v + bp.p1.v * v;
     bp.U1.v = bp.q0.v + bp.q1.v * v;
-    const Interval tau = bp.tau.v;
-    double eps = tau.lo() / 64;
-    bool windows = false;
-    for (int k = 0; k < 12 && !windows; ++k, eps /= 2) {
-      const auto start = FlightAt(bp, Interval::Hull(0.0, eps));
-      const auto end = FlightAt(bp, Interval::Hull(tau.lo() - eps, tau.hi()));
-      windows = start.yd.Negative() && end.yd.Negative();
-      if (windows) break;
-    }
-    if (!windows) {
-      last = "the velocity just after and just before the impacts is not proven negative";
-      continue;
-    }
-    const auto upper = ProvePositive(
-        eps, tau.hi(), tau.lo() / 32, 30, budget, [&](double s) { return bp.Delta.v - FlightAt(bp, Interval(s)).y; },
-        [&](const Interval& s) { return -FlightAt(bp, s).yd; });
-    const auto lower = ProvePositive(
-        0.0, tau.lo() - eps, tau.lo() / 32, 30, budget,
-        [&](double s) { return FlightAt(bp, Interval(s)).y + bp.Delta.v; },
-        [&](const Interval& s) { return FlightAt(bp, s).yd; });
-    if (!upper.proven || !lower.proven) {
-      last = "a gap is not proven positive between the impacts: " + (upper.proven ? lower.reason : upper.reason);
+    double eps = 0;
+    if (auto gaps = GapsPositive(bp, budget, eps); !gaps.empty()) {
+      last = std::move(gaps);
       continue;
     }
     // The claimed speed: of both merging orbits over the whole interval (every real root of the

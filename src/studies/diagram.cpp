@@ -133,6 +133,66 @@ std::optional<Attractor> Interpolated(const BranchPoint& a, const BranchPoint& b
 
 int PeriodOf(const BranchPoint& p, int fallback) { return p.summary.period.value_or(fallback); }
 
+// The least period of a point of a branch of period q, from its motion over qT: the least p
+// dividing q such that shifting the time by pT maps its impacts (phase mod 2πq, speed, contact)
+// and sticking phases onto themselves. A period-1 orbit continued with period 3 repeats its
+// impacts three times and has least period 1. An orbit with neither impacts nor sticking
+// phases gives q (nothing to tell by).
+int LeastPeriod(const BranchPoint& pt, int q) {
+  if (q <= 1 || (pt.impacts.empty() && pt.summary.stick_phases.empty())) return q;
+  const double span = 2 * M_PI * q;
+  const auto wrap = [span](double d) {
+    d = std::fmod(d, span);
+    if (d > span / 2) d -= span;
+    if (d <= -span / 2) d += span;
+    return d;
+  };
+  double scale = 1;
+  for (const auto& im : pt.impacts) scale = std::max(scale, 1 + std::abs(im.v_before));
+  constexpr double kTol = 1e-6;
+  for (int p = 1; p < q; ++p) {
+    if (q % p != 0 || pt.impacts.size() % static_cast<size_t>(q / p) != 0 ||
+        pt.summary.stick_phases.size() % static_cast<size_t>(q / p) != 0)
+      continue;
+    const double shift = 2 * M_PI * p;
+    bool repeats = true;
+    for (const auto& a : pt.impacts) {
+      bool found = false;
+      for (const auto& b : pt.impacts)
+        found = found || (b.contact == a.contact && std::abs(wrap(b.phase - a.phase - shift)) <= kTol &&
+                          std::abs(b.v_before - a.v_before) <= kTol * scale);
+      if (!(repeats = found)) break;
+    }
+    for (const auto& [s1, e1] : pt.summary.stick_phases) {
+      if (!repeats) break;
+      bool found = false;
+      for (const auto& [s2, e2] : pt.summary.stick_phases)
+        found = found || (std::abs(wrap(s2 - s1 - shift)) <= kTol && std::abs((e2 - s2) - (e1 - s1)) <= kTol);
+      repeats = found;
+    }
+    if (repeats) return p;
+  }
+  return q;
+}
+
+// Keeps points first..last of `n` and the bifurcations, relabels and crossings within their λ
+// range, widened by the largest step between them (a fold lies beyond its neighbouring points).
+void KeepPoints(DiagramBranch& n, size_t first, size_t last) {
+  auto& pts = n.branch.points;
+  double lo = kInf, hi = -kInf, step = 0;
+  for (size_t i = first; i <= last; ++i) {
+    lo = std::min(lo, pts[i].value), hi = std::max(hi, pts[i].value);
+    if (i > first) step = std::max(step, std::abs(pts[i].value - pts[i - 1].value));
+  }
+  pts.erase(pts.begin() + static_cast<std::ptrdiff_t>(last + 1), pts.end());
+  pts.erase(pts.begin(), pts.begin() + static_cast<std::ptrdiff_t>(first));
+  const auto outside = [&](double v) { return v < lo - step || v > hi + step; };
+  std::erase_if(n.branch.bifurcations, [&](const Bifurcation& b) { return outside(b.value); });
+  std::erase_if(n.branch.relabels, [&](const Relabel& r) { return outside(r.value); });
+  std::erase_if(n.branch.crossings, [&](const LevelCrossing& c) { return outside(c.value); });
+  n.branch.end = fmt::format("first end: {}; last end: {}", n.end_first, n.end_last);
+}
+
 class Builder {
  public:
   explicit Builder(const DiagramRequest& req) : req_(req) {
@@ -155,12 +215,31 @@ class Builder {
   std::vector<OrbitResult> OrbitsAt(const DiagramBranch& b, double lambda, bool stable_end) const;
   // Whether a motion at λ lies on a stored branch: (branch, distance), or (−1, reason).
   std::pair<int, double> CoveredBy(double lambda, const Attractor& a, std::string& reason) const;
+  // Whether `n` repeats `e`: its orbits at its sampled points within e's range (at least half of
+  // them) lie on `e`.
+  bool Repeats(const DiagramBranch& n, const DiagramBranch& e) const;
   // The index of a stored branch that `n` repeats, or −1.
   int DuplicateOf(const DiagramBranch& n) const;
+  // Whether stored branch `e` holds the orbit of `p` (same period assumed): (λ bracketed by two
+  // of e's points, the same orbit); `newton`: also by Newton from e's points next to λ.
+  std::pair<bool, bool> Holds(const DiagramBranch& e, const BranchPoint& p, bool newton) const;
+  // Keeps of `n` only its stretch around `birth` whose orbits no stored branch holds: a branch
+  // that runs into a stored one (through a crossing at a grazing, say) ends where it joins it.
+  // Returns the stored branch it joins when fewer than three points are left (then `n` is that
+  // branch again), else −1.
+  int TrimOverlap(DiagramBranch& n, size_t birth) const;
   // Continues from `orbit` at λ0 towards `to`, never beyond [lo, hi].
   Branch Follow(double lambda0, double to, const OrbitRequest& orbit) const;
   // Stores `n` unless it repeats a stored branch; then switches at its bifurcations (recursively).
-  void Add(DiagramBranch n);
+  // `birth`: the index of the point it was found at (a seed's orbit; 0 for a switched branch).
+  void Add(DiagramBranch n, size_t birth = 0);
+  // Keeps of `n` only its stretch around `birth` whose orbits have least period n.branch.period
+  // (a continuation may run into the orbit of a divisor period, continued as a multiple: that
+  // stretch is the shorter period's branch again); false when the orbit at `birth` has a shorter
+  // least period itself.
+  bool KeepLeastPeriod(DiagramBranch& n, size_t birth);
+  // Switches at the branch points and flips of stored branch `stored` (recursively, through Add).
+  void SwitchAt(size_t stored);
   void Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
             const std::string& source);
 
@@ -226,52 +305,83 @@ std::pair<int, double> Builder::CoveredBy(double lambda, const Attractor& a, std
 }
 
 int Builder::DuplicateOf(const DiagramBranch& n) const {
+  for (size_t k = 0; k < out_.branches.size(); ++k)
+    if (Repeats(n, out_.branches[k])) return static_cast<int>(k);
+  return -1;
+}
+
+
+std::pair<bool, bool> Builder::Holds(const DiagramBranch& e, const BranchPoint& p, bool newton) const {
+  // The stored branch's orbit at λ: between its two points around λ (interpolated, within a
+  // tenth of their difference), or Newton from the nearer one.
+  bool bracketed = false, same = false;
+  const auto& ep = e.branch.points;
+  const Attractor mine = ImpactsOf(p);
+  for (size_t j = 0; j + 1 < ep.size() && !same; ++j) {
+    const double lo = std::min(ep[j].value, ep[j + 1].value), hi = std::max(ep[j].value, ep[j + 1].value);
+    if (p.value < lo - slack_ || p.value > hi + slack_) continue;
+    bracketed = true;
+    if (!SameSequence(ep[j].sequence, p.sequence)) continue;
+    const auto at = Interpolated(ep[j], ep[j + 1], p.value);
+    if (!at) continue;
+    const double spread = MotionDistance(ImpactsOf(ep[j]), ImpactsOf(ep[j + 1]));
+    same = MotionDistance(*at, mine) <= req_.identity_tolerance + 0.1 * spread;
+  }
+  if (newton && !same && bracketed)
+    for (const auto& o : OrbitsAt(e, p.value, false))
+      same = same || (SameSequence(o.sequence, p.sequence) &&
+                      MotionDistance(o.summary, p.summary) <= req_.identity_tolerance);
+  return {bracketed, same};
+}
+
+bool Builder::Repeats(const DiagramBranch& n, const DiagramBranch& e) const {
   const auto& pts = n.branch.points;
-  if (pts.empty()) return -1;
+  // Every stored branch's orbits have least period its period (KeepLeastPeriod): branches of
+  // different periods never hold the same orbit.
+  if (pts.empty() || e.branch.points.empty() || e.branch.period != n.branch.period) return false;
   // Samples away from the birth of a switched branch (where it meets its parent).
   const size_t first = n.origin == "seed" ? 0 : std::min(pts.size() - 1, pts.size() / 5 + 1);
   std::vector<size_t> samples;
   const size_t count = std::min<size_t>(6, pts.size() - first);
   for (size_t s = 0; s < count; ++s)
     samples.push_back(first + (count > 1 ? s * (pts.size() - 1 - first) / (count - 1) : 0));
-  for (size_t k = 0; k < out_.branches.size(); ++k) {
-    const auto& e = out_.branches[k];
-    // Periods that divide one another: a branch continued with a multiple of its orbits' least
-    // period is the same branch (the summaries compare least periods).
-    if (e.branch.points.empty() || (e.branch.period % n.branch.period != 0 && n.branch.period % e.branch.period != 0))
-      continue;
-    size_t inside = 0;
-    bool all = true;
-    for (size_t i : samples) {
-      const auto& p = pts[i];
-      // The stored branch's orbit at λ: between its two points around λ (interpolated, within a
-      // tenth of their difference), or Newton from the nearer one.
-      bool bracketed = false, same = false;
-      const auto& ep = e.branch.points;
-      const Attractor mine = ImpactsOf(p);
-      for (size_t j = 0; j + 1 < ep.size() && !same; ++j) {
-        const double lo = std::min(ep[j].value, ep[j + 1].value), hi = std::max(ep[j].value, ep[j + 1].value);
-        if (p.value < lo - slack_ || p.value > hi + slack_) continue;
-        bracketed = true;
-        if (!SameSequence(ep[j].sequence, p.sequence)) continue;
-        const auto at = Interpolated(ep[j], ep[j + 1], p.value);
-        if (!at) continue;
-        const double spread = MotionDistance(ImpactsOf(ep[j]), ImpactsOf(ep[j + 1]));
-        same = MotionDistance(*at, mine) <= req_.identity_tolerance + 0.1 * spread;
-      }
-      if (!same && bracketed)
-        for (const auto& o : OrbitsAt(e, p.value, false))
-          same = same || (SameSequence(o.sequence, p.sequence) &&
-                          MotionDistance(o.summary, p.summary) <= req_.identity_tolerance);
-      if (!bracketed) continue;
-      ++inside;
-      if (!same) {
-        all = false;
-        break;
-      }
-    }
-    if (all && inside >= std::max<size_t>(1, (samples.size() + 1) / 2)) return static_cast<int>(k);
+  size_t inside = 0;
+  for (size_t i : samples) {
+    const auto [bracketed, same] = Holds(e, pts[i], true);
+    if (!bracketed) continue;
+    ++inside;
+    if (!same) return false;
   }
+  return inside >= std::max<size_t>(1, (samples.size() + 1) / 2);
+}
+
+int Builder::TrimOverlap(DiagramBranch& n, size_t birth) const {
+  auto& pts = n.branch.points;
+  birth = std::min(birth, pts.size() - 1);
+  // Near the birth of a switched branch its orbits are close to its parent's.
+  const size_t near = n.origin == "seed" ? 0 : pts.size() / 5 + 1;
+  const auto held = [&](size_t i) -> int {
+    const size_t from_birth = i > birth ? i - birth : birth - i;
+    for (size_t k = 0; k < out_.branches.size(); ++k) {
+      const auto& e = out_.branches[k];
+      if (e.branch.period != n.branch.period || (static_cast<int>(k) == n.parent && from_birth < near)) continue;
+      if (Holds(e, pts[i], false).second) return static_cast<int>(k);
+    }
+    return -1;
+  };
+  size_t first = birth, last = birth;
+  int before = -1, after = -1;
+  while (first > 0 && (before = held(first - 1)) < 0) --first;
+  while (last + 1 < pts.size() && (after = held(last + 1)) < 0) ++last;
+  if (first == 0 && last + 1 == pts.size()) return -1;
+  if (last - first < 2) return first > 0 ? before : after;
+  const auto joins = [&](size_t keep, size_t next, int k) {
+    return fmt::format("joins branch {} after {} = {:.12g} (its orbits from {:.12g} on are that branch's)", k,
+                       out_.param, pts[keep].value, pts[next].value);
+  };
+  if (first > 0) n.end_first = joins(first, first - 1, before);
+  if (last + 1 < pts.size()) n.end_last = joins(last, last + 1, after);
+  KeepPoints(n, first, last);
   return -1;
 }
 
@@ -320,13 +430,47 @@ Branch Builder::Follow(double lambda0, double to, const OrbitRequest& orbit) con
   return br;
 }
 
-void Builder::Add(DiagramBranch n) {
+bool Builder::KeepLeastPeriod(DiagramBranch& n, size_t birth) {
+  auto& pts = n.branch.points;
+  const int q = n.branch.period;
+  birth = std::min(birth, pts.size() - 1);
+  const auto full = [&](size_t i) { return LeastPeriod(pts[i], q) == q; };
+  if (!full(birth)) {
+    out_.notes.push_back(fmt::format("the {} at {} = {:.12g}: its orbit has least period {}, not {} (not stored "
+                                     "as a period-{} branch)",
+                                     n.origin, out_.param, n.born_at, LeastPeriod(pts[birth], q), q, q));
+    return false;
+  }
+  size_t first = birth, last = birth;
+  while (first > 0 && full(first - 1)) --first;
+  while (last + 1 < pts.size() && full(last + 1)) ++last;
+  if (first == 0 && last + 1 == pts.size()) return true;
+  const auto cut = [&](size_t keep, size_t next) {
+    return fmt::format("runs into an orbit of least period {} after {} = {:.12g} (next point at {:.12g}; "
+                       "continued with period {} it would repeat that orbit's branch)",
+                       LeastPeriod(pts[next], q), out_.param, pts[keep].value, pts[next].value, q);
+  };
+  if (first > 0) n.end_first = cut(first, first - 1);
+  if (last + 1 < pts.size()) n.end_last = cut(last, last + 1);
+  KeepPoints(n, first, last);
+  return true;
+}
+
+void Builder::Add(DiagramBranch n, size_t birth) {
   if (n.branch.points.empty()) return;
+  if (!KeepLeastPeriod(n, birth)) return;
   const int dup = DuplicateOf(n);
   if (dup >= 0) {
     ++out_.duplicates;
     out_.notes.push_back(fmt::format("the {} at {} = {:.12g} leads to branch {} again (not stored twice)",
                                      n.origin == "seed" ? "seed" : n.origin, out_.param, n.born_at, dup));
+    return;
+  }
+  const int joined = TrimOverlap(n, birth);
+  if (joined >= 0) {
+    ++out_.duplicates;
+    out_.notes.push_back(fmt::format("the {} at {} = {:.12g} joins branch {} at once (not stored)", n.origin,
+                                     out_.param, n.born_at, joined));
     return;
   }
   if (static_cast<int>(out_.branches.size()) >= req_.max_branches) {
@@ -336,11 +480,15 @@ void Builder::Add(DiagramBranch n) {
     full_noted_ = true;
     return;
   }
-  const int index = static_cast<int>(out_.branches.size());
   out_.branches.push_back(std::move(n));
+  SwitchAt(out_.branches.size() - 1);
+}
+
+void Builder::SwitchAt(size_t stored) {
+  const int index = static_cast<int>(stored);
   Progress("switching");
   // Switching at its branch points and flips (a copy: out_.branches grows below).
-  const DiagramBranch b = out_.branches.back();
+  const DiagramBranch b = out_.branches[stored];
   for (const auto& bif : b.branch.bifurcations) {
     if (Stopped()) return;
     if (bif.kind != "branch-point" && bif.kind != "flip") continue;
@@ -354,9 +502,26 @@ void Builder::Add(DiagramBranch n) {
     }
     const auto t0 = std::chrono::steady_clock::now();
     const auto& pts = b.branch.points;
-    const auto near = std::min_element(pts.begin(), pts.end(), [&](const BranchPoint& x, const BranchPoint& y) {
+    // The point next to it: on a segment around its λ across which a real multiplier crosses +1
+    // (branch point) or −1 (flip), the nearer end (a branch that folds may pass its λ on several
+    // sheets); the point nearest in λ if no segment shows the crossing.
+    const double target = bif.kind == "flip" ? -1.0 : 1.0;
+    const auto beyond = [&](const BranchPoint& p) {
+      int n = 0;
+      for (const auto& m : p.multipliers)
+        if (std::abs(m.imag()) <= 1e-9 * std::max(1.0, std::abs(m)) && (m.real() - target) * target > 0) ++n;
+      return n;
+    };
+    auto near = std::min_element(pts.begin(), pts.end(), [&](const BranchPoint& x, const BranchPoint& y) {
       return std::abs(x.value - bif.value) < std::abs(y.value - bif.value);
     });
+    double gap = kInf;
+    for (size_t i = 0; i + 1 < pts.size(); ++i) {
+      const double lo = std::min(pts[i].value, pts[i + 1].value), hi = std::max(pts[i].value, pts[i + 1].value);
+      if (bif.value < lo - slack_ || bif.value > hi + slack_ || beyond(pts[i]) == beyond(pts[i + 1])) continue;
+      const size_t k = std::abs(pts[i].value - bif.value) <= std::abs(pts[i + 1].value - bif.value) ? i : i + 1;
+      if (std::abs(pts[k].value - bif.value) < gap) gap = std::abs(pts[k].value - bif.value), near = pts.begin() + static_cast<std::ptrdiff_t>(k);
+    }
     SwitchRequest s;
     s.scene_at = req_.scene_at;
     s.kind = bif.kind;
@@ -453,7 +618,8 @@ void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, 
   n.end_first = has_down ? down.end : "the seed lies at the end of the range";
   n.end_last = has_up ? up.end : "the seed lies at the end of the range";
   br.end = fmt::format("towards {:.12g}: {}; towards {:.12g}: {}", lo_, n.end_first, hi_, n.end_last);
-  Add(std::move(n));
+  const size_t birth = has_down && !down.points.empty() ? down.points.size() - 1 : 0;
+  Add(std::move(n), birth);
 }
 
 DiagramResult Builder::Run() {

@@ -11,7 +11,10 @@ free flight of one DOF in mpmath (40 digits) and nothing of vibro:
     - both asymmetric branches born there, mirror images of each other: the state of a point of one
       half a period later, mirrored, is a periodic orbit (one period simulated here returns to it,
       1e-9) that is not the point's own orbit, and its impacts are those of the other branch;
-    - no branch twice (two stored branches never hold the same orbit at the same a).
+    - no branch twice (two stored branches never hold the same orbit at the same a), whatever their
+      periods: no branch of period q holds an orbit whose impacts repeat after fewer periods (the
+      period-1 orbit continued as a period-3 one), and no orbit, compared over its least period,
+      lies on two branches.
 (b) the tube scene over omega in [0.4, 1.6]: every attractor of the sweep and of the searches is on
     a stable branch or reported uncovered with a reason; a covered period-1 attractor's section
     points lie on the branch's strobe.
@@ -247,6 +250,77 @@ def test_no_branch_twice(two_sided):
                             abs((p["strobe"][0] or 0) - (r["strobe"][0] or 0)) < 1e-9:
                         same += 1
             assert same < max(3, len(a["points"]) // 2), (i, j, same)
+
+
+def impacts_of(h5, name):
+    """Per point of a stored branch: its impacts over the branch's period as (contact, phase, speed)."""
+    b = h5["diagram/branches"][name]["branch"]
+    off = b["impact_offsets"][()]
+    ph, vb, c = b["impact_phase"][()], b["impact_v_before"][()], b["impact_contact"][()]
+    return b["value"][()], [list(zip(c[off[i]:off[i + 1]], ph[off[i]:off[i + 1]], vb[off[i]:off[i + 1]]))
+                            for i in range(len(off) - 1)]
+
+
+def least_period(imp, q, tol=1e-6):
+    """The least p dividing q such that shifting time by p periods (phase by 2 pi p, mod 2 pi q)
+    maps the impacts onto themselves."""
+    span = 2 * math.pi * q
+    for p in range(1, q):
+        if q % p or len(imp) % (q // p) or not imp:
+            continue
+        if all(any(c2 == c1 and abs((ph2 - ph1 - 2 * math.pi * p + span / 2) % span - span / 2) < tol and
+                   abs(v2 - v1) < tol * (1 + abs(v1)) for c2, ph2, v2 in imp) for c1, ph1, v1 in imp):
+            return p
+    return q
+
+
+def reduced(imp, q):
+    """The impacts of one least period, as sorted (contact, phase mod 2 pi, speed)."""
+    p = least_period(imp, q)
+    keep = [(int(c), ph % (2 * math.pi), v) for c, ph, v in imp if ph % (2 * math.pi * q) < 2 * math.pi * p - 1e-9]
+    return sorted(keep)
+
+
+def test_branches_hold_orbits_of_their_least_period(two_sided):
+    """A period-1 orbit continued with period 3 is still the period-1 orbit: no stored branch of
+    period q holds an orbit whose impacts repeat after fewer periods."""
+    d, out = two_sided
+    with h5py.File(out, "r") as f:
+        for i, b in enumerate(d["branches"]):
+            _, imps = impacts_of(f, f"{i:03d}")
+            short = [k for k, imp in enumerate(imps) if least_period(imp, b["period"]) < b["period"]]
+            assert not short, (i, b["period"], len(short), len(imps))
+
+
+def test_no_orbit_on_two_branches_of_any_periods(two_sided):
+    """Two stored branches, of the same period or not, never hold the same orbit (compared over its
+    least period: impact phases mod 2 pi and speeds) at the same a (the other branch's orbit there
+    interpolated between its two points around a)."""
+    d, out = two_sided
+    with h5py.File(out, "r") as f:
+        data = [(b["period"],) + impacts_of(f, f"{i:03d}") for i, b in enumerate(d["branches"])]
+    for i, (qi, vi, ii) in enumerate(data):
+        for j, (qj, vj, ij) in enumerate(data):
+            if j == i:
+                continue
+            same = checked = 0
+            for k in range(0, len(vi), max(1, len(vi) // 12)):
+                a, mine = vi[k], reduced(ii[k], qi)
+                for m in range(len(vj) - 1):
+                    lo, hi = sorted((vj[m], vj[m + 1]))
+                    if not lo <= a <= hi or hi - lo > 0.2:
+                        continue
+                    x, y = reduced(ij[m], qj), reduced(ij[m + 1], qj)
+                    if len(x) != len(mine) or len(y) != len(mine):
+                        continue
+                    w = 0.0 if hi == lo else (a - vj[m]) / (vj[m + 1] - vj[m])
+                    checked += 1
+                    if all(c1 == c2 == c3 and abs(p1 - (p2 + w * (p3 - p2))) < 1e-2 and
+                           abs(s1 - (s2 + w * (s3 - s2))) < 1e-2 * (1 + abs(s1))
+                           for (c1, p1, s1), (c2, p2, s2), (c3, p3, s3) in zip(mine, x, y)):
+                        same += 1
+                        break
+            assert same < 3, (i, j, same, checked)
 
 
 def test_ends_are_reported(two_sided):
