@@ -11,6 +11,7 @@
 #include "cli/stop_signals.hpp"
 #include "cli/text_format.hpp"
 #include "frontend/run_output.hpp"
+#include "vibro/child_process.hpp"
 #include "vibro/distribute.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/scene_file.hpp"
@@ -44,7 +45,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   std::vector<vibro::CellResult> cells(points.size());
   std::unique_ptr<vibro::Hdf5Store> store;
   std::optional<vibro::InputError> file_problem;
-  bool out_of_memory = false;
+  bool out_of_memory = false, stopped = false;
   if (dist.root() && !args.out.empty()) {
     try {
       store = vibro::frontend::OpenStudyOutput(args.out, vibro::frontend::HeaderOf(loaded, sys), grid, args.resume,
@@ -53,12 +54,15 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
       file_problem = e;
     } catch (const std::bad_alloc&) {  // a limit (exit 3), not bad input
       out_of_memory = true;
+    } catch (const vibro::Interrupted&) {  // a stop request during the file's test read (exit 130)
+      stopped = true;
     } catch (const std::exception& e) {  // every rank must hear of it (no rank left waiting)
       file_problem = vibro::InputError({fmt::format("{}: cannot write the study: {}", args.out, e.what())});
     }
   }
-  if (dist.Any(file_problem.has_value() || out_of_memory)) {
+  if (dist.Any(file_problem.has_value() || out_of_memory || stopped)) {
     if (out_of_memory) throw std::bad_alloc();
+    if (stopped) return kExitInterrupted;
     if (file_problem) throw *file_problem;
     return kExitBadInput;  // reported by rank 0
   }

@@ -26,6 +26,7 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
   std::vector<std::string> problems;
   std::vector<ClaimedPoint> points;
   std::map<std::string, size_t> column;  // name → index
+  std::vector<size_t> strobes;           // the strobe_J columns
   std::vector<std::string> names;
   std::string line;
   int number = 0;
@@ -47,7 +48,14 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
         known.push_back(fmt::format("velocity_{}", i));
       }
       for (size_t c = 0; c < cells.size(); ++c) {
-        if (IsStrobeColumn(cells[c])) continue;  // no claim (plots)
+        // strobe_J: no claim (plots), but read as every column is: once, empty or a finite number.
+        if (IsStrobeColumn(cells[c])) {
+          if (column.count(cells[c]))
+            problems.push_back(fmt::format("{}: column '{}' given twice", where(c), cells[c]));
+          else
+            strobes.push_back(column[cells[c]] = c);
+          continue;
+        }
         if (std::find(known.begin(), known.end(), cells[c]) == known.end())
           problems.push_back(fmt::format("{}: unknown column '{}' (expected value, time, displacement_1..{}, "
                                          "velocity_1..{}, and optionally period, stable, sticking_fraction, "
@@ -86,6 +94,7 @@ std::vector<ClaimedPoint> ReadBranchCsv(const std::string& path, int n) {
         return std::nullopt;
       }
     };
+    for (const size_t c : strobes) number_at(names[c], false);  // checked, not kept
     ClaimedPoint p;
     p.line = number;
     p.value = number_at("value", true).value_or(0.0);

@@ -447,3 +447,21 @@ def test_continued_branch_exported_and_validated(tmp_path):
     assert p.returncode == 4
     verdicts = [pt["verdict"] for pt in j["points"]]
     assert verdicts.count("sequence-differs") == 1 and verdicts[len(body) // 2] == "sequence-differs"
+    # The strobe_J columns carry no claim but are read as every column is (fuzz/surfaces.py found a
+    # duplicated or non-finite strobe column accepted): once, and empty or a finite number.
+    body[len(body) // 2][k] = body[0][k]  # the sequence made right again
+    s0 = header.index("strobe_0")
+    write_csv(tmp_path / "dup.csv", [r + [r[s0]] for r in body], header + ["strobe_0"])
+    p, _ = validate_json(str(tmp_path / "dup.csv"))
+    assert p.returncode == 2 and f"dup.csv:1:{len(header) + 1} (strobe_0): column 'strobe_0' given twice" in p.stderr, p.stderr
+    for bad in ("nan", "inf", "x"):
+        rows_bad = [list(r) for r in body]
+        rows_bad[1][s0] = bad
+        write_csv(tmp_path / "bad.csv", rows_bad, header)
+        p, _ = validate_json(str(tmp_path / "bad.csv"))
+        assert p.returncode == 2 and f"bad.csv:3:{s0 + 1} (strobe_0): '{bad}' is not a finite number" in p.stderr, p.stderr
+    rows_empty = [list(r) for r in body]
+    rows_empty[1][s0] = ""  # NaN strobe, as branch_to_csv.py writes it
+    write_csv(tmp_path / "empty.csv", rows_empty, header)
+    p, _ = validate_json(str(tmp_path / "empty.csv"))
+    assert p.returncode == 0, p.stdout + p.stderr
