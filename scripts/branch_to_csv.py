@@ -9,7 +9,7 @@ scene's [initial] convention (physical DOFs q, q_dot for a physical scene, modal
 period, stable, sticking_fraction (empty when the orbit does not stick), and sequence (each
 point's contact sequence, when the branch is of a scene with several contacts: /branch/sequence
 holds a non-empty entry), then strobe_0..strobe_{m-1} (each contact's coordinate at the start's
-forcing phase, /branch/strobe: for plots, `vibro validate` reads past them). Writes to stdout without OUT.csv. Exit 2 when the file holds no branch
+forcing phase, /branch/strobe: for plots; `vibro validate` claims nothing from them, only checks them as numbers; a NaN is written empty). Writes to stdout without OUT.csv. Exit 2 when the file holds no branch
 with orbit states.
 """
 import csv
