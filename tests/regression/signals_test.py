@@ -55,7 +55,10 @@ def cpu_seconds(pid):
             except OSError:
                 continue
             if child[1] == str(pid):
-                total += cpu_seconds(int(entry))
+                try:
+                    total += cpu_seconds(int(entry))
+                except OSError:  # the child ended meanwhile (e.g. a file's test read): not ours to count
+                    continue
     return total
 
 
