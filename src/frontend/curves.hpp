@@ -1,0 +1,35 @@
+// `vibro curve` and vibro.curve (docs/diagram.md, "Two-parameter curves"): the checks, the start of
+// each curve (a bifurcation stored by `vibro continue --out`, or the first one met on a segment of
+// the parameter plane from the scene's values) and the tracing, shared by the command line and Python.
+#pragma once
+
+#include <atomic>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "frontend/frontend.hpp"
+#include "frontend/limits.hpp"
+#include "vibro/two_parameter.hpp"
+
+namespace vibro::frontend {
+
+struct CurveSpec {
+  std::vector<std::string> params;             // KEY1, KEY2
+  std::vector<std::string> kinds;              // CurveKinds(); empty with --from: the stored bifurcation's kind
+  long long contact = -1;                      // non-smooth kinds, several contacts (−1: any)
+  std::vector<double> range1, range2;          // the box
+  std::vector<double> toward;                  // A,B: search the segment from the scene's (KEY1, KEY2) to (A, B)
+  std::string from;                            // or: the bifurcation `point` of this stored branch
+  long long point = -1;
+  double step = 0.02, max_step = 0.1;          // in units of the box scaled to (0, 1)²
+  long long max_points = 200, period = 0, transient = 200;
+};
+
+// Checks the spec against the scene (InputError with every problem), finds the start and traces one
+// curve per kind. on_point(curve index, points, v1, v2) after each point.
+std::vector<Curve> TraceCurves(const SceneOrigin& origin, const LoadedScene& loaded, const CurveSpec& spec,
+                               Naming naming, const std::atomic<bool>* stop,
+                               const std::function<void(size_t, size_t, double, double)>& on_point = {});
+
+}  // namespace vibro::frontend
