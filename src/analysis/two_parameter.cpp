@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <optional>
 
 #include <fmt/format.h>
@@ -97,9 +96,9 @@ class Tracer {
     }
     cr.from = 0.0;
     cr.to = L;
-    cr.step = L / 16;
-    cr.max_step = L / 4;
-    cr.max_points = 120;  // a line that needs more is crawling round something else
+    cr.step = L / 8;
+    cr.max_step = 4 * L;  // arclength in (z, λ): the state may change far faster than λ
+    cr.max_points = 400;
     cr.orbit.kind = OrbitKind::kAuto;
     cr.orbit.period = seed.period;
     cr.orbit.transient_periods = 0;
@@ -178,6 +177,36 @@ class Tracer {
       }
     }
     return f;
+  }
+
+  // The first bifurcation met by continuing the orbit `seed` along u = seed.u + s·dir, s ∈ [0, L]
+  // (none: nothing met), with where it is (scaled).
+  std::optional<std::pair<Bifurcation, Vec2>> FirstAlong(const Seed& seed, const Vec2& dir, double L) {
+    ContinuationRequest cr;
+    const Vec2 S = seed.u;
+    cr.scene_at = [this, S, dir](double s) {
+      const Vec2 p = Param(S + s * dir);
+      return req_.scene_at(p[0], p[1]);
+    };
+    try {
+      const Scene at = cr.scene_at(0.0);
+      cr.from = 0.0;
+      cr.to = L;
+      cr.step = L / 8;
+      cr.max_step = 4 * L;  // arclength in (z, λ): the state may change far faster than λ
+      cr.max_points = 400;
+      cr.orbit.kind = OrbitKind::kAuto;
+      cr.orbit.period = seed.period;
+      cr.orbit.transient_periods = 0;
+      cr.orbit.start = InitialOverride{seed.section_time * seed.frequency / at.frequency, seed.X, seed.V};
+      cr.stop_requested = req_.stop_requested;
+      const Branch br = Continue(cr);
+      if (br.bifurcations.empty()) return std::nullopt;
+      const auto& b = br.bifurcations.front();
+      return std::make_pair(b, Vec2(S + b.value * dir));
+    } catch (const std::exception&) {
+      return std::nullopt;
+    }
   }
 
   Seed SeedOf(const BranchPoint& p, const Vec2& u, double frequency) const {
@@ -291,7 +320,7 @@ Curve TraceCurve(const CurveRequest& req) {
     Half half;
     Found cur = *start;
     Vec2 nu = d, tau = sigma * Perp(d);
-    double h = std::min(req.step, req.max_step);
+    double h = std::min(req.step, req.max_step), h_end = h;
     std::string last_failure;
     for (int k = 0; k < req.max_points; ++k) {
       if (tr.stopped()) {
@@ -332,7 +361,6 @@ Curve TraceCurve(const CurveRequest& req) {
           return half;
         }
         next = correct(h, last_failure, half.points.empty() ? 8.0 : 1.0);
-        if (std::getenv("VIBRO_CURVE_DEBUG")) fmt::print(stderr, "h={:.3g} {}\n", h, next ? "ok" : last_failure);
         if (next) {
           t_new = (next->u - cur.u).normalized();
           if (t_new.dot(tau) > std::cos(M_PI / 6) || h <= 4 * h_min) break;
@@ -350,6 +378,26 @@ Curve TraceCurve(const CurveRequest& req) {
         }
         half.end = fmt::format("the curve could not be continued past ({:.12g}, {:.12g}): {}",
                                tr.Param(cur.u)[0], tr.Param(cur.u)[1], last_failure);
+        // What ends it: the family, continued from its orbit next to the end along the curve's
+        // tangent, meets another boundary within a few steps (a corner of the family's region:
+        // a codimension-two point where the two curves meet).
+        if (!tr.stopped())
+          if (const auto other = tr.FirstAlong(cur.seed, tau, std::max(4.0 * h_end, 1e-4));
+              other && other->first.kind != req.kind) {
+            const Vec2 at = tr.Param(other->second);
+            CodimTwoPoint c;
+            c.kind = req.kind + "-" + other->first.kind;
+            c.value1 = at[0];
+            c.value2 = at[1];
+            c.bracket = (other->second - cur.u).norm();
+            c.after = half.points.size();
+            c.detail = fmt::format("the {} curve ends where the family meets a {} boundary ({}): a corner of the "
+                                   "region where the orbit exists",
+                                   req.kind, other->first.kind, other->first.detail);
+            half.special.push_back(c);
+            half.end = fmt::format("the curve ends at ({:.12g}, {:.12g}), where it meets a {} curve (codimension two)",
+                                   at[0], at[1], other->first.kind);
+          }
         return half;
       }
       if (!InBox(next->u)) {  // kept when just past the edge (the predictor stopped at it)
@@ -404,6 +452,7 @@ Curve TraceCurve(const CurveRequest& req) {
       tau = t_new;
       nu = nu_new;
       cur = *next;
+      h_end = h;
       h = std::min(1.5 * h, req.max_step);
     }
     half.end = "max points";
