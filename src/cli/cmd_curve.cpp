@@ -20,21 +20,17 @@ int RunCurve(const std::string& path, const std::vector<std::string>& sets, bool
   const auto loaded = origin.Load();
   const vibro::System sys(loaded.scene);
   vibro::cli::Progress progress("curve", json);
+  const auto plan = vibro::frontend::PlanCurves(origin, loaded, a.spec, vibro::frontend::Naming::kCli);
   std::unique_ptr<vibro::Hdf5Store> store;
-  // The options are checked before the file is made (TraceCurves throws InputError first), so the
-  // store is created once the start is known: a refused command writes nothing.
-  const auto curves = vibro::frontend::TraceCurves(
-      origin, loaded, a.spec, vibro::frontend::Naming::kCli, &vibro::cli::StopFlag(),
-      [&](size_t c, size_t n, double x, double y) {
-        if (progress.active())
-          progress.Update(static_cast<long long>(n), a.spec.max_points,
-                          fmt::format("curve {}: ({:.8g}, {:.8g})", c, x, y));
-      });
+  if (!a.out.empty()) store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, sys));  // fails early
+  const auto curves = vibro::frontend::TraceCurves(plan, &vibro::cli::StopFlag(), [&](size_t c, size_t n, double x, double y) {
+    if (progress.active())
+      progress.Update(static_cast<long long>(n), a.spec.max_points, fmt::format("curve {}: ({:.8g}, {:.8g})", c, x, y));
+  });
   const bool interrupted = vibro::cli::StopRequested();
   bool found = false;
   for (const auto& c : curves) found = found || c.status != "no-start";
-  if (!a.out.empty()) {
-    store = vibro::Hdf5Store::Create(a.out, vibro::frontend::HeaderOf(loaded, sys));
+  if (store) {
     const vibro::cli::FinalWrite writing;
     vibro::WriteCurves(*store, a.spec.params[0], a.spec.params[1], curves);
     vibro::RunResult r;

@@ -12,9 +12,7 @@
 
 namespace vibro::frontend {
 
-std::vector<Curve> TraceCurves(const SceneOrigin& origin, const LoadedScene& loaded, const CurveSpec& a,
-                               Naming naming, const std::atomic<bool>* stop,
-                               const std::function<void(size_t, size_t, double, double)>& on_point) {
+CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const CurveSpec& a, Naming naming) {
   const auto opt = [&](const char* o) { return OptionName(naming, o); };
   std::vector<std::string> problems;
   if (a.params.size() != 2 || a.params[0] == a.params[1])
@@ -60,7 +58,6 @@ std::vector<Curve> TraceCurves(const SceneOrigin& origin, const LoadedScene& loa
   req.max_step = a.max_step;
   req.max_points = static_cast<int>(a.max_points);
   req.contact = static_cast<int>(a.contact);
-  req.stop_requested = stop;
   std::vector<std::string> kinds = a.kinds;
   if (stored) {
     // The stored bifurcation: the branch point nearest to it (not on it) is the start, and the
@@ -123,16 +120,23 @@ std::vector<Curve> TraceCurves(const SceneOrigin& origin, const LoadedScene& loa
     req.dir1 = a.toward[0] - *v1;
     req.dir2 = a.toward[1] - *v2;
   }
+  return CurvePlan{req, kinds, a.params[0], a.params[1]};
+}
+
+std::vector<Curve> TraceCurves(const CurvePlan& plan, const std::atomic<bool>* stop,
+                               const std::function<void(size_t, size_t, double, double)>& on_point) {
   std::vector<Curve> curves;
-  for (size_t i = 0; i < kinds.size(); ++i) {
+  CurveRequest req = plan.request;
+  req.stop_requested = stop;
+  for (size_t i = 0; i < plan.kinds.size(); ++i) {
     if (stop && stop->load()) break;
-    req.kind = kinds[i];
+    req.kind = plan.kinds[i];
     req.progress = [&, i](size_t n, double x, double y) {
       if (on_point) on_point(i, n, x, y);
     };
     Curve c = TraceCurve(req);
-    c.param1 = a.params[0];
-    c.param2 = a.params[1];
+    c.param1 = plan.param1;
+    c.param2 = plan.param2;
     curves.push_back(std::move(c));
   }
   return curves;

@@ -26,10 +26,17 @@ struct CurveSpec {
   long long max_points = 200, period = 0, transient = 200;
 };
 
-// Checks the spec against the scene (InputError with every problem), finds the start and traces one
-// curve per kind. on_point(curve index, points, v1, v2) after each point.
-std::vector<Curve> TraceCurves(const SceneOrigin& origin, const LoadedScene& loaded, const CurveSpec& spec,
-                               Naming naming, const std::atomic<bool>* stop,
+// What to trace: the request (box, steps, the start orbit and the search segment) and the kinds.
+struct CurvePlan {
+  CurveRequest request;
+  std::vector<std::string> kinds;
+  std::string param1, param2;
+};
+// Checks the spec against the scene (InputError with every problem) and finds the start: the stored
+// bifurcation's nearest branch point, or the orbit of the scene (a transient and Newton).
+CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const CurveSpec& spec, Naming naming);
+// One curve per kind. on_point(curve index, points, v1, v2) after each point.
+std::vector<Curve> TraceCurves(const CurvePlan& plan, const std::atomic<bool>* stop,
                                const std::function<void(size_t, size_t, double, double)>& on_point = {});
 
 }  // namespace vibro::frontend

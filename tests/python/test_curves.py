@@ -291,8 +291,9 @@ def test_python_curve_matches_cli():
     p = vibro("curve", FIG08, "--set", "stop.restitution=0", "--param", "excitation.frequency,excitation.amplitude",
               "--kind", "sticking-lost", "--range1", "4,10", "--range2", "1,12", "--toward", "5,8", "--json")
     cli = json.loads(p.stdout)["curves"][0]
-    curves = vibro_mod.curve(FIG08, params=("excitation.frequency", "excitation.amplitude"), kinds=["sticking-lost"],
-                             range1=(4, 10), range2=(1, 12), toward=(5, 8), sets=["stop.restitution=0"])
+    scene = vibro_mod.load_scene(FIG08, set=["stop.restitution=0"])
+    curves = vibro_mod.curve(scene, ("excitation.frequency", "excitation.amplitude"), (4, 10), (1, 12),
+                             kind="sticking-lost", toward=(5, 8))
     c = curves[0]
     assert c["kind"] == "sticking-lost"
     assert isinstance(c["value1"], np.ndarray) and isinstance(c["value2"], np.ndarray)
