@@ -301,7 +301,7 @@ int main(int argc, char** argv) {
     curve->add_option("--range2", crv.spec.range2, "C,D: range of KEY2")->check(kFinite)->delimiter(',')->required();
     CLI::Option* toward = curve->add_option("--toward", crv.spec.toward,
                                             "A,B: start from the first such bifurcation met on the segment from the "
-                                            "scene's (KEY1, KEY2) to (A, B)")
+                                            "scene's (KEY1, KEY2) to (A, B); A1,B1,A2,B2,...: one end per kind")
                               ->check(kFinite)
                               ->delimiter(',');
     CLI::Option* cfrom = curve->add_option("--from", crv.spec.from, "or start from a bifurcation stored by vibro continue --out")

@@ -25,7 +25,8 @@ CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const
   const bool stored = !a.from.empty();
   if (stored == !a.toward.empty())
     problems.push_back(fmt::format("give the start: {} BRANCH.h5 {} K, or {} A,B", opt("--from"), opt("--point"), opt("--toward")));
-  if (!stored && a.toward.size() != 2) problems.push_back(opt("--toward") + ": expected A,B (a point of the plane)");
+  if (!stored && !a.toward.empty() && a.toward.size() != 2 && a.toward.size() != 2 * a.kinds.size())
+    problems.push_back(opt("--toward") + ": expected A,B (a point of the plane), or one point per kind");
   if (!stored && a.kinds.empty()) problems.push_back(opt("--kind") + ": give the kind(s) of bifurcation to follow");
   if (stored && a.point < 0) problems.push_back(fmt::format("{} {}: give the bifurcation with {} K", opt("--from"), a.from, opt("--point")));
   if (!(a.step > 0 && a.step <= 1)) problems.push_back(fmt::format("{} {}: expected a number in (0, 1]", opt("--step"), a.step));
@@ -120,7 +121,11 @@ CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const
     req.dir1 = a.toward[0] - *v1;
     req.dir2 = a.toward[1] - *v2;
   }
-  return CurvePlan{req, kinds, a.params[0], a.params[1]};
+  std::vector<std::pair<double, double>> directions;
+  for (size_t i = 0; i < kinds.size(); ++i)
+    directions.emplace_back(!stored && a.toward.size() > 2 ? a.toward[2 * i] - *v1 : req.dir1,
+                            !stored && a.toward.size() > 2 ? a.toward[2 * i + 1] - *v2 : req.dir2);
+  return CurvePlan{req, kinds, directions, a.params[0], a.params[1]};
 }
 
 std::vector<Curve> TraceCurves(const CurvePlan& plan, const std::atomic<bool>* stop,
@@ -131,6 +136,8 @@ std::vector<Curve> TraceCurves(const CurvePlan& plan, const std::atomic<bool>* s
   for (size_t i = 0; i < plan.kinds.size(); ++i) {
     if (stop && stop->load()) break;
     req.kind = plan.kinds[i];
+    req.dir1 = plan.directions[i].first;
+    req.dir2 = plan.directions[i].second;
     req.progress = [&, i](size_t n, double x, double y) {
       if (on_point) on_point(i, n, x, y);
     };

@@ -19,7 +19,8 @@ struct CurveSpec {
   std::vector<std::string> kinds;              // CurveKinds(); empty with --from: the stored bifurcation's kind
   long long contact = -1;                      // non-smooth kinds, several contacts (−1: any)
   std::vector<double> range1, range2;          // the box
-  std::vector<double> toward;                  // A,B: search the segment from the scene's (KEY1, KEY2) to (A, B)
+  // A,B: search the segment from the scene's (KEY1, KEY2) to (A, B); or A1,B1,A2,B2,...: one end per kind
+  std::vector<double> toward;
   std::string from;                            // or: the bifurcation `point` of this stored branch
   long long point = -1;
   double step = 0.02, max_step = 0.1;          // in units of the box scaled to (0, 1)²
@@ -30,6 +31,7 @@ struct CurveSpec {
 struct CurvePlan {
   CurveRequest request;
   std::vector<std::string> kinds;
+  std::vector<std::pair<double, double>> directions;  // the search segment of each kind (request.dir1, dir2)
   std::string param1, param2;
 };
 // Checks the spec against the scene (InputError with every problem) and finds the start: the stored
