@@ -407,7 +407,7 @@ int main(int argc, char** argv) {
   // on a stop request, keeps what it computed and exits 3. simulate adds its pace check to it
   // (frontend/run_budget.hpp); prove has its own, whose end is the verdict "not proven" (exit 4).
   double time_limit = vibro::frontend::RunBudget::kDefaultTimeLimit;
-  for (CLI::App* cmd : {model, orbit, cont, diagram, attractors, basin, partition, sweep, validate, score, check, info, plot})
+  for (CLI::App* cmd : {model, orbit, cont, curve, diagram, attractors, basin, partition, sweep, validate, score, check, info, plot})
     if (Wanted(cmd))
       cmd->add_option("--time-limit", time_limit,
                       "seconds for the whole command, transients included (default 86400, one day; 0: none): past "
@@ -415,7 +415,7 @@ int main(int argc, char** argv) {
           ->check(CLI::Range(0.0, 1e12));
 
   bool force = false;
-  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep, diagram})
+  for (CLI::App* cmd : {simulate, orbit, cont, curve, basin, partition, sweep, diagram})
     if (Wanted(cmd)) cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
 
   try {
