@@ -361,7 +361,6 @@ Outcome ProveStickingModes(const IntervalModel& mdl, const StickingGuess& guess,
     monodromy.push_back(r);
   }
   out.certificate["monodromy"] = monodromy;
-  out.certificate["held_coordinate"] = kk;
   out.certificate["inequalities"] = ledger.list();
 
   Json Xs = Json::array(), Vs = Json::array();
