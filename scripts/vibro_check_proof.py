@@ -1155,9 +1155,6 @@ def check_sticking(cert, m, ledger):
     if not hi(m.r) < 1:
         raise NotConfirmed("a sticking certificate needs 0 <= r < 1")
     plastic = lo(m.r) == 0 and hi(m.r) == 0
-    if m.zeta is not None and not plastic:
-        raise NotConfirmed("a sticking certificate of a damped model needs r = 0 (the chattering tail's bounds are "
-                           "those of the undamped model)")
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
@@ -1383,11 +1380,22 @@ def check_tail(cert, m, ledger, count, tL, vplus, reaction, w1s):
     rho = m.r * iv.sqrt(a_hi / A_low)
     claim_contains(tail["contraction"], rho, "the tail's contraction r sqrt(a_hi/A_lo)")
     ledger.check("tail contraction 1 - rho", tl, "> 0", 1 - rho, 1 - rho)
-    Tmax = 2 * v / (A_low * (1 - rho))
-    claim_upper(tail["time_bound"], Tmax, "the tail's time bound 2v/(A_lo (1 - rho))")
+    if m.zeta is None:
+        Tmax = 2 * v / (A_low * (1 - rho))
+        rho_low = m.r * iv.sqrt(A_low / a_hi)
+        Tmin = 2 * v_low / (a_hi * (1 - rho_low))
+    else:
+        # Damped, y'' = -w1² y - 2σ y' - T_B R (σ = ζ w1): the damping shortens the rise (Y <= v²/(2 A_lo))
+        # and takes energy in the fall (landing speed <= v sqrt(a_hi/A_lo)), but slows the fall, where
+        # y'' <= -(A_lo - 2σ v sqrt(a_hi/A_lo)) = -f_lo: a flight lasts at most v/A_lo + v/sqrt(A_lo f_lo)
+        # <= 2v/f_lo. From below, at least the first rise, v_lo/(a_hi + 2σ v).
+        sigma = m.zeta[0] * m.w_i[0]
+        f_lo = A_low - 2 * sigma * v * iv.sqrt(a_hi / A_low)
+        ledger.check("tail fall acceleration A_lo - 2 sigma v sqrt(a_hi/A_lo)", tl, "> 0", f_lo, f_lo)
+        Tmax = 2 * v / (f_lo * (1 - rho))
+        Tmin = v_low / (a_hi + 2 * sigma * v)
+    claim_upper(tail["time_bound"], Tmax, "the tail's time bound")
     ledger.check("tail window L - Tmax", tl, "> 0", L - Tmax, L - Tmax)
-    rho_low = m.r * iv.sqrt(A_low / a_hi)
-    Tmin = 2 * v_low / (a_hi * (1 - rho_low))
     t_end = iv.mpf([lo(tL + Tmin), hi(tL + Tmax)])
     claim_contains(tail["accumulation"], t_end, "the accumulation time")
     return t_end

@@ -442,9 +442,6 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
     if (system.contact_count() > 1) {
       outcome.reason = "sticking orbits of a model with several contacts are not proven by this version "
                        "(docs/prove.md)";
-    } else if (one_dof && system.damped() && system.restitution() > 0) {
-      outcome.reason = "sticking orbits with chattering (r > 0) of a damped model are not proven by this version "
-                       "(docs/prove.md)";
     } else if (one_dof) {
       outcome = proof::ProveSticking1Dof(model, request, budget);  // r = 0, or r > 0 with chattering
     } else if (system.restitution() > 0) {
