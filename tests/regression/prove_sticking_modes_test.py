@@ -3,8 +3,9 @@
 orbits of several modes") against a truth computed here at 50 digits in physical coordinates
 (sticking_truth.py: the scene's matrices, mpmath's expm, findroot; nothing of vibro's sources).
 
-For the 2-DOF chain with a preloaded stop under mass 2 and r = 0 (undamped and with 2 % modal
-damping) and the 3-DOF chain: every claim of the summary contains the truth (the release and landing
+For the 2-DOF chain with a preloaded stop under mass 2 and r = 0 (undamped, with 2 % modal damping, and a
+period-2 orbit whose first landing departs at once (R < 0)) and the 3-DOF chain: every claim of the
+summary contains the truth (the release and landing
 phases, the contact velocity before the landing, the multipliers one-to-one, the stability), the
 certificate is confirmed by the checker, and edits of it (a bound moved past the truth, a piece of
 the held phase removed, a window or a reaction claim moved) are rejected. Soundness: near the
@@ -41,7 +42,7 @@ position    = 1.0
 restitution = {r}
 [excitation]
 amplitude = {f}
-frequency = 0.8
+frequency = {w}
 [run]
 periods = 200
 """
@@ -90,25 +91,32 @@ def modal_guess(Mx, Kx, cd, X):
 
 
 def truth_of(label, Mx, Kx, cd, f, w, summary, zeta=None):
-    tr_phase = mpf(summary["events"][0]["phase"][0])
-    land_phase = mpf(summary["events"][1]["phase"][0])
-    flight = ((land_phase - tr_phase) % (2 * pi)) / mpf(w)
+    ev = summary["events"]
+    starts = [mpf(e["time"][0]) for e in ev if e["kind"] in ("release", "departure")]
+    lands = [mpf(e["time"][0]) for e in ev if e["kind"] == "impact"]
+    flights = [b - a for a, b in zip(starts, lands)]
     sec = summary["section"]
     x = modal_guess(Mx, Kx, cd, [p[0] for p in sec["X"]])
     v = modal_guess(Mx, Kx, cd, [p[0] for p in sec["V"]])
     F = [i for i in range(len(Mx)) if i != cd]
-    T = StickTruth(Mx, Kx, 0, cd, 1, f, w, zeta=zeta)
-    T.solve(tr_phase / mpf(w), [x[i] for i in F], [v[i] for i in F], flight)
+    T = StickTruth(Mx, Kx, 0, cd, 1, f, w, zeta=zeta, q=summary["period"])
+    T.solve(mpf(sec["time"][0]), [x[i] for i in F], [v[i] for i in F], flights)
     return T
 
 
 def compare(label, s, T):
     ev = s["events"]
-    expect([e["kind"] for e in ev] == ["release", "impact", "stick"], f"{label}: release, impact, stick ({[e['kind'] for e in ev]})")
+    kinds = ["release"]
+    for k in range(len(T.lands)):
+        kinds += ["impact", "stick" if k == len(T.lands) - 1 else "departure"]
+    expect([e["kind"] for e in ev] == kinds, f"{label}: the sequence {kinds} ({[e['kind'] for e in ev]})")
     expect(contains_phase(ev[0]["phase"], T.tr, T.w), f"{label}: the release phase contains the truth {mp.nstr(phase_of(T.tr, T.w), 20)}")
-    expect(contains_phase(ev[1]["phase"], T.tL, T.w), f"{label}: the landing phase contains the truth {mp.nstr(phase_of(T.tL, T.w), 20)}")
-    expect(inside(T.vminus, ev[1]["velocity_before"]), f"{label}: the speed before the landing contains {mp.nstr(T.vminus, 20)}")
-    expect(T.RL > 0, f"{label}: the truth sticks at the landing (R = {mp.nstr(T.RL, 12)})")
+    impacts = [e for e in ev if e["kind"] == "impact"]
+    for k, ((tL, vm, RL, _, _), e) in enumerate(zip(T.lands, impacts)):
+        expect(contains_phase(e["phase"], tL, T.w), f"{label}: landing {k + 1}'s phase contains the truth {mp.nstr(phase_of(tL, T.w), 20)}")
+        expect(inside(vm, e["velocity_before"]), f"{label}: the speed before landing {k + 1} contains {mp.nstr(vm, 20)}")
+        last = k == len(T.lands) - 1
+        expect(RL > 0 if last else RL < 0, f"{label}: the truth {'sticks' if last else 'departs'} at landing {k + 1} (R = {mp.nstr(RL, 12)})")
     mus = T.multipliers()
     claims = [(m["re"], m["im"]) for m in s["multipliers"]]
     left = list(claims)
@@ -164,11 +172,16 @@ def mutations(label, path):
 
 M2 = [[1, 0], [0, 1]]
 K2 = [[2, -1], [-1, 1]]
-cases = [("2-DOF chain r = 0", CHAIN2.format(r="0.0", f="0.8", damping=""), M2, K2, 1, None),
-         ("2-DOF chain r = 0, 2 % damping", CHAIN2.format(r="0.0", f="0.8", damping="damping_ratios = [0.02, 0.02]"),
-          M2, K2, 1, ["0.02", "0.02"]),
-         ("3-DOF chain r = 0", CHAIN3, [[1, 0, 0], [0, 1, 0], [0, 0, 1]], [[2, -1, 0], [-1, 2, -1], [0, -1, 1]], 2, None)]
-for label, text, Mx, Kx, cd, zeta in cases:
+cases = [("2-DOF chain r = 0", CHAIN2.format(r="0.0", f="0.8", w="0.8", damping=""), M2, K2, 1, None, "0.8", "0.8"),
+         ("2-DOF chain r = 0, 2 % damping",
+          CHAIN2.format(r="0.0", f="0.8", w="0.8", damping="damping_ratios = [0.02, 0.02]"),
+          M2, K2, 1, ["0.02", "0.02"], "0.8", "0.8"),
+         # Period 2, a landing with R < 0 (the body departs at once), then one that sticks.
+         ("2-DOF chain r = 0, omega = 2, f = 8", CHAIN2.format(r="0.0", f="8", w="2.0", damping=""), M2, K2, 1, None,
+          "8", "2"),
+         ("3-DOF chain r = 0", CHAIN3, [[1, 0, 0], [0, 1, 0], [0, 0, 1]], [[2, -1, 0], [-1, 2, -1], [0, -1, 1]], 2, None,
+          "0.8", "0.8")]
+for label, text, Mx, Kx, cd, zeta, famp, fw in cases:
     scene = scene_file(label.replace(" ", "_").replace(",", "").replace("%", "") + ".toml", text)
     out = os.path.join(H.tmp, label.replace(" ", "_").replace(",", "").replace("%", "") + ".json")
     code, s, err = prove(scene, out=out)
@@ -176,7 +189,7 @@ for label, text, Mx, Kx, cd, zeta in cases:
            f"{label}: proven (exit {code}, {s and s['reason'][:160]} {err[:200]})")
     if code != 0:
         continue
-    T = truth_of(label, Mx, Kx, cd, "0.8", "0.8", s, zeta)
+    T = truth_of(label, Mx, Kx, cd, famp, fw, s, zeta)
     compare(label, s, T)
     c, v = check(out)
     expect(c == 0, f"{label}: the certificate is confirmed by the checker ({v})")
@@ -189,14 +202,14 @@ for label, text, Mx, Kx, cd, zeta in cases:
 
 # Soundness at the end of the orbit: the amplitude f* where R at the landing vanishes.
 T0 = None
-scene = scene_file("c2.toml", CHAIN2.format(r="0.0", f="0.8", damping=""))
+scene = scene_file("c2.toml", CHAIN2.format(r="0.0", f="0.8", w="0.8", damping=""))
 code, s, _ = prove(scene)
 if code == 0:
     base = truth_of("f*", M2, K2, 1, "0.8", "0.8", s)
 
     def boundary(fv):
         T = StickTruth(M2, K2, 0, 1, 1, fv, "0.8")
-        T.solve(base.tr, base.xF, base.vF, base.tL - base.tr)
+        T.solve(base.tr, base.xF, base.vF, [base.tL - base.tr])
         base.tr, base.xF, base.vF = T.tr, T.xF, T.vF
         return T.RL
     # Follow the family in f until R at the landing changes sign, then solve for f*.
@@ -216,7 +229,7 @@ if code == 0:
     if fstar is not None:
         for side, df in (("1e-9 before", mpf("-1e-9")), ("1e-9 past", mpf("1e-9"))):
             fv = mp.nstr(fstar + df, 20)
-            sc = scene_file(f"c2_{side.replace(' ', '_')}.toml", CHAIN2.format(r="0.0", f=fv, damping=""))
+            sc = scene_file(f"c2_{side.replace(' ', '_')}.toml", CHAIN2.format(r="0.0", f=fv, w="0.8", damping=""))
             out = os.path.join(H.tmp, f"c2_{side.replace(' ', '_')}.json")
             code, s, _ = prove(sc, "--kind", "sticking", out=out)
             one_flight = code == 0 and [e["kind"] for e in s["events"]] == ["release", "impact", "stick"]
@@ -232,7 +245,7 @@ if code == 0:
         expect(False, "the reaction at the landing changes sign along the family (f* found)")
 
 # r > 0 with several modes: the precise refusal.
-scene = scene_file("c2_r05.toml", CHAIN2.format(r="0.5", f="0.8", damping=""))
+scene = scene_file("c2_r05.toml", CHAIN2.format(r="0.5", f="0.8", w="0.8", damping=""))
 code, s, _ = prove(scene)
 expect(code == 4 and "chattering (r > 0) of a model with more than one mode" in s["reason"],
        f"r = 0.5, 2 DOF: refused naming the chattering (exit {code}, {s and s['reason'][:160]})")

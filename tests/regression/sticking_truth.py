@@ -15,13 +15,13 @@ mp.dps = 50
 
 
 class StickTruth:
-    def __init__(self, M, K, forcing_dof, contact_dof, x0, f, w, zeta=None, side=1):
+    def __init__(self, M, K, forcing_dof, contact_dof, x0, f, w, zeta=None, side=1, q=1):
         self.N = N = len(M)
         self.M, self.K = matrix(M), matrix(K)
         self.a = matrix(N, 1)
         self.a[forcing_dof] = 1
         self.cd, self.x0, self.f, self.w = contact_dof, mpf(x0), mpf(f), mpf(w)
-        self.T = 2 * pi / self.w
+        self.T = q * 2 * pi / self.w  # the orbit's period, q forcing periods
         C = matrix(N, N)
         if zeta is not None:
             # Modal damping: M^{-1/2} K M^{-1/2} = Q Λ Qᵀ, Φ = M^{-1/2} Q (mass-normalised), C = M Φ diag(2ζω) Φᵀ M.
@@ -117,40 +117,46 @@ class StickTruth:
         return [v[i] + P * col[i] for i in range(self.N)]
 
     def _landed(self):
-        x, v = self.full(self.xF, self.vF)
-        xL, vL = self.free(self.tr, x, v, self.tL - self.tr)
-        vP = self.plastic(vL)
-        return [xL[i] for i in self.F], [vP[i] for i in self.F]
+        return self.lands[-1][3], self.lands[-1][4]
+
+    def flights(self, tr, x, v, guess):
+        """From the release: each flight to its plastic landing; every landing but the last departs
+        at once (R < 0 there, checked by the caller). [(t_L, ẋ_c⁻, R, x_F, v_F after)]."""
+        out, t = [], tr
+        for k, sg in enumerate(guess["flights"]):
+            sL = self.landing(t, x, v, sg)
+            xL, vL = self.free(t, x, v, sL)
+            vP = self.plastic(vL)
+            xLF, vLF = [xL[i] for i in self.F], [vP[i] for i in self.F]
+            tL = t + sL
+            out.append((tL, vL[self.cd], self.reaction(tL, xLF, vLF), xLF, vLF))
+            t, x, v = tL, xL, vP
+            x[self.cd] = self.x0
+        return out
 
     def cycle(self, tr, xF, vF, guess):
-        """From a release: (landing time, contact velocity before, R at the landing, the state at
-        tr + T after the held phase)."""
+        """From a release: the landings, and the state at tr + T after the held phase."""
         x, v = self.full(xF, vF)
-        sL = self.landing(tr, x, v, guess["flight"])
-        xL, vL = self.free(tr, x, v, sL)
-        vminus = vL[self.cd]
-        vP = self.plastic(vL)
-        xLF, vLF = [xL[i] for i in self.F], [vP[i] for i in self.F]
-        tL = tr + sL
-        RL = self.reaction(tL, xLF, vLF)
+        lands = self.flights(tr, x, v, guess)
+        tL, _, _, xLF, vLF = lands[-1]
         xe, ve = self.held(tL, xLF, vLF, tr + self.T - tL)
-        return tL, vminus, RL, xe, ve
+        return lands, xe, ve
 
-    def solve(self, tr, xF, vF, flight):
-        guess = {"flight": flight}
+    def solve(self, tr, xF, vF, flights):
+        guess = {"flights": flights if isinstance(flights, list) else [flights]}
         n = self.n
 
         def F(*u):
             tr_, xF_, vF_ = u[0], list(u[1:1 + n]), list(u[1 + n:])
-            _, _, _, xe, ve = self.cycle(tr_, xF_, vF_, guess)
+            _, xe, ve = self.cycle(tr_, xF_, vF_, guess)
             out = [xe[p] - xF_[p] for p in range(n)] + [ve[p] - vF_[p] for p in range(n)]
             out.append(self.reaction(tr_, xF_, vF_))
             return out
         u = findroot(F, [mpf(tr)] + [mpf(x) for x in xF] + [mpf(x) for x in vF])
         u = [u[k] for k in range(2 * n + 1)]
         self.tr, self.xF, self.vF = u[0], u[1:1 + n], u[1 + n:]
-        tL, vminus, RL, _, _ = self.cycle(self.tr, self.xF, self.vF, guess)
-        self.tL, self.vminus, self.RL = tL, vminus, RL
+        self.lands, _, _ = self.cycle(self.tr, self.xF, self.vF, guess)
+        self.tL, self.vminus, self.RL = self.lands[-1][:3]
         self.guess = guess
         return self
 
@@ -166,10 +172,8 @@ class StickTruth:
         xr, vr = self.held(ts, xF, vF, sr)
         tr = ts + sr
         x, v = self.full(xr, vr)
-        sL = self.landing(tr, x, v, self.guess["flight"])
-        xL, vL = self.free(tr, x, v, sL)
-        vP = self.plastic(vL)
-        xs, vs = self.held(tr + sL, [xL[i] for i in self.F], [vP[i] for i in self.F], ts + self.T - tr - sL)
+        tL, _, _, xLF, vLF = self.flights(tr, x, v, self.guess)[-1]
+        xs, vs = self.held(tL, xLF, vLF, ts + self.T - tL)
         return xs + vs
 
     def multipliers(self):
