@@ -30,6 +30,7 @@ import re
 import sys
 
 from mpmath import iv, mp
+from mpmath.libmp import libmpi, from_int
 
 PREC = 192
 iv.prec = PREC
@@ -57,6 +58,7 @@ class NotConfirmed(Exception):
 # ---- Intervals --------------------------------------------------------------------------------
 
 ZERO, ONE = iv.mpf(0), iv.mpf(1)
+_RAW_ZERO, _RAW_ONE = ZERO._mpi_, ONE._mpi_
 IV = type(ZERO)
 
 
@@ -1555,6 +1557,24 @@ STICKING_MODES_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczy
                        "monodromy")
 
 
+def _raw_matmul(A, B):
+    """The product of two matrices of mpmath intervals held as raw (lo, hi) pairs (libmpi, rounded
+    outward at PREC bits): the Taylor series of the held flow without the context's conversions."""
+    mul, add = libmpi.mpi_mul, libmpi.mpi_add
+    n, k, m = len(A), len(B), len(B[0])
+    out = []
+    for i in range(n):
+        row = A[i]
+        res = []
+        for j in range(m):
+            acc = _RAW_ZERO
+            for l in range(k):
+                acc = add(acc, mul(row[l], B[l][j], PREC), PREC)
+            res.append(acc)
+        out.append(res)
+    return out
+
+
 class Held:
     """The flow of the structure held at contact 0 (docs/prove.md "Sticking orbits of several
     modes"), written directly: Ẍ = Ẍ_free + T_B R with R chosen so that c·Ẍ = 0, i.e.
@@ -1613,22 +1633,25 @@ class Held:
         beta = iv.mpf(norm) * scale
         # Terms up to j = J, where β^(J+1)/(J+1)! < 2^-(PREC+10); the rest bounded in ‖·‖∞ by
         # β^(J+1)/(J+1)! · 1/(1 − β/(J+2)).
-        E = [[ONE if i == j else ZERO for j in range(N)] for i in range(N)]
-        term = [row[:] for row in E]
+        Br = [[x._mpi_ for x in row] for row in B]
+        Er = [[_RAW_ONE if i == j else _RAW_ZERO for j in range(N)] for i in range(N)]
+        term = [row[:] for row in Er]
         J, bound = 0, ONE
         while True:
             J += 1
-            term = matmul(term, B)
-            term = [[x / J for x in row] for row in term]
-            E = [[E[i][l] + term[i][l] for l in range(N)] for i in range(N)]
+            term = _raw_matmul(term, Br)
+            div = (from_int(J), from_int(J))
+            term = [[libmpi.mpi_div(x, div, PREC) for x in row] for row in term]
+            Er = [[libmpi.mpi_add(Er[i][l], term[i][l], PREC) for l in range(N)] for i in range(N)]
             bound = bound * beta / J
             if hi(bound * beta / (J + 1)) < mp.mpf(2) ** -(PREC + 10) or J >= 200:
                 break
         rest = bound * beta / (J + 1) / (1 - beta / (J + 2))
-        pad = iv.mpf([-hi(rest), hi(rest)])
-        E = [[x + pad for x in row] for row in E]
+        pad = iv.mpf([-hi(rest), hi(rest)])._mpi_
+        Er = [[libmpi.mpi_add(x, pad, PREC) for x in row] for row in Er]
         for _ in range(k):
-            E = matmul(E, E)
+            Er = _raw_matmul(Er, Er)
+        E = [[iv.make_mpf(x) for x in row] for row in Er]
         if len(self.cache) < 4096:
             self.cache[key] = E
         return E
