@@ -225,7 +225,22 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     req.kind = b.kind;
     req.value = b.value;
     req.bracket = b.bracket;
-    req.parameter = vibro::ReadBranchPoint(src, 0).param;
+    const auto first = vibro::ReadBranchPoint(src, 0);
+    req.parameter = first.param;
+    if (req.kind == "grazing") {
+      // The orbit that grazes, from the stored point nearest the grazing but at least 1e-6 (relative)
+      // from it, where the orbit clears the contact plainly (the branch ends at the grazing).
+      const double apart = 1e-6 * (1 + std::abs(req.value));
+      const auto distance = [&](double v) { return std::abs(v - req.value) >= apart ? std::abs(v - req.value) : 1e300; };
+      vibro::StoredBranchPoint near = first;
+      for (long long k = 1; k < first.points; ++k) {
+        auto p = vibro::ReadBranchPoint(src, k);
+        if (distance(p.value) < distance(near.value)) near = std::move(p);
+      }
+      req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
+      req.period = near.period;
+      req.start_value = near.value;
+    }
   }
   auto at = sets;
   at.push_back(vibro::frontend::Assignment(req.parameter, req.value));
@@ -247,9 +262,13 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
       const auto pair = [](const nlohmann::json& p) {
         return Range(vibro::Enclosure{p[0].get<double>(), p[1].get<double>()});
       };
-      const bool fold = s["bifurcation"] == "fold";
-      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : "det(DH + I)", s["parameter"].get<std::string>(),
-                 pair(s["slope"]));
+      const bool fold = s["bifurcation"] == "fold", grazing = s["bifurcation"] == "grazing";
+      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : grazing ? "(minimum gap)" : "det(DH + I)",
+                 s["parameter"].get<std::string>(), pair(s["slope"]));
+      if (grazing)
+        fmt::print("grazing      flight {} touches contact {} at t in {} (gap curvature {})\n",
+                   s["grazing_flight"].get<int>(), s["grazing_contact"].get<int>(), pair(s["grazing_time"]),
+                   pair(s["curvature"]));
       if (s.contains("half_map_multipliers"))
         fmt::print("multipliers  of the half-period map at the point: -1 and {} (the period map: +1 and their "
                    "squares)\n", pair(s["half_map_multipliers"][1]));
