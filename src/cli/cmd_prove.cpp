@@ -225,22 +225,32 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     req.kind = b.kind;
     req.value = b.value;
     req.bracket = b.bracket;
-    const auto first = vibro::ReadBranchPoint(src, 0);
-    req.parameter = first.param;
-    if (req.kind == "grazing") {
-      // The orbit that grazes, from the stored point nearest the grazing but at least 1e-6 (relative)
-      // from it, where the orbit clears the contact plainly (the branch ends at the grazing).
+    req.parameter = vibro::ReadBranchPoint(src, 0).param;
+  }
+  if (req.kind == "grazing") {
+    // The orbit that grazes, from the stored point nearest the grazing but at least 1e-6 (relative)
+    // from it, where the orbit clears the contact plainly (the branch ends at the grazing): of
+    // --from BRANCH.h5, or of the branch the bifurcation was read from.
+    const bool given = colon != std::string::npos && equals != std::string::npos && colon < equals &&
+                       !std::filesystem::exists(src);
+    const std::string file = given ? args.from : src;
+    if (!file.empty()) {
+      const auto first = vibro::ReadBranchPoint(file, 0);
+      if (first.param != req.parameter)
+        throw vibro::InputError({fmt::format("--from {}: a branch in {}, not {}", file, first.param, req.parameter)});
       const double apart = 1e-6 * (1 + std::abs(req.value));
       const auto distance = [&](double v) { return std::abs(v - req.value) >= apart ? std::abs(v - req.value) : 1e300; };
       vibro::StoredBranchPoint near = first;
       for (long long k = 1; k < first.points; ++k) {
-        auto p = vibro::ReadBranchPoint(src, k);
+        auto p = vibro::ReadBranchPoint(file, k);
         if (distance(p.value) < distance(near.value)) near = std::move(p);
       }
       req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
       req.period = near.period;
       req.start_value = near.value;
     }
+  } else if (!args.from.empty()) {
+    throw vibro::InputError({"--from " + args.from + ": with --bifurcation, only for a grazing given as KIND:KEY=VALUE"});
   }
   auto at = sets;
   at.push_back(vibro::frontend::Assignment(req.parameter, req.value));
