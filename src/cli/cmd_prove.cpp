@@ -235,16 +235,9 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
                        !std::filesystem::exists(src);
     const std::string file = given ? args.from : src;
     if (!file.empty()) {
-      const auto first = vibro::ReadBranchPoint(file, 0);
-      if (first.param != req.parameter)
-        throw vibro::InputError({fmt::format("--from {}: a branch in {}, not {}", file, first.param, req.parameter)});
-      const double apart = 1e-6 * (1 + std::abs(req.value));
-      const auto distance = [&](double v) { return std::abs(v - req.value) >= apart ? std::abs(v - req.value) : 1e300; };
-      vibro::StoredBranchPoint near = first;
-      for (long long k = 1; k < first.points; ++k) {
-        auto p = vibro::ReadBranchPoint(file, k);
-        if (distance(p.value) < distance(near.value)) near = std::move(p);
-      }
+      const auto near = vibro::NearestBranchPoint(file, req.value, 1e-6 * (1 + std::abs(req.value)));
+      if (near.param != req.parameter)
+        throw vibro::InputError({fmt::format("--from {}: a branch in {}, not {}", file, near.param, req.parameter)});
       req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
       req.period = near.period;
       req.start_value = near.value;
