@@ -2110,16 +2110,16 @@ def krawczyk_mp(F_point, J_box, x, X, extra=None):
     K, delta = [], mp.mpf(0)
     for a in range(n):
         v = x[a]
-        rowsum = mp.mpf(0)
+        rowsum = ZERO
         for l in range(n):
             v = v - iv.mpf(C[a, l]) * F_point[l]
             row = (ONE if a == l else ZERO) - sum((iv.mpf(C[a, j]) * J_box[j][l] for j in range(n)), ZERO)
             v = v + row * (X[l] - x[l])
-            rowsum += max(abs(lo(row)), abs(hi(row)))
+            rowsum = rowsum + iv.mpf(max(abs(lo(row)), abs(hi(row))))  # outward-rounded sum
         if extra is not None:
             col, dP = extra
             v = v - sum((iv.mpf(C[a, j]) * col[j] for j in range(n)), ZERO) * dP
-        delta = max(delta, rowsum)
+        delta = max(delta, hi(rowsum))
         K.append(v)
     return K, C, delta
 
