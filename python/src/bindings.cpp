@@ -50,6 +50,7 @@
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/distribute.hpp"
+#include "vibro/hdf5_branch.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
@@ -469,7 +470,8 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
 // points"): the summary and the certificate as JSON texts, and whether a stop request ended it.
 std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& s, const std::string& kind,
                                                                  const std::string& key, double value,
-                                                                 double time_limit, bool handle_sigint) {
+                                                                 double time_limit, bool handle_sigint,
+                                                                 const std::string& branch) {
   if (!(time_limit > 0) || !std::isfinite(time_limit))
     throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
   if (!std::isfinite(value)) throw vibro::InputError({fmt::format("value {}: expected a finite number", value)});
@@ -478,6 +480,14 @@ std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& 
   req.parameter = key;
   req.value = value;
   req.time_limit = time_limit;
+  if (!branch.empty()) {  // a grazing's orbit: the stored point nearest it, as `prove --from BRANCH.h5`
+    const auto near = vibro::NearestBranchPoint(branch, value, 1e-6 * (1 + std::abs(value)));
+    if (near.param != key)
+      throw vibro::InputError({fmt::format("branch {}: a branch in {}, not {}", branch, near.param, key)});
+    req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
+    req.period = near.period;
+    req.start_value = near.value;
+  }
   const vibro::Scene scene = vibro::frontend::SceneWith(s.origin, key, value);
   const vibro::System sys(scene);
   SigintGuard guard(handle_sigint);

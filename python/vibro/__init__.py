@@ -407,10 +407,12 @@ def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, tim
     return _json.loads(text)
 
 
-def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
+def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0, branch=None):
     """Proves a bifurcation point (``vibro prove --bifurcation KIND:KEY=VALUE --json``, docs/prove.md
     "Bifurcation points"): ``kind`` and ``value`` as ``continue_`` reports the point (a
-    "branch-point" or a "fold" of the symmetric two-sided oscillator), ``param`` the scene key it varies
+    "branch-point" or a "fold" of the symmetric two-sided oscillator, or a "grazing" of any impacting
+    orbit, whose orbit is taken from ``branch``, the HDF5 file of ``continue_``: its stored point
+    nearest ``value``), ``param`` the scene key it varies
     ("excitation.amplitude" or "excitation.frequency"). The dict has ``verdict``, ``reason`` and, when
     proven, ``bifurcation``, ``interval`` (two decimals, at most 1e-10 apart, holding exactly one such
     point), ``slope`` (the derivative that proves the crossing transversal) and
@@ -418,7 +420,8 @@ def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
     re-verifies."""
     text, certificate, interrupted = _vibro.prove_bifurcation(_scene(scene), str(kind), str(param),
                                                               _float("value", value),
-                                                              _float("time_limit", time_limit), _main_thread())
+                                                              _float("time_limit", time_limit), _main_thread(),
+                                                              "" if branch is None else _path("branch", branch))
     if interrupted:
         raise _interrupted("proof", None)
     if out is not None:

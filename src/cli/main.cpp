@@ -160,8 +160,8 @@ int main(int argc, char** argv) {
         "prove the bifurcation point stored by `vibro continue --out BRANCH.h5` (BRANCH.h5, with --point K: its "
         "bifurcation K, default 0) or given as KIND:KEY=VALUE (e.g. branch-point:excitation.amplitude=3.286): its "
         "parameter enclosed in an interval <= 1e-10 wide, one point in it, crossed transversally (the pitchfork "
-        "and the fold of the symmetric two-sided 1-DOF oscillator)")
-        ->excludes(from)
+        "and the fold of the symmetric two-sided 1-DOF oscillator, and grazings; a grazing given as KIND:KEY=VALUE "
+        "takes its orbit from --from BRANCH.h5)")
         ->excludes(branch_opt);
     prove->add_option("--point", prove_args.point, "with --bifurcation BRANCH.h5: the bifurcation K (0-based, in the "
                       "order `vibro continue` lists them)")
