@@ -2328,6 +2328,23 @@ def check_bifurcation(node):
     if node.has("structure"):
         check_structure(node["structure"], m)
     b = node["bifurcation"]
+    if isinstance(b.v, dict) and b.v.get("type") == "grazing":
+        name = b["parameter"].text(("amplitude", "frequency"))
+        ends = b["interval"].items(exactly=2)
+        plo, phi = decimal(ends[0]), decimal(ends[1])
+        if node["model"].v[name] != f"[{ends[0].v}, {ends[1].v}]":
+            raise NotConfirmed(f"{node['model'][name].path} = {node['model'].v[name]!r}: not the interval "
+                               f"{b['interval'].path} = {b['interval'].v}")
+        if not hi(phi) - lo(plo) <= mp.mpf("1e-10") or not lo(plo) < hi(phi):
+            raise NotConfirmed(f"{b['interval'].path}: {show(hi(phi) - lo(plo))} wide, not in (0, 1e-10]")
+        for key, skey in (("interval", "interval"), ("parameter", "parameter"), ("contact", "grazing_contact"),
+                          ("flight", "grazing_flight"), ("impact_contacts", "impact_contacts"),
+                          ("symmetric", "symmetric")):
+            if s[skey].v != b[key].v:
+                raise NotConfirmed(f"{s[skey].path} = {s[skey].v!r} and {b[key].path} = {b[key].v!r} differ")
+        if s["bifurcation"].v != "grazing":
+            raise NotConfirmed(f"{s['bifurcation'].path} = {s['bifurcation'].v!r}: the certificate is a grazing")
+        return check_grazing(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
     b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
     kind = b["type"].text(("pitchfork", "fold"))
     fold = kind == "fold"
@@ -2418,6 +2435,290 @@ def check_bifurcation(node):
             c = (u + v) / 2
             stack += [(u, c), (c, v)]
     return 4
+
+
+# ---- Grazing -----------------------------------------------------------------------------------
+
+def graze_flight(m, f, w, t0, X, V, s):
+    """The free flight from (t0, X, V) over s with the amplitude f and the forcing frequency w
+    variables too (written again for a grazing): per mode U = P sin ωt + Q cos ωt solving
+    Ü + 2σU̇ + ω_i²U = T_A f sin ωt, plus e^{−σs}(a cos ω_d s + b sin ω_d s) matching X, V at t0."""
+    L = D.lift
+    f, w, t0, s = L(f), L(w), L(t0), L(s)
+    t1 = t0 + s
+    s0, c0, s1, c1 = dsin(w * t0), dcos(w * t0), dsin(w * t1), dcos(w * t1)
+    Xo, Vo = [], []
+    for i in range(m.n):
+        z = m.zeta[i] if m.zeta is not None else ZERO
+        sg, wd = L(z * m.w_i[i]), L(m.w_i[i] * iv.sqrt(1 - z * z))
+        wi = L(m.w_i[i])
+        det = wi * wi - w * w
+        dmp = L(2) * sg * w
+        den = det * det + dmp * dmp
+        load = f * L(m.TA[i])
+        P, Q = load * det / den, -(load * dmp / den)
+        U0, Ud0 = P * s0 + Q * c0, w * (P * c0 - Q * s0)
+        U1, Ud1 = P * s1 + Q * c1, w * (P * c1 - Q * s1)
+        a = L(X[i]) - U0
+        b = (L(V[i]) - Ud0 + a * sg) / wd
+        e = dexp(-(s * sg))
+        cd, sd = dcos(s * wd), dsin(s * wd)
+        Xo.append(U1 + e * (a * cd + b * sd))
+        Vo.append(Ud1 + e * ((b * wd - a * sg) * cd - (a * wd + b * sg) * sd))
+    return Xo, Vo
+
+
+class Grazing:
+    """The orbit of a grazing certificate: unknowns u = (t_j, X_j, V_j) per impact (one impact and
+    its mirror image for a symmetric orbit), the parameter p, the tangency time s on flight J."""
+
+    def __init__(self, m, name, hits, symmetric, J, l):
+        self.m, self.freq, self.hits, self.sym, self.J, self.l = m, name == "frequency", hits, symmetric, J, l
+        self.count = 1 if symmetric else len(hits)
+        self.per = 2 * m.n + 1
+        self.N = self.count * self.per
+
+    def fw(self, p):
+        return (self.m.f, p) if self.freq else (p, self.m.w)
+
+    def part(self, u, j):
+        n, k = self.m.n, j * self.per
+        return u[k], u[k + 1:k + 1 + n], u[k + 1 + n:k + 1 + 2 * n]
+
+    def duration(self, u, j, p):
+        _, w = self.fw(p)
+        if self.sym:
+            return D.lift(iv.pi) / D.lift(w)
+        k = (j + 1) % self.count
+        end = D.lift(self.part(u, k)[0])
+        if j == self.count - 1:
+            end = end + D.lift(2 * iv.pi) / D.lift(w)
+        return end - D.lift(self.part(u, j)[0])
+
+    def flight(self, u, j, p, s):
+        t, X, V = self.part(u, j)
+        f, w = self.fw(p)
+        return graze_flight(self.m, f, w, t, X, V, s)
+
+    def gap(self, X, l):
+        return self.m.contact_of([D.lift(x) for x in X], l) - D(self.m.contacts[l][2])
+
+    def residual(self, u, p, s=None):
+        m, out = self.m, []
+        for j in range(self.count):
+            t, X, V = self.part(u, j)
+            Xe, Ve = self.flight(u, j, p, self.duration(u, j, p))
+            if self.sym:
+                b = 1 - self.hits[0]
+                Vp = m.impact(Ve, b)
+                out.append(self.gap(X, self.hits[0]))
+                out += [D.lift(Xe[i]) + D.lift(X[i]) for i in range(m.n)]
+                out += [D.lift(Vp[i]) + D.lift(V[i]) for i in range(m.n)]
+            else:
+                k = (j + 1) % self.count
+                _, Xn, Vn = self.part(u, k)
+                Vp = m.impact(Ve, self.hits[k])
+                out.append(self.gap(X, self.hits[j]))
+                out += [D.lift(Xe[i]) - D.lift(Xn[i]) for i in range(m.n)]
+                out += [D.lift(Vp[i]) - D.lift(Vn[i]) for i in range(m.n)]
+        if s is not None:
+            Xe, Ve = self.flight(u, self.J, p, s)
+            out.append(m.contact_of(Ve, self.l) if not isinstance(Ve[0], D) else
+                       sum((D(ci) * v for ci, v in zip(m.contacts[self.l][0], Ve)), D(ZERO)))
+            out.append(self.gap(Xe, self.l))
+        return out
+
+    def gap_at(self, U, P, j, l, S):
+        """(γ, γ̇, γ̈) of contact l at s ∈ S on flight j, over the box (U, P)."""
+        m = self.m
+        Xe, Ve = self.flight(U, j, P, S)
+        Xe, Ve = [value(x) for x in Xe], [value(v) for v in Ve]
+        t = value(D.lift(self.part(U, j)[0]) + D.lift(S))
+        f, w = self.fw(P)
+        load = f * iv.sin(w * t)
+        z = m.zeta or [ZERO] * m.n
+        acc = [m.TA[i] * load - m.w_i[i] ** 2 * Xe[i] - 2 * z[i] * m.w_i[i] * Ve[i] for i in range(m.n)]
+        c = m.contacts[l][0]
+        dot = lambda Y: sum((ci * y for ci, y in zip(c, Y)), ZERO)  # noqa: E731
+        return dot(Xe) - m.contacts[l][2], dot(Ve), dot(acc)
+
+
+def krawczyk_mp(F_point, J_box, x, X, extra=None):
+    """K(X) = x − C F(x) + (I − C J(X))(X − x) [− (C ∂F/∂p)(P − p̃) with extra = (column, P − p̃)],
+    C the inverse of J's midpoint (here, at 192 bits): (K, C, an upper bound of ‖I − C J‖∞)."""
+    n = len(x)
+    A = mp.matrix(n, n)
+    for a in range(n):
+        for b in range(n):
+            A[a, b] = mid(J_box[a][b])
+    C = mp.inverse(A)
+    K, delta = [], mp.mpf(0)
+    for a in range(n):
+        v = x[a]
+        rowsum = ZERO
+        for l in range(n):
+            v = v - iv.mpf(C[a, l]) * F_point[l]
+            row = (ONE if a == l else ZERO) - sum((iv.mpf(C[a, j]) * J_box[j][l] for j in range(n)), ZERO)
+            v = v + row * (X[l] - x[l])
+            rowsum = rowsum + iv.mpf(max(abs(lo(row)), abs(hi(row))))  # outward-rounded sum
+        if extra is not None:
+            col, dP = extra
+            v = v - sum((iv.mpf(C[a, j]) * col[j] for j in range(n)), ZERO) * dP
+        delta = max(delta, hi(rowsum))
+        K.append(v)
+    return K, C, delta
+
+
+def check_grazing(node, m, b, s, P, name):
+    """A grazing certificate (docs/prove.md "Bifurcation points"), recomputed: Krawczyk on the orbit
+    over the interval (for every p one orbit in the box), Krawczyk on the orbit with its tangency
+    (exactly one (u, s, p) in the box), dm/dp = 1/(J⁻¹)_{last,last} enclosed and nonzero from
+    ‖I − CJ‖∞ < 1 over the box, γ̇ of opposite signs at the ends of the tangency's time box, γ̈ > 0
+    on the window, and the orbit an orbit (durations, impact velocities, every gap positive
+    outside the window)."""
+    b.obj(("type", "parameter", "interval", "contact", "flight", "impact_contacts", "symmetric", "unknowns",
+           "midpoint", "box", "window", "slope", "curvature", "grazing_time"))
+    k_count = len(m.contacts)
+    hits = [h.integer(0, k_count - 1) for h in b["impact_contacts"].items(at_least=1, at_most=MAX_FLIGHTS)]
+    sym = b["symmetric"].boolean()
+    l = b["contact"].integer(0, k_count - 1)
+    if sym:
+        if k_count != 2 or len(hits) != 2 or hits[0] == hits[1] or node["period"].v != 1:
+            raise NotConfirmed(f"{b['symmetric'].path}: a symmetric orbit has two impacts on two contacts in one period")
+        (c0, T0, e0, r0, _), (c1, T1, e1, r1, _) = m.contacts
+        exact = all(lo(x + y) == 0 == hi(x + y) for x, y in zip(c0 + T0, c1 + T1))
+        mirrored = False
+        if node.has("structure"):
+            cs = node["structure"].v["contacts"]
+            mirrored = len(cs) == 2 and cs[0]["dof"] == cs[1]["dof"] and cs[0]["partner"] == cs[1]["partner"] == -1 \
+                and cs[0]["side"] != cs[1]["side"]
+        t = node["model"].v
+        if not (exact or mirrored) or t["stop"] != t["more_contacts"][0]["stop"] or \
+                t["restitution"] != t["more_contacts"][0]["restitution"]:
+            raise NotConfirmed(f"{b['symmetric'].path}: the model is not mirrored (contact 1 is not contact 0 mirrored)")
+    G = Grazing(m, name, hits, sym, 0, l)
+    G.J = b["flight"].integer(0, G.count - 1)
+    N = G.N
+    boxes = b["box"].items(exactly=N + 1)
+    X = [x.pair() for x in boxes]
+    mids = b["midpoint"].items(exactly=N + 1)
+    xm = [iv.mpf(x.num()) for x in mids]
+    if len(b["unknowns"].items(exactly=N + 1)) != N + 1:
+        pass
+    for k in range(N + 1):
+        if not inside(xm[k], X[k]):
+            raise NotConfirmed(f"{mids[k].path}: the midpoint is not in the box")
+    U, S = X[:N], X[N]
+    pm = iv.mpf(mid(P))
+    # (1) The orbit over P: the parametric Krawczyk test.
+    Fp = [value(r) for r in G.residual(xm[:N], pm)]
+    Ud = [variable(U[k], k) for k in range(N)]
+    Pd = variable(P, N)
+    R = G.residual(Ud, Pd)
+    J = [[r.g.get(c, ZERO) for c in range(N)] for r in R]
+    col = [r.g.get(N, ZERO) for r in R]
+    K, _, _ = krawczyk_mp(Fp, J, xm[:N], U, (col, P - pm))
+    for k in range(N):
+        if not (lo(U[k]) < lo(K[k]) and hi(K[k]) < hi(U[k])):
+            raise NotConfirmed(f"{boxes[k].path}: Krawczyk's test on the orbit over the interval fails "
+                               f"(K = {show_iv(K[k])}): no unique orbit in the box confirmed")
+    # (2) The orbit with its tangency: exactly one (u, s, p) in the box.
+    x = xm[:N] + [xm[N], pm]
+    Xb = U + [S, P]
+    Fe = [value(r) for r in G.residual(x[:N], x[N + 1], x[N])]
+    Vd = [variable(Xb[k], k) for k in range(N + 2)]
+    Re = G.residual(Vd[:N], Vd[N + 1], Vd[N])
+    Je = [[r.g.get(c, ZERO) for c in range(N + 2)] for r in Re]
+    Ke, Ce, delta = krawczyk_mp(Fe, Je, x, Xb)
+    for k in range(N + 2):
+        if not (lo(Xb[k]) < lo(Ke[k]) and hi(Ke[k]) < hi(Xb[k])):
+            raise NotConfirmed(f"{b['box'].path}: Krawczyk's test on the orbit with its tangency fails at unknown {k} "
+                               f"(K = {show_iv(Ke[k])}): no unique grazing in the box confirmed")
+    # (3) dm/dp over P: (J⁻¹)_{last,last} ∈ C_ll ± δ/(1 − δ) max_i |C_il|.
+    if not delta < 1:
+        raise NotConfirmed(f"{b['box'].path}: ‖I − CJ‖∞ ≤ {show(delta)}, not below 1")
+    last = N + 1
+    spread = iv.mpf(delta) / (1 - iv.mpf(delta)) * max(abs(Ce[i, last]) for i in range(N + 2))
+    inv = iv.mpf(Ce[last, last]) + iv.mpf([-hi(spread), hi(spread)])
+    if not excludes_zero(inv):
+        raise NotConfirmed(f"{b['slope'].path}: dp/dm = {show_iv(inv)} may vanish: transversality not confirmed")
+    slope = 1 / inv
+    claim_contains(b["slope"], slope, "dm/dp, the minimum gap's derivative")
+    claim_contains(s["slope"], slope, "dm/dp, the minimum gap's derivative")
+    # γ̇ < 0 at S's lower end and > 0 at its upper end, for every orbit of the box.
+    ga = G.gap_at(U, P, G.J, l, iv.mpf(lo(S)))[1]
+    gb = G.gap_at(U, P, G.J, l, iv.mpf(hi(S)))[1]
+    if not (negative(ga) and positive(gb)):
+        raise NotConfirmed(f"{b['box'].path}: the gap velocity at the ends of the tangency's time box, {show_iv(ga)} "
+                           f"and {show_iv(gb)}, not confirmed negative then positive")
+    curv = G.gap_at(U, P, G.J, l, S)[2]
+    claim_contains(b["curvature"], curv, "the gap's second derivative at the grazing")
+    claim_contains(s["curvature"], curv, "the gap's second derivative at the grazing")
+    tg = value(D.lift(G.part(U, G.J)[0]) + D.lift(S))
+    claim_contains(b["grazing_time"], tg, "the grazing time")
+    claim_contains(s["grazing_time"], tg, "the grazing time")
+    # The window: γ̈ > 0 on it (convex: one minimum, at s(p) ∈ S).
+    wa, wb = (x.num() for x in b["window"].items(exactly=2))
+    if not (wa < lo(S) and hi(S) < wb):
+        raise NotConfirmed(f"{b['window'].path}: the window does not contain the tangency's time box")
+
+    def bisect(pred, a, z, what, depth=40):
+        stack, count = [(a, z, 0)], 0
+        while stack:
+            u, v, d = stack.pop()
+            count += 1
+            if count > 200000:
+                raise NotConfirmed(f"{node.path}: {what}: not confirmed (too many pieces)")
+            if pred(u, v):
+                continue
+            if d >= depth:
+                raise NotConfirmed(f"{node.path}: {what}: not confirmed near s = {show(u)}")
+            c = (u + v) / 2
+            stack += [(u, c, d + 1), (c, v, d + 1)]
+
+    bisect(lambda u, v: positive(G.gap_at(U, P, G.J, l, iv.mpf([u, v]))[2]), wa, wb,
+           "the gap's convexity on the window")
+    # (4) The orbit is an orbit over the box.
+    for j in range(G.count):
+        cj = hits[j]
+        ck = (1 - cj) if sym else hits[(j + 1) % G.count]
+        Sj = value(G.duration(U, j, P))
+        after = G.gap_at(U, P, j, cj, iv.mpf(0))[1]
+        before = G.gap_at(U, P, j, ck, Sj)[1]
+        if not (positive(Sj) and positive(after) and negative(before)):
+            raise NotConfirmed(f"{node.path}: flight {j}: duration {show_iv(Sj)}, velocity after {show_iv(after)}, "
+                               f"before {show_iv(before)}: not those of an impacting orbit")
+        e0 = e1 = lo(Sj) / 16
+        for _ in range(30):
+            if positive(G.gap_at(U, P, j, cj, iv.mpf([0, e0]))[1]):
+                break
+            e0 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity after the impact not confirmed positive")
+        for _ in range(30):
+            if negative(G.gap_at(U, P, j, ck, iv.mpf([lo(Sj) - e1, hi(Sj)]))[1]):
+                break
+            e1 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity before the impact not confirmed negative")
+        for c in range(k_count):
+            a, z = (e0 if c == cj else mp.mpf(0)), (lo(Sj) - e1 if c == ck else hi(Sj))
+            ranges = [(a, z)]
+            if j == G.J and c == l:
+                if not (a < wa and wb < z):
+                    raise NotConfirmed(f"{b['window'].path}: the window meets the impacts' windows")
+                ranges = [(a, wa), (wb, z)]
+            for u0, v0 in ranges:
+                if u0 < v0:
+                    bisect(lambda u, v, j=j, c=c: positive(_gap_form(G, U, P, j, c, u, v)), u0, v0,
+                           f"the gap of contact {c} on flight {j}")
+    return 5
+
+
+def _gap_form(G, U, P, j, c, u, v):
+    """The gap on [u, v] by the mean-value form γ(mid) + γ̇([u, v])([u, v] − mid)."""
+    I, cm = iv.mpf([u, v]), iv.mpf((u + v) / 2)
+    return G.gap_at(U, P, j, c, cm)[0] + G.gap_at(U, P, j, c, I)[1] * (I - cm)
 
 
 def check(node):

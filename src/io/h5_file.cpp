@@ -81,6 +81,17 @@ inline Hdf5Api LoadHdf5() {
   // linked libhdf5 would get, so that a preloaded library that wraps an HDF5 call (LD_PRELOAD, as
   // the tests' hang shim does) still comes first and finds the real one with RTLD_NEXT.
   // RTLD_NODELETE: HDF5's atexit handlers stay valid however the handle is treated.
+  // The library and what it needs (curl, GnuTLS, ...: about 20 MB of address space) are mapped,
+  // their constructors run and the library initialises itself with allocations it does not all
+  // check: under an address-space limit that leaves less, GnuTLS's constructor failed and HDF5's
+  // initialisation crashed (H5E__get_stack). Address space is asked for first (never touched),
+  // and its refusal is an out-of-memory like any other (exit 3, MemoryError in Python).
+  constexpr size_t kLoadHeadroom = size_t{48} << 20;
+  if (void* probe = std::malloc(kLoadHeadroom)) {
+    std::free(probe);
+  } else {
+    throw std::bad_alloc();
+  }
   void* lib = dlopen(VIBRO_HDF5_LIBRARY, RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
   if (lib == nullptr) {
     const std::string why = dlerror();
@@ -102,6 +113,8 @@ inline Hdf5Api LoadHdf5() {
   VIBRO_HDF5_FUNCTIONS(VIBRO_HDF5_ENTRY)
   VIBRO_HDF5_VARIABLES(VIBRO_HDF5_ENTRY)
 #undef VIBRO_HDF5_ENTRY
+  // Initialised now, within the headroom just asked for (its first call would do it anyway).
+  if (api.H5open() < 0) throw std::runtime_error("the HDF5 library " VIBRO_HDF5_LIBRARY " could not initialise");
   return api;
 }
 

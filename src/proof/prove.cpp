@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "proof/bifurcation_proof.hpp"
+#include "proof/grazing_proof.hpp"
 #include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
 #include "proof/prove_api.hpp"
@@ -629,9 +630,9 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
   const bool mirrored = scene.physical.has_value() && contacts.size() == 2 && contacts[0].dof == contacts[1].dof && contacts[0].partner < 0 &&
                         contacts[1].partner < 0 && contacts[0].side != contacts[1].side;
   std::string interval;
-  if (request.kind != "branch-point" && request.kind != "fold") {
+  if (request.kind != "branch-point" && request.kind != "fold" && request.kind != "grazing") {
     outcome.reason = "a " + request.kind + " is not proven by this version (it proves the symmetry-breaking pitchfork "
-                     "and the fold of the symmetric two-sided one-DOF oscillator; docs/prove.md)";
+                     "and the fold of the symmetric two-sided one-DOF oscillator, and grazings; docs/prove.md)";
   } else if (!amplitude && !frequency) {
     outcome.reason = "the parameter " + request.parameter + " is not proven by this version (the amplitude or the "
                      "forcing frequency; docs/prove.md)";
@@ -647,10 +648,29 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
       }
       return m;
     }();
-    outcome = request.kind == "fold"
-                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
-                                              interval)
-                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
+    if (request.kind == "grazing") {
+      // The orbit that grazes, at the located value: from the given state, else searched.
+      as_orbit.kind = OrbitKind::kImpact;
+      as_orbit.period = request.period;
+      as_orbit.start = request.start;
+      Scene there = scene;
+      if (request.start) (amplitude ? there.amplitude : there.frequency) = request.start_value;
+      const System at(there);
+      const auto found = FindImpactOrbit(request.start ? at : system, request.start ? there : scene, as_orbit, budget);
+      as_orbit.period = 1;
+      if (found.stopped || budget.passed())
+        return Wrap(outcome, "bifurcation", model, as_orbit, budget, "during the orbit search", enclosed.structure);
+      if (!found.failure.empty() || found.sticking)
+        outcome.reason = "no impacting orbit found at the located value: " +
+                         (found.failure.empty() ? std::string("the orbit found sticks") : found.failure);
+      else
+        outcome = proof::ProveGrazing(model, mirrored, found.guess, frequency, request.value, request.bracket, budget, interval);
+    } else {
+      outcome = request.kind == "fold"
+                    ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
+                                                interval)
+                    : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
+    }
     if (outcome.proven) {
       // The certificate's model carries the parameter as the proven interval.
       (amplitude ? model.amplitude_text : model.frequency_text) = interval;
