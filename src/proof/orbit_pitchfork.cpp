@@ -172,6 +172,19 @@ Outcome ProveOrbitPitchfork(const IntervalModel& model, bool mirrored, const Imp
   g.q = guess.period;
   g.frequency = frequency;
   g.hits = guess.contacts.empty() ? std::vector<int>(static_cast<std::size_t>(g.count), 0) : guess.contacts;
+  if (model.contact_count() != 2) {
+    out.reason = fmt::format("the model has {} contact(s): a symmetry-breaking pitchfork needs two mirrored ones",
+                             model.contact_count());
+    return out;
+  }
+  if (model.contacts[0].restitution_text != model.contacts[1].restitution_text) {
+    out.reason = "the two restitutions differ: the model is not symmetric, no symmetry-breaking pitchfork to prove";
+    return out;
+  }
+  if (model.contacts[0].stop_text != model.contacts[1].stop_text) {
+    out.reason = "the two stops are not symmetric (e_1 ≠ e_0): no symmetry-breaking pitchfork to prove";
+    return out;
+  }
   if (g.count == 0 || !MakeSymmetric(g, guess, mirrored, 2 * M_PI / (frequency ? located : model.frequency.mid()))) {
     out.reason = "the orbit found is not the symmetric orbit of a mirrored model (one impact on each contact, half a "
                  "period apart, the second state the first mirrored): no symmetry-breaking pitchfork to prove";
