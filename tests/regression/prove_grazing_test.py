@@ -20,6 +20,11 @@ found at 50 digits at ω ± 1e-20) must lie in the certificate's claims; the int
 moved, the slope claim moved or of the wrong sign, the curvature and time claims moved, the box
 shrunk, the window cut, another contact or flight, the symmetry flag flipped, the model edited).
 Python's vibro.prove_bifurcation(..., branch=...) gives the command's answer.
+
+The tube's symmetry-breaking pitchfork near ω = 0.9554 (`prove --bifurcation BRANCH.h5 --point K`
+of its "branch-point"): the truth is the ω where the whole orbit's multiple-shooting Jacobian
+(central differences, h = 1e-20, at 50 digits, the symmetric orbit by findroot; no block split) is
+singular, and dμ/dω from that Jacobian's antisymmetric block bordered by the certificate's ℓ and k.
 Usage: prove_grazing_test.py VIBRO CHECKER SCENES_DIR
 """
 import copy
