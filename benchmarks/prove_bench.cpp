@@ -53,6 +53,14 @@ void BM_Prove3DofDampedImpact(benchmark::State& s) {
 void BM_Prove2DofTwoSidedTube(benchmark::State& s) {
   Prove(s, "tube_loose_support.toml", {}, vibro::OrbitKind::kImpact);
 }
+// Sticking orbits of several modes held at a plastic stop (r = 0): the held flow enclosed.
+void BM_Prove2DofSticking(benchmark::State& s) {
+  Prove(s, "chain2.toml", {"stop.restitution=0"}, vibro::OrbitKind::kSticking);
+}
+void BM_Prove2DofDampedSticking(benchmark::State& s) {
+  Prove(s, "chain2_damped.toml", {"stop.restitution=0"}, vibro::OrbitKind::kSticking);
+}
+void BM_Prove3DofSticking(benchmark::State& s) { Prove(s, "chain3.toml", {}, vibro::OrbitKind::kSticking); }
 // A bifurcation point: the tube's grazing near ω = 1.3646 (docs/prove.md "Grazings"), located by a
 // continuation in the set-up (not timed), proven from the branch point just before it: the orbit
 // search from that state, Newton on the orbit with its tangency, the two Krawczyk tests, the gaps.
@@ -100,6 +108,9 @@ void BM_ProveTubeGrazing(benchmark::State& state) {
 }
 BENCHMARK(BM_ProveTubeGrazing)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove1DofImpact)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove2DofSticking)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove2DofDampedSticking)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove3DofSticking)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove3DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofTwoSidedTube)->Unit(benchmark::kMillisecond);

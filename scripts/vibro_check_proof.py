@@ -30,6 +30,7 @@ import re
 import sys
 
 from mpmath import iv, mp
+from mpmath.libmp import libmpi, from_int
 
 PREC = 192
 iv.prec = PREC
@@ -57,6 +58,7 @@ class NotConfirmed(Exception):
 # ---- Intervals --------------------------------------------------------------------------------
 
 ZERO, ONE = iv.mpf(0), iv.mpf(1)
+_RAW_ZERO, _RAW_ONE = ZERO._mpi_, ONE._mpi_
 IV = type(ZERO)
 
 
@@ -779,6 +781,7 @@ class Truth:
         self.min_box_width = mp.mpf(0)
         self.reason = None      # a function of the reason text that raises NotConfirmed
         self.contacts = None    # the contact of each event (None: all at contact 0)
+        self.held_note = False  # a sticking orbit of several modes (the held note is about it)
 
 
 def prime_factors(q):
@@ -1154,9 +1157,6 @@ def check_sticking(cert, m, ledger):
     if not hi(m.r) < 1:
         raise NotConfirmed("a sticking certificate needs 0 <= r < 1")
     plastic = lo(m.r) == 0 and hi(m.r) == 0
-    if m.zeta is not None and not plastic:
-        raise NotConfirmed("a sticking certificate of a damped model needs r = 0 (the chattering tail's bounds are "
-                           "those of the undamped model)")
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
@@ -1382,11 +1382,22 @@ def check_tail(cert, m, ledger, count, tL, vplus, reaction, w1s):
     rho = m.r * iv.sqrt(a_hi / A_low)
     claim_contains(tail["contraction"], rho, "the tail's contraction r sqrt(a_hi/A_lo)")
     ledger.check("tail contraction 1 - rho", tl, "> 0", 1 - rho, 1 - rho)
-    Tmax = 2 * v / (A_low * (1 - rho))
-    claim_upper(tail["time_bound"], Tmax, "the tail's time bound 2v/(A_lo (1 - rho))")
+    if m.zeta is None:
+        Tmax = 2 * v / (A_low * (1 - rho))
+        rho_low = m.r * iv.sqrt(A_low / a_hi)
+        Tmin = 2 * v_low / (a_hi * (1 - rho_low))
+    else:
+        # Damped, y'' = -w1² y - 2σ y' - T_B R (σ = ζ w1): the damping shortens the rise (Y <= v²/(2 A_lo))
+        # and takes energy in the fall (landing speed <= v sqrt(a_hi/A_lo)), but slows the fall, where
+        # y'' <= -(A_lo - 2σ v sqrt(a_hi/A_lo)) = -f_lo: a flight lasts at most v/A_lo + v/sqrt(A_lo f_lo)
+        # <= 2v/f_lo. From below, at least the first rise, v_lo/(a_hi + 2σ v).
+        sigma = m.zeta[0] * m.w_i[0]
+        f_lo = A_low - 2 * sigma * v * iv.sqrt(a_hi / A_low)
+        ledger.check("tail fall acceleration A_lo - 2 sigma v sqrt(a_hi/A_lo)", tl, "> 0", f_lo, f_lo)
+        Tmax = 2 * v / (f_lo * (1 - rho))
+        Tmin = v_low / (a_hi + 2 * sigma * v)
+    claim_upper(tail["time_bound"], Tmax, "the tail's time bound")
     ledger.check("tail window L - Tmax", tl, "> 0", L - Tmax, L - Tmax)
-    rho_low = m.r * iv.sqrt(A_low / a_hi)
-    Tmin = 2 * v_low / (a_hi * (1 - rho_low))
     t_end = iv.mpf([lo(tL + Tmin), hi(tL + Tmax)])
     claim_contains(tail["accumulation"], t_end, "the accumulation time")
     return t_end
@@ -1398,7 +1409,9 @@ SUMMARY_KEYS = ("verdict", "reason", "kind", "period", "sequence", "events", "se
                 "box_width")
 NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
          "a multiplier enclosure meets the unit circle",
-         "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE)
+         "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE,
+         "sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
+         "other multipliers are 0")
 
 
 def summary_shape(s, n):
@@ -1515,8 +1528,9 @@ def check_summary(cert, s, truth, m):
     if stability == "unstable" and not (mods is not None and any(lo(x) > 1 for x in mods)):
         raise NotConfirmed(f"{s['stability'].path}: 'unstable', but the checker's |multiplier|² are "
                            f"{', '.join(show_iv(x) for x in mods or [])}")
+    held = truth.held_note
     if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
-            truth.multipliers == "zero":
+            truth.multipliers == "zero" or note == HELD_NOTE and not held:
         raise NotConfirmed(f"{s['stability_note'].path}: '{note}' is not about this orbit")
     # Asked for a period Q that the least period divides: the orbit is also the period-Q orbit, and
     # the reason says so (docs/prove.md "The period is the least period").
@@ -1533,6 +1547,437 @@ def check_summary(cert, s, truth, m):
     elif "; its least period" in text:
         raise NotConfirmed(f"{s['reason'].path}: states a requested period the summary does not have")
     truth.reason(s["reason"], text)
+
+
+# ---- Sticking orbits of several modes ----------------------------------------------------------
+
+HELD_NOTE = ("sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
+             "other multipliers are 0")
+STICKING_MODES_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczyk", "release", "flights", "sticking",
+                       "monodromy")
+
+
+def _raw_matmul(A, B):
+    """The product of two matrices of mpmath intervals held as raw (lo, hi) pairs (libmpi, rounded
+    outward at PREC bits): the Taylor series of the held flow without the context's conversions."""
+    mul, add = libmpi.mpi_mul, libmpi.mpi_add
+    n, k, m = len(A), len(B), len(B[0])
+    out = []
+    for i in range(n):
+        row = A[i]
+        res = []
+        for j in range(m):
+            acc = _RAW_ZERO
+            for l in range(k):
+                acc = add(acc, mul(row[l], B[l][j], PREC), PREC)
+            res.append(acc)
+        out.append(res)
+    return out
+
+
+class Held:
+    """The flow of the structure held at contact 0 (docs/prove.md "Sticking orbits of several
+    modes"), written directly: Ẍ = Ẍ_free + T_B R with R chosen so that c·Ẍ = 0, i.e.
+    R = −c·Ẍ_free/s_B = (c·(Ω²X + DẊ) − s_A f sin ωt)/s_B. In Z = (X, Ẋ, sin ωt, cos ωt) it is Ż = AZ,
+    Z(t0 + s) = e^{As}Z(t0), e^{As} enclosed by its Taylor series and a remainder bound."""
+
+    def __init__(self, m):
+        n, N = m.n, 2 * m.n + 2
+        self.n, self.N, self.m = n, N, m
+        c, TB = m.c, m.TB
+        z = m.zeta or [ZERO] * n
+        D_ = [2 * z[i] * m.w_i[i] for i in range(n)]
+        A = [[ZERO] * N for _ in range(N)]
+        # Column k of A: Ż for Z = e_k, the free acceleration plus T_B R(e_k).
+        for k in range(N):
+            X = [ONE if k == i else ZERO for i in range(n)]
+            V = [ONE if k == n + i else ZERO for i in range(n)]
+            sn = ONE if k == 2 * n else ZERO
+            cs = ONE if k == 2 * n + 1 else ZERO
+            free = [m.TA[i] * m.f * sn - m.w_i[i] ** 2 * X[i] - D_[i] * V[i] for i in range(n)]
+            R = -sum((c[i] * free[i] for i in range(n)), ZERO) / m.sB
+            for i in range(n):
+                A[i][k] = V[i]
+                A[n + i][k] = free[i] + TB[i] * R
+            A[2 * n][k] = m.w * cs
+            A[2 * n + 1][k] = -m.w * sn
+        self.A = A
+        self.l = [c[i] * m.w_i[i] ** 2 / m.sB for i in range(n)] + [c[i] * D_[i] / m.sB for i in range(n)] + \
+            [-m.sA * m.f / m.sB, ZERO]
+        self.lA = [sum((self.l[i] * A[i][k] for i in range(N)), ZERO) for k in range(N)]
+        self.cache = {}
+
+    def state(self, t, X, V):
+        wt = t * self.m.w if isinstance(t, D) else self.m.w * t
+        return list(X) + list(V) + [dsin(wt), dcos(wt)]
+
+    def exp(self, s):
+        """e^{As} for every s in the interval s."""
+        key = (lo(s), hi(s))
+        if key in self.cache:
+            return self.cache[key]
+        if lo(s) != hi(s) and lo(s) != 0:
+            # e^{As} = e^{A s_lo} e^{A[0, s_hi − s_lo]}: the width is not squared.
+            E = matmul(self.exp(iv.mpf(lo(s))), self.exp(iv.mpf([0, hi(s) - lo(s)])))
+            if len(self.cache) < 4096:
+                self.cache[key] = E
+            return E
+        N = self.N
+        B = [[self.A[i][k] * s for k in range(N)] for i in range(N)]
+        norm = max(sum((max(abs(lo(x)), abs(hi(x))) for x in row), mp.mpf(0)) for row in B)
+        k = 0
+        while norm / 2 ** k > mp.mpf(1) / 8:
+            k += 1
+        scale = iv.mpf(2) ** -k
+        B = [[x * scale for x in row] for row in B]
+        beta = iv.mpf(norm) * scale
+        # Terms up to j = J, where β^(J+1)/(J+1)! < 2^-(PREC+10); the rest bounded in ‖·‖∞ by
+        # β^(J+1)/(J+1)! · 1/(1 − β/(J+2)).
+        Br = [[x._mpi_ for x in row] for row in B]
+        Er = [[_RAW_ONE if i == j else _RAW_ZERO for j in range(N)] for i in range(N)]
+        term = [row[:] for row in Er]
+        J, bound = 0, ONE
+        while True:
+            J += 1
+            term = _raw_matmul(term, Br)
+            div = (from_int(J), from_int(J))
+            term = [[libmpi.mpi_div(x, div, PREC) for x in row] for row in term]
+            Er = [[libmpi.mpi_add(Er[i][l], term[i][l], PREC) for l in range(N)] for i in range(N)]
+            bound = bound * beta / J
+            if hi(bound * beta / (J + 1)) < mp.mpf(2) ** -(PREC + 10) or J >= 200:
+                break
+        rest = bound * beta / (J + 1) / (1 - beta / (J + 2))
+        pad = iv.mpf([-hi(rest), hi(rest)])._mpi_
+        Er = [[libmpi.mpi_add(x, pad, PREC) for x in row] for row in Er]
+        for _ in range(k):
+            Er = _raw_matmul(Er, Er)
+        E = [[iv.make_mpf(x) for x in row] for row in Er]
+        if len(self.cache) < 4096:
+            self.cache[key] = E
+        return E
+
+    def advance(self, z, s):
+        """e^{As}z for intervals, or with gradients (D): e^{As}∇z + A e^{As}z ∇s."""
+        dual = isinstance(s, D) or any(isinstance(x, D) for x in z)
+        if not dual:
+            E = self.exp(s)
+            return [sum((E[i][k] * z[k] for k in range(self.N)), ZERO) for i in range(self.N)]
+        s = D.lift(s)
+        z = [D.lift(x) for x in z]
+        E = self.exp(s.v)
+        Ez = [sum((E[i][k] * z[k].v for k in range(self.N)), ZERO) for i in range(self.N)]
+        AEz = [sum((self.A[i][k] * Ez[k] for k in range(self.N)), ZERO) for i in range(self.N)]
+        out = []
+        for i in range(self.N):
+            g = {}
+            for k in range(self.N):
+                for idx, d in z[k].g.items():
+                    g[idx] = g[idx] + E[i][k] * d if idx in g else E[i][k] * d
+            for idx, d in s.g.items():
+                g[idx] = g[idx] + AEz[i] * d if idx in g else AEz[i] * d
+            out.append(D(Ez[i], g))
+        return out
+
+
+def dot(l, z):
+    out = ZERO
+    for a, b in zip(l, z):
+        out = b * D(a) + out if isinstance(b, D) else a * b + out
+    return out
+
+
+def make_krawczyk(residual, C, N):
+    def krawczyk(center, box):
+        F = [value(r) for r in residual([iv.mpf(x) for x in center])]
+        J = [r.g if isinstance(r, D) else {} for r in residual([variable(box[p], p) for p in range(N)])]
+        diff = [box[l] - center[l] for l in range(N)]
+        K = []
+        for p in range(N):
+            k = iv.mpf(center[p])
+            acc = {}
+            for j in range(N):
+                c = C[p][j]
+                k -= c * F[j]
+                for l, d in J[j].items():
+                    acc[l] = acc[l] + c * d if l in acc else c * d
+            for l in range(N):
+                k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * diff[l]
+            K.append(k)
+        return K
+    return krawczyk
+
+
+def plastic_saltation(m, t, X, Vm, vm, sticks):
+    """S = Dg + (f⁺ − Dg f⁻)∇hᵀ/(∇h·f⁻) of a plastic landing at contact 0: Dg = diag(I, Π),
+    Π = I − T_B cᵀ/s_B; f⁺ the held field (sticking) or the free one (a departure) at ΠẊ⁻."""
+    n = m.n
+    Pi = [[(ONE if i == l else ZERO) - m.TB[i] * m.c[l] / m.sB for l in range(n)] for i in range(n)]
+    Vp = [sum((Pi[i][l] * Vm[l] for l in range(n)), ZERO) for i in range(n)]
+    am, ap = m.acceleration(t, X, Vm), m.acceleration(t, X, Vp)
+    if sticks:
+        ap = [sum((Pi[i][l] * ap[l] for l in range(n)), ZERO) for i in range(n)]
+    Pam = [sum((Pi[i][l] * am[l] for l in range(n)), ZERO) for i in range(n)]
+    jump = [Vp[i] - Vm[i] for i in range(n)] + [ap[i] - Pam[i] for i in range(n)]
+    S = [[ZERO] * (2 * n) for _ in range(2 * n)]
+    for i in range(n):
+        S[i][i] = ONE
+        for l in range(n):
+            S[n + i][n + l] = Pi[i][l]
+    for i in range(2 * n):
+        for l in range(n):
+            S[i][l] = S[i][l] + jump[i] * m.c[l] / vm
+    return S
+
+
+def check_sticking_modes(cert, m, ledger):
+    """A sticking orbit of several modes held on contact 0 with plastic landings (docs/prove.md
+    "Sticking orbits of several modes"): Krawczyk on the release and the landings, each flight free
+    of contact, R < 0 at each landing but the last, R > 0 at the last and over the held phase up to
+    the release, where Ṙ < 0; the monodromy and its multipliers on the held subspace."""
+    if len(m.contacts) > 1:
+        raise NotConfirmed("a sticking certificate of several modes needs a model of one contact")
+    if m.n < 2:
+        raise NotConfirmed("a certificate with unknowns of a sticking orbit needs several modes")
+    if not (lo(m.r) == 0 == hi(m.r)):
+        raise NotConfirmed("a sticking certificate of several modes needs r = 0 (plastic landings)")
+    if not positive(m.sB):
+        raise NotConfirmed("s_B = c·T_B must be > 0")
+    q = cert["period"].integer(1, 1 << 20)
+    n = m.n
+    per = 2 * n + 1
+    names_node = cert["unknowns"]
+    N = len(names_node.items(at_least=2 * per, at_most=MAX_UNKNOWNS))
+    if N % per:
+        names_node.fail(f"{N} unknowns: not a multiple of 2n + 1 = {per} (n = {n} modes)")
+    count = N // per - 1  # landings
+    expected = []
+    for b in range(count + 1):
+        expected += [f"t_{b}"] + [f"X_{b}[{i}]" for i in range(n)] + [f"V_{b}[{i}]" for i in range(n)]
+    names = [x.text() for x in names_node.items()]
+    if names != expected:
+        k = next(p for p in range(N) if names[p] != expected[p])
+        names_node[k].fail(f"'{names[k]}', expected '{expected[k]}'")
+    u_mid = [x.num() for x in cert["midpoint"].items(exactly=N)]
+    box_nodes = cert["box"].items(exactly=N)
+    U = [b.pair() for b in box_nodes]
+    for p in range(N):
+        if not lo(U[p]) < u_mid[p] < hi(U[p]):
+            cert["midpoint"][p].fail(f"{u_mid[p]} is not inside the box {show_pair(box_nodes[p].v)}")
+    C = [[iv.mpf(x.num()) for x in row.items(exactly=N)] for row in cert["preconditioner"].items(exactly=N)]
+    kr_nodes = cert["krawczyk"].items(exactly=N)
+    flights = cert["flights"].items(exactly=count)
+    mono_nodes = [row.items(exactly=2 * n) for row in cert["monodromy"].items(exactly=2 * n)]
+    qT = q * m.T
+    h = Held(m)
+
+    def unpack(vec, b):
+        o = b * per
+        return vec[o], vec[o + 1:o + 1 + n], vec[o + 1 + n:o + per]
+
+    def residual(vec):
+        out = []
+        for j in range(count):
+            t, X, V = unpack(vec, j)
+            tn, Xn, Vn = unpack(vec, j + 1)
+            Xe, Ve = m.flight(t, X, V, tn - t)
+            Vp = m.impact(Ve)
+            out.append(m.contact_of(Xe) - m.x0)
+            out += [Xe[i] - Xn[i] for i in range(n)]
+            out += [Vp[i] - Vn[i] for i in range(n)]
+        tm, Xm, Vm = unpack(vec, count)
+        tr, Xr, Vr = unpack(vec, 0)
+        z = h.advance(h.state(tm, Xm, Vm), tr + qT - tm)
+        out += [z[i] - Xr[i] for i in range(n)]
+        out += [z[n + i] - Vr[i] for i in range(n)]
+        out.append(dot(h.l, h.state(tr, Xr, Vr)))
+        return out
+
+    krawczyk = make_krawczyk(residual, C, N)
+    K = krawczyk(u_mid, U)
+    E = contract(residual, krawczyk, u_mid, U, K, C, m.point, m.thin)
+    for p in range(N):
+        ledger.check("krawczyk", names[p], "inside the box", K[p], E[p], box=U[p])
+        claim_contains(kr_nodes[p], E[p], f"the orbit's {names[p]}")
+        if not holds("inside the box", kr_nodes[p].pair(), U[p]):
+            raise NotConfirmed(f"{kr_nodes[p].path} = {show_pair(kr_nodes[p].v)} is not inside the box")
+
+    # The release: R falls through 0.
+    rel = cert["release"].obj(("reaction_rate",))
+    rate = dot(h.lA, h.state(*unpack(U, 0)))
+    rateT = dot(h.lA, h.state(*unpack(E, 0)))
+    ledger.check("reaction rate", "release", "< 0", rate, rateT)
+    claim_contains(rel["reaction_rate"], rateT, "the reaction rate at the release")
+
+    truth = Truth()
+    truth.kind, truth.period = "sticking", q
+    truth.sequence = ["release"]
+    truth.events = [("release", unpack(E, 0)[0], None)]
+    budget = [MAX_PIECES]
+    top = max([hi(m.w)] + [hi(w) for w in m.w_i])
+    M = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
+    for j in range(count):
+        fn = flights[j]
+        fl, land = f"flight {j}", f"landing {j + 1}"
+        start = "release" if j == 0 else "departure"
+        extra = ("third_derivative", "third_derivative_lower", "fourth_derivative_bound") if j == 0 else \
+            ("second_derivative", "second_derivative_lower", "third_derivative_bound")
+        fn.obj(("start", "duration", "start_window", "second_derivative_bound", "velocity_before_next",
+                "speed_before_lower", "end_window", "pieces", "reaction_at_landing") + extra)
+        if fn["start"].text() != start:
+            raise NotConfirmed(f"{fn['start'].path}: '{fn['start'].v}', the flight starts at a {start}")
+
+        def quantities(vec):
+            t, X, V = unpack(vec, j)
+            tn, Xn, Vn = unpack(vec, j + 1)
+            S = tn - t
+            Xe, Ve = m.flight(t, X, V, S)
+            return t, X, V, tn, Xn, Vn, S, Xe, Ve, m.contact_of(Ve)
+
+        t, X, V, tn, Xn, Vn, S, Xe, Ve, vm = quantities(U)
+        tT, XT, VT, tnT, XnT, VnT, ST, XeT, VeT, vmT = quantities(E)
+        ledger.check("duration", fl, "> 0", S, ST)
+        ledger.check("contact velocity before impact", fl, "< 0", vm, vmT)
+        claim_contains(fn["duration"], ST, f"the duration of {fl}")
+        claim_contains(fn["velocity_before_next"], vmT, f"the contact velocity before {land}")
+        ws = fn["start_window"].point()
+        if not positive(ws):
+            raise NotConfirmed(f"{fn['start_window'].path}: the window must be > 0")
+        if j == 0:
+            # At the true orbit g = g' = g'' = 0 (on the stop, at rest, R = 0): g(s) >= s^3 (g'''/6 - M4 s/24).
+            def g3_of(t_, X_, V_):
+                acc = m.acceleration(t_, X_, V_)
+                z = m.zeta or [ZERO] * n
+                jerk = [m.TA[i] * m.f * m.w * iv.cos(m.w * t_) - m.w_i[i] ** 2 * V_[i] - 2 * z[i] * m.w_i[i] * acc[i]
+                        for i in range(n)]
+                return m.contact_of(jerk)
+            g3, g3T = g3_of(t, X, V), g3_of(tT, XT, VT)
+            M4, M4T = m.derivative_bound(t, X, V, 4), m.derivative_bound(tT, XT, VT, 4)
+            ledger.check("third derivative of the gap", fl, "> 0", g3, g3T)
+            ledger.check("fourth-derivative bound", fl, "finite", M4, M4T)
+            claim_contains(fn["third_derivative"], g3T, f"g''' at the start of {fl}")
+            claim_lower(fn["third_derivative_lower"], g3, f"g''' at the start of {fl} over the box")
+            claim_upper(fn["fourth_derivative_bound"], M4T, f"the bound on |g''''| of {fl}")
+            margin = fn["third_derivative_lower"].point() / 6 - M4 * ws / 24
+            ledger.check("start window g'''/6 - M4 ws/24", fl, "> 0", margin,
+                         fn["third_derivative_lower"].point() / 6 - M4T * ws / 24)
+        else:
+            g2, g2T = m.contact_of(m.acceleration(t, X, V)), m.contact_of(m.acceleration(tT, XT, VT))
+            M3, M3T = m.derivative_bound(t, X, V, 3), m.derivative_bound(tT, XT, VT, 3)
+            ledger.check("second derivative of the gap", fl, "> 0", g2, g2T)
+            ledger.check("third-derivative bound", fl, "finite", M3, M3T)
+            claim_contains(fn["second_derivative"], g2T, f"g'' at the start of {fl}")
+            claim_lower(fn["second_derivative_lower"], g2, f"g'' at the start of {fl} over the box")
+            claim_upper(fn["third_derivative_bound"], M3T, f"the bound on |g'''| of {fl}")
+            margin = fn["second_derivative_lower"].point() / 2 - M3 * ws / 6
+            ledger.check("start window g''/2 - M3 ws/6", fl, "> 0", margin,
+                         fn["second_derivative_lower"].point() / 2 - M3T * ws / 6)
+        M2, M2T = m.derivative_bound(t, X, V, 2), m.derivative_bound(tT, XT, VT, 2)
+        ledger.check("second-derivative bound", fl, "finite", M2, M2T)
+        claim_upper(fn["second_derivative_bound"], M2T, f"the bound on |g''| of {fl}")
+        claim_lower(fn["speed_before_lower"], -vm, f"the contact speed before {land} over the box")
+        we = fn["end_window"].point()
+        if not positive(we):
+            raise NotConfirmed(f"{fn['end_window'].path}: the window must be > 0")
+        b_low = fn["speed_before_lower"].point()
+        ledger.check("end window b - M2 we/2", fl, "> 0", b_low - M2 * we / 2, b_low - M2T * we / 2)
+        topS = hi(iv.mpf(hi(S)) - we)
+        if lo(ws) < topS:
+            positive_pieces(fn["pieces"], lo(ws), topS,
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[0]) - m.x0,
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[1]), f"the gap on {fl}", budget)
+        else:
+            fn["pieces"].items(at_most=MAX_PIECES)
+        sticks = j == count - 1
+        R_land = dot(h.l, h.state(tn, Xn, Vn))
+        R_landT = dot(h.l, h.state(tnT, XnT, VnT))
+        ledger.check("reaction at the landing", land, "> 0" if sticks else "< 0", R_land, R_landT)
+        claim_contains(fn["reaction_at_landing"], R_landT, f"the reaction at {land}")
+        truth.events.append(("impact", tnT, vmT))
+        truth.sequence.append("impact")
+        if sticks:
+            truth.events.append(("stick", tnT, vmT))
+            truth.sequence.append("stick")
+        else:
+            truth.events.append(("departure", tnT, None))
+            truth.sequence.append("departure")
+        M = matmul(plastic_saltation(m, tnT, XeT, VeT, vmT, sticks), matmul(flight_jacobian(m, tT, XT, VT, ST), M))
+
+    # The held phase: R > 0 from the last landing on, Ṙ < 0 over the end window, R = 0 at the release.
+    st = cert["sticking"].obj(("duration", "end_window", "pieces"))
+    tm, Xm, Vm = unpack(U, count)
+    tmT, XmT, VmT = unpack(E, count)
+    zm, zmT = h.state(tm, Xm, Vm), h.state(tmT, XmT, VmT)
+    tau, tauT = unpack(U, 0)[0] + qT - tm, unpack(E, 0)[0] + qT - tmT
+    ledger.check("duration", "sticking phase", "> 0", tau, tauT)
+    claim_contains(st["duration"], tauT, "the duration of the sticking phase")
+    weh = st["end_window"].point()
+    if not positive(weh):
+        raise NotConfirmed(f"{st['end_window'].path}: the window must be > 0")
+    Iw = iv.mpf([lo(iv.mpf(lo(tau)) - weh), hi(tau)])
+    tail_rate = dot(h.lA, h.advance(zm, Iw))
+    ledger.check("reaction rate over the end window", "sticking phase", "< 0", tail_rate, dot(h.lA, h.advance(zmT, tauT)))
+    topH = hi(iv.mpf(hi(tau)) - weh)
+    if 0 < topH:
+        # E(p) for the pieces' ends, stepped exactly: E(p_k) = e^{A(p_k − p_{k−1})} E(p_{k−1}).
+        state = {"at": mp.mpf(0), "E": [[ONE if i == j else ZERO for j in range(h.N)] for i in range(h.N)]}
+
+        def at(p):
+            if p != state["at"]:
+                state["E"] = matmul(h.exp(iv.mpf(p - state["at"])), state["E"])
+                state["at"] = p
+            return [sum((state["E"][i][k] * zm[k] for k in range(h.N)), ZERO) for i in range(h.N)]
+
+        def r_value(c):
+            # e^{Ac}z = e^{A(c − p)} e^{Ap} z for the last stepped end p.
+            p0 = state["at"]
+            return dot(h.l, h.advance(at(p0), c - p0))
+
+        def r_slope(I):
+            p0 = lo(I)
+            return dot(h.lA, h.advance(at(p0), I - p0))
+
+        positive_pieces(st["pieces"], mp.mpf(0), topH, r_value, r_slope, "the reaction over the sticking phase",
+                        budget)
+    else:
+        st["pieces"].items(at_most=MAX_PIECES)
+
+    # The monodromy at the true orbit and its restriction to the held subspace.
+    Eh = h.exp(tauT)
+    M = matmul([row[:2 * n] for row in Eh[:2 * n]], M)
+    for i in range(2 * n):
+        for j in range(2 * n):
+            claim_contains(mono_nodes[i][j], M[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
+    kk = max(range(n), key=lambda i: abs(mid(m.c[i])))
+    if not excludes_zero(m.c[kk]):
+        raise NotConfirmed("the contact's shape has no nonzero entry")
+    keep = [b * n + i for b in range(2) for i in range(n) if i != kk]
+    B = [[ZERO] * len(keep) for _ in range(2 * n)]
+    for col, p in enumerate(keep):
+        b, i = divmod(p, n)
+        B[p][col] = ONE
+        B[b * n + kk][col] = -m.c[i] / m.c[kk]
+    MB = matmul(M, B)
+    Mr = [[MB[p][col] for col in range(len(keep))] for p in keep]
+    boxes = eigenvalues(Mr)
+    truth.multipliers = boxes
+    truth.not_enclosed = boxes is None
+    truth.held_note = True
+    truth.section = (*unpack(E, 0), "the release")
+    truth.min_box_width = max(hi(x) - lo(x) for x in U)
+
+    def reason(node, text):
+        interval_prefix(node, "", m)
+        g = re.fullmatch(r"exactly one period-(\d+) sticking orbit of (\d+) modes through the release in a box of "
+                         r"width (\S+) \(Krawczyk\): release, (\d+) flight\(s\) with plastic landings, sticking with "
+                         r"R > 0 until the next release", text)
+        if not g:
+            raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
+        check_count(node, "period", int(g.group(1)), q)
+        check_count(node, "modes", int(g.group(2)), n)
+        check_width(node, g.group(3), max(hi(x) - lo(x) for x in U), "the box")
+        check_count(node, "flights", int(g.group(4)), count)
+    truth.reason = reason
+    return truth
 
 
 # ---- One certificate --------------------------------------------------------------------------
@@ -2412,8 +2857,13 @@ def check(node):
     kind = node["kind"].text(("impact", "sticking", "bifurcation"))
     if kind == "bifurcation":
         return check_bifurcation(node)
-    node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-             (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
+    # A sticking orbit of several modes carries the unknowns of its Krawczyk test.
+    modes = kind == "sticking" and isinstance(node.v.get("unknowns"), list)
+    if modes:
+        node.obj(CERT_KEYS + STICKING_MODES_KEYS, ("structure",))
+    else:
+        node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
+                 (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]
@@ -2432,6 +2882,8 @@ def check(node):
     ledger = Ledger(node["inequalities"])
     if kind == "impact":
         truth = check_impact(node, m, ledger)
+    elif modes:
+        truth = check_sticking_modes(node, m, ledger)
     else:
         truth = check_sticking(node, m, ledger)
     check_summary(node, s, truth, m)

@@ -37,6 +37,8 @@
 #include <pybind11/stl.h>
 
 #include "frontend/commands.hpp"
+#include "frontend/curves.hpp"
+#include "vibro/curve_output.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
 #include "frontend/run_budget.hpp"
@@ -826,6 +828,47 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
   return {vibro::PartitionJson(params[0], params[1], levels, columns), interrupted};
 }
 
+// vibro curve: two-parameter curves of bifurcations.
+std::pair<std::string, bool> TraceCurvesPy(const PyScene& s, const std::vector<std::string>& params,
+                                           const std::vector<double>& range1, const std::vector<double>& range2,
+                                           const std::vector<std::string>& kinds, const std::vector<double>& toward,
+                                           const std::string& from, long long point, long long contact, double step,
+                                           double max_step, long long max_points, long long period,
+                                           long long transient, const std::string& out, bool handle_sigint) {
+  vibro::frontend::CurveSpec spec;
+  spec.params = params;
+  spec.range1 = range1;
+  spec.range2 = range2;
+  spec.kinds = kinds;
+  spec.toward = toward;
+  spec.from = from;
+  spec.point = point;
+  spec.contact = contact;
+  spec.step = step;
+  spec.max_step = max_step;
+  spec.max_points = max_points;
+  spec.period = period;
+  spec.transient = transient;
+  CheckPaths({{"from_", &spec.from}});
+  const auto plan = vibro::frontend::PlanCurves(s.origin, s.loaded, spec, kPython);
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
+  SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
+  const auto curves = vibro::frontend::TraceCurves(plan, guard.flag());
+  const bool interrupted = guard.interrupted();
+  if (store) {
+    vibro::WriteCurves(*store, params[0], params[1], curves);
+    vibro::RunResult r;
+    bool found = false;
+    for (const auto& c : curves) found = found || c.status != "no-start";
+    r.status = interrupted ? vibro::RunStatus::kInterrupted : found ? vibro::RunStatus::kOk : vibro::RunStatus::kNumericalFailure;
+    r.message = interrupted ? "interrupted" : found ? "ok" : "no curve was started";
+    store->Finish(r, vibro::frontend::NoAttractor());
+  }
+  store.reset();  // closed without the GIL
+  return {vibro::CurvesJson(params[0], params[1], curves), interrupted};
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_vibro, m) {
@@ -880,4 +923,5 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("validate", &Validate);
   m.def("score", &Score);
   m.def("partition", &PartitionPlane);
+  m.def("curve", &TraceCurvesPy);
 }
