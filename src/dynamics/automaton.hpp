@@ -229,6 +229,7 @@ class Automaton {
   void UpdateGaps(PropagatorT<S>& p, const S& sigma);
   bool OnContactMulti(int k);
   bool PairChatter(int k);
+  bool DecidableBesideHeld(int k);
   bool ImpactWhileHeld(int k);
   // Sticking on two or more contacts at once (docs/contacts.md): the held set's propagator, a
   // contact closing while the set is held, and the acceleration LCP that decides which contacts
