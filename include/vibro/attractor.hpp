@@ -82,6 +82,7 @@ class AttractorRecorder final : public Observer {
     Eigen::VectorXd z;  // (X, Ẋ)
     double amax;        // |z|∞
     Mode mode;
+    int held;  // contacts held at the section point
   };
   // Classify(); `check_decay` false (for Settled) skips the decay test of the period (Settled
   // makes its own, stricter one on the same windows) and returns no description without a period.

@@ -78,6 +78,8 @@ struct Sample {
   const Eigen::VectorXd& V;  // modal velocities, (n)
   double x_B;
   Mode mode;
+  int held;  // how many contacts are held (0 in free flight; 1 sticking on one contact; −1: not known,
+            // counted from the state by whoever needs it)
 };
 
 // Everything the automaton needs to continue a run exactly where it was (taken at period

@@ -38,7 +38,20 @@ void AttractorRecorder::OnSection(const Sample& s) {
   z.resize(2 * s.X.size());
   z << s.X, s.V;
   const double amax = z.cwiseAbs().maxCoeff();
-  sections_.push_back({s.clock.period, std::move(z), amax, s.mode});
+  int held = s.held;
+  if (held < 0) {
+    // Not known (a section read back from a file to resume): the contacts at zero gap and zero gap
+    // velocity within 1e-9 of their scale, at least one when sticking.
+    held = 0;
+    for (const ContactModel& c : sys_.contacts()) {
+      const double scale = 1.0 + std::abs(c.stop) + c.shape.cwiseProduct(s.X).cwiseAbs().sum();
+      if (std::abs(c.shape.dot(s.X) - c.stop) <= 1e-9 * scale &&
+          std::abs(c.shape.dot(s.V)) <= 1e-9 * (1.0 + c.shape.cwiseProduct(s.V).cwiseAbs().sum()))
+        ++held;
+    }
+    if (s.mode == Mode::kSticking) held = std::max(held, 1);
+  }
+  sections_.push_back({s.clock.period, std::move(z), amax, s.mode, held});
   while (sections_.size() > keep) sections_.pop_front();
   const long long oldest = sections_.front().k;
   while (!events_.empty() && events_.front().clock.period < oldest - 1) events_.pop_front();
@@ -296,6 +309,7 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   // every event with a phase each) would be most of a study's classification work.
   if (period == 0 && !check_decay) return a;
 
+  const bool multi = sys_.contact_count() > 1;
   // Sticking phases: each release in the window closes one phase; its start is the last stick
   // before it. The window is p periods (the whole record without a period).
   const int p = period > 0 ? period : static_cast<int>(n) - 1;
@@ -330,10 +344,24 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     return std::clamp(static_cast<double>(c.period - from) * T + c.offset, 0.0, p * T);
   };
   double stuck = 0.0, open_since = 0.0;
-  bool open = sections_[n - 1 - static_cast<size_t>(p)].mode == Mode::kSticking;
+  const Section& first = sections_[n - 1 - static_cast<size_t>(p)];
+  bool open = first.mode == Mode::kSticking;
+  // Several contacts: the time with at least one contact held (docs/output.md), counted by how many
+  // are held: the section point says how many at the window's start, each stick adds one and each
+  // release (a liftoff too) takes one away; the phases of different contacts overlap, and a contact
+  // held throughout has neither (issue 37's scene F: contact 0 held all along, fraction 1).
+  int held = open ? std::max(first.held, 1) : 0;
   for (const auto& e : events_) {
     const bool at_start = e.clock.period == from && e.clock.offset == 0.0;  // after the section point
     if (!at_start && !in_window(e, from, K)) continue;
+    if (multi) {
+      if (e.kind == EventKind::kStick && held++ == 0) {
+        open_since = since_from(e.clock);
+      } else if (e.kind == EventKind::kRelease && held > 0 && --held == 0) {
+        stuck += since_from(e.clock) - open_since;
+      }
+      continue;
+    }
     if (e.kind == EventKind::kStick && !open) {
       open = true;
       open_since = since_from(e.clock);
@@ -342,9 +370,9 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
       stuck += since_from(e.clock) - open_since;
     }
   }
-  if (open) stuck += p * T - open_since;
+  if (multi ? held > 0 : open) stuck += p * T - open_since;
   stuck = std::min(stuck, p * T);  // rounding of the sum
-  if (period > 0) {
+  if (period > 0 && !multi) {
     // Rounding (1e-12 of the window) aside, per_orbit is in [0, pT] for a true period.
     if (per_orbit < -1e-12 * p * T || per_orbit > (1 + 1e-12) * p * T) {
       Attractor none;

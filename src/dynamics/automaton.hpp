@@ -181,6 +181,7 @@ class Automaton {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
       last_impact_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
+      last_event_t_.assign(models_.size(), -std::numeric_limits<double>::infinity());
       pair_first_speed_.assign(models_.size(), -1.0);
       const std::vector<ContactSpec> specs = Contacts(scene);
       for (size_t j = 0; j < models_.size(); ++j) {
@@ -229,6 +230,7 @@ class Automaton {
   void UpdateGaps(PropagatorT<S>& p, const S& sigma);
   bool OnContactMulti(int k);
   bool PairChatter(int k);
+  bool DecidableBesideHeld(int k);
   bool ImpactWhileHeld(int k);
   // Sticking on two or more contacts at once (docs/contacts.md): the held set's propagator, a
   // contact closing while the set is held, and the acceleration LCP that decides which contacts
@@ -350,6 +352,24 @@ class Automaton {
   // few (ChatteringTogether).
   std::vector<std::pair<int, double>> recent_impacts_;
   bool ChatteringTogether(int j, int k) const;
+  // Several contacts: the runs of impacts (contact, first closing speed) of two coupled contacts
+  // whose chattering sequences interleave, each slower than the one before at its contact, with
+  // short flights between them (InterleavedChatter); the time of the last impact of the runs.
+  struct ChatterRun {
+    int contact;
+    double speed;
+  };
+  std::vector<ChatterRun> runs_;
+  double runs_t_ = 0;
+  static constexpr int kInterleavedRuns = 4;
+  static constexpr double kInterleavedResolution = 30;
+  std::vector<double> last_event_t_;  // several contacts: each contact's last event time
+  bool InterleavedChatter(int k);
+  // How many contacts are held (Sample::held).
+  int HeldCount() const {
+    if (mode_ != Mode::kSticking) return 0;
+    return held_set_.empty() ? 1 : static_cast<int>(held_set_.size());
+  }
   // Several contacts: each contact's last impact time (a tail beside a recent impact of another
   // contact is not one contact's chattering tail, RecentOtherImpact).
   std::vector<double> last_impact_t_;
@@ -433,6 +453,7 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
   if (multi() && kind == EventKind::kImpact) last_impact_t_[static_cast<size_t>(contact)] = e.t;
+  if (multi() && contact >= 0) last_event_t_[static_cast<size_t>(contact)] = e.t;
   if (multi()) {
     if (kind != EventKind::kImpact) {
       recent_impacts_.clear();
@@ -480,7 +501,8 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
                    D(Xs_, dx_),
                    D(Vs_, dv_),
                    R::to_double(m_.side * m_.ContactDisplacement(Xs_)),
-                   mode_};
+                   mode_,
+                   HeldCount()};
     for (auto* o : opt_.observers) o->OnSection(s);
   }
   if (spp <= 0) return;
@@ -504,7 +526,8 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
                    D(Xs_, dx_),
                    D(Vs_, dv_),
                    R::to_double(m_.side * m_.ContactDisplacement(Xs_)),
-                   mode_};
+                   mode_,
+                   HeldCount()};
     for (auto* o : opt_.observers) o->OnSample(s);
   }
 }
@@ -982,7 +1005,7 @@ RunResult Automaton<S>::Run() {
       sample_index_ = 0;  // the start is no section point; samples from the first one after it
     } else if (!opt_.observers.empty()) {
       const Sample s{ToClock(clock_), t0_, D(X_, dx_), D(V_, dv_),
-                     R::to_double(m_.side * m_.ContactDisplacement(X_)), mode_};
+                     R::to_double(m_.side * m_.ContactDisplacement(X_)), mode_, HeldCount()};
       for (auto* o : opt_.observers) o->OnSection(s);
       if (run_.samples_per_period > 0) {
         for (auto* o : opt_.observers) o->OnSample(s);

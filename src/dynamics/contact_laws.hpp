@@ -324,15 +324,78 @@ bool Automaton<S>::ChatteringTogether(int j, int k) const {
   return seen_j && seen_k;
 }
 
+// Two coupled contacts whose chattering sequences interleave toward one accumulation point (MODEL
+// §11.6): a run of impacts at j, then at k (each run perhaps ended by its predicted accumulation,
+// or lifting the other contact off its stop), then at j again, and so on, every run's first closing
+// speed below 0.9 of the last run's at the same contact and no flight longer than 1e-2 T. The runs
+// shrink toward one instant where both contacts come to rest at once; no tail of one contact
+// describes that. Such an interleaving may still end (one contact drops out and the other's tail
+// is predicted: random search scene 328, which the 60-digit reference resolves the same way), so it
+// is followed while the run can tell its order: k's gap, closing at speed v, moved by v·Δ since
+// contact j's last event (Δ before), and the order of the two is known while v·Δ is well above the
+// rounding δ of a gap (the held flows' data are double whatever S: δ = 32 ulps of double of the
+// contact's displacement). Once v·Δ < kInterleavedResolution·δ (after kInterleavedRuns runs), k's
+// arrival is within the timing uncertainty δ/v of j's: the precisions part there (random search
+// scenes 1126, 1312, 1520, 1588, 1626: double and quad took different orders at closing speeds
+// 1e-7 … 1e-9, the reference following the runs to 1e-27 and stopping undetermined), and the run
+// ends undetermined, not guessed. False when it ended.
+template <class S>
+bool Automaton<S>::InterleavedChatter(int k) {
+  const double v = -R::to_double(M(k).ContactVelocity(V_));
+  if (!(v > 0)) return true;  // a tangential arrival is no impact
+  const double now = AbsTime(clock_);
+  if (!runs_.empty() && now - runs_t_ > 1e-2 * R::to_double(period_)) runs_.clear();
+  runs_t_ = now;
+  if (!runs_.empty() && runs_.back().contact == k) return true;  // the same run goes on
+  // A new run: it extends the interleaving if it is at the other contact of the two (coupled), and
+  // slower than that contact's last run; else the interleaving starts again from the last run.
+  const auto extends = [&] {
+    if (runs_.empty()) return false;
+    const int j = runs_.back().contact;
+    if (DelassusOffDiagonal(M(j), M(k)) == S(0)) return false;
+    if (runs_.size() == 1) return true;
+    const ChatterRun& same = runs_[runs_.size() - 2];
+    return same.contact == k && v < 0.9 * same.speed;
+  };
+  if (!extends()) {
+    if (runs_.empty() || DelassusOffDiagonal(M(runs_.back().contact), M(k)) == S(0)) {
+      runs_.assign(1, ChatterRun{k, v});
+      return true;
+    }
+    runs_.erase(runs_.begin(), runs_.end() - 1);
+  }
+  runs_.push_back(ChatterRun{k, v});
+  if (static_cast<int>(runs_.size()) < kInterleavedRuns) return true;
+  const int j = runs_[runs_.size() - 2].contact;
+  const ModelT<S>& mk = M(k);
+  const double delta = now - last_event_t_[static_cast<size_t>(j)];
+  const double rounding = System::kStopUlps * std::numeric_limits<double>::epsilon() *
+                          R::to_double(R::abs(mk.x0) + mk.shape.cwiseProduct(X_).cwiseAbs().sum());
+  if (!(v * delta < kInterleavedResolution * rounding)) return true;
+  const int lo = std::min(j, k), hi = std::max(j, k);
+  return Fail(fmt::format("contacts {} ({}) and {} ({}) chatter together toward one accumulation point "
+                          "near t = {:.17g}: {} interleaved chattering sequences, each slower than the "
+                          "one before at its contact; contact {} arrives at closing speed {:.3g}, {:.3g} "
+                          "after contact {}'s last event, within {:.3g} times the timing its gap's rounding "
+                          "allows, so their order is below this run's resolution. The accumulation point "
+                          "of two contacts chattering at once is not predicted (docs/contacts.md): "
+                          "undetermined, not guessed. Move the parameter",
+                          lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)], now,
+                          runs_.size(), k, v, delta, j, v * delta / rounding),
+              RunStatus::kUndetermined);
+}
+
 template <class S>
 bool Automaton<S>::OnContactMulti(int k) {
   if (!PairChatter(k)) return false;
+  if (!InterleavedChatter(k)) return false;
   if (mode_ == Mode::kSticking) {
     // A free contact resting at zero gap beside the held ones (e.g. one that left at zero velocity
     // at this instant) is reached by the impact's impulse: it joins the LCP, or the impulse would
     // drive it through its stop unseen (its start divides that zero out).
     const std::vector<int> was = held_set_.empty() ? std::vector<int>{active_} : held_set_;
     const std::vector<int> resting = RestingBeside(k);
+    if (!DecidableBesideHeld(k)) return false;
     if (!resting.empty() || !held_set_.empty()) return ImpactWhileSetHeld(k, was, resting);
     return ImpactWhileHeld(k);
   }
@@ -392,6 +455,40 @@ bool Automaton<S>::OnContactMulti(int k) {
   active_ = k;
   for (size_t j = 0; j < starts_.size(); ++j) starts_[j] = FlightStart::kGeneric;
   return OnContact();
+}
+
+// Contact k meets its stop while contacts are held, at the instant of a coupled contact j's own
+// impact (within double's resolution of event times, 64 ulps of the period), the two chattering
+// together: j at rest after its impact (a plastic landing, held since or resting beside the held
+// ones) and k arriving within the rounding of that instant. Whether k hit first, at once, or just
+// after, is below the resolution of the run, and the impact map is discontinuous there (MODEL
+// §11.4.3): merged into one impact LCP (double) or followed as alternating impacts (quad), the two
+// precisions part. The exact motion goes on alternating toward one accumulation point, where the
+// independent reference stops undetermined (random search scenes 189, 523, 833, 1926, each beside a
+// held contact). The rule of the free flight (OnContactMulti), beside held contacts. False when the
+// run ended.
+template <class S>
+bool Automaton<S>::DecidableBesideHeld(int k) {
+  const double now = AbsTime(clock_), instant = 64 * std::numeric_limits<double>::epsilon() * R::to_double(period_);
+  for (int j = 0; j < static_cast<int>(models_.size()); ++j) {
+    if (j == k || now - last_impact_t_[static_cast<size_t>(j)] > instant) continue;
+    if (DelassusOffDiagonal(M(j), M(k)) == S(0) || !ChatteringTogether(j, k)) continue;
+    const int lo = std::min(j, k), hi = std::max(j, k);
+    std::string held;
+    for (const int h : held_set_.empty() ? std::vector<int>{active_} : held_set_)
+      held += (held.empty() ? "" : ", ") + std::to_string(h);
+    return Fail(fmt::format("contacts {} ({}) and {} ({}) chatter together and meet at zero gap "
+                            "within rounding at t = {:.17g} while contact(s) {} stick: contact {} "
+                            "arrives (gap velocity {:.3g}) at the instant of contact {}'s own impact. "
+                            "They are coupled, so the order of their impacts decides the motion, and "
+                            "this precision cannot tell it. The accumulation point of two contacts "
+                            "chattering at once is not predicted (docs/contacts.md): undetermined, "
+                            "not guessed. Move the parameter",
+                            lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
+                            now, held, k, R::to_double(M(k).ContactVelocity(V_)), j),
+                RunStatus::kUndetermined);
+  }
+  return true;
 }
 
 // A free contact k closes while contact j = active_ sticks: the impact LCP on {j, k} (MODEL §11.4.2).

@@ -100,7 +100,8 @@ RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const Sy
       const auto& c = stored_.tail_section_clocks[i];
       recorder.OnSection({c, loaded.scene.initial_time + static_cast<double>(c.period) * sys.period(),
                           stored_.tail_section_X[i], stored_.tail_section_V[i],
-                          sys.ContactDisplacement(stored_.tail_section_X[i]), stored_.tail_section_modes[i]});
+                          sys.ContactDisplacement(stored_.tail_section_X[i]), stored_.tail_section_modes[i],
+                          stored_.tail_section_modes[i] == Mode::kSticking ? -1 : 0});  // held: from the state
     }
     for (const auto& e : stored_.tail_events) recorder.OnEvent(e);
     // The loads of the periods before the checkpoint, as the run that went through summed them

@@ -670,7 +670,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
     for (h5::Column* col : trial->Columns()) col->ReadAllRows();
     const Checkpoint& c = *trial->last_checkpoint;
     const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
-    const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
+    const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode, c.mode == Mode::kSticking ? 1 : 0};
     for (int i = 0; i < 20000; ++i) {
       trial->ev.Push(e);
       trial->sa.Push(s);

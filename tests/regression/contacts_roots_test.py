@@ -19,6 +19,7 @@ through the real `vibro` binary.
 """
 import argparse
 import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -142,15 +143,27 @@ def main():
         _, kind, msg, *_ = random_search.check((args.vibro, 0, text, scene_contacts(path), work))
         check(f"{name}: the random search's checks", kind != "fail", msg)
     # contacts_resting_beside_held: contact 0 (r = 0) left at zero velocity beside held contact 1 is
-    # pushed against its stop by contact 4's impact: it takes part in that impact (was flown through
-    # by 0.0042).
-    out = os.path.join(tmp, "resting_double.h5")
-    p = simulate(args.vibro, os.path.join(args.scenes, "contacts_resting_beside_held.toml"), out)
-    ev, T, status = compare.read_h5(out)
-    check("resting beside held: double ends ok", status == "ok" and p.returncode == 0, (status, p.stderr))
-    resting = [e for e in ev if 4.849 < e.t < 4.8491 and e.contact == 0 and e.kind == "impact" and abs(e.vb) < 1e-12]
-    check("resting beside held: contact 0, at rest, takes part in contact 4's impact near t = 4.849", resting,
-          [e for e in ev if 4.849 < e.t < 4.8491])
+    # pushed against its stop by contact 4's impact (it was flown through by 0.0042 once). Contacts 0
+    # and 4 (coupled: both on q0) strike in turn, each slower, toward one accumulation point: the
+    # 60-digit reference (reference.py --dps 60) stops undetermined there, at t = 4.8490094858760575,
+    # after the impacts 4, 0, 4 at 4.8490093829, …94419, …94859. Each precision follows the same
+    # impacts and stops undetermined at that instant, naming both contacts (it went on `ok` after
+    # merging them into one impact LCP before).
+    for prec in ("double", "quad"):
+        out = os.path.join(tmp, f"resting_{prec}.h5")
+        extra = ['run.precision="quad"'] if prec == "quad" else []
+        p = simulate(args.vibro, os.path.join(args.scenes, "contacts_resting_beside_held.toml"), out, *extra)
+        ev, T, status = compare.read_h5(out)
+        named = re.search(r"contacts 0 \(([^)]*)\) and 4 \(([^)]*)\) chatter together", p.stderr)
+        at = re.search(r"(?:near t =|at t =) ([0-9.]+)", p.stderr)
+        check(f"resting beside held ({prec}): undetermined (exit 3) naming contacts 0 and 4",
+              status == "undetermined" and p.returncode == 3 and named is not None, (status, p.stderr[-500:]))
+        check(f"resting beside held ({prec}): stops at the reference's instant t = 4.8490094858760575",
+              at is not None and abs(float(at.group(1)) - 4.8490094858760575) < 1e-12, p.stderr[-500:])
+        want = [(4, 4.849009382917575), (0, 4.849009441886082), (4, 4.849009485876053)]
+        got = [(e.contact, e.t) for e in ev if 4.849 < e.t < 4.8491 and e.kind == "impact"][:3]
+        check(f"resting beside held ({prec}): the impacts 4, 0, 4 before it = reference's within 1e-12",
+              len(got) == 3 and all(a[0] == b[0] and abs(a[1] - b[1]) < 1e-12 for a, b in zip(got, want)), got)
 
     if args.search:
         code = random_search.main([args.vibro, "--count", str(args.search), "--seed", "1",

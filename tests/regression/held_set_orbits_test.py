@@ -26,6 +26,11 @@ these O(1) orbits with 4-6 events per period.
   (tests/scenes/contacts_two_held_chain.toml): the multipliers that are not collapsed equal those
   of the reference's full Jacobian within 1e-9 (both sides through the held flow on the set, the
   plastic entry onto it and the release from it).
+* The sticking fraction of each (docs/output.md: the time with at least one contact held, per
+  orbit period): the measure of the union of the reference orbit's held intervals over its q
+  periods, within 1e-9 — 1 for scene F, whose contact 0 is held throughout (it was 0.000000), and
+  the overlapping phases of two contacts counted once for A and the chain; `vibro simulate`'s
+  attractor line settled on scene F says 1.000000 too.
 * The same from Python (vibro.orbit) when the package is importable: equal to the CLI's.
 """
 import json
@@ -75,6 +80,25 @@ def close_sets(a, b, tol):
     return len(a) == len(b) and all(abs(x - y) <= tol for x, y in zip(a, b)), a, b
 
 
+def held_fraction(events, t0, span):
+    """The time with at least one contact held over [t0, t0 + span], / span, from the reference's
+    events (stick adds a contact; release, leave and liftoff take it away)."""
+    held, since, total = set(), None, mp.mpf(0)
+    for e in sorted(events, key=lambda e: e[0]):
+        t, kind, c = e[0], e[1], e[2]
+        if kind == "stick":
+            if not held:
+                since = t
+            held.add(c)
+        elif kind in ("release", "leave", "liftoff") and c in held:
+            held.discard(c)
+            if not held:
+                total += t - since
+    if held:
+        total += t0 + span - since
+    return float(total / span)
+
+
 def main():
     vibro_exe = vibro = sys.argv[1]
     scenes = sys.argv[2]
@@ -100,6 +124,8 @@ def main():
             check("F: multipliers = reference map's on the held manifold", ok, (a, b))
             check("F: |μ1 μ2| = 0.8^8", abs(abs(np.prod(mus(j))) - 0.8 ** 8) < 1e-12, mus(j))
             check("F: stable", j["stable"] is True, j["stable"])
+            check("F: sticking fraction 1 (contact 0 held throughout)", abs(j["sticking_fraction"] - 1) < 1e-12,
+                  j["sticking_fraction"])
             # events at 60 digits: the reference orbit, Newton again at 60 digits from the 30-digit one
             with mp.workdps(60):
                 z60, res60, events = H.fixed_point(text, t0, [mp.mpf(x) for x in z], 2, dirs, mp.mpf("1e-25"), 2)
@@ -107,6 +133,14 @@ def main():
                 w = mp.mpf("1.5")
                 ref_imp = sorted((float(mp.fmod(w * e[0], 2 * mp.pi)), e[2], float(e[3]))
                                  for e in events if e[1] == "impact")
+                ref_sf = held_fraction(events, mp.mpf(t0), 2 * T)
+            check("F: sticking fraction = the reference orbit's held time", abs(j["sticking_fraction"] - ref_sf) < 1e-9,
+                  (j["sticking_fraction"], ref_sf))
+            p = subprocess.run([vibro, "simulate", path, "--set", "run.periods=300"], capture_output=True, text=True,
+                               timeout=600)
+            line = [s for s in p.stdout.splitlines() if s.startswith("attractor")]
+            check("F: simulate's attractor line says sticking fraction 1.000000",
+                  len(line) == 1 and "sticking fraction 1.000000" in line[0], (line, p.stderr[-300:]))
             check("F: reference fixed point at 60 digits", res60 < mp.mpf("1e-40"), res60)
             got = sorted(zip(j["impact_phases"], j["impact_contacts"], j["impact_velocities"]))
             check("F: four impacts of contact 1", len(got) == 4 and all(c == 1 for _, c, _ in got), got)
@@ -144,6 +178,9 @@ def main():
             got_st = sorted(math.fmod(x, 2 * math.pi) for ph in j["stick_phases"] for x in ph)
             ok = len(ref_st) == len(got_st) and max(abs(a - b) for a, b in zip(ref_st, got_st)) < TOL_EVENT
             check("A: stick phases = reference", ok, (got_st, ref_st))
+            ref_sf = held_fraction(events, mp.mpf(t0), 2 * mp.pi / w)
+            check("A: sticking fraction = the reference orbit's held time (both stops counted once)",
+                  abs(j["sticking_fraction"] - ref_sf) < 1e-9, (j["sticking_fraction"], ref_sf))
 
         # ---- 3-DOF chain: two stops held at once, one mass free
         path = os.path.join(scenes, "contacts_two_held_chain.toml")
@@ -168,6 +205,9 @@ def main():
                     held.pop(e[2], None)
                 both = both or len(held) >= 2
             check("chain: the reference orbit holds two contacts at once", both, seq)
+            ref_sf = held_fraction(events, mp.mpf(t0), j["period"] * 2 * mp.pi / mp.mpf("0.5"))
+            check("chain: sticking fraction = the reference orbit's held time (overlaps counted once)",
+                  abs(j["sticking_fraction"] - ref_sf) < 1e-9, (j["sticking_fraction"], ref_sf))
             ref_mu, _ = H.reduced_multipliers(text, t0, z, j["period"], eye, h)
             ref_mu = [complex(x) for x in ref_mu if abs(x) > 1e-12]
             got = [m for m in mus(j) if abs(m) > 1e-12]

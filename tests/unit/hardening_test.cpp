@@ -34,7 +34,8 @@ Scene TwoDof(double w) {
 
 void Section(AttractorRecorder& rec, const System& sys, long long k, const Eigen::VectorXd& z, Mode mode) {
   const Eigen::VectorXd X = z.head(2), V = z.tail(2);
-  rec.OnSection({{k, 0.0}, static_cast<double>(k) * sys.period(), X, V, sys.ContactDisplacement(X), mode});
+  rec.OnSection({{k, 0.0}, static_cast<double>(k) * sys.period(), X, V, sys.ContactDisplacement(X), mode,
+                 mode == Mode::kSticking ? 1 : 0});
 }
 
 // Section points of a forced damped response: a period-1 steady state z_p plus a free transient

@@ -241,7 +241,7 @@ def check(args_tuple):
     for out in outs.values():
         os.remove(out)
     os.remove(scene)
-    return index, kind, f"{res.matched} events", res.dts
+    return index, kind, f"{res.matched} events", res.dts, f"double: {status['double'][1]} | quad: {status['quad'][1]}"[:400]
 
 
 def main(argv=None):
@@ -253,6 +253,8 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--keep", help="folder for the scenes (failing ones are left there)")
     ap.add_argument("--stats", help="save |t_double - t_quad| / T of every matched event here (.npy)")
+    ap.add_argument("--kinds", help="write each scene's index, result (ok, undetermined, fail) and the double "
+                    "run's end message here, one line a scene (to compare two builds)")
     ap.add_argument("--only", type=lambda a: {int(x) for x in a.split(",")},
                     help="comma-separated scene indices to run (the others are drawn, not run)")
     args = ap.parse_args(argv)
@@ -272,8 +274,11 @@ def main(argv=None):
     events = 0
     dts = []
     with cf.ThreadPoolExecutor(max_workers=args.jobs) as ex:
+        kinds = open(args.kinds, "w") if args.kinds else None
         for index, kind, msg, *rest in ex.map(check, tasks):
             counts[kind] += 1
+            if kinds:
+                print(f"{index}\t{kind}\t{rest[1] if len(rest) > 1 else msg}", file=kinds, flush=True)
             if kind == "fail":
                 print(f"search_{index:05d}: {msg}", flush=True)
             else:
