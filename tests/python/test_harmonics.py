@@ -134,16 +134,18 @@ def reference_impacts(t_end, count):
     return out, first_flight
 
 
-def test_two_harmonics_against_taylor_solver(tmp_path):
-    ev, smp, kinds = simulate(tmp_path, scene_text(periods=2))
+@pytest.mark.parametrize("precision, tol", [("double", 1e-12), ("quad", 4e-16)])
+def test_two_harmonics_against_taylor_solver(tmp_path, precision, tol):
+    """Double to 1e-12; the quad engine to the rounding of the times written (f64)."""
+    ev, smp, kinds = simulate(tmp_path, scene_text(periods=2, extra=f'precision = "{precision}"\n'))
     impacts = np.flatnonzero(ev["kind"] == kinds["impact"])
     assert impacts.size >= 3, "the scene was chosen to impact"
     ref, sol0 = reference_impacts(float(ev["t"][impacts[min(5, impacts.size - 1)]]) + 1, min(6, impacts.size))
     assert len(ref) >= 3
     for k, (ti, vB) in enumerate(ref):
         e = impacts[k]
-        assert abs(ev["t"][e] - float(ti)) <= 1e-12 * max(1.0, float(ti)), (k, ev["t"][e], ti)
-        assert abs(ev["v_before"][e] - float(vB)) <= 1e-11 * max(1.0, abs(float(vB))), (k, ev["v_before"][e], vB)
+        assert abs(ev["t"][e] - float(ti)) <= tol * max(1.0, float(ti)), (k, ev["t"][e], ti)
+        assert abs(ev["v_before"][e] - float(vB)) <= 10 * tol * max(1.0, abs(float(vB))), (k, ev["v_before"][e], vB)
     # Between impacts: every sample of the first flight against the 30-digit solution.
     first = smp["t"] < float(ref[0][0])
     assert first.sum() >= 5
