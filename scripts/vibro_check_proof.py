@@ -2328,7 +2328,8 @@ def check_bifurcation(node):
     if node.has("structure"):
         check_structure(node["structure"], m)
     b = node["bifurcation"]
-    if isinstance(b.v, dict) and b.v.get("type") == "grazing":
+    if isinstance(b.v, dict) and b.v.get("type") in ("grazing", "orbit-pitchfork"):
+        pitch = b.v.get("type") == "orbit-pitchfork"
         name = b["parameter"].text(("amplitude", "frequency"))
         ends = b["interval"].items(exactly=2)
         plo, phi = decimal(ends[0]), decimal(ends[1])
@@ -2337,13 +2338,16 @@ def check_bifurcation(node):
                                f"{b['interval'].path} = {b['interval'].v}")
         if not hi(phi) - lo(plo) <= mp.mpf("1e-10") or not lo(plo) < hi(phi):
             raise NotConfirmed(f"{b['interval'].path}: {show(hi(phi) - lo(plo))} wide, not in (0, 1e-10]")
-        for key, skey in (("interval", "interval"), ("parameter", "parameter"), ("contact", "grazing_contact"),
-                          ("flight", "grazing_flight"), ("impact_contacts", "impact_contacts"),
-                          ("symmetric", "symmetric")):
+        pairs = (("interval", "interval"), ("parameter", "parameter"), ("impact_contacts", "impact_contacts"))
+        if not pitch:
+            pairs += (("contact", "grazing_contact"), ("flight", "grazing_flight"), ("symmetric", "symmetric"))
+        for key, skey in pairs:
             if s[skey].v != b[key].v:
                 raise NotConfirmed(f"{s[skey].path} = {s[skey].v!r} and {b[key].path} = {b[key].v!r} differ")
-        if s["bifurcation"].v != "grazing":
-            raise NotConfirmed(f"{s['bifurcation'].path} = {s['bifurcation'].v!r}: the certificate is a grazing")
+        if s["bifurcation"].v != ("pitchfork" if pitch else "grazing"):
+            raise NotConfirmed(f"{s['bifurcation'].path} = {s['bifurcation'].v!r}: not the certificate's kind")
+        if pitch:
+            return check_orbit_pitchfork(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
         return check_grazing(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
     b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
     kind = b["type"].text(("pitchfork", "fold"))
@@ -2569,6 +2573,183 @@ def krawczyk_mp(F_point, J_box, x, X, extra=None):
     return K, C, delta
 
 
+def mirrored_model(node, m, hits, where):
+    """A symmetric orbit's model: contact 1 is contact 0 mirrored (c_1 = −c_0 and T_1 = −T_0 exactly,
+    or two stops on one DOF on opposite sides by the structure), equal stops and restitutions."""
+    if len(m.contacts) != 2 or len(hits) != 2 or hits[0] == hits[1] or node["period"].v != 1:
+        raise NotConfirmed(f"{where.path}: a symmetric orbit has two impacts on two contacts in one period")
+    (c0, T0, e0, r0, _), (c1, T1, e1, r1, _) = m.contacts
+    exact = all(lo(x + y) == 0 == hi(x + y) for x, y in zip(c0 + T0, c1 + T1))
+    mirrored = False
+    if node.has("structure"):
+        cs = node["structure"].v["contacts"]
+        mirrored = len(cs) == 2 and cs[0]["dof"] == cs[1]["dof"] and cs[0]["partner"] == cs[1]["partner"] == -1 \
+            and cs[0]["side"] != cs[1]["side"]
+    t = node["model"].v
+    if not (exact or mirrored) or t["stop"] != t["more_contacts"][0]["stop"] or \
+            t["restitution"] != t["more_contacts"][0]["restitution"]:
+        raise NotConfirmed(f"{where.path}: the model is not mirrored (contact 1 is not contact 0 mirrored)")
+
+
+def bisect(node, pred, a, z, what, depth=40):
+    """pred(u, v) on pieces of [a, z], halving the pieces where it fails (up to `depth`)."""
+    stack, count = [(a, z, 0)], 0
+    while stack:
+        u, v, d = stack.pop()
+        count += 1
+        if count > 200000:
+            raise NotConfirmed(f"{node.path}: {what}: not confirmed (too many pieces)")
+        if pred(u, v):
+            continue
+        if d >= depth:
+            raise NotConfirmed(f"{node.path}: {what}: not confirmed near s = {show(u)}")
+        c = (u + v) / 2
+        stack += [(u, c, d + 1), (c, v, d + 1)]
+
+
+def orbit_gaps(node, G, U, P, window=None):
+    """The orbit of G is an orbit for every p ∈ P and u ∈ U: durations, impact velocities, windows at
+    the impacts, every gap positive between them (bisection, mean-value form) except contact G.l's
+    on flight G.J over `window`."""
+    m, hits, sym = G.m, G.hits, G.sym
+    k_count = len(m.contacts)
+    for j in range(G.count):
+        cj = hits[j]
+        ck = (1 - cj) if sym else hits[(j + 1) % G.count]
+        Sj = value(G.duration(U, j, P))
+        after = G.gap_at(U, P, j, cj, iv.mpf(0))[1]
+        before = G.gap_at(U, P, j, ck, Sj)[1]
+        if not (positive(Sj) and positive(after) and negative(before)):
+            raise NotConfirmed(f"{node.path}: flight {j}: duration {show_iv(Sj)}, velocity after {show_iv(after)}, "
+                               f"before {show_iv(before)}: not those of an impacting orbit")
+        e0 = e1 = lo(Sj) / 16
+        for _ in range(30):
+            if positive(G.gap_at(U, P, j, cj, iv.mpf([0, e0]))[1]):
+                break
+            e0 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity after the impact not confirmed positive")
+        for _ in range(30):
+            if negative(G.gap_at(U, P, j, ck, iv.mpf([lo(Sj) - e1, hi(Sj)]))[1]):
+                break
+            e1 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity before the impact not confirmed negative")
+        for c in range(k_count):
+            a, z = (e0 if c == cj else mp.mpf(0)), (lo(Sj) - e1 if c == ck else hi(Sj))
+            ranges = [(a, z)]
+            if window is not None and j == G.J and c == G.l:
+                if not (a < window[0] and window[1] < z):
+                    raise NotConfirmed(f"{node.path}: the window meets the impacts' windows")
+                ranges = [(a, window[0]), (window[1], z)]
+            for u0, v0 in ranges:
+                if u0 < v0:
+                    bisect(node, lambda u, v, j=j, c=c: positive(_gap_form(G, U, P, j, c, u, v)), u0, v0,
+                           f"the gap of contact {c} on flight {j}")
+
+
+def anti_times(G, a, b, p):
+    """M(a, p) b: the antisymmetric block A − Bσ' of the whole orbit's Jacobian (A, B: of flight 0's
+    equations in the impact states u_0 and u_1 = σ(u_0) = (t_0 + T/2, −X_0, −V_0), σ' = diag(1, −I, −I))
+    applied to b, written again here: ∂(X, V)(t_1)/∂t_0 = −Φ(s)(V_0, Ẍ(t_0)), ∂/∂(X_0, V_0) = Φ(s) per
+    mode (Φ = [[h1, h2], [−ω_i² h2, h3]], s = T/2), ∂/∂t_1 = (V, Ẍ)(t_1); the impact's projection on the
+    velocity; −I on (X_1, V_1)."""
+    m, n, L = G.m, G.m.n, D.lift
+    ca = G.hits[0]
+    cb = 1 - ca
+    f, w = (L(z) for z in G.fw(p))
+    t0, X0, V0 = L(a[0]), [L(x) for x in a[1:1 + n]], [L(v) for v in a[1 + n:1 + 2 * n]]
+    sT = L(iv.pi) / w
+    Xe, Ve = graze_flight(m, f, w, t0, X0, V0, sT)
+    l0, l1 = f * dsin(w * t0), f * dsin(w * (t0 + sT))
+    bt, bx, bv = L(b[0]), [L(x) for x in b[1:1 + n]], [L(v) for v in b[1 + n:1 + 2 * n]]
+    out = [sum((D(c) * x for c, x in zip(m.contacts[ca][0], bx)), D(ZERO))]
+    dv = []
+    for i in range(n):
+        z = m.zeta[i] if m.zeta is not None else ZERO
+        sg, wd, w2 = L(z * m.w_i[i]), L(m.w_i[i] * iv.sqrt(1 - z * z)), L(m.w_i[i] ** 2)
+        e = dexp(-(sT * sg))
+        sd, cd = dsin(wd * sT), dcos(wd * sT)
+        h1, h2, h3 = e * (cd + sg / wd * sd), e * sd / wd, e * (cd - sg / wd * sd)
+        acc0 = L(m.TA[i]) * l0 - w2 * X0[i] - L(2) * sg * V0[i]
+        acc1 = L(m.TA[i]) * l1 - w2 * Xe[i] - L(2) * sg * Ve[i]
+        At, Bt = -(h1 * V0[i] + h2 * acc0), Ve[i]
+        out.append((At - Bt) * bt + (h1 - L(1)) * bx[i] + h2 * bv[i])
+        Dt0, Dt1 = -(h3 * acc0 - w2 * h2 * V0[i]), acc1
+        dv.append((Dt0 - Dt1) * bt - w2 * h2 * bx[i] + h3 * bv[i])
+    c, T, e_, r, W = m.contacts[cb]
+    cdv = sum((D(ci) * d for ci, d in zip(c, dv)), D(ZERO))
+    k = cdv * D(-(1 + r) / W)
+    for i in range(n):
+        out.append(dv[i] + k * D(T[i]) - bv[i])
+    return out
+
+
+def check_orbit_pitchfork(node, m, b, s, P, name):
+    """A symmetric orbit's pitchfork (docs/prove.md "Bifurcation points"), recomputed: the parametric
+    Krawczyk test on (R_sym, M b + μ e_k, ℓ·b − 1) in (a, b, μ) over the interval, Krawczyk's test on
+    (R_sym, M b, ℓ·b − 1) in (a, b, p), dp/dμ = −(J⁻¹)_{p,k} enclosed and nonzero from ‖I − CJ‖∞ < 1,
+    the orbit's gaps."""
+    b.obj(("type", "parameter", "interval", "impact_contacts", "normal", "row", "midpoint", "box", "slope"))
+    hits = [h.integer(0, len(m.contacts) - 1) for h in b["impact_contacts"].items(exactly=2)]
+    mirrored_model(node, m, hits, b["impact_contacts"])
+    G = Grazing(m, name, hits, True, 0, 0)
+    h = G.N
+    ell = [x.point() for x in b["normal"].items(exactly=h)]
+    k = b["row"].integer(0, h - 1)
+    boxes = b["box"].items(exactly=2 * h + 1)
+    X = [x.pair() for x in boxes]
+    mids = b["midpoint"].items(exactly=2 * h)
+    xm = [x.point() for x in mids] + [ZERO]
+    for j in range(2 * h + 1):
+        if not inside(xm[j], X[j]):
+            raise NotConfirmed(f"{boxes[j].path}: the midpoint is not in the box")
+    pm = iv.mpf(mid(P))
+
+    def residual(a, bb, mu, p):
+        out = G.residual(a, p)
+        mb = anti_times(G, a, bb, p)
+        mb[k] = mb[k] + D.lift(mu)
+        return [D.lift(r) for r in out] + mb + [sum((D(l_) * D.lift(x) for l_, x in zip(ell, bb)), D(ZERO)) - D(ONE)]
+
+    # (1) For every p ∈ P one (a, b, μ) in the box: the parametric test.
+    F = [value(r) for r in residual(xm[:h], xm[h:2 * h], xm[2 * h], pm)]
+    Vd = [variable(X[j], j) for j in range(2 * h + 1)]
+    R = residual(Vd[:h], Vd[h:2 * h], Vd[2 * h], variable(P, 2 * h + 1))
+    J = [[r.g.get(c, ZERO) for c in range(2 * h + 1)] for r in R]
+    col = [r.g.get(2 * h + 1, ZERO) for r in R]
+    K, _, _ = krawczyk_mp(F, J, xm, X, (col, P - pm))
+    for j in range(2 * h + 1):
+        if not (lo(X[j]) < lo(K[j]) and hi(K[j]) < hi(X[j])):
+            raise NotConfirmed(f"{boxes[j].path}: the parametric Krawczyk test fails (K = {show_iv(K[j])}): no unique "
+                               "symmetric orbit and antisymmetric vector in the box confirmed over the interval")
+    # (2) Exactly one (a, b, p) with μ = 0: the pitchfork.
+    xe = xm[:2 * h] + [pm]
+    Xe = X[:2 * h] + [P]
+    Fe = [value(r) for r in residual(xe[:h], xe[h:2 * h], ZERO, pm)]
+    Ve = [variable(Xe[j], j) for j in range(2 * h + 1)]
+    Re = residual(Ve[:h], Ve[h:2 * h], ZERO, Ve[2 * h])
+    Je = [[r.g.get(c, ZERO) for c in range(2 * h + 1)] for r in Re]
+    Ke, Ce, delta = krawczyk_mp(Fe, Je, xe, Xe)
+    for j in range(2 * h + 1):
+        if not (lo(Xe[j]) < lo(Ke[j]) and hi(Ke[j]) < hi(Xe[j])):
+            raise NotConfirmed(f"{b['box'].path}: Krawczyk's test with μ = 0 fails at unknown {j} "
+                               f"(K = {show_iv(Ke[j])}): no unique pitchfork in the box confirmed")
+    # (3) dp/dμ = −(J⁻¹)_{p, h + k}.
+    if not delta < 1:
+        raise NotConfirmed(f"{b['box'].path}: ‖I − CJ‖∞ ≤ {show(delta)}, not below 1")
+    r_, pr = h + k, 2 * h
+    spread = iv.mpf(delta) / (1 - iv.mpf(delta)) * max(abs(Ce[i, r_]) for i in range(2 * h + 1))
+    dpdmu = -(iv.mpf(Ce[pr, r_]) + iv.mpf([-hi(spread), hi(spread)]))
+    if not excludes_zero(dpdmu):
+        raise NotConfirmed(f"{b['slope'].path}: dp/dμ = {show_iv(dpdmu)} may vanish: transversality not confirmed")
+    claim_contains(b["slope"], 1 / dpdmu, "dμ/dp")
+    claim_contains(s["slope"], 1 / dpdmu, "dμ/dp")
+    # (4) The symmetric orbit is an orbit over the box.
+    orbit_gaps(node, G, X[:h], P)
+    return 4
+
+
 def check_grazing(node, m, b, s, P, name):
     """A grazing certificate (docs/prove.md "Bifurcation points"), recomputed: Krawczyk on the orbit
     over the interval (for every p one orbit in the box), Krawczyk on the orbit with its tangency
@@ -2583,19 +2764,7 @@ def check_grazing(node, m, b, s, P, name):
     sym = b["symmetric"].boolean()
     l = b["contact"].integer(0, k_count - 1)
     if sym:
-        if k_count != 2 or len(hits) != 2 or hits[0] == hits[1] or node["period"].v != 1:
-            raise NotConfirmed(f"{b['symmetric'].path}: a symmetric orbit has two impacts on two contacts in one period")
-        (c0, T0, e0, r0, _), (c1, T1, e1, r1, _) = m.contacts
-        exact = all(lo(x + y) == 0 == hi(x + y) for x, y in zip(c0 + T0, c1 + T1))
-        mirrored = False
-        if node.has("structure"):
-            cs = node["structure"].v["contacts"]
-            mirrored = len(cs) == 2 and cs[0]["dof"] == cs[1]["dof"] and cs[0]["partner"] == cs[1]["partner"] == -1 \
-                and cs[0]["side"] != cs[1]["side"]
-        t = node["model"].v
-        if not (exact or mirrored) or t["stop"] != t["more_contacts"][0]["stop"] or \
-                t["restitution"] != t["more_contacts"][0]["restitution"]:
-            raise NotConfirmed(f"{b['symmetric'].path}: the model is not mirrored (contact 1 is not contact 0 mirrored)")
+        mirrored_model(node, m, hits, b['symmetric'])
     G = Grazing(m, name, hits, sym, 0, l)
     G.J = b["flight"].integer(0, G.count - 1)
     N = G.N
@@ -2662,56 +2831,10 @@ def check_grazing(node, m, b, s, P, name):
     if not (wa < lo(S) and hi(S) < wb):
         raise NotConfirmed(f"{b['window'].path}: the window does not contain the tangency's time box")
 
-    def bisect(pred, a, z, what, depth=40):
-        stack, count = [(a, z, 0)], 0
-        while stack:
-            u, v, d = stack.pop()
-            count += 1
-            if count > 200000:
-                raise NotConfirmed(f"{node.path}: {what}: not confirmed (too many pieces)")
-            if pred(u, v):
-                continue
-            if d >= depth:
-                raise NotConfirmed(f"{node.path}: {what}: not confirmed near s = {show(u)}")
-            c = (u + v) / 2
-            stack += [(u, c, d + 1), (c, v, d + 1)]
-
-    bisect(lambda u, v: positive(G.gap_at(U, P, G.J, l, iv.mpf([u, v]))[2]), wa, wb,
+    bisect(node, lambda u, v: positive(G.gap_at(U, P, G.J, l, iv.mpf([u, v]))[2]), wa, wb,
            "the gap's convexity on the window")
     # (4) The orbit is an orbit over the box.
-    for j in range(G.count):
-        cj = hits[j]
-        ck = (1 - cj) if sym else hits[(j + 1) % G.count]
-        Sj = value(G.duration(U, j, P))
-        after = G.gap_at(U, P, j, cj, iv.mpf(0))[1]
-        before = G.gap_at(U, P, j, ck, Sj)[1]
-        if not (positive(Sj) and positive(after) and negative(before)):
-            raise NotConfirmed(f"{node.path}: flight {j}: duration {show_iv(Sj)}, velocity after {show_iv(after)}, "
-                               f"before {show_iv(before)}: not those of an impacting orbit")
-        e0 = e1 = lo(Sj) / 16
-        for _ in range(30):
-            if positive(G.gap_at(U, P, j, cj, iv.mpf([0, e0]))[1]):
-                break
-            e0 /= 2
-        else:
-            raise NotConfirmed(f"{node.path}: flight {j}: the velocity after the impact not confirmed positive")
-        for _ in range(30):
-            if negative(G.gap_at(U, P, j, ck, iv.mpf([lo(Sj) - e1, hi(Sj)]))[1]):
-                break
-            e1 /= 2
-        else:
-            raise NotConfirmed(f"{node.path}: flight {j}: the velocity before the impact not confirmed negative")
-        for c in range(k_count):
-            a, z = (e0 if c == cj else mp.mpf(0)), (lo(Sj) - e1 if c == ck else hi(Sj))
-            ranges = [(a, z)]
-            if j == G.J and c == l:
-                if not (a < wa and wb < z):
-                    raise NotConfirmed(f"{b['window'].path}: the window meets the impacts' windows")
-                ranges = [(a, wa), (wb, z)]
-            for u0, v0 in ranges:
-                if u0 < v0:
-                    bisect(lambda u, v, j=j, c=c: positive(_gap_form(G, U, P, j, c, u, v)), u0, v0,
-                           f"the gap of contact {c} on flight {j}")
+    orbit_gaps(node, G, U, P, (wa, wb))
     return 5
 
 

@@ -117,8 +117,9 @@ struct BifurcationRequest {
 // Encloses the parameter of the bifurcation in an interval at most 1e-10 wide around `value`, and
 // proves that exactly one such point lies there and that the crossing is transversal. This version
 // proves the symmetry-breaking pitchfork ("branch-point") and the fold of the symmetric orbit of the
-// symmetric two-sided one-DOF oscillator (undamped), and the grazing ("grazing") of any impacting
-// orbit (damped, several contacts and modes);
+// symmetric two-sided one-DOF oscillator (undamped), the pitchfork of the symmetric orbit of any
+// mirrored model (damped, several modes), and the grazing ("grazing") of any impacting orbit
+// (damped, several contacts and modes);
 // any other is "not proven" with the reason. The result's kind is "bifurcation"; its summary and
 // certificate carry the interval; scripts/vibro_check_proof.py re-verifies it.
 ProofResult ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request);

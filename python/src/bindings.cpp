@@ -834,7 +834,8 @@ std::pair<std::string, bool> TraceCurvesPy(const PyScene& s, const std::vector<s
                                            const std::vector<std::string>& kinds, const std::vector<double>& toward,
                                            const std::string& from, long long point, long long contact, double step,
                                            double max_step, long long max_points, long long period,
-                                           long long transient, const std::string& out, bool handle_sigint) {
+                                           long long transient, const std::string& orbit, const std::string& out,
+                                           bool handle_sigint) {
   vibro::frontend::CurveSpec spec;
   spec.params = params;
   spec.range1 = range1;
@@ -849,6 +850,7 @@ std::pair<std::string, bool> TraceCurvesPy(const PyScene& s, const std::vector<s
   spec.max_points = max_points;
   spec.period = period;
   spec.transient = transient;
+  spec.orbit = orbit;
   CheckPaths({{"from_", &spec.from}});
   const auto plan = vibro::frontend::PlanCurves(s.origin, s.loaded, spec, kPython);
   auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));

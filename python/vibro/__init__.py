@@ -863,7 +863,7 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
 
 
 def curve(scene, params, range1, range2, kind=None, toward=None, from_=None, point=None, contact=-1, step=0.02,
-          max_step=0.1, max_points=200, period=0, transient=200, out=None, force=False):
+          max_step=0.1, max_points=200, period=0, transient=200, orbit="auto", out=None, force=False):
     """Curves of codimension-one bifurcations in the plane of two scene keys (``vibro curve --json``,
     docs/diagram.md "Two-parameter curves"). ``params`` = (KEY1, KEY2); the curves stay in the box
     ``range1`` x ``range2``. ``kind``: one kind or a list ("fold", "flip", "neimark-sacker",
@@ -871,6 +871,7 @@ def curve(scene, params, range1, range2, kind=None, toward=None, from_=None, poi
     ``toward=(A, B)``, the first such bifurcation met from the scene's (KEY1, KEY2) towards (A, B), or
     ``from_=BRANCH.h5, point=K``, bifurcation K of a branch stored by :func:`continue_` (``kind``
     defaults to its kind). ``contact``: with several contacts, follow a non-smooth kind on that contact.
+    ``orbit``: with ``toward``, the kind of the start orbit ("auto", "sticking", "impact").
 
     Returns a list, one dict per kind: the keys of the JSON (kind, contact, period, status,
     end_start, end_finish, points, special) and numpy arrays ``value1``, ``value2`` (the curve in
@@ -882,14 +883,15 @@ def curve(scene, params, range1, range2, kind=None, toward=None, from_=None, poi
     _invoke("curve", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2), kind=tuple(kinds),
             toward=None if toward is None else tuple(toward), from_=None if from_ is None else str(from_),
             point=point, contact=contact, step=step, max_step=max_step, max_points=max_points, period=period,
-            transient=transient, out=out, force=force)
+            transient=transient, orbit=orbit, out=out, force=force)
     text, interrupted = _vibro.curve(_scene(scene), [str(p) for p in params], [_float("range1", v) for v in range1],
                                      [_float("range2", v) for v in range2], kinds,
                                      [] if toward is None else [_float("toward", v) for v in toward],
                                      "" if from_ is None else _path("from_", from_),
                                      -1 if point is None else _int("point", point), _int("contact", contact),
                                      _float("step", step), _float("max_step", max_step), _int("max_points", max_points),
-                                     _int("period", period), _int("transient", transient), _out(out), _main_thread())
+                                     _int("period", period), _int("transient", transient), str(orbit), _out(out),
+                                     _main_thread())
     if interrupted:
         raise _interrupted("curve", out)
     curves = _json.loads(text)["curves"]

@@ -227,8 +227,8 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     req.bracket = b.bracket;
     req.parameter = vibro::ReadBranchPoint(src, 0).param;
   }
-  if (req.kind == "grazing") {
-    // The orbit that grazes, from the stored point nearest the grazing but at least 1e-6 (relative)
+  if (req.kind == "grazing" || req.kind == "branch-point") {
+    // The orbit that grazes (or whose symmetry breaks), from the stored point nearest the grazing but at least 1e-6 (relative)
     // from it, where the orbit clears the contact plainly (the branch ends at the grazing): of
     // --from BRANCH.h5, or of the branch the bifurcation was read from.
     const bool given = colon != std::string::npos && equals != std::string::npos && colon < equals &&
@@ -266,7 +266,7 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
         return Range(vibro::Enclosure{p[0].get<double>(), p[1].get<double>()});
       };
       const bool fold = s["bifurcation"] == "fold", grazing = s["bifurcation"] == "grazing";
-      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : grazing ? "(minimum gap)" : "det(DH + I)",
+      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : grazing ? "(minimum gap)" : s.contains("impact_contacts") ? "mu" : "det(DH + I)",
                  s["parameter"].get<std::string>(), pair(s["slope"]));
       if (grazing)
         fmt::print("grazing      flight {} touches contact {} at t in {} (gap curvature {})\n",

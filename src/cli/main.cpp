@@ -313,6 +313,8 @@ int main(int argc, char** argv) {
     curve->add_option("--max-points", crv.spec.max_points, "most points each way from the start (default 200)");
     curve->add_option("--period", crv.spec.period, "with --toward: period of the orbit (default: from a transient)");
     curve->add_option("--transient", crv.spec.transient, "with --toward: periods simulated before the first Newton (default 200)");
+    curve->add_option("--orbit", crv.spec.orbit, "with --toward: the start orbit, auto | sticking | impact (default auto)")
+        ->check(CLI::IsMember({"auto", "sticking", "impact"}));
     curve->add_option("--out", crv.out, "write the curves to HDF5 (/curves)");
   }
 

@@ -36,6 +36,8 @@ CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const
   CheckInteger(naming, "--period", a.period, kPeriodLimit, problems);
   CheckInteger(naming, "--transient", a.transient, kTransientLimit, problems);
   CheckInteger(naming, "--contact", a.contact, {-1, 4096}, problems);
+  if (a.orbit != "auto" && a.orbit != "sticking" && a.orbit != "impact")
+    problems.push_back(fmt::format("{} {}: expected auto, sticking or impact", opt("--orbit"), a.orbit));
   std::optional<double> v1, v2;
   if (a.params.size() == 2) {
     for (const auto& k : a.params)
@@ -105,7 +107,7 @@ CurvePlan PlanCurves(const SceneOrigin& origin, const LoadedScene& loaded, const
     const Scene scene = scene_at(*v1, *v2);
     const System sys(scene);
     OrbitRequest oreq;
-    oreq.kind = OrbitKind::kAuto;
+    oreq.kind = a.orbit == "impact" ? OrbitKind::kImpact : a.orbit == "sticking" ? OrbitKind::kSticking : OrbitKind::kAuto;
     oreq.period = static_cast<int>(a.period);
     oreq.transient_periods = static_cast<int>(a.transient);
     const OrbitResult o = SolveOrbit(sys, scene, oreq);

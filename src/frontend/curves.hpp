@@ -25,6 +25,7 @@ struct CurveSpec {
   long long point = -1;
   double step = 0.02, max_step = 0.1;          // in units of the box scaled to (0, 1)²
   long long max_points = 200, period = 0, transient = 200;
+  std::string orbit = "auto";                  // with --toward: the kind of the start orbit (auto | sticking | impact)
 };
 
 // What to trace: the request (box, steps, the start orbit and the search segment) and the kinds.

@@ -54,26 +54,7 @@ Outcome ProveGrazing(const IntervalModel& model, bool mirrored, const ImpactGues
   }
   // A symmetric orbit of a mirrored model: proven as its half (the two grazings, of contact l on
   // one half and of the other contact on the mirrored half, are then one).
-  if (model.contact_count() == 2 && g.count == 2 && g.q == 1 && g.hits[0] != g.hits[1]) {
-    const auto& k0 = model.contacts[0];
-    const auto& k1 = model.contacts[1];
-    bool exact = true;
-    for (int i = 0; i < g.n; ++i) {
-      const auto z = static_cast<std::size_t>(i);
-      const Interval c = k0.shape[z] + k1.shape[z], t = k0.contact[z] + k1.contact[z];
-      exact = exact && c.lo() == 0 && c.hi() == 0 && t.lo() == 0 && t.hi() == 0;
-    }
-    const double T = 2 * M_PI / (frequency ? located : model.frequency.mid());
-    bool image = std::abs(guess.times[1] - guess.times[0] - T / 2) < 1e-4 * T;
-    for (int i = 0; i < g.n; ++i)
-      image = image && std::abs(guess.X[1](i) + guess.X[0](i)) < 1e-4 * (1 + std::abs(guess.X[0](i))) &&
-              std::abs(guess.V[1](i) + guess.V[0](i)) < 1e-4 * (1 + std::abs(guess.V[0](i)));
-    if ((exact || mirrored) && k0.stop_text == k1.stop_text && k0.restitution_text == k1.restitution_text && image) {
-      g.symmetric = true;
-      g.count = 1;
-      g.hits.resize(1);
-    }
-  }
+  MakeSymmetric(g, guess, mirrored, 2 * M_PI / (frequency ? located : model.frequency.mid()));
   std::vector<double> u0;
   for (int j = 0; j < g.count; ++j) {
     u0.push_back(guess.times[static_cast<std::size_t>(j)]);

@@ -300,4 +300,31 @@ inline std::string OrbitGaps(const Setup& g, const std::vector<Interval>& Uu, co
   return fail;
 }
 
+// A symmetric orbit of a mirrored model (contact 1 is contact 0 mirrored: c_1 = −c_0, T_1 = −T_0
+// exactly, or `mirrored` by the scene's structure; equal stops and restitutions), found as two
+// impacts half a period T/2 apart with the second state the first mirrored: g becomes its half.
+inline bool MakeSymmetric(Setup& g, const ImpactGuess& guess, bool mirrored, double T) {
+  const IntervalModel& model = *g.m;
+  if (model.contact_count() == 2 && g.count == 2 && g.q == 1 && g.hits[0] != g.hits[1]) {
+    const auto& k0 = model.contacts[0];
+    const auto& k1 = model.contacts[1];
+    bool exact = true;
+    for (int i = 0; i < g.n; ++i) {
+      const auto z = static_cast<std::size_t>(i);
+      const Interval c = k0.shape[z] + k1.shape[z], t = k0.contact[z] + k1.contact[z];
+      exact = exact && c.lo() == 0 && c.hi() == 0 && t.lo() == 0 && t.hi() == 0;
+    }
+    bool image = std::abs(guess.times[1] - guess.times[0] - T / 2) < 1e-2 * T;  // the guess may lie a little away in the parameter
+    for (int i = 0; i < g.n; ++i)
+      image = image && std::abs(guess.X[1](i) + guess.X[0](i)) < 1e-4 * (1 + std::abs(guess.X[0](i))) &&
+              std::abs(guess.V[1](i) + guess.V[0](i)) < 1e-4 * (1 + std::abs(guess.V[0](i)));
+    if ((exact || mirrored) && k0.stop_text == k1.stop_text && k0.restitution_text == k1.restitution_text && image) {
+      g.symmetric = true;
+      g.count = 1;
+      g.hits.resize(1);
+    }
+  }
+  return g.symmetric;
+}
+
 }  // namespace vibro::proof::family

@@ -10,6 +10,7 @@
 
 #include "proof/bifurcation_proof.hpp"
 #include "proof/grazing_proof.hpp"
+#include "proof/orbit_pitchfork.hpp"
 #include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
 #include "proof/prove_api.hpp"
@@ -652,7 +653,11 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
       }
       return m;
     }();
-    if (request.kind == "grazing") {
+    std::string one_dof_why;
+    const bool general_pitchfork =
+        request.kind == "branch-point" && !proof::SymmetricTwoSided(model, mirrored, one_dof_why) && model.n >= 1 &&
+        model.contact_count() == 2;
+    if (request.kind == "grazing" || general_pitchfork) {
       // The orbit that grazes, at the located value: from the given state, else searched.
       as_orbit.kind = OrbitKind::kImpact;
       as_orbit.period = request.period;
@@ -668,7 +673,10 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
         outcome.reason = "no impacting orbit found at the located value: " +
                          (found.failure.empty() ? std::string("the orbit found sticks") : found.failure);
       else
-        outcome = proof::ProveGrazing(model, mirrored, found.guess, frequency, request.value, request.bracket, budget, interval);
+        outcome = general_pitchfork ? proof::ProveOrbitPitchfork(model, mirrored, found.guess, frequency, request.value,
+                                                                 request.bracket, budget, interval)
+                                    : proof::ProveGrazing(model, mirrored, found.guess, frequency, request.value,
+                                                          request.bracket, budget, interval);
     } else {
       outcome = request.kind == "fold"
                     ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,

@@ -12,7 +12,8 @@ mpmath, from closed-form free flights of one DOF and nothing of vibro:
     period-1 orbit, traced in (a, omega) from a fold stored by `vibro continue --out`, matches the
     discriminant of the closed form of the symmetric orbit within 1e-10 at every point, and there the
     symmetry-reduced impact map G (impact on +1 -> impact on -1, mirrored), computed here at 40 digits,
-    has tr DG = 1 + r^2 (det DG = r^2: a multiplier +1);
+    has tr DG = 1 + r^2 (det DG = r^2: a multiplier +1); likewise (r = 0.6) the pitchfork curve,
+    tr DG = -(1 + r^2) (a multiplier -1 of G: +1 of the period map G o G);
 (d) the HDF5 file holds the curves as the JSON says; bad input is refused (exit 2, nothing written);
 (e) Python: vibro.curve returns numpy arrays, the same curve as the CLI.
 
@@ -258,7 +259,69 @@ def test_two_sided_fold_curve(tmp_path):
             det = cols[0][0] * cols[1][1] - cols[1][0] * cols[0][1]
             assert abs(tr - (1 + R2**2)) < mp.mpf("1e-15"), tr
             assert abs(det - R2**2) < mp.mpf("1e-15"), det
+    assert c["special"] == []  # the other multiplier of G is r^2: no codimension-two point on this curve
 
+
+def symmetric_orbits(a, w, r, delta=1):
+    """Both closed-form symmetric orbits (t0, u0) at (a, omega): impact on +1 at phase phi with arrival
+    speed V, leaving at -r V (the roots V > 0 of the quadratic above)."""
+    k1 = (1 + r) * mp.tan(mp.pi / (2 * w)) / 2
+    k2 = (1 - r) / (2 * w)
+    U = a / (1 - w**2)
+    disc = k1**2 - (k1**2 + k2**2) * (delta**2 - U**2) / delta**2
+    out = []
+    for sign in (1, -1):
+        V = delta * (k1 + sign * mp.sqrt(disc)) / (k1**2 + k2**2)
+        if V > 0:
+            phi = mp.atan2((delta - k1 * V) / U, k2 * V / U)
+            out.append((phi / w, -r * V))
+    return out
+
+
+def trace_DG(a, w, r, t0, u0, h=mp.mpf("1e-12")):
+    cols = []
+    for dt, du in ((h, 0), (0, h)):
+        pl = reduced_map(a, w, r, t0 + dt, u0 + du)
+        mi = reduced_map(a, w, r, t0 - dt, u0 - du)
+        cols.append([(pl[0] - mi[0]) / (2 * h), (pl[1] - mi[1]) / (2 * h)])
+    return cols[0][0] + cols[1][1]
+
+
+def test_two_sided_pitchfork_curve(tmp_path):
+    """The symmetry-breaking pitchfork of the symmetric orbit (r = 0.6): where G has the multiplier
+    -1, tr DG = -(1 + r^2); the branch-point curve traced in (a, omega) from the stored pitchfork
+    matches the root in a of tr DG + 1 + r^2 (closed-form orbit, DG at 40 digits) within 1e-10, and
+    no codimension-two point is claimed on it (the other multiplier of G is -r^2: nothing crosses)."""
+    sets = ["--set", "contact[0].restitution=0.6", "--set", "contact[1].restitution=0.6", "--set",
+            "excitation.frequency=2", "--set", "excitation.amplitude=2", "--set", "initial.velocity=[2.0]"]
+    branch = tmp_path / "bp.h5"
+    vibro("continue", TWO_SIDED, *sets, "--param", "excitation.amplitude", "--to", "5", "--out", branch)
+    with h5py.File(branch, "r") as h:
+        kinds = [k.decode() if isinstance(k, bytes) else k for k in h["bifurcations/kind"][:]]
+    p = vibro("curve", TWO_SIDED, *sets, "--param", "excitation.amplitude,excitation.frequency", "--from", branch,
+              "--point", kinds.index("branch-point"), "--range1", "1,8", "--range2", "1.6,2.6", "--json")
+    c = json.loads(p.stdout)["curves"][0]
+    assert c["kind"] == "branch-point" and c["special"] == []
+    a = np.array([q["value1"] for q in c["points"]])
+    w = np.array([q["value2"] for q in c["points"]])
+    assert w.min() < 1.65 and w.max() > 2.55
+    r = mp.mpf("0.6")
+    with mp.workdps(40):
+        # the anchor: omega = 2, where the pitchfork is at a = 3.28605035735799...
+        i2 = int(np.argmin(abs(w - 2)))
+        for i in sorted(set(range(0, len(a), max(1, len(a) // 6))) | {len(a) - 1, i2}):
+            wi = mp.mpf(w[i])
+            orbits = symmetric_orbits(mp.mpf(a[i]), wi, r)
+            # the orbit of the branch: the one whose trace is nearest -(1 + r^2) at the curve's a
+            t0, u0 = min(orbits, key=lambda o: abs(trace_DG(mp.mpf(a[i]), wi, r, *o) + 1 + r**2))
+            sign = 1 if abs(t0 - orbits[0][0]) < mp.mpf("1e-20") else -1
+
+            def h(am):
+                o = symmetric_orbits(am, wi, r)
+                o = o[0] if sign == 1 or len(o) == 1 else o[1]
+                return trace_DG(am, wi, r, *o) + 1 + r**2
+            truth = mp.findroot(h, mp.mpf(a[i]))
+            assert abs(a[i] - float(truth)) < 1e-10, (w[i], a[i], truth)
 
 # ---- (d) bad input ----
 

@@ -98,6 +98,20 @@ def read_all(path):
 PROGRESS_LINE = re.compile(r"^[a-z][\w ]*:\s+\d+% \(\d+ / \d+\)")
 
 
+def same_datasets(path, other):
+    """The datasets of `path` whose bytes differ from `other`'s (or that `other` lacks)."""
+    differ = []
+    with h5py.File(path, "r") as a, h5py.File(other, "r") as b:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset):
+                x = obj[()]
+                y = b[name][()] if name in b else None
+                if y is None or x.shape != y.shape or x.dtype != y.dtype or x.tobytes() != y.tobytes():
+                    differ.append(name)
+        a.visititems(visit)
+    return differ
+
+
 def one_line(text):
     return len([l for l in text.strip().splitlines() if l.strip() and not PROGRESS_LINE.match(l)]) == 1
 
@@ -278,6 +292,36 @@ if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=3m", "tmpfs", mnt], captu
         check("tmpfs 3 MiB: basin exit 3", r.returncode == 3 and "no space left on device" in r.stderr,
               f"{r.returncode} {r.stderr[-400:]}")
         check("tmpfs 3 MiB: basin file readable", read_all(path) == "", read_all(path))
+        os.remove(path)
+        # --extend on a disk that fills during the extension (issue 38): exit 3 with one line, the
+        # finished run left as it was (every dataset to the bit, status ok), and once there is room
+        # the same --extend gives the file of a run that went through the total from the start.
+        path = os.path.join(mnt, "ext.h5")
+        base_args = ["simulate", default, "--set", "run.periods=1000", "--out", path]
+        r = run(*base_args)
+        check("tmpfs --extend: the 1000-period run fits", r.returncode == 0, r.stderr[-300:])
+        before = os.path.join(tmp, "ext_before.h5")
+        shutil.copyfile(path, before)
+        free = os.statvfs(mnt)
+        with open(os.path.join(mnt, "filler"), "wb") as f:
+            f.write(b"\0" * max(0, free.f_bavail * free.f_frsize - 150 * 1024))
+        r = run(*base_args, "--extend", "3000")
+        check("tmpfs --extend on a full disk: exit 3 with one line naming the disk",
+              r.returncode == 3 and one_line(r.stderr) and
+              ("no space left on device" in r.stderr or "its disk has" in r.stderr) and path in r.stderr,
+              f"{r.returncode} {r.stderr[-400:]}")
+        check("tmpfs --extend on a full disk: every dataset readable", read_all(path) == "", read_all(path))
+        check("tmpfs --extend on a full disk: the finished run kept to the bit, status ok",
+              same_datasets(path, before) == [] and attrs(path)["status"] == "ok",
+              (same_datasets(path, before), attrs(path).get("status")))
+        os.remove(os.path.join(mnt, "filler"))
+        r = run(*base_args, "--extend", "3000")
+        whole = os.path.join(tmp, "ext_whole.h5")
+        w = run("simulate", default, "--set", "run.periods=4000", "--out", whole)
+        check("tmpfs --extend once there is room: exit 0", r.returncode == 0 and w.returncode == 0,
+              r.stderr[-300:] + w.stderr[-300:])
+        check("tmpfs --extend once there is room: the file of the uninterrupted 4000-period run, to the bit",
+              same_datasets(path, whole) == [], same_datasets(path, whole))
         os.remove(path)
         # Full before the run starts (the surfaces campaign: exit 2 printed, then SIGSEGV in HDF5's
         # clean-up at exit): refused, no crash, nothing left.

@@ -20,6 +20,11 @@ found at 50 digits at ω ± 1e-20) must lie in the certificate's claims; the int
 moved, the slope claim moved or of the wrong sign, the curvature and time claims moved, the box
 shrunk, the window cut, another contact or flight, the symmetry flag flipped, the model edited).
 Python's vibro.prove_bifurcation(..., branch=...) gives the command's answer.
+
+The tube's symmetry-breaking pitchfork near ω = 0.9554 (`prove --bifurcation BRANCH.h5 --point K`
+of its "branch-point"): the truth is the ω where the whole orbit's multiple-shooting Jacobian
+(central differences, h = 1e-20, at 50 digits, the symmetric orbit by findroot; no block split) is
+singular, and dμ/dω from that Jacobian's antisymmetric block bordered by the certificate's ℓ and k.
 Usage: prove_grazing_test.py VIBRO CHECKER SCENES_DIR
 """
 import copy
@@ -79,6 +84,86 @@ def full_orbit(cert):
     return md, n, u, hits, mpf(b["midpoint"][-1])
 
 
+def whole_orbit(m, n, hits, u):
+    """The whole period-1 orbit's equations (per impact: on its contact; the flight to the next
+    impact; the impact law there), with prove_truth.Truth's flight."""
+    count, per, out = len(hits), 2 * n + 1, []
+    for j in range(count):
+        k = (j + 1) % count
+        t, X, V = u[j * per], u[j * per + 1:j * per + 1 + n], u[j * per + 1 + n:(j + 1) * per]
+        tn, Xn, Vn = u[k * per], u[k * per + 1:k * per + 1 + n], u[k * per + 1 + n:(k + 1) * per]
+        tn = tn + (m.T if j == count - 1 else 0)
+        Xe, Ve = m.state(t, X, V, tn)
+        Vp = m.impact(Ve, hits[k])
+        out.append(m.gap(X, hits[j]))
+        out += [Xe[i] - Xn[i] for i in range(n)] + [Vp[i] - Vn[i] for i in range(n)]
+    return out
+
+
+def pitchfork_truth(cert):
+    """The tube's pitchfork at 50 digits: the ω where the whole orbit's multiple-shooting Jacobian
+    (central differences, h = 1e-20) is singular along the symmetric orbit (its half by findroot at
+    50 digits for each ω, mirrored; then the secant method on the determinant); and dμ/dω, μ the bordering of the
+    antisymmetric block A − Bσ' (A, B: the first flight's rows of that Jacobian in the first and the
+    second impact's unknowns) with the certificate's ℓ and row k, by central differences."""
+    b = cert["bifurcation"]
+    md = dict(scene_model(cert))
+    md[b["parameter"]] = mp.nstr(sum(mpf(x) for x in b["interval"]) / 2, 20)
+    n = len(md["frequencies"])
+    m = Truth(md)
+    hits = b["impact_contacts"]
+    per = 2 * n + 1
+    a = [mpf(x) for x in b["midpoint"][:per]]
+    w0 = sum(mpf(x) for x in b["interval"]) / 2
+    state = {"a": a}
+
+    def half(z):  # the symmetric orbit: on contact a, half a period later on b in −(X_0, V_0)
+        t, X, V = z[0], z[1:1 + n], z[1 + n:]
+        Xe, Ve = m.state(t, X, V, t + m.T / 2)
+        Vp = m.impact(Ve, hits[1])
+        return [m.gap(X, hits[0])] + [Xe[i] + X[i] for i in range(n)] + [Vp[i] + V[i] for i in range(n)]
+
+    def orbit(w):  # the whole orbit, its second impact the first mirrored (its Jacobian is singular here)
+        m.w, m.T = w, 2 * pi / w
+        z = findroot(lambda *y: half(list(y)), state["a"], tol=mpf(10) ** -45)
+        z = [z[i] for i in range(len(z))]
+        state["a"] = z
+        return z + [z[0] + m.T / 2] + [-x for x in z[1:]]
+
+    def jacobian(w):
+        u = orbit(w)
+        h = mpf("1e-20")
+        J = mp.matrix(2 * per, 2 * per)
+        for c in range(2 * per):
+            up, um = list(u), list(u)
+            up[c] += h
+            um[c] -= h
+            fp, fm = whole_orbit(m, n, hits, up), whole_orbit(m, n, hits, um)
+            for r in range(2 * per):
+                J[r, c] = (fp[r] - fm[r]) / (2 * h)
+        return J
+
+    w = findroot(lambda w_: mp.det(jacobian(w_)), w0, tol=mpf(10) ** -40)
+    ell, k = [mpf(x) for x in b["normal"]], b["row"]
+
+    def mu(w_):
+        J = jacobian(w_)
+        M = mp.matrix(per + 1, per + 1)
+        for r in range(per):
+            for c in range(per):
+                sig = 1 if c == 0 else -1
+                M[r, c] = J[r, c] - J[r, per + c] * sig
+        M[k, per] = 1
+        for c in range(per):
+            M[per, c] = ell[c]
+        rhs = mp.matrix([0] * per + [1])
+        return mp.lu_solve(M, rhs)[per]
+
+    hh = mpf("1e-15")
+    slope = (mu(w + hh) - mu(w - hh)) / (2 * hh)
+    return w, slope
+
+
 def truth_of(cert):
     """(ω*, t_grazing, γ̈ there, dm/dω) at 50 digits, from findroot on the whole orbit with its
     tangency (ω an unknown)."""
@@ -92,17 +177,7 @@ def truth_of(cert):
         m.w, m.T = w, 2 * pi / w
 
     def orbit_eqs(u):
-        out = []
-        for j in range(count):
-            k = (j + 1) % count
-            t, X, V = u[j * per], u[j * per + 1:j * per + 1 + n], u[j * per + 1 + n:(j + 1) * per]
-            tn, Xn, Vn = u[k * per], u[k * per + 1:k * per + 1 + n], u[k * per + 1 + n:(k + 1) * per]
-            tn = tn + (m.T if j == count - 1 else 0)
-            Xe, Ve = m.state(t, X, V, tn)
-            Vp = m.impact(Ve, hits[k])
-            out.append(m.gap(X, hits[j]))
-            out += [Xe[i] - Xn[i] for i in range(n)] + [Vp[i] - Vn[i] for i in range(n)]
-        return out
+        return whole_orbit(m, n, hits, u)
 
     def at(u, s):
         t, X, V = u[J * per], u[J * per + 1:J * per + 1 + n], u[J * per + 1 + n:(J + 1) * per]
@@ -146,6 +221,13 @@ def truth_of(cert):
 
 def inside(x, pair):
     return mpf(pair[0]) <= x <= mpf(pair[1])
+
+
+def moved_interval(c, d):
+    a, z = (mp.nstr(mpf(x) + d, 17) for x in c["bifurcation"]["interval"])
+    for node in (c["bifurcation"], c["summary"]):
+        node["interval"] = [a, z]
+    c["model"][c["bifurcation"]["parameter"]] = f"[{a}, {z}]"
 
 
 def mutants(label, cert):
@@ -264,6 +346,40 @@ if s_up:
     expect(s_up["symmetric"] is True and "symmetric" in s_up["reason"], "tube: the symmetric orbit proven as its half")
 if s_one:
     expect(s_one["symmetric"] is False and len(s_one["impact_contacts"]) == 2, "1-DOF: the whole orbit (two impacts)")
+
+# The tube's pitchfork near ω = 0.9554 (its symmetric orbit, damped, two modes).
+pf = os.path.join(H.tmp, "pitchfork.json")
+kinds = []
+import h5py  # noqa: E402
+with h5py.File(up, "r") as fh:
+    kinds = [k.decode() if isinstance(k, bytes) else k for k in fh["/bifurcations/kind"][:]]
+code, s_pf, err = prove(tube, "--bifurcation", up, "--point", str(kinds.index("branch-point")), out=pf)
+expect(code == 0 and s_pf and s_pf["verdict"] == "proven", f"tube pitchfork: proven (exit {code}: "
+                                                             f"{s_pf and s_pf['reason'][:300]} {err[-300:]})")
+if code == 0:
+    code, v = H.check(pf)
+    expect(code == 0, f"tube pitchfork: the checker confirms ({v})")
+    cert = json.load(open(pf))
+    w, slope = pitchfork_truth(cert)
+    lo, hi = (mpf(x) for x in s_pf["interval"])
+    print(f"tube pitchfork: ω* = {mp.nstr(w, 30)}, dμ/dω = {mp.nstr(slope, 12)}")
+    expect(lo <= w <= hi and hi - lo <= mpf("1e-10"), f"tube pitchfork: [{s_pf['interval'][0]}, {s_pf['interval'][1]}] "
+                                                      f"contains the 50-digit ω* = {mp.nstr(w, 25)}")
+    expect(inside(slope, s_pf["slope"]), f"tube pitchfork: the slope claim {s_pf['slope']} contains dμ/dω = "
+                                         f"{mp.nstr(slope, 20)}")
+    for what, edit in (("the interval moved by 1e-9", lambda c: moved_interval(c, mpf("1e-9"))),
+                       ("the slope of the wrong sign", lambda c: [c[k_].__setitem__("slope", [-c[k_]["slope"][1], -c[k_]["slope"][0]])
+                                                                  for k_ in ("bifurcation", "summary")]),
+                       ("the normal's first entry halved", lambda c: c["bifurcation"]["normal"].__setitem__(0, c["bifurcation"]["normal"][0] / 2)),
+                       ("the amplitude edited", lambda c: c["model"].__setitem__("amplitude", "0.3000001"))):
+        c = copy.deepcopy(cert)
+        edit(c)
+        code, v = check_doc(c)
+        expect(code in (1, 2), f"tube pitchfork: {what}: rejected ({v and v['reason'][:160]})")
+    for d in (mpf("1e-9"), mpf("-1e-9")):
+        code, s2, err = prove(tube, "--bifurcation", f"branch-point:excitation.frequency={mp.nstr(w + d, 17)}", "--from", up)
+        expect(code == 4 and s2 and s2["verdict"] == "not-proven",
+               f"tube pitchfork: {mp.nstr(d, 2)} from it: nothing proven (exit {code}: {s2 and s2['reason'][:200]})")
 
 # Python gives the command's answer.
 if s_up:
