@@ -11,6 +11,8 @@
 
 #include <Eigen/Dense>
 
+#include "vibro/harmonics.hpp"
+
 namespace vibro {
 
 // One problem of a scene: the key it concerns (e.g. "stop.restitution", "structure.mass"),
@@ -98,6 +100,12 @@ struct Scene {
 
   double amplitude = 0.0;  // f
   double frequency = 1.0;  // ω
+  // A sum of harmonics (docs/harmonics.md): every harmonic as written, when [excitation] gives
+  // lists, a phase or forcing vectors; empty for today's f sin ωt. With harmonics, `frequency` is the
+  // base pulsation ω_b of the common period (ω_h = n_h ω_b, the multiples found from the written
+  // frequencies) and `amplitude` f_0; a change of either (a continuation parameter, --set) scales
+  // every harmonic's frequency, or amplitude, by the same factor.
+  std::vector<HarmonicSpec> harmonics;
 
   double initial_time = 0.0;
   // Initial displacement and velocity: modal coordinates (modal form) or physical DOFs (physical

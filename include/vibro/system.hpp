@@ -14,6 +14,7 @@
 
 #include <Eigen/Dense>
 
+#include "vibro/harmonics.hpp"
 #include "vibro/scene.hpp"
 
 namespace vibro {
@@ -118,6 +119,24 @@ class System {
   // docs/contacts_reference.md). Throws std::invalid_argument for dependent contacts.
   HeldSetModes HeldOn(const std::vector<int>& set) const;
 
+  // The forcing as a sum of harmonics (docs/harmonics.md), one entry per harmonic: today's forcing
+  // is one (n = 1, ψ = 0, T_A^(0) = forcing()), and harmonic_sum() is false for it, so that the
+  // engines keep their single-harmonic closed forms to the bit. With a sum, frequency() is the base
+  // pulsation ω_b, period() the common period and amplitude() f_0.
+  const std::vector<Harmonic>& harmonics() const { return harmonics_; }
+  bool harmonic_sum() const { return harmonic_sum_; }
+  // Contact j under harmonic h: s_A,j^(h) = c_jᵀT_A^(h) and, sticking on j alone, the constrained
+  // modal forcing l_kᵀF_c^(h), F_c^(h) = T_A^(h) − (s_A,j^(h)/W_jj) T_j (docs/model.md §4.2).
+  double HarmonicSA(int j, int h) const { return harmonic_s_A_[static_cast<size_t>(j)][static_cast<size_t>(h)]; }
+  const Eigen::VectorXd& HarmonicStickForcing(int j, int h) const {
+    return harmonic_stick_[static_cast<size_t>(j)][static_cast<size_t>(h)];
+  }
+
+  // The d-th time derivative of the forcing at base phase φ: modal, Σ_h T_A^(h) f_h ω_h^d sin(φ_h + dπ/2)
+  // with φ_h = n_h φ + ψ_h; and as contact j sees it (c_jᵀ of it). Every harmonic, sum or not.
+  Eigen::VectorXd HarmonicForce(double phase, int d) const;
+  double HarmonicContactForce(int j, double phase, int d) const;
+
   // Physical form only: mode shapes ψ_i (columns, unit component at B for contact modes), (N, n).
   const Eigen::MatrixXd& mode_shapes() const { return mode_shapes_; }
   // Physical form only: modal masses m_i = ψ_iᵀ M ψ_i, (n).
@@ -188,6 +207,12 @@ class System {
   std::vector<int> kept_;   // modal form: indices of the kept modes in the scene's lists
   std::vector<ContactModel> contacts_;
   Eigen::MatrixXd delassus_;
+  // system_harmonics.cpp
+  void BuildHarmonics(const Scene& scene);
+  std::vector<Harmonic> harmonics_;
+  bool harmonic_sum_ = false;
+  std::vector<std::vector<double>> harmonic_s_A_;            // [contact][harmonic]
+  std::vector<std::vector<Eigen::VectorXd>> harmonic_stick_;  // [contact][harmonic]
 };
 
 }  // namespace vibro

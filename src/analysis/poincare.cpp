@@ -184,7 +184,9 @@ Eigen::VectorXd TangentTracker::Field(Mode mode, const Eigen::VectorXd& X,
   const auto n = sys_.dof();
   Eigen::VectorXd z(2 * n);
   z.head(n) = V;
-  z.tail(n) = -w2_.cwiseProduct(X) - D_.cwiseProduct(V) + sys_.forcing() * (sys_.amplitude() * std::sin(phase));
+  z.tail(n) = -w2_.cwiseProduct(X) - D_.cwiseProduct(V) +
+              (sys_.harmonic_sum() ? sys_.HarmonicForce(phase, 0)  // docs/harmonics.md
+                                   : Eigen::VectorXd(sys_.forcing() * (sys_.amplitude() * std::sin(phase))));
   // Ẍ = free acceleration + T_j λ_j with c_jᵀẌ = 0.
   if (mode == Mode::kSticking) z.tail(n) = contacts_[static_cast<size_t>(contact)].Pi * z.tail(n);
   return z;
@@ -374,6 +376,11 @@ void TangentTracker::Impact(const Reset& r, int contact) {
   double c_a_minus = 0;
   for (int i = 0; i < n; ++i)
     c_a_minus += c[i] * (-w2_[i] * r.X_before[i] - D_[i] * r.V_before[i] + T_A[i] * forcing);
+  if (sys_.harmonic_sum()) {  // a sum of harmonics (docs/harmonics.md): the forcing summed
+    const Eigen::VectorXd F = sys_.HarmonicForce(r.phase, 0);
+    c_a_minus = 0;
+    for (int i = 0; i < n; ++i) c_a_minus += c[i] * (-w2_[i] * r.X_before[i] - D_[i] * r.V_before[i] + F[i]);
+  }
   for (int i = 0; i < n; ++i) {
     du_[i] = r.V_after[i] - r.V_before[i];
     dv_[i] = -w2_[i] * (r.X_after[i] - r.X_before[i]) - D_[i] * du_[i] + k * c_a_minus * T_B[i];

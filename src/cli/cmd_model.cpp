@@ -45,6 +45,12 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
   fmt::print("stop x0, r          {:.10g}, {:.10g}\n", sys.stop(), sys.restitution());
   fmt::print("excitation f, ω, T  {:.10g}, {:.10g}, {:.10g}\n", sys.amplitude(), sys.frequency(),
              sys.period());
+  if (sys.harmonic_sum())  // docs/harmonics.md: ω above is the base pulsation, T the common period
+    for (size_t h = 0; h < sys.harmonics().size(); ++h) {
+      const auto& hh = sys.harmonics()[h];
+      fmt::print("  harmonic {}        f = {:.10g}, ω = {:.10g} = {}·ω_b, ψ = {:.10g}, T_A = {}\n", h, hh.amplitude,
+                 hh.frequency, hh.multiple, hh.phase, Vec(hh.forcing));
+    }
   // Scenes with [[contact]] tables: every contact, as written and in the modal coordinates
   // (docs/contacts.md; contact 0's are the lines above).
   if (!loaded.scene.contacts.empty() || sys.contact_count() > 1) {

@@ -173,7 +173,9 @@ class Automaton {
     for (int j = 1; j < sys.contact_count(); ++j) others_.emplace_back(sys, j);
     models_.push_back(&model);
     for (const ModelT<S>& o : others_) models_.push_back(&o);
-    if (model.stick_frequencies.size() == 0)
+    // One DOF: the closed-form resting flow (a single harmonic; a sum's release is searched by the
+    // engine, docs/harmonics.md).
+    if (model.stick_frequencies.size() == 0 && model.harmonics.empty())
       for (const ModelT<S>* k : models_) resting_all_.push_back(std::make_unique<RestingStick<S>>(*k));
     counts_.resize(models_.size());
     loads_.Resize(models_.size());
@@ -725,7 +727,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   const ModelT<S>& m = multi() ? M(active_) : m_;
   const S phase_k = Phase(clock_);
   const S* sc = SinCos(phase_k);
-  const TailPrediction<S> tail = PredictTail<S>(m, X_, V_, sc[0], sc[1], chatter_tol_, tail_w_);
+  const TailPrediction<S> tail = PredictTail<S>(m, X_, V_, sc[0], sc[1], chatter_tol_, tail_w_, &phase_k);
   last_tail_ = tail;
   last_jump_failure_.clear();
   if (!tail.accepted) {
@@ -824,7 +826,7 @@ bool Automaton<S>::OnContact() {
   const bool unresolved = cvode_ && accumulating && chatter_last_ > 0 &&
                           -v_minus < S(resolution_ratio_) * chatter_first_;
   if (accumulating && chatter_last_ > 0 && (touch || unresolved)) {
-    const S Rc = m.ReactionSin(X_, V_, sc[0]);
+    const S Rc = m.ReactionSin(X_, V_, sc[0], &phase);
     if (Rc > 0) {
       return Fail(
           fmt::format(
@@ -842,7 +844,7 @@ bool Automaton<S>::OnContact() {
   }
   if (touch) {
     // Tangential touch (docs/model.md §2.1): no impact.
-    const S Rc = m.ReactionSin(X_, V_, sc[0]);
+    const S Rc = m.ReactionSin(X_, V_, sc[0], &phase);
     Xb_ = X_;
     Vb_ = V_;
     const Vec& Xb = Xb_;
@@ -854,7 +856,7 @@ bool Automaton<S>::OnContact() {
       Emit(EventKind::kStick, S(0), S(0));
     } else {
       m.ProjectOntoStop(X_, V_);
-      const S rate = m.ReactionRateTrig(X_, V_, sc[0], sc[1]);
+      const S rate = m.ReactionRateTrig(X_, V_, sc[0], sc[1], &phase);
       if (Rc < 0) {
         Depart(FlightStart::kDeparture);
         NotifyReset(ResetKind::kGrazing, Xb, Vb);
@@ -888,7 +890,7 @@ bool Automaton<S>::OnContact() {
     const Vec& Vb = Vb_;
     m.ProjectOntoStop(X_, V_);
     Emit(EventKind::kImpact, v_minus, S(0));
-    const S Rc = m.ReactionSin(X_, V_, sc[0]);
+    const S Rc = m.ReactionSin(X_, V_, sc[0], &phase);
     if (Rc > 0) {
       EnterSticking(StickStart::kGeneric);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
@@ -897,7 +899,7 @@ bool Automaton<S>::OnContact() {
       chatter_first_ = chatter_last_ = 0;
       Depart(FlightStart::kDeparture);
       NotifyReset(ResetKind::kPlasticLeave, Xb, Vb);
-    } else if (m.ReactionRateTrig(X_, V_, sc[0], sc[1]) > 0) {
+    } else if (m.ReactionRateTrig(X_, V_, sc[0], sc[1], &phase) > 0) {
       EnterSticking(StickStart::kRising);
       NotifyReset(ResetKind::kPlasticStick, Xb, Vb);
       Emit(EventKind::kStick, S(0), S(0));
@@ -913,7 +915,7 @@ bool Automaton<S>::OnContact() {
   Vb_ = V_;
   const Vec& Vb = Vb_;
   m.ApplyImpact(V_, r);
-  const S Rc = m.ReactionSin(X_, V_, sc[0]);
+  const S Rc = m.ReactionSin(X_, V_, sc[0], &phase);
   NotifyReset(ResetKind::kImpact, X_, Vb);
   Emit(EventKind::kImpact, v_minus, m.ContactVelocity(V_));
   if (accumulating && Rc > 0) {

@@ -26,6 +26,7 @@
 #include <Eigen/Dense>
 
 #include "dynamics/model_t.hpp"
+#include "dynamics/harmonic_flow.hpp"
 #include "dynamics/oscillator.hpp"
 
 namespace vibro::detail {
@@ -50,20 +51,20 @@ struct TailPrediction {
 template <class S>
 TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                               const typename ModelT<S>::Vec& V, const S& sp, const S& cp,
-                              const S& target, typename ModelT<S>::Vec& W) {
+                              const S& target, typename ModelT<S>::Vec& W, const S* phase = nullptr) {
   using R = Real<S>;
   TailPrediction<S> t;
   t.speed = m.ContactVelocity(V);
   if (!(t.speed > 0) || !(m.r > 0) || !(m.r < 1)) return t;
   W = V - m.contact * (t.speed / m.s_B);  // ΠẊ: the stuck velocity
-  t.reaction = m.ReactionSin(X, W, sp);
+  t.reaction = m.ReactionSin(X, W, sp, phase);
   if (!(t.reaction > 0)) return t;
   t.delta0 = S(2) * t.speed / ((S(1) - m.r) * m.s_B * t.reaction);
   const S d = t.delta0;
   t.error = d * m.contact_stiffness * d * d / 4;
   if (m.damped) t.error += d * R::abs(m.contact_damping) * d / 2;
   if (!(t.error <= target)) return t;
-  t.rate = m.ReactionRateTrig(X, W, sp, cp);
+  t.rate = m.ReactionRateTrig(X, W, sp, cp, phase);
   t.epsilon = -t.rate * t.delta0 / t.reaction;
   t.delta = t.delta0 * (S(1) + t.epsilon / 3);
   t.error += d * S(0.3) * t.epsilon * t.epsilon;
@@ -72,7 +73,30 @@ TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec&
   // Free second derivative of R at the start and a bound on |R'''| over [0, 2Δ0].
   const S H = S(2) * t.delta0;
   S r2 = m.s_A * m.f * m.w * m.w * sp, M3 = R::abs(m.s_A * m.f) * m.w * m.w * m.w;
-  for (int i = 0; i < m.dof(); ++i) {
+  if (!m.harmonics.empty()) {  // a sum of harmonics (docs/harmonics.md)
+    const auto& hs = m.harmonics;
+    r2 = -hs.Contact(*phase, 2);
+    M3 = hs.ContactBound(3);
+    const typename ModelT<S>::Vec f0 = hs.Vector(*phase, 0), f1 = hs.Vector(*phase, 1);
+    for (int i = 0; i < m.dof(); ++i) {
+      if (m.shape[i] == S(0)) continue;
+      const OscillatorT<S> o{m.omega[i], m.zeta[i], S(0)};
+      HarmonicSumsT<S> F;
+      for (const auto& h : hs.h) {
+        const S a = R::abs(h.forcing[i]);
+        F.f += a;
+        F.fw += a * h.omega;
+        F.fw2 += a * h.omega * h.omega;
+      }
+      const S w2 = o.nu * o.nu, tz = S(2) * o.zeta * o.nu;
+      const S acc = -w2 * X[i] - tz * W[i] + f0[i];
+      const S jerk = -w2 * W[i] - tz * acc + f1[i];
+      r2 += m.shape[i] * (w2 * acc + tz * jerk);
+      const auto b = BoundsSum<S>(o, F, Amplitude<S>(o, X[i], W[i]) + F.f * H);
+      M3 += R::abs(m.shape[i]) * (w2 * b.d3 + tz * b.d4);
+    }
+  }
+  for (int i = 0; i < m.dof() && m.harmonics.empty(); ++i) {
     if (m.shape[i] == S(0)) continue;
     const OscillatorT<S> o{m.omega[i], m.zeta[i], m.forcing[i] * m.f};
     const S w2 = o.nu * o.nu, tz = S(2) * o.zeta * o.nu;
@@ -93,7 +117,7 @@ template <class S>
 TailPrediction<S> PredictTail(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                               const typename ModelT<S>::Vec& V, const S& phase, const S& target) {
   typename ModelT<S>::Vec W;
-  return PredictTail<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), target, W);
+  return PredictTail<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), target, W, &phase);
 }
 
 // Gradient of the jump time for the Jacobian of the jump (docs/model.md §5.6), length 2n in (X, Ẋ).
@@ -137,7 +161,14 @@ Eigen::VectorXd DeltaGradient(const ModelT<S>& m, const typename ModelT<S>::Vec&
   S dR_dphi = -m.s_A * m.f * cp / m.s_B;
   S dRd_dphi = m.s_A * m.f * m.w * sp / m.s_B;
   if (m.damped) dRd_dphi += cD.dot(Pi(m.forcing * (m.f * cp))) / m.s_B;
-  const S rate = g.dot(field) + m.w * (dD_dR * dR_dphi + dD_dRd * dRd_dphi);
+  S rate = g.dot(field) + m.w * (dD_dR * dR_dphi + dD_dRd * dRd_dphi);
+  if (!m.harmonics.empty()) {  // a sum of harmonics: the forcing's rates in time (docs/harmonics.md)
+    field.tail(n) += m.harmonics.Vector(phase);
+    const S dR_dt = -m.harmonics.Contact(phase, 1) / m.s_B;
+    S dRd_dt = -m.harmonics.Contact(phase, 2) / m.s_B;
+    if (m.damped) dRd_dt += cD.dot(Pi(m.harmonics.Vector(phase, 1))) / m.s_B;
+    rate = g.dot(field) + dD_dR * dR_dt + dD_dRd * dRd_dt;
+  }
   g.head(n) -= (S(1) + rate) * m.shape / t.speed;
   return g.template cast<double>();
 }

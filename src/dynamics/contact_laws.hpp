@@ -51,6 +51,9 @@ typename ModelT<S>::Mat Delassus(const ContactModelsT<S>& models, const std::vec
 template <class S>
 typename ModelT<S>::Vec FreeAcceleration(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                                          const typename ModelT<S>::Vec& V, const S& phase) {
+  if (!m.harmonics.empty())  // a sum of harmonics (docs/harmonics.md)
+    return -m.omega.cwiseAbs2().cwiseProduct(X) - S(2) * m.zeta.cwiseProduct(m.omega).cwiseProduct(V) +
+           m.harmonics.Vector(phase);
   return -m.omega.cwiseAbs2().cwiseProduct(X) - S(2) * m.zeta.cwiseProduct(m.omega).cwiseProduct(V) +
          m.forcing * (m.f * Real<S>::sin(phase));
 }
@@ -657,6 +660,11 @@ SetStickingT<S>* Automaton<S>::SetEngineFor(const std::vector<int>& set, std::st
     why = "the CVODE engine does not hold several contacts at once; use run.engine = \"exact\"";
     return nullptr;
   }
+  if (!m_.harmonics.empty()) {
+    why = "sticking on several contacts at once under a sum of harmonics has no closed form in vibro yet "
+          "(docs/harmonics.md)";
+    return nullptr;
+  }
   try {
     auto e = std::make_unique<SetStickingT<S>>(sys_, models_, set);
     if (!e->ok()) {
@@ -868,7 +876,8 @@ int Automaton<S>::TryHeldAccumulation(int k) {
   const Vec acc_Z = project(Z, a_free);
   const Vec jerk_free = -mk.omega.cwiseAbs2().cwiseProduct(Vs) -
                         S(2) * mk.zeta.cwiseProduct(mk.omega).cwiseProduct(acc_Z) +
-                        mk.forcing * (mk.f * mk.w * R::cos(phase));
+                        (mk.harmonics.empty() ? Vec(mk.forcing * (mk.f * mk.w * R::cos(phase)))
+                                              : Vec(mk.harmonics.Vector(phase, 1)));
   const S A_rate = -mk.shape.dot(project(held, jerk_free));
   const S delta0 = S(2) * u / ((S(1) - r) * A);
   const S eps = -A_rate * delta0 / A;

@@ -175,6 +175,7 @@ class ContactLoadsT {
     Vec b(n);
     for (Eigen::Index i = 0; i < n; ++i)
       b[i] = (V1[i] - V0[i]) + S(2) * m0.zeta[i] * m0.omega[i] * (X1[i] - X0[i]) - m0.forcing[i] * m0.f * sin_integral;
+    if (!m0.harmonics.empty()) b -= HarmonicImpulse(m0, phase, sigma);
     // The augmented system [F | rhs], solved by Gaussian elimination with partial pivoting.
     std::vector<std::vector<S>> A(zs, std::vector<S>(zs + 1, S(0)));
     S scale(0);
@@ -210,6 +211,19 @@ class ContactLoadsT {
       lambda[static_cast<Eigen::Index>(c)] = v / A[c][c];
     }
     return true;
+  }
+
+  // ∫ Σ_h T_A^(h) f_h sin φ_h dt over [0, σ] from base phase φ (docs/harmonics.md).
+  static Vec HarmonicImpulse(const ModelT<S>& m, const S& phase, const S& sigma) {
+    Vec J = Vec::Zero(m.omega.size());
+    const auto& hs = m.harmonics;
+    for (size_t h = 0; h < hs.size(); ++h) {
+      const S p0 = hs.PhaseOf(h, phase), p1 = hs.PhaseOf(h, phase + m.w * sigma);
+      // cos p0 − cos p1 = 2 sin((p0+p1)/2) sin((p1−p0)/2), without cancellation for short segments.
+      const S d = S(2) * R::sin(S(0.5) * (p0 + p1)) * R::sin(S(0.5) * hs.h[h].omega * sigma);
+      J += hs.h[h].forcing * (d / hs.h[h].omega);
+    }
+    return J;
   }
 
   // Checkpoint (open phases) and resume.
@@ -248,9 +262,14 @@ class ContactLoadsT {
     const auto& k = search_.CoefsOf(m);
     S sum(0);
     for (Eigen::Index i = 0; i < m.omega.size(); ++i) sum += k.u[i] * (V1[i] - V0[i]) + k.ud[i] * (X1[i] - X0[i]);
-    const S forcing = k.uTA * m.f *
-                      (cos_ends ? S((*cos_ends)[0] - (*cos_ends)[1]) : S(R::cos(phase) - R::cos(phase + m.w * sigma))) /
-                      m.w;
+    S forcing = k.uTA * m.f *
+                (cos_ends ? S((*cos_ends)[0] - (*cos_ends)[1]) : S(R::cos(phase) - R::cos(phase + m.w * sigma))) /
+                m.w;
+    if (!m.harmonics.empty()) {  // Σ_h uᵀT_A^(h) f_h ∫ sin φ_h dt (docs/harmonics.md)
+      const Vec J = HarmonicImpulse(m, phase, sigma);
+      forcing = S(0);
+      for (Eigen::Index i = 0; i < m.omega.size(); ++i) forcing += k.u[i] * J[i];
+    }
     return (sum - forcing + m.x0 * sigma) / m.flexibility;
   }
 

@@ -133,6 +133,9 @@ struct CvodeEngine::Impl {
     Eigen::MatrixXd stick_D;                        // (n − 1, n − 1)
     double react_f = 0, R_static = 0;
     bool stick_damped = false;
+    // A sum of harmonics (docs/harmonics.md): per harmonic, l_kᵀF_c^(h) f_h and s_A^(h) f_h / s_B.
+    std::vector<Eigen::VectorXd> stick_hF;
+    std::vector<double> react_hf;
     std::vector<Eigen::VectorXd> held_weights;  // [k]: V_jᵀc_k, (n − 1)
     std::vector<double> held_base;              // [k]: e_j c_kᵀv_j − e_k
   };
@@ -163,6 +166,20 @@ struct CvodeEngine::Impl {
 
   // Model data common to every contact.
   Eigen::VectorXd w2, damp, TA_f;
+  // A sum of harmonics (docs/harmonics.md): T_A^(h) f_h, ω_h, n_h, ψ_h; empty for one harmonic.
+  std::vector<Eigen::VectorXd> h_TA;
+  std::vector<double> h_w, h_psi;
+  std::vector<int> h_n;
+  // ω_h^d sin(φ_h(σ) + dπ/2) of harmonic h at local time t.
+  double HarmonicWave(size_t h, double t, int d) const {
+    const double p = h_n[h] * (phase + sys.frequency() * t) + h_psi[h];
+    const double w = d == 0 ? 1.0 : d == 1 ? h_w[h] : h_w[h] * h_w[h];
+    switch (d & 3) {
+      case 0: return w * std::sin(p);
+      case 1: return w * std::cos(p);
+      default: return -w * std::sin(p);
+    }
+  }
 
   Impl(const System& s, const RunSpec& r) : sys(s), run(r) {}
 
@@ -180,6 +197,10 @@ struct CvodeEngine::Impl {
       for (int i = 0; i < n; ++i) {
         D[i] = Y[n + i];
         D[n + i] = -m->w2[i] * (m->X0[i] + Y[i]) - m->damp[i] * Y[n + i] + m->TA_f[i] * s;
+      }
+      for (size_t h = 0; h < m->h_TA.size(); ++h) {
+        const double sh = m->HarmonicWave(h, t, 0);
+        for (int i = 0; i < n; ++i) D[n + i] += m->h_TA[h][i] * sh;
       }
       return 0;
     } catch (...) {
@@ -228,6 +249,7 @@ struct CvodeEngine::Impl {
     const double s = std::sin(phase + sys.frequency() * t);
     double a = 0;
     for (int i = 0; i < n; ++i) a += c[i] * (-w2[i] * (X0[i] + Y[i]) - damp[i] * Y[n + i] + TA_f[i] * s);
+    for (size_t h = 0; h < h_TA.size(); ++h) a += c.dot(h_TA[h]) * HarmonicWave(h, t, 0);
     return a;
   }
 
@@ -278,6 +300,7 @@ struct CvodeEngine::Impl {
     const double s = std::sin(phase + sys.frequency() * t);
     for (Eigen::Index i = 0; i < k; ++i) {
       double a = -hd->stick_w2[i] * Y[i] + hd->stick_F[i] * s;
+      for (size_t h = 0; h < hd->stick_hF.size(); ++h) a += hd->stick_hF[h][i] * HarmonicWave(h, t, 0);
       if (hd->stick_damped)
         for (Eigen::Index j = 0; j < k; ++j) a -= hd->stick_D(i, j) * Y[k + j];
       acc[i] = a;
@@ -306,6 +329,10 @@ struct CvodeEngine::Impl {
     const double w = sys.frequency();
     R = hd->R_static - hd->react_f * std::sin(phase + w * t);
     dR = -hd->react_f * w * std::cos(phase + w * t);
+    for (size_t h = 0; h < hd->react_hf.size(); ++h) {
+      R -= hd->react_hf[h] * HarmonicWave(h, t, 0);
+      dR -= hd->react_hf[h] * HarmonicWave(h, t, 1);
+    }
     std::vector<double> acc(static_cast<size_t>(k));
     StickAcc(t, Y, acc.data());
     for (Eigen::Index i = 0; i < k; ++i) {
@@ -321,8 +348,10 @@ struct CvodeEngine::Impl {
     std::vector<double> acc(static_cast<size_t>(k));
     StickAcc(t, Y, acc.data());
     double d2R = hd->react_f * w * w * std::sin(phase + w * t);
+    for (size_t h = 0; h < hd->react_hf.size(); ++h) d2R -= hd->react_hf[h] * HarmonicWave(h, t, 2);
     for (Eigen::Index i = 0; i < k; ++i) {
       double jerk = -hd->stick_w2[i] * Y[k + i] + hd->stick_F[i] * w * std::cos(phase + w * t);
+      for (size_t h = 0; h < hd->stick_hF.size(); ++h) jerk += hd->stick_hF[h][i] * HarmonicWave(h, t, 1);
       for (Eigen::Index j = 0; j < k; ++j) jerk -= hd->stick_D(i, j) * acc[static_cast<size_t>(j)];
       d2R += hd->rho[i] * acc[static_cast<size_t>(i)] + hd->rho_v[i] * jerk;
     }
@@ -490,6 +519,7 @@ struct CvodeEngine::Impl {
       jet.g1 += w[q] * Y[k + q];
       jet.g2 += w[q] * acc[static_cast<size_t>(q)];
       jet.g3 += w[q] * (-hd->stick_w2[q] * Y[k + q] + hd->stick_F[q] * fw * cp);
+      for (size_t h = 0; h < hd->stick_hF.size(); ++h) jet.g3 += w[q] * hd->stick_hF[h][q] * HarmonicWave(h, 0.0, 1);
       const auto b = Bounds<double>(o, fw, Amplitude<double>(o, Y[q], Y[k + q]) + std::abs(o.F) * cap);
       jet.M3 += std::abs(w[q]) * b.d3;
       jet.M4 += std::abs(w[q]) * b.d4;
@@ -497,7 +527,7 @@ struct CvodeEngine::Impl {
     const double margin = 1 + 1e-9;  // rounding of the evaluated jets
     jet.M3 *= margin;
     jet.M4 *= margin;
-    certified = !hd->stick_damped;
+    certified = !hd->stick_damped && hd->stick_hF.empty();  // a sum of harmonics: no bound at hand
     return jet;
   }
 };
@@ -508,7 +538,15 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
   const auto n = sys.dof();
   m.w2 = sys.omega().cwiseAbs2();
   m.damp = 2.0 * sys.damping().cwiseProduct(sys.omega());
-  m.TA_f = sys.forcing() * sys.amplitude();
+  const double f = sys.harmonic_sum() ? 0.0 : sys.amplitude();  // a sum: its harmonics below
+  m.TA_f = sys.forcing() * f;
+  if (sys.harmonic_sum())
+    for (const Harmonic& h : sys.harmonics()) {
+      m.h_TA.push_back(h.forcing * h.amplitude);
+      m.h_w.push_back(h.frequency);
+      m.h_psi.push_back(h.phase);
+      m.h_n.push_back(h.multiple);
+    }
   // Contact 0 is the single stop, with the accessors' data (docs/contacts.md).
   const auto& all = sys.contacts();
   for (size_t j = 0; j < all.size(); ++j) {
@@ -518,13 +556,19 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
     cd.stop = k.stop;
     const auto& cm = k.constrained;
     cd.stick_w2 = cm.frequencies.cwiseAbs2();
-    cd.stick_F = cm.modal_forcing * sys.amplitude();
+    cd.stick_F = cm.modal_forcing * f;
     cd.stick_D = cm.damping;
     cd.stick_damped = cm.damping.size() > 0 && cm.damping.cwiseAbs().maxCoeff() > 0;
     cd.rho = cm.reaction;
     // Velocity part of R (docs/model.md §7): Σ c_i 2ζ_iω_i Ẋ_i / s_B with Ẋ = V ξ̇.
     cd.rho_v = cm.vectors.transpose() * (cd.c.cwiseProduct(m.damp)) / k.s_B;
-    cd.react_f = k.s_A / k.s_B * sys.amplitude();
+    cd.react_f = k.s_A / k.s_B * f;
+    if (sys.harmonic_sum())
+      for (size_t h = 0; h < sys.harmonics().size(); ++h) {
+        const double fh = sys.harmonics()[h].amplitude;
+        cd.stick_hF.push_back(sys.HarmonicStickForcing(static_cast<int>(j), static_cast<int>(h)) * fh);
+        cd.react_hf.push_back(sys.HarmonicSA(static_cast<int>(j), static_cast<int>(h)) / k.s_B * fh);
+      }
     cd.R_static = k.stop / k.flexibility;
     // Gaps of the other contacts while j is held: X = e_j v_j + V_j ξ.
     cd.held_weights.resize(all.size());

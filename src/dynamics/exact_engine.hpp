@@ -10,6 +10,7 @@
 
 #include "dynamics/damped_sticking.hpp"
 #include "dynamics/flight_window.hpp"
+#include "dynamics/harmonic_flow.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/oscillator.hpp"
 #include "dynamics/propagator.hpp"
@@ -141,6 +142,31 @@ class ExactEngineT final : public PropagatorT<S> {
   mutable std::vector<TaylorMode> taylor_;
   mutable bool taylor_ready_ = false;
   S gap0_{0};
+  // A sum of harmonics (docs/harmonics.md); empty for one harmonic (the closed forms above as they
+  // are). free_hF_[i·H + h] = T_A,i^(h) f_h; per contact, its constrained modes' and its reaction's.
+  bool harm() const { return !h_omega_.empty(); }
+  std::vector<S> h_omega_;
+  std::vector<PhaseTrigT<S>> h_trig_;  // φ_h at σ = 0
+  mutable HarmonicTrigT<S> h_at_;     // at the probe's σ
+  std::vector<S> free_hF_;
+  std::vector<HarmonicSumsT<S>> free_hsum_;
+  struct HarmonicContact {
+    std::vector<S> stick_hF;               // [k·H + h]
+    std::vector<HarmonicSumsT<S>> stick_hsum;
+    std::vector<S> kappa;                  // s_A,j^(h) f_h / W_jj
+  };
+  std::vector<HarmonicContact> h_contacts_;
+  // Σ_h F[h] sin φ_h(σ), and its derivative, at the probe's σ.
+  S HForce(const S* F) const {
+    S out(0);
+    for (size_t h = 0; h < h_omega_.size(); ++h) out += F[h] * h_at_.s[h];
+    return out;
+  }
+  S HForceRate(const S* F) const {
+    S out(0);
+    for (size_t h = 0; h < h_omega_.size(); ++h) out += F[h] * h_omega_[h] * h_at_.c[h];
+    return out;
+  }
   long long probes_ = 0;  // probes of the certified searches (ThreadProbeCount)
   FlightStart flight_start_ = FlightStart::kGeneric;
   StickStart stick_start_ = StickStart::kGeneric;
@@ -182,7 +208,7 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
       const OscillatorT<S>& o = modes[i];
       const S d = o.nu * o.nu - omega_ * omega_, e = S(2) * o.zeta * o.nu * omega_;
       const S den = d * d + e * e;
-      const bool eligible = o.nu >= S(2) * omega_ && weight(i) != S(0);
+      const bool eligible = o.nu >= S(2) * omega_ && weight(i) != S(0) && m.harmonics.empty();
       far.push_back(eligible ? ModeFar{o.F * d / den, -o.F * e / den,
                                        Real<S>::abs(o.F) / Real<S>::sqrt(den), true}
                              : ModeFar{S(0), S(0), S(0), false});
@@ -218,6 +244,33 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
     }
   }
   samples_.resize(std::max(free_modes_.size(), stick_max));
+  if (!m.harmonics.empty()) {
+    const size_t H = m.harmonics.size();
+    for (const auto& hh : m.harmonics.h) h_omega_.push_back(hh.omega);
+    h_trig_.assign(H, PhaseTrigT<S>(S(0)));
+    const auto sums = [&](const S* F) {
+      HarmonicSumsT<S> t;
+      for (size_t h = 0; h < H; ++h) {
+        t.f += Real<S>::abs(F[h]);
+        t.fw += Real<S>::abs(F[h]) * h_omega_[h];
+        t.fw2 += Real<S>::abs(F[h]) * h_omega_[h] * h_omega_[h];
+      }
+      return t;
+    };
+    for (int i = 0; i < m.dof(); ++i)
+      for (size_t h = 0; h < H; ++h) free_hF_.push_back(m.harmonics.h[h].forcing[i]);
+    for (int i = 0; i < m.dof(); ++i) free_hsum_.push_back(sums(&free_hF_[static_cast<size_t>(i) * H]));
+    h_contacts_.resize(contacts_.size());
+    for (size_t j = 0; j < contacts_.size(); ++j) {
+      const ModelT<S>& mj = *contacts_[j].m;
+      HarmonicContact& hc = h_contacts_[j];
+      for (Eigen::Index k = 0; k < mj.stick_frequencies.size(); ++k)
+        for (size_t h = 0; h < H; ++h) hc.stick_hF.push_back(mj.harmonics.h[h].stick[k]);
+      for (Eigen::Index k = 0; k < mj.stick_frequencies.size(); ++k)
+        hc.stick_hsum.push_back(sums(&hc.stick_hF[static_cast<size_t>(k) * H]));
+      for (size_t h = 0; h < H; ++h) hc.kappa.push_back(mj.harmonics.h[h].contact / mj.s_B);
+    }
+  }
 }
 
 template <class S>
@@ -288,6 +341,7 @@ void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
   phase_ = s.phase;
   trig_ = s.phase_sincos ? PhaseTrigT<S>(s.phase_sincos[0], s.phase_sincos[1]) : PhaseTrigT<S>(s.phase);
   gap0_ = s.gap;
+  for (size_t h = 0; h < h_trig_.size(); ++h) h_trig_[h] = PhaseTrigT<S>(m_.harmonics.PhaseOf(h, s.phase));
   flight_start_ = s.flight_start;
   stick_start_ = s.stick_start;
   start_contact_ = s.contact;
@@ -332,25 +386,31 @@ ProbeT<S> ExactEngineT<S>::GapProbeOf(int j, const S& sigma, const S& H, const S
   const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(j)] : gap0_;
   ProbeT<S> p{{g0, S(0), S(0)}, S(0)};
   S dq_sum(0);
+  const size_t Hn = h_omega_.size();
+  if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   for (size_t i = 0; i < free_modes_.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     const S ci = c[ii];
     if (ci == S(0)) continue;
     const OscillatorT<S>& o = free_modes_[i];
-    const auto st = Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma, fw);
+    const auto st = Hn ? FlowSum<S>(o, &free_hF_[i * Hn], h_omega_, h_trig_, h_at_, X0_[ii], V0_[ii], sigma)
+                       : Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma, fw);
     const S x = X0_[ii] + st.dq;
-    const S acc = -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v + o.F * s_forcing;
+    const S acc = -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v +
+                  (Hn ? HForce(&free_hF_[i * Hn]) : S(o.F * s_forcing));
     const S A = Amplitude<S>(o, x, st.v);
+    const S d3 = Hn ? BoundsSum<S>(o, free_hsum_[i], A + free_hsum_[i].f * H).d3
+                    : Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
     if constexpr (kWeighted) {
       dq_sum += ci * st.dq;
       p.jet.g1 += ci * st.v;
       p.jet.g2 += ci * acc;
-      p.M += R::abs(ci) * Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+      p.M += R::abs(ci) * d3;
     } else {  // c_i = 1
       dq_sum += st.dq;
       p.jet.g1 += st.v;
       p.jet.g2 += acc;
-      p.M += Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+      p.M += d3;
     }
     if (far) {
       const ModeFar& mf = cd.free_far[i];
@@ -380,17 +440,23 @@ ProbeT<S> ExactEngineT<S>::HeldGapProbe(int k, const S& sigma, const S& H) const
   const ForcingTrigT<S> fw(omega_, sigma);
   ProbeT<S> p{{gap0s_[static_cast<size_t>(k)], S(0), S(0)}, S(0)};
   const S sf = fw.SinPhase(trig_);
+  const size_t Hn = h_omega_.size();
+  if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   for (size_t q = 0; q < cd.stick_modes.size(); ++q) {
     const auto qq = static_cast<Eigen::Index>(q);
     if (w[qq] == S(0)) continue;
     const OscillatorT<S>& o = cd.stick_modes[q];
-    const auto st = Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
+    const S* hF = Hn ? &h_contacts_[static_cast<size_t>(start_contact_)].stick_hF[q * Hn] : nullptr;
+    const auto st = Hn ? FlowSum<S>(o, hF, h_omega_, h_trig_, h_at_, xi0_[qq], dxi0_[qq], sigma)
+                       : Flow<S>(o, omega_, trig_, xi0_[qq], dxi0_[qq], sigma, fw);
     const S xi = xi0_[qq] + st.dq;
-    const S acc = -o.nu * o.nu * xi + o.F * sf;
+    const S acc = -o.nu * o.nu * xi + (Hn ? HForce(hF) : S(o.F * sf));
     p.jet.g += w[qq] * st.dq;
     p.jet.g1 += w[qq] * st.v;
     p.jet.g2 += w[qq] * acc;
-    p.M += R::abs(w[qq]) * Bounds<S>(o, omega_, Amplitude<S>(o, xi, st.v) + R::abs(o.F) * H).d3;
+    const S A = Amplitude<S>(o, xi, st.v);
+    const auto* hs = Hn ? &h_contacts_[static_cast<size_t>(start_contact_)].stick_hsum[q] : nullptr;
+    p.M += R::abs(w[qq]) * (Hn ? BoundsSum<S>(o, *hs, A + hs->f * H).d3 : Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3);
   }
   p.M *= BoundMargin<S>();
   return p;
@@ -411,6 +477,16 @@ FlightJetT<S> ExactEngineT<S>::HeldGapStartJet(int k) const {
     const auto qq = static_cast<Eigen::Index>(q);
     if (w[qq] == S(0)) continue;
     const OscillatorT<S>& o = cd.stick_modes[q];
+    if (harm()) {  // a sum of harmonics: each harmonic's jerk and the summed bounds
+      const size_t Hn = h_omega_.size();
+      const HarmonicContact& hc = h_contacts_[static_cast<size_t>(start_contact_)];
+      S jerk = -o.nu * o.nu * dxi0_[qq];
+      for (size_t h = 0; h < Hn; ++h) jerk += hc.stick_hF[q * Hn + h] * h_omega_[h] * h_trig_[h].c;
+      j.g3 += w[qq] * jerk;
+      M4 += Real<S>::abs(w[qq]) *
+            BoundsSum<S>(o, hc.stick_hsum[q], Amplitude<S>(o, xi0_[qq], dxi0_[qq]) + hc.stick_hsum[q].f * h_cap_).d4;
+      continue;
+    }
     j.g3 += w[qq] * (-o.nu * o.nu * dxi0_[qq] + o.F * omega_ * trig_.c);
     M4 += Real<S>::abs(w[qq]) *
           Bounds<S>(o, omega_, Amplitude<S>(o, xi0_[qq], dxi0_[qq]) + Real<S>::abs(o.F) * h_cap_).d4;
@@ -427,22 +503,37 @@ ProbeT<S> ExactEngineT<S>::ReactionProbe(const S& sigma, const S& H, const S& re
   const auto& stick_modes_ = cd.stick_modes;
   const ForcingTrigT<S> fw(omega_, sigma);
   const S sf = fw.SinPhase(trig_), cf = fw.CosPhase(trig_);
-  const JetT<S> base{cd.static_reaction - cd.reaction_forcing * sf, -cd.reaction_forcing * omega_ * cf,
-                     cd.reaction_forcing * omega_ * omega_ * sf};
-  const S base_M = R::abs(cd.reaction_forcing) * omega_ * omega_ * omega_;
+  JetT<S> base{cd.static_reaction - cd.reaction_forcing * sf, -cd.reaction_forcing * omega_ * cf,
+               cd.reaction_forcing * omega_ * omega_ * sf};
+  S base_M = R::abs(cd.reaction_forcing) * omega_ * omega_ * omega_;
+  const size_t Hn = h_omega_.size();
+  const HarmonicContact* hc = Hn ? &h_contacts_[static_cast<size_t>(start_contact_)] : nullptr;
+  if (Hn) {  // R = R_st + ρᵀξ − Σ_h κ_h sin φ_h
+    h_at_.At(h_omega_, h_trig_, sigma);
+    for (size_t h = 0; h < Hn; ++h) {
+      const S k = hc->kappa[h], w = h_omega_[h];
+      base.g -= k * h_at_.s[h];
+      base.g1 -= k * w * h_at_.c[h];
+      base.g2 += k * w * w * h_at_.s[h];
+      base_M += R::abs(k) * w * w * w;
+    }
+  }
   ProbeT<S> p{base, base_M};
   const bool far = rest > H;
   for (size_t k = 0; k < stick_modes_.size(); ++k) {
     const auto kk = static_cast<Eigen::Index>(k);
     const OscillatorT<S>& o = stick_modes_[k];
-    const auto st = Flow<S>(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
+    const S* hF = Hn ? &hc->stick_hF[k * Hn] : nullptr;
+    const auto st = Hn ? FlowSum<S>(o, hF, h_omega_, h_trig_, h_at_, xi0_[kk], dxi0_[kk], sigma)
+                       : Flow<S>(o, omega_, trig_, xi0_[kk], dxi0_[kk], sigma, fw);
     const S xi = xi0_[kk] + st.dq;
-    const S acc = -o.nu * o.nu * xi + o.F * sf;
+    const S acc = -o.nu * o.nu * xi + (Hn ? HForce(hF) : S(o.F * sf));
     const S A = Amplitude<S>(o, xi, st.v);
     p.jet.g += rho[kk] * xi;
     p.jet.g1 += rho[kk] * st.v;
     p.jet.g2 += rho[kk] * acc;
-    p.M += R::abs(rho[kk]) * Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3;
+    p.M += R::abs(rho[kk]) * (Hn ? BoundsSum<S>(o, hc->stick_hsum[k], A + hc->stick_hsum[k].f * H).d3
+                                 : Bounds<S>(o, omega_, A + R::abs(o.F) * H).d3);
     if (far) {
       const ModeFar& mf = cd.stick_far[k];
       samples_[k] = {xi, st.v, acc, A,
@@ -473,7 +564,7 @@ S ExactEngineT<S>::FlightWindow() const {
   // docs/model.md §2.1: divide out the known zero at σ = 0; no root in the certified window (0, σ_w).
   if (flight_start_ == FlightStart::kGeneric) return S(0);
   const ModelT<S>& m = contacts_.size() == 1 ? m_ : *contacts_[static_cast<size_t>(start_contact_)].m;
-  return CertifiedWindow<S>(flight_start_, StartJet<S>(m, X0_, V0_, trig_.s, trig_.c, h_cap_), h_cap_);
+  return CertifiedWindow<S>(flight_start_, StartJet<S>(m, X0_, V0_, trig_.s, trig_.c, h_cap_, &phase_), h_cap_);
 }
 
 template <class S>
@@ -513,7 +604,7 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceFree(const S& sigma_max, bool detect_e
     const S w = start == FlightStart::kGeneric
                     ? S(0)
                     : CertifiedWindow<S>(start, StartJet<S>(*contacts_[static_cast<size_t>(j)].m, X0_, V0_,
-                                                            trig_.s, trig_.c, h_cap_),
+                                                            trig_.s, trig_.c, h_cap_, &phase_),
                                          h_cap_);
     if (w >= best.sigma) continue;
     auto r = Search([this, j](const S& u, const S& H, const S& rest) { return GapProbe(j, u, H, rest); },
@@ -538,6 +629,10 @@ SegmentResultT<S> ExactEngineT<S>::AdvanceSticking(const S& sigma_max, bool dete
               "eigenvectors that do not refine to quad precision): no closed form; change "
               "structure.damping_ratios slightly"};
   }
+  if (damped_sticking_ && harm())
+    return {SegmentEnd::kFailure, S(0),
+            "sticking under a sum of harmonics with non-proportional constrained damping has no closed "
+            "form in vibro yet (docs/harmonics.md): use one harmonic, or an undamped structure"};
   if (!detect_events) return {SegmentEnd::kLimit, sigma_max, {}};
   const auto probe = [this](const S& u, const S& H, const S& rest) -> ProbeT<S> {
     if (damped_sticking_) return Damped().ReactionProbe(u);
@@ -600,11 +695,15 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   const auto n = m_.dof();
   X.resize(n);
   V.resize(n);
+  const size_t Hn = h_omega_.size();
+  if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   if (mode_ == Mode::kFree) {
     const ForcingTrigT<S> fw(omega_, sigma);
     for (int i = 0; i < n; ++i) {
       const auto st =
-          Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
+          Hn ? FlowSum<S>(free_modes_[static_cast<size_t>(i)], &free_hF_[static_cast<size_t>(i) * Hn], h_omega_,
+                          h_trig_, h_at_, X0_[i], V0_[i], sigma)
+             : Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
       X[i] = X0_[i] + st.dq;
       V[i] = st.v;
     }
@@ -624,7 +723,10 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   const ForcingTrigT<S> fw(omega_, sigma);
   for (Eigen::Index k = 0; k < k_count && !done; ++k) {
     const auto st =
-        Flow<S>(cd.stick_modes[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma, fw);
+        Hn ? FlowSum<S>(cd.stick_modes[static_cast<size_t>(k)],
+                        &h_contacts_[static_cast<size_t>(start_contact_)].stick_hF[static_cast<size_t>(k) * Hn],
+                        h_omega_, h_trig_, h_at_, xi0_[k], dxi0_[k], sigma)
+           : Flow<S>(cd.stick_modes[static_cast<size_t>(k)], omega_, trig_, xi0_[k], dxi0_[k], sigma, fw);
     xi[k] = xi0_[k] + st.dq;
     dxi[k] = st.v;
   }
@@ -648,6 +750,13 @@ bool ExactEngineT<S>::HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) c
   if (mode_ == Mode::kFree) return false;
   if (damped_sticking_) {
     const ProbeT<S> p = Damped().ReactionProbe(sigma);
+    R = p.jet.g;
+    rate = p.jet.g1;
+    accel = p.jet.g2;
+    return true;
+  }
+  if (harm()) {  // a sum of harmonics: the release search's own probe (its jet without bounds)
+    const ProbeT<S> p = ReactionProbe(sigma, S(0));
     R = p.jet.g;
     rate = p.jet.g1;
     accel = p.jet.g2;
@@ -679,8 +788,24 @@ bool ExactEngineT<S>::HeldReactionJet(const S& sigma, S& R, S& rate, S& accel) c
 // for an undamped constrained mode); none for the damped closed form (m5 = 0).
 template <class S>
 bool ExactEngineT<S>::HeldReactionBound(const S& H, S& M, S* m5) const {
-  if (mode_ == Mode::kFree) return false;
+  if (mode_ == Mode::kFree || (harm() && damped_sticking_)) return false;
   if (m5) *m5 = S(0);
+  if (harm()) {  // M = Σ_h |κ_h| ω_h³ + Σ_k |ρ_k| max|ξ_k‴| (no bound of R⁽⁵⁾: m5 = 0)
+    using R = Real<S>;
+    const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
+    const HarmonicContact& hc = h_contacts_[static_cast<size_t>(start_contact_)];
+    const auto& rho = cd.m->stick_reaction;
+    S b(0);
+    for (size_t h = 0; h < h_omega_.size(); ++h) b += R::abs(hc.kappa[h]) * h_omega_[h] * h_omega_[h] * h_omega_[h];
+    for (size_t k = 0; k < cd.stick_modes.size(); ++k) {
+      const auto kk = static_cast<Eigen::Index>(k);
+      const OscillatorT<S>& o = cd.stick_modes[k];
+      b += R::abs(rho[kk]) *
+           BoundsSum<S>(o, hc.stick_hsum[k], Amplitude<S>(o, xi0_[kk], dxi0_[kk]) + hc.stick_hsum[k].f * H).d3;
+    }
+    M = b * BoundMargin<S>();
+    return true;
+  }
   if (damped_sticking_) {
     M = Damped().ReactionProbe(S(0)).M;
     return true;
@@ -706,7 +831,7 @@ bool ExactEngineT<S>::HeldReactionBound(const S& H, S& M, S* m5) const {
 // ξ'''' = −ν²ξ'' − Fω² sin φ (undamped constrained modes); the damped closed form has none.
 template <class S>
 bool ExactEngineT<S>::HeldReactionTaylor(const S& sigma, S* d) const {
-  if (mode_ == Mode::kFree || damped_sticking_) return false;
+  if (mode_ == Mode::kFree || damped_sticking_ || harm()) return false;
   const ContactData& cd = contacts_[static_cast<size_t>(start_contact_)];
   const auto& rho = cd.m->stick_reaction;
   const ForcingTrigT<S> fw(omega_, sigma);
@@ -781,9 +906,13 @@ S ExactEngineT<S>::EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
   const auto& c = mc.shape;
   const ForcingTrigT<S> fw(omega_, sigma);
   S dq_sum(0);
+  const size_t Hn = h_omega_.size();
+  if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   for (int i = 0; i < n; ++i) {
     const auto st =
-        Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
+        Hn ? FlowSum<S>(free_modes_[static_cast<size_t>(i)], &free_hF_[static_cast<size_t>(i) * Hn], h_omega_,
+                        h_trig_, h_at_, X0_[i], V0_[i], sigma)
+           : Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
     X[i] = X0_[i] + st.dq;
     V[i] = st.v;
     if (c[i] == S(0)) continue;

@@ -23,8 +23,41 @@ using FlightJet = FlightJetT<double>;
 // c_i are 0 or 1: docs/contacts.md).
 template <class S, bool kWeighted>
 [[gnu::always_inline]] inline FlightJetT<S> StartJetOf(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
-                         const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H) {
+                         const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H,
+                         const S* phase = nullptr) {
   FlightJetT<S> j{S(0), S(0), S(0), S(0), S(0)};
+  if (!m.harmonics.empty()) {  // a sum of harmonics (docs/harmonics.md): every forcing term summed
+    using R = Real<S>;
+    const auto& hs = m.harmonics;
+    const typename ModelT<S>::Vec f0 = hs.Vector(*phase, 0), f1 = hs.Vector(*phase, 1);
+    for (int i = 0; i < m.dof(); ++i) {
+      if (m.shape[i] == S(0)) continue;
+      const OscillatorT<S> o{m.omega[i], m.zeta[i], S(0)};
+      S sf(0), sfw(0), sfw2(0);
+      for (const auto& h : hs.h) {
+        const S a = R::abs(h.forcing[i]);
+        sf += a;
+        sfw += a * h.omega;
+        sfw2 += a * h.omega * h.omega;
+      }
+      const S tz = S(2) * o.zeta * o.nu;
+      const S acc = -o.nu * o.nu * X[i] - tz * V[i] + f0[i];
+      const S jerk = -o.nu * o.nu * V[i] - tz * acc + f1[i];
+      const S A = Amplitude<S>(o, X[i], V[i]) + sf * H;
+      const S nu = o.nu;
+      const S d2 = nu * A + tz * A + sf, d3 = nu * nu * A + tz * d2 + sfw, d4 = nu * nu * d2 + tz * d3 + sfw2;
+      const S c = m.shape[i];
+      j.g1 += c * V[i];
+      j.g2 += c * acc;
+      j.g3 += c * jerk;
+      j.M3 += R::abs(c) * d3;
+      j.M4 += R::abs(c) * d4;
+    }
+    const S margin = S(1) + S(1e-9);
+    j.M3 *= margin;
+    j.M4 *= margin;
+    return j;
+  }
   for (int i = 0; i < m.dof(); ++i) {
     if (m.shape[i] == S(0)) continue;
     const OscillatorT<S> o{m.omega[i], m.zeta[i], m.forcing[i] * m.f};
@@ -54,16 +87,19 @@ template <class S, bool kWeighted>
 }
 
 // With sp, cp = sin φ, cos φ of the flight's phase, already at hand.
+// A sum of harmonics needs the phase φ itself (docs/harmonics.md).
 template <class S>
 [[gnu::always_inline]] inline FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
-                       const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H) {
-  return m.unit_shape ? StartJetOf<S, false>(m, X, V, sp, cp, H) : StartJetOf<S, true>(m, X, V, sp, cp, H);
+                       const typename ModelT<S>::Vec& V, const S& sp, const S& cp, const S& H,
+                       const S* phase = nullptr) {
+  return m.unit_shape ? StartJetOf<S, false>(m, X, V, sp, cp, H, phase)
+                      : StartJetOf<S, true>(m, X, V, sp, cp, H, phase);
 }
 
 template <class S>
 [[gnu::always_inline]] inline FlightJetT<S> StartJet(const ModelT<S>& m, const typename ModelT<S>::Vec& X,
                        const typename ModelT<S>::Vec& V, const S& phase, const S& H) {
-  return StartJet<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), H);
+  return StartJet<S>(m, X, V, Real<S>::sin(phase), Real<S>::cos(phase), H, &phase);
 }
 
 // σ_w ≤ H with no root of g in (0, σ_w): after an impact g(σ)/σ ≥ g' + g''σ/2 − M3σ²/6; after a
@@ -96,6 +132,7 @@ S CertifiedWindow(FlightStart start, const FlightJetT<S>& j, const S& H) {
 template <class S>
 S StepCap(const ModelT<S>& m) {
   S fastest = m.w;
+  if (m.harmonics.fastest > fastest) fastest = m.harmonics.fastest;
   for (int i = 0; i < m.dof(); ++i)
     if (m.omega[i] > fastest) fastest = m.omega[i];
   for (Eigen::Index k = 0; k < m.stick_frequencies.size(); ++k)

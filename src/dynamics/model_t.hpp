@@ -6,6 +6,7 @@
 
 #include <Eigen/Dense>
 
+#include "dynamics/harmonic_forcing.hpp"
 #include "dynamics/scalar.hpp"
 #include "vibro/system.hpp"
 
@@ -32,7 +33,7 @@ struct ModelT {
         s_B(k.s_B),
         x0(k.stop),
         r(k.restitution),
-        f(sys.amplitude()),
+        f(sys.harmonic_sum() ? 0.0 : sys.amplitude()),
         w(sys.frequency()),
         period(S(2) * Real<S>::pi() / S(sys.frequency())),
         flexibility(k.flexibility),
@@ -42,7 +43,8 @@ struct ModelT {
         stick_left(k.constrained.left.cast<S>()),
         stick_forcing(k.constrained.modal_forcing.cast<S>()),
         stick_reaction(k.constrained.reaction.cast<S>()),
-        side(k.spec.side == Side::kAbove ? S(-1) : S(1)) {
+        side(k.spec.side == Side::kAbove ? S(-1) : S(1)),
+        harmonics(sys, static_cast<int>(&k - sys.contacts().data())) {
     for (Eigen::Index i = 0; i < omega.size(); ++i) {
       contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
       contact_damping += shape[i] * contact[i] * S(2) * zeta[i] * omega[i];
@@ -60,10 +62,11 @@ struct ModelT {
 
   // R = (Σ c_i(ω_i² X_i + 2ζ_iω_i Ẋ_i) − s_A f sin φ)/s_B (the paper's eq. (5); docs/model.md §7).
   [[gnu::always_inline]] S Reaction(const Vec& X, const Vec& V, const S& phase) const {
-    return ReactionSin(X, V, Real<S>::sin(phase));
+    return ReactionSin(X, V, Real<S>::sin(phase), &phase);
   }
-  // The same with sin φ at hand.
-  [[gnu::always_inline]] S ReactionSin(const Vec& X, const Vec& V, const S& sin_phase) const {
+  // The same with sin φ at hand; a sum of harmonics needs the phase φ itself.
+  [[gnu::always_inline]] S ReactionSin(const Vec& X, const Vec& V, const S& sin_phase,
+                                       const S* phase = nullptr) const {
     S elastic(0);
     if (unit_shape) {  // the contact of the scaling (every c_i is 0 or 1): no products by c_i
       for (Eigen::Index i = 0; i < X.size(); ++i) {
@@ -76,17 +79,29 @@ struct ModelT {
         elastic += shape[i] * (omega[i] * omega[i] * X[i] + S(2) * zeta[i] * omega[i] * V[i]);
       }
     }
+    if (!harmonics.empty()) return (elastic - harmonics.Contact(*phase)) / s_B;
     return (elastic - s_A * f * sin_phase) / s_B;
   }
 
   // Ṙ along the sticking flow (docs/model.md §4.2; damped constrained acceleration of §7).
   S ReactionRate(const Vec& X, const Vec& V, const S& phase) const {
-    return ReactionRateTrig(X, V, Real<S>::sin(phase), Real<S>::cos(phase));
+    return ReactionRateTrig(X, V, Real<S>::sin(phase), Real<S>::cos(phase), &phase);
   }
   // The same with sin φ, cos φ at hand, without allocation: the products are summed in the order
   // of the vector expression; damped, the free acceleration is kept in a per-thread scratch vector
   // (the same element-wise operations as the temporaries it replaces, so the same doubles).
-  S ReactionRateTrig(const Vec& X, const Vec& V, const S& sin_phase, const S& cos_phase) const {
+  S ReactionRateTrig(const Vec& X, const Vec& V, const S& sin_phase, const S& cos_phase,
+                     const S* phase = nullptr) const {
+    if (!harmonics.empty()) {  // a sum of harmonics (docs/harmonics.md)
+      S rate = shape.dot(omega.cwiseAbs2().cwiseProduct(V)) - harmonics.Contact(*phase, 1);
+      if (damped) {
+        const Vec free_acc = -omega.cwiseAbs2().cwiseProduct(X) -
+                             S(2) * zeta.cwiseProduct(omega).cwiseProduct(V) + harmonics.Vector(*phase);
+        const S pull = shape.dot(free_acc) / s_B;
+        rate += shape.dot(S(2) * zeta.cwiseProduct(omega).cwiseProduct(free_acc - contact * pull));
+      }
+      return rate / s_B;
+    }
     S rate = shape.dot(omega.cwiseAbs2().cwiseProduct(V)) - s_A * f * w * cos_phase;
     if (damped) {
       thread_local Vec free_acc;
@@ -122,6 +137,8 @@ struct ModelT {
   S side{1};               // σ: the physical coordinate wᵀq is σ·cᵀX (docs/contacts.md)
   bool unit_shape = true;  // every c_i is 0 or 1 (contact 0, the contact of the scaling)
   S contact_stiffness{0};  // ω_c² = Σ c_i T_B,i ω_i² / s_B, the stiffness the contact point sees
+  // A sum of harmonics (docs/harmonics.md); empty for today's forcing f sin ωt.
+  HarmonicsT<S> harmonics;
   S contact_damping{0};    // β = Σ c_i T_B,i 2ζ_iω_i / s_B, the damping the contact velocity feels
 };
 

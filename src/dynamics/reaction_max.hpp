@@ -437,6 +437,7 @@ class ReactionMaxT {
     S sn(0), cs(0);
     R::sincos(ph, sn, cs);
     cos_ = cs;
+    if (!m.harmonics.empty()) return JetOfSum(m, X, V, ph);
     const S fs = m.f * sn, fc = m.f * m.w * cs;
     if (!m.damped) {
       // Undamped, with k_i = c_iω_i²: s_B R = Σ k_i X_i − s_A f sin φ, s_B Ṙ = Σ k_i Ẋ_i − s_A fω cos φ,
@@ -480,6 +481,33 @@ class ReactionMaxT {
     j.accel = (a + m.s_A * m.f * m.w * m.w * sn) * inv;
     return j;
   }
+  // JetAt under a sum of harmonics (docs/harmonics.md): the same relations with the forcing
+  // Σ_h T_A^(h) f_h sin φ_h and its derivatives.
+  Jet JetOfSum(const ModelT<S>& m, const Vec& X, const Vec& V, const S& ph) const {
+    const auto& hs = m.harmonics;
+    const Vec f0 = hs.Vector(ph, 0), f1 = hs.Vector(ph, 1);
+    const S inv = S(1) / m.s_B;
+    S elastic(0);
+    for (Eigen::Index i = 0; i < X.size(); ++i)
+      elastic += m.shape[i] * (m.omega[i] * m.omega[i] * X[i] + S(2) * m.zeta[i] * m.omega[i] * V[i]);
+    Jet j{(elastic - hs.Contact(ph, 0)) * inv, S(0), S(0)};
+    Vec acc(X.size());
+    S r(0);
+    for (Eigen::Index i = 0; i < X.size(); ++i) {
+      const S w2 = m.omega[i] * m.omega[i], d = S(2) * m.zeta[i] * m.omega[i];
+      acc[i] = -w2 * X[i] - d * V[i] + f0[i] + m.contact[i] * j.R;
+      r += m.shape[i] * (w2 * V[i] + d * acc[i]);
+    }
+    j.rate = (r - hs.Contact(ph, 1)) * inv;
+    S a(0);
+    for (Eigen::Index i = 0; i < X.size(); ++i) {
+      const S w2 = m.omega[i] * m.omega[i], d = S(2) * m.zeta[i] * m.omega[i];
+      const S jerk = -w2 * V[i] - d * acc[i] + f1[i] + m.contact[i] * j.rate;
+      a += m.shape[i] * (w2 * acc[i] + d * jerk);
+    }
+    j.accel = (a - hs.Contact(ph, 2)) * inv;
+    return j;
+  }
   // What JetAt needs of a model, made once per model (the automaton's models live for the run).
   struct Coefs {
     const ModelT<S>* m = nullptr;
@@ -507,6 +535,7 @@ class ReactionMaxT {
     c.u.resize(n);
     c.ud.resize(n);
     c.wmax = m.w;
+    if (m.harmonics.fastest > c.wmax) c.wmax = m.harmonics.fastest;
     for (Eigen::Index i = 0; i < n; ++i) {
       const S w2 = m.omega[i] * m.omega[i];
       c.k2[i] = m.shape[i] * w2;

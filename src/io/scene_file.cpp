@@ -125,6 +125,8 @@ const std::map<std::string, Kind>& Schema() {
       {"excitation", Kind::kTable},
       {"excitation.amplitude", Kind::kNumber},
       {"excitation.frequency", Kind::kNumber},
+      {"excitation.phase", Kind::kNumber},
+      {"excitation.vectors", Kind::kMatrix},
       {"initial", Kind::kTable},
       {"initial.time", Kind::kNumber},
       {"initial.displacement", Kind::kNumberArray},
@@ -763,6 +765,84 @@ std::string ShortestFloats(const std::string& text) {
   return out;
 }
 
+// [excitation]: a number each (f sin ωt, today's forcing) or lists of one length, one entry per
+// harmonic, with an optional phase and forcing vectors (docs/harmonics.md). Lists, a phase or
+// vectors make the scene's `harmonics`; its amplitude and frequency are then f_0 and the base
+// pulsation of the common period.
+void ReadExcitation(Reader& rd, Scene& s) {
+  struct Entry {
+    const char* key;
+    std::optional<Eigen::VectorXd> values;
+    bool list = false;
+  };
+  std::array<Entry, 3> e{{{"excitation.amplitude", {}}, {"excitation.frequency", {}}, {"excitation.phase", {}}}};
+  bool bad = false;
+  for (Entry& x : e) {
+    const toml::node* n = rd.Find(x.key);
+    if (!n) continue;
+    if (n->is_array()) {
+      x.list = true;
+      x.values = rd.ArrayOf(n, x.key);
+      if (x.values && x.values->size() == 0) {
+        rd.Report(n, x.key, "a non-empty list, one entry per harmonic");
+        x.values.reset();
+      }
+    } else if (auto v = rd.Number(x.key)) {
+      x.values = Eigen::VectorXd::Constant(1, *v);
+    }
+    if (!x.values) bad = true;
+  }
+  std::optional<Eigen::MatrixXd> vectors;
+  if (rd.Find("excitation.vectors")) {
+    vectors = rd.Matrix("excitation.vectors");
+    if (!vectors) bad = true;
+  }
+  const bool lists = e[0].list || e[1].list || e[2].list;
+  if (!lists) {  // numbers: harmonic 0 alone
+    if (e[0].values) s.amplitude = (*e[0].values)[0];
+    if (e[1].values) s.frequency = (*e[1].values)[0];
+  }
+  if (bad || !e[0].values || !e[1].values) return;
+  const bool phase = e[2].values.has_value();
+  if (!lists && !phase && !vectors) return;
+  // Every list of one length; a number beside a list is refused (which harmonic would it be?).
+  const Eigen::Index H = lists ? std::max({e[0].list ? e[0].values->size() : 0, e[1].list ? e[1].values->size() : 0,
+                                           e[2].list && phase ? e[2].values->size() : 0})
+                               : 1;
+  for (const Entry& x : e) {
+    if (!x.values) continue;
+    if (lists && !x.list) {
+      rd.Report(rd.Find(x.key), x.key,
+                fmt::format("a list of {} (one per harmonic), as the other [excitation] lists", H));
+      bad = true;
+    } else if (x.values->size() != H) {
+      rd.Report(rd.Find(x.key), x.key,
+                fmt::format("one entry per harmonic: {} expected (the longest [excitation] list), got {}", H,
+                            x.values->size()));
+      bad = true;
+    }
+  }
+  if (vectors && vectors->rows() != H) {
+    rd.Report(rd.Find("excitation.vectors"), "excitation.vectors",
+              fmt::format("one forcing vector (row) per harmonic: {} rows expected, got {}", H, vectors->rows()));
+    bad = true;
+  }
+  if (bad) return;
+  s.harmonics.resize(static_cast<size_t>(H));
+  for (Eigen::Index h = 0; h < H; ++h) {
+    HarmonicSpec& hs = s.harmonics[static_cast<size_t>(h)];
+    hs.amplitude = (*e[0].values)[h];
+    hs.frequency = (*e[1].values)[h];
+    hs.phase = phase ? (*e[2].values)[h] : 0.0;
+    if (vectors) hs.vector = vectors->row(h).transpose();
+  }
+  s.amplitude = s.harmonics[0].amplitude;
+  std::vector<double> w;
+  for (const HarmonicSpec& hs : s.harmonics) w.push_back(hs.frequency);
+  const CommonPeriod cp = FindCommonPeriod(w);
+  s.frequency = cp.commensurate ? cp.base : s.harmonics[0].frequency;
+}
+
 LoadedScene Build(toml::table root, const std::string& source,
                   const std::vector<std::string>& overrides) {
   std::vector<std::string> messages;
@@ -898,8 +978,7 @@ LoadedScene Build(toml::table root, const std::string& source,
   if (auto v = rd.Number("stop.restitution")) s.restitution = *v;
   rd.Require("excitation.amplitude");
   rd.Require("excitation.frequency");
-  if (auto v = rd.Number("excitation.amplitude")) s.amplitude = *v;
-  if (auto v = rd.Number("excitation.frequency")) s.frequency = *v;
+  ReadExcitation(rd, s);
 
   if (auto v = rd.Number("initial.time")) s.initial_time = *v;
   if (auto v = rd.Vector("initial.displacement")) s.initial_displacement = *v;
@@ -976,6 +1055,19 @@ std::optional<double> SceneNumber(const std::string& text, const std::string& ke
       if (const std::string missing = MissingContact(t, *k, key); !missing.empty()) throw InputError({missing});
       if (!t.get_as<toml::array>(k->base))  // the [stop] shorthand is contact[0]
         return k->entry ? std::nullopt : t.at_path("stop." + k->leaf).value<double>();
+    }
+    // A sum of harmonics (docs/harmonics.md): excitation.amplitude is f_0, excitation.frequency the
+    // base pulsation of the common period.
+    if (const auto* list = t.at_path(key).as_array(); list && (key == "excitation.amplitude" || key == "excitation.frequency")) {
+      std::vector<double> values;
+      for (const auto& e : *list)
+        if (auto v = e.value<double>()) values.push_back(*v);
+      if (values.empty() || values.size() != list->size()) return std::nullopt;
+      if (key == "excitation.amplitude") return values.front();
+      for (const double w : values)
+        if (!(w > 0) || !std::isfinite(w)) return std::nullopt;
+      const CommonPeriod cp = FindCommonPeriod(values);
+      return cp.commensurate ? std::optional<double>(cp.base) : std::nullopt;
     }
     return t.at_path(key).value<double>();
   } catch (const toml::parse_error&) {

@@ -245,14 +245,16 @@ std::vector<InputIssue> Validate(const Scene& s) {
 
   c.Require(s.restitution >= 0 && s.restitution <= 1, "stop.restitution", Show(s.restitution),
             "0 ≤ r ≤ 1");
-  c.Require(s.amplitude >= 0, "excitation.amplitude", Show(s.amplitude), "f ≥ 0");
-  c.Require(s.frequency > 0, "excitation.frequency", Show(s.frequency), "ω > 0");
+  // With harmonics, amplitude and frequency are derived (f_0, ω_b): ValidateHarmonics checks each.
+  const bool lists = !s.harmonics.empty();
+  c.Require(lists || s.amplitude >= 0, "excitation.amplitude", Show(s.amplitude), "f ≥ 0");
+  c.Require(lists || s.frequency > 0, "excitation.frequency", Show(s.frequency), "ω > 0");
   // What the machine allows: the period T = 2π/ω, the forcing and the squares of every state
   // (energies, ω²X) must be representable with room to spare, so magnitudes stay in
   // [kTiny, kHuge]; a forcing below kTiny is no forcing (give 0).
-  c.Require(s.amplitude == 0 || (s.amplitude >= kTiny && s.amplitude <= kHuge), "excitation.amplitude",
+  c.Require(lists || s.amplitude == 0 || (s.amplitude >= kTiny && s.amplitude <= kHuge), "excitation.amplitude",
             Show(s.amplitude), fmt::format("f = 0 or {:g} ≤ f ≤ {:g} (representable forcing)", kTiny, kHuge));
-  c.Require(!(s.frequency > 0) || (s.frequency >= kTiny && s.frequency <= kHuge), "excitation.frequency",
+  c.Require(lists || !(s.frequency > 0) || (s.frequency >= kTiny && s.frequency <= kHuge), "excitation.frequency",
             Show(s.frequency),
             fmt::format("{:g} ≤ ω ≤ {:g} (the period 2π/ω and the phase ωt representable)", kTiny, kHuge));
   CheckMagnitude(s.stop_position, "stop.position", c);
@@ -280,6 +282,8 @@ std::vector<InputIssue> Validate(const Scene& s) {
             fmt::format("at most {} modes or DOFs (the model's matrices are n×n)", kMaxModes));
 
   CheckContacts(s, n_listed, c);
+  for (auto& issue : ValidateHarmonics(s.harmonics, static_cast<long>(n_listed)))
+    c.Require(false, issue.key, issue.value, issue.constraint);
 
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");

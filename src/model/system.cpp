@@ -118,6 +118,7 @@ System::System(const Scene& scene) {
   static_shape_ = v0 / flexibility_;
   BuildConstrained();
   BuildContacts(scene);
+  BuildHarmonics(scene);
 }
 
 namespace {
@@ -249,6 +250,7 @@ double System::Reaction(const Eigen::VectorXd& X, const Eigen::VectorXd& V, doub
     if (shape_[i] == 0.0) continue;
     elastic += omega_[i] * omega_[i] * X[i] + 2.0 * zeta_[i] * omega_[i] * V[i];
   }
+  if (harmonic_sum_) return (elastic - HarmonicContactForce(0, phase, 0)) / s_B_;
   return (elastic - s_A_ * f_ * std::sin(phase)) / s_B_;
 }
 
@@ -259,18 +261,21 @@ double System::ContactReaction(int j, const Eigen::VectorXd& X, const Eigen::Vec
   double elastic = 0.0;
   for (Eigen::Index i = 0; i < X.size(); ++i)
     elastic += c.shape[i] * (omega_[i] * omega_[i] * X[i] + 2.0 * zeta_[i] * omega_[i] * V[i]);
+  if (harmonic_sum_) return (elastic - HarmonicContactForce(j, phase, 0)) / c.s_B;
   return (elastic - c.s_A * f_ * std::sin(phase)) / c.s_B;
 }
 
 double System::ReactionRate(const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                             double phase) const {
   const Eigen::VectorXd w2 = omega_.cwiseAbs2();
-  double rate = shape_.dot(w2.cwiseProduct(V)) - s_A_ * f_ * w_ * std::cos(phase);
+  double rate = shape_.dot(w2.cwiseProduct(V)) -
+                (harmonic_sum_ ? HarmonicContactForce(0, phase, 1) : s_A_ * f_ * w_ * std::cos(phase));
   if (damped_) {
     // Ẍ = −A X − Π D Ẋ + F_c f sin φ on the stop.
     const Eigen::VectorXd DV = 2.0 * zeta_.cwiseProduct(omega_).cwiseProduct(V);
     const Eigen::VectorXd free_acc =
-        -w2.cwiseProduct(X) - DV + forcing_ * (f_ * std::sin(phase));
+        -w2.cwiseProduct(X) - DV +
+        (harmonic_sum_ ? HarmonicForce(phase, 0) : Eigen::VectorXd(forcing_ * (f_ * std::sin(phase))));
     const Eigen::VectorXd acc = free_acc - contact_ * (shape_.dot(free_acc) / s_B_);
     rate += shape_.dot(2.0 * zeta_.cwiseProduct(omega_).cwiseProduct(acc));
   }

@@ -432,6 +432,10 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
   const proof::Budget budget(request.time_limit, request.stop_requested);
   const auto enclosed = EnclosureOf(system, scene);
   proof::Outcome outcome;
+  if (enclosed.failure.empty() && system.harmonic_sum()) {
+    outcome.reason = "orbits under a sum of harmonics are not proven by this version (docs/harmonics.md)";
+    return Wrap(outcome, "", ModelOf(system), request, budget, "before the proof");
+  }
   if (!enclosed.failure.empty()) {
     outcome.reason = enclosed.failure;
     return Wrap(outcome, "", ModelOf(system), request, budget, "during the proof");

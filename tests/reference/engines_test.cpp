@@ -55,7 +55,13 @@ TEST(Engines, CvodeAgreesWithExactOnEveryScene) {
     const Outcome cvode = Simulate(WithEngine(scene, Engine::kCvode));
     ASSERT_EQ(cvode.result.status, RunStatus::kOk) << cvode.result.message;
     const double T = 2 * M_PI / scene.frequency;
-    const auto a = milestones(exact.log.events), b = milestones(cvode.log.events);
+    auto a = milestones(exact.log.events), b = milestones(cvode.log.events);
+    // A motion of impacts alone, without chattering (data/scenes/two_harmonics_chain2.toml): every
+    // impact is compared.
+    if (a.size() < 4 && exact.log.events.size() >= 4) {
+      a = exact.log.events;
+      b = cvode.log.events;
+    }
     size_t n = std::min<size_t>({a.size(), b.size(), 40});
     // A motion that is not periodic (the undamped stiff chain) is sensitive to its initial
     // state: the engines are compared over its first forcing period only.
