@@ -326,6 +326,12 @@ bool Automaton<S>::ChatteringTogether(int j, int k) const {
 
 template <class S>
 bool Automaton<S>::OnContactMulti(int k) {
+  if (Compliant(k)) {  // a compliant stop (docs/compliant.md): a contact phase, no impact law
+    if (mode_ == Mode::kFree) return EnterContactPhase(k);
+    return Fail(fmt::format("contact {} ({}), a compliant stop, closes while the body is held on contact {}: "
+                            "a contact phase beside a held contact is not supported",
+                            k, labels_[static_cast<size_t>(k)], active_));
+  }
   if (!PairChatter(k)) return false;
   if (mode_ == Mode::kSticking) {
     // A free contact resting at zero gap beside the held ones (e.g. one that left at zero velocity

@@ -42,7 +42,11 @@ struct ModelT {
         stick_left(k.constrained.left.cast<S>()),
         stick_forcing(k.constrained.modal_forcing.cast<S>()),
         stick_reaction(k.constrained.reaction.cast<S>()),
-        side(k.spec.side == Side::kAbove ? S(-1) : S(1)) {
+        side(k.spec.side == Side::kAbove ? S(-1) : S(1)),
+        compliant(k.spec.compliance.compliant()),
+        stiffness(k.spec.compliance.stiffness),
+        damping(k.spec.compliance.damping),
+        separation(k.spec.compliance.separation) {
     for (Eigen::Index i = 0; i < omega.size(); ++i) {
       contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
       contact_damping += shape[i] * contact[i] * S(2) * zeta[i] * omega[i];
@@ -123,6 +127,10 @@ struct ModelT {
   bool unit_shape = true;  // every c_i is 0 or 1 (contact 0, the contact of the scaling)
   S contact_stiffness{0};  // ω_c² = Σ c_i T_B,i ω_i² / s_B, the stiffness the contact point sees
   S contact_damping{0};    // β = Σ c_i T_B,i 2ζ_iω_i / s_B, the damping the contact velocity feels
+  // A compliant stop (docs/compliant.md, dynamics/compliant_contact.hpp): λ = −k g − c ġ in contact.
+  bool compliant = false;
+  double stiffness = 0, damping = 0;
+  Separation separation = Separation::kForce;
 };
 
 }  // namespace vibro::detail
