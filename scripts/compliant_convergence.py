@@ -43,12 +43,15 @@ def main():
                      c["phases"]))
         print(f"k = {k:8.1e}  distance {rows[-1][1]:.4g} (t = {rows[-1][2]:.6g})  peak force {rows[-1][3]:.6g}  "
               f"duration {rows[-1][4]:.4g}  phases {rows[-1][5]}")
-    xs = [math.log10(r[0]) for r in rows]
-    ys = [math.log10(r[1]) for r in rows]
+    # The slope over the asymptotic range k ≥ 1e10 (below, the compliant run's impacts differ in
+    # number from the rigid one's within the window, and the distance is of the clearance's order).
+    fit = [r for r in rows if r[0] >= 1e10]
+    xs = [math.log10(r[0]) for r in fit]
+    ys = [math.log10(r[1]) for r in fit]
     n = len(xs)
     mx, my = sum(xs) / n, sum(ys) / n
     slope = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sum((x - mx) ** 2 for x in xs)
-    print(f"slope of log distance against log k: {slope:.4f} (k^(-1/2): -0.5)")
+    print(f"slope of log distance against log k over k >= 1e10: {slope:.4f} (k^(-1/2): -0.5)")
     if a.csv:
         with open(a.csv, "w", newline="") as f:
             w = csv.writer(f)
@@ -61,11 +64,11 @@ def main():
         fig, ax = plt.subplots(figsize=(6, 4))
         ks = [r[0] for r in rows]
         ax.loglog(ks, [r[1] for r in rows], "o-", label="vibro: max |x_compliant − x_rigid|")
-        ref = rows[2][1]
-        ax.loglog(ks, [ref * (k / rows[2][0]) ** -0.5 for k in ks], "k--", lw=0.8, label="k^(−1/2)")
+        ref = rows[-1][1]
+        ax.loglog(ks, [ref * (k / rows[-1][0]) ** -0.5 for k in ks], "k--", lw=0.8, label="k^(−1/2)")
         ax.set_xlabel("stop stiffness k [N/m]")
         ax.set_ylabel("distance to the rigid model [m]")
-        ax.set_title(f"SDND121 scene, {a.periods} periods: slope {slope:.3f}")
+        ax.set_title(f"SDND121 scene, first {a.periods} period(s): slope {slope:.3f} (k ≥ 1e10)")
         ax.grid(True, which="both", lw=0.3)
         ax.legend()
         fig.tight_layout()
