@@ -42,7 +42,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers.push_back(&loads);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  if (loaded.scene.run.lyapunov)
+  // Compliant stops: no Lyapunov exponents (the tangent map has no contact phase yet, docs/compliant.md).
+  if (loaded.scene.run.lyapunov && !vibro::HasCompliantContact(loaded.scene))
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).

@@ -410,6 +410,13 @@ int main(int argc, char** argv) {
   if (!*prove) vibro::cli::ArmTimeLimit(time_limit, "--time-limit");
   const auto dispatch = [&]() -> int {
     try {
+      // Compliant stops (docs/compliant.md) run in `simulate` and `model`; the analyses built on the
+      // rigid saltations (orbits, continuation, proofs, check, validate, score, studies) do not take
+      // them yet: refused before anything is computed rather than answered wrongly.
+      if (!*model && !*simulate && !scene_path.empty() && vibro::HasCompliantContact(vibro::LoadScene(scene_path, sets).scene))
+        throw vibro::InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in `vibro "
+                                             "simulate` (with --rigid-beside) and `vibro model`; this command does not "
+                                             "handle it yet (docs/compliant.md)", scene_path)});
       if (*model) return RunModel(scene_path, sets, json);
       if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
                                           simulate_time_limit, rigid_beside);

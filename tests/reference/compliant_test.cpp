@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 
 #include "support.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/scene_file.hpp"
 
 namespace vibro::test {
@@ -190,6 +191,47 @@ TEST(Compliant, BilinearOscillatorPeriodAgainstEnergy) {
     const double measured = (in.back().t - in.front().t) / static_cast<double>(in.size() - 1);
     EXPECT_LT(Rel(measured, T), 1e-11) << "A = " << A;
   }
+}
+
+// The distance to the rigid model falls like k^(−1/2) (the penetration v/ω_c, ω_c = √(k/m)): on
+// SDND121's scene (m = 156 kg, k = 2e6 N/m, gap 1e-3 m, F = 3000 sin 10πt N), undamped (r = 1
+// beside it), over its first period, each decade of stiffness divides the largest distance by √10.
+TEST(Compliant, ConvergenceToTheRigidModelAtRateKToMinusOneHalf) {
+  Scene s;
+  s.physical = PhysicalStructureSpec{Eigen::MatrixXd::Constant(1, 1, 156.0), Eigen::MatrixXd::Constant(1, 1, 2e6), 0, 0};
+  s.stop_position = -1e-3;
+  s.amplitude = 3000;
+  s.frequency = 10 * M_PI;
+  s.initial_displacement = Eigen::VectorXd::Zero(1);
+  s.initial_velocity = Eigen::VectorXd::Zero(1);
+  s.run.periods = 1;
+  s.run.samples_per_period = 2000;
+  s.run.lyapunov = false;
+  std::vector<double> d;
+  for (const double k : {1e11, 1e12, 1e13}) {
+    s.stop_compliance = {k, 0, Separation::kForce};
+    const RigidComparison c = CompareWithRigid(s, 2);
+    ASSERT_EQ(c.compliant_result.status, RunStatus::kOk) << c.compliant_result.message;
+    ASSERT_EQ(c.rigid_result.status, RunStatus::kOk) << c.rigid_result.message;
+    EXPECT_EQ(c.rigid.restitution[0], 1.0);
+    d.push_back(c.distance);
+  }
+  for (size_t i = 1; i < d.size(); ++i) EXPECT_NEAR(std::log10(d[i - 1] / d[i]), 0.5, 0.03) << d[i - 1] << " " << d[i];
+}
+
+TEST(Compliant, EquivalentRestitution) {
+  for (const double z : {0.01, 0.1, 0.3, 0.5}) {
+    const double s = std::sqrt(1 - z * z);
+    EXPECT_DOUBLE_EQ(EquivalentRestitution(z, Separation::kGap), std::exp(-z * M_PI / s));
+    // Schwager & Pöschel's coefficient against the force rule's exit of the isolated impact (above).
+    const Isolated t(1.0, 1.0, 2 * z, 1.0);
+    EXPECT_NEAR(EquivalentRestitution(z, Separation::kForce), static_cast<double>(t.v(t.ExitForce())), 1e-15);
+  }
+  // Two rules, one damping: 2 % apart at ζ = 0.1, 83 % at ζ = 0.5 (the numbers).
+  EXPECT_NEAR(EquivalentRestitution(0.1, Separation::kForce) / EquivalentRestitution(0.1, Separation::kGap) - 1, 0.020, 0.001);
+  EXPECT_NEAR(EquivalentRestitution(0.5, Separation::kForce) / EquivalentRestitution(0.5, Separation::kGap) - 1, 0.831, 0.001);
+  // Critically damped, force rule: x = −t e^(−t), λ = 0 at t = 2, e = e^(−2).
+  EXPECT_DOUBLE_EQ(EquivalentRestitution(1.0, Separation::kForce), std::exp(-2.0));
 }
 
 TEST(Compliant, SceneKeysLocatedErrors) {
