@@ -69,6 +69,12 @@ struct Event {
   double stick_duration = std::numeric_limits<double>::quiet_NaN();
   double reaction_integral = std::numeric_limits<double>::quiet_NaN();
   double reaction_max = std::numeric_limits<double>::quiet_NaN();
+  // A release that ends the contact phase of a compliant stop (docs/compliant.md): stick_duration is
+  // the phase's duration, reaction_integral its impulse ∫λ dt, reaction_max its peak force, at
+  // absolute time peak_time; penetration_max its largest penetration −g; energy_dissipated the
+  // energy its dashpot dissipated (with the spring's ½k g² left at a force-rule exit). NaN otherwise.
+  double peak_time = std::numeric_limits<double>::quiet_NaN();
+  double penetration_max = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct Sample {

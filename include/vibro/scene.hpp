@@ -44,6 +44,19 @@ struct PhysicalStructureSpec {
 // with a = `modal` (docs/contacts_reference.md, "the modal form"); contact 0 has no `modal`: its
 // components are σ_0 on every mode (the scaling, c_0 = σ_0 a_0 = 1).
 enum class Side { kBelow, kAbove };
+// When the body leaves a compliant stop (docs/compliant.md): "force" when the contact force
+// λ = −k g − c ġ returns to zero (no pulling; the massless surface then relaxes back,
+// y = y₀ e^(−kt/c)), "gap" when the gap returns to zero (the dashpot may pull).
+enum class Separation { kForce, kGap };
+// A compliant stop (docs/compliant.md): a linear spring–dashpot of stiffness k > 0 and damping
+// c ≥ 0 on the gap: while in contact the contact carries λ = −k g − c ġ. stiffness = 0: rigid
+// (the restitution law), the default.
+struct Compliance {
+  double stiffness = 0;  // k [force/length of the gap]; 0 = a rigid stop
+  double damping = 0;    // c [force·time/length]
+  Separation separation = Separation::kForce;
+  bool compliant() const { return stiffness > 0; }
+};
 struct ContactSpec {
   int dof = 0;
   int partner = -1;  // −1: a stop on `dof`; else the other DOF of an impact pair
@@ -53,6 +66,7 @@ struct ContactSpec {
   // Modal form, contacts j ≥ 1: a_j,i = w_jᵀψ_i, one per listed mode (before truncation), shape (n);
   // empty for contact 0 and in the physical form.
   Eigen::VectorXd modal = {};
+  Compliance compliance = {};  // rigid unless a stiffness is given
 };
 
 enum class Engine { kExact, kCvode };
@@ -94,6 +108,7 @@ struct Scene {
 
   double stop_position = 1.0;  // x0
   double restitution = 0.75;   // r
+  Compliance stop_compliance;  // [stop] stiffness, damping, separation (rigid by default)
   // The [[contact]] tables, in file order. Empty: the one-contact [stop] shorthand (stop_position,
   // restitution, physical->contact_dof), which Contacts() returns as m = 1 in the physical form.
   std::vector<ContactSpec> contacts;
@@ -124,6 +139,9 @@ std::vector<InputIssue> Validate(const Scene& scene);
 // physical->contact_dof. Empty for the modal form with [stop] (one contact, given by its modal data).
 std::vector<ContactSpec> Contacts(const Scene& scene);
 const char* ToString(Side s);
+const char* ToString(Separation s);  // "force", "gap"
+// Whether any contact of the scene is compliant.
+bool HasCompliantContact(const Scene& scene);
 
 const char* ToString(Engine e);
 const char* ToString(ChatterTreatment c);

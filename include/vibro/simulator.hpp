@@ -61,6 +61,22 @@
 //                    with g = g' = g'' = 0, g''' > 0 under the flow of the others
 //       R = 0, Ṙ < 0 → emit release, mode ← free (g = g' = g'' = 0, g''' > 0)
 //       R = 0, Ṙ ≥ 0 → tangency (rising-bifurcation boundary, docs/model.md §5.7): stay stuck
+//     compliant stop j (docs/compliant.md; a stiffness k_j, damping c_j, rule "force" | "gap"; the
+//                    law in src/dynamics/compliant_contact.hpp, these transitions in
+//                    src/dynamics/compliant_transitions.hpp):
+//       free flight reaches g_j = 0 closing (or touching with R > 0) → emit stick (entry), mode ←
+//                    sticking on j as a contact phase: no reset, the flow of the structure plus
+//                    k_j T_j c_jᵀ and c_j T_j c_jᵀ in closed form; touching with R ≤ 0 → emit grazing
+//       contact phase: advance until the exit (rule "gap": g_j = 0; rule "force": λ_j = −k g − c ġ
+//                    = 0), another gap reaching 0 (→ failure: not supported), or the period
+//                    boundary; each segment adds its duration, ∫λ dt, peak force (certified max),
+//                    penetration and dashpot energy to the phase's account
+//       exit         → emit release (the phase's loads); rule "gap" (or c = 0): free flight from
+//                    g = 0, ġ ≥ 0; rule "force" with g < 0: a relaxing flight, its gap g_j − y,
+//                    y = g_exit e^(−kσ/c) the surface, until re-contact (→ entry) or the surface is
+//                    back within the gap's rounding (→ an ordinary flight); another contact closing
+//                    during it → failure (not supported)
+//       start with g_j ≤ 0 and the body pushed in → a contact phase
 //     start on several stops (gaps closed within double's rounding, whatever the precision):
 //                    those moving away leave, the others → rest below
 //     rest (contacts Z0 at zero gap and zero gap velocity): project onto them, solve the

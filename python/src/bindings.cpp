@@ -47,6 +47,7 @@
 #include "frontend/diagram.hpp"
 #include "frontend/tables.hpp"
 #include "vibro/attractor.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/distribute.hpp"
@@ -346,7 +347,7 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   // Contact loads (docs/loads.md), the first tenth of the periods left out, as the command line.
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers = {&attractor_recorder, &recorder, &loads};
-  if (loaded.scene.run.lyapunov)
+  if (loaded.scene.run.lyapunov && !vibro::HasCompliantContact(loaded.scene))  // as `vibro simulate`
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   std::optional<vibro::frontend::RunOutput> output;
   {
@@ -913,6 +914,13 @@ PYBIND11_MODULE(_vibro, m) {
   });
   m.def("model", &Model);
   m.def("simulate", &SimulateScene);
+  // The rigid model beside a compliant scene (docs/compliant.md): its comparison as JSON.
+  m.def("rigid_beside", [](const PyScene& s, int blocks) {
+    if (!vibro::HasCompliantContact(s.loaded.scene))
+      throw vibro::InputError({"rigid_beside: the scene has no compliant stop (give a stop a stiffness, docs/compliant.md)"});
+    py::gil_scoped_release release;
+    return vibro::RigidComparisonJson(vibro::CompareWithRigid(s.loaded.scene, blocks));
+  });
   m.def("orbit", &Orbit);
   m.def("prove", &Prove);
   m.def("prove_bifurcation", &ProveBifurcationPoint);

@@ -363,6 +363,20 @@ def simulate(scene, out=None, force=False, resume=False, extend=None, progress=N
                             _rows_array(r["section"]))
 
 
+def rigid_beside(scene, blocks=10):
+    """The rigid model beside a scene with compliant stops (``vibro simulate --rigid-beside``,
+    docs/compliant.md): the scene is run as given and with every compliant stop made rigid, of the
+    restitution e(ζ) its damping gives an isolated impact under its separation rule. Returns the
+    dict of the JSON's ``rigid_model``: ``distance`` (max, time_of_max, at_end: the largest distance
+    between the two trajectories over the dense samples, physical DOFs), ``contacts`` (per contact:
+    zeta, restitution, phases, peak_force_max, peak_force_mean, duration_mean, and the ``compliant``
+    and ``rigid`` loads: impulse_per_period, mean_force, dissipated_power, contact_fraction)."""
+    nblocks = _int("blocks", blocks)
+    if not 2 <= nblocks <= 100000:
+        raise ValueError(f"blocks {blocks!r}: expected 2 to 100000 blocks (an interval needs two)")
+    return _json.loads(_vibro.rigid_beside(_scene(scene), nblocks))
+
+
 def orbit(scene, kind="auto", period=0, impacts=0, guess=None, out=None, force=False, transient=None):
     """Finds a periodic orbit with the Poincaré solver (``vibro orbit --json``). ``guess`` is the
     phase ωt of the release (or first impact), or (phase, contact velocity): Newton starts there

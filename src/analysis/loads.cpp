@@ -179,6 +179,8 @@ void LoadsRecorder::OnEvent(const Event& e) {
       if (!std::isfinite(e.reaction_integral)) row.partial = true;  // held with other contacts
       if (std::isfinite(e.reaction_integral)) row.reaction += e.reaction_integral - open_reaction_[j];
       if (std::isfinite(e.stick_duration)) row.held += e.stick_duration - open_held_[j];
+      // A compliant stop's contact phase (docs/compliant.md): the energy its dashpot took.
+      if (std::isfinite(e.peak_time) && std::isfinite(e.energy_dissipated)) row.energy += e.energy_dissipated;
       open_reaction_[j] = open_held_[j] = 0;
       break;
     case EventKind::kGrazing: break;

@@ -31,6 +31,35 @@ void PrintLoads(const vibro::LoadsSummary& s) {
                pm(c.work_rate, c.work_rate_ci), pm(c.contact_fraction, c.contact_fraction_ci));
 }
 
+void PrintRigidComparison(const vibro::RigidComparison& c) {
+  fmt::print("rigid model  the same scene with rigid stops ({} / {}): distance between the trajectories {:.4g} "
+             "(largest, at t = {:.10g}), {:.4g} at the end\n",
+             vibro::ToString(c.compliant_result.status), vibro::ToString(c.rigid_result.status), c.distance,
+             c.distance_time, c.end_distance);
+  const auto find = [](const vibro::LoadsSummary& s, size_t j) -> const vibro::ContactLoads* {
+    for (const auto& l : s.contacts)
+      if (l.contact == static_cast<int>(j)) return &l;
+    return nullptr;
+  };
+  for (size_t j = 0; j < c.rigid.zeta.size(); ++j) {
+    const auto* a = find(c.compliant_loads, j);
+    const auto* b = find(c.rigid_loads, j);
+    if (std::isfinite(c.rigid.zeta[j]))
+      fmt::print("  contact {}  ζ {:.6g} → r {:.6g}; {} contact phases: peak force {:.6g} (largest), {:.6g} (mean), "
+                 "duration {:.6g} (mean)\n",
+                 j, c.rigid.zeta[j], c.rigid.restitution[j], c.phases[j], c.peak_force_max[j], c.peak_force_mean[j],
+                 c.duration_mean[j]);
+    else
+      fmt::print("  contact {}  rigid in both (r {:.6g})\n", j, c.rigid.restitution[j]);
+    if (a && b)
+      fmt::print("    compliant / rigid: impulse/T {:.6g} / {:.6g}, mean force {:.6g} / {:.6g}, dissipated power "
+                 "{:.6g} / {:.6g}\n",
+                 a->impulse_per_period + a->reaction_integral_per_period,
+                 b->impulse_per_period + b->reaction_integral_per_period, a->mean_force, b->mean_force,
+                 a->dissipated_power, b->dissipated_power);
+  }
+}
+
 void PrintAttractor(const vibro::Attractor& a, double restitution, bool named) {
   fmt::print("{}", vibro::cli::AttractorText(a, restitution, "", named));
 }

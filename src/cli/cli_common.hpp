@@ -18,6 +18,7 @@
 #include "vibro/attractor.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/lyapunov.hpp"
@@ -49,9 +50,11 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
 
 // `vibro simulate SCENE [--out FILE [--resume | --extend N]]` (cmd_simulate.cpp); extend 0: none;
 // time_limit: seconds for the whole run (0: none), see frontend/run_budget.hpp.
+// The rigid model beside a compliant scene (docs/compliant.md).
+void PrintRigidComparison(const vibro::RigidComparison& c);
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
                 const std::string& out, bool resume, long long extend, int blocks = 10,
-                double time_limit = 86400.0);
+                double time_limit = 86400.0, bool rigid_beside = false);
 
 // `vibro orbit SCENE` (cmd_orbit.cpp).
 int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool json,

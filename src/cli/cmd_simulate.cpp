@@ -16,18 +16,23 @@
 #include "vibro/hdf5_store.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
 
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
-                const std::string& out, bool resume, long long extend, int blocks, double time_limit) {
+                const std::string& out, bool resume, long long extend, int blocks, double time_limit,
+                bool rigid_beside) {
   vibro::frontend::RunContinuation how;
   how.resume = resume;
   if (extend > 0) how.extend = extend;
   const auto loaded =
       vibro::frontend::SceneToRun(vibro::LoadScene(path, sets), out, how, vibro::frontend::Naming::kCli);
+  if (rigid_beside && !vibro::HasCompliantContact(loaded.scene))
+    throw vibro::InputError({fmt::format("{}: --rigid-beside: the scene has no compliant stop (give a stop a "
+                                         "stiffness, docs/compliant.md)", path)});
   const vibro::System sys(loaded.scene);
   vibro::AttractorRecorder recorder(sys, loaded.scene);
   vibro::SimulationOptions options;
@@ -37,7 +42,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   vibro::LoadsRecorder loads(sys, loaded.scene.run.periods / 10);
   options.observers.push_back(&loads);
   std::optional<vibro::LyapunovObserver> lyapunov;
-  if (loaded.scene.run.lyapunov)
+  // Compliant stops: no Lyapunov exponents (the tangent map has no contact phase yet, docs/compliant.md).
+  if (loaded.scene.run.lyapunov && !vibro::HasCompliantContact(loaded.scene))
     options.observers.push_back(&lyapunov.emplace(sys, loaded.scene));
   options.stop_requested = &vibro::cli::StopFlag();
   // A new file, or the stored run taken up at its last checkpoint (frontend/run_output.hpp).
@@ -63,9 +69,14 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   }
   output.reset();
 
+  // The rigid model beside it (docs/compliant.md): both runs again, side by side.
+  std::optional<vibro::RigidComparison> rigid;
+  if (rigid_beside && result.status == vibro::RunStatus::kOk) rigid = vibro::CompareWithRigid(loaded.scene, blocks);
   if (json) {
-    fmt::print("{}\n", vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr,
-                                                 &load_summary));
+    std::string summary = vibro::SimulationJson(loaded.scene, result, attractor, spectrum ? &*spectrum : nullptr,
+                                                &load_summary);
+    if (rigid) summary = summary.substr(0, summary.rfind('}')) + ",\"rigid_model\":" + vibro::RigidComparisonJson(*rigid) + "}";
+    fmt::print("{}\n", summary);
   } else {
     fmt::print("scene        {}{}\n", path,
                loaded.scene.title.empty() ? "" : "  (" + loaded.scene.title + ")");
@@ -105,6 +116,7 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
     PrintAttractor(attractor, loaded.scene.contacts.size() > 1 ? std::nan("") : loaded.scene.restitution,
                    !loaded.scene.contacts.empty());
     PrintLoads(load_summary);
+    if (rigid) PrintRigidComparison(*rigid);
     if (spectrum) PrintLyapunov(*spectrum);
     if (loaded.scene.run.engine == vibro::Engine::kCvode)
       fmt::print("cvode        {} ({}), rtol {:g}, atol {:g}: {} steps, {} rhs, {} root evals, "

@@ -14,6 +14,7 @@
 #include <fmt/format.h>
 
 #include "dynamics/chatter_tail.hpp"
+#include "dynamics/compliant_contact.hpp"
 #include "dynamics/contact_loads.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
@@ -179,6 +180,7 @@ class Automaton {
       for (const ModelT<S>* k : models_) resting_all_.push_back(std::make_unique<RestingStick<S>>(*k));
     counts_.resize(models_.size());
     loads_.Resize(models_.size());
+    BuildCompliant();
     if (multi()) {
       gaps_.assign(models_.size(), S(0));
       starts_.assign(models_.size(), FlightStart::kGeneric);
@@ -316,6 +318,17 @@ class Automaton {
   void EnterSticking(StickStart how);
   void Depart(FlightStart how);
   bool OnContact();
+  // Compliant stops (docs/compliant.md; dynamics/compliant_contact.hpp, the transitions in
+  // dynamics/compliant_transitions.hpp): the contact phase is the mode `sticking` on a compliant
+  // contact, its propagator the contact's closed form; a force-rule exit leaves a relaxing flight.
+  void BuildCompliant();
+  bool Compliant(int j) const { return M(j).compliant; }
+  bool InCompliantPhase() const { return mode_ == Mode::kSticking && held_set_.empty() && Compliant(active_); }
+  PropagatorT<S>* CompliantPropagatorNow();
+  bool EnterContactPhase(int k);
+  bool AfterCompliantSegment(const SegmentResultT<S>& seg, const ClockT<S>& from);
+  bool ClassifyInitialCompliant();
+  void CompliantEventLoads(Event& e, int contact);
   bool TryAccumulation(const S& reaction);
   bool TailClearOfOtherContacts(const S& delta);
   void Checkpointed();
@@ -414,6 +427,18 @@ class Automaton {
   bool sincos_valid_ = false;
   Vec tail_w_;  // PredictTail's scratch (no allocation per impact)
   ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
+  // Compliant stops: each compliant contact's closed form (double only: quad and CVODE refuse them,
+  // docs/compliant.md), the relaxing flight after a force-rule exit (its contact and surface
+  // offset), and the open contact phase's account beyond the sticking one.
+  using CompliantP = std::conditional_t<std::is_same_v<S, double>, CompliantPropagator, PropagatorT<S>>;
+  std::vector<std::unique_ptr<CompliantP>> compliant_;
+  bool relaxing_ = false;
+  int relax_contact_ = -1;
+  S relax_y_{0};
+  struct CompliantAccount {
+    double peak = -std::numeric_limits<double>::infinity(), peak_time = 0, penetration = 0, dissipated = 0;
+  };
+  std::vector<CompliantAccount> compliant_account_;
   bool stretch_loads_ = false;  // the sticking segment under way searches max R per stretch
 };
 
@@ -451,6 +476,7 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
   }
   if (kind == EventKind::kStick) loads_.Begin(contact);
   if (kind == EventKind::kRelease) loads_.End(contact, e);
+  if (m.compliant && (kind == EventKind::kStick || kind == EventKind::kRelease)) CompliantEventLoads(e, contact);
   Count(result_.counts, kind, simultaneous);
   // One contact: its counts are the run's (RunResult::contact_counts is filled at the end).
   if (multi()) Count(counts_[static_cast<size_t>(contact)], kind, simultaneous);
@@ -495,6 +521,7 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
       for (size_t j = 0; j < models_.size(); ++j)
+        if (!(relaxing_ && static_cast<int>(j) == relax_contact_))
         CheckFreeGap(models_[j]->ContactDisplacement(Xs_) - models_[j]->x0, Xs_,
                      R::to_double(S(t0_) + S(static_cast<double>(k)) * period_), "a section point of a flight",
                      multi() ? static_cast<int>(j) : -1);
@@ -520,6 +547,7 @@ void Automaton<S>::EmitStretch(const ClockT<S>& start, PropagatorT<S>& p, const 
     if (project_samples_) M(active_).ProjectOntoStop(Xs_, Vs_);
     if (mode_ == Mode::kFree && !project_samples_)
       for (size_t j = 0; j < models_.size(); ++j)
+        if (!(relaxing_ && static_cast<int>(j) == relax_contact_))
         CheckFreeGap(models_[j]->ContactDisplacement(Xs_) - models_[j]->x0, Xs_,
                      R::to_double(S(t0_) + S(static_cast<double>(k)) * period_ + off), "a sample of a flight",
                      multi() ? static_cast<int>(j) : -1);
@@ -580,6 +608,7 @@ void Automaton<S>::Depart(FlightStart how) {
 // A state on the stop at rest (or the start of a run): stick, leave, or decide with Ṙ.
 template <class S>
 void Automaton<S>::ClassifyInitialState() {
+  if (ClassifyInitialCompliant()) return;
   if (multi()) {
     ClassifyInitialContacts();
     return;
@@ -687,6 +716,12 @@ void Automaton<S>::CheckSegment(const ClockT<S>& from, const S& sigma) {
     } else {
       CheckFreeGap(gap_, X_, AbsTime(clock_), "the state at the end of a flight");
     }
+  } else if (InCompliantPhase()) {
+    // In a compliant stop: the gap is ≤ 0 (within rounding) over the whole contact phase.
+    const S off = M(active_).ContactDisplacement(X_) - M(active_).x0;
+    if (off > GapTolerance(X_))
+      violation_ = fmt::format("contact phase of a compliant stop with the gap open: {:.3g} at t = {:.17g}{}",
+                               R::to_double(off), AbsTime(clock_), AtContact());
   } else {
     const S off = M(active_).ContactDisplacement(X_) - M(active_).x0;
     if (R::abs(off) > GapTolerance(X_))
@@ -808,6 +843,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
 // Free flight reached g = 0 at the current state.
 template <class S>
 bool Automaton<S>::OnContact() {
+  if (Compliant(active_)) return EnterContactPhase(active_);
   const ModelT<S>& m = multi() ? M(active_) : m_;
   // Snap the contact coordinate onto the stop (docs/model.md §8).
   X_ -= m.contact * ((m.ContactDisplacement(X_) - m.x0) / m.s_B);
@@ -1036,13 +1072,18 @@ RunResult Automaton<S>::Run() {
     const S to_boundary = period_ - clock_.offset;
     SetStickingT<S>* set = mode_ == Mode::kSticking && !held_set_.empty() ? SetEngine() : nullptr;
     if (mode_ == Mode::kSticking && !held_set_.empty() && !set) break;  // failed: reason kept
-    PropagatorT<S>& p = set ? *set : (mode_ == Mode::kSticking && Resting()) ? *Resting() : *engine_;
+    PropagatorT<S>* compliant = CompliantPropagatorNow();
+    PropagatorT<S>& p = set         ? *set
+                        : compliant ? *compliant
+                        : (mode_ == Mode::kSticking && Resting()) ? *Resting()
+                                                                   : *engine_;
     const S phase_now = Phase(clock_);
     p.Begin({mode_, phase_now, clock_.offset, X_, V_, gap_, flight_start_, stick_start_, active_,
              multi() ? &gaps_ : nullptr, multi() ? &starts_ : nullptr, -1, SinCos(phase_now)});
     const ClockT<S> from = clock_;
     // Loads of a phase held on one contact or on a set of contacts at once (docs/loads.md).
-    const bool loads = mode_ == Mode::kSticking && held_set_.empty() && opt_.loads && !opt_.observers.empty();
+    const bool loads = mode_ == Mode::kSticking && held_set_.empty() && !compliant && opt_.loads &&
+                       !opt_.observers.empty();
     const bool set_loads = mode_ == Mode::kSticking && !held_set_.empty() && opt_.loads && !opt_.observers.empty();
     if (mode_ == Mode::kSticking && !held_set_.empty() && !set_loads) loads_.Invalidate();
     if (loads || set_loads) loads_.SegmentStart(X_, V_);
@@ -1078,6 +1119,8 @@ RunResult Automaton<S>::Run() {
       for (auto* o : opt_.observers) o->OnStretch({mode_, R::to_double(seg.sigma), active_, &held_set_});
     }
     AdvanceClock(clock_, seg.sigma, to_boundary, seg.exact_offset);
+    if (compliant && mode_ == Mode::kFree && multi())  // a relaxing flight: its contact's gap is to the surface
+      gaps_[static_cast<size_t>(relax_contact_)] = p.GapOf(relax_contact_, seg.sigma);
     CheckSegment(from, seg.sigma);
     if (!Guarded()) break;
     stalled = seg.sigma <= tiny ? stalled + 1 : 0;
@@ -1086,6 +1129,13 @@ RunResult Automaton<S>::Run() {
                        "advancing (degenerate contact)",
                        AbsTime(clock_), AtContact()));
       break;
+    }
+    if (compliant) {
+      // The compliant contact's own transitions (dynamics/compliant_transitions.hpp).
+      if (!AfterCompliantSegment(seg, from)) break;
+      // A period boundary (not the end of a relaxing flight inside the period): a checkpoint.
+      if (seg.end == SegmentEnd::kLimit && !(seg.sigma < to_boundary)) Checkpointed();
+      continue;
     }
     if (seg.end == SegmentEnd::kLimit) {
       if (mode_ == Mode::kFree) flight_start_ = FlightStart::kGeneric;
@@ -1139,3 +1189,5 @@ RunResult Automaton<S>::Run() {
 
 // The contact laws of several contacts and the automaton's transitions that use them.
 #include "dynamics/contact_laws.hpp"  // IWYU pragma: export
+// The compliant stops' transitions (docs/compliant.md).
+#include "dynamics/compliant_transitions.hpp"  // IWYU pragma: export

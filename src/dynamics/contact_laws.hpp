@@ -390,6 +390,12 @@ bool Automaton<S>::InterleavedChatter(int k) {
 
 template <class S>
 bool Automaton<S>::OnContactMulti(int k) {
+  if (Compliant(k)) {  // a compliant stop (docs/compliant.md): a contact phase, no impact law
+    if (mode_ == Mode::kFree) return EnterContactPhase(k);
+    return Fail(fmt::format("contact {} ({}), a compliant stop, closes while the body is held on contact {}: "
+                            "a contact phase beside a held contact is not supported",
+                            k, labels_[static_cast<size_t>(k)], active_));
+  }
   if (!PairChatter(k)) return false;
   if (!InterleavedChatter(k)) return false;
   if (mode_ == Mode::kSticking) {

@@ -73,6 +73,15 @@ class ContactLoadsT {
   }
   // Impulsive reaction received by a held contact (an impact elsewhere while it sticks).
   void AddImpulse(int j, const S& P) { phases_[static_cast<size_t>(j)].integral += R::to_double(P); }
+  // A segment of a compliant stop's contact phase (docs/compliant.md): its duration, ∫λ dt and
+  // largest force, computed by the phase's closed form.
+  void AddCompliant(int j, double duration, double integral, double max) {
+    StickAccount& a = phases_[static_cast<size_t>(j)];
+    if (!a.open) return;
+    a.duration += duration;
+    a.integral += integral;
+    if (!(a.max >= max)) a.max = max;
+  }
   // A release: the phase's account into the event, then closed.
   void End(int j, Event& e) {
     StickAccount& a = phases_[static_cast<size_t>(j)];

@@ -44,7 +44,11 @@ struct ModelT {
         stick_forcing(k.constrained.modal_forcing.cast<S>()),
         stick_reaction(k.constrained.reaction.cast<S>()),
         side(k.spec.side == Side::kAbove ? S(-1) : S(1)),
-        harmonics(sys, static_cast<int>(&k - sys.contacts().data())) {
+        harmonics(sys, static_cast<int>(&k - sys.contacts().data())),
+        compliant(k.spec.compliance.compliant()),
+        stiffness(k.spec.compliance.stiffness),
+        damping(k.spec.compliance.damping),
+        separation(k.spec.compliance.separation) {
     for (Eigen::Index i = 0; i < omega.size(); ++i) {
       contact_stiffness += shape[i] * contact[i] * omega[i] * omega[i];
       contact_damping += shape[i] * contact[i] * S(2) * zeta[i] * omega[i];
@@ -140,6 +144,10 @@ struct ModelT {
   // A sum of harmonics (docs/harmonics.md); empty for today's forcing f sin ωt.
   HarmonicsT<S> harmonics;
   S contact_damping{0};    // β = Σ c_i T_B,i 2ζ_iω_i / s_B, the damping the contact velocity feels
+  // A compliant stop (docs/compliant.md, dynamics/compliant_contact.hpp): λ = −k g − c ġ in contact.
+  bool compliant = false;
+  double stiffness = 0, damping = 0;
+  Separation separation = Separation::kForce;
 };
 
 }  // namespace vibro::detail

@@ -115,6 +115,9 @@ const std::map<std::string, Kind>& Schema() {
       {"stop", Kind::kTable},
       {"stop.position", Kind::kNumber},
       {"stop.restitution", Kind::kNumber},
+      {"stop.stiffness", Kind::kNumber},
+      {"stop.damping", Kind::kNumber},
+      {"stop.separation", Kind::kString},
       {"contact", Kind::kTableArray},
       {"contact.dof", Kind::kInteger},
       {"contact.dofs", Kind::kNumberArray},
@@ -122,6 +125,9 @@ const std::map<std::string, Kind>& Schema() {
       {"contact.side", Kind::kString},
       {"contact.position", Kind::kNumber},
       {"contact.restitution", Kind::kNumber},
+      {"contact.stiffness", Kind::kNumber},
+      {"contact.damping", Kind::kNumber},
+      {"contact.separation", Kind::kString},
       {"excitation", Kind::kTable},
       {"excitation.amplitude", Kind::kNumber},
       {"excitation.frequency", Kind::kNumber},
@@ -485,6 +491,40 @@ std::optional<TableArrayKey> ParseTableArrayKey(const std::string& key) {
   return k;
 }
 
+// The compliant-stop keys of the table at `at` ("stop" or "contact[j]", docs/compliant.md):
+// stiffness k > 0 makes the stop compliant; damping c ≥ 0 and separation = "force" | "gap" belong
+// to a compliant stop only, and restitution to a rigid one only (a compliant stop's restitution
+// follows from its damping and rule).
+Compliance ReadCompliance(Reader& rd, const std::string& at) {
+  Compliance c;
+  const toml::node* k = rd.Find(at + ".stiffness");
+  if (auto v = rd.Number(at + ".stiffness")) {
+    if (!(*v > 0))
+      rd.Report(k, at + ".stiffness",
+                "k > 0 (a compliant stop's stiffness; omit stiffness for a rigid stop)");
+    else
+      c.stiffness = *v;
+  }
+  if (auto v = rd.Number(at + ".damping")) {
+    if (!(*v >= 0)) rd.Report(rd.Find(at + ".damping"), at + ".damping", "c ≥ 0 (a compliant stop's damping)");
+    else c.damping = *v;
+  }
+  if (auto v = rd.String(at + ".separation", {"force", "gap"}))
+    c.separation = *v == "gap" ? Separation::kGap : Separation::kForce;
+  if (!k) {
+    for (const char* leaf : {"damping", "separation"})
+      if (const toml::node* n = rd.Find(at + "." + leaf))
+        rd.Report(n, at + "." + leaf,
+                  "belongs to a compliant stop: give its stiffness too (a stop without stiffness is rigid "
+                  "and takes restitution)");
+  } else if (const toml::node* n = rd.Find(at + ".restitution")) {
+    rd.Report(n, at + ".restitution",
+              "a compliant stop (stiffness given) has no restitution key: its restitution follows from "
+              "its damping and separation rule (docs/compliant.md); give restitution only for a rigid stop");
+  }
+  return c;
+}
+
 // How many contacts the scene table `root` has: its [[contact]] tables, or 1 for a [stop].
 size_t ContactCount(const toml::table& root) {
   if (const auto* a = root.get_as<toml::array>("contact")) return a->size();
@@ -537,9 +577,10 @@ void ApplyTableArrayOverride(toml::table& root, const TableArrayKey& k, const st
   if (auto* a = root.get_as<toml::array>("contact")) {
     table = a->get(k.index) ? a->get(k.index)->as_table() : nullptr;
   } else {  // the [stop] shorthand: contact[0]
-    if (k.leaf != "position" && k.leaf != "restitution") {
-      messages.push_back(fmt::format("{}: {}: the scene's one contact is its [stop] table, which takes position "
-                                     "and restitution (give [[contact]] tables for more)",
+    if (k.leaf != "position" && k.leaf != "restitution" && k.leaf != "stiffness" && k.leaf != "damping" &&
+        k.leaf != "separation") {
+      messages.push_back(fmt::format("{}: {}: the scene's one contact is its [stop] table, which takes position, "
+                                     "restitution, stiffness, damping and separation (give [[contact]] tables for more)",
                                      where, key));
       return;
     }
@@ -962,20 +1003,24 @@ LoadedScene Build(toml::table root, const std::string& source,
           if (k.partner < 0) k.partner = -2;  // out of range, reported by Validate
         }
       }
-      for (const char* leaf : {"side", "position", "restitution"}) rd.Require(at + "." + leaf);
+      for (const char* leaf : {"side", "position"}) rd.Require(at + "." + leaf);
+      k.compliance = ReadCompliance(rd, at);
+      if (!rd.Find(at + ".stiffness")) rd.Require(at + ".restitution");
       if (auto v = rd.String(at + ".side", {"below", "above"}))
         k.side = *v == "below" ? Side::kBelow : Side::kAbove;
       if (auto v = rd.Number(at + ".position")) k.position = *v;
-      if (auto v = rd.Number(at + ".restitution")) k.restitution = *v;
+      if (auto v = rd.Number(at + ".restitution"); v && !k.compliance.compliant()) k.restitution = *v;
       s.contacts.push_back(k);
     }
     if (s.physical && !s.contacts.empty()) s.physical->contact_dof = s.contacts.front().dof;
   } else {
     rd.Require("stop.position");
-    rd.Require("stop.restitution");
+    s.stop_compliance = ReadCompliance(rd, "stop");
+    if (!rd.Find("stop.stiffness")) rd.Require("stop.restitution");
+    if (s.stop_compliance.compliant()) s.restitution = 0;
   }
   if (auto v = rd.Number("stop.position")) s.stop_position = *v;
-  if (auto v = rd.Number("stop.restitution")) s.restitution = *v;
+  if (auto v = rd.Number("stop.restitution"); v && !s.stop_compliance.compliant()) s.restitution = *v;
   rd.Require("excitation.amplitude");
   rd.Require("excitation.frequency");
   ReadExcitation(rd, s);

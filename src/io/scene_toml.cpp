@@ -53,9 +53,14 @@ std::string ResolvedSceneToml(const Scene& sc) {
   }
   if (sc.modes > 0) s += fmt::format("modes = {}\n", sc.modes);  // either form
   if (sc.damping_ratios.size() > 0) s += fmt::format("damping_ratios = {}\n", Vector(sc.damping_ratios));
+  // A compliant stop: its stiffness, damping and rule in place of a restitution (docs/compliant.md).
+  const auto law = [](const Compliance& k, double r) {
+    if (!k.compliant()) return fmt::format("restitution = {}\n", Number(r));
+    return fmt::format("stiffness = {}\ndamping = {}\nseparation = \"{}\"\n", Number(k.stiffness),
+                       Number(k.damping), ToString(k.separation));
+  };
   if (sc.contacts.empty())
-    s += fmt::format("\n[stop]\nposition = {}\nrestitution = {}\n", Number(sc.stop_position),
-                     Number(sc.restitution));
+    s += fmt::format("\n[stop]\nposition = {}\n{}", Number(sc.stop_position), law(sc.stop_compliance, sc.restitution));
   for (const ContactSpec& k : sc.contacts) {
     s += "\n[[contact]]\n";
     if (sc.modal) {
@@ -65,8 +70,8 @@ std::string ResolvedSceneToml(const Scene& sc) {
     } else {
       s += fmt::format("dof = {}\n", k.dof);
     }
-    s += fmt::format("side = \"{}\"\nposition = {}\nrestitution = {}\n", ToString(k.side),
-                     Number(k.position), Number(k.restitution));
+    s += fmt::format("side = \"{}\"\nposition = {}\n{}", ToString(k.side), Number(k.position),
+                     law(k.compliance, k.restitution));
   }
   s += fmt::format("\n[excitation]\namplitude = {}\nfrequency = {}\n", Number(sc.amplitude),
                    Number(sc.frequency));

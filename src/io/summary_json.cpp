@@ -529,6 +529,10 @@ std::string ModelJson(const System& s) {
                         {"side", k.spec.side == Side::kBelow ? "below" : "above"},
                         {"position", k.spec.position},
                         {"restitution", k.restitution},
+                        {"stiffness", k.spec.compliance.compliant() ? nlohmann::json(k.spec.compliance.stiffness)
+                                                                    : nlohmann::json(nullptr)},
+                        {"damping", k.spec.compliance.damping},
+                        {"separation", ToString(k.spec.compliance.separation)},
                         {"shape", Array(k.shape)},
                         {"contact", Array(k.contact)},
                         {"stop", k.stop},

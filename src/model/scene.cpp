@@ -150,6 +150,29 @@ void CheckModalContacts(const Scene& s, Eigen::Index n_modes, Checker& c) {
   }
 }
 
+// The compliant stops (docs/compliant.md): k ≥ 0 and c ≥ 0 finite, a damping only with a stiffness;
+// for now they run with the exact engine in double precision.
+void CheckCompliance(const Scene& s, Checker& c) {
+  const auto one = [&](const Compliance& k, const std::string& at) {
+    c.Require(std::isfinite(k.stiffness) && k.stiffness >= 0 && k.stiffness <= kHuge, at + ".stiffness",
+              Show(k.stiffness), fmt::format("0 < k ≤ {:g} (0: a rigid stop)", kHuge));
+    c.Require(std::isfinite(k.damping) && k.damping >= 0 && k.damping <= kHuge, at + ".damping", Show(k.damping),
+              fmt::format("0 ≤ c ≤ {:g}", kHuge));
+    c.Require(k.stiffness > 0 || k.damping == 0, at + ".damping", Show(k.damping),
+              "belongs to a compliant stop: give its stiffness too");
+  };
+  if (s.contacts.empty()) one(s.stop_compliance, "stop");
+  for (size_t j = 0; j < s.contacts.size(); ++j) one(s.contacts[j].compliance, fmt::format("contact[{}]", j));
+  if (!HasCompliantContact(s)) return;
+  c.Require(s.run.engine == Engine::kExact, "run.engine", ToString(s.run.engine),
+            "\"exact\": a compliant stop runs in the exact engine's closed forms (docs/compliant.md)");
+  c.Require(s.run.precision == Precision::kDouble, "run.precision", ToString(s.run.precision),
+            "\"double\": a compliant stop's contact phase is not yet available in quad precision "
+            "(docs/compliant.md)");  c.Require(s.harmonics.empty(), "excitation.frequency", fmt::format("a list of {}", s.harmonics.size()),
+            "one harmonic: a compliant stop's contact phase has the closed form of one harmonic only in this "
+            "version (docs/compliant.md)");
+}
+
 void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {
   if (s.contacts.empty()) return;
   const auto key = [](size_t j, const char* leaf) { return fmt::format("contact[{}].{}", j, leaf); };
@@ -284,6 +307,7 @@ std::vector<InputIssue> Validate(const Scene& s) {
   CheckContacts(s, n_listed, c);
   for (auto& issue : ValidateHarmonics(s.harmonics, static_cast<long>(n_listed)))
     c.Require(false, issue.key, issue.value, issue.constraint);
+  CheckCompliance(s, c);
 
   const auto& r = s.run;
   c.Require(r.periods >= 1, "run.periods", std::to_string(r.periods), "periods ≥ 1");
@@ -402,7 +426,7 @@ std::vector<InputIssue> Validate(const Scene& s) {
                 fmt::format("admissible initial state: the gap of contact {} is {} < 0{}", j, g,
                             has_x ? "" : " at the default state (give initial.displacement and "
                                          "initial.velocity)"));
-      if (has_v && g <= tol && g >= -below) {
+      if (has_v && g <= tol && g >= -below && !k.spec.compliance.compliant()) {
         const double v = k.shape.dot(init.V);
         c.Require(v >= -System::kStopUlps * std::numeric_limits<double>::epsilon() *
                            k.shape.cwiseProduct(init.V).cwiseAbs().sum(),
@@ -424,7 +448,8 @@ std::vector<InputIssue> Validate(const Scene& s) {
     const double below = sys.BelowStopTolerance();
     c.Require(xB >= x0 - below, "initial.displacement", Show(s.initial_displacement),
               fmt::format("admissible initial state x_B ≥ x0 (x_B = {}, x0 = {})", xB, x0));
-    if (xB - x0 <= sys.StopTolerance(init.X) && xB >= x0 - below)
+    // A compliant stop takes a body arriving on it (its contact phase begins at t0).
+    if (xB - x0 <= sys.StopTolerance(init.X) && xB >= x0 - below && !s.stop_compliance.compliant())
       c.Require(vB >= -sys.RestTolerance(init.V), "initial.velocity", Show(s.initial_velocity),
                 fmt::format("admissible initial state: on the stop (x_B = x0) the contact "
                             "velocity must not point into it (ẋ_B = {} < 0)",
@@ -436,11 +461,20 @@ std::vector<InputIssue> Validate(const Scene& s) {
 std::vector<ContactSpec> Contacts(const Scene& scene) {
   if (!scene.contacts.empty()) return scene.contacts;
   if (!scene.physical) return {};
-  return {ContactSpec{scene.physical->contact_dof, -1, Side::kBelow, scene.stop_position,
-                      scene.restitution}};
+  ContactSpec k{scene.physical->contact_dof, -1, Side::kBelow, scene.stop_position, scene.restitution};
+  k.compliance = scene.stop_compliance;
+  return {k};
+}
+
+bool HasCompliantContact(const Scene& scene) {
+  if (scene.stop_compliance.compliant()) return true;
+  for (const ContactSpec& k : scene.contacts)
+    if (k.compliance.compliant()) return true;
+  return false;
 }
 
 const char* ToString(Side s) { return s == Side::kBelow ? "below" : "above"; }
+const char* ToString(Separation s) { return s == Separation::kGap ? "gap" : "force"; }
 
 const char* ToString(Engine e) { return e == Engine::kExact ? "exact" : "cvode"; }
 const char* ToString(ChatterTreatment c) {

@@ -190,7 +190,7 @@ void System::BuildContacts(const Scene& scene) {
   ContactModel c0;
   const auto specs = Contacts(scene);
   if (!specs.empty()) c0.spec = specs.front();
-  else c0.spec = ContactSpec{-1, -1, Side::kBelow, x0_, r_};
+  else c0.spec = ContactSpec{-1, -1, Side::kBelow, x0_, r_, {}, scene.stop_compliance};
   c0.shape = shape_;
   c0.contact = contact_;
   c0.stop = x0_;

@@ -1,0 +1,53 @@
+// The rigid model beside a compliant one (docs/compliant.md, "The rigid model beside it"): the
+// same scene with every compliant stop made rigid, of the restitution its damping gives an
+// isolated impact under its separation rule, run beside it; the distance between the two
+// trajectories and between their loads. The distance falls like k^(−1/2) with the stiffness
+// (docs/loads.md, "The distance to the rigid model").
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "vibro/loads.hpp"
+#include "vibro/scene.hpp"
+#include "vibro/simulator.hpp"
+#include "vibro/system.hpp"
+
+namespace vibro {
+
+// The restitution of an isolated impact on a spring–dashpot of damping ratio ζ = c/(2√(k m)):
+// rule "gap" e = exp(−ζπ/√(1−ζ²)); rule "force" (Schwager & Pöschel) e = exp(−ζω₀ t_c) with
+// ω_d t_c = π − atan2(2ζ√(1−ζ²), 1 − 2ζ²). ζ ≥ 1: 0 under "gap" (the body never comes back
+// above the stop's surface with the dashpot holding it), and, under "force", the overdamped closed
+// form's force zero (std::nan when there is none: the body stays).
+double EquivalentRestitution(double zeta, Separation rule);
+
+// Per contact: its damping ratio ζ_j = c_j/(2√(k_j m_j)), m_j = 1/W_jj the contact's effective
+// mass (NaN for a rigid contact), and the restitution the rigid model gives it.
+struct RigidEquivalent {
+  Scene scene;                      // the rigid scene
+  std::vector<double> zeta, restitution;
+};
+// Throws std::invalid_argument when the scene has no compliant stop.
+RigidEquivalent RigidModelOf(const Scene& scene, const System& system);
+
+struct RigidComparison {
+  RigidEquivalent rigid;
+  RunResult compliant_result, rigid_result;
+  LoadsSummary compliant_loads, rigid_loads;
+  // The largest distance between the two trajectories over the dense samples of the run (the
+  // physical DOFs in the physical form, the modal coordinates in the modal form, max norm), the
+  // time where it is reached, and the distance at the end of the run.
+  double distance = 0, distance_time = 0, end_distance = 0;
+  long long samples = 0;
+  // Per contact of the compliant scene: its phases' largest peak force, mean peak force, mean
+  // duration (over the phases ended in the run; NaN without any), count of phases.
+  std::vector<double> peak_force_max, peak_force_mean, duration_mean;
+  std::vector<long long> phases;
+};
+// Runs both (scene.run as given; dense samples at run.samples_per_period, at least 64).
+RigidComparison CompareWithRigid(const Scene& scene, int blocks);
+// The comparison as JSON (docs/compliant.md lists its keys).
+std::string RigidComparisonJson(const RigidComparison& c);
+
+}  // namespace vibro

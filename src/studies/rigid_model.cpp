@@ -1,0 +1,184 @@
+// The rigid model beside a compliant one (include/vibro/rigid_model.hpp, docs/compliant.md).
+#include "vibro/rigid_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "vibro/observer.hpp"
+
+namespace vibro {
+
+double EquivalentRestitution(double zeta, Separation rule) {
+  if (!(zeta >= 0)) return std::nan("");
+  if (zeta < 1) {
+    const double s = std::sqrt(1 - zeta * zeta);
+    if (rule == Separation::kGap) return std::exp(-zeta * M_PI / s);
+    return std::exp(-zeta / s * (M_PI - std::atan2(2 * zeta * s, 1 - 2 * zeta * zeta)));
+  }
+  if (rule == Separation::kGap) return 0;  // overdamped: the gap never reopens
+  // Overdamped, rule "force" (ω₀ = 1, v₀ = 1): x = −(e^{r₁t} − e^{r₂t})/(r₁ − r₂); λ = 0 where
+  // e^{(r₁−r₂)t} = (1 + 2ζr₂)/(1 + 2ζr₁). Critical damping: x = −t e^{−t}, λ = 0 at t = 2.
+  if (zeta == 1) return std::exp(-2.0);
+  const double s = std::sqrt(zeta * zeta - 1), r1 = -zeta + s, r2 = -zeta - s;
+  const double ratio = (1 + 2 * zeta * r2) / (1 + 2 * zeta * r1);
+  if (!(ratio > 1)) return std::nan("");
+  const double t = std::log(ratio) / (r1 - r2);
+  return std::abs((r1 * std::exp(r1 * t) - r2 * std::exp(r2 * t)) / (r1 - r2));
+}
+
+RigidEquivalent RigidModelOf(const Scene& scene, const System& system) {
+  RigidEquivalent out;
+  out.scene = scene;
+  bool any = false;
+  for (const ContactModel& k : system.contacts()) {
+    const Compliance& c = k.spec.compliance;
+    if (!c.compliant()) {
+      out.zeta.push_back(std::nan(""));
+      out.restitution.push_back(k.restitution);
+      continue;
+    }
+    any = true;
+    const double mass = 1 / k.s_B;  // the contact's effective mass, 1/W_jj
+    const double zeta = c.damping / (2 * std::sqrt(c.stiffness * mass));
+    const double e = EquivalentRestitution(zeta, c.separation);
+    out.zeta.push_back(zeta);
+    out.restitution.push_back(std::isfinite(e) ? e : 0.0);
+  }
+  if (!any) throw std::invalid_argument("the scene has no compliant stop (give a stop a stiffness)");
+  if (out.scene.contacts.empty()) {
+    out.scene.stop_compliance = {};
+    out.scene.restitution = out.restitution.front();
+  } else {
+    for (size_t j = 0; j < out.scene.contacts.size(); ++j) {
+      if (!out.scene.contacts[j].compliance.compliant()) continue;
+      out.scene.contacts[j].compliance = {};
+      out.scene.contacts[j].restitution = out.restitution[j];
+    }
+  }
+  if (!out.scene.title.empty()) out.scene.title += " (rigid model)";
+  return out;
+}
+
+namespace {
+
+// The dense samples of a run (time and state) and the compliant contacts' phases.
+struct Trace final : Observer {
+  std::vector<double> t;
+  std::vector<Eigen::VectorXd> X;
+  std::vector<Event> releases;
+  void OnSample(const Sample& s) override {
+    t.push_back(s.t);
+    X.push_back(s.X);
+  }
+  void OnEvent(const Event& e) override {
+    if (e.kind == EventKind::kRelease && std::isfinite(e.peak_time)) releases.push_back(e);
+  }
+};
+
+struct Ran {
+  RunResult result;
+  LoadsSummary loads;
+  Trace trace;
+};
+
+void RunOne(const Scene& scene, int blocks, Ran& out) {
+  const System sys(scene);
+  LoadsRecorder loads(sys, scene.run.periods / 10);
+  SimulationOptions opt;
+  opt.observers = {&out.trace, &loads};
+  out.result = Simulate(sys, scene, opt);
+  out.loads = loads.Summary(blocks);
+}
+
+}  // namespace
+
+RigidComparison CompareWithRigid(const Scene& scene_in, int blocks) {
+  Scene scene = scene_in;
+  scene.run.samples_per_period = std::max(scene.run.samples_per_period, 64);
+  scene.run.lyapunov = false;
+  const System sys(scene);
+  RigidComparison c;
+  c.rigid = RigidModelOf(scene, sys);
+  Ran compliant, rigid;
+  RunOne(scene, blocks, compliant);
+  RunOne(c.rigid.scene, blocks, rigid);
+  c.compliant_result = compliant.result;
+  c.rigid_result = rigid.result;
+  c.compliant_loads = compliant.loads;
+  c.rigid_loads = rigid.loads;
+  const size_t n = std::min(compliant.trace.t.size(), rigid.trace.t.size());
+  const auto physical = [&](const Eigen::VectorXd& X) -> Eigen::VectorXd {
+    return sys.physical() ? Eigen::VectorXd(sys.mode_shapes() * X) : X;
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const double d = (physical(compliant.trace.X[i]) - physical(rigid.trace.X[i])).cwiseAbs().maxCoeff();
+    if (d > c.distance || i == 0) {
+      c.distance = d;
+      c.distance_time = compliant.trace.t[i];
+    }
+    c.end_distance = d;
+  }
+  c.samples = static_cast<long long>(n);
+  const size_t m = static_cast<size_t>(sys.contact_count());
+  c.peak_force_max.assign(m, std::nan(""));
+  c.peak_force_mean.assign(m, std::nan(""));
+  c.duration_mean.assign(m, std::nan(""));
+  c.phases.assign(m, 0);
+  std::vector<double> peak_sum(m, 0), duration_sum(m, 0);
+  for (const Event& e : compliant.trace.releases) {
+    const auto j = static_cast<size_t>(e.contact);
+    if (j >= m) continue;
+    ++c.phases[j];
+    peak_sum[j] += e.reaction_max;
+    duration_sum[j] += e.stick_duration;
+    if (!(c.peak_force_max[j] >= e.reaction_max)) c.peak_force_max[j] = e.reaction_max;
+  }
+  for (size_t j = 0; j < m; ++j)
+    if (c.phases[j] > 0) {
+      c.peak_force_mean[j] = peak_sum[j] / static_cast<double>(c.phases[j]);
+      c.duration_mean[j] = duration_sum[j] / static_cast<double>(c.phases[j]);
+    }
+  return c;
+}
+
+std::string RigidComparisonJson(const RigidComparison& c) {
+  const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json j;
+  j["distance"] = {{"max", num(c.distance)},
+                   {"time_of_max", num(c.distance_time)},
+                   {"at_end", num(c.end_distance)},
+                   {"samples", c.samples}};
+  j["status"] = {{"compliant", ToString(c.compliant_result.status)}, {"rigid", ToString(c.rigid_result.status)}};
+  auto contacts = nlohmann::json::array();
+  for (size_t k = 0; k < c.rigid.zeta.size(); ++k) {
+    nlohmann::json o;
+    o["contact"] = k;
+    o["zeta"] = num(c.rigid.zeta[k]);
+    o["restitution"] = num(c.rigid.restitution[k]);
+    o["phases"] = k < c.phases.size() ? c.phases[k] : 0;
+    o["peak_force_max"] = k < c.peak_force_max.size() ? num(c.peak_force_max[k]) : nullptr;
+    o["peak_force_mean"] = k < c.peak_force_mean.size() ? num(c.peak_force_mean[k]) : nullptr;
+    o["duration_mean"] = k < c.duration_mean.size() ? num(c.duration_mean[k]) : nullptr;
+    const auto loads = [&](const LoadsSummary& s) -> nlohmann::json {
+      for (const ContactLoads& l : s.contacts)
+        if (l.contact == static_cast<int>(k))
+          return {{"impulse_per_period", num(l.impulse_per_period + l.reaction_integral_per_period)},
+                  {"mean_force", num(l.mean_force)},
+                  {"dissipated_power", num(l.dissipated_power)},
+                  {"contact_fraction", num(l.contact_fraction)}};
+      return nullptr;
+    };
+    o["compliant"] = loads(c.compliant_loads);
+    o["rigid"] = loads(c.rigid_loads);
+    contacts.push_back(o);
+  }
+  j["contacts"] = contacts;
+  return j.dump();
+}
+
+}  // namespace vibro

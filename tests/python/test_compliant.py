@@ -1,0 +1,60 @@
+"""Compliant stops (docs/compliant.md) through Python and the command line on a real scene: the
+tube in a two-sided compliant support. Each contact phase's release carries its peak force,
+duration and impulse; the rigid model beside it has the restitution of Schwager & Pöschel's closed
+form for the contact's damping ratio (ζ = c/(2√(k m)), m = 1 at the tube's DOF: M = diag(2, 1)
+gives W = (M⁻¹)₁₁ = 1); bad keys are located errors, exit 2."""
+import math
+import os
+import subprocess
+
+import numpy as np
+
+import vibro
+from conftest import CLI, SCENES
+
+TUBE = os.path.join(SCENES, "tube_compliant_support.toml")
+
+
+def test_contact_phases_carry_peak_force_duration_impulse():
+    r = vibro.simulate(TUBE, blocks=10, progress=False)
+    assert r.summary["status"] == "ok"
+    e = r.events
+    releases = e[e["kind"] == 4]
+    stick = e[e["kind"] == 3]
+    assert len(releases) > 100 and len(stick) == len(releases)
+    assert set(np.unique(releases["contact"])) == {0, 1}
+    # Each phase: a positive peak, a duration near half the contact's period π/√(k/m) (k = 1000,
+    # m = 1: 0.0993; the structure and the damping shift it slightly), a positive impulse.
+    assert np.all(releases["reaction_max"] > 0)
+    assert np.all(np.abs(releases["stick_duration"] / (math.pi / math.sqrt(1000.0)) - 1) < 0.05)
+    assert np.all(releases["reaction_integral"] > 0)
+    # The phases' energy is the loads' dissipated power.
+    assert r.summary["loads"][0]["dissipated_power"] > 0
+
+
+def test_rigid_beside_restitution_and_distance():
+    c = vibro.rigid_beside(TUBE)
+    zeta = 2.0 / (2 * math.sqrt(1000.0 * 1.0))
+    s = math.sqrt(1 - zeta * zeta)
+    e_sp = math.exp(-zeta / s * (math.pi - math.atan2(2 * zeta * s, 1 - 2 * zeta * zeta)))
+    for k in c["contacts"]:
+        assert math.isclose(k["zeta"], zeta, rel_tol=1e-12)
+        assert math.isclose(k["restitution"], e_sp, rel_tol=1e-12)
+        assert k["phases"] > 100 and k["peak_force_max"] >= k["peak_force_mean"] > 0
+        assert k["compliant"]["dissipated_power"] > 0 and k["rigid"]["dissipated_power"] > 0
+    assert 0 < c["distance"]["max"] < 0.2
+
+
+def test_cli_rigid_beside_and_located_errors(tmp_path):
+    out = subprocess.run([CLI, "simulate", TUBE, "--set", "run.periods=40", "--rigid-beside", "--json"],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    import json
+    j = json.loads(out.stdout)
+    assert "rigid_model" in j and j["rigid_model"]["contacts"][1]["phases"] > 0
+    bad = subprocess.run([CLI, "simulate", TUBE, "--set", "contact[0].stiffness=-5"], capture_output=True, text=True)
+    assert bad.returncode == 2
+    assert "contact[0].stiffness" in bad.stderr and "k > 0" in bad.stderr
+    rigid = subprocess.run([CLI, "simulate", os.path.join(SCENES, "tube_loose_support.toml"), "--rigid-beside"],
+                           capture_output=True, text=True)
+    assert rigid.returncode == 2 and "no compliant stop" in rigid.stderr
