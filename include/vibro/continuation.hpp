@@ -135,6 +135,9 @@ struct Branch {
   std::vector<Relabel> relabels;  // signature changes that are no bifurcation
   std::vector<LevelCrossing> crossings;
   std::string end;  // why the branch stopped
+  // The branch came back to its first point (the same orbit at the same λ, after it had gone
+  // 1e-3 away from it): a closed loop, stored once; `end` starts with "closed loop".
+  bool closed_loop = false;
   // Map evaluations done in quad precision because the double engine left a chattering sequence
   // undetermined there (near the end of a sticking branch; docs/chattering.md).
   int quad_evaluations = 0;

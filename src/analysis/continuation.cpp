@@ -625,6 +625,87 @@ std::optional<AcrossGrazingResult> AcrossGrazing(const Problem& p, const Point& 
   return std::nullopt;
 }
 
+// How far apart two orbits at one λ are, from what does not depend on where their sections sit:
+// their impacts over the period (phase mod 2π·q, sorted; contact; speed), max of |Δphase| and
+// |Δv|/(1 + the largest speed); ∞ when they have different impacts. Orbits without impacts: their
+// stroboscopic states (one contact coordinate each, at the scene's forcing phase).
+double OrbitDistance(const BranchPoint& a, const BranchPoint& b, int q) {
+  if (a.impacts.size() != b.impacts.size()) return std::numeric_limits<double>::infinity();
+  const double cycle = 2.0 * M_PI * q;
+  auto sa = a.impacts, sb = b.impacts;
+  const auto by_phase = [](const auto& x, const auto& y) { return x.phase < y.phase; };
+  std::sort(sa.begin(), sa.end(), by_phase);
+  std::sort(sb.begin(), sb.end(), by_phase);
+  double scale = 1.0, d = 0.0;
+  for (const auto& i : sa) scale = std::max(scale, 1.0 + std::abs(i.v_before));
+  // The first impact of one list may sort last in the other (a phase next to 0 ≡ 2π·q): match
+  // every rotation, keep the best.
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t shift = 0; shift < std::max<size_t>(sb.size(), 1); ++shift) {
+    d = 0.0;
+    for (size_t k = 0; k < sa.size() && d < best; ++k) {
+      const auto& x = sa[k];
+      const auto& y = sb[(k + shift) % sb.size()];
+      if (x.contact != y.contact) {
+        d = std::numeric_limits<double>::infinity();
+        break;
+      }
+      d = std::max({d, std::abs(std::remainder(x.phase - y.phase, cycle)),
+                    std::abs(x.v_before - y.v_before) / scale});
+    }
+    best = std::min(best, d);
+  }
+  if (sa.empty()) {
+    best = 0.0;
+    if (a.strobe.size() != b.strobe.size()) return std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < a.strobe.size(); ++j) best = std::max(best, std::abs(a.strobe[j] - b.strobe[j]));
+    if (!std::isfinite(best)) return std::numeric_limits<double>::infinity();
+  }
+  return best;
+}
+
+// The state (X, V, λ) at the section time phase/ω (mod q·T) of the periodic orbit through the free
+// state (X, V) at t0, at λ: the orbit's point on another section (closed loops compare a branch's
+// first point with its current one on the current section). Nothing when it cannot be simulated.
+std::optional<Eigen::VectorXd> OnSection(const Problem& p, double lambda, double t0, const Eigen::VectorXd& X,
+                                         const Eigen::VectorXd& V, double phase) {
+  auto scene = p.DecidingSceneAt(lambda);
+  if (!scene) return std::nullopt;
+  const System sys(*scene);
+  const double T = 2.0 * M_PI / sys.frequency(), cycle = p.period() * T;
+  double t_to = phase / sys.frequency();
+  t_to += std::ceil((t0 - t_to) / cycle) * cycle;  // the first section time at or after t0
+  Eigen::VectorXd out(2 * X.size() + 1);
+  if (std::abs(t_to - t0) < 1e-12 * cycle) {
+    out << X, V, lambda;
+    return out;
+  }
+  struct Near final : Observer {
+    double target = 0, best = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd X, V;
+    void OnSection(const Sample& s) override {
+      if (std::abs(s.t - target) < best) {
+        best = std::abs(s.t - target);
+        X = s.X;
+        V = s.V;
+      }
+    }
+  } near;
+  near.target = t_to;
+  const int j = static_cast<int>(std::ceil((t_to - t0) / T - 1e-9));
+  scene->run.periods = j + 1;
+  scene->run.samples_per_period = 0;
+  const InitialOverride here{t0, X, V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.section_origin = t_to - j * T;
+  opt.observers = {&near};
+  opt.loads = false;
+  if (Simulate(sys, *scene, opt).status != RunStatus::kOk || near.best > 1e-6 * T) return std::nullopt;
+  out << near.X, near.V, lambda;
+  return out;
+}
+
 // The branch as returned, with how many map evaluations needed the quad engine.
 Branch& Finish(Branch& br, const Problem& p) {
   br.quad_evaluations = p.quad_evaluations();
@@ -712,6 +793,9 @@ Branch Continue(const ContinuationRequest& req) {
   }
   Point cur = *first;
   record(cur);
+  bool went_away = false;  // the branch has been 1e-3 away from its first point (closed loops)
+  Eigen::VectorXd first_y = cur.y;  // the first point on the section first_phase (closed loops)
+  double first_phase = p.phase();
   Eigen::VectorXd t = Tangent(cur.eval, Eigen::VectorXd());
   if (t[n2] * span < 0) t = -t;
 
@@ -1154,10 +1238,56 @@ Branch Continue(const ContinuationRequest& req) {
         br.end = "reached the end value";
         return Finish(br, p);
       }
+      // A closed loop (docs/orbits.md, "Closed loops"): after the branch went away from its first
+      // point, the step crosses the hyperplane through the first orbit (taken to the current
+      // section) normal to the branch, near it and on its events; the orbit corrected on that
+      // hyperplane is the first one again (impacts within 1e-7, same λ). The branch stops there:
+      // going on would draw the loop again.
+      if (went_away && next->probe.signature == br.points.front().signature && !stop_requested()) {
+        const double l0 = br.points.front().value;
+        std::optional<Corrected> yc;
+        int iters = 0;
+        if (p.phase() != first_phase) {  // the first orbit on the current section
+          const BranchPoint& f0 = br.points.front();
+          if (auto y = OnSection(p, l0, f0.section_time, f0.X, f0.V, p.phase())) {
+            first_y = *y;
+            first_phase = p.phase();
+          }
+        }
+        if (p.phase() == first_phase) {
+          const double a0 = t.dot(cur.y - first_y), a1 = t.dot(next->y - first_y);
+          if (a0 * a1 <= 0 && a0 != a1 && (cur.y - first_y).norm() < 4.0 * ds + 1e-9) {
+            const Eigen::VectorXd from_here = cur.y + (a0 / (a0 - a1)) * (next->y - cur.y);
+            yc = Correct(p, first_y, t, iters, false, &from_here);
+          }
+        }
+        const auto back = yc ? p.Examine(*yc) : std::nullopt;
+        if (back && SameFamily(cur, *back)) {
+          const size_t before = br.points.size();
+          record(*back);
+          if (br.points.size() > before) {
+            const double d = std::max(OrbitDistance(br.points.front(), br.points.back(), p.period()),
+                                      std::abs(br.points.back().value - l0) / std::max(1.0, std::abs(l0)));
+            if (d < 1e-7) {
+              br.end = fmt::format("closed loop: back at its first point (λ = {:.17g}; orbit within {:.1e}) after "
+                                   "{} points",
+                                   br.points.back().value, d, br.points.size() - 1);
+              br.closed_loop = true;
+              return Finish(br, p);
+            }
+            br.points.pop_back();
+          }
+        }
+      }
       cur = *next;
       t = t_new;
       section_fresh = false;
       record(cur);
+      if (!went_away && br.points.size() > 1 &&
+          OrbitDistance(br.points.front(), br.points.back(), p.period()) +
+                  std::abs(br.points.back().value - br.points.front().value) /
+                      std::max(1.0, std::abs(br.points.front().value)) > 1e-3)
+        went_away = true;
       transition.reset();
       ds = std::min(ds * 1.5, ds_max);
     } else if (ds > ds_retry) {

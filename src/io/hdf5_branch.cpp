@@ -143,7 +143,7 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   t.strings.emplace_back("events", events);
   t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
-  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
+  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}, {"closed_loop", b.closed_loop ? 1 : 0}};
   WriteTable(group + "/branch", t);
   std::vector<const std::vector<ContactLoads>*> loads;
   std::vector<std::string> notes;

@@ -335,6 +335,7 @@ nlohmann::json BranchObject(const Branch& b) {
     rel.push_back({{"value", x.value}, {"from", x.from}, {"to", x.to}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["relabels"] = rel;
   j["end"] = b.end;
+  j["closed_loop"] = b.closed_loop;
   j["quad_evaluations"] = b.quad_evaluations;
   return j;
 }

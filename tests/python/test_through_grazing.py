@@ -247,3 +247,59 @@ def test_the_new_impact_speed_is_linear_in_the_distance(near_grazing):
     # v ~ k d^p over the distances: p = 1 (a square-root law would give 1/2).
     p = np.polyfit(np.log(lam - w_g), np.log(v), 1)[0]
     assert abs(p - 1) < 0.01, p
+
+
+def period_map(tube, t_s, q, qd):
+    """The 30-digit flow of one forcing period from the free state (q, q') at t_s, with the impacts."""
+    t, q, qd = mp.mpf(t_s), [mp.mpf(x) for x in q], [mp.mpf(x) for x in qd]
+    end = t + tube.T
+    while True:
+        t_n, c = tube.next_impact(t, q, qd)
+        if t_n >= end:
+            return tube.flow(t, q, qd, end)
+        q, qd = tube.flow(t, q, qd, t_n)
+        t = t_n
+        qd = [qd[0], -R * qd[1]]
+
+
+def test_a_closed_loop_stops_where_it_returns_to_its_first_point(down, tmp_path):
+    """The asymmetric four-impact branch switched at the branch point near omega = 0.577019 goes
+    round a closed loop (before: three times round, until --max-points). It now stops where it
+    comes back: its last orbit is its first (a periodic orbit of the independent flow, 1e-9)."""
+    j, out = down
+    bp = [b["value"] for b in j["bifurcations"] if b["kind"] == "branch-point" and abs(b["value"] - 0.577019) < 1e-5]
+    assert bp
+    vals = [p["value"] for p in j["points"]]
+    k = next(i for i in range(len(vals) - 1)
+             if min(vals[i], vals[i + 1]) < bp[0] < max(vals[i], vals[i + 1])
+             and j["points"][i]["sequence"] == "0:impact*2 1:impact*2")
+    loop = tmp_path / "loop.h5"
+    res = json.loads(vibro("continue", TUBE, "--param", KEY, "--to", 0.62, "--from", out, "--point", k, "--switch",
+                           "--out", loop, "--json", "--force"))
+    assert res["closed_loop"] is True and res["end"].startswith("closed loop"), res["end"]
+    n = len(res["points"])
+    assert 10 < n < 200, n  # once round
+    with h5py.File(loop) as f:
+        assert f["branch"].attrs["closed_loop"] == 1
+        b = f["branch"]
+        first, last = vibro_impacts(f, 0), vibro_impacts(f, n - 1)
+        assert abs(b["value"][0] - b["value"][n - 1]) < 1e-9
+        key = lambda i: (i[0] % (2 * np.pi))
+        for x, y in zip(sorted(first, key=key), sorted(last, key=key)):
+            assert x[1] == y[1]
+            assert abs(np.remainder(x[0] - y[0] + np.pi, 2 * np.pi) - np.pi) < 1e-9
+            assert abs(x[2] - y[2]) < 1e-9
+        # Its orbits are asymmetric (the symmetric one it was born from is another branch), and its
+        # first and last orbits are a periodic orbit of the independent flow.
+        def asymmetry(i):
+            imp = vibro_impacts(f, i)
+            s0 = sorted(abs(x[2]) for x in imp if x[1] == 0)
+            s1 = sorted(abs(x[2]) for x in imp if x[1] == 1)
+            return max(abs(a - c) for a, c in zip(s0, s1)) if len(s0) == len(s1) else 1.0
+        assert max(asymmetry(i) for i in range(n)) > 1e-3
+        for i in (0, n - 1):
+            tube = Tube(b["value"][i])
+            q, qd = period_map(tube, b["section_time"][i], b["q"][i], b["q_dot"][i])
+            err = max(abs(float(q[m]) - b["q"][i][m]) for m in range(2))
+            err = max(err, max(abs(float(qd[m]) - b["q_dot"][i][m]) for m in range(2)))
+            assert err < 1e-9, (i, err)
