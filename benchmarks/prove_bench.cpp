@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "vibro/continuation.hpp"
 #include "vibro/prove.hpp"
 #include "vibro/scene_file.hpp"
 
@@ -52,7 +53,64 @@ void BM_Prove3DofDampedImpact(benchmark::State& s) {
 void BM_Prove2DofTwoSidedTube(benchmark::State& s) {
   Prove(s, "tube_loose_support.toml", {}, vibro::OrbitKind::kImpact);
 }
+// Sticking orbits of several modes held at a plastic stop (r = 0): the held flow enclosed.
+void BM_Prove2DofSticking(benchmark::State& s) {
+  Prove(s, "chain2.toml", {"stop.restitution=0"}, vibro::OrbitKind::kSticking);
+}
+void BM_Prove2DofDampedSticking(benchmark::State& s) {
+  Prove(s, "chain2_damped.toml", {"stop.restitution=0"}, vibro::OrbitKind::kSticking);
+}
+void BM_Prove3DofSticking(benchmark::State& s) { Prove(s, "chain3.toml", {}, vibro::OrbitKind::kSticking); }
+// A bifurcation point: the tube's grazing near ω = 1.3646 (docs/prove.md "Grazings"), located by a
+// continuation in the set-up (not timed), proven from the branch point just before it: the orbit
+// search from that state, Newton on the orbit with its tangency, the two Krawczyk tests, the gaps.
+void BM_ProveTubeGrazing(benchmark::State& state) {
+  const std::string file = std::string(VIBRO_SCENES_DIR) + "/tube_loose_support.toml";
+  const auto at = [&](double w) {
+    return vibro::LoadScene(file, {"run.samples_per_period=0", "excitation.frequency=" + std::to_string(w)}).scene;
+  };
+  vibro::ContinuationRequest c;
+  c.scene_at = [&](double w) {
+    auto scene = vibro::LoadScene(file, {"run.samples_per_period=0"}).scene;
+    scene.frequency = w;
+    return scene;
+  };
+  c.orbit.kind = vibro::OrbitKind::kImpact;
+  c.from = 0.9;
+  c.to = 1.5;
+  const auto branch = vibro::Continue(c);
+  const vibro::Bifurcation* graze = nullptr;
+  for (const auto& b : branch.bifurcations)
+    if (b.kind == "grazing") graze = &b;
+  if (graze == nullptr || branch.points.size() < 2) {
+    state.SkipWithError("no grazing located");
+    return;
+  }
+  const auto& before = branch.points[branch.points.size() - 2];
+  vibro::BifurcationRequest req;
+  req.kind = "grazing";
+  req.parameter = "excitation.frequency";
+  req.value = graze->value;
+  req.bracket = graze->bracket;
+  req.start = vibro::InitialOverride{before.section_time, before.X, before.V};
+  req.period = branch.period;
+  req.start_value = before.value;
+  auto scene = at(0.9);
+  scene.frequency = graze->value;
+  const vibro::System sys(scene);
+  double width = 0;
+  for (auto _ : state) {
+    const auto r = vibro::ProveBifurcation(sys, scene, req);
+    if (!r.proven) state.SkipWithError(("not proven: " + r.reason).c_str());
+    width = r.box_width;
+  }
+  state.counters["interval_width"] = width;
+}
+BENCHMARK(BM_ProveTubeGrazing)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove1DofImpact)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove2DofSticking)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove2DofDampedSticking)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Prove3DofSticking)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove3DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofTwoSidedTube)->Unit(benchmark::kMillisecond);

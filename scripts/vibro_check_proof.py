@@ -30,6 +30,7 @@ import re
 import sys
 
 from mpmath import iv, mp
+from mpmath.libmp import libmpi, from_int
 
 PREC = 192
 iv.prec = PREC
@@ -57,6 +58,7 @@ class NotConfirmed(Exception):
 # ---- Intervals --------------------------------------------------------------------------------
 
 ZERO, ONE = iv.mpf(0), iv.mpf(1)
+_RAW_ZERO, _RAW_ONE = ZERO._mpi_, ONE._mpi_
 IV = type(ZERO)
 
 
@@ -779,6 +781,7 @@ class Truth:
         self.min_box_width = mp.mpf(0)
         self.reason = None      # a function of the reason text that raises NotConfirmed
         self.contacts = None    # the contact of each event (None: all at contact 0)
+        self.held_note = False  # a sticking orbit of several modes (the held note is about it)
 
 
 def prime_factors(q):
@@ -1154,9 +1157,6 @@ def check_sticking(cert, m, ledger):
     if not hi(m.r) < 1:
         raise NotConfirmed("a sticking certificate needs 0 <= r < 1")
     plastic = lo(m.r) == 0 and hi(m.r) == 0
-    if m.zeta is not None and not plastic:
-        raise NotConfirmed("a sticking certificate of a damped model needs r = 0 (the chattering tail's bounds are "
-                           "those of the undamped model)")
     w, w1s, kappa, TB, x0 = m.w, m.w_i[0] ** 2, m.TA[0] * m.f, m.TB[0], m.x0
     rel = "release"
     ratio = w1s * x0 / kappa
@@ -1382,11 +1382,22 @@ def check_tail(cert, m, ledger, count, tL, vplus, reaction, w1s):
     rho = m.r * iv.sqrt(a_hi / A_low)
     claim_contains(tail["contraction"], rho, "the tail's contraction r sqrt(a_hi/A_lo)")
     ledger.check("tail contraction 1 - rho", tl, "> 0", 1 - rho, 1 - rho)
-    Tmax = 2 * v / (A_low * (1 - rho))
-    claim_upper(tail["time_bound"], Tmax, "the tail's time bound 2v/(A_lo (1 - rho))")
+    if m.zeta is None:
+        Tmax = 2 * v / (A_low * (1 - rho))
+        rho_low = m.r * iv.sqrt(A_low / a_hi)
+        Tmin = 2 * v_low / (a_hi * (1 - rho_low))
+    else:
+        # Damped, y'' = -w1² y - 2σ y' - T_B R (σ = ζ w1): the damping shortens the rise (Y <= v²/(2 A_lo))
+        # and takes energy in the fall (landing speed <= v sqrt(a_hi/A_lo)), but slows the fall, where
+        # y'' <= -(A_lo - 2σ v sqrt(a_hi/A_lo)) = -f_lo: a flight lasts at most v/A_lo + v/sqrt(A_lo f_lo)
+        # <= 2v/f_lo. From below, at least the first rise, v_lo/(a_hi + 2σ v).
+        sigma = m.zeta[0] * m.w_i[0]
+        f_lo = A_low - 2 * sigma * v * iv.sqrt(a_hi / A_low)
+        ledger.check("tail fall acceleration A_lo - 2 sigma v sqrt(a_hi/A_lo)", tl, "> 0", f_lo, f_lo)
+        Tmax = 2 * v / (f_lo * (1 - rho))
+        Tmin = v_low / (a_hi + 2 * sigma * v)
+    claim_upper(tail["time_bound"], Tmax, "the tail's time bound")
     ledger.check("tail window L - Tmax", tl, "> 0", L - Tmax, L - Tmax)
-    rho_low = m.r * iv.sqrt(A_low / a_hi)
-    Tmin = 2 * v_low / (a_hi * (1 - rho_low))
     t_end = iv.mpf([lo(tL + Tmin), hi(tL + Tmax)])
     claim_contains(tail["accumulation"], t_end, "the accumulation time")
     return t_end
@@ -1398,7 +1409,9 @@ SUMMARY_KEYS = ("verdict", "reason", "kind", "period", "sequence", "events", "se
                 "box_width")
 NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
          "a multiplier enclosure meets the unit circle",
-         "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE)
+         "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE,
+         "sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
+         "other multipliers are 0")
 
 
 def summary_shape(s, n):
@@ -1515,8 +1528,9 @@ def check_summary(cert, s, truth, m):
     if stability == "unstable" and not (mods is not None and any(lo(x) > 1 for x in mods)):
         raise NotConfirmed(f"{s['stability'].path}: 'unstable', but the checker's |multiplier|² are "
                            f"{', '.join(show_iv(x) for x in mods or [])}")
+    held = truth.held_note
     if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
-            truth.multipliers == "zero":
+            truth.multipliers == "zero" or note == HELD_NOTE and not held:
         raise NotConfirmed(f"{s['stability_note'].path}: '{note}' is not about this orbit")
     # Asked for a period Q that the least period divides: the orbit is also the period-Q orbit, and
     # the reason says so (docs/prove.md "The period is the least period").
@@ -1533,6 +1547,437 @@ def check_summary(cert, s, truth, m):
     elif "; its least period" in text:
         raise NotConfirmed(f"{s['reason'].path}: states a requested period the summary does not have")
     truth.reason(s["reason"], text)
+
+
+# ---- Sticking orbits of several modes ----------------------------------------------------------
+
+HELD_NOTE = ("sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
+             "other multipliers are 0")
+STICKING_MODES_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczyk", "release", "flights", "sticking",
+                       "monodromy")
+
+
+def _raw_matmul(A, B):
+    """The product of two matrices of mpmath intervals held as raw (lo, hi) pairs (libmpi, rounded
+    outward at PREC bits): the Taylor series of the held flow without the context's conversions."""
+    mul, add = libmpi.mpi_mul, libmpi.mpi_add
+    n, k, m = len(A), len(B), len(B[0])
+    out = []
+    for i in range(n):
+        row = A[i]
+        res = []
+        for j in range(m):
+            acc = _RAW_ZERO
+            for l in range(k):
+                acc = add(acc, mul(row[l], B[l][j], PREC), PREC)
+            res.append(acc)
+        out.append(res)
+    return out
+
+
+class Held:
+    """The flow of the structure held at contact 0 (docs/prove.md "Sticking orbits of several
+    modes"), written directly: Ẍ = Ẍ_free + T_B R with R chosen so that c·Ẍ = 0, i.e.
+    R = −c·Ẍ_free/s_B = (c·(Ω²X + DẊ) − s_A f sin ωt)/s_B. In Z = (X, Ẋ, sin ωt, cos ωt) it is Ż = AZ,
+    Z(t0 + s) = e^{As}Z(t0), e^{As} enclosed by its Taylor series and a remainder bound."""
+
+    def __init__(self, m):
+        n, N = m.n, 2 * m.n + 2
+        self.n, self.N, self.m = n, N, m
+        c, TB = m.c, m.TB
+        z = m.zeta or [ZERO] * n
+        D_ = [2 * z[i] * m.w_i[i] for i in range(n)]
+        A = [[ZERO] * N for _ in range(N)]
+        # Column k of A: Ż for Z = e_k, the free acceleration plus T_B R(e_k).
+        for k in range(N):
+            X = [ONE if k == i else ZERO for i in range(n)]
+            V = [ONE if k == n + i else ZERO for i in range(n)]
+            sn = ONE if k == 2 * n else ZERO
+            cs = ONE if k == 2 * n + 1 else ZERO
+            free = [m.TA[i] * m.f * sn - m.w_i[i] ** 2 * X[i] - D_[i] * V[i] for i in range(n)]
+            R = -sum((c[i] * free[i] for i in range(n)), ZERO) / m.sB
+            for i in range(n):
+                A[i][k] = V[i]
+                A[n + i][k] = free[i] + TB[i] * R
+            A[2 * n][k] = m.w * cs
+            A[2 * n + 1][k] = -m.w * sn
+        self.A = A
+        self.l = [c[i] * m.w_i[i] ** 2 / m.sB for i in range(n)] + [c[i] * D_[i] / m.sB for i in range(n)] + \
+            [-m.sA * m.f / m.sB, ZERO]
+        self.lA = [sum((self.l[i] * A[i][k] for i in range(N)), ZERO) for k in range(N)]
+        self.cache = {}
+
+    def state(self, t, X, V):
+        wt = t * self.m.w if isinstance(t, D) else self.m.w * t
+        return list(X) + list(V) + [dsin(wt), dcos(wt)]
+
+    def exp(self, s):
+        """e^{As} for every s in the interval s."""
+        key = (lo(s), hi(s))
+        if key in self.cache:
+            return self.cache[key]
+        if lo(s) != hi(s) and lo(s) != 0:
+            # e^{As} = e^{A s_lo} e^{A[0, s_hi − s_lo]}: the width is not squared.
+            E = matmul(self.exp(iv.mpf(lo(s))), self.exp(iv.mpf([0, hi(s) - lo(s)])))
+            if len(self.cache) < 4096:
+                self.cache[key] = E
+            return E
+        N = self.N
+        B = [[self.A[i][k] * s for k in range(N)] for i in range(N)]
+        norm = max(sum((max(abs(lo(x)), abs(hi(x))) for x in row), mp.mpf(0)) for row in B)
+        k = 0
+        while norm / 2 ** k > mp.mpf(1) / 8:
+            k += 1
+        scale = iv.mpf(2) ** -k
+        B = [[x * scale for x in row] for row in B]
+        beta = iv.mpf(norm) * scale
+        # Terms up to j = J, where β^(J+1)/(J+1)! < 2^-(PREC+10); the rest bounded in ‖·‖∞ by
+        # β^(J+1)/(J+1)! · 1/(1 − β/(J+2)).
+        Br = [[x._mpi_ for x in row] for row in B]
+        Er = [[_RAW_ONE if i == j else _RAW_ZERO for j in range(N)] for i in range(N)]
+        term = [row[:] for row in Er]
+        J, bound = 0, ONE
+        while True:
+            J += 1
+            term = _raw_matmul(term, Br)
+            div = (from_int(J), from_int(J))
+            term = [[libmpi.mpi_div(x, div, PREC) for x in row] for row in term]
+            Er = [[libmpi.mpi_add(Er[i][l], term[i][l], PREC) for l in range(N)] for i in range(N)]
+            bound = bound * beta / J
+            if hi(bound * beta / (J + 1)) < mp.mpf(2) ** -(PREC + 10) or J >= 200:
+                break
+        rest = bound * beta / (J + 1) / (1 - beta / (J + 2))
+        pad = iv.mpf([-hi(rest), hi(rest)])._mpi_
+        Er = [[libmpi.mpi_add(x, pad, PREC) for x in row] for row in Er]
+        for _ in range(k):
+            Er = _raw_matmul(Er, Er)
+        E = [[iv.make_mpf(x) for x in row] for row in Er]
+        if len(self.cache) < 4096:
+            self.cache[key] = E
+        return E
+
+    def advance(self, z, s):
+        """e^{As}z for intervals, or with gradients (D): e^{As}∇z + A e^{As}z ∇s."""
+        dual = isinstance(s, D) or any(isinstance(x, D) for x in z)
+        if not dual:
+            E = self.exp(s)
+            return [sum((E[i][k] * z[k] for k in range(self.N)), ZERO) for i in range(self.N)]
+        s = D.lift(s)
+        z = [D.lift(x) for x in z]
+        E = self.exp(s.v)
+        Ez = [sum((E[i][k] * z[k].v for k in range(self.N)), ZERO) for i in range(self.N)]
+        AEz = [sum((self.A[i][k] * Ez[k] for k in range(self.N)), ZERO) for i in range(self.N)]
+        out = []
+        for i in range(self.N):
+            g = {}
+            for k in range(self.N):
+                for idx, d in z[k].g.items():
+                    g[idx] = g[idx] + E[i][k] * d if idx in g else E[i][k] * d
+            for idx, d in s.g.items():
+                g[idx] = g[idx] + AEz[i] * d if idx in g else AEz[i] * d
+            out.append(D(Ez[i], g))
+        return out
+
+
+def dot(l, z):
+    out = ZERO
+    for a, b in zip(l, z):
+        out = b * D(a) + out if isinstance(b, D) else a * b + out
+    return out
+
+
+def make_krawczyk(residual, C, N):
+    def krawczyk(center, box):
+        F = [value(r) for r in residual([iv.mpf(x) for x in center])]
+        J = [r.g if isinstance(r, D) else {} for r in residual([variable(box[p], p) for p in range(N)])]
+        diff = [box[l] - center[l] for l in range(N)]
+        K = []
+        for p in range(N):
+            k = iv.mpf(center[p])
+            acc = {}
+            for j in range(N):
+                c = C[p][j]
+                k -= c * F[j]
+                for l, d in J[j].items():
+                    acc[l] = acc[l] + c * d if l in acc else c * d
+            for l in range(N):
+                k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * diff[l]
+            K.append(k)
+        return K
+    return krawczyk
+
+
+def plastic_saltation(m, t, X, Vm, vm, sticks):
+    """S = Dg + (f⁺ − Dg f⁻)∇hᵀ/(∇h·f⁻) of a plastic landing at contact 0: Dg = diag(I, Π),
+    Π = I − T_B cᵀ/s_B; f⁺ the held field (sticking) or the free one (a departure) at ΠẊ⁻."""
+    n = m.n
+    Pi = [[(ONE if i == l else ZERO) - m.TB[i] * m.c[l] / m.sB for l in range(n)] for i in range(n)]
+    Vp = [sum((Pi[i][l] * Vm[l] for l in range(n)), ZERO) for i in range(n)]
+    am, ap = m.acceleration(t, X, Vm), m.acceleration(t, X, Vp)
+    if sticks:
+        ap = [sum((Pi[i][l] * ap[l] for l in range(n)), ZERO) for i in range(n)]
+    Pam = [sum((Pi[i][l] * am[l] for l in range(n)), ZERO) for i in range(n)]
+    jump = [Vp[i] - Vm[i] for i in range(n)] + [ap[i] - Pam[i] for i in range(n)]
+    S = [[ZERO] * (2 * n) for _ in range(2 * n)]
+    for i in range(n):
+        S[i][i] = ONE
+        for l in range(n):
+            S[n + i][n + l] = Pi[i][l]
+    for i in range(2 * n):
+        for l in range(n):
+            S[i][l] = S[i][l] + jump[i] * m.c[l] / vm
+    return S
+
+
+def check_sticking_modes(cert, m, ledger):
+    """A sticking orbit of several modes held on contact 0 with plastic landings (docs/prove.md
+    "Sticking orbits of several modes"): Krawczyk on the release and the landings, each flight free
+    of contact, R < 0 at each landing but the last, R > 0 at the last and over the held phase up to
+    the release, where Ṙ < 0; the monodromy and its multipliers on the held subspace."""
+    if len(m.contacts) > 1:
+        raise NotConfirmed("a sticking certificate of several modes needs a model of one contact")
+    if m.n < 2:
+        raise NotConfirmed("a certificate with unknowns of a sticking orbit needs several modes")
+    if not (lo(m.r) == 0 == hi(m.r)):
+        raise NotConfirmed("a sticking certificate of several modes needs r = 0 (plastic landings)")
+    if not positive(m.sB):
+        raise NotConfirmed("s_B = c·T_B must be > 0")
+    q = cert["period"].integer(1, 1 << 20)
+    n = m.n
+    per = 2 * n + 1
+    names_node = cert["unknowns"]
+    N = len(names_node.items(at_least=2 * per, at_most=MAX_UNKNOWNS))
+    if N % per:
+        names_node.fail(f"{N} unknowns: not a multiple of 2n + 1 = {per} (n = {n} modes)")
+    count = N // per - 1  # landings
+    expected = []
+    for b in range(count + 1):
+        expected += [f"t_{b}"] + [f"X_{b}[{i}]" for i in range(n)] + [f"V_{b}[{i}]" for i in range(n)]
+    names = [x.text() for x in names_node.items()]
+    if names != expected:
+        k = next(p for p in range(N) if names[p] != expected[p])
+        names_node[k].fail(f"'{names[k]}', expected '{expected[k]}'")
+    u_mid = [x.num() for x in cert["midpoint"].items(exactly=N)]
+    box_nodes = cert["box"].items(exactly=N)
+    U = [b.pair() for b in box_nodes]
+    for p in range(N):
+        if not lo(U[p]) < u_mid[p] < hi(U[p]):
+            cert["midpoint"][p].fail(f"{u_mid[p]} is not inside the box {show_pair(box_nodes[p].v)}")
+    C = [[iv.mpf(x.num()) for x in row.items(exactly=N)] for row in cert["preconditioner"].items(exactly=N)]
+    kr_nodes = cert["krawczyk"].items(exactly=N)
+    flights = cert["flights"].items(exactly=count)
+    mono_nodes = [row.items(exactly=2 * n) for row in cert["monodromy"].items(exactly=2 * n)]
+    qT = q * m.T
+    h = Held(m)
+
+    def unpack(vec, b):
+        o = b * per
+        return vec[o], vec[o + 1:o + 1 + n], vec[o + 1 + n:o + per]
+
+    def residual(vec):
+        out = []
+        for j in range(count):
+            t, X, V = unpack(vec, j)
+            tn, Xn, Vn = unpack(vec, j + 1)
+            Xe, Ve = m.flight(t, X, V, tn - t)
+            Vp = m.impact(Ve)
+            out.append(m.contact_of(Xe) - m.x0)
+            out += [Xe[i] - Xn[i] for i in range(n)]
+            out += [Vp[i] - Vn[i] for i in range(n)]
+        tm, Xm, Vm = unpack(vec, count)
+        tr, Xr, Vr = unpack(vec, 0)
+        z = h.advance(h.state(tm, Xm, Vm), tr + qT - tm)
+        out += [z[i] - Xr[i] for i in range(n)]
+        out += [z[n + i] - Vr[i] for i in range(n)]
+        out.append(dot(h.l, h.state(tr, Xr, Vr)))
+        return out
+
+    krawczyk = make_krawczyk(residual, C, N)
+    K = krawczyk(u_mid, U)
+    E = contract(residual, krawczyk, u_mid, U, K, C, m.point, m.thin)
+    for p in range(N):
+        ledger.check("krawczyk", names[p], "inside the box", K[p], E[p], box=U[p])
+        claim_contains(kr_nodes[p], E[p], f"the orbit's {names[p]}")
+        if not holds("inside the box", kr_nodes[p].pair(), U[p]):
+            raise NotConfirmed(f"{kr_nodes[p].path} = {show_pair(kr_nodes[p].v)} is not inside the box")
+
+    # The release: R falls through 0.
+    rel = cert["release"].obj(("reaction_rate",))
+    rate = dot(h.lA, h.state(*unpack(U, 0)))
+    rateT = dot(h.lA, h.state(*unpack(E, 0)))
+    ledger.check("reaction rate", "release", "< 0", rate, rateT)
+    claim_contains(rel["reaction_rate"], rateT, "the reaction rate at the release")
+
+    truth = Truth()
+    truth.kind, truth.period = "sticking", q
+    truth.sequence = ["release"]
+    truth.events = [("release", unpack(E, 0)[0], None)]
+    budget = [MAX_PIECES]
+    top = max([hi(m.w)] + [hi(w) for w in m.w_i])
+    M = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
+    for j in range(count):
+        fn = flights[j]
+        fl, land = f"flight {j}", f"landing {j + 1}"
+        start = "release" if j == 0 else "departure"
+        extra = ("third_derivative", "third_derivative_lower", "fourth_derivative_bound") if j == 0 else \
+            ("second_derivative", "second_derivative_lower", "third_derivative_bound")
+        fn.obj(("start", "duration", "start_window", "second_derivative_bound", "velocity_before_next",
+                "speed_before_lower", "end_window", "pieces", "reaction_at_landing") + extra)
+        if fn["start"].text() != start:
+            raise NotConfirmed(f"{fn['start'].path}: '{fn['start'].v}', the flight starts at a {start}")
+
+        def quantities(vec):
+            t, X, V = unpack(vec, j)
+            tn, Xn, Vn = unpack(vec, j + 1)
+            S = tn - t
+            Xe, Ve = m.flight(t, X, V, S)
+            return t, X, V, tn, Xn, Vn, S, Xe, Ve, m.contact_of(Ve)
+
+        t, X, V, tn, Xn, Vn, S, Xe, Ve, vm = quantities(U)
+        tT, XT, VT, tnT, XnT, VnT, ST, XeT, VeT, vmT = quantities(E)
+        ledger.check("duration", fl, "> 0", S, ST)
+        ledger.check("contact velocity before impact", fl, "< 0", vm, vmT)
+        claim_contains(fn["duration"], ST, f"the duration of {fl}")
+        claim_contains(fn["velocity_before_next"], vmT, f"the contact velocity before {land}")
+        ws = fn["start_window"].point()
+        if not positive(ws):
+            raise NotConfirmed(f"{fn['start_window'].path}: the window must be > 0")
+        if j == 0:
+            # At the true orbit g = g' = g'' = 0 (on the stop, at rest, R = 0): g(s) >= s^3 (g'''/6 - M4 s/24).
+            def g3_of(t_, X_, V_):
+                acc = m.acceleration(t_, X_, V_)
+                z = m.zeta or [ZERO] * n
+                jerk = [m.TA[i] * m.f * m.w * iv.cos(m.w * t_) - m.w_i[i] ** 2 * V_[i] - 2 * z[i] * m.w_i[i] * acc[i]
+                        for i in range(n)]
+                return m.contact_of(jerk)
+            g3, g3T = g3_of(t, X, V), g3_of(tT, XT, VT)
+            M4, M4T = m.derivative_bound(t, X, V, 4), m.derivative_bound(tT, XT, VT, 4)
+            ledger.check("third derivative of the gap", fl, "> 0", g3, g3T)
+            ledger.check("fourth-derivative bound", fl, "finite", M4, M4T)
+            claim_contains(fn["third_derivative"], g3T, f"g''' at the start of {fl}")
+            claim_lower(fn["third_derivative_lower"], g3, f"g''' at the start of {fl} over the box")
+            claim_upper(fn["fourth_derivative_bound"], M4T, f"the bound on |g''''| of {fl}")
+            margin = fn["third_derivative_lower"].point() / 6 - M4 * ws / 24
+            ledger.check("start window g'''/6 - M4 ws/24", fl, "> 0", margin,
+                         fn["third_derivative_lower"].point() / 6 - M4T * ws / 24)
+        else:
+            g2, g2T = m.contact_of(m.acceleration(t, X, V)), m.contact_of(m.acceleration(tT, XT, VT))
+            M3, M3T = m.derivative_bound(t, X, V, 3), m.derivative_bound(tT, XT, VT, 3)
+            ledger.check("second derivative of the gap", fl, "> 0", g2, g2T)
+            ledger.check("third-derivative bound", fl, "finite", M3, M3T)
+            claim_contains(fn["second_derivative"], g2T, f"g'' at the start of {fl}")
+            claim_lower(fn["second_derivative_lower"], g2, f"g'' at the start of {fl} over the box")
+            claim_upper(fn["third_derivative_bound"], M3T, f"the bound on |g'''| of {fl}")
+            margin = fn["second_derivative_lower"].point() / 2 - M3 * ws / 6
+            ledger.check("start window g''/2 - M3 ws/6", fl, "> 0", margin,
+                         fn["second_derivative_lower"].point() / 2 - M3T * ws / 6)
+        M2, M2T = m.derivative_bound(t, X, V, 2), m.derivative_bound(tT, XT, VT, 2)
+        ledger.check("second-derivative bound", fl, "finite", M2, M2T)
+        claim_upper(fn["second_derivative_bound"], M2T, f"the bound on |g''| of {fl}")
+        claim_lower(fn["speed_before_lower"], -vm, f"the contact speed before {land} over the box")
+        we = fn["end_window"].point()
+        if not positive(we):
+            raise NotConfirmed(f"{fn['end_window'].path}: the window must be > 0")
+        b_low = fn["speed_before_lower"].point()
+        ledger.check("end window b - M2 we/2", fl, "> 0", b_low - M2 * we / 2, b_low - M2T * we / 2)
+        topS = hi(iv.mpf(hi(S)) - we)
+        if lo(ws) < topS:
+            positive_pieces(fn["pieces"], lo(ws), topS,
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[0]) - m.x0,
+                            lambda s: m.contact_of(m.flight(t, X, V, s)[1]), f"the gap on {fl}", budget)
+        else:
+            fn["pieces"].items(at_most=MAX_PIECES)
+        sticks = j == count - 1
+        R_land = dot(h.l, h.state(tn, Xn, Vn))
+        R_landT = dot(h.l, h.state(tnT, XnT, VnT))
+        ledger.check("reaction at the landing", land, "> 0" if sticks else "< 0", R_land, R_landT)
+        claim_contains(fn["reaction_at_landing"], R_landT, f"the reaction at {land}")
+        truth.events.append(("impact", tnT, vmT))
+        truth.sequence.append("impact")
+        if sticks:
+            truth.events.append(("stick", tnT, vmT))
+            truth.sequence.append("stick")
+        else:
+            truth.events.append(("departure", tnT, None))
+            truth.sequence.append("departure")
+        M = matmul(plastic_saltation(m, tnT, XeT, VeT, vmT, sticks), matmul(flight_jacobian(m, tT, XT, VT, ST), M))
+
+    # The held phase: R > 0 from the last landing on, Ṙ < 0 over the end window, R = 0 at the release.
+    st = cert["sticking"].obj(("duration", "end_window", "pieces"))
+    tm, Xm, Vm = unpack(U, count)
+    tmT, XmT, VmT = unpack(E, count)
+    zm, zmT = h.state(tm, Xm, Vm), h.state(tmT, XmT, VmT)
+    tau, tauT = unpack(U, 0)[0] + qT - tm, unpack(E, 0)[0] + qT - tmT
+    ledger.check("duration", "sticking phase", "> 0", tau, tauT)
+    claim_contains(st["duration"], tauT, "the duration of the sticking phase")
+    weh = st["end_window"].point()
+    if not positive(weh):
+        raise NotConfirmed(f"{st['end_window'].path}: the window must be > 0")
+    Iw = iv.mpf([lo(iv.mpf(lo(tau)) - weh), hi(tau)])
+    tail_rate = dot(h.lA, h.advance(zm, Iw))
+    ledger.check("reaction rate over the end window", "sticking phase", "< 0", tail_rate, dot(h.lA, h.advance(zmT, tauT)))
+    topH = hi(iv.mpf(hi(tau)) - weh)
+    if 0 < topH:
+        # E(p) for the pieces' ends, stepped exactly: E(p_k) = e^{A(p_k − p_{k−1})} E(p_{k−1}).
+        state = {"at": mp.mpf(0), "E": [[ONE if i == j else ZERO for j in range(h.N)] for i in range(h.N)]}
+
+        def at(p):
+            if p != state["at"]:
+                state["E"] = matmul(h.exp(iv.mpf(p - state["at"])), state["E"])
+                state["at"] = p
+            return [sum((state["E"][i][k] * zm[k] for k in range(h.N)), ZERO) for i in range(h.N)]
+
+        def r_value(c):
+            # e^{Ac}z = e^{A(c − p)} e^{Ap} z for the last stepped end p.
+            p0 = state["at"]
+            return dot(h.l, h.advance(at(p0), c - p0))
+
+        def r_slope(I):
+            p0 = lo(I)
+            return dot(h.lA, h.advance(at(p0), I - p0))
+
+        positive_pieces(st["pieces"], mp.mpf(0), topH, r_value, r_slope, "the reaction over the sticking phase",
+                        budget)
+    else:
+        st["pieces"].items(at_most=MAX_PIECES)
+
+    # The monodromy at the true orbit and its restriction to the held subspace.
+    Eh = h.exp(tauT)
+    M = matmul([row[:2 * n] for row in Eh[:2 * n]], M)
+    for i in range(2 * n):
+        for j in range(2 * n):
+            claim_contains(mono_nodes[i][j], M[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
+    kk = max(range(n), key=lambda i: abs(mid(m.c[i])))
+    if not excludes_zero(m.c[kk]):
+        raise NotConfirmed("the contact's shape has no nonzero entry")
+    keep = [b * n + i for b in range(2) for i in range(n) if i != kk]
+    B = [[ZERO] * len(keep) for _ in range(2 * n)]
+    for col, p in enumerate(keep):
+        b, i = divmod(p, n)
+        B[p][col] = ONE
+        B[b * n + kk][col] = -m.c[i] / m.c[kk]
+    MB = matmul(M, B)
+    Mr = [[MB[p][col] for col in range(len(keep))] for p in keep]
+    boxes = eigenvalues(Mr)
+    truth.multipliers = boxes
+    truth.not_enclosed = boxes is None
+    truth.held_note = True
+    truth.section = (*unpack(E, 0), "the release")
+    truth.min_box_width = max(hi(x) - lo(x) for x in U)
+
+    def reason(node, text):
+        interval_prefix(node, "", m)
+        g = re.fullmatch(r"exactly one period-(\d+) sticking orbit of (\d+) modes through the release in a box of "
+                         r"width (\S+) \(Krawczyk\): release, (\d+) flight\(s\) with plastic landings, sticking with "
+                         r"R > 0 until the next release", text)
+        if not g:
+            raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
+        check_count(node, "period", int(g.group(1)), q)
+        check_count(node, "modes", int(g.group(2)), n)
+        check_width(node, g.group(3), max(hi(x) - lo(x) for x in U), "the box")
+        check_count(node, "flights", int(g.group(4)), count)
+    truth.reason = reason
+    return truth
 
 
 # ---- One certificate --------------------------------------------------------------------------
@@ -1883,6 +2328,23 @@ def check_bifurcation(node):
     if node.has("structure"):
         check_structure(node["structure"], m)
     b = node["bifurcation"]
+    if isinstance(b.v, dict) and b.v.get("type") == "grazing":
+        name = b["parameter"].text(("amplitude", "frequency"))
+        ends = b["interval"].items(exactly=2)
+        plo, phi = decimal(ends[0]), decimal(ends[1])
+        if node["model"].v[name] != f"[{ends[0].v}, {ends[1].v}]":
+            raise NotConfirmed(f"{node['model'][name].path} = {node['model'].v[name]!r}: not the interval "
+                               f"{b['interval'].path} = {b['interval'].v}")
+        if not hi(phi) - lo(plo) <= mp.mpf("1e-10") or not lo(plo) < hi(phi):
+            raise NotConfirmed(f"{b['interval'].path}: {show(hi(phi) - lo(plo))} wide, not in (0, 1e-10]")
+        for key, skey in (("interval", "interval"), ("parameter", "parameter"), ("contact", "grazing_contact"),
+                          ("flight", "grazing_flight"), ("impact_contacts", "impact_contacts"),
+                          ("symmetric", "symmetric")):
+            if s[skey].v != b[key].v:
+                raise NotConfirmed(f"{s[skey].path} = {s[skey].v!r} and {b[key].path} = {b[key].v!r} differ")
+        if s["bifurcation"].v != "grazing":
+            raise NotConfirmed(f"{s['bifurcation'].path} = {s['bifurcation'].v!r}: the certificate is a grazing")
+        return check_grazing(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
     b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
     kind = b["type"].text(("pitchfork", "fold"))
     fold = kind == "fold"
@@ -1975,6 +2437,290 @@ def check_bifurcation(node):
     return 4
 
 
+# ---- Grazing -----------------------------------------------------------------------------------
+
+def graze_flight(m, f, w, t0, X, V, s):
+    """The free flight from (t0, X, V) over s with the amplitude f and the forcing frequency w
+    variables too (written again for a grazing): per mode U = P sin ωt + Q cos ωt solving
+    Ü + 2σU̇ + ω_i²U = T_A f sin ωt, plus e^{−σs}(a cos ω_d s + b sin ω_d s) matching X, V at t0."""
+    L = D.lift
+    f, w, t0, s = L(f), L(w), L(t0), L(s)
+    t1 = t0 + s
+    s0, c0, s1, c1 = dsin(w * t0), dcos(w * t0), dsin(w * t1), dcos(w * t1)
+    Xo, Vo = [], []
+    for i in range(m.n):
+        z = m.zeta[i] if m.zeta is not None else ZERO
+        sg, wd = L(z * m.w_i[i]), L(m.w_i[i] * iv.sqrt(1 - z * z))
+        wi = L(m.w_i[i])
+        det = wi * wi - w * w
+        dmp = L(2) * sg * w
+        den = det * det + dmp * dmp
+        load = f * L(m.TA[i])
+        P, Q = load * det / den, -(load * dmp / den)
+        U0, Ud0 = P * s0 + Q * c0, w * (P * c0 - Q * s0)
+        U1, Ud1 = P * s1 + Q * c1, w * (P * c1 - Q * s1)
+        a = L(X[i]) - U0
+        b = (L(V[i]) - Ud0 + a * sg) / wd
+        e = dexp(-(s * sg))
+        cd, sd = dcos(s * wd), dsin(s * wd)
+        Xo.append(U1 + e * (a * cd + b * sd))
+        Vo.append(Ud1 + e * ((b * wd - a * sg) * cd - (a * wd + b * sg) * sd))
+    return Xo, Vo
+
+
+class Grazing:
+    """The orbit of a grazing certificate: unknowns u = (t_j, X_j, V_j) per impact (one impact and
+    its mirror image for a symmetric orbit), the parameter p, the tangency time s on flight J."""
+
+    def __init__(self, m, name, hits, symmetric, J, l):
+        self.m, self.freq, self.hits, self.sym, self.J, self.l = m, name == "frequency", hits, symmetric, J, l
+        self.count = 1 if symmetric else len(hits)
+        self.per = 2 * m.n + 1
+        self.N = self.count * self.per
+
+    def fw(self, p):
+        return (self.m.f, p) if self.freq else (p, self.m.w)
+
+    def part(self, u, j):
+        n, k = self.m.n, j * self.per
+        return u[k], u[k + 1:k + 1 + n], u[k + 1 + n:k + 1 + 2 * n]
+
+    def duration(self, u, j, p):
+        _, w = self.fw(p)
+        if self.sym:
+            return D.lift(iv.pi) / D.lift(w)
+        k = (j + 1) % self.count
+        end = D.lift(self.part(u, k)[0])
+        if j == self.count - 1:
+            end = end + D.lift(2 * iv.pi) / D.lift(w)
+        return end - D.lift(self.part(u, j)[0])
+
+    def flight(self, u, j, p, s):
+        t, X, V = self.part(u, j)
+        f, w = self.fw(p)
+        return graze_flight(self.m, f, w, t, X, V, s)
+
+    def gap(self, X, l):
+        return self.m.contact_of([D.lift(x) for x in X], l) - D(self.m.contacts[l][2])
+
+    def residual(self, u, p, s=None):
+        m, out = self.m, []
+        for j in range(self.count):
+            t, X, V = self.part(u, j)
+            Xe, Ve = self.flight(u, j, p, self.duration(u, j, p))
+            if self.sym:
+                b = 1 - self.hits[0]
+                Vp = m.impact(Ve, b)
+                out.append(self.gap(X, self.hits[0]))
+                out += [D.lift(Xe[i]) + D.lift(X[i]) for i in range(m.n)]
+                out += [D.lift(Vp[i]) + D.lift(V[i]) for i in range(m.n)]
+            else:
+                k = (j + 1) % self.count
+                _, Xn, Vn = self.part(u, k)
+                Vp = m.impact(Ve, self.hits[k])
+                out.append(self.gap(X, self.hits[j]))
+                out += [D.lift(Xe[i]) - D.lift(Xn[i]) for i in range(m.n)]
+                out += [D.lift(Vp[i]) - D.lift(Vn[i]) for i in range(m.n)]
+        if s is not None:
+            Xe, Ve = self.flight(u, self.J, p, s)
+            out.append(m.contact_of(Ve, self.l) if not isinstance(Ve[0], D) else
+                       sum((D(ci) * v for ci, v in zip(m.contacts[self.l][0], Ve)), D(ZERO)))
+            out.append(self.gap(Xe, self.l))
+        return out
+
+    def gap_at(self, U, P, j, l, S):
+        """(γ, γ̇, γ̈) of contact l at s ∈ S on flight j, over the box (U, P)."""
+        m = self.m
+        Xe, Ve = self.flight(U, j, P, S)
+        Xe, Ve = [value(x) for x in Xe], [value(v) for v in Ve]
+        t = value(D.lift(self.part(U, j)[0]) + D.lift(S))
+        f, w = self.fw(P)
+        load = f * iv.sin(w * t)
+        z = m.zeta or [ZERO] * m.n
+        acc = [m.TA[i] * load - m.w_i[i] ** 2 * Xe[i] - 2 * z[i] * m.w_i[i] * Ve[i] for i in range(m.n)]
+        c = m.contacts[l][0]
+        dot = lambda Y: sum((ci * y for ci, y in zip(c, Y)), ZERO)  # noqa: E731
+        return dot(Xe) - m.contacts[l][2], dot(Ve), dot(acc)
+
+
+def krawczyk_mp(F_point, J_box, x, X, extra=None):
+    """K(X) = x − C F(x) + (I − C J(X))(X − x) [− (C ∂F/∂p)(P − p̃) with extra = (column, P − p̃)],
+    C the inverse of J's midpoint (here, at 192 bits): (K, C, an upper bound of ‖I − C J‖∞)."""
+    n = len(x)
+    A = mp.matrix(n, n)
+    for a in range(n):
+        for b in range(n):
+            A[a, b] = mid(J_box[a][b])
+    C = mp.inverse(A)
+    K, delta = [], mp.mpf(0)
+    for a in range(n):
+        v = x[a]
+        rowsum = ZERO
+        for l in range(n):
+            v = v - iv.mpf(C[a, l]) * F_point[l]
+            row = (ONE if a == l else ZERO) - sum((iv.mpf(C[a, j]) * J_box[j][l] for j in range(n)), ZERO)
+            v = v + row * (X[l] - x[l])
+            rowsum = rowsum + iv.mpf(max(abs(lo(row)), abs(hi(row))))  # outward-rounded sum
+        if extra is not None:
+            col, dP = extra
+            v = v - sum((iv.mpf(C[a, j]) * col[j] for j in range(n)), ZERO) * dP
+        delta = max(delta, hi(rowsum))
+        K.append(v)
+    return K, C, delta
+
+
+def check_grazing(node, m, b, s, P, name):
+    """A grazing certificate (docs/prove.md "Bifurcation points"), recomputed: Krawczyk on the orbit
+    over the interval (for every p one orbit in the box), Krawczyk on the orbit with its tangency
+    (exactly one (u, s, p) in the box), dm/dp = 1/(J⁻¹)_{last,last} enclosed and nonzero from
+    ‖I − CJ‖∞ < 1 over the box, γ̇ of opposite signs at the ends of the tangency's time box, γ̈ > 0
+    on the window, and the orbit an orbit (durations, impact velocities, every gap positive
+    outside the window)."""
+    b.obj(("type", "parameter", "interval", "contact", "flight", "impact_contacts", "symmetric", "unknowns",
+           "midpoint", "box", "window", "slope", "curvature", "grazing_time"))
+    k_count = len(m.contacts)
+    hits = [h.integer(0, k_count - 1) for h in b["impact_contacts"].items(at_least=1, at_most=MAX_FLIGHTS)]
+    sym = b["symmetric"].boolean()
+    l = b["contact"].integer(0, k_count - 1)
+    if sym:
+        if k_count != 2 or len(hits) != 2 or hits[0] == hits[1] or node["period"].v != 1:
+            raise NotConfirmed(f"{b['symmetric'].path}: a symmetric orbit has two impacts on two contacts in one period")
+        (c0, T0, e0, r0, _), (c1, T1, e1, r1, _) = m.contacts
+        exact = all(lo(x + y) == 0 == hi(x + y) for x, y in zip(c0 + T0, c1 + T1))
+        mirrored = False
+        if node.has("structure"):
+            cs = node["structure"].v["contacts"]
+            mirrored = len(cs) == 2 and cs[0]["dof"] == cs[1]["dof"] and cs[0]["partner"] == cs[1]["partner"] == -1 \
+                and cs[0]["side"] != cs[1]["side"]
+        t = node["model"].v
+        if not (exact or mirrored) or t["stop"] != t["more_contacts"][0]["stop"] or \
+                t["restitution"] != t["more_contacts"][0]["restitution"]:
+            raise NotConfirmed(f"{b['symmetric'].path}: the model is not mirrored (contact 1 is not contact 0 mirrored)")
+    G = Grazing(m, name, hits, sym, 0, l)
+    G.J = b["flight"].integer(0, G.count - 1)
+    N = G.N
+    boxes = b["box"].items(exactly=N + 1)
+    X = [x.pair() for x in boxes]
+    mids = b["midpoint"].items(exactly=N + 1)
+    xm = [iv.mpf(x.num()) for x in mids]
+    if len(b["unknowns"].items(exactly=N + 1)) != N + 1:
+        pass
+    for k in range(N + 1):
+        if not inside(xm[k], X[k]):
+            raise NotConfirmed(f"{mids[k].path}: the midpoint is not in the box")
+    U, S = X[:N], X[N]
+    pm = iv.mpf(mid(P))
+    # (1) The orbit over P: the parametric Krawczyk test.
+    Fp = [value(r) for r in G.residual(xm[:N], pm)]
+    Ud = [variable(U[k], k) for k in range(N)]
+    Pd = variable(P, N)
+    R = G.residual(Ud, Pd)
+    J = [[r.g.get(c, ZERO) for c in range(N)] for r in R]
+    col = [r.g.get(N, ZERO) for r in R]
+    K, _, _ = krawczyk_mp(Fp, J, xm[:N], U, (col, P - pm))
+    for k in range(N):
+        if not (lo(U[k]) < lo(K[k]) and hi(K[k]) < hi(U[k])):
+            raise NotConfirmed(f"{boxes[k].path}: Krawczyk's test on the orbit over the interval fails "
+                               f"(K = {show_iv(K[k])}): no unique orbit in the box confirmed")
+    # (2) The orbit with its tangency: exactly one (u, s, p) in the box.
+    x = xm[:N] + [xm[N], pm]
+    Xb = U + [S, P]
+    Fe = [value(r) for r in G.residual(x[:N], x[N + 1], x[N])]
+    Vd = [variable(Xb[k], k) for k in range(N + 2)]
+    Re = G.residual(Vd[:N], Vd[N + 1], Vd[N])
+    Je = [[r.g.get(c, ZERO) for c in range(N + 2)] for r in Re]
+    Ke, Ce, delta = krawczyk_mp(Fe, Je, x, Xb)
+    for k in range(N + 2):
+        if not (lo(Xb[k]) < lo(Ke[k]) and hi(Ke[k]) < hi(Xb[k])):
+            raise NotConfirmed(f"{b['box'].path}: Krawczyk's test on the orbit with its tangency fails at unknown {k} "
+                               f"(K = {show_iv(Ke[k])}): no unique grazing in the box confirmed")
+    # (3) dm/dp over P: (J⁻¹)_{last,last} ∈ C_ll ± δ/(1 − δ) max_i |C_il|.
+    if not delta < 1:
+        raise NotConfirmed(f"{b['box'].path}: ‖I − CJ‖∞ ≤ {show(delta)}, not below 1")
+    last = N + 1
+    spread = iv.mpf(delta) / (1 - iv.mpf(delta)) * max(abs(Ce[i, last]) for i in range(N + 2))
+    inv = iv.mpf(Ce[last, last]) + iv.mpf([-hi(spread), hi(spread)])
+    if not excludes_zero(inv):
+        raise NotConfirmed(f"{b['slope'].path}: dp/dm = {show_iv(inv)} may vanish: transversality not confirmed")
+    slope = 1 / inv
+    claim_contains(b["slope"], slope, "dm/dp, the minimum gap's derivative")
+    claim_contains(s["slope"], slope, "dm/dp, the minimum gap's derivative")
+    # γ̇ < 0 at S's lower end and > 0 at its upper end, for every orbit of the box.
+    ga = G.gap_at(U, P, G.J, l, iv.mpf(lo(S)))[1]
+    gb = G.gap_at(U, P, G.J, l, iv.mpf(hi(S)))[1]
+    if not (negative(ga) and positive(gb)):
+        raise NotConfirmed(f"{b['box'].path}: the gap velocity at the ends of the tangency's time box, {show_iv(ga)} "
+                           f"and {show_iv(gb)}, not confirmed negative then positive")
+    curv = G.gap_at(U, P, G.J, l, S)[2]
+    claim_contains(b["curvature"], curv, "the gap's second derivative at the grazing")
+    claim_contains(s["curvature"], curv, "the gap's second derivative at the grazing")
+    tg = value(D.lift(G.part(U, G.J)[0]) + D.lift(S))
+    claim_contains(b["grazing_time"], tg, "the grazing time")
+    claim_contains(s["grazing_time"], tg, "the grazing time")
+    # The window: γ̈ > 0 on it (convex: one minimum, at s(p) ∈ S).
+    wa, wb = (x.num() for x in b["window"].items(exactly=2))
+    if not (wa < lo(S) and hi(S) < wb):
+        raise NotConfirmed(f"{b['window'].path}: the window does not contain the tangency's time box")
+
+    def bisect(pred, a, z, what, depth=40):
+        stack, count = [(a, z, 0)], 0
+        while stack:
+            u, v, d = stack.pop()
+            count += 1
+            if count > 200000:
+                raise NotConfirmed(f"{node.path}: {what}: not confirmed (too many pieces)")
+            if pred(u, v):
+                continue
+            if d >= depth:
+                raise NotConfirmed(f"{node.path}: {what}: not confirmed near s = {show(u)}")
+            c = (u + v) / 2
+            stack += [(u, c, d + 1), (c, v, d + 1)]
+
+    bisect(lambda u, v: positive(G.gap_at(U, P, G.J, l, iv.mpf([u, v]))[2]), wa, wb,
+           "the gap's convexity on the window")
+    # (4) The orbit is an orbit over the box.
+    for j in range(G.count):
+        cj = hits[j]
+        ck = (1 - cj) if sym else hits[(j + 1) % G.count]
+        Sj = value(G.duration(U, j, P))
+        after = G.gap_at(U, P, j, cj, iv.mpf(0))[1]
+        before = G.gap_at(U, P, j, ck, Sj)[1]
+        if not (positive(Sj) and positive(after) and negative(before)):
+            raise NotConfirmed(f"{node.path}: flight {j}: duration {show_iv(Sj)}, velocity after {show_iv(after)}, "
+                               f"before {show_iv(before)}: not those of an impacting orbit")
+        e0 = e1 = lo(Sj) / 16
+        for _ in range(30):
+            if positive(G.gap_at(U, P, j, cj, iv.mpf([0, e0]))[1]):
+                break
+            e0 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity after the impact not confirmed positive")
+        for _ in range(30):
+            if negative(G.gap_at(U, P, j, ck, iv.mpf([lo(Sj) - e1, hi(Sj)]))[1]):
+                break
+            e1 /= 2
+        else:
+            raise NotConfirmed(f"{node.path}: flight {j}: the velocity before the impact not confirmed negative")
+        for c in range(k_count):
+            a, z = (e0 if c == cj else mp.mpf(0)), (lo(Sj) - e1 if c == ck else hi(Sj))
+            ranges = [(a, z)]
+            if j == G.J and c == l:
+                if not (a < wa and wb < z):
+                    raise NotConfirmed(f"{b['window'].path}: the window meets the impacts' windows")
+                ranges = [(a, wa), (wb, z)]
+            for u0, v0 in ranges:
+                if u0 < v0:
+                    bisect(lambda u, v, j=j, c=c: positive(_gap_form(G, U, P, j, c, u, v)), u0, v0,
+                           f"the gap of contact {c} on flight {j}")
+    return 5
+
+
+def _gap_form(G, U, P, j, c, u, v):
+    """The gap on [u, v] by the mean-value form γ(mid) + γ̇([u, v])([u, v] − mid)."""
+    I, cm = iv.mpf([u, v]), iv.mpf((u + v) / 2)
+    return G.gap_at(U, P, j, c, cm)[0] + G.gap_at(U, P, j, c, I)[1] * (I - cm)
+
+
 def check(node):
     """Checks one certificate; returns how many inequalities were recomputed."""
     if not isinstance(node.v, dict):
@@ -1988,8 +2734,13 @@ def check(node):
     kind = node["kind"].text(("impact", "sticking", "bifurcation"))
     if kind == "bifurcation":
         return check_bifurcation(node)
-    node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-             (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
+    # A sticking orbit of several modes carries the unknowns of its Krawczyk test.
+    modes = kind == "sticking" and isinstance(node.v.get("unknowns"), list)
+    if modes:
+        node.obj(CERT_KEYS + STICKING_MODES_KEYS, ("structure",))
+    else:
+        node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
+                 (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]
@@ -2008,6 +2759,8 @@ def check(node):
     ledger = Ledger(node["inequalities"])
     if kind == "impact":
         truth = check_impact(node, m, ledger)
+    elif modes:
+        truth = check_sticking_modes(node, m, ledger)
     else:
         truth = check_sticking(node, m, ledger)
     check_summary(node, s, truth, m)

@@ -7,7 +7,9 @@ PREFIX_section (a run with several contacts: PREFIX_gaps, every gap, and PREFIX_
 PREFIX_section of every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation (and PREFIX_branch_loads: mean contact force and work rate along it), PREFIX_partition for a
 partition (and PREFIX_partition_loads: the work rate over its plane), PREFIX_basin for a basin study, PREFIX_sweep for
-a sweep (with a continuation branch overlaid by --overlay BRANCH.h5). --coordinate draws another
+a sweep (with a continuation branch overlaid by --overlay BRANCH.h5), PREFIX_curves for the
+two-parameter curves of `vibro curve` (drawn over a partition's picture by
+`vibro plot PARTITION.h5 --overlay CURVES.h5`). --coordinate draws another
 coordinate than x_B (PREFIX_X2, PREFIX_q1); --title, --size and --font-size shape every picture
 for a paper; SVG text stays text.
 
@@ -593,8 +595,62 @@ def plot_branch(f, title, save):
     save(fig, "branch")
 
 
-def plot_partition(f, title, save):
-    """Curves of constant sticking fraction and existence boundaries in a parameter plane."""
+def read_curves(path):
+    """The /curves of a `vibro curve --out` file: (param1, param2, [curve dicts])."""
+    try:
+        with h5py.File(path, "r") as f:
+            g = f["curves"]
+            out = []
+            for name in sorted(k for k in g if isinstance(g[k], h5py.Group)):
+                c = g[name]
+                sp = c["special"]
+                out.append({"kind": text(c.attrs["kind"]), "contact": int(c.attrs["contact"]),
+                            "value1": c["value1"][()], "value2": c["value2"][()],
+                            "stable": c["stable"][()].astype(bool),
+                            "special": [(text(k), v1, v2) for k, v1, v2 in
+                                        zip(sp["kind"][()], sp["value1"][()], sp["value2"][()])]})
+            return text(g.attrs["param1"]), text(g.attrs["param2"]), out
+    except (OSError, KeyError) as e:
+        refuse(f"--overlay {path}: not a file of two-parameter curves (`vibro curve --out`, /curves): {e}")
+
+
+CURVE_COLOURS = {"sticking-lost": OKABE_ITO[1], "sticking-entry": OKABE_ITO[0], "fold": OKABE_ITO[7],
+                 "flip": OKABE_ITO[3], "neimark-sacker": OKABE_ITO[2], "branch-point": OKABE_ITO[5],
+                 "grazing": OKABE_ITO[4], "rising": OKABE_ITO[6], "simultaneous": "#777777"}
+
+
+def draw_curves(ax, curves, swap=False):
+    """Traced curves as lines (one colour per kind), their codimension-two points as black stars."""
+    seen = set()
+    for c in curves:
+        x, y = (c["value2"], c["value1"]) if swap else (c["value1"], c["value2"])
+        name = c["kind"] + (f" (contact {c['contact']})" if c["contact"] >= 0 else "")
+        ax.plot(x, y, "-", color=CURVE_COLOURS.get(c["kind"], "k"), lw=2.0,
+                label=f"{name}, traced" if name not in seen else None, zorder=4)
+        seen.add(name)
+        for k, v1, v2 in c["special"]:
+            ax.plot(v2 if swap else v1, v1 if swap else v2, "*", color="k", ms=11, zorder=5,
+                    label=k if k not in seen else None)
+            seen.add(k)
+
+
+def plot_curves(f, title, save):
+    """The two-parameter curves of `vibro curve`: each curve in the plane of its two keys."""
+    p1, p2 = text(f["curves"].attrs["param1"]), text(f["curves"].attrs["param2"])
+    _, _, curves = read_curves(f.filename)
+    fig, ax = figure(figsize=(8.4, 5.4))
+    draw_curves(ax, curves)
+    ax.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    ax.set_xlabel(axis_label(p1))
+    ax.set_ylabel(axis_label(p2))
+    kinds = ", ".join(sorted({c["kind"] for c in curves}))
+    set_title(ax, title, f"{kinds}: curves traced in the (${SYMBOLS.get(p1, p1)}$, ${SYMBOLS.get(p2, p2)}$) plane")
+    save(fig, "curves")
+
+
+def plot_partition(f, title, save, overlay=None):
+    """Curves of constant sticking fraction and existence boundaries in a parameter plane; with
+    `overlay` (a `vibro curve --out` file of the same two keys), the traced curves over it."""
     p = f["partition"]
     p1, p2 = text(p.attrs["param1"]), text(p.attrs["param2"])
     xv1, xl, xv2 = p["crossing_value1"][:], p["crossing_level"][:], p["crossing_value2"][:]
@@ -629,7 +685,13 @@ def plot_partition(f, title, save):
     for j, k in enumerate(sorted(set(bk))):
         sel = bk == k
         ax.plot(bv1[sel], bv2[sel], BIFURCATION_MARKERS.get(k, "o"), color=OKABE_ITO[(1 + j) % 8],
-                mec="k", mew=0.3, ms=5, ls="none", label=k)
+                mec="k", mew=0.3, ms=5, ls="none", label=k + (" (columns)" if overlay else ""),
+                alpha=0.6 if overlay else 1.0)
+    if overlay:
+        c1, c2, curves = read_curves(overlay)
+        if {c1, c2} != {p1, p2}:
+            refuse(f"--overlay {overlay}: its curves are in ({c1}, {c2}), the partition in ({p1}, {p2})")
+        draw_curves(ax, curves, swap=(c1 != p1))
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
     ax.legend(unique.values(), unique.keys(), fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0),
@@ -1075,7 +1137,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("file")
     ap.add_argument("--out", default=None, help="prefix of the files")
-    ap.add_argument("--overlay", default=None, help="continuation branch (HDF5) drawn over a sweep")
+    ap.add_argument("--overlay", default=None,
+                    help="continuation branch (HDF5) drawn over a sweep, or curves (vibro curve --out) over a partition")
     ap.add_argument("--format", default="png", choices=["png", "pdf", "svg"])
     ap.add_argument("--dpi", type=int, default=150)
     ap.add_argument("--time-window", default=None, help="A,B: time plots show A ≤ t ≤ B")
@@ -1432,8 +1495,13 @@ def check_options(f, args, window):
             why = "the file has no dense samples to draw it from (it applies to the time plot, phase portrait and section)"
         if why is not None:
             refuse(f"--coordinate {args.coordinate}: {why}")
-    if args.overlay and "sweep" not in f:
-        refuse(f"--overlay {args.overlay}: {args.file} holds no sweep to draw it over")
+    if args.overlay and "sweep" not in f and "partition" not in f:
+        refuse(f"--overlay {args.overlay}: {args.file} holds no sweep or partition to draw it over")
+    if args.overlay and "partition" in f:
+        c1, c2, _ = read_curves(args.overlay)
+        p1, p2 = text(f["partition"].attrs["param1"]), text(f["partition"].attrs["param2"])
+        if {c1, c2} != {p1, p2}:
+            refuse(f"--overlay {args.overlay}: its curves are in ({c1}, {c2}), the partition in ({p1}, {p2})")
     if dense:
         time_window(f["samples/t"][:], float(f.attrs["forcing_period"]), window)
 
@@ -1443,7 +1511,7 @@ def draw(args, save, window):
         check_options(f, args, window)
         varied = set()
         for g, attr in (("branch", "param"), ("sweep", "param"), ("diagram", "param"), ("partition", "param1"),
-                        ("partition", "param2")):
+                        ("partition", "param2"), ("curves", "param1"), ("curves", "param2")):
             if g in f:
                 varied.add(text(f[g].attrs[attr]))
         title = make_title(f, varied)
@@ -1453,12 +1521,14 @@ def draw(args, save, window):
             plot_branch(f, title, save)
             plot_branch_loads(f, title, save)
         if "partition" in f:
-            plot_partition(f, title, save)
+            plot_partition(f, title, save, args.overlay)
             plot_partition_loads(f, title, save)
         if "sweep" in f:
             plot_sweep(f, title, save, args.overlay)
         if "diagram" in f:
             plot_diagram(f, title, save)
+        if "curves" in f:
+            plot_curves(f, title, save)
         if "events" in f and "impulse" in f["events"]:
             plot_loads(f, title, save)
         contacts = scene_contacts(f)
@@ -1467,7 +1537,7 @@ def draw(args, save, window):
             plot_contacts_run(f, title, save, window, contacts, args.coordinate)
         elif len(f["samples/t"]) > 1:
             plot_run(f, title, save, window, args.coordinate)
-        elif not any(g in f for g in ("basin", "branch", "partition", "sweep", "diagram")):
+        elif not any(g in f for g in ("basin", "branch", "partition", "sweep", "diagram", "curves")):
             print("vibro plot: the file has no dense samples (run.samples_per_period = 0)", file=sys.stderr)
 
 

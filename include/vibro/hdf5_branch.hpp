@@ -43,6 +43,11 @@ struct StoredBranchPoint {
 // than k + 1 points.
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k);
 
+// The stored point of the branch in `path` nearest `value` among those at least `apart` from it
+// (the nearest of all when none is): e.g. the orbit just before a grazing, where it clears the
+// contact plainly. Throws as ReadBranchPoint.
+StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart);
+
 // The bifurcations stored with the branch in `path` (/bifurcations: kind, value, bracket; detail
 // and contact are not read). Throws InputError naming the file and dataset when they are missing
 // or malformed.

@@ -104,6 +104,12 @@ struct BifurcationRequest {
   // Its uncertainty (`continue`'s bracket): the value is refined by Newton within it before the
   // proof; 0 (a value given directly): the interval is centred on `value` itself.
   double bracket = 0;
+  // A grazing: a state on (or near) the orbit that grazes, at the parameter `start_value` near
+  // `value` (e.g. a stored branch point just before the grazing), and its period; none: the orbit is searched from the scene's initial
+  // state, as `vibro orbit` does.
+  std::optional<InitialOverride> start;
+  int period = 0;
+  double start_value = 0;  // the parameter at which `start` lies (the orbit is found there, then followed)
   double time_limit = 60.0;
   const std::atomic<bool>* stop_requested = nullptr;
 };
@@ -111,7 +117,8 @@ struct BifurcationRequest {
 // Encloses the parameter of the bifurcation in an interval at most 1e-10 wide around `value`, and
 // proves that exactly one such point lies there and that the crossing is transversal. This version
 // proves the symmetry-breaking pitchfork ("branch-point") and the fold of the symmetric orbit of the
-// symmetric two-sided one-DOF oscillator (undamped);
+// symmetric two-sided one-DOF oscillator (undamped), and the grazing ("grazing") of any impacting
+// orbit (damped, several contacts and modes);
 // any other is "not proven" with the reason. The result's kind is "bifurcation"; its summary and
 // certificate carry the interval; scripts/vibro_check_proof.py re-verifies it.
 ProofResult ProveBifurcation(const System& system, const Scene& scene, const BifurcationRequest& request);

@@ -37,6 +37,8 @@
 #include <pybind11/stl.h>
 
 #include "frontend/commands.hpp"
+#include "frontend/curves.hpp"
+#include "vibro/curve_output.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
 #include "frontend/run_budget.hpp"
@@ -48,6 +50,7 @@
 #include "vibro/check.hpp"
 #include "vibro/continuation.hpp"
 #include "vibro/distribute.hpp"
+#include "vibro/hdf5_branch.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/lyapunov.hpp"
@@ -467,7 +470,8 @@ std::tuple<std::string, std::string, bool> Prove(const PyScene& s, const std::st
 // points"): the summary and the certificate as JSON texts, and whether a stop request ended it.
 std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& s, const std::string& kind,
                                                                  const std::string& key, double value,
-                                                                 double time_limit, bool handle_sigint) {
+                                                                 double time_limit, bool handle_sigint,
+                                                                 const std::string& branch) {
   if (!(time_limit > 0) || !std::isfinite(time_limit))
     throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
   if (!std::isfinite(value)) throw vibro::InputError({fmt::format("value {}: expected a finite number", value)});
@@ -476,6 +480,14 @@ std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& 
   req.parameter = key;
   req.value = value;
   req.time_limit = time_limit;
+  if (!branch.empty()) {  // a grazing's orbit: the stored point nearest it, as `prove --from BRANCH.h5`
+    const auto near = vibro::NearestBranchPoint(branch, value, 1e-6 * (1 + std::abs(value)));
+    if (near.param != key)
+      throw vibro::InputError({fmt::format("branch {}: a branch in {}, not {}", branch, near.param, key)});
+    req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
+    req.period = near.period;
+    req.start_value = near.value;
+  }
   const vibro::Scene scene = vibro::frontend::SceneWith(s.origin, key, value);
   const vibro::System sys(scene);
   SigintGuard guard(handle_sigint);
@@ -816,6 +828,47 @@ std::pair<std::string, bool> PartitionPlane(const PyScene& s, const std::vector<
   return {vibro::PartitionJson(params[0], params[1], levels, columns), interrupted};
 }
 
+// vibro curve: two-parameter curves of bifurcations.
+std::pair<std::string, bool> TraceCurvesPy(const PyScene& s, const std::vector<std::string>& params,
+                                           const std::vector<double>& range1, const std::vector<double>& range2,
+                                           const std::vector<std::string>& kinds, const std::vector<double>& toward,
+                                           const std::string& from, long long point, long long contact, double step,
+                                           double max_step, long long max_points, long long period,
+                                           long long transient, const std::string& out, bool handle_sigint) {
+  vibro::frontend::CurveSpec spec;
+  spec.params = params;
+  spec.range1 = range1;
+  spec.range2 = range2;
+  spec.kinds = kinds;
+  spec.toward = toward;
+  spec.from = from;
+  spec.point = point;
+  spec.contact = contact;
+  spec.step = step;
+  spec.max_step = max_step;
+  spec.max_points = max_points;
+  spec.period = period;
+  spec.transient = transient;
+  CheckPaths({{"from_", &spec.from}});
+  const auto plan = vibro::frontend::PlanCurves(s.origin, s.loaded, spec, kPython);
+  auto store = CreateStore(out, HeaderOf(s.loaded, vibro::System(s.loaded.scene)));
+  SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
+  const auto curves = vibro::frontend::TraceCurves(plan, guard.flag());
+  const bool interrupted = guard.interrupted();
+  if (store) {
+    vibro::WriteCurves(*store, params[0], params[1], curves);
+    vibro::RunResult r;
+    bool found = false;
+    for (const auto& c : curves) found = found || c.status != "no-start";
+    r.status = interrupted ? vibro::RunStatus::kInterrupted : found ? vibro::RunStatus::kOk : vibro::RunStatus::kNumericalFailure;
+    r.message = interrupted ? "interrupted" : found ? "ok" : "no curve was started";
+    store->Finish(r, vibro::frontend::NoAttractor());
+  }
+  store.reset();  // closed without the GIL
+  return {vibro::CurvesJson(params[0], params[1], curves), interrupted};
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_vibro, m) {
@@ -870,4 +923,5 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("validate", &Validate);
   m.def("score", &Score);
   m.def("partition", &PartitionPlane);
+  m.def("curve", &TraceCurvesPy);
 }

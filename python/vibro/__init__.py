@@ -69,7 +69,7 @@ EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "relea
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
-__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_",
+__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_", "curve",
            "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
            "EVENT_KINDS", "MODES", "LOAD_FIELDS", "LimitError"]
@@ -407,10 +407,12 @@ def prove(scene, kind="auto", period=0, transient=200, from_=None, out=None, tim
     return _json.loads(text)
 
 
-def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
+def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0, branch=None):
     """Proves a bifurcation point (``vibro prove --bifurcation KIND:KEY=VALUE --json``, docs/prove.md
     "Bifurcation points"): ``kind`` and ``value`` as ``continue_`` reports the point (a
-    "branch-point" or a "fold" of the symmetric two-sided oscillator), ``param`` the scene key it varies
+    "branch-point" or a "fold" of the symmetric two-sided oscillator, or a "grazing" of any impacting
+    orbit, whose orbit is taken from ``branch``, the HDF5 file of ``continue_``: its stored point
+    nearest ``value``), ``param`` the scene key it varies
     ("excitation.amplitude" or "excitation.frequency"). The dict has ``verdict``, ``reason`` and, when
     proven, ``bifurcation``, ``interval`` (two decimals, at most 1e-10 apart, holding exactly one such
     point), ``slope`` (the derivative that proves the crossing transversal) and
@@ -418,7 +420,8 @@ def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0):
     re-verifies."""
     text, certificate, interrupted = _vibro.prove_bifurcation(_scene(scene), str(kind), str(param),
                                                               _float("value", value),
-                                                              _float("time_limit", time_limit), _main_thread())
+                                                              _float("time_limit", time_limit), _main_thread(),
+                                                              "" if branch is None else _path("branch", branch))
     if interrupted:
         raise _interrupted("proof", None)
     if out is not None:
@@ -857,6 +860,52 @@ def partition(scene, params, range1, range2, sticking_fraction, steps1=20, from2
     d["sequences"] = _records(spans, [("value1", "f8", _np.nan), ("from", "f8", _np.nan), ("to", "f8", _np.nan),
                                       ("sequence", _text_width(spans, "sequence"), "")])
     return d
+
+
+def curve(scene, params, range1, range2, kind=None, toward=None, from_=None, point=None, contact=-1, step=0.02,
+          max_step=0.1, max_points=200, period=0, transient=200, out=None, force=False):
+    """Curves of codimension-one bifurcations in the plane of two scene keys (``vibro curve --json``,
+    docs/diagram.md "Two-parameter curves"). ``params`` = (KEY1, KEY2); the curves stay in the box
+    ``range1`` x ``range2``. ``kind``: one kind or a list ("fold", "flip", "neimark-sacker",
+    "branch-point", "grazing", "sticking-lost", "sticking-entry", "rising", "simultaneous"). The start:
+    ``toward=(A, B)``, the first such bifurcation met from the scene's (KEY1, KEY2) towards (A, B), or
+    ``from_=BRANCH.h5, point=K``, bifurcation K of a branch stored by :func:`continue_` (``kind``
+    defaults to its kind). ``contact``: with several contacts, follow a non-smooth kind on that contact.
+
+    Returns a list, one dict per kind: the keys of the JSON (kind, contact, period, status,
+    end_start, end_finish, points, special) and numpy arrays ``value1``, ``value2`` (the curve in
+    order), ``bracket``, ``stable``, ``max_multiplier``, and ``special`` as a structured array
+    (kind, value1, value2, bracket, after, detail): the codimension-two points."""
+    kinds = [] if kind is None else ([kind] if isinstance(kind, str) else [str(k) for k in kind])
+    if (from_ is None) != (point is None):
+        raise ValueError("from_ and point go together: the stored branch and its bifurcation K")
+    _invoke("curve", scene, params=tuple(params), range1=tuple(range1), range2=tuple(range2), kind=tuple(kinds),
+            toward=None if toward is None else tuple(toward), from_=None if from_ is None else str(from_),
+            point=point, contact=contact, step=step, max_step=max_step, max_points=max_points, period=period,
+            transient=transient, out=out, force=force)
+    text, interrupted = _vibro.curve(_scene(scene), [str(p) for p in params], [_float("range1", v) for v in range1],
+                                     [_float("range2", v) for v in range2], kinds,
+                                     [] if toward is None else [_float("toward", v) for v in toward],
+                                     "" if from_ is None else _path("from_", from_),
+                                     -1 if point is None else _int("point", point), _int("contact", contact),
+                                     _float("step", step), _float("max_step", max_step), _int("max_points", max_points),
+                                     _int("period", period), _int("transient", transient), _out(out), _main_thread())
+    if interrupted:
+        raise _interrupted("curve", out)
+    curves = _json.loads(text)["curves"]
+    for c in curves:
+        pts = c["points"]
+        c["value1"] = _np.array([p["value1"] for p in pts], dtype=float)
+        c["value2"] = _np.array([p["value2"] for p in pts], dtype=float)
+        c["bracket"] = _np.array([p["bracket"] for p in pts], dtype=float)
+        c["stable"] = _np.array([p["stable"] for p in pts], dtype=bool)
+        c["max_multiplier"] = _np.array([_np.nan if p["max_multiplier"] is None else p["max_multiplier"] for p in pts],
+                                        dtype=float)
+        sp = c["special"]
+        c["special"] = _records(sp, [("kind", _text_width(sp, "kind"), ""), ("value1", "f8", _np.nan),
+                                     ("value2", "f8", _np.nan), ("bracket", "f8", _np.nan), ("after", "i8", -1),
+                                     ("detail", _text_width(sp, "detail"), "")])
+    return curves
 
 
 class Group(dict):

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "frontend/commands.hpp"
+#include "frontend/curves.hpp"
 #include "frontend/diagram.hpp"
 #include "frontend/frontend.hpp"
 #include "vibro/attractor.hpp"
@@ -74,6 +75,13 @@ struct PartitionArgs {
 };
 int RunPartition(const std::string& path, const std::vector<std::string>& sets, bool json,
                  const PartitionArgs& a);
+
+// `vibro curve SCENE --param KEY1,KEY2 ...` (cmd_curve.cpp): two-parameter curves.
+struct CurveArgs {
+  vibro::frontend::CurveSpec spec;  // the checks and the request: frontend/curves.hpp
+  std::string out;
+};
+int RunCurve(const std::string& path, const std::vector<std::string>& sets, bool json, const CurveArgs& a);
 
 // `vibro attractors SCENE` and `vibro basin SCENE` (cmd_study.cpp).
 struct StudyArgs {

@@ -227,6 +227,24 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     req.bracket = b.bracket;
     req.parameter = vibro::ReadBranchPoint(src, 0).param;
   }
+  if (req.kind == "grazing") {
+    // The orbit that grazes, from the stored point nearest the grazing but at least 1e-6 (relative)
+    // from it, where the orbit clears the contact plainly (the branch ends at the grazing): of
+    // --from BRANCH.h5, or of the branch the bifurcation was read from.
+    const bool given = colon != std::string::npos && equals != std::string::npos && colon < equals &&
+                       !std::filesystem::exists(src);
+    const std::string file = given ? args.from : src;
+    if (!file.empty()) {
+      const auto near = vibro::NearestBranchPoint(file, req.value, 1e-6 * (1 + std::abs(req.value)));
+      if (near.param != req.parameter)
+        throw vibro::InputError({fmt::format("--from {}: a branch in {}, not {}", file, near.param, req.parameter)});
+      req.start = vibro::InitialOverride{near.section_time, near.X, near.V};
+      req.period = near.period;
+      req.start_value = near.value;
+    }
+  } else if (!args.from.empty()) {
+    throw vibro::InputError({"--from " + args.from + ": with --bifurcation, only for a grazing given as KIND:KEY=VALUE"});
+  }
   auto at = sets;
   at.push_back(vibro::frontend::Assignment(req.parameter, req.value));
   const auto loaded = vibro::LoadScene(path, at);
@@ -247,9 +265,13 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
       const auto pair = [](const nlohmann::json& p) {
         return Range(vibro::Enclosure{p[0].get<double>(), p[1].get<double>()});
       };
-      const bool fold = s["bifurcation"] == "fold";
-      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : "det(DH + I)", s["parameter"].get<std::string>(),
-                 pair(s["slope"]));
+      const bool fold = s["bifurcation"] == "fold", grazing = s["bifurcation"] == "grazing";
+      fmt::print("transversal  d {}/d{} in {}\n", fold ? "disc" : grazing ? "(minimum gap)" : "det(DH + I)",
+                 s["parameter"].get<std::string>(), pair(s["slope"]));
+      if (grazing)
+        fmt::print("grazing      flight {} touches contact {} at t in {} (gap curvature {})\n",
+                   s["grazing_flight"].get<int>(), s["grazing_contact"].get<int>(), pair(s["grazing_time"]),
+                   pair(s["curvature"]));
       if (s.contains("half_map_multipliers"))
         fmt::print("multipliers  of the half-period map at the point: -1 and {} (the period map: +1 and their "
                    "squares)\n", pair(s["half_map_multipliers"][1]));

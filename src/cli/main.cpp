@@ -160,8 +160,8 @@ int main(int argc, char** argv) {
         "prove the bifurcation point stored by `vibro continue --out BRANCH.h5` (BRANCH.h5, with --point K: its "
         "bifurcation K, default 0) or given as KIND:KEY=VALUE (e.g. branch-point:excitation.amplitude=3.286): its "
         "parameter enclosed in an interval <= 1e-10 wide, one point in it, crossed transversally (the pitchfork "
-        "and the fold of the symmetric two-sided 1-DOF oscillator)")
-        ->excludes(from)
+        "and the fold of the symmetric two-sided 1-DOF oscillator, and grazings; a grazing given as KIND:KEY=VALUE "
+        "takes its orbit from --from BRANCH.h5)")
         ->excludes(branch_opt);
     prove->add_option("--point", prove_args.point, "with --bifurcation BRANCH.h5: the bifurcation K (0-based, in the "
                       "order `vibro continue` lists them)")
@@ -285,6 +285,37 @@ int main(int argc, char** argv) {
     partition->add_option("--out", part.out, "write the partition to HDF5");
   }
 
+  CLI::App* curve = app.add_subcommand(
+      "curve", "trace a fold, flip, Neimark-Sacker, branch point or non-smooth bifurcation in two parameters");
+  CurveArgs crv;
+  if (Wanted(curve)) {
+    add_scene_options(curve);
+    curve->add_option("--param", crv.spec.params, "KEY1,KEY2: the two numeric scene keys")->delimiter(',')->required();
+    curve->add_option("--kind", crv.spec.kinds,
+                      "K1,K2,...: fold, flip, neimark-sacker, branch-point, grazing, sticking-lost, sticking-entry, "
+                      "rising, simultaneous (with --from: default the stored bifurcation's kind)")
+        ->delimiter(',');
+    curve->add_option("--contact", crv.spec.contact, "several contacts: follow the non-smooth kind on this contact only");
+    curve->add_option("--range1", crv.spec.range1, "A,B: range of KEY1 (the curve ends where it leaves the box)")
+        ->check(kFinite)->delimiter(',')->required();
+    curve->add_option("--range2", crv.spec.range2, "C,D: range of KEY2")->check(kFinite)->delimiter(',')->required();
+    CLI::Option* toward = curve->add_option("--toward", crv.spec.toward,
+                                            "A,B: start from the first such bifurcation met on the segment from the "
+                                            "scene's (KEY1, KEY2) to (A, B); A1,B1,A2,B2,...: one end per kind")
+                              ->check(kFinite)
+                              ->delimiter(',');
+    CLI::Option* cfrom = curve->add_option("--from", crv.spec.from, "or start from a bifurcation stored by vibro continue --out")
+                             ->excludes(toward);
+    curve->add_option("--point", crv.spec.point, "with --from: the bifurcation K (0-based, in the order vibro continue lists them)")
+        ->needs(cfrom);
+    curve->add_option("--step", crv.spec.step, "first step, in units of the box scaled to (0,1)x(0,1) (default 0.02)")->check(kFinite);
+    curve->add_option("--max-step", crv.spec.max_step, "largest step, same units (default 0.1)")->check(kFinite);
+    curve->add_option("--max-points", crv.spec.max_points, "most points each way from the start (default 200)");
+    curve->add_option("--period", crv.spec.period, "with --toward: period of the orbit (default: from a transient)");
+    curve->add_option("--transient", crv.spec.transient, "with --toward: periods simulated before the first Newton (default 200)");
+    curve->add_option("--out", crv.out, "write the curves to HDF5 (/curves)");
+  }
+
   CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
   std::string sweep_param, sweep_out;
   double sweep_from = 0, sweep_to = 0;
@@ -376,7 +407,7 @@ int main(int argc, char** argv) {
   // on a stop request, keeps what it computed and exits 3. simulate adds its pace check to it
   // (frontend/run_budget.hpp); prove has its own, whose end is the verdict "not proven" (exit 4).
   double time_limit = vibro::frontend::RunBudget::kDefaultTimeLimit;
-  for (CLI::App* cmd : {model, orbit, cont, diagram, attractors, basin, partition, sweep, validate, score, check, info, plot})
+  for (CLI::App* cmd : {model, orbit, cont, curve, diagram, attractors, basin, partition, sweep, validate, score, check, info, plot})
     if (Wanted(cmd))
       cmd->add_option("--time-limit", time_limit,
                       "seconds for the whole command, transients included (default 86400, one day; 0: none): past "
@@ -384,7 +415,7 @@ int main(int argc, char** argv) {
           ->check(CLI::Range(0.0, 1e12));
 
   bool force = false;
-  for (CLI::App* cmd : {simulate, orbit, cont, basin, partition, sweep, diagram})
+  for (CLI::App* cmd : {simulate, orbit, cont, curve, basin, partition, sweep, diagram})
     if (Wanted(cmd)) cmd->add_flag("--force", force, "replace an --out file holding a vibro run of another scene or command");
 
   try {
@@ -456,6 +487,7 @@ int main(int argc, char** argv) {
       if (*sweep)
         return RunSweep(scene_path, sets, json, sweep_param, sweep_from, sweep_to, sweep_steps,
                         sweep_record, sweep_one_way, sweep_out);
+      if (*curve) return RunCurve(scene_path, sets, json, crv);
       if (*diagram) return RunDiagram(scene_path, sets, json, dia, dia_out);
       if (*attractors) return RunStudyCommand(scene_path, sets, json, study_args, false);
       if (*basin) return RunStudyCommand(scene_path, sets, json, study_args, true);

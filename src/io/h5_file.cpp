@@ -7,6 +7,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <mutex>
@@ -57,7 +58,7 @@
     X(H5free_memory) X(H5open)
 
 #define VIBRO_HDF5_VARIABLES(X) \
-    X(H5P_CLS_DATASET_ACCESS_ID_g) X(H5P_CLS_DATASET_CREATE_ID_g) X(H5P_CLS_FILE_ACCESS_ID_g) \
+    X(H5E_CANTALLOC_g) X(H5E_NOSPACE_g) X(H5P_CLS_DATASET_ACCESS_ID_g) X(H5P_CLS_DATASET_CREATE_ID_g) X(H5P_CLS_FILE_ACCESS_ID_g) \
     X(H5P_CLS_FILE_CREATE_ID_g) X(H5T_C_S1_g) X(H5T_IEEE_F64LE_g) X(H5T_NATIVE_DOUBLE_g) \
     X(H5T_NATIVE_INT32_g) X(H5T_NATIVE_INT64_g) X(H5T_NATIVE_INT8_g) X(H5T_NATIVE_UINT8_g) \
     X(H5T_STD_I32LE_g) X(H5T_STD_I64LE_g) X(H5T_STD_I8LE_g) X(H5T_STD_U8LE_g)
@@ -80,6 +81,17 @@ inline Hdf5Api LoadHdf5() {
   // linked libhdf5 would get, so that a preloaded library that wraps an HDF5 call (LD_PRELOAD, as
   // the tests' hang shim does) still comes first and finds the real one with RTLD_NEXT.
   // RTLD_NODELETE: HDF5's atexit handlers stay valid however the handle is treated.
+  // The library and what it needs (curl, GnuTLS, ...: about 20 MB of address space) are mapped,
+  // their constructors run and the library initialises itself with allocations it does not all
+  // check: under an address-space limit that leaves less, GnuTLS's constructor failed and HDF5's
+  // initialisation crashed (H5E__get_stack). Address space is asked for first (never touched),
+  // and its refusal is an out-of-memory like any other (exit 3, MemoryError in Python).
+  constexpr size_t kLoadHeadroom = size_t{48} << 20;
+  if (void* probe = std::malloc(kLoadHeadroom)) {
+    std::free(probe);
+  } else {
+    throw std::bad_alloc();
+  }
   void* lib = dlopen(VIBRO_HDF5_LIBRARY, RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
   if (lib == nullptr) {
     const std::string why = dlerror();
@@ -101,6 +113,8 @@ inline Hdf5Api LoadHdf5() {
   VIBRO_HDF5_FUNCTIONS(VIBRO_HDF5_ENTRY)
   VIBRO_HDF5_VARIABLES(VIBRO_HDF5_ENTRY)
 #undef VIBRO_HDF5_ENTRY
+  // Initialised now, within the headroom just asked for (its first call would do it anyway).
+  if (api.H5open() < 0) throw std::runtime_error("the HDF5 library " VIBRO_HDF5_LIBRARY " could not initialise");
   return api;
 }
 
@@ -194,6 +208,8 @@ inline const Hdf5Api& Hdf5() {
 #define H5T_C_S1_g (*::vibro::h5::Hdf5().H5T_C_S1_g)
 #define H5T_IEEE_F64LE_g (*::vibro::h5::Hdf5().H5T_IEEE_F64LE_g)
 #define H5T_NATIVE_DOUBLE_g (*::vibro::h5::Hdf5().H5T_NATIVE_DOUBLE_g)
+#define H5E_NOSPACE_g (*::vibro::h5::Hdf5().H5E_NOSPACE_g)
+#define H5E_CANTALLOC_g (*::vibro::h5::Hdf5().H5E_CANTALLOC_g)
 #define H5T_NATIVE_INT32_g (*::vibro::h5::Hdf5().H5T_NATIVE_INT32_g)
 #define H5T_NATIVE_INT64_g (*::vibro::h5::Hdf5().H5T_NATIVE_INT64_g)
 #define H5T_NATIVE_INT8_g (*::vibro::h5::Hdf5().H5T_NATIVE_INT8_g)
@@ -286,9 +302,29 @@ void MarkFileFailed(hid_t obj) {
   }
 }
 
-// A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why.
+// Whether HDF5's error stack says an allocation failed (its "no space available for allocation"
+// or "can't allocate space", which HDF5 also uses for memory; a full disk names errno 28 instead).
+bool AllocationFailed() {
+  bool failed = false;
+  H5Ewalk2(
+      H5E_DEFAULT, H5E_WALK_DOWNWARD,
+      [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
+        if (e->min_num == H5E_NOSPACE_g || e->min_num == H5E_CANTALLOC_g) *static_cast<bool*>(out) = true;
+        return 0;
+      },
+      &failed);
+  return failed;
+}
+
+// A failed write or flush to the file of `obj`: the file is marked failed, WriteError says why;
+// a write that failed for want of memory is the out-of-memory it is (std::bad_alloc: exit 3,
+// MemoryError in Python; it read as "HDF5 could not write kind" under `ulimit -v`).
 void CheckWrite(herr_t status, hid_t obj, const std::string& what) {
   if (status >= 0) return;
+  if (errno == ENOMEM || (SystemReason().empty() && AllocationFailed())) {
+    MarkFileFailed(obj);
+    throw std::bad_alloc();
+  }
   // errno is the system's reason only for the errors a write can meet (it may be left over from
   // an earlier call that did not fail the write: a stale ENOENT made a damaged file a "system"
   // failure, exit 3, where it is bad input).
@@ -369,12 +405,44 @@ void Close(Id id, Closer closer) {
   closer(id);
 }
 
+// HDF5's clean-up at exit (H5_term_library, an atexit handler) closes every file still open,
+// the failed ones too, which vibro leaves open on purpose: it crashed doing so (SIGSEGV in
+// H5F__close_cb after a chunk allocation had failed under `ulimit -v`). This handler, registered
+// after HDF5's (so run before it), ends the process with its status before that clean-up when a
+// file has failed; every other file was closed by its owner and stdio is flushed.
+// HDF5 1.10 also ends the process itself, with exit(-1) and no message, when some of its
+// allocations fail (H5I_register under an exhausted `ulimit -v`, seen in H5Dget_space and
+// H5Screate on the writer thread); its clean-up then crashed on the call under way. vibro never
+// exits with -1: that status is reported as the out-of-memory it is (exit 3, the file keeping its
+// last flush, written with no reuse of freed space: docs/output.md).
+void SkipCleanUpAfterFailure(int status, void*) {
+  if (status == -1) {
+    static const char kLine[] =
+        "vibro: out of memory (the HDF5 library could not allocate and ended the process); the output file keeps "
+        "what was written up to its last flush\n";
+    std::fflush(nullptr);
+    const ssize_t written = write(2, kLine, sizeof kLine - 1);
+    (void)written;
+    _exit(3);
+  }
+  if (!g_any_failed.load()) return;
+  std::fflush(nullptr);
+  _exit(status);
+}
+
 void Silence() {
-  static const bool once = [] {
+  // Each thread has its own error stack and its own printing of it (a thread-safe HDF5).
+  thread_local const bool once = [] {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     return true;
   }();
   (void)once;
+  static const bool hooked = [] {
+    H5open();  // HDF5's atexit handler is registered by its initialisation: this one comes after
+    on_exit(SkipCleanUpAfterFailure, nullptr);
+    return true;
+  }();
+  (void)hooked;
 }
 
 // ---- Files ----

@@ -362,6 +362,16 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   }
 }
 
+StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart) {
+  const auto distance = [&](double v) { return std::abs(v - value) >= apart ? std::abs(v - value) : 1e300 + std::abs(v - value); };
+  StoredBranchPoint near = ReadBranchPoint(path, 0);
+  for (long long k = 1; k < near.points; ++k) {
+    auto p = ReadBranchPoint(path, k);
+    if (distance(p.value) < distance(near.value)) near = std::move(p);
+  }
+  return near;
+}
+
 std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   h5::Silence();
   store::ProbeInChild(path, {"/bifurcations"});

@@ -302,6 +302,7 @@ void Hdf5Store::Impl::Close() {
 
 void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events,
                                               h5::Size n_samples, h5::Size n_sections, h5::Size n_loads) {
+  h5::Silence();  // the writer thread's own error stack (HDF5 keeps one per thread)
   const auto t0 = std::chrono::steady_clock::now();
   // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
   // then, when there is room for it, the metadata that makes them part of the file.
@@ -319,6 +320,14 @@ void Hdf5Store::Impl::Flush() {
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
   WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads);
   last_flush = std::chrono::steady_clock::now();
+}
+
+void Hdf5Store::Impl::StartWriter() {
+  // The writer thread starts with the file: a thread the system refuses (ulimit -v) fails now,
+  // before any computation, not at the first flush; and the thread's own HDF5 state (its error
+  // stack, silenced) is set up while memory is there.
+  writer.Start([] { h5::Silence(); });
+  Sync();
 }
 
 void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
@@ -381,6 +390,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     impl->se.Create(impl->section.get(), static_cast<h5::Size>(h.dof));
     store::WriteHeader(f, h);
     impl->Flush();
+    impl->StartWriter();
     // A destination that is (nearly) full fails now, before any computation.
     struct statvfs vfs{};
     if (statvfs(path.c_str(), &vfs) == 0 &&
@@ -393,6 +403,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     if (!existed && stat(path.c_str(), &now) == 0 && S_ISREG(now.st_mode)) std::remove(path.c_str());
     // Out of memory is a limit (exit 3, MemoryError in Python), not bad input.
     if (dynamic_cast<const std::bad_alloc*>(&e) != nullptr) throw;
+    if (std::string(e.what()).rfind("pthread_create", 0) == 0) throw;  // the writer thread refused: a limit too
     throw InputError({fmt::format("{}: cannot write the output file: {}", path, e.what())});
   }
   impl->last_flush = std::chrono::steady_clock::now();
@@ -682,6 +693,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
   });
   auto impl = prepare(path);
   impl->lock = std::move(lock);
+  impl->StartWriter();
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

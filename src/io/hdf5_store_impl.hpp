@@ -150,6 +150,7 @@ struct Hdf5Store::Impl {
   // A run's periodic flush, on the writer thread (write-behind): the rows buffered so far are set
   // aside and written while the run goes on.
   void MaybeFlush();
+  void StartWriter();  // the writer thread and its HDF5 state, set up with the file
   void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
   // The checkpoint `c` (none: nothing) with the row counts at it.
   void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections,

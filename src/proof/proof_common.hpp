@@ -61,6 +61,20 @@ struct ImpactGuess {
 
 Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,
                          const Budget& budget);
+// A sticking orbit of several modes held on contact 0 with plastic landings (r = 0), as the
+// Poincaré solver found it: the release (time, modal state), then each landing (time, state just
+// after the plastic impact); every landing but the last departs at once (R < 0), the last sticks
+// until the release q periods after the first.
+struct StickingGuess {
+  int period = 0;
+  double release_time = 0;
+  Eigen::VectorXd X_release, V_release;
+  std::vector<double> landing_times;
+  std::vector<Eigen::VectorXd> X, V;
+};
+Outcome ProveStickingModes(const IntervalModel& model, const StickingGuess& guess, const ProofRequest& request,
+                           const Budget& budget);
+
 // One-DOF, r = 0: the release phase is fixed by the model (docs/model.md §4.4), so no guess.
 Outcome ProveSticking1Dof(const IntervalModel& model, const ProofRequest& request, const Budget& budget);
 

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "proof/bifurcation_proof.hpp"
+#include "proof/grazing_proof.hpp"
 #include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
 #include "proof/prove_api.hpp"
@@ -225,6 +226,119 @@ Found FindImpactOrbit(const System& sys, const Scene& scene, const ProofRequest&
   return f;
 }
 
+// The releases and plastic landings of a sticking orbit, in order, with their times and the states
+// just after (a release event follows its reset, a plastic impact precedes its reset: they are
+// paired in order).
+class StickRecorder final : public Observer {
+ public:
+  struct Item {
+    std::string kind;  // "release", "stick", "leave", "other"
+    double t = 0;
+    Eigen::VectorXd X, V;
+  };
+  void OnEvent(const Event& e) override {
+    if (e.kind == EventKind::kRelease || e.kind == EventKind::kImpact) times.push_back(e.t);
+    if (e.kind == EventKind::kAccumulation || e.kind == EventKind::kGrazing) other = true;
+  }
+  void OnReset(const Reset& r) override {
+    Item it;
+    it.kind = r.kind == ResetKind::kRelease        ? "release"
+              : r.kind == ResetKind::kPlasticStick ? "stick"
+              : r.kind == ResetKind::kPlasticLeave ? "leave"
+                                                   : "other";
+    it.X = r.X_after;
+    it.V = r.V_after;
+    items.push_back(std::move(it));
+  }
+  std::vector<double> times;
+  std::vector<Item> items;
+  bool other = false;
+};
+
+// A sticking orbit of several modes held on one contact with plastic landings: the release and the
+// landings up to the sticking that lasts until the next release, q periods later.
+struct FoundSticking {
+  std::string failure;
+  bool stopped = false;
+  proof::StickingGuess guess;
+};
+
+FoundSticking FindStickingOrbit(const System& sys, const Scene& scene, const ProofRequest& request,
+                                const proof::Budget& budget) {
+  FoundSticking f;
+  OrbitRequest req;
+  req.kind = OrbitKind::kSticking;
+  req.period = request.period;
+  req.transient_periods = request.start ? 0 : request.transient_periods;
+  req.start = request.start;
+  OrbitResult orbit;
+  StickRecorder rec;
+  RunResult run;
+  budget.Watch([&] {
+    orbit = SolveOrbit(sys, scene, req);
+    if (orbit.status != "converged" || orbit.summary.kind != "sticking-periodic" || budget.passed()) return;
+    Scene two = scene;
+    two.run.periods = 2 * orbit.period + 1;
+    two.run.samples_per_period = 0;
+    two.run.lyapunov = false;
+    const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
+    SimulationOptions opt;
+    opt.observers = {&rec};
+    opt.initial = &start;
+    run = Simulate(sys, two, opt);
+  });
+  if (budget.passed()) {
+    f.stopped = true;
+    return f;
+  }
+  if (orbit.status != "converged") {
+    f.failure = "the Poincaré solver found no orbit to prove (" + orbit.status +
+                (orbit.message.empty() ? "" : ": " + orbit.message) + ")";
+    return f;
+  }
+  if (orbit.summary.kind != "sticking-periodic") {
+    f.failure = "the orbit found does not stick (try --kind impact)";
+    return f;
+  }
+  if (run.status != RunStatus::kOk) {
+    f.failure = "the orbit found could not be followed over its period: " + run.message;
+    return f;
+  }
+  if (rec.other || rec.times.size() != rec.items.size()) {
+    f.failure = "the sticking orbit found has a chattering sequence or a grazing the prover cannot follow";
+    return f;
+  }
+  for (std::size_t k = 0; k < rec.items.size(); ++k) rec.items[k].t = rec.times[k];
+  const auto& it = rec.items;
+  std::size_t r0 = 0;
+  while (r0 < it.size() && it[r0].kind != "release") ++r0;
+  std::size_t end = r0 + 1;
+  while (end < it.size() && it[end].kind == "leave") ++end;
+  const double T = sys.period();
+  if (r0 >= it.size() || end >= it.size() || it[end].kind != "stick" || end + 1 >= it.size() ||
+      it[end + 1].kind != "release") {
+    f.failure = "the sticking orbit found is not a release, plastic landings and one sticking phase per period";
+    return f;
+  }
+  const double turns = (it[end + 1].t - it[r0].t) / T;
+  const int q = static_cast<int>(std::lround(turns));
+  if (q < 1 || std::abs(turns - q) > 1e-6) {
+    f.failure = "the sticking orbit found has more than one sticking phase per period (not proven by this version)";
+    return f;
+  }
+  const double shift = std::floor(it[r0].t / T) * T;
+  f.guess.period = q;
+  f.guess.release_time = it[r0].t - shift;
+  f.guess.X_release = it[r0].X;
+  f.guess.V_release = it[r0].V;
+  for (std::size_t k = r0 + 1; k <= end; ++k) {
+    f.guess.landing_times.push_back(it[k].t - shift);
+    f.guess.X.push_back(it[k].X);
+    f.guess.V.push_back(it[k].V);
+  }
+  return f;
+}
+
 // An impact of the orbit at a contact with r = 0.
 bool PlasticImpact(const System& sys, const proof::ImpactGuess& g) {
   for (std::size_t j = 0; j < g.times.size(); ++j) {
@@ -329,14 +443,18 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
     if (system.contact_count() > 1) {
       outcome.reason = "sticking orbits of a model with several contacts are not proven by this version "
                        "(docs/prove.md)";
-    } else if (one_dof && system.damped() && system.restitution() > 0) {
-      outcome.reason = "sticking orbits with chattering (r > 0) of a damped model are not proven by this version "
-                       "(docs/prove.md)";
     } else if (one_dof) {
       outcome = proof::ProveSticking1Dof(model, request, budget);  // r = 0, or r > 0 with chattering
+    } else if (system.restitution() > 0) {
+      outcome.reason = "sticking orbits with chattering (r > 0) of a model with more than one mode are not proven "
+                       "by this version (docs/prove.md)";
     } else {
-      outcome.reason = "sticking orbits of a model with more than one mode are not proven by this version "
-                       "(docs/prove.md)";
+      const auto found = FindStickingOrbit(system, scene, request, budget);
+      if (found.stopped)
+        stage = fmt::format("during the orbit search (a transient of {} periods, then Newton)",
+                            request.start ? 0 : request.transient_periods);
+      else if (!found.failure.empty()) outcome.reason = found.failure;
+      else outcome = proof::ProveStickingModes(model, found.guess, request, budget);
     }
   };
   if (request.kind == OrbitKind::kSticking) {
@@ -512,9 +630,9 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
   const bool mirrored = scene.physical.has_value() && contacts.size() == 2 && contacts[0].dof == contacts[1].dof && contacts[0].partner < 0 &&
                         contacts[1].partner < 0 && contacts[0].side != contacts[1].side;
   std::string interval;
-  if (request.kind != "branch-point" && request.kind != "fold") {
+  if (request.kind != "branch-point" && request.kind != "fold" && request.kind != "grazing") {
     outcome.reason = "a " + request.kind + " is not proven by this version (it proves the symmetry-breaking pitchfork "
-                     "and the fold of the symmetric two-sided one-DOF oscillator; docs/prove.md)";
+                     "and the fold of the symmetric two-sided one-DOF oscillator, and grazings; docs/prove.md)";
   } else if (!amplitude && !frequency) {
     outcome.reason = "the parameter " + request.parameter + " is not proven by this version (the amplitude or the "
                      "forcing frequency; docs/prove.md)";
@@ -530,10 +648,29 @@ ProofResult proof::ProveBifurcation(const System& system, const Scene& scene, co
       }
       return m;
     }();
-    outcome = request.kind == "fold"
-                  ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
-                                              interval)
-                  : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
+    if (request.kind == "grazing") {
+      // The orbit that grazes, at the located value: from the given state, else searched.
+      as_orbit.kind = OrbitKind::kImpact;
+      as_orbit.period = request.period;
+      as_orbit.start = request.start;
+      Scene there = scene;
+      if (request.start) (amplitude ? there.amplitude : there.frequency) = request.start_value;
+      const System at(there);
+      const auto found = FindImpactOrbit(request.start ? at : system, request.start ? there : scene, as_orbit, budget);
+      as_orbit.period = 1;
+      if (found.stopped || budget.passed())
+        return Wrap(outcome, "bifurcation", model, as_orbit, budget, "during the orbit search", enclosed.structure);
+      if (!found.failure.empty() || found.sticking)
+        outcome.reason = "no impacting orbit found at the located value: " +
+                         (found.failure.empty() ? std::string("the orbit found sticks") : found.failure);
+      else
+        outcome = proof::ProveGrazing(model, mirrored, found.guess, frequency, request.value, request.bracket, budget, interval);
+    } else {
+      outcome = request.kind == "fold"
+                    ? proof::ProveSymmetricFold(model, mirrored, frequency, request.value, request.bracket, budget,
+                                                interval)
+                    : proof::ProvePitchfork(model, mirrored, frequency, request.value, request.bracket, budget, interval);
+    }
     if (outcome.proven) {
       // The certificate's model carries the parameter as the proven interval.
       (amplitude ? model.amplitude_text : model.frequency_text) = interval;

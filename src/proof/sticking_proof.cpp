@@ -26,6 +26,9 @@ constexpr int kMaxFlights = 400;
 // this fraction of the first landing speed, or its enclosure is wider than kTailWidth of it (the
 // enclosures widen along the sequence); the rest of the sequence is then bounded as a whole.
 constexpr double kTailSwitch = 1e-7, kTailWidth = 1e-5;
+// Damped, the tail's enclosure of the accumulation time is O(v) wide (below): the impacts are
+// followed further.
+constexpr double kTailSwitchDamped = 1e-12;
 }
 
 Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request, const Budget& budget) {
@@ -195,7 +198,7 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
       events.push_back({{"kind", "impact"}, {"contact", 0}, {"time", Pair(tL)}, {"phase", Pair(Phase(mdl, tL))}, {"velocity_before", Pair(vminus)}});
       sequence.push_back("impact");
       landing_low = (t - tr + Interval(S.lo())).lo();
-      if (vplus.hi() < kTailSwitch * first_speed || vplus.width() > kTailWidth * vplus.mid()) {
+      if (vplus.hi() < (mdl.damped() ? kTailSwitchDamped : kTailSwitch) * first_speed || vplus.width() > kTailWidth * vplus.mid()) {
         // The rest of the sequence, bounded (docs/prove.md "chattering"): with y = x − x0 ≥ 0,
         // ÿ = −ω_1² y − T_B R(t). On a window W where T_B R ∈ [a_lo, A_hi], a_lo > 0, every flight from
         // speed v lasts at most 2v/a_lo, rises at most Y = v²/(2 a_lo), and lands with speed at most
@@ -206,7 +209,13 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
         // enclosures, checks that these bounds hold, and derives ρ and the time bound from them.
         const double v = vplus.hi() * (1 + 1e-9);
         double L = 4 * v / std::max(1e-300, (TB * R_land).lo());
-        Interval A, a_lo, a_hi, rho, Tmax;
+        // Damped (σ = ζω_1 > 0), ÿ = −ω_1² y − 2σẏ − T_B R: the damping force opposes the rise (so
+        // Y ≤ v²/(2 A_lo) still) and removes energy in the fall (so the landing speed is still at most
+        // v √(a_hi/A_lo)), but it slows the fall: there ÿ ≤ −(A_lo − 2σ v √(a_hi/A_lo)) = −f_lo, and a
+        // flight lasts at most v/A_lo + v/√(A_lo f_lo) ≤ 2v/f_lo. Undamped f_lo = A_lo.
+        const bool damped = mdl.damped();
+        const Interval sigma = damped ? mdl.sigma[0] : Interval(0.0);
+        Interval A, a_lo, a_hi, rho, Tmax, f_lo;
         double A_low = 0, A_high = 0;
         bool closed = false;
         for (int it = 0; it < 6 && !closed; ++it, L *= 2) {
@@ -217,21 +226,26 @@ Outcome ProveSticking1Dof(const IntervalModel& mdl, const ProofRequest& request,
           a_lo = Interval(A_low);
           a_hi = Interval(A_high) + w1s * Sqr(Interval(v)) / (Interval(2.0) * a_lo);
           rho = mdl.restitution * Sqrt(a_hi / a_lo);
-          if (!(rho.hi() < 1)) continue;
-          Tmax = Interval(2.0) * Interval(v) / (a_lo * (Interval(1.0) - rho));
+          f_lo = damped ? a_lo - Interval(2.0) * sigma * Interval(v) * Sqrt(a_hi / a_lo) : a_lo;
+          if (!(rho.hi() < 1) || !(f_lo.lo() > 0)) continue;
+          Tmax = Interval(2.0) * Interval(v) / (f_lo * (Interval(1.0) - rho));
           closed = Tmax.hi() <= L;
         }
         L /= 2;
         if (!ledger.Check(A.Positive(), "tail reaction T_B R over the window", tl, A, "> 0") ||
             !ledger.Check((Interval(1.0) - rho).Positive(), "tail contraction 1 - rho", tl, Interval(1.0) - rho, "> 0") ||
+            (damped && !ledger.Check(f_lo.Positive(), "tail fall acceleration A_lo - 2 sigma v sqrt(a_hi/A_lo)", tl,
+                                     f_lo, "> 0")) ||
             !ledger.Check((Interval(L) - Tmax).Positive(), "tail window L - Tmax", tl, Interval(L) - Tmax, "> 0"))
           return finish(ledger.failed() + " (the chattering sequence could not be bounded)");
         // And from below: a flight from v lasts at least 2v/a_hi and lands at least v √(A_lo/a_hi)
         // fast (the rise and the fall of the energy balance), so t∞ − t ≥ 2 v_lo/(a_hi (1 − ρ_lo)):
-        // the enclosure of t∞ is O(v²) wide.
+        // the enclosure of t∞ is O(v²) wide. Damped: at least the first rise, v_lo/(a_hi + 2σv) (the
+        // deceleration in the rise is at most A_hi + ω_1² Y + 2σv): O(v) wide.
         const double v_low = vplus.lo() * (1 - 1e-9);
         const Interval rho_low = mdl.restitution * Sqrt(a_lo / a_hi);
-        const Interval Tmin = Interval(2.0) * Interval(v_low) / (a_hi * (Interval(1.0) - rho_low));
+        const Interval Tmin = damped ? Interval(v_low) / (a_hi + Interval(2.0) * sigma * Interval(v))
+                                     : Interval(2.0) * Interval(v_low) / (a_hi * (Interval(1.0) - rho_low));
         t_end = Interval::Hull((tL + Tmin).lo(), (tL + Tmax).hi());
         out.certificate["tail"] = {{"after_flight", k},       {"speed_upper", v},        {"speed_lower", v_low},
                                    {"window", L},

@@ -28,8 +28,10 @@ def test_prove_matches_the_command_and_its_certificate_is_confirmed(tmp_path):
 def test_prove_proves_a_chattering_orbit_and_says_why_it_does_not_prove_another():
     r = vibro.prove(os.path.join(SCENES, "fig05_coexistence.toml"))
     assert r["verdict"] == "proven" and r["sequence"][-2:] == ["accumulation", "stick"]
-    r = vibro.prove(os.path.join(SCENES, "chain3.toml"))
-    assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
+    r = vibro.prove(os.path.join(SCENES, "chain3.toml"))  # 3 modes held at a plastic stop (r = 0)
+    assert r["verdict"] == "proven" and r["sequence"] == ["release", "impact", "stick"] and len(r["multipliers"]) == 4
+    r = vibro.prove(os.path.join(SCENES, "chain2.toml"))  # 2 modes, r = 0.5: chattering
+    assert r["verdict"] == "not-proven" and "chattering (r > 0) of a model with more than one mode" in r["reason"]
 
 
 def test_prove_proves_a_damped_two_contact_orbit_and_refuses_a_bad_period(tmp_path):
@@ -45,7 +47,7 @@ def test_prove_proves_a_damped_two_contact_orbit_and_refuses_a_bad_period(tmp_pa
     c = subprocess.run([sys.executable, CHECKER, str(cert)], capture_output=True, text=True, timeout=600)
     assert c.returncode == 0, c.stdout + c.stderr
     r = vibro.prove(os.path.join(SCENES, "chain2_damped.toml"))
-    assert r["verdict"] == "not-proven" and "more than one mode" in r["reason"]
+    assert r["verdict"] == "not-proven" and "chattering (r > 0) of a model with more than one mode" in r["reason"]
     with pytest.raises(ValueError):
         vibro.prove(os.path.join(SCENES, "fig04_subharmonic.toml"), period=-1)
 

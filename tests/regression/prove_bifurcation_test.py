@@ -16,7 +16,7 @@ Checked: the proven interval contains the truth and is at most 1e-10 wide (ampli
 frequency); the checker confirms each certificate and rejects it with the interval moved by 1e-9,
 narrowed to exclude the truth, widened past 1e-10, with the slope claim moved, or with the model
 edited; at a parameter 1e-9 past the point nothing is proven and no certificate is written; an
-asymmetric scene and a kind this version does not prove are refused with their reasons; a bad
+asymmetric scene and a kind this version does not prove (a flip) are refused with their reasons; a bad
 --point is bad input (exit 2).
 Usage: prove_bifurcation_test.py VIBRO CHECKER
 """
@@ -261,9 +261,9 @@ asym = scene_file("asym.toml", two_sided("3.0", "0.6", "2.0", r_above="0.7"))
 code, s, err = prove(asym, "--bifurcation", f"branch-point:excitation.amplitude={mp.nstr(truth, 20)}")
 expect(code == 4 and s and "restitutions differ" in s["reason"], f"asymmetric restitutions: refused with the reason "
        f"(exit {code}: {s and s['reason']})")
-code, s, err = prove(scene, "--bifurcation", "grazing:excitation.amplitude=3.0")
-expect(code == 4 and s and "grazing is not proven by this version" in s["reason"],
-       f"a grazing: refused with the reason (exit {code}: {s and s['reason']})")
+code, s, err = prove(scene, "--bifurcation", "flip:excitation.amplitude=3.0")
+expect(code == 4 and s and "flip is not proven by this version" in s["reason"],
+       f"a flip: refused with the reason (exit {code}: {s and s['reason']})")
 code, s, err = prove(scene, "--bifurcation", branches[0], "--point", "7")
 expect(code == 2 and "--point 7" in err, f"--point beyond the bifurcations: bad input (exit {code}: {err[-200:]})")
 code, s, err = prove(scene, "--bifurcation", branches[0], "--branch", branches[0])

@@ -21,9 +21,8 @@ H = Harness(VIBRO, CHECKER, "vibro_prove_scenes_", verbose=True)
 TMP, expect = H.tmp, H.expect
 # The refusals of docs/prove.md, as the prover words them.
 REFUSALS = (
-    "sticking orbits of a model with more than one mode are not proven by this version",
+    "sticking orbits with chattering (r > 0) of a model with more than one mode are not proven by this version",
     "sticking orbits of a model with several contacts are not proven by this version",
-    "sticking orbits with chattering (r > 0) of a damped model are not proven by this version",
     "the Poincaré solver found no orbit to prove",
     "an orbit through a simultaneous impact is not proven",
     "a grazing orbit cannot be proven",

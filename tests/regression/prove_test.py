@@ -373,16 +373,16 @@ code, s, err = prove("chain2.toml", "--kind", "impact", "--set", "excitation.amp
 expect(code == 4 and "time limit" in (s or {}).get("reason", ""), f"--time-limit: exit 4, reason given (exit {code}: {s and s['reason']})")
 
 # ---- Not proven, and bad input --------------------------------------------------------------
-path = os.path.join(TMP, "chain3.json")
-code, s, err = prove("chain3.toml", out=path)
-expect(code == 4 and s["verdict"] == "not-proven" and "more than one mode" in s["reason"],
-       f"a sticking orbit of 3 modes: exit 4 with the reason (exit {code}, {s and s['reason']})")
+path = os.path.join(TMP, "chain2.json")
+code, s, err = prove("chain2.toml", out=path)
+expect(code == 4 and s["verdict"] == "not-proven" and "chattering (r > 0) of a model with more than one mode" in s["reason"],
+       f"a chattering sticking orbit of 2 modes: exit 4 with the reason (exit {code}, {s and s['reason']})")
 code, v = check(path)
 expect(code == 1 and v["verdict"] == "not confirmed", "the checker rejects a not-proven certificate")
 path = os.path.join(TMP, "damped.json")
 code, s, err = prove("chain2_damped.toml", out=path)
 expect(code == 4 and s["verdict"] == "not-proven" and "more than one mode" in s["reason"] and os.path.exists(path),
-       f"a damped 2-DOF sticking orbit: exit 4 with the reason, a certificate saying so (exit {code}: {err})")
+       f"a damped 2-DOF chattering sticking orbit: exit 4 with the reason, a certificate saying so (exit {code}: {err})")
 code, s, err = prove("fig04_subharmonic.toml", out=os.path.join(TMP, "missing_dir", "c.json"))
 expect(code == 2 and "no directory" in err, f"--out into a missing directory: bad input before any work (exit {code})")
 code, s, err = prove("no_such_scene.toml")

@@ -166,6 +166,9 @@ cli_commands = {
                   "partition.h5", "keep"),
     "sweep": (["sweep", fig5, "--param", "excitation.frequency", "--from", "1", "--to", "3", "--steps", "1000000"],
               "sweep.h5", "keep"),
+    "curve": (["curve", default, "--param", "excitation.frequency,excitation.amplitude", "--kind", "sticking-lost",
+               "--range1", "1,20", "--range2", "1,2", "--toward", "2.8,1.5", "--step", "1e-5", "--max-step", "1e-5",
+               "--max-points", "1000000"], "curve.h5", "keep"),
     "validate": (["validate", default, branch_csv, "--param", "excitation.amplitude"], "validation.h5", "keep"),
     "score": (["score", default, events_csv] + LONG, None, "none"),
     "check": (["check", default] + LONG, None, "none"),
@@ -259,7 +262,9 @@ if not only or "limit-py" in only:
 
 # ---- Python: every long-running function raises KeyboardInterrupt ----
 py_calls = {
-    "simulate": "vibro.simulate(long, out='out.h5')",
+    # No time limit: under a heavy load the pace check estimated 26 h, past the default limit,
+    # and raised LimitError before the signal came (this case tests the signal).
+    "simulate": "vibro.simulate(long, out='out.h5', time_limit=0)",
     "orbit": "vibro.orbit(long, transient=100000000)",
     "prove": "vibro.prove(fig5, transient=10**7, time_limit=1000)",
     "continue_": "vibro.continue_(chain3, 'excitation.frequency', 0.3, step=1e-4, max_points=100000, out='b.h5')",
@@ -268,6 +273,8 @@ py_calls = {
     "partition": "vibro.partition(chain3, ('excitation.amplitude', 'excitation.frequency'), (0.9, 1.1), (0.3, 0.8), "
                  "[0.3, 0.5], steps1=4, out='p.h5')",
     "sweep": "vibro.sweep(fig5, 'excitation.frequency', 1, 3, steps=1000000, out='s.h5')",
+    "curve": "vibro.curve(default, ('excitation.frequency', 'excitation.amplitude'), (1, 20), (1, 2), "
+             "kind='sticking-lost', toward=(2.8, 1.5), step=1e-5, max_step=1e-5, max_points=1000000, out='c.h5')",
     "validate": f"vibro.validate(default, {branch_csv!r}, 'excitation.amplitude', out='v.h5')",
     "score": f"vibro.score(long, {events_csv!r})",
     "check": "vibro.check(long)",
