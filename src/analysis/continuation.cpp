@@ -706,6 +706,24 @@ std::optional<Eigen::VectorXd> OnSection(const Problem& p, double lambda, double
   return out;
 }
 
+// Whether the branch's last bifurcation, a non-smooth point it went through, repeats an earlier
+// one of the branch: the same kind, the same events before and after, at the same λ (within 1e-9
+// relative, or their brackets). Then the branch is going round a loop through it again (e.g.
+// between two grazings close together, turning back at one and crossing back at the other).
+bool RepeatsATransition(const Branch& br) {
+  if (br.bifurcations.size() < 2) return false;
+  const Bifurcation& g = br.bifurcations.back();
+  if (g.through.empty()) return false;
+  for (size_t k = 0; k + 1 < br.bifurcations.size(); ++k) {
+    const Bifurcation& e = br.bifurcations[k];
+    if (e.kind == g.kind && !e.through.empty() && e.events_before == g.events_before &&
+        e.events_after == g.events_after &&
+        std::abs(e.value - g.value) <= 1e-9 * std::max(1.0, std::abs(g.value)) + e.bracket + g.bracket)
+      return true;
+  }
+  return false;
+}
+
 // The branch as returned, with how many map evaluations needed the quad engine.
 Branch& Finish(Branch& br, const Problem& p) {
   br.quad_evaluations = p.quad_evaluations();
@@ -1473,6 +1491,12 @@ Branch Continue(const ContinuationRequest& req) {
               g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
               Count(g.events_after, 'I') - Count(g.events_before, 'I') > 1 ? "s" : "", near->speed, std::abs(d_near),
               far->speed, eps);
+          if (RepeatsATransition(br)) {
+            br.end = fmt::format("closed loop: through the {} at λ = {:.17g} again (the same events before and after)",
+                                 g.kind, g.value);
+            br.closed_loop = true;
+            return Finish(br, p);
+          }
           p.SetLambdaStep(std::clamp(1e-2 * eps * eps / std::max(1.0, std::abs(g.value)), 1e-12, 1e-6));
           record(near->point);
           cur = far->point;
@@ -1491,7 +1515,15 @@ Branch Continue(const ContinuationRequest& req) {
           continue;
         }
       }
-      if (goes_on) br.bifurcations.back().through = "past";
+      if (goes_on) {
+        br.bifurcations.back().through = "past";
+        if (RepeatsATransition(br)) {
+          br.end = fmt::format("closed loop: through the {} at λ = {:.17g} again (the same events before and after)",
+                               br.bifurcations.back().kind, br.bifurcations.back().value);
+          br.closed_loop = true;
+          return Finish(br, p);
+        }
+      }
       if (!goes_on) {
         br.end = kind == "sticking-lost" || kind == "undetermined" || kind == "no-jacobian" ? kind
                  : past && past->probe.signature.find_first_of("RI") == std::string::npos
