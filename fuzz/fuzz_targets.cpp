@@ -82,7 +82,7 @@ void StoredRunTarget(const std::uint8_t* data, std::size_t size, const std::stri
     try {
       const Checkpoint& c = *stored.checkpoint;
       const Event e{EventKind::kImpact, c.clock, 0.0, 0.0, -1.0, 0.5};
-      const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode};
+      const Sample s{c.clock, 0.0, c.X, c.V, 0.0, c.mode, c.mode == Mode::kSticking ? 1 : 0};
       for (int i = 0; i < 5000; ++i) {
         store->OnEvent(e);
         store->OnSample(s);
