@@ -186,11 +186,12 @@ std::string Suggest(const std::string& path) {
     (void)kind;
     const size_t full = EditDistance(path, known);
     size_t d = std::min(full, EditDistance(leaf, LastComponent(known)) + 1);
-    // A shortened key (`structure.damping` for `structure.damping_ratios`) is a near miss too.
+    // A shortened key of the same table (`structure.damping` for `structure.damping_ratios`) is the
+    // nearest miss: nearer than the same leaf in another table (`stop.damping`, a compliant stop's).
     const std::string known_leaf = LastComponent(known);
     if (leaf.size() >= 4 && known_leaf.rfind(leaf, 0) == 0 &&
         path.substr(0, path.size() - leaf.size()) == known.substr(0, known.size() - known_leaf.size()))
-      d = std::min<size_t>(d, 1);
+      d = 0;
     // Ties (the same leaf in two tables: stop.restitution, contact.restitution) go to the
     // closer whole key.
     if (d < best_d || (d == best_d && !best.empty() && full < best_full)) {
