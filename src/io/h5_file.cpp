@@ -412,11 +412,14 @@ void Close(Id id, Closer closer) {
 // file has failed; every other file was closed by its owner and stdio is flushed.
 // HDF5 1.10 also ends the process itself, with exit(-1) and no message, when some of its
 // allocations fail (H5I_register under an exhausted `ulimit -v`, seen in H5Dget_space and
-// H5Screate on the writer thread); its clean-up then crashed on the call under way. vibro never
-// exits with -1: that status is reported as the out-of-memory it is (exit 3, the file keeping its
-// last flush, written with no reuse of freed space: docs/output.md).
+// H5Screate on the writer thread); its clean-up then crashed on the call under way. An exit(-1)
+// during a store's writes (WritingScope) is reported as the out-of-memory it is (exit 3, the file
+// keeping its last flush, written with no reuse of freed space: docs/output.md); outside them the
+// status is the program's own (a Python sys.exit(-1) stays 255).
+std::atomic<int> g_writing{0};  // stretches of store writes under way (WritingScope)
+
 void SkipCleanUpAfterFailure(int status, void*) {
-  if (status == -1) {
+  if (status == -1 && g_writing.load() > 0) {
     static const char kLine[] =
         "vibro: out of memory (the HDF5 library could not allocate and ended the process); the output file keeps "
         "what was written up to its last flush\n";
@@ -429,6 +432,9 @@ void SkipCleanUpAfterFailure(int status, void*) {
   std::fflush(nullptr);
   _exit(status);
 }
+
+WritingScope::WritingScope() { g_writing.fetch_add(1); }
+WritingScope::~WritingScope() { g_writing.fetch_sub(1); }
 
 void Silence() {
   // Each thread has its own error stack and its own printing of it (a thread-safe HDF5).

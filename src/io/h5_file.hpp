@@ -88,6 +88,17 @@ class Type {
 // Turns the library's own error printing off (vibro reports errors itself). Idempotent.
 void Silence();
 
+// Marks a stretch of a store's HDF5 writes (RAII, any thread): HDF5 1.10 ends the process with
+// exit(-1) when some allocations fail, and only an exit(-1) during such a stretch is reported as
+// out of memory (exit 3); any other exit status, -1 included, is left as the program gave it.
+class WritingScope {
+ public:
+  WritingScope();
+  ~WritingScope();
+  WritingScope(const WritingScope&) = delete;
+  WritingScope& operator=(const WritingScope&) = delete;
+};
+
 // ---- Files ----
 bool IsHdf5(const std::string& path);
 // Creates (truncates) `path` for the store: freed space never reused, metadata written at

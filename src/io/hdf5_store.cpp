@@ -303,6 +303,7 @@ void Hdf5Store::Impl::Close() {
 void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c, h5::Size n_events,
                                               h5::Size n_samples, h5::Size n_sections, h5::Size n_loads) {
   h5::Silence();  // the writer thread's own error stack (HDF5 keeps one per thread)
+  const h5::WritingScope writing;
   const auto t0 = std::chrono::steady_clock::now();
   // The rows' chunks first (a failed write leaves the file as it was: they lie past its end);
   // then, when there is room for it, the metadata that makes them part of the file.
@@ -316,6 +317,7 @@ void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c,
 
 void Hdf5Store::Impl::Flush() {
   Sync();
+  const h5::WritingScope writing;
   for (h5::Column* c : Columns()) c->Stage();
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
   WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads);
