@@ -1,6 +1,7 @@
 """The arrays of vibro.simulate are the rows the same run writes to HDF5 (read with h5py)."""
 import os
 import re
+import subprocess
 
 import h5py
 import numpy as np
@@ -41,3 +42,17 @@ def test_samples_are_the_model():
     on = run.samples["mode"] == 1
     assert on.any()
     np.testing.assert_allclose(run.samples["x_B"][on], stop, atol=1e-9)
+
+
+def test_a_programs_own_exit_status_is_kept_after_writing_a_file(tmp_path):
+    # vibro reports HDF5's own exit(-1) during a file's writes as out of memory (exit 3); a
+    # program that exits with -1 itself, after vibro wrote its file, keeps its status 255.
+    import sys
+    code = ("import sys, vibro\n"
+            f"vibro.simulate(vibro.load_scene({os.path.join(SCENES, 'default.toml')!r}, set={{'run.periods': 5}}), "
+            f"out={str(tmp_path / 'x.h5')!r})\n"
+            "sys.exit(-1)\n")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env=dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path)))
+    assert r.returncode == 255, (r.returncode, r.stderr)
+    assert "out of memory" not in r.stderr
