@@ -99,6 +99,21 @@ PyScene LoadPyScene(SceneOrigin origin) {
   return {std::move(origin), std::move(loaded)};
 }
 
+// Compliant stops (docs/compliant.md) run in model, simulate and rigid_beside only, as on the
+// command line: the analyses built on the rigid model refuse them (ValueError) before computing
+// anything, rather than answer for a rigid stop (vibro.check answered "ok" with CVODE's rigid stop).
+template <typename R, typename... A>
+auto RigidOnly(R (*f)(const PyScene&, A...)) {
+  return [f](const PyScene& s, A... a) -> R {
+    if (vibro::HasCompliantContact(s.loaded.scene))
+      throw vibro::InputError({fmt::format(
+          "{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in vibro.simulate (rigid_beside) and "
+          "vibro.model; this function does not handle it yet (docs/compliant.md)",
+          s.origin.source.empty() ? s.origin.path : s.origin.source)});
+    return f(s, std::forward<A>(a)...);
+  };
+}
+
 // SIGINT and SIGTERM → stop flag while a computation runs (main thread only; see the file comment).
 std::atomic<bool> g_sigint{false};
 std::atomic<int> g_stop_signal{0};  // the signal that stopped the computation
@@ -921,17 +936,17 @@ PYBIND11_MODULE(_vibro, m) {
     py::gil_scoped_release release;
     return vibro::RigidComparisonJson(vibro::CompareWithRigid(s.loaded.scene, blocks));
   });
-  m.def("orbit", &Orbit);
-  m.def("prove", &Prove);
-  m.def("prove_bifurcation", &ProveBifurcationPoint);
-  m.def("continue_branch", &ContinueBranch);
-  m.def("study", &Study);
-  m.def("sweep", &SweepScene);
-  m.def("diagram", &DiagramScene);
-  m.def("check", &Check);
+  m.def("orbit", RigidOnly(&Orbit));
+  m.def("prove", RigidOnly(&Prove));
+  m.def("prove_bifurcation", RigidOnly(&ProveBifurcationPoint));
+  m.def("continue_branch", RigidOnly(&ContinueBranch));
+  m.def("study", RigidOnly(&Study));
+  m.def("sweep", RigidOnly(&SweepScene));
+  m.def("diagram", RigidOnly(&DiagramScene));
+  m.def("check", RigidOnly(&Check));
   m.def("info", &Info);
-  m.def("validate", &Validate);
-  m.def("score", &Score);
-  m.def("partition", &PartitionPlane);
-  m.def("curve", &TraceCurvesPy);
+  m.def("validate", RigidOnly(&Validate));
+  m.def("score", RigidOnly(&Score));
+  m.def("partition", RigidOnly(&PartitionPlane));
+  m.def("curve", RigidOnly(&TraceCurvesPy));
 }
