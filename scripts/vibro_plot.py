@@ -101,6 +101,9 @@ def make_title(f, varied=(), width=100):
     ma = f["model"].attrs
     values = {"stop.restitution": ma["restitution"], "excitation.frequency": ma["frequency"],
               "excitation.amplitude": ma["amplitude"]}
+    tables = scene_contacts(f) or [scene_table(f, "stop")]
+    if all(compliant_law(t) for t in tables):  # no restitution: the stops are spring–dashpots
+        values.pop("stop.restitution")
     run = ", ".join(f"{PLAIN[k]} = {float(v):g}" for k, v in values.items() if k not in varied)
     line = f"{name}: {run}" if run else name
     return textwrap.fill(line, width=width, break_long_words=False)
@@ -109,39 +112,64 @@ def make_title(f, varied=(), width=100):
 # ---------------------------------------------------------------------------------------------
 # Dense evaluation of free flights (docs/model.md §2 and §7).
 
+def harmonics(model):
+    """[(f_h, ω_h, ψ_h, T_A^(h), s_A^(h) = c·T_A^(h))]: the forcing Σ_h T_A^(h) f_h sin(ω_h t + ψ_h)
+    in modal form (docs/harmonics.md); one entry, (f, ω, 0, T_A, s_A), for the single harmonic
+    f sin ωt."""
+    a = model.attrs
+    if "harmonic_amplitudes" in a:
+        TA = np.atleast_2d(np.asarray(a["harmonic_forcing"], dtype=float))
+        c = np.asarray(a["contact_shape"], dtype=float)
+        return [(float(fh), float(wh), float(ph), TA[k], float(c @ TA[k])) for k, (fh, wh, ph) in
+                enumerate(zip(a["harmonic_amplitudes"], a["harmonic_frequencies"], a["harmonic_phases"]))]
+    return [(float(a["amplitude"]), float(a["frequency"]), 0.0, np.asarray(a["forcing"], dtype=float),
+             float(a["s_A"]))]
+
+
 def free_flight(model, X0, V0, t0, t):
     """Modal state at times t (any order, before or after t0) of the free flight through
-    (t0, X0, V0): Ẍ_i + 2ζ_iω_i Ẋ_i + ω_i² X_i = T_A,i f sin ωt, mode by mode."""
+    (t0, X0, V0): Ẍ_i + 2ζ_iω_i Ẋ_i + ω_i² X_i = Σ_h T_A,i^(h) f_h sin(ω_h t + ψ_h), mode by mode,
+    the particular solution summed over the harmonics."""
     a = model.attrs
-    w, z, TA = a["frequencies"], a["damping_ratios"], a["forcing"]
-    f, W = float(a["amplitude"]), float(a["frequency"])
+    w, z = a["frequencies"], a["damping_ratios"]
+    forcing = harmonics(model)
     t = np.asarray(t, dtype=float)
     s = t - t0
     X = np.empty((len(t), len(w)))
     V = np.empty_like(X)
-    for i, (wi, zi, ta) in enumerate(zip(w, z, TA)):
-        d2 = wi * wi - W * W
-        D = d2 * d2 + (2 * zi * wi * W) ** 2
-        if D > 1e-24 * max(1.0, wi ** 4):
-            def U(tt):
-                return ta * f * (d2 * np.sin(W * tt) - 2 * zi * wi * W * np.cos(W * tt)) / D
+    for i, (wi, zi) in enumerate(zip(w, z)):
+        parts = []
+        for f, W, ph, TA, _ in forcing:
+            ta = TA[i]
+            d2 = wi * wi - W * W
+            D = d2 * d2 + (2 * zi * wi * W) ** 2
+            if D > 1e-24 * max(1.0, wi ** 4):
+                def U(tt, ta=ta, f=f, W=W, ph=ph, d2=d2, D=D):
+                    return ta * f * (d2 * np.sin(W * tt + ph) - 2 * zi * wi * W * np.cos(W * tt + ph)) / D
 
-            def dU(tt):
-                return ta * f * W * (d2 * np.cos(W * tt) + 2 * zi * wi * W * np.sin(W * tt)) / D
-        else:  # undamped exact resonance: the secular particular solution
-            def U(tt):
-                return -ta * f * tt * np.cos(W * tt) / (2 * W)
+                def dU(tt, ta=ta, f=f, W=W, ph=ph, d2=d2, D=D):
+                    return ta * f * W * (d2 * np.cos(W * tt + ph) + 2 * zi * wi * W * np.sin(W * tt + ph)) / D
+            else:  # undamped exact resonance: the secular particular solution
+                def U(tt, ta=ta, f=f, W=W, ph=ph):
+                    return -ta * f * tt * np.cos(W * tt + ph) / (2 * W)
 
-            def dU(tt):
-                return -ta * f * (np.cos(W * tt) - W * tt * np.sin(W * tt)) / (2 * W)
-        A = X0[i] - U(t0)
-        B = V0[i] - dU(t0)
+                def dU(tt, ta=ta, f=f, W=W, ph=ph):
+                    return -ta * f * (np.cos(W * tt + ph) - W * tt * np.sin(W * tt + ph)) / (2 * W)
+            parts.append((U, dU))
+
+        def Up(tt):
+            return sum(U(tt) for U, _ in parts)
+
+        def dUp(tt):
+            return sum(dU(tt) for _, dU in parts)
+        A = X0[i] - Up(t0)
+        B = V0[i] - dUp(t0)
         al = zi * wi
         wd = wi * np.sqrt(1 - zi * zi)
         e = np.exp(-al * s)
         c, sn = np.cos(wd * s), np.sin(wd * s)
-        X[:, i] = U(t) + e * (A * c + (B + al * A) / wd * sn)
-        V[:, i] = dU(t) + e * (B * c - (wi * wi * A + al * B) / wd * sn)
+        X[:, i] = Up(t) + e * (A * c + (B + al * A) / wd * sn)
+        V[:, i] = dUp(t) + e * (B * c - (wi * wi * A + al * B) / wd * sn)
     return X, V
 
 
@@ -298,22 +326,35 @@ def expm_batch(A):
 
 
 def stuck_generator(model):
-    """The generator of the sticking motion (docs/model.md §3, §7) on y = (X, Ẋ, sin ωt, cos ωt):
-    x_B = c·X stays at the stop and R is eq. (5) with the damping term, so that y(t + s) =
-    exp(s A) y(t) exactly, forward or backward."""
+    """The generator of the sticking motion (docs/model.md §3, §7) on y = (X, Ẋ, sin φ_0, cos φ_0,
+    sin φ_1, cos φ_1, ...), φ_h = ω_h t + ψ_h one pair per harmonic: x_B = c·X stays at the stop
+    and R is eq. (5) with the damping term, so that y(t + s) = exp(s A) y(t) exactly, forward or
+    backward."""
     a = model.attrs
     w, z = np.asarray(a["frequencies"], float), np.asarray(a["damping_ratios"], float)
-    TA, TB, c = (np.asarray(a[k], float) for k in ("forcing", "contact", "contact_shape"))
-    f, W, sA, sB = (float(a[k]) for k in ("amplitude", "frequency", "s_A", "s_B"))
-    n = len(w)
-    A = np.zeros((2 * n + 2, 2 * n + 2))
+    TB, c = (np.asarray(a[k], float) for k in ("contact", "contact_shape"))
+    sB = float(a["s_B"])
+    forcing = harmonics(model)
+    n, H = len(w), len(forcing)
+    A = np.zeros((2 * n + 2 * H, 2 * n + 2 * H))
     A[:n, n:2 * n] = np.eye(n)
     A[n:2 * n, :n] = -np.diag(w * w) + np.outer(TB, c * w * w) / sB
     A[n:2 * n, n:2 * n] = -np.diag(2 * z * w) + np.outer(TB, c * 2 * z * w) / sB
-    A[n:2 * n, 2 * n] = TA * f - TB * sA * f / sB
-    A[2 * n, 2 * n + 1] = W
-    A[2 * n + 1, 2 * n] = -W
+    for h, (f, W, _, TA, sA) in enumerate(forcing):
+        k = 2 * n + 2 * h
+        A[n:2 * n, k] = TA * f - TB * sA * f / sB
+        A[k, k + 1] = W
+        A[k + 1, k] = -W
     return A
+
+
+def forcing_phases(model, t):
+    """(m, 2H): sin φ_h and cos φ_h at the times t, the trailing part of stuck_generator's y."""
+    t = np.asarray(t, dtype=float)
+    cols = []
+    for _, W, ph, _, _ in harmonics(model):
+        cols += [np.sin(W * t + ph), np.cos(W * t + ph)]
+    return np.stack(cols, axis=1)
 
 
 def fill_stuck_states(f, tt, XX, VV):
@@ -329,7 +370,6 @@ def fill_stuck_states(f, tt, XX, VV):
     t = f["samples/t"][:]
     Xs, Vs, ms = f["samples/X"][:], f["samples/V"][:], f["samples/mode"][:]
     ev_t = f["events/t"][:]
-    W = float(f["model"].attrs["frequency"])
     n = Xs.shape[1]
     A = stuck_generator(f["model"])
     idx = np.nonzero(missing)[0]
@@ -344,7 +384,7 @@ def fill_stuck_states(f, tt, XX, VV):
         if not sel.any():
             continue
         a = anchor[sel]
-        y0 = np.concatenate([Xs[a], Vs[a], np.sin(W * t[a])[:, None], np.cos(W * t[a])[:, None]], axis=1)
+        y0 = np.concatenate([Xs[a], Vs[a], forcing_phases(f["model"], t[a])], axis=1)
         E = expm_batch(A[None] * (tt[idx[sel]] - t[a])[:, None, None])
         y = np.einsum("mij,mj->mi", E, y0)
         XX[idx[sel]], VV[idx[sel]] = y[:, :n], y[:, n:2 * n]
@@ -365,7 +405,7 @@ def reaction(model, X, V, t):
     z = model.attrs["damping_ratios"]
     X, V = np.atleast_2d(X), np.atleast_2d(V)
     elastic = (X * (c * w * w)).sum(axis=1) + (V * (c * 2 * z * w)).sum(axis=1)
-    forcing = model.attrs["s_A"] * model.attrs["amplitude"] * np.sin(model.attrs["frequency"] * np.asarray(t))
+    forcing = sum(sA * f * np.sin(W * np.asarray(t) + ph) for f, W, ph, _, sA in harmonics(model))
     return (elastic - forcing) / model.attrs["s_B"]
 
 
@@ -991,7 +1031,7 @@ def plot_run(f, title, save, window, coordinate="x_B"):
             if e >= t_from and s <= t_to:
                 spans.add((max(s, t_from), min(e, t_to)))
         for n, (a, b) in enumerate(sorted(spans)):
-            ax.axvspan(a, b, color=STICK_SHADE, alpha=0.25, lw=0, label="sticking" if n == 0 else None)
+            ax.axvspan(a, b, color=STICK_SHADE, alpha=0.25, lw=0, label=contact_shade_label(f) if n == 0 else None)
 
     fig, ax = figure(figsize=(9, 3.8))
     ax.plot(tt, xx, lw=1, color=OKABE_ITO[0], label=f"${sym}$")
@@ -1217,6 +1257,33 @@ def scene_contacts(f):
         return []
 
 
+def compliant_law(table):
+    """'k = …, c = …' for a compliant contact's table ([stop] or [[contact]]), None for a rigid one
+    (docs/compliant.md)."""
+    if not isinstance(table, dict) or "stiffness" not in table:
+        return None
+    law = f"k = {float(table['stiffness']):g}"
+    if float(table.get("damping", 0.0)) > 0:
+        law += f", c = {float(table['damping']):g}"
+    return law
+
+
+def scene_table(f, name):
+    """A top-level table of the run's scene ({} when absent or unreadable)."""
+    import tomllib
+    try:
+        return tomllib.loads(text(f.attrs["scene"])).get(name, {})
+    except (KeyError, tomllib.TOMLDecodeError):
+        return {}
+
+
+def contact_shade_label(f):
+    """The legend of the shaded contact phases: a compliant stop's phases are contact phases
+    (the body presses on the spring–dashpot), a rigid stop's are sticking."""
+    tables = scene_contacts(f) or [scene_table(f, "stop")]
+    return "in contact (compliant)" if any(compliant_law(t) for t in tables) else "sticking"
+
+
 def gap_coordinates(f, contacts):
     """Per contact j (docs/contacts.md): (a_j, σ_j, d_j, name) with g_j = σ_j (a_jᵀX − d_j) on the
     modal state X: a_j = Φᵀw_j in the physical form (w_j picks q_dof, minus q_partner for an impact
@@ -1328,7 +1395,7 @@ def plot_contacts_run(f, title, save, window, contacts, coordinate):
                 e = later[0] if len(later) else t_to
                 if e >= t_from and s0 <= t_to:
                     ax.axvspan(max(s0, t_from), min(e, t_to), color=STICK_SHADE, alpha=0.25, lw=0,
-                               label="sticking" if n_ == 0 and j == 0 else None)
+                               label=contact_shade_label(f) if n_ == 0 and j == 0 else None)
             imp = (ev_c == j) & (kinds == kind_of["impact"]) & (ev_t >= t_from) & (ev_t <= t_to)
             if imp.any():
                 known = np.isfinite(tt)
@@ -1419,7 +1486,7 @@ def plot_gaps(f, title, save, window, contacts):
             e = later[0] if len(later) else t_to
             if e >= t_from and s0 <= t_to:
                 ax.axvspan(max(s0, t_from), min(e, t_to), color=STICK_SHADE, alpha=0.25, lw=0,
-                           label="sticking" if drawn == 0 else None)
+                           label=contact_shade_label(f) if drawn == 0 else None)
                 drawn += 1
         imp = mine & (kinds == kind_of["impact"]) & (ev_t >= t_from) & (ev_t <= t_to)
         if imp.any():
@@ -1427,7 +1494,8 @@ def plot_gaps(f, title, save, window, contacts):
                     label=f"impacts ({imp.sum()})")
         rel = "≥" if sigma > 0 else "≤"
         ax.set_ylabel(f"$g_{j}$")
-        ax.set_title(f"contact {j}: {where} {rel} {c['position']:g}, r = {c.get('restitution', 0):g}",
+        law = compliant_law(c) or f"r = {c.get('restitution', 0):g}"
+        ax.set_title(f"contact {j}: {where} {rel} {c['position']:g}, {law}",
                      fontsize=fs(9), loc="left")
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)

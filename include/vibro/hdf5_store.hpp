@@ -58,6 +58,10 @@ struct StoreHeader {
   Eigen::VectorXd frequencies, forcing, contact, contact_shape, damping_ratios,
       constrained_frequencies;
   double s_A = 0, s_B = 0, stop = 0, restitution = 0, amplitude = 0, frequency = 0;
+  // A sum of harmonics (docs/harmonics.md; empty for one harmonic): f_h, ω_h, ψ_h, and the modal
+  // forcing T_A^(h) of each harmonic per unit amplitude as the rows of an (H, n) matrix.
+  Eigen::VectorXd harmonic_amplitudes, harmonic_frequencies, harmonic_phases;
+  Eigen::MatrixXd harmonic_forcing;
   // Physical form: mode shapes ψ_i as columns (N, n), x = Σ ψ_i X_i, and a label per physical DOF;
   // empty for the modal form.
   Eigen::MatrixXd mode_shapes;

@@ -130,6 +130,21 @@ StoreHeader HeaderOf(const LoadedScene& loaded, const System& sys) {
   h.restitution = sys.restitution();
   h.amplitude = sys.amplitude();
   h.frequency = sys.frequency();
+  if (sys.harmonic_sum()) {
+    const auto& hs = sys.harmonics();
+    const Eigen::Index H = static_cast<Eigen::Index>(hs.size());
+    h.harmonic_amplitudes.resize(H);
+    h.harmonic_frequencies.resize(H);
+    h.harmonic_phases.resize(H);
+    h.harmonic_forcing.resize(H, sys.omega().size());
+    for (Eigen::Index k = 0; k < H; ++k) {
+      const Harmonic& one = hs[static_cast<size_t>(k)];
+      h.harmonic_amplitudes[k] = one.amplitude;
+      h.harmonic_frequencies[k] = one.frequency;
+      h.harmonic_phases[k] = one.phase;
+      h.harmonic_forcing.row(k) = one.forcing.transpose();
+    }
+  }
   if (sys.physical() && loaded.scene.physical) {
     h.mode_shapes = sys.mode_shapes();
     for (Eigen::Index i = 0; i < h.mode_shapes.rows(); ++i) {

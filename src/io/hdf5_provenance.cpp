@@ -92,6 +92,15 @@ void WriteHeader(h5::Id f, const StoreHeader& h) {
   h5::WriteDouble(m, "restitution", h.restitution);
   h5::WriteDouble(m, "amplitude", h.amplitude);
   h5::WriteDouble(m, "frequency", h.frequency);
+  if (h.harmonic_amplitudes.size() > 0) {  // a sum of harmonics; rows of harmonic_forcing (H, n)
+    h5::WriteDoubles(m, "harmonic_amplitudes", Values(h.harmonic_amplitudes));
+    h5::WriteDoubles(m, "harmonic_frequencies", Values(h.harmonic_frequencies));
+    h5::WriteDoubles(m, "harmonic_phases", Values(h.harmonic_phases));
+    std::vector<double> rows;
+    for (Eigen::Index i = 0; i < h.harmonic_forcing.rows(); ++i)
+      for (Eigen::Index j = 0; j < h.harmonic_forcing.cols(); ++j) rows.push_back(h.harmonic_forcing(i, j));
+    h5::WriteDoubles(m, "harmonic_forcing", rows, static_cast<h5::Size>(h.harmonic_forcing.cols()));
+  }
   h5::WriteString(m, "form", h.mode_shapes.size() > 0 ? "physical" : "modal");
   if (h.mode_shapes.size() > 0) {  // (N, n), row-major as HDF5 stores it
     std::vector<double> rows;

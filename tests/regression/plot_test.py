@@ -40,7 +40,10 @@ with tempfile.TemporaryDirectory() as d:
              ("chain2_damped", "chain2_damped.toml", ()),
              ("chain3", "chain3.toml", ()),
              # ω = ω_1 = 1: the secular (resonant) particular solution.
-             ("resonant", "fig11_clearance.toml", ("excitation.frequency=1.0", "excitation.amplitude=0.05"))]
+             ("resonant", "fig11_clearance.toml", ("excitation.frequency=1.0", "excitation.amplitude=0.05")),
+             # A sum of two harmonics with their own forcing vectors and a phase (docs/harmonics.md):
+             # the file's /model carries them, and the flight sums their particular solutions.
+             ("two_harmonics", "two_harmonics_chain2.toml", ())]
     for name, scene, sets in cases:
         h5 = simulate(d, name, scene, "run.periods=20", "run.samples_per_period=256", *sets)
         with h5py.File(h5) as f:
@@ -124,6 +127,38 @@ with tempfile.TemporaryDirectory() as d:
         psi = fc["model"].attrs["mode_shapes"]
         check("q2 (contact DOF) is x_B", np.allclose(choices["q2"][0], choices["x_B"][0]) and np.allclose(psi[2], 1.0),
               psi[2])
+
+    # chain3 sticking under two harmonics (the amplitude split 0.7 + 0.3 at 0.8 and 1.6, a phase on
+    # the second): the sticking motion drawn from 16 samples per period (exp of the generator with a
+    # (sin, cos) pair per harmonic) against the engine's states at 512 per period.
+    with open(os.path.join(scenes, "chain3.toml")) as fh:
+        text = fh.read().replace("amplitude = 1.0\nfrequency = 0.8",
+                                 "amplitude = [0.7, 0.3]\nfrequency = [0.8, 1.6]\nphase = [0.0, 0.9]")
+    check("chain3 with two harmonics written", "[0.7, 0.3]" in text)
+    with open(os.path.join(d, "chain3_h2.toml"), "w") as fh:
+        fh.write(text)
+    fine = simulate(d, "h2fine", os.path.join(d, "chain3_h2.toml"), "run.periods=10", "run.samples_per_period=512")
+    coarse = simulate(d, "h2coarse", os.path.join(d, "chain3_h2.toml"), "run.periods=10", "run.samples_per_period=16")
+    with h5py.File(fine) as ff, h5py.File(coarse) as fc:
+        check("/model carries the harmonics", list(fc["model"].attrs["harmonic_frequencies"]) == [0.8, 1.6],
+              dict(fc["model"].attrs))
+        T = float(fc.attrs["forcing_period"])
+        t_end = fc["samples/t"][-1]
+        t0 = t_end - 3 * T
+        tf = ff["samples/t"][:]
+        sel = (tf > t0) & (tf < t_end)
+        stuck = ff["samples/mode"][:][sel] == 1
+        ts = tf[sel][stuck]
+        Xf, Vf = vibro_plot.fill_stuck_states(fc, ts, np.full((len(ts), 3), np.nan), np.full((len(ts), 3), np.nan))
+        errs = max(np.abs(Xf - ff["samples/X"][:][sel][stuck]).max(), np.abs(Vf - ff["samples/V"][:][sel][stuck]).max())
+        check(f"chain3 under two harmonics: sticking motion equals the engine's stuck states to 1e-10 "
+              f"({len(ts)} stuck samples)", len(ts) > 100 and errs < 1e-10, errs)
+        tt, xx, *_ = vibro_plot.dense_run(fc, t0, t_end)
+        free = ~(ff["samples/mode"][:][sel] == 1)
+        drawn = np.interp(tf[sel][free], tt, xx)
+        err = np.abs(drawn - ff["samples/x_B"][:][sel][free]).max()
+        check("chain3 under two harmonics: x_B drawn in flight within 1e-5 of the engine's",
+              err < 1e-5 * np.abs(ff["samples/x_B"][:][sel]).max(), err)
 
     # `vibro plot` options (docs/cli.md): --size, --font-size, --title, --coordinate, editable SVG
     # text, absolute time ticks, bifurcation kinds on a sweep overlay.
