@@ -24,6 +24,7 @@ One line is printed, and the exit code is
   1  "not confirmed: ..."      a claim that the checker's enclosures do not confirm (which, values);
   2  "not a certificate: ..."  the file is not a well-formed certificate (what, where).
 """
+import copy
 import json
 import os
 import re
@@ -45,6 +46,8 @@ MAX_PIECES = 1_000_000
 MAX_CERTIFICATES = 10_000
 MAX_TEXT = 4096
 FORMAT = "vibro-proof-certificate/1"
+# The pieces of a parameter interval over which the true values are enclosed (check_impact).
+PARAMETER_PIECES = 8
 
 
 class NotACertificate(Exception):
@@ -388,11 +391,40 @@ class Model:
                                                     cn.v["shape"] + cn.v["contact"] + [cn.v["stop"], cn.v["restitution"]])
                 self.contacts.append((c, T, e, r, W))
         self.T = 2 * iv.pi / self.w
+        # A parameter interval "[a, b]" of validated continuation: its two ends, as decimals.
+        self.ends = {}
+        for k in ("stop", "restitution", "amplitude", "frequency"):
+            t = self.texts[k]
+            if t.startswith("["):
+                self.ends[k] = tuple(decimal(node[k], e.strip()) for e in t[1:-1].split(","))
         # Every parameter a point or an interval of relative width < 2^-100 (a physical scene's
         # enclosed modal data).
         every = self.w_i + self.TA + self.TB + self.c + [self.x0, self.r, self.f, self.w] + (self.zeta or []) + \
             [x for c_, T_, e_, r_, _ in self.contacts[1:] for x in c_ + T_ + [e_, r_]]
         self.thin = all(hi(x) - lo(x) <= mp.mpf(2) ** -100 * (1 + abs(mid(x))) for x in every)
+
+    def affine_parameter(self):
+        """The one parameter interval of the model (a segment of a branch) when the shooting
+        residual below depends on it affinely: the amplitude f (the flight is linear in f: T_A f K,
+        or the forced response P, Q ∝ f), contact 0's stop x0 (only in c·X − x0) or its restitution r
+        (only in the impact law's factor (1 + r)). None otherwise (no interval, the forcing
+        frequency, or more than one)."""
+        if len(self.ends) == 1 and next(iter(self.ends)) in ("amplitude", "stop", "restitution"):
+            return next(iter(self.ends))
+        return None
+
+    def with_parameter(self, name, x):
+        """This model with the parameter `name` (amplitude, stop, restitution) equal to x."""
+        m = copy.copy(self)
+        if name == "amplitude":
+            m.f = x
+        elif name == "stop":
+            m.x0 = x
+        else:
+            m.r = x
+        c, T, e, r, W = self.contacts[0]
+        m.contacts = [(c, T, m.x0, m.r, W)] + self.contacts[1:]
+        return m
 
     def damped_flight(self, t0, X, V, s):
         """The damped free flight (docs/model.md §7), written directly: per mode the forced response
@@ -659,6 +691,28 @@ def eigenvalues(M):
     return eigenvalues_general(M)
 
 
+def piecewise_eigenvalues(monodromies):
+    """The multipliers over a parameter interval cut into pieces, from the monodromy of each piece:
+    the eigenvalue boxes of each piece (disjoint, one eigenvalue of every matrix of the piece in each),
+    each paired with the nearest box of the first piece, one-to-one, and the hull of each pairing.
+    Whatever the pairing, for every parameter value each hull holds an eigenvalue of its monodromy,
+    a different one in each; None when a piece's eigenvalues cannot be separated."""
+    first = eigenvalues(monodromies[0])
+    if first is None:
+        return None
+    hulls = [[re, im] for re, im in first]
+    for M in monodromies[1:]:
+        boxes = eigenvalues(M)
+        if boxes is None:
+            return None
+        free = list(range(len(hulls)))
+        for re, im in boxes:
+            k = min(free, key=lambda h: abs(mid(re) - mid(first[h][0])) + abs(mid(im) - mid(first[h][1])))
+            free.remove(k)
+            hulls[k] = [hull_tree([hulls[k][0], re]), hull_tree([hulls[k][1], im])]
+    return [tuple(h) for h in hulls]
+
+
 def eigenvalues_general(M):
     """Krawczyk's test on the eigenpair equations (A − λ)v = 0, v_k = 1 (real form, λ = a + ib,
     v = x + iy) around approximate eigenpairs of the midpoint matrix (mpmath's eig, not part of the
@@ -839,7 +893,7 @@ def check_impact(cert, m, ledger):
         b = j * per
         return vec[b], vec[b + 1:b + 1 + n], vec[b + 1 + n:b + per]
 
-    def residual(vec):
+    def residual(vec, m=m):
         out = []
         for j in range(count):
             k = (j + 1) % count
@@ -854,25 +908,45 @@ def check_impact(cert, m, ledger):
             out += [Vp[i] - Vn[i] for i in range(n)]
         return out
 
-    def krawczyk(center, box):
-        """K(box) = ũ − C F(ũ) + (I − C J(box))(box − ũ) with the sparse Jacobian over the box."""
-        F = [value(r) for r in residual([iv.mpf(x) for x in center])]
-        J = [r.g if isinstance(r, D) else {} for r in residual([variable(box[p], p) for p in range(N)])]
-        diff = [box[l] - center[l] for l in range(N)]
-        K = []
-        for p in range(N):
-            row = C[p]
-            k = iv.mpf(center[p])
-            acc = {}
-            for j in range(N):
-                c = row[j]
-                k -= c * F[j]
-                for l, d in J[j].items():
-                    acc[l] = acc[l] + c * d if l in acc else c * d
-            for l in range(N):
-                k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * diff[l]
-            K.append(k)
-        return K
+    # Over a parameter interval P on which the residual depends affinely (Model.affine_parameter),
+    # ũ − C F(ũ, p) is affine in p: its range over P is the hull of its values at the two ends of P
+    # (the centred form ũ − C F(ũ, p̃) − (C ∂F/∂p)(P − p̃), exact for an affine parameter). Evaluated
+    # for the whole of P at once, F(ũ, P) loses the correlation of its components, and C F(ũ, P)
+    # comes out far wider than the orbits' spread over P (several modes: wider than the box).
+    affine = m.affine_parameter()
+
+    def krawczyk_over(model, ends):
+        """Krawczyk's operator for every parameter of `model`; `ends`: the models at the two ends
+        of its affine parameter interval (or [model])."""
+        def constant(center):
+            """ũ − C F(ũ, p) for every p of the model's parameters, enclosed."""
+            parts = []
+            for end in ends:
+                F = [value(r) for r in residual([iv.mpf(x) for x in center], end)]
+                parts.append([iv.mpf(center[p]) - sum((C[p][j] * F[j] for j in range(N)), ZERO) for p in range(N)])
+            return [iv.mpf([min(lo(x[p]) for x in parts), max(hi(x[p]) for x in parts)]) for p in range(N)]
+
+        def krawczyk(center, box):
+            """K(box) = ũ − C F(ũ) + (I − C J(box))(box − ũ) with the sparse Jacobian over the box."""
+            const = constant(center)
+            J = [r.g if isinstance(r, D) else {} for r in residual([variable(box[p], p) for p in range(N)], model)]
+            diff = [box[l] - center[l] for l in range(N)]
+            K = []
+            for p in range(N):
+                row = C[p]
+                k = const[p]
+                acc = {}
+                for j in range(N):
+                    c = row[j]
+                    for l, d in J[j].items():
+                        acc[l] = acc[l] + c * d if l in acc else c * d
+                for l in range(N):
+                    k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * diff[l]
+                K.append(k)
+            return K
+        return krawczyk
+
+    krawczyk = krawczyk_over(m, [m.with_parameter(affine, e) for e in m.ends[affine]] if affine else [m])
 
     # 1. Existence and uniqueness in the certificate's box.
     K = krawczyk(u_mid, U)
@@ -888,8 +962,78 @@ def check_impact(cert, m, ledger):
             raise NotConfirmed(f"{kr_nodes[p].path} = {show_pair(kr_nodes[p].v)} is not inside the box")
 
     # 3. No contact between the impacts, over the whole box; the monodromy at the true orbit.
+    def flight_quantities(vec, mm, j):
+        k = (j + 1) % count
+        t, X, V = unpack(vec, j)
+        tn = unpack(vec, k)[0] + (qT if j == count - 1 else 0)
+        S = tn - t
+        Xe, Ve = mm.flight(t, X, V, S)
+        M2 = [mm.derivative_bound(t, X, V, 2, l) for l in range(len(mm.contacts))]
+        return t, X, V, tn, S, Xe, Ve, mm.contact_of(V, hits[j]), mm.contact_of(Ve, hits[k]), M2
+
+    def orbit_values(E_, mm):
+        """Every flight's quantities and the monodromy (flights and saltation matrices, docs/model.md
+        §5.6) at the orbits in E_ of the model mm."""
+        M = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
+        values = []
+        for j in range(count):
+            ck = hits[(j + 1) % count]
+            tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T = flight_quantities(E_, mm, j)
+            values.append((tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T))
+            if mm.zeta is not None:
+                M = matmul(damped_saltation(mm, tnT, XeT, VeT, vmT, ck), matmul(flight_jacobian(mm, tT, XT, VT, ST), M))
+                continue
+            Phi = [[ZERO] * (2 * n) for _ in range(2 * n)]
+            for i in range(n):
+                c, s = iv.cos(mm.w_i[i] * ST), iv.sin(mm.w_i[i] * ST)
+                Phi[i][i], Phi[i][n + i], Phi[n + i][i], Phi[n + i][n + i] = c, s / mm.w_i[i], -mm.w_i[i] * s, c
+            aB = mm.contact_acceleration(tnT, XeT, ck)
+            c_, T_, e_, r_, W_ = mm.contacts[ck]
+            Sal = [[ZERO] * (2 * n) for _ in range(2 * n)]
+            for i in range(n):
+                for l in range(n):
+                    pr = (1 if i == l else 0) - (1 + r_) * T_[i] * c_[l] / W_
+                    Sal[i][l] = pr
+                    Sal[n + i][n + l] = pr
+                    Sal[n + i][l] = (1 + r_) * aB * T_[i] * c_[l] / (W_ * vmT)
+            M = matmul(Sal, matmul(Phi, M))
+        return values, M
+
+    # The true values: at the orbit in E. Over an affine parameter interval E holds the orbits of
+    # every parameter value; the quantities evaluated over E and the whole interval at once lose the
+    # correlation between the orbit and its parameter (the checker's enclosures would come out wider
+    # than the prover's claims). So the interval is cut into PARAMETER_PIECES pieces P_k, the orbits
+    # of P_k enclosed in E_k = E ∩ K_k(E) (every zero of F(·, p), p ∈ P_k, in E lies in K_k(E): the
+    # Krawczyk operator of P_k, whatever its inclusion), iterated, and the values are the hull over
+    # the pieces.
+    # The quantities over the box likewise: the hull over the pieces of their values over (U, P_k).
+    piece_models = []
+    if affine:
+        p0, p1 = m.ends[affine]
+        cuts = [p0] + [p0 + (p1 - p0) * k / PARAMETER_PIECES for k in range(1, PARAMETER_PIECES)] + [p1]
+        parts = []
+        for k in range(PARAMETER_PIECES):
+            a_, b_ = cuts[k], cuts[k + 1]
+            mk = m.with_parameter(affine, iv.mpf([lo(a_), hi(b_)]))
+            piece_models.append(mk)
+            kk = krawczyk_over(mk, [m.with_parameter(affine, a_), m.with_parameter(affine, b_)])
+            Ek = E
+            for _ in range(3):
+                Kn = kk([mid(x) for x in Ek], Ek)
+                En = [meet(Kn[p], Ek[p]) for p in range(N)]
+                if any(x is None for x in En):
+                    raise NotConfirmed(f"the orbits of the parameter piece [{show(lo(a_))}, {show(hi(b_))}] are not "
+                                       "enclosed in the box")
+                Ek = En
+            parts.append(orbit_values(Ek, mk))
+        values, monodromy = hull_tree([x[0] for x in parts]), hull_tree([x[1] for x in parts])
+        multipliers = piecewise_eigenvalues([x[1] for x in parts])
+    else:
+        values, monodromy = orbit_values(E, m)
+        multipliers = eigenvalues(monodromy)
+    over_box = [hull_tree([flight_quantities(U, mk, j) for mk in piece_models or [m]]) for j in range(count)]
+
     budget = [MAX_PIECES]
-    M = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
     vbefore = [None] * count
     for j in range(count):
         k = (j + 1) % count
@@ -902,16 +1046,8 @@ def check_impact(cert, m, ledger):
             fl["from"].fail(f"{fl['from'].v}, expected {j}")
         where = f"flight {j} (impact {j} to impact {k})"
 
-        def quantities(vec):
-            t, X, V = unpack(vec, j)
-            tn = unpack(vec, k)[0] + (qT if j == count - 1 else 0)
-            S = tn - t
-            Xe, Ve = m.flight(t, X, V, S)
-            M2 = [m.derivative_bound(t, X, V, 2, l) for l in range(len(m.contacts))]
-            return t, X, V, tn, S, Xe, Ve, m.contact_of(V, cj), m.contact_of(Ve, ck), M2
-
-        t, X, V, tn, S, Xe, Ve, a, vm, M2 = quantities(U)
-        tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T = quantities(E)
+        t, X, V, tn, S, Xe, Ve, a, vm, M2 = over_box[j]
+        tT, XT, VT, tnT, ST, XeT, VeT, aT, vmT, M2T = values[j]
         ledger.check("duration", where, "> 0", S, ST)
         ledger.check("contact velocity after impact", where, "> 0", a, aT)
         ledger.check("contact velocity before impact", where, "< 0", vm, vmT)
@@ -955,24 +1091,7 @@ def check_impact(cert, m, ledger):
             else:
                 gap_nodes[l]["pieces"].items(at_most=MAX_PIECES)
         vbefore[k] = vmT
-        # Flight and saltation matrices at the true orbit (docs/model.md §5.6).
-        if m.zeta is not None:
-            M = matmul(damped_saltation(m, tnT, XeT, VeT, vmT, ck), matmul(flight_jacobian(m, tT, XT, VT, ST), M))
-            continue
-        Phi = [[ZERO] * (2 * n) for _ in range(2 * n)]
-        for i in range(n):
-            c, s = iv.cos(m.w_i[i] * ST), iv.sin(m.w_i[i] * ST)
-            Phi[i][i], Phi[i][n + i], Phi[n + i][i], Phi[n + i][n + i] = c, s / m.w_i[i], -m.w_i[i] * s, c
-        aB = m.contact_acceleration(tnT, XeT, ck)
-        c_, T_, e_, r_, W_ = m.contacts[ck]
-        Sal = [[ZERO] * (2 * n) for _ in range(2 * n)]
-        for i in range(n):
-            for l in range(n):
-                pr = (1 if i == l else 0) - (1 + r_) * T_[i] * c_[l] / W_
-                Sal[i][l] = pr
-                Sal[n + i][n + l] = pr
-                Sal[n + i][l] = (1 + r_) * aB * T_[i] * c_[l] / (W_ * vmT)
-        M = matmul(Sal, matmul(Phi, M))
+    M = monodromy
     for i in range(2 * n):
         for j in range(2 * n):
             claim_contains(mono_nodes[i][j], M[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
@@ -985,7 +1104,7 @@ def check_impact(cert, m, ledger):
         truth.events.append(("impact", unpack(E, j)[0], vbefore[j]))
     t0, X0, V0 = unpack(E, 0)
     truth.section = (t0, X0, V0, "just after impact 0")
-    boxes = eigenvalues(M)
+    boxes = multipliers
     truth.multipliers = boxes
     truth.not_enclosed = boxes is None
     truth.min_box_width = max(hi(x) - lo(x) for x in U)
@@ -1015,7 +1134,9 @@ def flight_jacobian(m, t, X, V, S):
 def damped_saltation(m, t, X, Vm, vm, j):
     """The saltation matrix of an impact, S = Dg + (f⁺ − Dg f⁻) ∇hᵀ/(∇h·f⁻): the reset
     g(X, V) = (X, Impact(V)) with Jacobian Dg, the vector fields f = (V, Ẍ(t, X, V)) before and after,
-    ∇h = (c, 0), ∇h·f⁻ = c·V⁻."""
+    ∇h = (c, 0), ∇h·f⁻ = c·V⁻. The position part of f⁺ − Dg f⁻ is V⁺ − V⁻ = −(1 + r)(c·V⁻/W)T, whose
+    quotient by c·V⁻ is −(1 + r)T/W exactly: taken so (the quotient of the enclosures would not cancel
+    c·V⁻, and over a parameter interval it comes out wide)."""
     n = m.n
     c, T, e, r, W = m.contacts[j]
     Vp = m.impact(Vm, j)
@@ -1023,11 +1144,20 @@ def damped_saltation(m, t, X, Vm, vm, j):
     for i in range(n):
         for l in range(n):
             Dg[n + i][n + l] = (ONE if i == l else ZERO) - (1 + r) * T[i] * c[l] / W
-    fm = list(Vm) + m.acceleration(t, X, Vm)
-    fp = list(Vp) + m.acceleration(t, X, Vp)
-    jump = [fp[i] - sum((Dg[i][l] * fm[l] for l in range(2 * n)), ZERO) for i in range(2 * n)]
+    fm = m.acceleration(t, X, Vm)
+    fp = m.acceleration(t, X, Vp)
+    jump = [-(1 + r) * T[i] / W for i in range(n)] + \
+        [(fp[i] - sum((Dg[n + i][n + l] * fm[l] for l in range(n)), ZERO)) / vm for i in range(n)]
     grad = list(c) + [ZERO] * n
-    return [[Dg[i][l] + jump[i] * grad[l] / vm for l in range(2 * n)] for i in range(2 * n)]
+    return [[Dg[i][l] + jump[i] * grad[l] for l in range(2 * n)] for i in range(2 * n)]
+
+
+def hull_tree(items):
+    """The hull of intervals held in equal nested lists or tuples, position by position."""
+    first = items[0]
+    if isinstance(first, (list, tuple)):
+        return type(first)(hull_tree([x[i] for x in items]) for i in range(len(first)))
+    return iv.mpf([min(lo(x) for x in items), max(hi(x) for x in items)])
 
 
 def matmul(A, B):
@@ -1774,7 +1904,7 @@ def check_sticking_modes(cert, m, ledger):
         o = b * per
         return vec[o], vec[o + 1:o + 1 + n], vec[o + 1 + n:o + per]
 
-    def residual(vec):
+    def residual(vec, m=m):
         out = []
         for j in range(count):
             t, X, V = unpack(vec, j)

@@ -106,8 +106,19 @@ struct Krawczyk {
   std::size_t worst = 0;  // the component farthest from inside
 };
 
+// ũ − C F(ũ) over the parameter interval, component p: with the model at the two ends (a residual
+// affine in the parameter), the hull of the values at the ends, which is its exact range (the
+// centred form ũ − C F(ũ, p̃) − (C ∂F/∂p)(P − p̃) with ∂F/∂p constant); otherwise F(ũ) evaluated for
+// the whole interval at once.
+Interval Constant(const Eigen::MatrixXd& C, const std::vector<double>& u, std::size_t p,
+                  const std::vector<Interval>& F) {
+  Interval v(u[p]);
+  for (std::size_t l = 0; l < u.size(); ++l) v -= Interval(C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(l))) * F[l];
+  return v;
+}
+
 Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vector<double>& u, double radius,
-               const std::vector<double>& spread, double spread_scale) {
+               const std::vector<double>& spread, double spread_scale, const AffineEnds* ends) {
   Krawczyk k;
   const std::size_t N = u.size();
   std::vector<Interval> U;
@@ -118,15 +129,18 @@ Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vecto
     U.push_back(Interval::Hull(k.lo.back(), k.hi.back()));
   }
   const auto F = Residual(mdl, L, q, Points(u));
+  std::vector<Interval> F_lo, F_hi;
+  if (ends) {
+    F_lo = Residual(ends->lo, L, q, Points(u));
+    F_hi = Residual(ends->hi, L, q, Points(u));
+  }
   const auto J = Jacobian(mdl, L, q, U);
   k.C = Mid(J).inverse();
   k.inside = k.C.allFinite();
   double worst = -1;
   for (std::size_t p = 0; p < N; ++p) {
-    Interval v(u[p]);
+    Interval v = ends ? Union(Constant(k.C, u, p, F_lo), Constant(k.C, u, p, F_hi)) : Constant(k.C, u, p, F);
     for (std::size_t l = 0; l < N; ++l) {
-      const double c = k.C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(l));
-      v -= Interval(c) * F[l];
       Interval row(p == l ? 1.0 : 0.0);
       for (std::size_t j = 0; j < N; ++j) row -= Interval(k.C(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(j))) * J[j][l];
       v += row * (U[l] - Interval(u[l]));
@@ -146,7 +160,7 @@ Krawczyk Test(const IntervalModel& mdl, const Layout& L, int q, const std::vecto
 }  // namespace
 
 Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, const ProofRequest& request,
-                         const Budget& budget) {
+                         const Budget& budget, const AffineEnds* ends) {
   Outcome out;
   const Layout L{mdl.n, static_cast<int>(guess.times.size()), guess.contacts};
   const bool several = mdl.contact_count() > 1;
@@ -184,7 +198,7 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
   Krawczyk k;
   double radius = request.box_radius;
   for (int attempt = 0; attempt < 4; ++attempt, radius *= 4) {
-    k = Test(mdl, L, q, u, radius, spread, radius / request.box_radius);
+    k = Test(mdl, L, q, u, radius, spread, radius / request.box_radius, ends);
     if (k.inside || budget.passed()) break;
   }
   Json krawczyk = Json::array();

@@ -59,8 +59,16 @@ struct ImpactGuess {
   std::vector<double> spread;
 };
 
+// Over a parameter interval P on which the residual depends affinely (the amplitude, contact 0's
+// stop position or its restitution; docs/prove.md "Along a branch"): the model at each end of P.
+// Krawczyk's constant term ũ − C F(ũ, p) is then affine in p, and its range over P is the hull of its
+// values at the two ends (the centred form, exact for an affine parameter).
+struct AffineEnds {
+  IntervalModel lo, hi;
+};
+
 Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,
-                         const Budget& budget);
+                         const Budget& budget, const AffineEnds* ends = nullptr);
 // A sticking orbit of several modes held on contact 0 with plastic landings (r = 0), as the
 // Poincaré solver found it: the release (time, modal state), then each landing (time, state just
 // after the plastic impact); every landing but the last departs at once (R < 0), the last sticks

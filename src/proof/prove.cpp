@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -561,15 +562,23 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   // Proves [x0, x1] (decimal texts) at the fractions [f0, f1] of the whole interval.
   std::function<bool(const std::string&, const std::string&, double, double, int)> piece =
       [&](const std::string& x0, const std::string& x1, double f0, double f1, int depth) -> bool {
-    *field = "[" + x0 + ", " + x1 + "]";
-    const auto m0 = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
-                                                      structure.shape_text, stop, restitution, amplitude, frequency,
-                                                      structure.damping_text);
-    auto m = m0;
-    for (std::size_t c = 1; c < structure.contacts.size(); ++c) {
-      const auto& k = structure.contacts[c];
-      m.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
-    }
+    // The model with the parameter at `text` (a decimal, or the interval "[a, b]").
+    const auto model_at = [&](const std::string& text) {
+      *field = text;
+      auto m = proof::IntervalModel::FromDecimals(structure.omega_text, structure.forcing_text, structure.contact_text,
+                                                  structure.shape_text, stop, restitution, amplitude, frequency,
+                                                  structure.damping_text);
+      for (std::size_t c = 1; c < structure.contacts.size(); ++c) {
+        const auto& k = structure.contacts[c];
+        m.AddContact(k.shape_text, k.contact_text, k.stop_text, k.restitution_text);
+      }
+      return m;
+    };
+    // The residual is affine in the amplitude, the stop position and the restitution (not in the
+    // forcing frequency): Krawczyk's constant term from the two ends (proof_common.hpp AffineEnds).
+    std::optional<proof::AffineEnds> ends;
+    if (field != &frequency) ends = proof::AffineEnds{model_at(x0), model_at(x1)};
+    const auto m = model_at("[" + x0 + ", " + x1 + "]");
     const auto at = [&](double f, const auto& lo_v, const auto& hi_v) { return lo_v + f * (hi_v - lo_v); };
     proof::ImpactGuess g = g_lo;
     for (std::size_t j = 0; j < g.times.size(); ++j) {
@@ -583,15 +592,17 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
       g.X[j] = (X0 + X1) / 2;
       g.V[j] = (V0 + V1) / 2;
     }
-    auto o = proof::ProveImpactOrbit(m, g, lo, budget);
+    auto o = proof::ProveImpactOrbit(m, g, lo, budget, ends ? &*ends : nullptr);
+    const std::string interval = *field;
+    const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
+    const std::string xm = Decimal(vm);
+    const bool can_split = depth < kMaxSplit && !budget.passed() && v0 < vm && vm < v1;
     if (o.proven) {
-      o.reason = "for every " + differs.front() + " in " + *field + ": " + o.reason;
+      o.reason = "for every " + differs.front() + " in " + interval + ": " + o.reason;
       results.push_back(Wrap(o, "impact", m, lo, budget, "during the proof", scene_structure));
       return true;
     }
-    const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
-    const std::string xm = Decimal(vm);
-    if (depth >= kMaxSplit || budget.passed() || !(v0 < vm && vm < v1)) {
+    if (!can_split) {
       failure = fmt::format("{} in [{}, {}]: {}", differs.front(), x0, x1, o.reason);
       outcome = o;
       return false;
