@@ -2092,6 +2092,45 @@ def stepped(h, z0):
     return value, slope
 
 
+def positive_pieces_refined(node, a, b, f_value, f_slope, what, budget, depth=12):
+    """positive_pieces, where a piece whose mean-value form does not clear 0 is bisected (up to
+    `depth` times) before it is rejected: f > 0 on the piece is what the certificate claims, and the
+    checker's own enclosures (at 192 bits, its own exponentials, looser over an interval of times
+    than the prover's) may need finer pieces to confirm it."""
+    pieces = node.items(at_least=1, at_most=MAX_PIECES)
+    budget[0] -= len(pieces)
+    if budget[0] < 0:
+        node.fail(f"more than {MAX_PIECES} pieces in the certificate")
+    vals = [(lo(x), hi(x)) for x in (p.pair() for p in pieces)]
+    if vals[0][0] > a:
+        raise NotConfirmed(f"{what}: the pieces start at {show(vals[0][0])}, after {show(a)}")
+    if vals[-1][1] < b:
+        raise NotConfirmed(f"{what}: the pieces end at {show(vals[-1][1])}, before {show(b)}")
+
+    def form(p0, p1):
+        c = iv.mpf((p0 + p1) / 2)
+        I = iv.mpf([p0, p1])
+        return f_value(c) + f_slope(I) * (I - c)
+
+    def clears(p0, p1, d):
+        f = form(p0, p1)
+        if positive(f):
+            return None
+        if d == 0:
+            return f
+        m = (p0 + p1) / 2
+        return clears(p0, m, d - 1) or clears(m, p1, d - 1)
+
+    for k, (p0, p1) in enumerate(vals):
+        if k > 0 and vals[k - 1][1] != p0:
+            raise NotConfirmed(f"{what}: a hole or an overlap between pieces {k - 1} and {k}")
+        if not p0 < p1:
+            raise NotConfirmed(f"{node.path}[{k}]: an empty piece")
+        f = clears(p0, p1, depth)
+        if f is not None:
+            raise NotConfirmed(f"{what}: not positive on {node.path}[{k}] = [{show(p0)}, {show(p1)}] ({show_iv(f)})")
+
+
 def set_text(s):
     return "{" + ", ".join(str(x) for x in s) + "}"
 
@@ -2315,7 +2354,7 @@ def check_held_set(cert, m, ledger):
             elif w != 0:
                 raise NotConfirmed(f"{fn['end_window'].path}: contact {hc} is not released at the end of {seg}")
             if 0 < topF:
-                positive_pieces(fn["pieces"], mp.mpf(0), topF, lambda s, r=r: val(h.force[r], s),
+                positive_pieces_refined(fn["pieces"], mp.mpf(0), topF, lambda s, r=r: val(h.force[r], s),
                                 lambda I, r=r: slp(h.rate[r], I), f"the force of contact {hc} on {seg}", budget)
             else:
                 fn["pieces"].items(at_most=MAX_PIECES)
@@ -2361,7 +2400,7 @@ def check_held_set(cert, m, ledger):
                 raise NotConfirmed(f"{gn['end_window'].path}: contact {j} does not land at the end of {seg}")
             if bottom < topG:
                 e_j = m.contacts[j][2]
-                positive_pieces(gn["pieces"], bottom, topG, lambda s, g0=g0, e_j=e_j: val(g0, s) - e_j,
+                positive_pieces_refined(gn["pieces"], bottom, topG, lambda s, g0=g0, e_j=e_j: val(g0, s) - e_j,
                                 lambda I, g1=g1: slp(g1, I), f"the gap of contact {j} on {seg}", budget)
             else:
                 gn["pieces"].items(at_most=MAX_PIECES)
