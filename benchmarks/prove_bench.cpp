@@ -61,6 +61,15 @@ void BM_Prove2DofDampedSticking(benchmark::State& s) {
   Prove(s, "chain2_damped.toml", {"stop.restitution=0"}, vibro::OrbitKind::kSticking);
 }
 void BM_Prove3DofSticking(benchmark::State& s) { Prove(s, "chain3.toml", {}, vibro::OrbitKind::kSticking); }
+// Sticking orbits held on sets of contacts (docs/prove.md "Sticking orbits held on sets of contacts"):
+// issue 37's scene A (two masses on their preloaded stops, r = 0: four segments, both held for a third
+// of the period) and the damped 3-DOF chain whose first two masses are held together.
+void BM_ProveHeldSet2Dof(benchmark::State& s) {
+  Prove(s, "../../tests/scenes/contacts_quad_start_two_stops.toml", {}, vibro::OrbitKind::kAuto);
+}
+void BM_ProveHeldSet3DofDamped(benchmark::State& s) {
+  Prove(s, "../../tests/scenes/contacts_two_held_chain.toml", {}, vibro::OrbitKind::kAuto);
+}
 // A bifurcation point: the tube's grazing near ω = 1.3646 (docs/prove.md "Grazings"), located by a
 // continuation in the set-up (not timed), proven from the branch point just before it: the orbit
 // search from that state, Newton on the orbit with its tangency, the two Krawczyk tests, the gaps.
@@ -111,6 +120,8 @@ BENCHMARK(BM_Prove1DofImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofSticking)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofDampedSticking)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove3DofSticking)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProveHeldSet2Dof)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProveHeldSet3DofDamped)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove3DofDampedImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofTwoSidedTube)->Unit(benchmark::kMillisecond);

@@ -589,6 +589,8 @@ def holds(relation, x, box=None):
         return negative(x)
     if relation == "!= 0":
         return excludes_zero(x)
+    if relation == ">= 0":
+        return finite(x) and lo(x) >= 0
     if relation == "finite":
         return finite(x)
     if relation == "inside the box":
@@ -836,6 +838,7 @@ class Truth:
         self.reason = None      # a function of the reason text that raises NotConfirmed
         self.contacts = None    # the contact of each event (None: all at contact 0)
         self.held_note = False  # a sticking orbit of several modes (the held note is about it)
+        self.set_note = False   # a sticking orbit held on sets of contacts
 
 
 def prime_factors(q):
@@ -1541,7 +1544,9 @@ NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
          "a multiplier enclosure meets the unit circle",
          "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE,
          "sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
-         "other multipliers are 0")
+         "other multipliers are 0",
+         "sticking on the contacts held at the section collapses their displacements and velocities: the "
+         "multipliers listed are those of the monodromy on the held subspace, its other multipliers are 0")
 
 
 def summary_shape(s, n):
@@ -1660,7 +1665,8 @@ def check_summary(cert, s, truth, m):
                            f"{', '.join(show_iv(x) for x in mods or [])}")
     held = truth.held_note
     if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
-            truth.multipliers == "zero" or note == HELD_NOTE and not held:
+            truth.multipliers == "zero" or note == HELD_NOTE and not held or \
+            note == SET_NOTE and not truth.set_note or truth.set_note and note not in (SET_NOTE,) + NOTES[:3]:
         raise NotConfirmed(f"{s['stability_note'].path}: '{note}' is not about this orbit")
     # Asked for a period Q that the least period divides: the orbit is also the period-Q orbit, and
     # the reason says so (docs/prove.md "The period is the least period").
@@ -2106,6 +2112,562 @@ def check_sticking_modes(cert, m, ledger):
         check_count(node, "modes", int(g.group(2)), n)
         check_width(node, g.group(3), max(hi(x) - lo(x) for x in U), "the box")
         check_count(node, "flights", int(g.group(4)), count)
+    truth.reason = reason
+    return truth
+
+
+# ---- Sticking orbits held on sets of contacts --------------------------------------------------
+
+SET_NOTE = ("sticking on the contacts held at the section collapses their displacements and velocities: the "
+            "multipliers listed are those of the monodromy on the held subspace, its other multipliers are 0")
+HELD_SET_KEYS = ("unknowns", "midpoint", "box", "preconditioner", "krawczyk", "segments", "coupling", "monodromy")
+
+
+def iv_inverse(A, what):
+    """The inverse of a small interval matrix (Gauss–Jordan on the diagonal pivots); exact zeros stay
+    exact."""
+    p = len(A)
+    W = [list(row) for row in A]
+    I = [[ONE if i == j else ZERO for j in range(p)] for i in range(p)]
+    for k in range(p):
+        piv = W[k][k]
+        if not excludes_zero(piv):
+            raise NotConfirmed(f"{what}: a pivot of the matrix is not separated from 0 ({show_iv(piv)})")
+        W[k] = [x / piv for x in W[k]]
+        I[k] = [x / piv for x in I[k]]
+        for i in range(p):
+            if i != k:
+                f = W[i][k]
+                W[i] = [W[i][j] - f * W[k][j] for j in range(p)]
+                I[i] = [I[i][j] - f * I[k][j] for j in range(p)]
+    return I
+
+
+def iv_det(A):
+    if not A:
+        return ONE
+    if len(A) == 1:
+        return A[0][0]
+    out = ZERO
+    for c in range(len(A)):
+        minor = [[A[r][k] for k in range(len(A)) if k != c] for r in range(1, len(A))]
+        term = A[0][c] * iv_det(minor)
+        out = out + term if c % 2 == 0 else out - term
+    return out
+
+
+class HeldSet(Held):
+    """The flow with every contact of the set H held (docs/contacts.md "Sticking on several contacts at
+    once"), written directly: Ẍ = a + Σ_h T_h λ_h with λ chosen so that c_h·Ẍ = 0 for h ∈ H, i.e.
+    W_HH λ = −C_H a, a = T_A f sin ωt − Ω²X − DẊ; in Z = (X, Ẋ, sin ωt, cos ωt) a linear system Ż = AZ.
+    H empty: the free flow. force[h]·Z = λ_h, rate[h]·Z = λ̇_h."""
+
+    def __init__(self, m, held):
+        n, N = m.n, 2 * m.n + 2
+        self.n, self.N, self.m, self.held = n, N, m, list(held)
+        z = m.zeta or [ZERO] * n
+        D_ = [2 * z[i] * m.w_i[i] for i in range(n)]
+        W = [[sum((m.contacts[a][0][i] * m.contacts[b][1][i] for i in range(n)), ZERO) for b in held] for a in held]
+        Wi = iv_inverse(W, f"the contact matrix of the held set {held}") if held else []
+        A = [[ZERO] * N for _ in range(N)]
+        force = [[ZERO] * N for _ in held]
+        for k in range(N):
+            X = [ONE if k == i else ZERO for i in range(n)]
+            V = [ONE if k == n + i else ZERO for i in range(n)]
+            sn = ONE if k == 2 * n else ZERO
+            cs = ONE if k == 2 * n + 1 else ZERO
+            free = [m.TA[i] * m.f * sn - m.w_i[i] ** 2 * X[i] - D_[i] * V[i] for i in range(n)]
+            Ca = [sum((m.contacts[h][0][i] * free[i] for i in range(n)), ZERO) for h in held]
+            lam = [-sum((Wi[r][q] * Ca[q] for q in range(len(held))), ZERO) for r in range(len(held))]
+            for r in range(len(held)):
+                force[r][k] = lam[r]
+            for i in range(n):
+                A[i][k] = V[i]
+                A[n + i][k] = free[i] + sum((m.contacts[h][1][i] * lam[r] for r, h in enumerate(held)), ZERO)
+            A[2 * n][k] = m.w * cs
+            A[2 * n + 1][k] = -m.w * sn
+        self.A = A
+        self.force = force
+        self.rate = [[sum((f[i] * A[i][k] for i in range(N)), ZERO) for k in range(N)] for f in force]
+        self.cache = {}
+
+    def row_power(self, row, k):
+        for _ in range(k):
+            row = [sum((row[i] * self.A[i][c] for i in range(self.N)), ZERO) for c in range(self.N)]
+        return row
+
+
+def stepped(h, z0):
+    """s ↦ e^{As}z0 for increasing s, e^{A(p_k − p_{k−1})} stepped exactly from the last end p_k
+    (the pieces of a positivity test come in order)."""
+    state = {"at": mp.mpf(0), "E": [[ONE if i == j else ZERO for j in range(h.N)] for i in range(h.N)]}
+
+    def at(p):
+        if p < state["at"]:
+            state["at"], state["E"] = mp.mpf(0), [[ONE if i == j else ZERO for j in range(h.N)] for i in range(h.N)]
+        if p != state["at"]:
+            state["E"] = matmul(h.exp(iv.mpf(p - state["at"])), state["E"])
+            state["at"] = p
+        return [sum((state["E"][i][k] * z0[k] for k in range(h.N)), ZERO) for i in range(h.N)]
+
+    def value(row, c):
+        # e^{Ac}z0 = e^{A(c − p)} e^{Ap} z0 from the last stepped end p (≤ c; else from 0).
+        p0 = state["at"] if state["at"] <= lo(c) else mp.mpf(0)
+        return dot(row, h.advance(at(p0), c - p0))
+
+    def slope(row, I):
+        p0 = lo(I)
+        return dot(row, h.advance(at(p0), I - p0))
+
+    return value, slope
+
+
+def positive_pieces_refined(node, a, b, f_value, f_slope, what, budget, depth=12):
+    """positive_pieces, where a piece whose mean-value form does not clear 0 is bisected (up to
+    `depth` times) before it is rejected: f > 0 on the piece is what the certificate claims, and the
+    checker's own enclosures (at 192 bits, its own exponentials, looser over an interval of times
+    than the prover's) may need finer pieces to confirm it."""
+    pieces = node.items(at_least=1, at_most=MAX_PIECES)
+    budget[0] -= len(pieces)
+    if budget[0] < 0:
+        node.fail(f"more than {MAX_PIECES} pieces in the certificate")
+    vals = [(lo(x), hi(x)) for x in (p.pair() for p in pieces)]
+    if vals[0][0] > a:
+        raise NotConfirmed(f"{what}: the pieces start at {show(vals[0][0])}, after {show(a)}")
+    if vals[-1][1] < b:
+        raise NotConfirmed(f"{what}: the pieces end at {show(vals[-1][1])}, before {show(b)}")
+
+    def form(p0, p1):
+        c = iv.mpf((p0 + p1) / 2)
+        I = iv.mpf([p0, p1])
+        return f_value(c) + f_slope(I) * (I - c)
+
+    def clears(p0, p1, d):
+        f = form(p0, p1)
+        if positive(f):
+            return None
+        if d == 0:
+            return f
+        m = (p0 + p1) / 2
+        return clears(p0, m, d - 1) or clears(m, p1, d - 1)
+
+    for k, (p0, p1) in enumerate(vals):
+        if k > 0 and vals[k - 1][1] != p0:
+            raise NotConfirmed(f"{what}: a hole or an overlap between pieces {k - 1} and {k}")
+        if not p0 < p1:
+            raise NotConfirmed(f"{node.path}[{k}]: an empty piece")
+        f = clears(p0, p1, depth)
+        if f is not None:
+            raise NotConfirmed(f"{what}: not positive on {node.path}[{k}] = [{show(p0)}, {show(p1)}] ({show_iv(f)})")
+
+
+def set_text(s):
+    return "{" + ", ".join(str(x) for x in s) + "}"
+
+
+def structure_coupling(node, m):
+    """W_jk = σ_jσ_k w_jᵀM⁻¹w_k exactly (rational arithmetic on the mass matrix's decimals) when every
+    mode is kept: then it is the modal Σ_i c_j,i T_k,i of the true modal data."""
+    from fractions import Fraction
+    rows = node["mass"].items()
+    N = len(rows)
+    if node["kept"].integer(1, N) != N:
+        raise NotConfirmed(f"{node['kept'].path}: the coupling from the structure needs every mode kept")
+    M = [[Fraction(x.text()) for x in r.items(exactly=N)] for r in rows]
+    Inv = [[Fraction(int(i == j)) for j in range(N)] for i in range(N)]
+    for k in range(N):
+        p = next((r for r in range(k, N) if M[r][k] != 0), None)
+        if p is None:
+            raise NotConfirmed(f"{node['mass'].path}: singular")
+        M[k], M[p], Inv[k], Inv[p] = M[p], M[k], Inv[p], Inv[k]
+        piv = M[k][k]
+        M[k] = [x / piv for x in M[k]]
+        Inv[k] = [x / piv for x in Inv[k]]
+        for i in range(N):
+            if i != k and M[i][k] != 0:
+                f = M[i][k]
+                M[i] = [a - f * b for a, b in zip(M[i], M[k])]
+                Inv[i] = [a - f * b for a, b in zip(Inv[i], Inv[k])]
+    ws = []
+    for cn in node["contacts"].items(exactly=len(m.contacts)):
+        d, q = cn["dof"].integer(0, N - 1), cn["partner"].integer(-1, N - 1)
+        s = 1 if cn["side"].text(("below", "above")) == "below" else -1
+        w = [Fraction(0)] * N
+        w[d] += s
+        if q >= 0:
+            w[q] -= s
+        ws.append(w)
+    J = len(ws)
+    out = [[None] * J for _ in range(J)]
+    for a in range(J):
+        for b in range(J):
+            x = sum((ws[a][i] * Inv[i][k] * ws[b][k] for i in range(N) for k in range(N)), Fraction(0))
+            out[a][b] = iv.mpf(x.numerator) / iv.mpf(x.denominator) if x != 0 else ZERO
+    return out
+
+
+def check_held_set(cert, m, ledger):
+    """A sticking orbit held on sets of contacts with plastic landings (docs/prove.md "Sticking orbits
+    held on sets of contacts"): Krawczyk on the segments' starts; per segment every held force > 0 up
+    to the end window of its release, where it falls; every other gap > 0 (start windows after a
+    release or a departure, an end window before a landing); at each landing the contact matrix a
+    P-matrix and the held contacts' impulses >= 0; the monodromy and its multipliers on the subspace
+    held at the section."""
+    q = cert["period"].integer(1, 1 << 20)
+    n, J = m.n, len(m.contacts)
+    if J < 2:
+        raise NotConfirmed("a certificate of a sticking orbit held on sets needs a model of several contacts")
+    per = 2 * n + 1
+    seg_nodes = cert["segments"].items(at_least=2, at_most=MAX_UNKNOWNS // per)
+    count = len(seg_nodes)
+    N = count * per
+    names = [x.text() for x in cert["unknowns"].items(exactly=N)]
+    expected = []
+    for b in range(count):
+        expected += [f"t_{b}"] + [f"X_{b}[{i}]" for i in range(n)] + [f"V_{b}[{i}]" for i in range(n)]
+    if names != expected:
+        k = next(p for p in range(N) if names[p] != expected[p])
+        cert["unknowns"][k].fail(f"'{names[k]}', expected '{expected[k]}'")
+    # The segments' sets and events, and their consistency.
+    helds, ends = [], []
+    for k, sn in enumerate(seg_nodes):
+        end = sn["end"].text(("landing", "release"))
+        keys = ("held", "end", "contact", "duration", "forces", "gaps")
+        if end == "landing":
+            keys += ("sticks",) + (("velocity_before", "impulses") if k < count - 1 else ())
+        sn.obj(keys)
+        held = [x.integer(0, J - 1) for x in sn["held"].items(at_most=J)]
+        if held != sorted(set(held)):
+            sn["held"].fail("not an ascending list of distinct contacts")
+        c = sn["contact"].integer(0, J - 1)
+        helds.append(held)
+        ends.append((end == "landing", c, sn["sticks"].boolean() if end == "landing" else False))
+    if ends[-1][0]:
+        raise NotConfirmed(f"{seg_nodes[-1].path}: the last segment must end at the release that starts segment 0")
+    landed, ever = set(), set()
+    for k in range(count):
+        landing, c, sticks = ends[k]
+        nxt = set(helds[k])
+        if landing and c in nxt or not landing and c not in nxt:
+            raise NotConfirmed(f"{seg_nodes[k].path}: contact {c} cannot {'land' if landing else 'be released'} "
+                               f"while the set {set_text(helds[k])} is held")
+        if landing and sticks:
+            nxt.add(c)
+        if not landing:
+            nxt.discard(c)
+        if sorted(nxt) != helds[(k + 1) % count]:
+            raise NotConfirmed(f"{seg_nodes[(k + 1) % count].path}.held: {set_text(helds[(k + 1) % count])}, the "
+                               f"event before leaves {set_text(sorted(nxt))} held")
+        if landing:
+            landed.add(c)
+            if not (lo(m.contacts[c][3]) == 0 == hi(m.contacts[c][3])):
+                raise NotConfirmed(f"{seg_nodes[k].path}: a plastic landing of contact {c}, whose restitution is not 0")
+        ever.update(helds[k])
+    if ever - landed:
+        raise NotConfirmed(f"contact {min(ever - landed)} is held but never lands: its constraint is no equation of the "
+                           f"orbit")
+    flows = [HeldSet(m, h) for h in helds]
+    proj = [None] * count
+    for k in range(count):
+        landing, c, _ = ends[k]
+        if landing:
+            Z = sorted(helds[k] + [c])
+            W = [[sum((m.contacts[a][0][i] * m.contacts[b][1][i] for i in range(n)), ZERO) for b in Z] for a in Z]
+            Wi = iv_inverse(W, f"the contact matrix of {set_text(Z)}")
+            proj[k] = [[(ONE if i == l else ZERO) - sum((m.contacts[Z[r]][1][i] * Wi[r][s] * m.contacts[Z[s]][0][l]
+                                                         for r in range(len(Z)) for s in range(len(Z))), ZERO)
+                        for l in range(n)] for i in range(n)]
+    u_mid = [x.num() for x in cert["midpoint"].items(exactly=N)]
+    box_nodes = cert["box"].items(exactly=N)
+    U = [b.pair() for b in box_nodes]
+    for p in range(N):
+        if not lo(U[p]) < u_mid[p] < hi(U[p]):
+            cert["midpoint"][p].fail(f"{u_mid[p]} is not inside the box {show_pair(box_nodes[p].v)}")
+    C = [[iv.mpf(x.num()) for x in row.items(exactly=N)] for row in cert["preconditioner"].items(exactly=N)]
+    kr_nodes = cert["krawczyk"].items(exactly=N)
+    mono_nodes = [row.items(exactly=2 * n) for row in cert["monodromy"].items(exactly=2 * n)]
+    qT = q * m.T
+
+    def unpack(vec, b):
+        o = (b % count) * per
+        return vec[o], vec[o + 1:o + 1 + n], vec[o + 1 + n:o + per]
+
+    def end_time(vec, k):
+        return unpack(vec, k + 1)[0] + (qT if k == count - 1 else 0)
+
+    def residual(vec):
+        out = []
+        for k in range(count):
+            t, X, V = unpack(vec, k)
+            tn, Xn, Vn = end_time(vec, k), *unpack(vec, k + 1)[1:]
+            h = flows[k]
+            z = h.advance(h.state(t, X, V), tn - t)
+            landing, c, _ = ends[k]
+            Ve = z[n:2 * n]
+            if landing:
+                out.append(m.contact_of(z[:n], c) - m.contacts[c][2])
+                Vp = []
+                for i in range(n):
+                    acc = ZERO
+                    for l in range(n):
+                        term = Ve[l] * D(proj[k][i][l]) if isinstance(Ve[l], D) else proj[k][i][l] * Ve[l]
+                        acc = term + acc  # a D on the left: D + interval, never interval + D
+                    Vp.append(acc)
+                Ve = Vp
+            else:
+                out.append(dot(h.force[h.held.index(c)], z))
+            out += [z[i] - Xn[i] for i in range(n)]
+            out += [Ve[i] - Vn[i] for i in range(n)]
+        return out
+
+    krawczyk = make_krawczyk(residual, C, N)
+    K = krawczyk(u_mid, U)
+    E = contract(residual, krawczyk, u_mid, U, K, C, m.point, m.thin)
+    for p in range(N):
+        ledger.check("krawczyk", names[p], "inside the box", K[p], E[p], box=U[p])
+        claim_contains(kr_nodes[p], E[p], f"the orbit's {names[p]}")
+        if not holds("inside the box", kr_nodes[p].pair(), U[p]):
+            raise NotConfirmed(f"{kr_nodes[p].path} = {show_pair(kr_nodes[p].v)} is not inside the box")
+
+    # The coupling W between the contacts: from the structure (every mode kept) or the modal data.
+    cp = cert["coupling"].obj(("source", "W"))
+    source = cp["source"].text(("structure", "modal"))
+    if source == "structure":
+        if not cert.has("structure"):
+            raise NotConfirmed(f"{cp['source'].path}: 'structure', but the certificate has no structure")
+        Wc = structure_coupling(cert["structure"], m)
+    else:
+        Wc = [[sum((m.contacts[a][0][i] * m.contacts[b][1][i] for i in range(n)), ZERO) for b in range(J)]
+              for a in range(J)]
+    for a, row in enumerate(cp["W"].items(exactly=J)):
+        for b, x in enumerate(row.items(exactly=J)):
+            claim_contains(x, Wc[a][b], f"the coupling W_{a}{b} of the contacts")
+
+    truth = Truth()
+    truth.kind, truth.period = "sticking", q
+    first = ends[-1][1]
+    truth.sequence = ["release"]
+    truth.events = [("release", unpack(E, 0)[0], None)]
+    truth.contacts = [first]
+    budget = [MAX_PIECES]
+    top = max([hi(m.w)] + [hi(w) for w in m.w_i])
+    Mo = [[ONE if i == j else ZERO for j in range(2 * n)] for i in range(2 * n)]
+    for k in range(count):
+        sn, h = seg_nodes[k], flows[k]
+        landing, c, sticks = ends[k]
+        prev = ends[k - 1]
+        seg = f"segment {k}"
+        t, X, V = unpack(U, k)
+        tT, XT, VT = unpack(E, k)
+        S, ST = end_time(U, k) - t, end_time(E, k) - tT
+        ledger.check("duration", seg, "> 0", S, ST)
+        claim_contains(sn["duration"], ST, f"the duration of {seg}")
+        z0, z0T = h.state(t, X, V), h.state(tT, XT, VT)
+        val, slp = stepped(h, z0)
+        # The forces of the held contacts.
+        fnodes = sn["forces"].items(exactly=len(helds[k]))
+        for r, (fn, hc) in enumerate(zip(fnodes, helds[k])):
+            fn.obj(("contact", "end_window", "pieces"))
+            if fn["contact"].integer(0, J - 1) != hc:
+                fn["contact"].fail(f"{fn['contact'].v}, expected {hc}")
+            where = f"{seg}, force of contact {hc}"
+            w = fn["end_window"].num()
+            topF = hi(S)
+            if not landing and c == hc:
+                if not w > 0:
+                    raise NotConfirmed(f"{fn['end_window'].path}: the window must be > 0")
+                Iw = iv.mpf([lo(iv.mpf(lo(S)) - w), hi(S)])
+                rate = dot(h.rate[r], h.advance(z0, Iw))
+                rateT = dot(h.rate[r], h.advance(z0T, ST))
+                ledger.check("force rate over the end window", where, "< 0", rate, rateT)
+                topF = hi(iv.mpf(hi(S)) - w)
+            elif w != 0:
+                raise NotConfirmed(f"{fn['end_window'].path}: contact {hc} is not released at the end of {seg}")
+            if 0 < topF:
+                positive_pieces_refined(fn["pieces"], mp.mpf(0), topF, lambda s, r=r: val(h.force[r], s),
+                                lambda I, r=r: slp(h.rate[r], I), f"the force of contact {hc} on {seg}", budget)
+            else:
+                fn["pieces"].items(at_most=MAX_PIECES)
+        # Every other gap.
+        others = [j for j in range(J) if j not in helds[k]]
+        gnodes = sn["gaps"].items(exactly=len(others))
+        for gn, j in zip(gnodes, others):
+            gn.obj(("contact", "start", "start_window", "end_window", "pieces"))
+            if gn["contact"].integer(0, J - 1) != j:
+                gn["contact"].fail(f"{gn['contact'].v}, expected {j}")
+            where = f"{seg}, gap of contact {j}"
+            start = "open"
+            if prev[1] == j and not (prev[0] and prev[2]):
+                start = "departure" if prev[0] else "release"
+            if gn["start"].text(("open", "release", "departure")) != start:
+                raise NotConfirmed(f"{gn['start'].path}: '{gn['start'].v}', the gap of contact {j} starts at a {start}")
+            g0 = [m.contacts[j][0][i] for i in range(n)] + [ZERO] * (n + 2)
+            g1 = h.row_power(g0, 1)
+            ws = gn["start_window"].num()
+            bottom = mp.mpf(0)
+            if start != "open":
+                if not ws > 0:
+                    raise NotConfirmed(f"{gn['start_window'].path}: the window must be > 0")
+                order = 2 if start == "departure" else 3
+                gk = h.row_power(g0, order)
+                d = dot(gk, h.advance(z0, iv.mpf([0, ws])))
+                dT = dot(gk, z0T)
+                ledger.check("third derivative of the gap over the start window" if order == 3 else
+                             "second derivative of the gap over the start window", where, "> 0", d, dT)
+                bottom = mp.mpf(ws)
+            elif ws != 0:
+                raise NotConfirmed(f"{gn['start_window'].path}: the gap of contact {j} is open at the start of {seg}")
+            we = gn["end_window"].num()
+            topG = hi(S)
+            if landing and c == j:
+                if not we > 0:
+                    raise NotConfirmed(f"{gn['end_window'].path}: the window must be > 0")
+                Iw = iv.mpf([lo(iv.mpf(lo(S)) - we), hi(S)])
+                ledger.check("gap velocity over the end window", where, "< 0", dot(g1, h.advance(z0, Iw)),
+                             dot(g1, h.advance(z0T, ST)))
+                topG = hi(iv.mpf(hi(S)) - we)
+            elif we != 0:
+                raise NotConfirmed(f"{gn['end_window'].path}: contact {j} does not land at the end of {seg}")
+            if bottom < topG:
+                e_j = m.contacts[j][2]
+                positive_pieces_refined(gn["pieces"], bottom, topG, lambda s, g0=g0, e_j=e_j: val(g0, s) - e_j,
+                                lambda I, g1=g1: slp(g1, I), f"the gap of contact {j} on {seg}", budget)
+            else:
+                gn["pieces"].items(at_most=MAX_PIECES)
+        # The monodromy through the segment, and its end event.
+        Eh = h.exp(ST)
+        Mo = matmul([row[:2 * n] for row in Eh[:2 * n]], Mo)
+        if k == count - 1:
+            break
+        tnT = end_time(E, k)
+        if landing:
+            land = f"landing at the end of segment {k}"
+            zS, zST = h.advance(z0, S), h.advance(z0T, ST)
+            vm, vmT = m.contact_of(zS[n:2 * n], c), m.contact_of(zST[n:2 * n], c)
+            ledger.check("contact velocity before impact", land, "< 0", vm, vmT)
+            claim_contains(sn["velocity_before"], vmT, f"the contact velocity before the {land}")
+            Z = sorted(helds[k] + [c])
+            for mask in range(1, 1 << len(Z)):
+                sub = [Z[r] for r in range(len(Z)) if mask >> r & 1]
+                if len(sub) < 2:
+                    continue
+                d = iv_det([[Wc[a][b] for b in sub] for a in sub])
+                ledger.check("principal minor of W", f"{land}, contacts {set_text(sub)}", "> 0", d, d)
+            imp = sn["impulses"].items(exactly=len(Z) - 1 if len(Z) > 1 else 0)
+            if len(Z) > 1:
+                Wi = iv_inverse([[Wc[a][b] for b in Z] for a in Z], f"the coupling of {set_text(Z)}")
+                jz = Z.index(c)
+                others_z = [r for r in range(len(Z)) if r != jz]
+                for node_, r in zip(imp, others_z):
+                    node_.obj(("contact", "value"))
+                    if node_["contact"].integer(0, J - 1) != Z[r]:
+                        node_["contact"].fail(f"{node_['contact'].v}, expected {Z[r]}")
+                    x = Wi[r][jz]
+                    ledger.check("impulse per unit speed", f"{land}, contact {Z[r]}", ">= 0", x, x)
+                    claim_contains(node_["value"], x, f"the impulse per unit speed of contact {Z[r]}")
+            # Saltation at the true orbit.
+            Pz = proj[k]
+            hn = flows[k + 1]
+            Ve = zST[n:2 * n]
+            zp = list(zST)
+            for i in range(n):
+                zp[n + i] = sum((Pz[i][l] * Ve[l] for l in range(n)), ZERO)
+            fm = [sum((h.A[i][l] * zST[l] for l in range(h.N)), ZERO) for i in range(h.N)]
+            fp = [sum((hn.A[i][l] * zp[l] for l in range(h.N)), ZERO) for i in range(h.N)]
+            jump = [fp[i] - fm[i] for i in range(n)] + \
+                [fp[n + i] - sum((Pz[i][l] * fm[n + l] for l in range(n)), ZERO) for i in range(n)]
+            Sal = [[ZERO] * (2 * n) for _ in range(2 * n)]
+            for i in range(n):
+                Sal[i][i] = ONE
+                for l in range(n):
+                    Sal[n + i][n + l] = Pz[i][l]
+            for i in range(2 * n):
+                for l in range(n):
+                    Sal[i][l] = Sal[i][l] + jump[i] * m.contacts[c][0][l] / vmT
+            Mo = matmul(Sal, Mo)
+            truth.events.append(("impact", tnT, vmT))
+            truth.sequence.append("impact")
+            truth.contacts.append(c)
+            truth.events.append(("stick", tnT, vmT) if sticks else ("departure", tnT, None))
+            truth.sequence.append("stick" if sticks else "departure")
+            truth.contacts.append(c)
+        else:
+            truth.events.append(("release", tnT, None))
+            truth.sequence.append("release")
+            truth.contacts.append(c)
+    for i in range(2 * n):
+        for j in range(2 * n):
+            claim_contains(mono_nodes[i][j], Mo[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
+
+    # The least period: for every prime ℓ dividing q the segments shifted by count/ℓ differ.
+    for ell in prime_factors(q):
+        if count % ell:
+            continue
+        hs = count // ell
+        apart = False
+        for k in range(count):
+            k2 = (k + hs) % count
+            if ends[k] != ends[k2] or helds[k] != helds[k2]:
+                apart = True
+                break
+            tk, Xk, Vk = unpack(E, k)
+            t2, X2, V2 = unpack(E, k2)
+            dt = t2 + (qT if k + hs >= count else 0) - tk - (q // ell) * m.T
+            if excludes_zero(dt) or any(excludes_zero(X2[i] - Xk[i]) or excludes_zero(V2[i] - Vk[i]) for i in range(n)):
+                apart = True
+                break
+        if not apart:
+            raise NotConfirmed(f"period: {q} is claimed, but the orbit repeats after {q // ell} forcing period(s)")
+
+    # The multipliers: the restriction to the subspace held at the section.
+    P = helds[-1]
+    piv = []
+    Cm = [[mid(m.contacts[h][0][i]) for i in range(n)] for h in P]
+    for r in range(len(P)):
+        best = max((i for i in range(n) if i not in piv), key=lambda i: abs(Cm[r][i]))
+        if Cm[r][best] == 0:
+            raise NotConfirmed("the contacts held at the section are dependent")
+        piv.append(best)
+        for r2 in range(r + 1, len(P)):
+            f = Cm[r2][best] / Cm[r][best]
+            Cm[r2] = [a - f * b for a, b in zip(Cm[r2], Cm[r])]
+    Cpi = iv_inverse([[m.contacts[h][0][pv] for pv in piv] for h in P], "the contacts held at the section")
+    free_modes = [i for i in range(n) if i not in piv]
+    keep = [b * n + i for b in range(2) for i in free_modes]
+    B = [[ZERO] * len(keep) for _ in range(2 * n)]
+    for col, p in enumerate(keep):
+        b, i = divmod(p, n)
+        B[p][col] = ONE
+        for a in range(len(P)):
+            B[b * n + piv[a]][col] = -sum((Cpi[a][r] * m.contacts[P[r]][0][i] for r in range(len(P))), ZERO)
+    if keep:
+        MB = matmul(Mo, B)
+        Mr = [[MB[p][col] for col in range(len(keep))] for p in keep]
+        boxes = eigenvalues(Mr)
+    else:
+        boxes = []
+    truth.multipliers = boxes
+    truth.not_enclosed = boxes is None
+    truth.set_note = True
+    truth.section = (*unpack(E, 0), "the release")
+    truth.min_box_width = max(hi(x) - lo(x) for x in U)
+    landings = sum(1 for e in ends if e[0])
+
+    def reason(node, text):
+        interval_prefix(node, "", m)
+        g = re.fullmatch(r"exactly one period-(\d+) sticking orbit of (\d+) modes held on sets of contacts through the "
+                         r"release of contact (\d+) in a box of width (\S+) \(Krawczyk\): (\d+) segments, (\d+) plastic "
+                         r"landing\(s\) and (\d+) release\(s\), every held force > 0 and every other gap > 0 between "
+                         r"them", text)
+        if not g:
+            raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
+        check_count(node, "period", int(g.group(1)), q)
+        check_count(node, "modes", int(g.group(2)), n)
+        check_count(node, "released contact", int(g.group(3)), first)
+        check_width(node, g.group(4), max(hi(x) - lo(x) for x in U), "the box")
+        check_count(node, "segments", int(g.group(5)), count)
+        check_count(node, "landings", int(g.group(6)), landings)
+        check_count(node, "releases", int(g.group(7)), count - landings)
     truth.reason = reason
     return truth
 
@@ -2989,7 +3551,10 @@ def check(node):
         return check_bifurcation(node)
     # A sticking orbit of several modes carries the unknowns of its Krawczyk test.
     modes = kind == "sticking" and isinstance(node.v.get("unknowns"), list)
-    if modes:
+    held_set = modes and "segments" in node.v
+    if held_set:
+        node.obj(CERT_KEYS + HELD_SET_KEYS, ("structure",))
+    elif modes:
         node.obj(CERT_KEYS + STICKING_MODES_KEYS, ("structure",))
     else:
         node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
@@ -3012,6 +3577,8 @@ def check(node):
     ledger = Ledger(node["inequalities"])
     if kind == "impact":
         truth = check_impact(node, m, ledger)
+    elif held_set:
+        truth = check_held_set(node, m, ledger)
     elif modes:
         truth = check_sticking_modes(node, m, ledger)
     else:

@@ -319,8 +319,11 @@ int Prove(const std::string& path, const std::vector<std::string>& sets, bool js
                    Range(e.velocity_before));
       for (const auto& [re, im] : result.multipliers) fmt::print("multiplier   {} + i {}\n", Range(re), Range(im));
       if (result.multipliers.empty())
-        fmt::print("multipliers  {}\n", result.kind == "sticking" ? "none (one-DOF sticking orbit: superstable)"
-                                                                  : "not enclosed (the stability is undecided)");
+        fmt::print("multipliers  {}\n",
+                   result.kind != "sticking" ? "not enclosed (the stability is undecided)"
+                   : result.reason.find("held on sets of contacts") != std::string::npos
+                       ? "none (superstable: the contacts held at the section hold every direction)"
+                       : "none (one-DOF sticking orbit: superstable)");
       fmt::print("stability    {}\n", result.stability);
       if (result.modal_data == "enclosed")
         fmt::print("modal data   enclosed from the scene's mass and stiffness matrices (every eigenpair; the theorem "

@@ -11,6 +11,7 @@
 
 #include "proof/bifurcation_proof.hpp"
 #include "proof/grazing_proof.hpp"
+#include "proof/held_set_proof.hpp"
 #include "proof/orbit_pitchfork.hpp"
 #include "proof/modal_enclosure.hpp"
 #include "proof/proof_common.hpp"
@@ -447,8 +448,13 @@ ProofResult proof::ProveOrbit(const System& system, const Scene& scene, const Pr
   const auto sticking = [&]() {
     kind = "sticking";
     if (system.contact_count() > 1) {
-      outcome.reason = "sticking orbits of a model with several contacts are not proven by this version "
-                       "(docs/prove.md)";
+      // Held on one contact or on a set of contacts, plastic landings (proof/held_set_proof.hpp).
+      const auto found = proof::FindHeldSetOrbit(system, scene, model, request, budget);
+      if (found.stopped)
+        stage = fmt::format("during the orbit search (a transient of {} periods, then Newton)",
+                            request.start ? 0 : request.transient_periods);
+      else if (!found.failure.empty()) outcome.reason = found.failure;
+      else outcome = proof::ProveHeldSet(model, found.guess, request, budget);
     } else if (one_dof) {
       outcome = proof::ProveSticking1Dof(model, request, budget);  // r = 0, or r > 0 with chattering
     } else if (system.restitution() > 0) {

@@ -23,7 +23,10 @@ TMP, expect = H.tmp, H.expect
 # The refusals of docs/prove.md, as the prover words them.
 REFUSALS = (
     "sticking orbits with chattering (r > 0) of a model with more than one mode are not proven by this version",
-    "sticking orbits of a model with several contacts are not proven by this version",
+    "sticking orbits with chattering (an accumulation of impacts) of a model with several contacts are not proven by "
+    "this version",
+    "impacts with r > 0 in a sticking orbit of several contacts are not proven by this version",
+    "a sticking orbit held on a contact that never lands is not proven by this version",
     "the Poincaré solver found no orbit to prove",
     "an orbit through a simultaneous impact is not proven",
     "a grazing orbit cannot be proven",
