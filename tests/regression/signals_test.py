@@ -152,6 +152,7 @@ cli_commands = {
     "model": (["model", os.path.join(scenes, "large", "beam40.toml")] if os.path.exists(
         os.path.join(scenes, "large", "beam40.toml")) else ["model", default], None, "none"),
     "simulate": (["simulate", default, "--time-limit", "0"] + LONG, "out.h5", "keep"),
+    "simulate-no-out": (["simulate", default, "--time-limit", "0"] + LONG, None, "none"),
     "orbit": (["orbit", default, "--transient", "100000000"], "orbit.h5", "none"),
     "prove": (["prove", fig5, "--transient", "10000000", "--time-limit", "1000"], "cert.json", "none"),
     "prove-branch": (["prove", fig11, "--branch", cbranch, "--time-limit", "1000"], "certs.json", "none"),
@@ -191,6 +192,10 @@ for name, (args, out_name, keeps) in cli_commands.items():
             check(f"{tag}: finished whole", stdout.strip() != "", stdout[-300:])
             continue
         check(f"{tag}: exit 130", rc == 130, f"exit {rc} after {took:.2f} s; stderr {stderr[-600:]}")
+        # What it says is true: without an output file there is nothing to resume.
+        if not out:
+            check(f"{tag}: no --resume hint without an --out file", "--resume" not in stdout + stderr,
+                  (stdout + stderr)[-600:])
         check(f"{tag}: within {BUDGET} s", took < BUDGET, f"{took:.2f} s")
         check(f"{tag}: no verdict", not any(w in stdout + stderr for w in ("not-proven", "refuted", "Traceback",
                                                                           "internal error")),
