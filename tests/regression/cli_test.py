@@ -104,6 +104,13 @@ for args in (("orbit", fig5, "--transient", "x"), ("prove", fig5, "--transient",
           p.returncode == 2 and lines and args[-2] in lines[0] and "integer" in lines[0] and len(lines[0]) < 120,
           p.stderr[:400])
 
+# --bifurcation given neither a file nor KIND:KEY=VALUE: the option named, and both forms.
+for spec in ("branch-point=nan", "branch-point:excitation.amplitude", "nofile.h5"):
+    p = run("prove", fig5, "--bifurcation", spec)
+    check(f"prove --bifurcation {spec}: exit 2 naming the option and both forms",
+          p.returncode == 2 and p.stderr.startswith(f"--bifurcation {spec}:") and "KIND:KEY=VALUE" in p.stderr,
+          p.stderr[:300])
+
 # Several contacts: every command takes them; `prove` proves the orbit (exit 0) or says why not
 # (exit 4, a reason docs/prove.md lists; prove.scenes checks each); simulate (either engine), orbit,
 # continue and check run them.
