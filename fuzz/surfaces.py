@@ -992,8 +992,8 @@ class Surfaces(Campaign):
                     valid = False
         damage = r.choice(["none", "none", "none", "length", "freq", "amp", "irrational", "vector-length",
                            "vector-bad", "phase", "scalar-beside", "empty", "many", "ratio-1000"])
-        if damage == "length":
-            r.choice([amps, freqs, phases]).append("0.1")
+        if damage == "length":  # (amplitudes or frequencies: the phases are not always written)
+            r.choice([amps, freqs]).append("0.1")
             valid = False
         elif damage == "freq":
             freqs[r.randrange(n)] = r.choice(["0.0", "-1.0", "nan", "inf", "\"x\"", "-0.0"])

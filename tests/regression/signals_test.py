@@ -214,6 +214,26 @@ for name, (args, out_name, keeps) in cli_commands.items():
             check(f"{tag}: --out readable", code == 0, f"{code} {st}")
 
 
+# ---- a stop during the test read of a study to resume: exit 130 and one line saying nothing was
+# written (basin --resume ended silently) ----
+if not only or "resume-test-read" in only:
+    study = os.path.join(tmp, "resume_read.h5")
+    env = dict(os.environ, VIBRO_SIGNAL_READY="1")
+    rc, took, stdout, stderr = run_and_signal([vibro, "basin", fig5, "--grid", "150,150", "--threads", "1", "--out", study],
+                                              signal.SIGTERM, "stderr", b"vibro: ready for stop requests\n", env)
+    check("basin to resume: interrupted, file kept", rc == 130 and os.path.exists(study), f"{rc} {stderr[-300:]}")
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        # Signalled at once after the ready line: the command is reading its input (the study's test read).
+        p = subprocess.Popen([vibro, "basin", fig5, "--grid", "150,150", "--threads", "1", "--out", study, "--resume"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+        first = p.stderr.readline()
+        p.send_signal(sig)
+        out_, err_ = p.communicate(timeout=60)
+        err_ = err_.decode(errors="replace")
+        check(f"basin --resume, {signal.Signals(sig).name} at once: exit 130 with one line saying so",
+              p.returncode == 130 and "interrupted" in err_ and err_.strip() != "", f"{p.returncode} {err_[-300:]!r}")
+
+
 # ---- --time-limit: the whole command, the same way for every command ----
 LIMIT = 2.0
 for name, (args, out_name, keeps) in cli_commands.items():
