@@ -667,7 +667,7 @@ def write_report(c, t0, path, extra):
     """Prints the campaign's report (and writes it to `path`); 1 when there are findings."""
     report = {
         "runs": c.runs, "distinct_inputs": len(c.inputs), "minutes": round((time.monotonic() - t0) / 60, 1),
-        "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items())},
+        "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items(), key=lambda kv: str(kv[0]))},
         "exit2_located": f"{c.located[0]} of {c.located[1]}", "ok_files_checked_for_physics": c.physics_checked,
         "stops_slower_than_1s": len(c.slow_stops),
         "slowest_stop_s": round(max(c.slow_stops), 2) if c.slow_stops else None,

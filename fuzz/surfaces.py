@@ -621,7 +621,12 @@ class Surfaces(Campaign):
             b = subprocess.Popen(full + extra, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
                                  preexec_fn=default_stop_signals)
             procs = [a, b]
-        # The second (or one of two concurrent resumes) must be refused at once.
+        # The second (or one of two concurrent resumes) must be refused at once: it is given up to
+        # HANG s to end by itself (its test read of the file takes a while on a loaded machine; a
+        # stop request sent before it ends it with exit 130, no refusal to judge).
+        end = time.monotonic() + HANG
+        while time.monotonic() < end and all(p.poll() is None for p in procs):
+            time.sleep(0.02)
         time.sleep(r.uniform(0.2, 1.0))
         for p in procs:
             if p.poll() is None:
