@@ -43,10 +43,12 @@ Exits 1 when there are findings; the report lists each with its command line.
 """
 import argparse
 import csv
+import hashlib
 import io
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -61,7 +63,34 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from campaign import Campaign, default_stop_signals, write_report, HANG, LIVENESS  # noqa: E402
 
 CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk", "prove-branch",
-              "contacts", "sequence-column", "extend-fsize"]
+              "contacts", "sequence-column", "extend-fsize", "compliant", "harmonics", "curve", "prove-bifurcation",
+              "checker"]
+
+# The symmetric two-sided oscillator of docs/prove.md (its pitchfork at a = 3.2860503573579958).
+PITCHFORK = """title = "1-DOF two-sided clearance: stops at -1 and +1, r = 0.6, omega = 2"
+[structure]
+mass = [[1.0]]
+stiffness = [[1.0]]
+forcing_dof = 0
+[[contact]]
+dof = 0
+side = "below"
+position = -1.0
+restitution = 0.6
+[[contact]]
+dof = 0
+side = "above"
+position = 1.0
+restitution = 0.6
+[excitation]
+amplitude = 3.0
+frequency = 2.0
+[initial]
+displacement = [0.0]
+velocity = [0.0]
+[run]
+periods = 20
+"""
 
 
 def read_csv(path):
@@ -87,6 +116,8 @@ class Surfaces(Campaign):
         self.chain2 = os.path.join(scenes, "chain2.toml")
         self.fig5 = os.path.join(scenes, "fig05_coexistence.toml")
         self.can_mount = None
+        self.certificates = []  # certificate files for the checker's runs
+        self.base_codes = {}    # certificate → the checker's exit code on it, unmutated
 
     # ---- seeds: files made by vibro itself ----
     def make(self, argv, out):
@@ -132,6 +163,33 @@ class Surfaces(Campaign):
                        check=True, capture_output=True, timeout=60)
         s["events_contacts_csv"] = ev2
         self.seed_files = s
+        # prove --bifurcation and curve --from: the pitchfork branch of docs/prove.md.
+        self.pitchfork = os.path.join(d, "pitchfork.toml")
+        with open(self.pitchfork, "w") as f:
+            f.write(PITCHFORK)
+        bif = os.path.join(d, "bif.h5")
+        p = subprocess.run([self.vibro, "continue", self.pitchfork, "--param", "excitation.amplitude", "--to", "3.6",
+                            "--out", bif], capture_output=True, text=True, timeout=600)
+        m = re.search(r"branch-point at excitation.amplitude = ([0-9.eE+-]+)", p.stdout)
+        if p.returncode != 0 or not m:
+            raise RuntimeError(f"seed: the pitchfork branch ({p.returncode}): {p.stdout[-300:]} {p.stderr[-300:]}")
+        s["branch_bif"] = bif
+        self.bif_value = float(m.group(1))
+
+    def seed_certificates(self):
+        """Certificates of every kind for the checker's runs: an impacting orbit, a sticking one, a
+        pitchfork, a branch's (points and segments)."""
+        d = os.path.join(self.work, "seeds")
+        jobs = [("orbit", ["prove", self.fig5]), ("sticking", ["prove", self.default]),
+                ("pitchfork", ["prove", self.pitchfork, "--bifurcation", self.seed_files["branch_bif"]]),
+                ("branch", ["prove", self.fig5, "--branch", self.seed_files["branch_impact"]])]
+        for name, argv in jobs:
+            out = os.path.join(d, f"cert_{name}.json")
+            p = subprocess.run([self.vibro, *argv, "--out", out], capture_output=True, text=True, timeout=900)
+            if os.path.exists(out):
+                self.certificates.append(out)
+            else:
+                print(f"seed certificate {name}: exit {p.returncode}, none written: {p.stderr[-300:]}", flush=True)
 
     # ---- from-branch ----
     def damaged_branch(self, point, seed="branch"):
@@ -563,7 +621,12 @@ class Surfaces(Campaign):
             b = subprocess.Popen(full + extra, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
                                  preexec_fn=default_stop_signals)
             procs = [a, b]
-        # The second (or one of two concurrent resumes) must be refused at once.
+        # The second (or one of two concurrent resumes) must be refused at once: it is given up to
+        # HANG s to end by itself (its test read of the file takes a while on a loaded machine; a
+        # stop request sent before it ends it with exit 130, no refusal to judge).
+        end = time.monotonic() + HANG
+        while time.monotonic() < end and all(p.poll() is None for p in procs):
+            time.sleep(0.02)
         time.sleep(r.uniform(0.2, 1.0))
         for p in procs:
             if p.poll() is None:
@@ -614,7 +677,11 @@ class Surfaces(Campaign):
             return False
         try:
             out = os.path.join(d, "out.h5")
-            what = r.choice(["simulate", "simulate-samples", "basin", "sweep", "continue"])
+            what = r.choice(["simulate", "simulate-samples", "basin", "sweep", "continue", "extend", "extend"])
+            if what == "extend":  # a stored run on the small disk, then extended until the disk is full
+                scene = r.choice([self.default, os.path.join(self.scenes, "contacts_two_sided_1dof.toml"), self.chain2])
+                self.make(["simulate", scene, "--set", "run.periods=50", "--set", "run.samples_per_period=64", "--out",
+                           out], out)
             argv = {
                 "simulate": ["simulate", self.default, "--set", "run.periods=3000000", "--out", out],
                 "simulate-samples": ["simulate", self.chain2, "--set", "run.periods=3000000", "--set",
@@ -624,10 +691,15 @@ class Surfaces(Campaign):
                           "--steps", "100000", "--out", out],
                 "continue": ["continue", os.path.join(self.scenes, "chain3.toml"), "--param", "excitation.frequency",
                              "--to", "0.3", "--step", "1e-5", "--max-points", "1000000", "--out", out],
+                "extend": ["simulate", scene if what == "extend" else "", "--set", "run.samples_per_period=64", "--out",
+                           out, "--extend", "3000000"] if what == "extend" else [],
             }[what]
             if r.random() < 0.3:  # the disk nearly full before the run
-                with open(os.path.join(d, "filler"), "wb") as f:
-                    f.write(b"\0" * r.choice([2_900_000, 3_000_000, 3_145_000]))
+                try:
+                    with open(os.path.join(d, "filler"), "wb") as f:
+                        f.write(b"\0" * r.choice([2_900_000, 3_000_000, 3_145_000]))
+                except OSError:  # already full (the stored run to extend takes its share): as wanted
+                    pass
             rc, err = self.run("full-disk", argv, limit=40, out=None, key=what)
             full = [self.vibro, *argv]
             # "no space", or simulate's pace check before the disk fills ("its disk has 1.5 MB free")
@@ -641,6 +713,11 @@ class Surfaces(Campaign):
                                 f[name][:]
                 except OSError as e:
                     self.find("full disk: the file kept is unreadable", full, f"[full-disk] exit {rc}: {e}")
+                if what == "extend":
+                    i = subprocess.run([self.vibro, "info", out], capture_output=True, text=True, timeout=120)
+                    if i.returncode != 0:
+                        self.find("full disk: the extended file is unreadable by vibro info", full,
+                                  f"[full-disk] exit {rc}; info: {i.stderr[-300:]}")
         finally:
             subprocess.run(["umount", "-l", d], capture_output=True)
         return True
@@ -754,15 +831,636 @@ class Surfaces(Campaign):
             self.find("extend under ulimit -f: the file kept is unreadable", argv,
                       f"[extend-fsize] exit {p.returncode}; info: {i.stderr[-300:]}")
 
+    # ---- compliant stops: stiffness, damping, separation on [stop] and [[contact]] ----
+    COMPLIANT_1DOF = (
+        "title = \"fuzz: a compliant stop\"\n[structure]\nmass = [[1.0]]\nstiffness = [[1.0]]\nforcing_dof = 0\n"
+        "contact_dof = 0\ndamping_ratios = [{zeta}]\n[excitation]\namplitude = {amp}\nfrequency = {freq}\n"
+        "[stop]\nposition = {pos}\n{keys}[initial]\ndisplacement = [0.0]\nvelocity = [{v0}]\n[run]\nperiods = {periods}\n")
+    # Each pool: the values a scene may hold, then (after None) those it must not or may not.
+    STIFFNESS = ["1.0", "100.0", "1e4", "1e8", "1e12", "1e-8", "1e16", "3.5", None, "0", "-1.0", "nan", "inf", "1e308",
+                 "5e-324", "\"x\"", "true", "[1.0]", "-0.0"]
+    DAMPING = ["0", "0.1", "2.0", "10.0", "1e6", "1e-300", "0.5", None, "-0.1", "nan", "inf", "1e308", "-0.0", "\"x\""]
+    SEPARATION = ["\"force\"", "\"gap\"", None, "\"Force\"", "\"\"", "1", "\"none\"", "\"gap \""]
+
+    def pick(self, pool):
+        """A value of the pool: one it may hold three times in four."""
+        k = pool.index(None)
+        return self.rng.choice(pool[:k] if self.rng.random() < 0.75 else pool[k + 1:])
+    RIGID_ONLY = ["orbit", "continue", "prove", "check", "validate", "score", "basin", "attractors", "sweep",
+                  "partition", "curve", "diagram"]
+
+    @staticmethod
+    def compliance_valid(k, c, sep, restitution):
+        """True: a scene vibro must accept; False: one it must refuse (docs/compliant.md); None:
+        not promised either way (an infinite stiffness, a subnormal one)."""
+        def num(s):
+            try:
+                return float(s)
+            except (TypeError, ValueError):
+                return None
+        if k is None:
+            return False if (c is not None or sep is not None) else True
+        kv = num(k)
+        if kv is None or kv != kv or kv <= 0 or k in ("true",):
+            return False
+        if restitution is not None:
+            return False
+        if c is not None:
+            cv = num(c)
+            if cv is None or cv != cv or cv < 0:
+                return False
+        if sep is not None and sep not in ("\"force\"", "\"gap\""):
+            return False
+        if math.isinf(kv) or kv < 1e-300 or (c is not None and math.isinf(float(c))):
+            return None
+        return True
+
+    def gen_compliant(self):
+        r = self.rng
+        form = r.choice(["stop", "stop", "contacts", "sdnd121"])
+        sets = []
+        k = c = sep = rest = None
+        if form == "stop":
+            k = self.pick(self.STIFFNESS) if r.random() < 0.9 else None
+            c = self.pick(self.DAMPING) if r.random() < 0.6 else None
+            sep = self.pick(self.SEPARATION) if r.random() < 0.5 else None
+            rest = r.choice(["0.8", "1.0"]) if r.random() < 0.1 else None
+            keys = "".join(f"{name} = {v}\n" for name, v in (("stiffness", k), ("damping", c), ("separation", sep),
+                                                             ("restitution", rest)) if v is not None)
+            text = self.COMPLIANT_1DOF.format(zeta=r.choice(["0.0", "0.02"]), amp=r.choice(["0.5", "1.0", "3.0"]),
+                                              freq=r.choice(["0.8", "1.0", "2.8"]), pos=r.choice(["0.0", "-0.5", "-0.05"]),
+                                              keys=keys, v0=r.choice(["0.0", "1.0"]), periods=r.choice([5, 20, 60]))
+            scene = self.write_scene(text)
+            valid = self.compliance_valid(k, c, sep, rest)
+            if k is None and rest is None and valid is True:
+                valid = None  # a stop with a position only: whatever the default restitution is
+        elif form == "contacts":
+            scene = os.path.join(self.scenes, "tube_compliant_support.toml")
+            j = r.choice([0, 1, 1, 2])
+            valid = True
+            for name, pool in (("stiffness", self.STIFFNESS), ("damping", self.DAMPING), ("separation", self.SEPARATION)):
+                if r.random() < 0.5:
+                    v = self.pick(pool)
+                    sets += ["--set", f"contact[{j}].{name}={v}"]
+                    if j == 2:
+                        valid = False  # the scene has two contacts
+                    else:
+                        kk = v if name == "stiffness" else "1000.0"
+                        cc = v if name == "damping" else "2.0"
+                        ss = v if name == "separation" else "\"force\""
+                        ok = self.compliance_valid(kk, cc, ss, None)
+                        valid = ok if valid is not False and ok is not True else valid
+            if r.random() < 0.1 and j < 2:
+                sets += ["--set", f"contact[{j}].restitution=0.7"]
+                valid = False
+            sets += ["--set", f"run.periods={r.choice([5, 20])}"]
+        else:
+            scene = os.path.join(self.scenes, "sdnd121_compliant.toml")
+            valid = True
+            for name, pool in (("stiffness", self.STIFFNESS), ("damping", self.DAMPING), ("separation", self.SEPARATION)):
+                if r.random() < 0.4:
+                    v = self.pick(pool)
+                    sets += ["--set", f"stop.{name}={v}"]
+                    ok = self.compliance_valid(v if name == "stiffness" else "1e10", v if name == "damping" else None,
+                                               v if name == "separation" else None, None)
+                    valid = ok if valid is not False and ok is not True else valid
+        cmd = r.choice(["simulate"] * 6 + ["model"] * 2 + ["rigid-beside"] * 3) if r.random() < 0.75 else \
+            r.choice(self.RIGID_ONLY)
+        out = self.fresh(".h5")
+        if cmd == "simulate":
+            argv = ["simulate", scene, *sets] + (["--out", out] if r.random() < 0.6 else [])
+            if r.random() < 0.3:
+                argv += ["--blocks", r.choice(["2", "10", "1", "100001"])]
+            if r.random() < 0.15:
+                argv += ["--set", r.choice(['run.engine="cvode"', 'run.precision="quad"'])]
+                valid = False if valid is not None else None
+        elif cmd == "rigid-beside":
+            argv = ["simulate", scene, *sets, "--rigid-beside", "--json"] + (["--out", out] if r.random() < 0.3 else [])
+        elif cmd == "model":
+            argv = ["model", scene, *sets] + (["--json"] if r.random() < 0.5 else [])
+        else:
+            argv = {"orbit": ["orbit", scene, "--out", out], "continue": ["continue", scene, "--param",
+                    "excitation.amplitude", "--to", "1.2", "--max-points", "3", "--out", out],
+                    "prove": ["prove", scene], "check": ["check", scene],
+                    "validate": ["validate", scene, self.seed_files["branch_csv"], "--param", "excitation.amplitude"],
+                    "score": ["score", scene, self.seed_files["events_csv"]],
+                    "basin": ["basin", scene, "--grid", "3,3", "--threads", "1", "--out", out],
+                    "attractors": ["attractors", scene, "--samples", "4", "--threads", "1"],
+                    "sweep": ["sweep", scene, "--param", "excitation.frequency", "--from", "1", "--to", "2", "--steps",
+                              "3", "--out", out],
+                    "partition": ["partition", scene, "--params", "excitation.amplitude,excitation.frequency",
+                                  "--range1", "0.5,1", "--range2", "1,2", "--steps1", "2", "--sticking-fraction", "0.3",
+                                  "--threads", "1", "--out", out],
+                    "curve": ["curve", scene, "--param", "excitation.frequency,excitation.amplitude", "--kind",
+                              "grazing", "--range1", "0.5,3", "--range2", "0.1,3", "--toward", "2,2",
+                              "--max-points", "3", "--out", out],
+                    "diagram": ["diagram", scene, "--param", "excitation.frequency", "--from", "1", "--to", "2",
+                                "--out", out]}[cmd]
+            argv = argv[:2] + sets + argv[2:]
+        argv += ["--time-limit", "30"]
+        signals = [(r.uniform(0.1, 1.5), r.choice([signal.SIGINT, signal.SIGTERM]))] if r.random() < 0.1 else []
+        rc, err = self.run("compliant", argv, signals=signals, limit=90, watch=[self.work],
+                           out=out if "--out" in argv else None, key=(form, cmd, k, c, sep, rest, tuple(sets)))
+        full = [self.vibro, *argv]
+        if cmd in self.RIGID_ONLY and rc not in (2, 130):
+            self.find(f"compliant: {cmd} not refused", full, f"[compliant] exit {rc}: {err[-300:]}")
+        elif rc in (0, 3) and valid is False:
+            self.find("compliant: accepted a stop it must refuse", full, f"[compliant] exit {rc}: {err[-300:]}")
+        elif rc == 2 and valid is True and cmd in ("simulate", "model") and "cvode" not in " ".join(argv) \
+                and "quad" not in " ".join(argv) and "--blocks" not in argv:
+            self.find("compliant: refused a valid stop", full, f"[compliant] {err[-300:]}")
+        if cmd == "rigid-beside" and rc == 0:
+            try:
+                doc = json.loads(self.last_stdout)
+                assert "rigid_model" in doc
+            except (ValueError, AssertionError):
+                self.find("--rigid-beside --json without rigid_model", full, f"[compliant] {self.last_stdout[-300:]}")
+        if rc == 3 and "--rigid-beside" not in argv and not any(w in err for w in ("time limit", "out of", "per time unit",
+                                                                                     "numerical", "undetermined",
+                                                                                     "failed", "could not", "stopped")):
+            self.find("compliant: exit 3 without saying why", full, f"[compliant] {err[-300:]}")
+
+    # ---- sums of harmonics: [excitation] lists and vectors ----
+    def harmonics_block(self, ndof):
+        """An [excitation] block of lists and whether vibro must accept it (True), refuse it (False)
+        or either (None), from docs/harmonics.md's constraints."""
+        r = self.rng
+        n = r.choice([1, 1, 2, 2, 3, 4])
+        valid = True
+        amps = [r.choice(["0.8", "0.3", "0.5", "0.0"]) for _ in range(n)]
+        base = r.choice([0.8, 1.0, 2.5])
+        mult = [1] + [r.choice([2, 3, 0.5, 1.5, 1, 7]) for _ in range(n - 1)]
+        freqs = [repr(base * m) for m in mult]
+        phases = [r.choice(["0.0", "0.5", "-3.0"]) for _ in range(n)]
+        vectors = None
+        if r.random() < 0.5:
+            vectors = [[r.choice(["1.0", "0.0", "0.5"]) for _ in range(ndof)] for _ in range(n)]
+            for v in vectors:
+                if all(float(x) == 0 for x in v):
+                    valid = False
+        damage = r.choice(["none", "none", "none", "length", "freq", "amp", "irrational", "vector-length",
+                           "vector-bad", "phase", "scalar-beside", "empty", "many", "ratio-1000"])
+        if damage == "length":  # (amplitudes or frequencies: the phases are not always written)
+            r.choice([amps, freqs]).append("0.1")
+            valid = False
+        elif damage == "freq":
+            freqs[r.randrange(n)] = r.choice(["0.0", "-1.0", "nan", "inf", "\"x\"", "-0.0"])
+            valid = False
+        elif damage == "amp":
+            amps[r.randrange(n)] = r.choice(["-0.1", "nan", "inf", "\"x\""])
+            valid = False
+        elif damage == "irrational" and n > 1:
+            freqs[-1] = repr(base * math.pi)
+            valid = False
+        elif damage == "ratio-1000" and n > 1:
+            freqs[-1] = repr(base * r.choice([1001, 101 / 100 * 0 + 1009]))  # T past 1000 periods of it
+            valid = False
+        elif damage == "vector-length":
+            vectors = [["1.0"] * (ndof + r.choice([-1, 1])) for _ in range(n)]
+            valid = False if ndof > 0 else None
+        elif damage == "vector-bad":
+            vectors = [["1.0"] * ndof for _ in range(n)]
+            vectors[r.randrange(n)][0] = r.choice(["nan", "inf"])
+            if ndof == 1 or r.random() < 0.5:
+                vectors[0] = ["0.0"] * ndof
+            valid = False
+        elif damage == "phase":
+            phases[r.randrange(n)] = r.choice(["nan", "inf", "1e300"])
+            valid = None
+        elif damage == "scalar-beside" and n > 1:
+            amps = amps[0]
+            valid = False
+        elif damage == "empty":
+            amps, freqs, phases = [], [], []
+            vectors = None
+            valid = False
+        elif damage == "many":
+            amps, freqs, phases = ["0.01"] * 5000, [repr(base)] * 5000, ["0.0"] * 5000
+            vectors = None
+            valid = None
+        if all(a == "0.0" for a in (amps if isinstance(amps, list) else [amps])) and valid:
+            valid = None
+        lst = lambda xs: xs if isinstance(xs, str) else "[" + ", ".join(xs) + "]"
+        text = f"[excitation]\namplitude = {lst(amps)}\nfrequency = {lst(freqs)}\n"
+        if r.random() < 0.6:
+            text += f"phase = {lst(phases)}\n"
+        if vectors is not None:
+            text += "vectors = [" + ", ".join(lst(v) for v in vectors) + "]\n"
+        return text, valid, damage
+
+    @staticmethod
+    def replace_table(text, table, block):
+        """The scene text with its [table] (up to the next table) replaced by block."""
+        out, skip = [], False
+        for line in text.split("\n"):
+            s = line.strip()
+            if s.startswith("["):
+                skip = s == f"[{table}]"
+                if skip:
+                    out.append(block.rstrip("\n"))
+                    continue
+            if not skip:
+                out.append(line)
+        return "\n".join(out)
+
+    def gen_harmonics(self):
+        r = self.rng
+        name = r.choice(["two_harmonics_chain2.toml", "chain2.toml", "fig08_preload.toml", "default.toml",
+                         "contacts_two_sided_1dof.toml", "fig05_coexistence.toml", "sdnd121_compliant.toml"])
+        text = self.scene_texts[name]
+        ndof = 2 if "chain2" in name else 1
+        block, valid, damage = self.harmonics_block(ndof)
+        text = self.replace_table(text, "excitation", block)
+        if name == "sdnd121_compliant.toml" and valid is True:
+            valid = None  # a compliant stop under a sum of harmonics: refused before 6ceea5c, run since
+        path = self.write_scene(text)
+        cmd = r.choice(["simulate"] * 5 + ["model", "orbit", "continue", "sweep", "basin", "attractors", "prove", "check"])
+        out = self.fresh(".h5")
+        argv = {"simulate": ["simulate", path, "--set", f"run.periods={r.choice([3, 20])}", "--out", out],
+                "model": ["model", path],
+                "orbit": ["orbit", path, "--out", out],
+                "continue": ["continue", path, "--param", r.choice(["excitation.amplitude", "excitation.frequency"]),
+                             "--to", "1.1", "--max-points", "3", "--out", out],
+                "sweep": ["sweep", path, "--param", "excitation.frequency", "--from", "0.8", "--to", "1.0", "--steps",
+                          "3", "--out", out],
+                "basin": ["basin", path, "--grid", "3,3", "--threads", "1", "--out", out],
+                "attractors": ["attractors", path, "--samples", "4", "--threads", "1"],
+                "prove": ["prove", path, "--time-limit", "10"],
+                "check": ["check", path, "--set", "run.periods=10"]}[cmd]
+        if "--time-limit" not in argv:
+            argv += ["--time-limit", "40"]
+        if r.random() < 0.3:
+            argv += ["--json"]
+        rc, err = self.run("harmonics", argv, limit=90, watch=[self.work], out=out if "--out" in argv else None,
+                           key=(name, cmd), content=block)
+        full = [self.vibro, *argv]
+        if valid is False and rc in (0, 3, 4):
+            self.find("harmonics: accepted an [excitation] it must refuse", full,
+                      f"[harmonics] {damage}: exit {rc}; block:\n{block[:600]}")
+        if valid is True and rc == 2 and cmd in ("simulate", "model") and name != "sdnd121_compliant.toml":
+            self.find("harmonics: refused a valid [excitation]", full, f"[harmonics] {damage}: {err[-400:]}\n{block[:600]}")
+
+    def gen_harmonics_equivalence(self):
+        """One harmonic written as lists (and its forcing vector e_A, phase 0) runs to the bit as
+        the scalar scene (docs/harmonics.md): the JSON summaries agree except for timings."""
+        r = self.rng
+        name = r.choice(["chain2.toml", "fig08_preload.toml", "default.toml", "fig05_coexistence.toml",
+                         "contacts_two_sided_1dof.toml", "chain3.toml"])
+        text = self.scene_texts[name]
+        amp = r.choice(["0.5", "1.0", "1.25", "2.0"])
+        freq = r.choice(["0.8", "1.0", "2.8", "2.5"])
+        sets = ["--set", f"excitation.amplitude={amp}", "--set", f"excitation.frequency={freq}"]
+        scalar = self.write_scene(text)
+        import tomllib
+        try:
+            doc = tomllib.loads(text)
+        except tomllib.TOMLDecodeError:
+            return
+        n = len(doc["structure"]["mass"]) if "mass" in doc["structure"] else len(doc["structure"].get("frequencies", [0]))
+        fdof = doc["structure"].get("forcing_dof", 0)
+        e = ["1.0" if i == fdof else "0.0" for i in range(n)]
+        block = f"[excitation]\namplitude = [{amp}]\nfrequency = [{freq}]\nphase = [0.0]\n"
+        if "mass" in doc["structure"] and r.random() < 0.5:
+            block += "vectors = [[" + ", ".join(e) + "]]\n"
+        listed = self.write_scene(self.replace_table(text, "excitation", block))
+        periods = ["--set", f"run.periods={r.choice([10, 40])}"]
+        outs = []
+        for path, extra in ((scalar, sets), (listed, [])):
+            argv = ["simulate", path, *extra, *periods, "--json", "--time-limit", "60"]
+            rc, err = self.run("harmonics", argv, limit=90, watch=[self.work], key=("equiv", name, amp, freq))
+            outs.append((rc, self.last_stdout, err))
+        (rc1, o1, e1), (rc2, o2, e2) = outs
+        def strip(o):
+            try:
+                d = json.loads(o)
+            except ValueError:
+                return o
+            for key in ("seconds", "wall_time", "cpu_time", "elapsed", "scene", "path", "time_s", "work"):
+                d.pop(key, None)
+            return json.dumps(d, sort_keys=True)
+        if rc1 != rc2 or (rc1 == 0 and strip(o1) != strip(o2)):
+            a, b = strip(o1), strip(o2)
+            k = next((i for i in range(min(len(a), len(b))) if a[i] != b[i]), min(len(a), len(b)))
+            self.find("harmonics: one harmonic as a list differs from the scalar scene",
+                      [self.vibro, "simulate", listed, *periods, "--json"],
+                      f"[harmonics] {name} a={amp} w={freq}: exits {rc1}/{rc2}; first difference at {k}: "
+                      f"{a[max(0, k - 80):k + 80]!r} vs {b[max(0, k - 80):k + 80]!r}; {e2[-200:]}")
+
+    # ---- vibro curve ----
+    def gen_curve(self):
+        """`vibro curve` from docs/diagram.md's two examples (the sticking-lost curve of Fig. 9 toward a
+        point; the pitchfork curve from a stored branch, damaged as from-branch damages them), each
+        option replaced by a corner value now and then; a tiny --time-limit or a stop signal."""
+        r = self.rng
+        num = lambda: r.choice(["0.5", "1", "1.5", "2.8", "3", "12", "20", "-1", "0", "nan", "inf", "1e300", "1e-300"])
+        kinds = ["fold", "flip", "neimark-sacker", "branch-point", "grazing", "sticking-lost", "sticking-entry",
+                 "rising", "simultaneous"]
+        out = self.fresh(".h5")
+        opts = {}
+        watch = []
+        if r.random() < 0.55:
+            scene = os.path.join(self.scenes, "fig08_preload.toml")
+            opts = {"--param": "excitation.frequency,excitation.amplitude", "--kind": "sticking-lost",
+                    "--range1": "1,20", "--range2": "1,12", "--toward": "2.8,1.5"}
+            variants = {"--param": ["excitation.amplitude,excitation.frequency", "excitation.frequency,excitation.frequency",
+                                    "stop.restitution,excitation.amplitude", "x,y", "excitation.frequency"],
+                        "--kind": kinds + ["sticking-lost,fold", "nonsense", ""],
+                        "--range1": [f"{num()},{num()}", "20,1", "1,1"], "--range2": [f"{num()},{num()}", "12,1"],
+                        "--toward": [f"{num()},{num()}", "2.8", "2.8,1.5,3,1"], "--orbit": ["auto", "sticking", "impact", "x"],
+                        "--period": ["1", "2", "0", "-1", "1000000"], "--transient": ["0", "10", "100000000"],
+                        "--contact": ["0", "1", "-1"]}
+        else:
+            scene = self.pitchfork
+            path, what, valid = self.damaged_branch(-1, seed="branch_bif") if r.random() < 0.5 else \
+                (self.seed_files["branch_bif"], "untouched", True)
+            watch = [path]
+            opts = {"--param": "excitation.amplitude,excitation.frequency", "--from": path, "--point": "0",
+                    "--range1": "0,5", "--range2": "1.5,4"}
+            variants = {"--param": ["excitation.frequency,excitation.amplitude", "contact[0].restitution,excitation.amplitude",
+                                    "excitation.amplitude,contact[2].position"],
+                        "--point": ["1", "-1", "99", "x"], "--range1": [f"{num()},{num()}"],
+                        "--range2": [f"{num()},{num()}"], "--kind": kinds + ["x"], "--contact": ["0", "1", "2", "-1"],
+                        "--toward": ["3,2"]}
+        for _ in range(r.choice([0, 0, 1, 1, 2])):
+            k = r.choice(sorted(variants))
+            opts[k] = r.choice(variants[k])
+        opts["--step"] = r.choice(["0.05"] * 6 + ["0.1", "1e-6", "0", "-0.1", "nan", "2"])
+        opts["--max-points"] = r.choice(["2", "3", "5", "3", "2", "0"])
+        argv = ["curve", scene]
+        for k, v in opts.items():
+            argv += [k, v]
+        argv += ["--out", out] + (["--json"] if r.random() < 0.4 else [])
+        argv += ["--time-limit", r.choice(["0.5", "10", "30", "30"])]
+        signals = [(r.uniform(0.1, 2.0), r.choice([signal.SIGINT, signal.SIGTERM]))] if r.random() < 0.2 else []
+        rc, err = self.run("curve", argv, signals=signals, limit=90, watch=[*watch, self.work], out=None,
+                           key=tuple(a if not a.startswith(self.work) else "<tmp>" for a in argv[2:]))
+        full = [self.vibro, *argv]
+        if rc == 3 and not any(w in err for w in ("time limit", "end", "out of", "could not", "no ", "failed")) \
+                and "end" not in self.last_stdout:
+            self.find("curve: exit 3 without saying why", full, f"[curve] {err[-300:]} {self.last_stdout[-300:]}")
+        if os.path.exists(out) and rc in (0, 3, 130):
+            i = subprocess.run([self.vibro, "info", out], capture_output=True, text=True, timeout=120)
+            if i.returncode != 0:
+                self.find("curve: the --out file kept is unreadable", full, f"[curve] exit {rc}; info: {i.stderr[-300:]}")
+
+    # ---- prove --bifurcation ----
+    def gen_prove_bifurcation(self):
+        r = self.rng
+        out = os.path.join(self.work, f"bif{self.runs}.json")
+        mode = r.choice(["branch", "branch", "value", "value-from"])
+        valid = None
+        if mode == "branch":
+            path, what, valid = self.damaged_branch(-1, seed="branch_bif")
+            # The point is read from the branch's bifurcations and its parameter: damage elsewhere
+            # (the states, another dataset) need not be refused, only never make a false proof.
+            valid = True if what == "untouched" else None
+            point = r.choice(["0", "0", "1", "-1", "99", "x"])
+            argv = ["prove", self.pitchfork, "--bifurcation", path] + (["--point", point] if point != "0" or r.random() < 0.5
+                                                                       else [])
+            if point != "0":
+                valid = False if point in ("-1", "99", "x") else None
+            key = (what, point)
+            watch = [path]
+        else:
+            kind = r.choice(["branch-point", "branch-point", "fold", "grazing", "flip", "pitchfork", "", "x"])
+            key_ = r.choice(["excitation.amplitude", "excitation.amplitude", "excitation.frequency", "stop.position",
+                             "contact[0].restitution", "nope", ""])
+            value = r.choice([repr(self.bif_value), repr(self.bif_value + 1e-9), repr(self.bif_value - 1e-9), "3.3",
+                              "nan", "inf", "1e300", "-3.28", "", "0x1p1", "3.2860503573579969e0"])
+            spec = r.choice([f"{kind}:{key_}={value}", f"{kind}{key_}={value}", f"{kind}:{key_}{value}",
+                             f"{kind}:{key_}={value}"])
+            argv = ["prove", self.pitchfork, "--bifurcation", spec]
+            if mode == "value-from":
+                path, what, _ = self.damaged_branch(-1, seed="branch_bif")
+                argv += ["--from", path]
+                watch = [path]
+            else:
+                what, watch = "none", []
+            key = (spec, what)
+        argv += ["--out", out]
+        if r.random() < 0.4:
+            argv.append("--json")
+        limited = r.random() < 0.2
+        if limited:
+            argv += ["--time-limit", r.choice(["0.001", "0.05", "0.5"])]
+        signals = [(r.uniform(0.05, 1.5), r.choice([signal.SIGINT, signal.SIGTERM]))] if r.random() < 0.2 else []
+        rc, err = self.run("prove-bifurcation", argv, signals=signals, limit=180, watch=watch, key=key)
+        full = [self.vibro, *argv]
+        if rc == 0 and valid is False:
+            self.find("prove --bifurcation accepted an input it must refuse", full, f"[prove-bifurcation] {key}: exit 0")
+        if valid is True and not limited and not signals and rc != 0:
+            self.find("prove --bifurcation did not prove the untouched branch's pitchfork", full,
+                      f"[prove-bifurcation] exit {rc}: {err[-300:]} {self.last_stdout[-300:]}")
+        if rc == 130 and os.path.exists(out):
+            self.find("prove --bifurcation interrupted wrote a certificate", full, "[prove-bifurcation]")
+        if os.path.exists(out):
+            code, line, err2 = self.check_certificate(out)
+            if code is None:
+                self.find("the checker failed on a certificate file", full, f"[prove-bifurcation] {line} {err2}")
+            elif rc == 0 and code != 0:
+                self.find("a proven bifurcation that the checker does not confirm", full, f"[prove-bifurcation] {line}")
+            elif rc == 4 and code == 0 and "confirmed: every" in line:
+                pass  # a certificate of "not proven" is confirmed as such
+            if code is not None and self.rng.random() < 0.5 and len(self.certificates) < 40:
+                keep = self.fresh(".json")
+                shutil.copy(out, keep)
+                self.certificates.append(keep)
+            os.remove(out)
+        elif rc in (0, 4) and "--out" in argv and not limited:
+            self.find("prove --bifurcation --out wrote no certificate", full, f"[prove-bifurcation] exit {rc}")
+
+    # ---- certificates given to the checker ----
+    def check_certificate(self, path, vlimit=None):
+        """(exit code, its one line, stderr) of the checker on `path`; code None when it failed to
+        answer as promised (a traceback, no line or several, an exit other than 0, 1, 2, a checker
+        bug caught as 'the checker failed')."""
+        def limits():
+            default_stop_signals()
+            if vlimit:
+                import resource
+                resource.setrlimit(resource.RLIMIT_AS, (vlimit, vlimit))
+        try:
+            p = subprocess.run(["/usr/bin/python3", os.path.join(self.scripts, "vibro_check_proof.py"), path],
+                               capture_output=True, text=True, timeout=900, preexec_fn=limits)
+        except subprocess.TimeoutExpired:
+            return None, "ran past 900 s", ""
+        lines = p.stdout.splitlines()
+        line = lines[0] if lines else ""
+        if p.returncode not in (0, 1, 2) or len(lines) != 1 or "Traceback" in p.stderr or \
+                not line.startswith(("confirmed:", "not confirmed:", "not a certificate:")) or \
+                (p.returncode, line.split(":")[0]) not in ((0, "confirmed"), (1, "not confirmed"), (2, "not a certificate")):
+            return None, f"exit {p.returncode}: {p.stdout[-400:]}", p.stderr[-600:]
+        if "the checker failed" in line:
+            return None, line, p.stderr[-300:]
+        return p.returncode, line, p.stderr
+
+    def mutate_certificate(self, data):
+        """A damaged copy of a certificate's bytes and what was done; the second value says whether
+        a claim was changed (then 'confirmed' would be false)."""
+        r = self.rng
+        op = r.choice(["leaf", "leaf", "leaf", "shift", "shift", "shift", "delete", "add", "swap", "bytes", "dup-key",
+                       "deep", "huge-list", "type"])
+        if op == "bytes":
+            b = bytearray(data)
+            how = r.choice(["flip", "truncate", "utf8", "bom"])
+            if how == "flip":
+                for _ in range(r.randint(1, 8)):
+                    b[r.randrange(len(b))] ^= 1 << r.randrange(8)
+            elif how == "truncate":
+                b = b[: r.randrange(len(b))]
+            elif how == "utf8":
+                k = r.randrange(len(b))
+                b[k:k] = b"\xff\xfe"
+            else:
+                b = bytearray(b"\xef\xbb\xbf") + b
+            return bytes(b), f"bytes-{how}", False
+        doc = json.loads(data)
+        paths = []
+
+        def walk(o, p):
+            if isinstance(o, dict):
+                for k, v in o.items():
+                    paths.append((p + (k,), v))
+                    walk(v, p + (k,))
+            elif isinstance(o, list):
+                for i, v in enumerate(o[:200]):
+                    paths.append((p + (i,), v))
+                    walk(v, p + (i,))
+        walk(doc, ())
+        if not paths:
+            return data, "none", False
+
+        def parent(p):
+            o = doc
+            for k in p[:-1]:
+                o = o[k]
+            return o
+        changed = False
+        if op == "shift":
+            # A claim moved off the truth: an interval (a string "[a, b]" or a list [a, b] of numbers)
+            # moved by three times its width and more, both ends the same way (moving one end
+            # outward only widens it, still true). A single number changed is judged by nothing
+            # (it may be a parameter of the proof, not a claim).
+            def interval(v):
+                if isinstance(v, str) and re.fullmatch(r"\s*\[\s*[-+0-9.eE]+\s*,\s*[-+0-9.eE]+\s*\]\s*", v):
+                    lo, hi = (float(x) for x in v.strip()[1:-1].split(","))
+                    return lo, hi
+                if isinstance(v, list) and len(v) == 2 and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                               for x in v) and v[0] <= v[1]:
+                    return float(v[0]), float(v[1])
+                return None
+            intervals = [(p, v) for p, v in paths if interval(v) is not None and all(map(math.isfinite, interval(v)))]
+            numbers = [(p, v) for p, v in paths if isinstance(v, (int, float)) and not isinstance(v, bool)]
+            if intervals and (r.random() < 0.8 or not numbers):
+                p, v = r.choice(intervals)
+                lo, hi = interval(v)
+                d = (hi - lo) * r.choice([3, 100]) + 1e-6 * max(abs(lo), abs(hi)) + 1e-300
+                d *= r.choice([1, -1])
+                moved = [lo + d, hi + d]
+                parent(p)[p[-1]] = f"[{moved[0]!r}, {moved[1]!r}]" if isinstance(v, str) else moved
+                changed = True
+            elif numbers:
+                p, v = r.choice(numbers)
+                parent(p)[p[-1]] = r.choice([v + 1, v * 1.001 + 1e-9, -v - 1, v * 2 + 1])
+                if isinstance(v, int):
+                    parent(p)[p[-1]] = int(parent(p)[p[-1]])
+                changed = None
+            else:
+                return data, "none", False
+            op += ":" + "/".join(map(str, p))
+        elif op == "leaf":
+            p, v = r.choice(paths)
+            parent(p)[p[-1]] = r.choice([None, True, "", "x", 0, -1, 1e308, 1.7976931348623157e308, 5e-324,
+                                         "[1, 0]", "[nan, 1]", "[inf, inf]", "[1e400, 2]", "[ 0 , 0 ]", "1, 2",
+                                         "x" * 100000, [], {}, [0.0] * 3, {"a": 1}, 2 ** 64, -2 ** 63, 1e-320])
+            op += ":" + "/".join(map(str, p))
+        elif op == "type":
+            p, v = r.choice(paths)
+            parent(p)[p[-1]] = [v] if not isinstance(v, list) else (v[0] if v else {})
+            op += ":" + "/".join(map(str, p))
+        elif op == "delete":
+            p, _ = r.choice(paths)
+            o = parent(p)
+            del o[p[-1]]
+            op += ":" + "/".join(map(str, p))
+        elif op == "add":
+            dicts = [v for _, v in paths if isinstance(v, dict)] + [doc]
+            r.choice(dicts)[r.choice(["extra", "note", "kind", "x" * 70])] = r.choice([1, "x", None, [1]])
+        elif op == "swap":
+            lists = [(p, v) for p, v in paths if isinstance(v, list) and len(v) > 1]
+            if not lists:
+                return data, "none", False
+            p, v = r.choice(lists)
+            i, j = r.sample(range(len(v)), 2)
+            if v[i] != v[j]:
+                changed = None  # a reordering may or may not change a claim
+            v[i], v[j] = v[j], v[i]
+            op += ":" + "/".join(map(str, p))
+        elif op == "deep":
+            p, _ = r.choice(paths)
+            depth = r.choice([100, 5000, 50000])
+            parent(p)[p[-1]] = "__DEEP__"
+            op += f"({depth})"
+            op += ":" + "/".join(map(str, p))
+        elif op == "huge-list":
+            lists = [(p, v) for p, v in paths if isinstance(v, list)]
+            if not lists:
+                return data, "none", False
+            p, v = r.choice(lists)
+            parent(p)[p[-1]] = (v * (r.choice([1000, 200000]) // max(1, len(v)) + 1))[: 200000]
+            op += ":" + "/".join(map(str, p))
+        text = json.dumps(doc)
+        if op.startswith("deep"):
+            text = text.replace('"__DEEP__"', "[" * depth + "0" + "]" * depth, 1)
+        if op == "dup-key":
+            k = next(iter(doc)) if isinstance(doc, dict) and doc else None
+            if k is None:
+                return data, "none", False
+            text = "{" + json.dumps(k) + ": 1, " + text[1:]
+        return text.encode(), op, changed
+
+    def gen_checker(self):
+        r = self.rng
+        if not self.certificates:
+            return False
+        src = r.choice(self.certificates)
+        data = open(src, "rb").read()
+        mutated, what, changed = self.mutate_certificate(data)
+        path = self.fresh(".json")
+        with open(path, "wb") as f:
+            f.write(mutated)
+        self.runs += 1
+        self.categories["checker"] = self.categories.get("checker", 0) + 1
+        self.inputs.add(("checker", hashlib.sha1(mutated).hexdigest()))
+        vlimit = r.choice([None, None, None, 1 << 30])
+        code, line, err = self.check_certificate(path, vlimit)
+        self.exits[f"checker {code}"] = self.exits.get(f"checker {code}", 0) + 1
+        cmd = ["vibro_check_proof.py", path] + ([f"(ulimit -v {vlimit >> 10})"] if vlimit else [])
+        if changed and src not in self.base_codes:
+            self.base_codes[src] = self.check_certificate(src)[0]
+        base_code = self.base_codes.get(src)
+        if code is None:
+            self.find("the checker did not answer in one line (0, 1 or 2)", cmd, f"[checker] {what}: {line} {err}")
+        elif code == 0 and changed and base_code == 0:
+            self.find("the checker confirmed a certificate with a changed claim", cmd, f"[checker] {what}: {line}")
+        os.remove(path)
+
     def main(self, runs):
         self.seeds_()
         gens = {"from-branch": (0.22, self.gen_from_branch), "validate-input": (0.22, self.gen_validate_input),
                 "score-input": (0.22, self.gen_score_input), "python-api": (0.16, self.gen_python_api),
                 "two-writers": (0.09, self.gen_two_writers), "full-disk": (0.09, self.gen_full_disk),
                 "prove-branch": (0.1, self.gen_prove_branch), "contacts": (0.15, self.gen_contacts),
-                "sequence-column": (0.15, self.gen_sequence_column), "extend-fsize": (0.05, self.gen_extend_fsize)}
+                "sequence-column": (0.15, self.gen_sequence_column), "extend-fsize": (0.05, self.gen_extend_fsize),
+                "compliant": (0.15, self.gen_compliant),
+                "harmonics": (0.15, lambda: self.gen_harmonics_equivalence() if self.rng.random() < 0.2
+                              else self.gen_harmonics()),
+                "curve": (0.08, self.gen_curve), "prove-bifurcation": (0.08, self.gen_prove_bifurcation),
+                "checker": (0.12, self.gen_checker)}
         if self.only:
             gens = {self.only: (1.0, gens[self.only][1])}
+        if "checker" in gens:
+            self.seed_certificates()
         total = sum(w for w, _ in gens.values())
         while self.runs < runs and self.time_left():
             x = self.rng.random() * total

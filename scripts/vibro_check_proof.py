@@ -3102,8 +3102,14 @@ def check_bifurcation(node):
     # claim contains the speeds of both merging orbits over the whole interval.
     speed_what = "the speed of every merging orbit over the interval" if fold else "the speed"
     claims += ((b["speed"], over["V"], speed_what), (s["speed"], over["V"], speed_what))
+    if fold and s.has("half_map_multipliers"):  # a claim no fold makes, which nothing here would check
+        raise NotConfirmed(f"{s['half_map_multipliers'].path}: a fold's certificate claims no multipliers of the "
+                           "half-period map (a pitchfork's does)")
     if not fold:
-        claims += ((s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH"),)
+        # At the point det(DH + I) = 0 (its sign change, confirmed above): −1 is a multiplier of DH
+        # there, which the first entry claims (it was not checked: [2, 2] was confirmed).
+        claims += ((s["half_map_multipliers"][0], iv.mpf(-1), "the multiplier −1 of DH at the point"),
+                   (s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH"))
     for claim, E, what in claims:
         claim_contains(claim, E, what)
     # The orbit over the whole interval: Δ − y > 0 and y + Δ > 0 on the open flight (time s = Ωt),

@@ -1145,7 +1145,10 @@ def check_title(title, font_size):
     (exit 2, nothing written) instead of failing in the middle of the pictures."""
     if not title:
         return
-    shown = repr(title if len(title) <= 60 else title[:57] + "...")
+    # The title as it was typed, between quotes: repr() would double every backslash of its mathtext
+    # ('$\\frac{$' for $\frac{$); only characters that cannot be printed are escaped.
+    cut = title if len(title) <= 60 else title[:57] + "..."
+    shown = "'" + "".join(c if c.isprintable() else repr(c)[1:-1] for c in cut) + "'"
     if len(title) > MAX_TITLE:
         refuse(f"--title {shown}: {len(title)} characters, at most {MAX_TITLE} (a title longer than any "
                "picture is wide)")

@@ -382,7 +382,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   {
     py::gil_scoped_release release;
     options.stop_requested = guard.flag();
-    const auto result = vibro::Simulate(sys, loaded.scene, options);
+    auto result = vibro::Simulate(sys, loaded.scene, options);
+    output->NoteInterruption(result, kPython);
     const auto attractor = attractor_recorder.Classify();
     output->Finish(result, attractor);
     output.reset();  // closed without the GIL

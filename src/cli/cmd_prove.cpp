@@ -218,6 +218,10 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     if (number.empty() || end == nullptr || *end != '\0' || !std::isfinite(req.value))
       throw vibro::InputError({"--bifurcation " + src + ": '" + number + "' is not a number (KIND:KEY=VALUE)"});
   } else {
+    // Neither a file nor KIND:KEY=VALUE: say both (the file's own refusal named no option).
+    if (!std::filesystem::exists(src))
+      throw vibro::InputError({"--bifurcation " + src + ": no such file, and not KIND:KEY=VALUE (e.g. "
+                               "branch-point:excitation.amplitude=3.286)"});
     const auto list = vibro::ReadBranchBifurcations(src);
     if (args.point >= static_cast<long long>(list.size()))
       throw vibro::InputError({fmt::format("--point {}: {} has {} bifurcation(s)", args.point, src, list.size())});

@@ -56,7 +56,8 @@ int RunSimulate(const std::string& path, const std::vector<std::string>& sets, b
   // The time and disk limits against the run's event rate: LimitError, exit 3 (main.cpp).
   vibro::frontend::RunBudget budget(sys, loaded.scene, time_limit, out, "--time-limit");
   options.observers.push_back(&budget);
-  const auto result = vibro::Simulate(sys, loaded.scene, options);
+  auto result = vibro::Simulate(sys, loaded.scene, options);
+  output->NoteInterruption(result, vibro::frontend::Naming::kCli);
   progress.reset();
   const auto attractor = recorder.Classify();
   const vibro::LoadsSummary load_summary = loads.Summary(blocks);

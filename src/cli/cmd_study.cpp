@@ -46,6 +46,7 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
   std::unique_ptr<vibro::Hdf5Store> store;
   std::optional<vibro::InputError> file_problem;
   bool out_of_memory = false, stopped = false;
+  std::optional<vibro::Interrupted> stopped_reading;  // said by main ("...; nothing was written")
   if (dist.root() && !args.out.empty()) {
     try {
       store = vibro::frontend::OpenStudyOutput(args.out, vibro::frontend::HeaderOf(loaded, sys), grid, args.resume,
@@ -54,14 +55,17 @@ int RunStudyCommand(const std::string& path, const std::vector<std::string>& set
       file_problem = e;
     } catch (const std::bad_alloc&) {  // a limit (exit 3), not bad input
       out_of_memory = true;
-    } catch (const vibro::Interrupted&) {  // a stop request during the file's test read (exit 130)
+    } catch (const vibro::Interrupted& e) {  // a stop request during the file's test read (exit 130)
       stopped = true;
+      stopped_reading = e;
     } catch (const std::exception& e) {  // every rank must hear of it (no rank left waiting)
       file_problem = vibro::InputError({fmt::format("{}: cannot write the study: {}", args.out, e.what())});
     }
   }
   if (dist.Any(file_problem.has_value() || out_of_memory || stopped)) {
     if (out_of_memory) throw std::bad_alloc();
+    // Rank 0 says so, as a stop during any other test read (it ended silently, exit 130).
+    if (stopped_reading) throw *stopped_reading;
     if (stopped) return kExitInterrupted;
     if (file_problem) throw *file_problem;
     return kExitBadInput;  // reported by rank 0

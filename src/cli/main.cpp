@@ -4,6 +4,7 @@
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement ·
 // 130 interrupted.
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -38,6 +39,19 @@ const CLI::Validator kFinite(
       return {};
     },
     "FINITE");
+
+// A count (periods, an index) ≥ 0. CLI::NonNegativeNumber refused `x` with its range written out
+// to DBL_MAX, a line of 330 characters.
+const CLI::Validator kNonNegativeInteger(
+    [](std::string& text) -> std::string {
+      char* end = nullptr;
+      errno = 0;
+      const long long v = std::strtoll(text.c_str(), &end, 10);
+      if (end == text.c_str() || *end != '\0' || errno == ERANGE || v < 0)
+        return "expected an integer ≥ 0, got " + text;
+      return {};
+    },
+    "INT>=0");
 
 // An argument as a POSIX shell reads it back.
 std::string ShellQuoted(const std::string& arg) {
@@ -134,7 +148,7 @@ int main(int argc, char** argv) {
         ->check(CLI::IsMember({"auto", "sticking", "impact"}));
     orbit->add_option("--transient", orbit_req.transient_periods,
                       "periods simulated before Newton (default 200; 0: Newton from the scene's initial state)")
-        ->check(CLI::NonNegativeNumber);
+        ->check(kNonNegativeInteger);
     orbit->add_option("--period", orbit_req.period, "period in forcing periods (default: from a transient)")
         ->check(InRange(vibro::frontend::kPeriodLimit));
     orbit->add_option("--impacts", orbit_req.impacts, "impacts per period of an impact orbit")
@@ -155,7 +169,7 @@ int main(int argc, char** argv) {
         ->check(InRange(vibro::frontend::kPeriodLimit));
     CLI::Option* from = prove->add_option("--from", prove_args.from, "start from the orbit stored by `vibro orbit --out ORBIT.h5`");
     prove->add_option("--transient", prove_args.request.transient_periods, "periods simulated before the orbit search (default 200)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(kNonNegativeInteger)
         ->excludes(from);
     CLI::Option* branch_opt =
         prove->add_option("--branch", prove_args.branch, "prove every point of the branch stored by `vibro continue --out FILE.h5`")
@@ -170,7 +184,7 @@ int main(int argc, char** argv) {
         ->excludes(branch_opt);
     prove->add_option("--point", prove_args.point, "with --bifurcation BRANCH.h5: the bifurcation K (0-based, in the "
                       "order `vibro continue` lists them)")
-        ->check(CLI::NonNegativeNumber)
+        ->check(kNonNegativeInteger)
         ->needs(bif);
     prove->add_option("--out", prove_args.out, "write the certificate (JSON) to this file (with --branch: all of them)");
     prove->add_option("--time-limit", prove_args.request.time_limit,
@@ -197,7 +211,7 @@ int main(int argc, char** argv) {
     cont->add_option("--kind", cont_kind, "auto | sticking | impact (default auto)")
         ->check(CLI::IsMember({"auto", "sticking", "impact"}));
     cont->add_option("--transient", cont_transient, "periods simulated before the first Newton (default 200; 0: from [initial])")
-        ->check(CLI::NonNegativeNumber);
+        ->check(kNonNegativeInteger);
     CLI::Option* from = cont->add_option("--from", cont_from, "restart from a branch stored by vibro continue --out");
     CLI::Option* point =
         cont->add_option("--point", cont_point, "the point K (0-based) of --from to restart from")->needs(from);
@@ -446,10 +460,14 @@ int main(int argc, char** argv) {
       // Compliant stops (docs/compliant.md) run in `simulate` and `model`; the analyses built on the
       // rigid saltations (orbits, continuation, proofs, check, validate, score, studies) do not take
       // them yet: refused before anything is computed rather than answered wrongly.
-      if (!*model && !*simulate && !scene_path.empty() && vibro::HasCompliantContact(vibro::LoadScene(scene_path, sets).scene))
+      // `validate` and `score` hold their scene and --set apart from the other commands'.
+      const std::string& analysed = *validate ? val.scene : *score ? sco.scene : scene_path;
+      const std::vector<std::string>& analysed_sets = *validate ? val.sets : *score ? sco.sets : sets;
+      if (!*model && !*simulate && !analysed.empty() &&
+          vibro::HasCompliantContact(vibro::LoadScene(analysed, analysed_sets).scene))
         throw vibro::InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in `vibro "
                                              "simulate` (with --rigid-beside) and `vibro model`; this command does not "
-                                             "handle it yet (docs/compliant.md)", scene_path)});
+                                             "handle it yet (docs/compliant.md)", analysed)});
       if (*model) return RunModel(scene_path, sets, json);
       if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
                                           simulate_time_limit, rigid_beside);

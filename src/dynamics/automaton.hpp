@@ -1063,10 +1063,9 @@ RunResult Automaton<S>::Run() {
     if (!Guarded()) break;
     if (StopPolled()) {
       result_.status = RunStatus::kInterrupted;
-      result_.message = fmt::format(
-          "interrupted at t = {:.10g} (period {}); everything so far is kept, continue with "
-          "--resume",
-          AbsTime(clock_), clock_.period);
+      // Where what was computed is kept, and how to go on, is the caller's to say
+      // (frontend::NoteInterruption): a run without an output file has nothing to resume.
+      result_.message = fmt::format("interrupted at t = {:.10g} (period {})", AbsTime(clock_), clock_.period);
       break;
     }
     const S to_boundary = period_ - clock_.offset;

@@ -115,6 +115,14 @@ RunOutput::RunOutput(const std::string& out, const LoadedScene& loaded, const Sy
   options.observers.push_back(store_.get());
 }
 
+void RunOutput::NoteInterruption(RunResult& result, Naming naming) const {
+  if (result.status != RunStatus::kInterrupted) return;
+  result.message += store_ ? fmt::format("; everything so far is kept, continue with {}",
+                                         naming == Naming::kCli ? "--resume" : "resume=True")
+                           : fmt::format("; the results so far are reported (without {} there is nothing to resume)",
+                                         OutOption(naming));
+}
+
 Hdf5Store::Stats RunOutput::Finish(const RunResult& result, const Attractor& attractor) {
   if (!store_) return {};
   store_->Finish(result, attractor);

@@ -50,6 +50,9 @@ class RunOutput {
   RunOutput& operator=(const RunOutput&) = delete;
 
   Hdf5Store* store() { return store_.get(); }
+  // An interrupted run's message ends with where what it computed is kept: "everything so far is
+  // kept, continue with --resume" with an output file, "nothing to resume" without one.
+  void NoteInterruption(RunResult& result, Naming naming) const;
   // Writes the run's end (Hdf5Store::Finish) and closes the file; returns its write statistics.
   Hdf5Store::Stats Finish(const RunResult& result, const Attractor& attractor);
 

@@ -191,9 +191,11 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
 StoredBranchPoint ReadBranchPoint(const std::string& path, long long k) {
   h5::Silence();
   // Only what a restart needs is read (never the event strings): first in a child, which a
-  // damaged file may crash without harm, then here, row k alone, every value checked.
+  // damaged file may crash without harm, then here, row k alone, every value checked. Every object
+  // read below is in the child's list: /branch/sequence (the contact sequences of several contacts)
+  // was not, and a damaged heap of its strings crashed vibro itself.
   const std::vector<std::string> needed{"/branch", "/branch/value", "/branch/section_time", "/branch/X",
-                                        "/branch/V"};
+                                        "/branch/V", "/branch/sequence"};
   store::ProbeInChild(path, needed);
   const h5::Handle file = h5::OpenFile(path, false);
   if (!file) throw store::CannotOpen(path);
@@ -359,7 +361,9 @@ StoredBranchPoint NearestBranchPoint(const std::string& path, double value, doub
 
 std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   h5::Silence();
-  store::ProbeInChild(path, {"/bifurcations"});
+  // The child reads every object read below: a group's probe reads its attributes only, and the
+  // strings of /bifurcations/kind were read here untried (a damaged heap of them would crash vibro).
+  store::ProbeInChild(path, {"/bifurcations", "/bifurcations/value", "/bifurcations/kind", "/bifurcations/bracket"});
   const h5::Handle file = h5::OpenFile(path, false);
   if (!file) throw store::CannotOpen(path);
   const h5::Handle g = h5::TryOpenGroup(file.get(), "/bifurcations");

@@ -416,6 +416,11 @@ class Reader {
       }
       auto r = ArrayOf(row, path);
       if (!r) return std::nullopt;
+      // An empty row is no row of numbers: `vectors = [[]]` was taken for no forcing vector.
+      if (r->size() == 0) {
+        Report(n, path, fmt::format("rows of at least one number (row {} is empty)", i));
+        return std::nullopt;
+      }
       if (!rows.empty() && r->size() != rows.front().size()) {
         Report(n, path, fmt::format("rows of equal length (row 0 has {}, row {} has {})",
                                     rows.front().size(), i, r->size()));

@@ -213,6 +213,10 @@ def test_superposition(tmp_path):
     ("amplitude = [1.0, 0.5]\nfrequency = [1.0, 2.0]\nvectors = [[1.0, 0.0]]", "excitation.vectors",
      "one forcing vector (row) per harmonic: 2 rows expected, got 1"),
     ("amplitude = []\nfrequency = []", "excitation.amplitude", "a non-empty list"),
+    # An empty forcing vector is no vector (it was taken for none: the forcing of structure.forcing).
+    ("amplitude = [1.0]\nfrequency = [1.0]\nvectors = [[]]", "excitation.vectors", "row 0 is empty"),
+    ("amplitude = [1.0, 0.5]\nfrequency = [1.0, 2.0]\nvectors = [[1.0, 0.0], []]", "excitation.vectors",
+     "row 1 is empty"),
 ])
 def test_located_errors(tmp_path, excitation, key, constraint):
     scene = tmp_path / "bad.toml"

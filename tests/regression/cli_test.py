@@ -68,6 +68,49 @@ def refused_compliant(tag, p):
           and p.stdout == "", p.stdout[-300:] + p.stderr[-300:])
 
 
+# `validate` and `score` hold their scene apart from the other commands' (their own SCENE and
+# --set): a compliant scene is refused by them too, before the CSV is read (they answered exit 4,
+# `score` with the contact phases of the compliant stop as sticks and releases).
+with tempfile.TemporaryDirectory() as d:
+    import tomllib
+    events = os.path.join(d, "events.csv")
+    with open(events, "w") as fh:
+        fh.write("t,kind\n0.05,impact\n")
+    for f in sorted(os.listdir(scenes)):
+        path = os.path.join(scenes, f)
+        if not f.endswith(".toml") or not compliant(path):
+            continue
+        with open(path, "rb") as fh:
+            structure = tomllib.load(fh)["structure"]
+        n = len(structure.get("mass") or structure.get("frequencies"))
+        branch = os.path.join(d, f"{f}.csv")
+        with open(branch, "w") as fh:
+            fh.write(",".join(["value", "time"] + [f"displacement_{i + 1}" for i in range(n)] +
+                              [f"velocity_{i + 1}" for i in range(n)]) + "\n")
+            fh.write(",".join(["1.0", "0.0"] + ["0.0"] * (2 * n)) + "\n")
+        refused_compliant(f"validate {f}", run("validate", path, branch, "--param", "excitation.amplitude"))
+        refused_compliant(f"score {f}", run("score", path, events))
+        refused_compliant(f"score {f} --set", run("score", path, events, "--set", "run.periods=3"))
+
+# A count option given a word: one short line naming the option (CLI::NonNegativeNumber wrote its
+# range out to DBL_MAX, 330 characters).
+fig5 = os.path.join(scenes, "fig05_coexistence.toml")
+for args in (("orbit", fig5, "--transient", "x"), ("prove", fig5, "--transient", "x"),
+             ("prove", fig5, "--bifurcation", "b.h5", "--point", "x"),
+             ("continue", fig5, "--param", "excitation.amplitude", "--to", "2", "--transient", "-1")):
+    p = run(*args)
+    lines = p.stderr.strip().splitlines()
+    check(f"{' '.join(args[:1] + args[2:])}: exit 2, one short line naming the option",
+          p.returncode == 2 and lines and args[-2] in lines[0] and "integer" in lines[0] and len(lines[0]) < 120,
+          p.stderr[:400])
+
+# --bifurcation given neither a file nor KIND:KEY=VALUE: the option named, and both forms.
+for spec in ("branch-point=nan", "branch-point:excitation.amplitude", "nofile.h5"):
+    p = run("prove", fig5, "--bifurcation", spec)
+    check(f"prove --bifurcation {spec}: exit 2 naming the option and both forms",
+          p.returncode == 2 and p.stderr.startswith(f"--bifurcation {spec}:") and "KIND:KEY=VALUE" in p.stderr,
+          p.stderr[:300])
+
 # Several contacts: every command takes them; `prove` proves the orbit (exit 0) or says why not
 # (exit 4, a reason docs/prove.md lists; prove.scenes checks each); simulate (either engine), orbit,
 # continue and check run them.

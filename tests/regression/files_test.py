@@ -426,6 +426,56 @@ r = run("continue", chain2, "--param", "excitation.amplitude", "--to", "2", "--m
 check("--from: a branch of a 1-DOF scene given to a 2-DOF scene: exit 2 naming /branch/X",
       r.returncode == 2 and "/branch/X" in r.stderr, r.stderr[-400:])
 
+
+
+# The strings vibro does read, in a damaged global heap: the contact sequences of a branch with
+# several contacts (continue --from, prove --branch) and the kinds of its bifurcations (prove
+# --bifurcation, curve --from). Each heap object's size is made huge: HDF5 copies past its buffer
+# and crashed vibro itself (SIGSEGV), as the child's test read did not read these objects.
+def huge_heap_object(path, text):
+    """The file with the global-heap object holding `text` declaring 2^47 bytes."""
+    with open(path, "r+b") as fh:
+        data = bytearray(fh.read())
+        at = data.find(text)
+        check(f"{os.path.basename(path)}: the string is in the file", at >= 16, text)
+        data[at - 8:at] = (1 << 47).to_bytes(8, "little")  # index(2) refcount(2) reserved(4) size(8) data
+        fh.seek(0)
+        fh.write(data)
+
+
+two_sided = os.path.join(scenes, "contacts_two_sided_1dof.toml")
+seq_branch = os.path.join(tmp, "seq_branch.h5")
+r = run("continue", two_sided, "--param", "excitation.amplitude", "--to", "1.2", "--max-points", "4", "--out", seq_branch)
+check("a branch with contact sequences", r.returncode == 0, r.stderr[-300:])
+with h5py.File(seq_branch, "r") as f:
+    first = bytes(f["branch/sequence"][0])
+huge_heap_object(seq_branch, first)
+for args in (("continue", two_sided, "--param", "excitation.amplitude", "--to", "1.3", "--max-points", "2",
+              "--from", seq_branch, "--point", "0"),
+             ("prove", two_sided, "--branch", seq_branch)):
+    r = run(*args)
+    check(f"{args[0]}: a damaged heap of /branch/sequence: exit 2 naming the file, no crash",
+          r.returncode == 2 and seq_branch in r.stderr and "corrupt" in r.stderr, (r.returncode, r.stderr[-400:]))
+
+pitchfork = os.path.join(tmp, "pitchfork.toml")
+with open(pitchfork, "w") as fh:
+    fh.write("[structure]\nmass = [[1.0]]\nstiffness = [[1.0]]\nforcing_dof = 0\n"
+             "[[contact]]\ndof = 0\nside = \"below\"\nposition = -1.0\nrestitution = 0.6\n"
+             "[[contact]]\ndof = 0\nside = \"above\"\nposition = 1.0\nrestitution = 0.6\n"
+             "[excitation]\namplitude = 3.0\nfrequency = 2.0\n[initial]\ndisplacement = [0.0]\nvelocity = [0.0]\n")
+bif_branch = os.path.join(tmp, "bif_branch.h5")
+r = run("continue", pitchfork, "--param", "excitation.amplitude", "--to", "3.6", "--out", bif_branch)
+with h5py.File(bif_branch, "r") as f:
+    kinds = [bytes(k) for k in f["bifurcations/kind"][:]]
+check("a branch with a bifurcation", r.returncode == 0 and kinds, (r.stderr[-300:], kinds))
+huge_heap_object(bif_branch, kinds[0])
+for args in (("prove", pitchfork, "--bifurcation", bif_branch),
+             ("curve", pitchfork, "--param", "excitation.amplitude,excitation.frequency", "--from", bif_branch,
+              "--point", "0", "--range1", "0,5", "--range2", "1.5,4", "--max-points", "2")):
+    r = run(*args)
+    check(f"{args[0]}: a damaged heap of /bifurcations/kind: exit 2 naming the file, no crash",
+          r.returncode == 2 and bif_branch in r.stderr and "corrupt" in r.stderr, (r.returncode, r.stderr[-400:]))
+
 # ---- every message is one line (a newline that came with the input is shown escaped) ----
 r = run("model", default, "--set", "excitation.amplitude=2.5\nrun.periods=1")
 lines = r.stderr.strip().splitlines()

@@ -305,6 +305,9 @@ with tempfile.TemporaryDirectory() as d:
         check(f"--title {title[:12]!r}: exit 2 naming the title, nothing written",
               p.returncode == 2 and "--title" in p.stderr and why in p.stderr and "damaged" not in p.stderr
               and len(p.stderr.strip().splitlines()) == 1 and not made, (p.returncode, p.stderr[:300], made))
+        # Named as typed: the backslash of its mathtext once, not doubled as repr() shows it.
+        check(f"--title {title[:12]!r}: the message shows the title as typed",
+              f"'{title[:57]}" in p.stderr, p.stderr[:300])
     p = plot(c3, "okt", "--title", "$\\omega = 1.2$, $x_B$")
     check("--title with mathtext that typesets: exit 0", p.returncode == 0, p.stderr)
 

@@ -120,6 +120,10 @@ def mutants(label, cert, truth):
              ("the slope claim moved past its truth", lambda c: c["bifurcation"].__setitem__(
                  "slope", [c["bifurcation"]["slope"][1] + 1e-9, c["bifurcation"]["slope"][1] + 2e-9])),
              ("a restitution edited", lambda c: c["model"]["more_contacts"][0].__setitem__("restitution", "0.61")),
+             # The pitchfork's multiplier −1 of the half-period map (a fold's summary has none: it is
+             # given one, which no fold claims).
+             ("the multiplier -1 of DH moved", lambda c: c["summary"].__setitem__(
+                 "half_map_multipliers", [[-0.999, -0.999]] + c["summary"].get("half_map_multipliers", [[0, 0]])[1:])),
              ("another kind of point", lambda c: c["bifurcation"].__setitem__(
                  "type", "pitchfork" if c["bifurcation"]["type"] == "fold" else "fold"))]
     for what, edit in cases:

@@ -152,6 +152,7 @@ cli_commands = {
     "model": (["model", os.path.join(scenes, "large", "beam40.toml")] if os.path.exists(
         os.path.join(scenes, "large", "beam40.toml")) else ["model", default], None, "none"),
     "simulate": (["simulate", default, "--time-limit", "0"] + LONG, "out.h5", "keep"),
+    "simulate-no-out": (["simulate", default, "--time-limit", "0"] + LONG, None, "none"),
     "orbit": (["orbit", default, "--transient", "100000000"], "orbit.h5", "none"),
     "prove": (["prove", fig5, "--transient", "10000000", "--time-limit", "1000"], "cert.json", "none"),
     "prove-branch": (["prove", fig11, "--branch", cbranch, "--time-limit", "1000"], "certs.json", "none"),
@@ -191,6 +192,10 @@ for name, (args, out_name, keeps) in cli_commands.items():
             check(f"{tag}: finished whole", stdout.strip() != "", stdout[-300:])
             continue
         check(f"{tag}: exit 130", rc == 130, f"exit {rc} after {took:.2f} s; stderr {stderr[-600:]}")
+        # What it says is true: without an output file there is nothing to resume.
+        if not out:
+            check(f"{tag}: no --resume hint without an --out file", "--resume" not in stdout + stderr,
+                  (stdout + stderr)[-600:])
         check(f"{tag}: within {BUDGET} s", took < BUDGET, f"{took:.2f} s")
         check(f"{tag}: no verdict", not any(w in stdout + stderr for w in ("not-proven", "refuted", "Traceback",
                                                                           "internal error")),
@@ -207,6 +212,26 @@ for name, (args, out_name, keeps) in cli_commands.items():
         elif out and os.path.exists(out) and out.endswith(".h5"):
             code, st = info_status(out)
             check(f"{tag}: --out readable", code == 0, f"{code} {st}")
+
+
+# ---- a stop during the test read of a study to resume: exit 130 and one line saying nothing was
+# written (basin --resume ended silently) ----
+if not only or "resume-test-read" in only:
+    study = os.path.join(tmp, "resume_read.h5")
+    env = dict(os.environ, VIBRO_SIGNAL_READY="1")
+    rc, took, stdout, stderr = run_and_signal([vibro, "basin", fig5, "--grid", "150,150", "--threads", "1", "--out", study],
+                                              signal.SIGTERM, "stderr", b"vibro: ready for stop requests\n", env)
+    check("basin to resume: interrupted, file kept", rc == 130 and os.path.exists(study), f"{rc} {stderr[-300:]}")
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        # Signalled at once after the ready line: the command is reading its input (the study's test read).
+        p = subprocess.Popen([vibro, "basin", fig5, "--grid", "150,150", "--threads", "1", "--out", study, "--resume"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+        first = p.stderr.readline()
+        p.send_signal(sig)
+        out_, err_ = p.communicate(timeout=60)
+        err_ = err_.decode(errors="replace")
+        check(f"basin --resume, {signal.Signals(sig).name} at once: exit 130 with one line saying so",
+              p.returncode == 130 and "interrupted" in err_ and err_.strip() != "", f"{p.returncode} {err_[-300:]!r}")
 
 
 # ---- --time-limit: the whole command, the same way for every command ----
