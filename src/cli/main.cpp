@@ -447,7 +447,10 @@ int main(int argc, char** argv) {
       // The analyses built on the rigid model's saltations refuse a compliant stop before anything
       // is computed (frontend/rigid_model.hpp, the one place of the rule).
       // (validate and score keep their scene and overrides in their own arguments.)
-      const std::string command = app.get_subcommands().empty() ? "" : app.get_subcommands().front()->get_name();
+      const std::string command = app.get_subcommands().empty() ? ""
+                                  : *check && check_precision == "quad"
+                                      ? "check --precision quad"
+                                      : app.get_subcommands().front()->get_name();
       const std::string& scene = *validate ? val.scene : *score ? sco.scene : scene_path;
       if (!scene.empty() && !vibro::frontend::TakesCompliantStops(command))
         vibro::frontend::CheckSceneModel(command,

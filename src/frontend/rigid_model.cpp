@@ -11,7 +11,9 @@
 namespace vibro::frontend {
 
 bool TakesCompliantStops(const std::string& command) {
-  static constexpr std::array<const char*, 2> kTakes = {"model", "simulate"};
+  // check: the exact engine against CVODE (the quad engine, `check --precision quad`, does not
+  // take a contact phase yet).
+  static constexpr std::array<const char*, 3> kTakes = {"model", "simulate", "check"};
   return std::any_of(kTakes.begin(), kTakes.end(), [&](const char* c) { return command == c; });
 }
 
@@ -21,8 +23,8 @@ void CheckSceneModel(const std::string& command, const LoadedScene& loaded, cons
   throw InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in {}; {} does "
                                 "not handle it yet (docs/compliant.md)",
                                 scene,
-                                cli ? "`vibro simulate` (with --rigid-beside) and `vibro model`"
-                                    : "vibro.simulate (rigid_beside) and vibro.model",
+                                cli ? "`vibro simulate` (with --rigid-beside), `vibro model` and `vibro check`"
+                                    : "vibro.simulate (rigid_beside), vibro.model and vibro.check",
                                 command.find(' ') != std::string::npos ? fmt::format("`vibro {}`", command)
                                 : cli                                  ? "this command"
                                                                        : "this function")});

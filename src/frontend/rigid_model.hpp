@@ -3,9 +3,10 @@
 // command line (src/cli/main.cpp) and the Python module (python/src/bindings.cpp) alike.
 //
 // A compliant stop (a stiffness on [stop] or a [[contact]]) runs in `simulate` (with
-// --rigid-beside) and `model`; the orbits, continuation, proofs, `check`, `validate`, `score`, the
-// studies, `sweep`, `partition`, `curve` and `diagram` do not handle its contact phase yet: they
-// refuse such a scene before anything is computed, rather than answer for a rigid stop.
+// --rigid-beside), `model` and `check` (the exact engine against CVODE); the orbits, continuation,
+// proofs, `check --precision quad`, `validate`, `score`, the studies, `sweep`, `partition`, `curve`
+// and `diagram` do not handle its contact phase yet: they refuse such a scene before anything is
+// computed, rather than answer for a rigid stop.
 #pragma once
 
 #include <string>

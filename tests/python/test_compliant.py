@@ -70,3 +70,19 @@ def test_compliant_stop_with_a_sum_of_harmonics_is_refused_located(tmp_path):
     assert r.returncode == 2, r.stderr
     assert f"{scene}:11:" in r.stderr and "excitation.frequency" in r.stderr and "one harmonic" in r.stderr
     assert not out.exists()
+
+
+def test_check_compares_the_exact_engine_with_cvode():
+    # docs/compliant.md "CVODE and vibro check": the closed forms against CVODE's integration of the
+    # same law; the Poincaré solver is not attempted; the quad engine is refused, located.
+    r = vibro.check(vibro.load_scene(TUBE))
+    assert r["ok"] and r["orbit_status"] == "not attempted", [x for x in r["rows"] if not x["ok"]]
+    rows = {x["quantity"]: x for x in r["rows"]}
+    first = rows["first contact phase peak force"]
+    assert first["exact"] > 0 and first["exact"] != first["cvode"]  # two engines, not one run twice
+    assert abs(first["cvode"] / first["exact"] - 1) < 1e-8
+    assert any(q.startswith("contact phase 2 (contact") for q in rows)
+    quad = subprocess.run([CLI, "check", TUBE, "--precision", "quad"], capture_output=True, text=True)
+    assert quad.returncode == 2 and quad.stdout == ""
+    assert "compliant stop" in quad.stderr and "`vibro check --precision quad` does not handle it yet" in quad.stderr
+
