@@ -288,6 +288,8 @@ class Recorder final : public vibro::Observer {
     event_stick_duration.push_back(e.stick_duration);
     event_reaction_integral.push_back(e.reaction_integral);
     event_reaction_max.push_back(e.reaction_max);
+    event_peak_time.push_back(e.peak_time);
+    event_penetration_max.push_back(e.penetration_max);
   }
   void OnSample(const vibro::Sample& s) override { samples.Add(s); }
   void OnSection(const vibro::Sample& s) override { section.Add(s); }
@@ -311,6 +313,8 @@ class Recorder final : public vibro::Observer {
   // What the contacts endure (docs/loads.md).
   std::vector<double> event_impulse, event_energy, event_stick_duration, event_reaction_integral,
       event_reaction_max;
+  // A compliant contact phase's peak instant and largest penetration (docs/compliant.md).
+  std::vector<double> event_peak_time, event_penetration_max;
   Rows samples, section;
 };
 
@@ -408,6 +412,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   events["stick_duration"] = Array(recorder.event_stick_duration);
   events["reaction_integral"] = Array(recorder.event_reaction_integral);
   events["reaction_max"] = Array(recorder.event_reaction_max);
+  events["peak_time"] = Array(recorder.event_peak_time);
+  events["penetration_max"] = Array(recorder.event_penetration_max);
   d["events"] = events;
   d["samples"] = RowsDict(recorder.samples, sys.dof());
   d["section"] = RowsDict(recorder.section, sys.dof());

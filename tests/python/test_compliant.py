@@ -86,3 +86,21 @@ def test_check_compares_the_exact_engine_with_cvode():
     assert quad.returncode == 2 and quad.stdout == ""
     assert "compliant stop" in quad.stderr and "`vibro check --precision quad` does not handle it yet" in quad.stderr
 
+
+def test_peak_time_and_penetration_columns(tmp_path):
+    # docs/output.md: /events/peak_time and /events/penetration_max, the same in Python's events;
+    # a phase's peak lies inside it; at the largest penetration ġ = 0, so the force there is the
+    # spring's, k max(−g), at most the peak force; NaN for every other event.
+    out = tmp_path / "tube.h5"
+    r = vibro.simulate(TUBE, out=str(out), progress=False)
+    e = r.events
+    rel, stick = e[e["kind"] == 4], e[e["kind"] == 3]
+    assert len(rel) > 100 and len(stick) == len(rel)
+    assert np.all((stick["t"] <= rel["peak_time"]) & (rel["peak_time"] <= rel["t"]))
+    assert np.all(rel["penetration_max"] > 0)
+    assert np.all(1000.0 * rel["penetration_max"] <= rel["reaction_max"] * (1 + 1e-12))
+    assert np.all(np.isnan(e["peak_time"][e["kind"] != 4])) and np.all(np.isnan(e["penetration_max"][e["kind"] != 4]))
+    import h5py
+    with h5py.File(out) as f:
+        for name in ("peak_time", "penetration_max"):
+            np.testing.assert_array_equal(f["events"][name][:], e[name])
