@@ -83,28 +83,12 @@ class Tracer {
                               std::string& why) {
     ++corrections_;
     ContinuationRequest cr;
-    cr.scene_at = [this, S, nu](double s) {
-      const Vec2 p = Param(S + s * nu);
-      return req_.scene_at(p[0], p[1]);
-    };
-    Scene at;
     try {
-      at = cr.scene_at(0.0);
+      cr = LineRequest(S, nu, L, seed);
     } catch (const std::exception& e) {
       why = fmt::format("the scene is not valid at the corrector's start: {}", e.what());
       return std::nullopt;
     }
-    cr.from = 0.0;
-    cr.to = L;
-    cr.step = L / 8;
-    cr.max_step = 4 * L;  // arclength in (z, λ): the state may change far faster than λ
-    cr.max_points = 400;
-    cr.orbit.kind = OrbitKind::kAuto;
-    cr.orbit.period = seed.period;
-    cr.orbit.transient_periods = 0;
-    // The same forcing phase at the section as the seed's (the frequency may change along the line).
-    cr.orbit.start = InitialOverride{seed.section_time * seed.frequency / at.frequency, seed.X, seed.V};
-    cr.stop_requested = req_.stop_requested;
     const Branch br = Continue(cr);
     if (br.points.empty()) {
       why = "no orbit at the corrector's start (" + br.end + ")";
@@ -182,31 +166,38 @@ class Tracer {
   // The first bifurcation met by continuing the orbit `seed` along u = seed.u + s·dir, s ∈ [0, L]
   // (none: nothing met), with where it is (scaled).
   std::optional<std::pair<Bifurcation, Vec2>> FirstAlong(const Seed& seed, const Vec2& dir, double L) {
-    ContinuationRequest cr;
     const Vec2 S = seed.u;
-    cr.scene_at = [this, S, dir](double s) {
-      const Vec2 p = Param(S + s * dir);
-      return req_.scene_at(p[0], p[1]);
-    };
     try {
-      const Scene at = cr.scene_at(0.0);
-      cr.from = 0.0;
-      cr.to = L;
-      cr.step = L / 8;
-      cr.max_step = 4 * L;  // arclength in (z, λ): the state may change far faster than λ
-      cr.max_points = 400;
-      cr.orbit.kind = OrbitKind::kAuto;
-      cr.orbit.period = seed.period;
-      cr.orbit.transient_periods = 0;
-      cr.orbit.start = InitialOverride{seed.section_time * seed.frequency / at.frequency, seed.X, seed.V};
-      cr.stop_requested = req_.stop_requested;
-      const Branch br = Continue(cr);
+      const Branch br = Continue(LineRequest(S, dir, L, seed));
       if (br.bifurcations.empty()) return std::nullopt;
       const auto& b = br.bifurcations.front();
       return std::make_pair(b, Vec2(S + b.value * dir));
     } catch (const std::exception&) {
       return std::nullopt;
     }
+  }
+
+  // The continuation of the orbit `seed` along the line u = S + s·dir, s ∈ [0, L], in the line
+  // parameter s. Throws when the scene is not valid at the line's start.
+  ContinuationRequest LineRequest(const Vec2& S, const Vec2& dir, double L, const Seed& seed) const {
+    ContinuationRequest cr;
+    cr.scene_at = [this, S, dir](double s) {
+      const Vec2 p = Param(S + s * dir);
+      return req_.scene_at(p[0], p[1]);
+    };
+    const Scene at = cr.scene_at(0.0);
+    cr.from = 0.0;
+    cr.to = L;
+    cr.step = L / 8;
+    cr.max_step = 4 * L;  // arclength in (z, λ): the state may change far faster than λ
+    cr.max_points = 400;
+    cr.orbit.kind = OrbitKind::kAuto;
+    cr.orbit.period = seed.period;
+    cr.orbit.transient_periods = 0;
+    // The same forcing phase at the section as the seed's (the frequency may change along the line).
+    cr.orbit.start = InitialOverride{seed.section_time * seed.frequency / at.frequency, seed.X, seed.V};
+    cr.stop_requested = req_.stop_requested;
+    return cr;
   }
 
   Seed SeedOf(const BranchPoint& p, const Vec2& u, double frequency) const {

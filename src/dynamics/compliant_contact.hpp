@@ -44,12 +44,19 @@ class LinearFlow {
   using CVec = Eigen::VectorXcd;
   using CMat = Eigen::MatrixXcd;
 
+  // One harmonic of the forcing: T_A^(h) f_h sin(n_h φ + ψ_h), pulsation ω_h = n_h ω_b
+  // (docs/harmonics.md); today's single forcing is T_A f sin φ: n = 1, ψ = 0, ω_h = ω.
+  struct Term {
+    Vec forcing;  // T_A^(h) f_h
+    double omega = 1, psi = 0;
+    int n = 1;
+  };
+
   // Returns an empty string when built, else why not (a defective or ill-conditioned A, a
   // forcing at a resonance of the undamped flow).
-  std::string Build(const Mat& K, const Mat& C, const Vec& forcing, double f, double w, const Vec& b0) {
+  std::string Build(const Mat& K, const Mat& C, const std::vector<Term>& terms, const Vec& b0) {
     const Eigen::Index n = K.rows();
     n_ = n;
-    w_ = w;
     Mat A = Mat::Zero(2 * n, 2 * n);
     A.topRightCorner(n, n) = Mat::Identity(n, n);
     A.bottomLeftCorner(n, n) = -K;
@@ -68,44 +75,63 @@ class LinearFlow {
           cond);
     // Static part: K X_s = b0.
     Xs_ = K.fullPivLu().solve(b0);
-    // Harmonic part: (K − ω² I + iω C) H = T_A f.
-    CMat Z = K.cast<std::complex<double>>() - (w * w) * CMat::Identity(n, n) +
-             std::complex<double>(0, w) * C.cast<std::complex<double>>();
-    Eigen::FullPivLU<CMat> zlu(Z);
-    if (f != 0 && forcing.norm() > 0) {
-      if (zlu.rank() < n) return "the forcing frequency is a resonance of the undamped contact phase";
-      H_ = zlu.solve(forcing.cast<std::complex<double>>() * f);
-    } else {
-      H_ = CVec::Zero(n);
+    // Harmonic part, one per harmonic: (K − ω_h² I + iω_h C) H_h = T_A^(h) f_h.
+    harmonics_.clear();
+    for (const Term& t : terms) {
+      if (t.forcing.norm() == 0) continue;
+      const double w = t.omega;
+      CMat Z = K.cast<std::complex<double>>() - (w * w) * CMat::Identity(n, n) +
+               std::complex<double>(0, w) * C.cast<std::complex<double>>();
+      Eigen::FullPivLU<CMat> zlu(Z);
+      if (zlu.rank() < n)
+        return terms.size() > 1 ? fmt::format("the harmonic at ω = {} is a resonance of the undamped contact phase", w)
+                                : std::string("the forcing frequency is a resonance of the undamped contact phase");
+      harmonics_.push_back({zlu.solve(t.forcing.cast<std::complex<double>>()), w, t.psi, t.n});
     }
     return "";
   }
 
   // The flow from (X0, V0) at forcing phase φ0: coefficients of each mode.
+  // φ_h = n_h φ + ψ_h at σ = 0 (exactly φ for today's single harmonic).
   void Begin(double phase, const Vec& X0, const Vec& V0) {
-    phase_ = phase;
-    const std::complex<double> e(std::cos(phase), std::sin(phase));
-    // X_p(0) = X_s + Im(H e^{iφ0}); V_p(0) = Im(iω H e^{iφ0}).
+    phase_.clear();
+    for (const Harmonic& h : harmonics_) phase_.push_back(h.n == 1 && h.psi == 0 ? phase : h.n * phase + h.psi);
+    // X_p(0) = X_s + Σ_h Im(H_h e^{iφ_h}); V_p(0) = Σ_h Im(iω_h H_h e^{iφ_h}).
     CVec z(2 * n_);
     for (Eigen::Index i = 0; i < n_; ++i) {
-      const std::complex<double> h = H_[i] * e;
-      z[i] = X0[i] - Xs_[i] - h.imag();
-      z[n_ + i] = V0[i] - (std::complex<double>(0, w_) * h).imag();
+      z[i] = X0[i] - Xs_[i];
+      z[n_ + i] = V0[i];
+    }
+    for (size_t k = 0; k < harmonics_.size(); ++k) {
+      const Harmonic& hk = harmonics_[k];
+      const std::complex<double> e(std::cos(phase_[k]), std::sin(phase_[k]));
+      for (Eigen::Index i = 0; i < n_; ++i) {
+        const std::complex<double> h = hk.H[i] * e;
+        z[i] -= h.imag();
+        z[n_ + i] -= (std::complex<double>(0, hk.omega) * h).imag();
+      }
     }
     a_ = Pinv_ * z;
   }
   // The state at σ.
   void Evaluate(double s, Vec& X, Vec& V) const {
-    X.resize(n_);
-    V.resize(n_);
-    const std::complex<double> e(std::cos(phase_ + w_ * s), std::sin(phase_ + w_ * s));
     CVec c(2 * n_);
     for (Eigen::Index k = 0; k < 2 * n_; ++k) c[k] = a_[k] * std::exp(lambda_[k] * s);
     const CVec z = P_ * c;
+    X = Xs_;
+    V = Vec::Zero(n_);
+    for (size_t k = 0; k < harmonics_.size(); ++k) {
+      const Harmonic& hk = harmonics_[k];
+      const std::complex<double> e(std::cos(phase_[k] + hk.omega * s), std::sin(phase_[k] + hk.omega * s));
+      for (Eigen::Index i = 0; i < n_; ++i) {
+        const std::complex<double> h = hk.H[i] * e;
+        X[i] += h.imag();
+        V[i] += (std::complex<double>(0, hk.omega) * h).imag();
+      }
+    }
     for (Eigen::Index i = 0; i < n_; ++i) {
-      const std::complex<double> h = H_[i] * e;
-      X[i] = Xs_[i] + h.imag() + z[i].real();
-      V[i] = (std::complex<double>(0, w_) * h).imag() + z[n_ + i].real();
+      X[i] += z[i].real();
+      V[i] += z[n_ + i].real();
     }
   }
   // uᵀX(σ) − offset as a sum of exponentials (a gap: u = c_j, offset = e_j).
@@ -117,12 +143,14 @@ class LinearFlow {
       if (std::abs(b * a_[k]) > 0) F.Add(b * a_[k], lambda_[k]);
     }
     F.Add(u.dot(Xs_) - offset, 0.0);
-    // Im(h e^{i(φ0+ωσ)}) = Re(−i h e^{iφ0} e^{iωσ}): one term, its real part is the sum.
-    std::complex<double> h(0, 0);
-    for (Eigen::Index i = 0; i < n_; ++i) h += u[i] * H_[i];
-    if (std::abs(h) > 0) {
-      const std::complex<double> e(std::cos(phase_), std::sin(phase_));
-      F.Add(std::complex<double>(0, -1) * h * e, std::complex<double>(0, w_));
+    // Im(h e^{i(φ_h+ω_hσ)}) = Re(−i h e^{iφ_h} e^{iω_hσ}): one term per harmonic, its real part is the sum.
+    for (size_t k = 0; k < harmonics_.size(); ++k) {
+      std::complex<double> h(0, 0);
+      for (Eigen::Index i = 0; i < n_; ++i) h += u[i] * harmonics_[k].H[i];
+      if (std::abs(h) > 0) {
+        const std::complex<double> e(std::cos(phase_[k]), std::sin(phase_[k]));
+        F.Add(std::complex<double>(0, -1) * h * e, std::complex<double>(0, harmonics_[k].omega));
+      }
     }
     return F;
   }
@@ -136,12 +164,17 @@ class LinearFlow {
   const Eigen::VectorXcd& eigenvalues() const { return lambda_; }
 
  private:
+  struct Harmonic {
+    CVec H;  // (K − ω_h² I + iω_h C)⁻¹ T_A^(h) f_h
+    double omega, psi;
+    int n;
+  };
   Eigen::Index n_ = 0;
-  double w_ = 1, phase_ = 0;
+  std::vector<Harmonic> harmonics_;
+  std::vector<double> phase_;  // φ_h at σ = 0
   CVec lambda_;
   CMat P_, Pinv_;
   Vec Xs_;
-  CVec H_;
   CVec a_;
 };
 
@@ -205,11 +238,18 @@ class CompliantPropagator final : public CompliantPhase {
     Mat K = m_.omega.cwiseAbs2().asDiagonal();
     Mat D = (2.0 * m_.zeta.cwiseProduct(m_.omega)).asDiagonal();
     const Vec zero = Vec::Zero(n);
-    error_ = free_.Build(K, D, m_.forcing, m_.f, m_.w, zero);
+    // The forcing: today's T_A f sin φ, or a sum of harmonics (ModelT's f is then 0).
+    std::vector<LinearFlow::Term> terms;
+    if (m_.harmonics.empty()) {
+      terms.push_back({m_.forcing * m_.f, m_.w, 0.0, 1});
+    } else {
+      for (const auto& h : m_.harmonics.h) terms.push_back({h.forcing, h.omega, h.psi, h.n});
+    }
+    error_ = free_.Build(K, D, terms, zero);
     const double k = m_.stiffness, c = m_.damping;
     Mat Kc = K + k * m_.contact * m_.shape.transpose();
     Mat Cc = D + c * m_.contact * m_.shape.transpose();
-    if (error_.empty()) error_ = contact_.Build(Kc, Cc, m_.forcing, m_.f, m_.w, k * m_.x0 * m_.contact);
+    if (error_.empty()) error_ = contact_.Build(Kc, Cc, terms, k * m_.x0 * m_.contact);
   }
   void Begin(const SegmentStartT<double>& s) override {
     mode_ = s.mode;

@@ -167,9 +167,6 @@ void CheckCompliance(const Scene& s, Checker& c) {
   c.Require(s.run.precision == Precision::kDouble, "run.precision", ToString(s.run.precision),
             "\"double\": a compliant stop's contact phase is not yet available in quad precision "
             "(docs/compliant.md)");
-  c.Require(s.harmonics.empty(), "excitation.frequency", fmt::format("a list of {}", s.harmonics.size()),
-            "one harmonic: a compliant stop's contact phase has the closed form of one harmonic only in this "
-            "version (docs/compliant.md)");
 }
 
 void CheckContacts(const Scene& s, Eigen::Index n_dofs, Checker& c) {

@@ -60,18 +60,6 @@ def test_cli_rigid_beside_and_located_errors(tmp_path):
     assert rigid.returncode == 2 and "no compliant stop" in rigid.stderr
 
 
-def test_compliant_stop_with_a_sum_of_harmonics_is_refused_located(tmp_path):
-    scene = tmp_path / "two.toml"
-    scene.write_text("[structure]\nmass = [[1.0]]\nstiffness = [[1.0]]\nforcing_dof = 0\ncontact_dof = 0\n"
-                     "[stop]\nposition = 0.0\nstiffness = 1e4\n"
-                     "[excitation]\namplitude = [1.0, 0.5]\nfrequency = [1.0, 2.0]\n")
-    out = tmp_path / "o.h5"
-    r = subprocess.run([CLI, "simulate", str(scene), "--out", str(out)], capture_output=True, text=True)
-    assert r.returncode == 2, r.stderr
-    assert f"{scene}:11:" in r.stderr and "excitation.frequency" in r.stderr and "one harmonic" in r.stderr
-    assert not out.exists()
-
-
 def test_check_compares_the_exact_engine_with_cvode():
     # docs/compliant.md "CVODE and vibro check": the closed forms against CVODE's integration of the
     # same law; the Poincaré solver is not attempted; the quad engine is refused, located.
