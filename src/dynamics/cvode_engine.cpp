@@ -1134,11 +1134,13 @@ class CvodeCompliant final : public CompliantPhase {
 
   // The structure's acceleration at local time t with the contact force `lam` on it (0 in flight),
   // in a scratch vector (no allocation per right-hand side).
+  // A sum of harmonics (docs/harmonics.md): f is 0 and each harmonic's term is added.
   const Vec& Acceleration(double t, const double* Y, double lam) const {
-    const double s = std::sin(phase_ + m_.w * t);
+    const double phi = phase_ + m_.w * t, s = std::sin(phi);
     acc_.resize(n_);
     for (Eigen::Index i = 0; i < n_; ++i)
       acc_[i] = -w2_[i] * (X0_[i] + Y[i]) - damp_[i] * Y[n_ + i] + TAf_[i] * s + m_.contact[i] * lam;
+    if (!m_.harmonics.empty()) acc_ += m_.harmonics.Vector(phi);
     return acc_;
   }
   double OwnGap(const double* Y) const {
