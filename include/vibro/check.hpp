@@ -56,6 +56,12 @@ std::vector<CyclicEvent> AlignedCyclic(const std::vector<CyclicEvent>& ref, cons
 // Poincaré solver against exact, 1e-9; the leading multiplier against the decay rate observed in
 // the exact transient, 10 % (+ 0.02); the exact engine against the quad engine (with_quad),
 // 1e-9 (the double engine's claimed accuracy on periodic quantities, docs/chattering.md).
+// A scene with a compliant stop (docs/compliant.md): the exact engine's closed forms against CVODE's
+// integration of the same law; no Poincaré solver (it does not take a contact phase yet: "not
+// attempted"); the first contact phase (entry and exit instants in periods, duration, peak force,
+// largest penetration, impulse, exit velocity) and, on a periodic attractor, each contact phase of
+// its last period, as relative differences within the CVODE tolerance. with_quad is refused
+// before (the quad engine has no contact phase yet).
 CheckReport CrossCheck(const System& system, const Scene& scene, bool with_quad = false);
 
 }  // namespace vibro

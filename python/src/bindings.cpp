@@ -43,6 +43,7 @@
 #include "frontend/limits.hpp"
 #include "frontend/run_budget.hpp"
 #include "frontend/run_output.hpp"
+#include "frontend/rigid_model.hpp"
 #include "frontend/switching.hpp"
 #include "frontend/diagram.hpp"
 #include "frontend/tables.hpp"
@@ -99,17 +100,14 @@ PyScene LoadPyScene(SceneOrigin origin) {
   return {std::move(origin), std::move(loaded)};
 }
 
-// Compliant stops (docs/compliant.md) run in model, simulate and rigid_beside only, as on the
-// command line: the analyses built on the rigid model refuse them (ValueError) before computing
-// anything, rather than answer for a rigid stop (vibro.check answered "ok" with CVODE's rigid stop).
+// The entry check of a command on a scene (frontend/rigid_model.hpp, as on the command line):
+// the analyses built on the rigid model refuse a compliant stop (ValueError) before computing
+// anything. `command` is the command line's name of the function.
 template <typename R, typename... A>
-auto RigidOnly(R (*f)(const PyScene&, A...)) {
-  return [f](const PyScene& s, A... a) -> R {
-    if (vibro::HasCompliantContact(s.loaded.scene))
-      throw vibro::InputError({fmt::format(
-          "{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in vibro.simulate (rigid_beside) and "
-          "vibro.model; this function does not handle it yet (docs/compliant.md)",
-          s.origin.source.empty() ? s.origin.path : s.origin.source)});
+auto Entry(const char* command, R (*f)(const PyScene&, A...)) {
+  return [command, f](const PyScene& s, A... a) -> R {
+    vibro::frontend::CheckSceneModel(command, s.loaded, s.origin.source.empty() ? s.origin.path : s.origin.source,
+                                     kPython);
     return f(s, std::forward<A>(a)...);
   };
 }
@@ -290,6 +288,8 @@ class Recorder final : public vibro::Observer {
     event_stick_duration.push_back(e.stick_duration);
     event_reaction_integral.push_back(e.reaction_integral);
     event_reaction_max.push_back(e.reaction_max);
+    event_peak_time.push_back(e.peak_time);
+    event_penetration_max.push_back(e.penetration_max);
   }
   void OnSample(const vibro::Sample& s) override { samples.Add(s); }
   void OnSection(const vibro::Sample& s) override { section.Add(s); }
@@ -313,6 +313,8 @@ class Recorder final : public vibro::Observer {
   // What the contacts endure (docs/loads.md).
   std::vector<double> event_impulse, event_energy, event_stick_duration, event_reaction_integral,
       event_reaction_max;
+  // A compliant contact phase's peak instant and largest penetration (docs/compliant.md).
+  std::vector<double> event_peak_time, event_penetration_max;
   Rows samples, section;
 };
 
@@ -411,6 +413,8 @@ py::dict SimulateScene(const PyScene& s, const std::string& out, bool resume, st
   events["stick_duration"] = Array(recorder.event_stick_duration);
   events["reaction_integral"] = Array(recorder.event_reaction_integral);
   events["reaction_max"] = Array(recorder.event_reaction_max);
+  events["peak_time"] = Array(recorder.event_peak_time);
+  events["penetration_max"] = Array(recorder.event_penetration_max);
   d["events"] = events;
   d["samples"] = RowsDict(recorder.samples, sys.dof());
   d["section"] = RowsDict(recorder.section, sys.dof());
@@ -937,17 +941,17 @@ PYBIND11_MODULE(_vibro, m) {
     py::gil_scoped_release release;
     return vibro::RigidComparisonJson(vibro::CompareWithRigid(s.loaded.scene, blocks));
   });
-  m.def("orbit", RigidOnly(&Orbit));
-  m.def("prove", RigidOnly(&Prove));
-  m.def("prove_bifurcation", RigidOnly(&ProveBifurcationPoint));
-  m.def("continue_branch", RigidOnly(&ContinueBranch));
-  m.def("study", RigidOnly(&Study));
-  m.def("sweep", RigidOnly(&SweepScene));
-  m.def("diagram", RigidOnly(&DiagramScene));
-  m.def("check", RigidOnly(&Check));
+  m.def("orbit", Entry("orbit", &Orbit));
+  m.def("prove", Entry("prove", &Prove));
+  m.def("prove_bifurcation", Entry("prove", &ProveBifurcationPoint));
+  m.def("continue_branch", Entry("continue", &ContinueBranch));
+  m.def("study", Entry("basin", &Study));
+  m.def("sweep", Entry("sweep", &SweepScene));
+  m.def("diagram", Entry("diagram", &DiagramScene));
+  m.def("check", Entry("check", &Check));
   m.def("info", &Info);
-  m.def("validate", RigidOnly(&Validate));
-  m.def("score", RigidOnly(&Score));
-  m.def("partition", RigidOnly(&PartitionPlane));
-  m.def("curve", RigidOnly(&TraceCurvesPy));
+  m.def("validate", Entry("validate", &Validate));
+  m.def("score", Entry("score", &Score));
+  m.def("partition", Entry("partition", &PartitionPlane));
+  m.def("curve", Entry("curve", &TraceCurvesPy));
 }

@@ -291,7 +291,8 @@ def _events_array(e):
     a = _np.empty(len(e["t"]), dtype=[("t", "f8"), ("kind", "i1"), ("x_B", "f8"), ("v_before", "f8"),
                                       ("v_after", "f8"), ("contact", "i4"), ("simultaneous", "?"),
                                       ("impulse", "f8"), ("energy_dissipated", "f8"), ("stick_duration", "f8"),
-                                      ("reaction_integral", "f8"), ("reaction_max", "f8")])
+                                      ("reaction_integral", "f8"), ("reaction_max", "f8"), ("peak_time", "f8"),
+                                      ("penetration_max", "f8")])
     for k in a.dtype.names:
         a[k] = e[k]
     return a
@@ -313,7 +314,9 @@ class SimulationResult:
     - ``events``: structured array, fields t, kind (:data:`EVENT_KINDS`), x_B, v_before, v_after, contact (the
       ``[[contact]]`` index, docs/contacts.md), simultaneous, and what the contacts endure (docs/loads.md):
       impulse, energy_dissipated, and for a release stick_duration, reaction_integral, reaction_max (NaN
-      otherwise); ``summary["loads"]`` holds the per-contact means and intervals;
+      otherwise), and for a compliant contact phase's release peak_time (the peak force's instant) and
+      penetration_max (its largest penetration; NaN otherwise, docs/compliant.md); ``summary["loads"]``
+      holds the per-contact means and intervals;
     - ``samples``: structured array of the dense output, fields t, X (n,), V (n,), x_B, mode;
     - ``section``: the stroboscopic section (t0 + kT), same fields as ``samples``.
     """
@@ -782,7 +785,7 @@ def _event_columns(cols):
     names = set(cols)
     own = {"t", "kind", "x_B", "v_before", "v_after"}
     extra = {"contact", "simultaneous", "impulse", "energy_dissipated", "stick_duration", "reaction_integral",
-             "reaction_max"}
+             "reaction_max", "peak_time", "penetration_max"}
     if own <= names <= own | extra:  # vibro's own events (a run or a file, with or without the loads)
         cols = {"t": cols["t"], "kind": cols["kind"], "velocity": cols["v_before"],
                 **({"contact": cols["contact"]} if "contact" in cols else {})}

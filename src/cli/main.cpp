@@ -21,6 +21,7 @@
 #include "cli/stop_signals.hpp"
 #include "frontend/frontend.hpp"
 #include "frontend/limits.hpp"
+#include "frontend/rigid_model.hpp"
 #include "frontend/run_budget.hpp"
 #include "vibro/child_process.hpp"
 #include "vibro/hdf5_store.hpp"
@@ -457,17 +458,18 @@ int main(int argc, char** argv) {
   if (!*prove) vibro::cli::ArmTimeLimit(time_limit, "--time-limit");
   const auto dispatch = [&]() -> int {
     try {
-      // Compliant stops (docs/compliant.md) run in `simulate` and `model`; the analyses built on the
-      // rigid saltations (orbits, continuation, proofs, check, validate, score, studies) do not take
-      // them yet: refused before anything is computed rather than answered wrongly.
-      // `validate` and `score` hold their scene and --set apart from the other commands'.
-      const std::string& analysed = *validate ? val.scene : *score ? sco.scene : scene_path;
-      const std::vector<std::string>& analysed_sets = *validate ? val.sets : *score ? sco.sets : sets;
-      if (!*model && !*simulate && !analysed.empty() &&
-          vibro::HasCompliantContact(vibro::LoadScene(analysed, analysed_sets).scene))
-        throw vibro::InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in `vibro "
-                                             "simulate` (with --rigid-beside) and `vibro model`; this command does not "
-                                             "handle it yet (docs/compliant.md)", analysed)});
+      // The analyses built on the rigid model's saltations refuse a compliant stop before anything
+      // is computed (frontend/rigid_model.hpp, the one place of the rule).
+      // (validate and score keep their scene and overrides in their own arguments.)
+      const std::string command = app.get_subcommands().empty() ? ""
+                                  : *check && check_precision == "quad"
+                                      ? "check --precision quad"
+                                      : app.get_subcommands().front()->get_name();
+      const std::string& scene = *validate ? val.scene : *score ? sco.scene : scene_path;
+      if (!scene.empty() && !vibro::frontend::TakesCompliantStops(command))
+        vibro::frontend::CheckSceneModel(command,
+                                         vibro::LoadScene(scene, *validate ? val.sets : *score ? sco.sets : sets),
+                                         scene, vibro::frontend::Naming::kCli);
       if (*model) return RunModel(scene_path, sets, json);
       if (*simulate) return RunSimulate(scene_path, sets, json, out_path, resume, extend, blocks,
                                           simulate_time_limit, rigid_beside);

@@ -15,6 +15,7 @@
 
 #include "dynamics/chatter_tail.hpp"
 #include "dynamics/compliant_contact.hpp"
+#include "dynamics/cvode_engine.hpp"
 #include "dynamics/contact_loads.hpp"
 #include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
@@ -320,7 +321,8 @@ class Automaton {
   bool OnContact();
   // Compliant stops (docs/compliant.md; dynamics/compliant_contact.hpp, the transitions in
   // dynamics/compliant_transitions.hpp): the contact phase is the mode `sticking` on a compliant
-  // contact, its propagator the contact's closed form; a force-rule exit leaves a relaxing flight.
+  // contact, its propagator the contact's closed form (CVODE's integration with run.engine =
+  // "cvode"); a force-rule exit leaves a relaxing flight.
   void BuildCompliant();
   bool Compliant(int j) const { return M(j).compliant; }
   bool InCompliantPhase() const { return mode_ == Mode::kSticking && held_set_.empty() && Compliant(active_); }
@@ -427,10 +429,11 @@ class Automaton {
   bool sincos_valid_ = false;
   Vec tail_w_;  // PredictTail's scratch (no allocation per impact)
   ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
-  // Compliant stops: each compliant contact's closed form (double only: quad and CVODE refuse them,
+  // Compliant stops: each compliant contact's propagator, its closed form or, with run.engine =
+  // "cvode", CVODE's integration of the same law (double only: quad refuses them,
   // docs/compliant.md), the relaxing flight after a force-rule exit (its contact and surface
   // offset), and the open contact phase's account beyond the sticking one.
-  using CompliantP = std::conditional_t<std::is_same_v<S, double>, CompliantPropagator, PropagatorT<S>>;
+  using CompliantP = std::conditional_t<std::is_same_v<S, double>, CompliantPhase, PropagatorT<S>>;
   std::vector<std::unique_ptr<CompliantP>> compliant_;
   bool relaxing_ = false;
   int relax_contact_ = -1;
@@ -1181,6 +1184,17 @@ RunResult Automaton<S>::Run() {
   if (multi()) result_.contact_counts = counts_;
   else result_.contact_counts = {result_.counts};
   result_.solver = engine_->stats();
+  if constexpr (std::is_same_v<S, double>)
+    for (const auto& c : compliant_) {  // CVODE's work in the compliant contacts
+      if (!c) continue;
+      const SolverStats w = c->stats();
+      result_.solver.steps += w.steps;
+      result_.solver.rhs_evals += w.rhs_evals;
+      result_.solver.root_evals += w.root_evals;
+      result_.solver.jac_evals += w.jac_evals;
+      result_.solver.error_test_failures += w.error_test_failures;
+      result_.solver.reinits += w.reinits;
+    }
   return result_;
 }
 

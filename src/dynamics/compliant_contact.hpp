@@ -178,16 +178,62 @@ class LinearFlow {
   CVec a_;
 };
 
+// What the automaton asks of a compliant contact's propagator (dynamics/compliant_transitions.hpp),
+// whichever engine runs it: the closed form below (the exact engine), or CVODE's integration of the
+// same spring–dashpot law (dynamics/cvode_engine.hpp, `vibro check`'s second opinion). It runs the
+// contact phase (mode sticking) and the relaxing flight after a force-rule exit (mode free), over
+// every contact's gap, and gives the phase's loads.
+class CompliantPhase : public PropagatorT<double> {
+ public:
+  // The contact phase's loads over [0, σ] of the last segment (docs/loads.md): ∫λ dt, the
+  // dashpot's ∫c ġ² dt, and the largest force and penetration with their instants.
+  struct PhaseLoads {
+    double integral = 0, dissipated = 0;
+    double peak = -std::numeric_limits<double>::infinity(), peak_at = 0;
+    double penetration = 0, penetration_at = 0;
+  };
+
+  // Empty when the propagator is ready, else why not (the run fails with it).
+  const std::string& error() const { return error_; }
+  // The relaxing surface of a force-rule exit: its offset y₀ (≤ 0) at the start of the next segment.
+  // at_exit: the flight starts at the exit itself (the gap to the surface has a double zero there).
+  void SetSurface(double y0, bool at_exit = false) {
+    y0_ = y0;
+    at_exit_ = at_exit;
+  }
+  double SurfaceAt(double s) const { return y0_ == 0 ? 0.0 : y0_ * std::exp(-stiffness_ / damping_ * s); }
+  // A relaxing flight's last segment ended because the surface is back (within the gap's rounding).
+  bool relaxed() const { return relaxed_; }
+  virtual PhaseLoads Loads(double sigma) const = 0;
+
+ protected:
+  CompliantPhase(double stiffness, double damping) : stiffness_(stiffness), damping_(damping) {}
+  // The local time after which the relaxing surface is back within the rounding of a gap of
+  // `scale` (the end of a relaxing flight).
+  double RelaxedAfter(double scale) const {
+    const double tol = 8 * std::numeric_limits<double>::epsilon() * (scale + 1.0);
+    return damping_ / stiffness_ * std::log(std::abs(y0_) / tol);
+  }
+
+  double stiffness_, damping_;
+  std::string error_;
+  double y0_ = 0;
+  bool relaxed_ = false, at_exit_ = false;
+};
+
 // The propagator of a compliant contact (docs/compliant.md): the contact phase (mode sticking)
 // and the relaxing flight after a force-rule exit (mode free), over every contact's gap.
-class CompliantPropagator final : public PropagatorT<double> {
+class CompliantPropagator final : public CompliantPhase {
  public:
   using Vec = Eigen::VectorXd;
   using Mat = Eigen::MatrixXd;
 
   // `contact`: the compliant contact j; `models`: every contact's model (their gaps are watched).
   CompliantPropagator(const std::vector<const ModelT<double>*>& models, int contact)
-      : models_(models), j_(contact), m_(*models[static_cast<size_t>(contact)]) {
+      : CompliantPhase(models[static_cast<size_t>(contact)]->stiffness, models[static_cast<size_t>(contact)]->damping),
+        models_(models),
+        j_(contact),
+        m_(*models[static_cast<size_t>(contact)]) {
     const Eigen::Index n = m_.dof();
     Mat K = m_.omega.cwiseAbs2().asDiagonal();
     Mat D = (2.0 * m_.zeta.cwiseProduct(m_.omega)).asDiagonal();
@@ -205,18 +251,6 @@ class CompliantPropagator final : public PropagatorT<double> {
     Mat Cc = D + c * m_.contact * m_.shape.transpose();
     if (error_.empty()) error_ = contact_.Build(Kc, Cc, terms, k * m_.x0 * m_.contact);
   }
-  const std::string& error() const { return error_; }
-
-  // The relaxing surface of a force-rule exit: its offset y₀ (≤ 0) at the start of the next segment.
-  // at_exit: the flight starts at the exit itself (the gap to the surface has a double zero there).
-  void SetSurface(double y0, bool at_exit = false) {
-    y0_ = y0;
-    at_exit_ = at_exit;
-  }
-  double SurfaceAt(double s) const { return y0_ == 0 ? 0.0 : y0_ * std::exp(-m_.stiffness / m_.damping * s); }
-  // A relaxing flight's last segment ended because the surface is back (within the gap's rounding).
-  bool relaxed() const { return relaxed_; }
-
   void Begin(const SegmentStartT<double>& s) override {
     mode_ = s.mode;
     phase_ = s.phase;
@@ -241,8 +275,7 @@ class CompliantPropagator final : public PropagatorT<double> {
     int who = j_;
     if (mode_ == Mode::kFree && y0_ != 0) {
       // The surface is back within the rounding of the gap after this time: an ordinary flight.
-      const double tol = 8 * std::numeric_limits<double>::epsilon() * (scale_ + 1.0);
-      const double back = m_.damping / m_.stiffness * std::log(std::abs(y0_) / tol);
+      const double back = RelaxedAfter(scale_);
       if (back < end) {
         end = std::max(back, 0.0);
         relaxed_ = true;
@@ -288,15 +321,8 @@ class CompliantPropagator final : public PropagatorT<double> {
   double Gap(double s) const override { return gaps_[static_cast<size_t>(j_)].Value(s); }
   double GapOf(int j, double s) const override { return gaps_[static_cast<size_t>(j)].Value(s); }
 
-  // The contact phase's loads over [0, σ] of the last segment (docs/loads.md): ∫λ dt, the dashpot's
-  // ∫c ġ² dt, and the largest force and penetration with their instants (certified: the roots of
-  // λ̇ and ġ where they fall, by the same stepping, then the ends).
-  struct PhaseLoads {
-    double integral = 0, dissipated = 0;
-    double peak = -std::numeric_limits<double>::infinity(), peak_at = 0;
-    double penetration = 0, penetration_at = 0;
-  };
-  PhaseLoads Loads(double sigma) const {
+  // Certified: the roots of λ̇ and ġ where they fall, by the same stepping, then the ends.
+  PhaseLoads Loads(double sigma) const override {
     PhaseLoads L;
     L.integral = force_.Integral(sigma);
     L.dissipated = m_.damping * ExpSum::IntegralOfProduct(rate_, rate_, sigma);
@@ -361,10 +387,8 @@ class CompliantPropagator final : public PropagatorT<double> {
   int j_;
   const ModelT<double>& m_;
   LinearFlow free_, contact_;
-  std::string error_;
   Mode mode_ = Mode::kSticking;
-  double phase_ = 0, y0_ = 0, last_ = 0, scale_ = 1;
-  bool relaxed_ = false, at_exit_ = false;
+  double phase_ = 0, last_ = 0, scale_ = 1;
   std::vector<ExpSum> gaps_;
   ExpSum rate_, force_;
 };

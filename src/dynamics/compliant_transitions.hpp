@@ -19,7 +19,8 @@ void Automaton<S>::BuildCompliant() {
   if constexpr (std::is_same_v<S, double>) {
     for (size_t j = 0; j < models_.size(); ++j) {
       if (!models_[j]->compliant) continue;
-      compliant_[j] = std::make_unique<CompliantPropagator>(models_, static_cast<int>(j));
+      if (cvode_) compliant_[j] = MakeCvodeCompliant(run_, models_, static_cast<int>(j));
+      else compliant_[j] = std::make_unique<CompliantPropagator>(models_, static_cast<int>(j));
       compliant_[j]->SetStopPoll([this] { return StopPolled(); });
       if (!compliant_[j]->error().empty() && violation_.empty())
         violation_ = fmt::format("compliant contact {}: {}", j, compliant_[j]->error());
@@ -93,7 +94,7 @@ bool Automaton<S>::AfterCompliantSegment(const SegmentResultT<S>& seg, const Clo
     return Fail("a compliant stop needs the exact engine in double precision");
   } else {
     const int k = mode_ == Mode::kSticking ? active_ : relax_contact_;
-    CompliantPropagator& p = *compliant_[static_cast<size_t>(k)];
+    CompliantPhase& p = *compliant_[static_cast<size_t>(k)];
     const ModelT<S>& m = M(k);
     if (mode_ == Mode::kSticking) {
       if (opt_.loads && !opt_.observers.empty()) {

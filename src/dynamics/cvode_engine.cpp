@@ -18,6 +18,9 @@
 // the pair of every other contact k is its gap under the held flow, g_k = c_kᵀ(e_a v_a + V_a ξ)
 // − e_k, and its rate (a free contact hits while a sticks). The pair of a contact that cannot
 // have a root (the chattering tail's own contact, a gap the held flow does not move) is constant.
+// Compliant stops (docs/compliant.md): their contact phase and relaxing flight are integrated by
+// CvodeCompliant at the end of this file (MakeCvodeCompliant), with the same law as the exact
+// engine's closed form.
 #include "dynamics/cvode_engine.hpp"
 
 #include "dynamics/flight_window.hpp"
@@ -856,6 +859,529 @@ SolverStats CvodeEngine::stats() const {
     if (CVodeGetNumErrTestFails(in->mem, &v) == CV_SUCCESS) s.error_test_failures += v;
   }
   return s;
+}
+
+}  // namespace vibro::detail
+
+namespace vibro::detail {
+
+// ---- a compliant contact integrated by CVODE (docs/compliant.md, "CVODE") ----
+//
+// Contact phase on compliant contact j: y = (ΔX, Ẋ, G, E) ∈ ℝ^{2n+2}, ΔX = X − X(0) as in free
+// flight, with the spring–dashpot force on the structure,
+//   Ẋ' = −Ω X − D Ẋ + T_A f sin(φ + ωσ) + T_j λ,  λ = −k g − c ġ,  g = g(0) + c_jᵀΔX,  ġ = c_jᵀẊ,
+// and two quadratures for the loads, G' = g (∫λ dt = −k G − c (g(σ) − g(0))) and E' = ġ² (the
+// dashpot's work c E); they are left out of the error test (an absolute tolerance of 1e300), as
+// CVODES leaves its quadratures by default. Roots: the exit (g upward, rule "gap" or c = 0; −λ
+// upward, rule "force"), λ̇ downward (a peak of the force), ġ upward (the largest penetration), and
+// every other contact's gap (downward) and its rate (upward, a minimum ends a step, as in free
+// flight). At the entry the gap's known zero is set to exactly 0 (CVODE takes a root function
+// that is 0 at t0 as no root, and the gap moves in at once).
+// Relaxing flight after a force-rule exit: the free flow in y = (ΔX, Ẋ), with the gap to the
+// surface d = g − y₀e^(−kσ/c) as contact j's root (downward) and its rate (upward). A flight that
+// starts at the exit itself has d = ḋ = 0 there: d/σ² and ḋ/σ are the root functions, their
+// limits d̈(0)/2 and d̈(0) on a short window (a millionth of the period, at most a thousandth of
+// the relaxation time c/k), as the sticking flow's known zeros above.
+class CvodeCompliant final : public CompliantPhase {
+ public:
+  using Vec = Eigen::VectorXd;
+
+  CvodeCompliant(const RunSpec& run, const std::vector<const ModelT<double>*>& models, int j)
+      : CompliantPhase(models[static_cast<size_t>(j)]->stiffness, models[static_cast<size_t>(j)]->damping),
+        run_(run),
+        models_(models),
+        j_(j),
+        m_(*models[static_cast<size_t>(j)]),
+        n_(m_.dof()) {
+    w2_ = m_.omega.cwiseAbs2();
+    damp_ = 2.0 * m_.zeta.cwiseProduct(m_.omega);
+    TAf_ = m_.forcing * m_.f;
+    const int count = static_cast<int>(models_.size());
+    std::vector<int> dirs{+1, -1, +1};
+    for (int q = 0; q < count; ++q) dirs.insert(dirs.end(), {-1, +1});
+    Create(contact_, 2 * n_ + 2, &CvodeCompliant::ContactRhs, &CvodeCompliant::ContactRoots, dirs,
+           &CvodeCompliant::ContactJac);
+    // The quadratures G and E are left out of the error test.
+    N_Vector atol = N_VNew_Serial(2 * n_ + 2, context_.ctx);
+    double* a = N_VGetArrayPointer(atol);
+    for (Eigen::Index i = 0; i < 2 * n_; ++i) a[i] = run_.atol;
+    a[2 * n_] = a[2 * n_ + 1] = 1e300;
+    CVodeSVtolerances(contact_.mem, run_.rtol, atol);
+    N_VDestroy(atol);
+    dirs.clear();
+    for (int q = 0; q < count; ++q) dirs.insert(dirs.end(), {-1, +1});
+    Create(flight_, 2 * n_, &CvodeCompliant::FlightRhs, &CvodeCompliant::FlightRoots, dirs, &CvodeCompliant::FlightJac);
+    gap0_.resize(models_.size());
+  }
+
+  void Begin(const SegmentStart& s) override {
+    mode_ = s.mode;
+    phase_ = s.phase;
+    relaxed_ = false;
+    immediate_ = SegmentEnd::kLimit;
+    X0_ = s.X;
+    for (size_t q = 0; q < models_.size(); ++q) gap0_[q] = models_[q]->shape.dot(s.X) - models_[q]->x0;
+    scale_ = std::abs(m_.x0) + m_.shape.cwiseProduct(s.X).cwiseAbs().sum();
+    Integrator& in = mode_ == Mode::kFree ? flight_ : contact_;
+    double* Y = N_VGetArrayPointer(in.y);
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      Y[i] = 0.0;
+      Y[n_ + i] = s.V[i];
+    }
+    const double gd = m_.shape.dot(s.V);
+    const double tol = 64 * std::numeric_limits<double>::epsilon() * (scale_ + 1e-300);
+    divide_ = false;
+    window_ = 0;
+    if (mode_ == Mode::kSticking) {
+      Y[2 * n_] = Y[2 * n_ + 1] = 0.0;
+      double& g = gap0_[static_cast<size_t>(j_)];
+      if (std::abs(g) <= tol) g = 0.0;  // the entry's known zero, exactly
+      // The exit function and its rate at σ = 0: past its root already, the phase ends at once.
+      const double lam = -stiffness_ * g - damping_ * gd;
+      const double acc = m_.shape.dot(Acceleration(0.0, Y, lam));
+      const bool by_gap = m_.separation == Separation::kGap || damping_ == 0;
+      const double e0 = by_gap ? g : -lam, e1 = by_gap ? gd : stiffness_ * gd + damping_ * acc;
+      if (e0 > 0 || (e0 == 0 && e1 > 0)) immediate_ = SegmentEnd::kRelease;
+      peak_ = lam;
+      peak_at_ = 0;
+      penetration_ = -g;
+      penetration_at_ = 0;
+    } else {
+      // The gap to the surface: d(0) = g(0) − y₀ (exactly 0 at the exit itself).
+      if (at_exit_) {
+        gap0_[static_cast<size_t>(j_)] = y0_;
+        const double acc = m_.shape.dot(Acceleration(0.0, Y, 0.0));
+        const double r = stiffness_ / damping_;
+        d2_ = acc - r * r * y0_;  // d̈(0)
+        divide_ = true;
+        window_ = std::min(1e-6 * m_.period, 1e-3 / r);
+        if (!(d2_ > 0)) immediate_ = SegmentEnd::kContact;  // the body does not lift off the surface
+      } else if (!(gap0_[static_cast<size_t>(j_)] - y0_ > 0)) {
+        immediate_ = SegmentEnd::kContact;
+      }
+    }
+    Collect(in);
+    ++totals_.reinits;
+    CVodeReInit(in.mem, 0.0, in.y);
+    active_ = &in;
+  }
+
+  SegmentResult Advance(double sigma_max, bool detect, const StretchCallback& on_stretch) override {
+    Integrator& in = *active_;
+    if (detect && immediate_ != SegmentEnd::kLimit) {
+      SegmentResult now{immediate_, 0.0, {}};
+      now.contact = j_;
+      at_exit_ = false;
+      last_ = 0;
+      return now;
+    }
+    guards_off_ = !detect;
+    double end = sigma_max;
+    bool relaxing_end = false;
+    if (mode_ == Mode::kFree && y0_ != 0) {
+      const double back = RelaxedAfter(scale_);
+      if (back < end) {
+        end = std::max(back, 0.0);
+        relaxing_end = true;
+      }
+    }
+    at_exit_ = false;
+    SegmentResult res{SegmentEnd::kLimit, end, {}};
+    res.contact = j_;
+    if (end <= 0) {
+      relaxed_ = relaxing_end;
+      last_ = 0;
+      return res;
+    }
+    CVodeSetStopTime(in.mem, end);
+    const int roots = mode_ == Mode::kFree ? 2 * Count() : 3 + 2 * Count();
+    std::vector<int> found(static_cast<size_t>(roots));
+    double t_prev = 0.0;
+    long steps = 0;
+    while (true) {
+      if (StopRequested()) return Stopped(t_prev, "a segment");
+      double t = 0.0;
+      last_error_.clear();
+      rhs_in_call_ = 0;
+      stopped_in_rhs_ = overworked_ = false;
+      const int flag = CVode(in.mem, end, in.y, &t, CV_ONE_STEP);
+      if (pending_) std::rethrow_exception(std::exchange(pending_, nullptr));
+      if (stopped_in_rhs_) return Stopped(t_prev, "a CVODE step");
+      if (overworked_)
+        return {SegmentEnd::kFailure, t_prev,
+                fmt::format("CVODE made more than {} right-hand-side evaluations in one step of a compliant contact "
+                            "at local time {:.6g} (the tolerances cannot be met: raise run.atol or run.rtol)",
+                            kRhsPerStep, t_prev)};
+      if (flag < 0)
+        return {SegmentEnd::kFailure, t_prev,
+                fmt::format("CVODE {} in a compliant contact at local time {:.6g}{}; {}", FlagName(flag), t_prev,
+                            last_error_.empty() ? "" : " (" + last_error_ + ")", Hint(flag))};
+      if (++steps > run_.max_steps)
+        return {SegmentEnd::kFailure, t_prev,
+                fmt::format("CVODE CV_TOO_MUCH_WORK: more than run.max_steps = {} steps in one segment of a "
+                            "compliant contact (local time {:.6g}); {}",
+                            run_.max_steps, t_prev, Hint(CV_TOO_MUCH_WORK))};
+      if (flag == CV_ROOT_RETURN) {
+        CVodeGetRootInfo(in.mem, found.data());
+        const double* Y = N_VGetArrayPointer(in.y);  // the state at the root t
+        if (on_stretch && t > t_prev) on_stretch(t_prev, t);
+        t_prev = std::max(t_prev, t);
+        if (mode_ == Mode::kSticking) {
+          if (found[1] != 0) {  // a maximum of the force
+            const double lam = Force(Y);
+            if (lam > peak_) {
+              peak_ = lam;
+              peak_at_ = t;
+            }
+          }
+          if (found[2] != 0) {  // a minimum of the gap
+            const double pen = -OwnGap(Y);
+            if (pen > penetration_) {
+              penetration_ = pen;
+              penetration_at_ = t;
+            }
+          }
+          if (found[0] != 0) {
+            res.end = SegmentEnd::kRelease;
+            res.sigma = last_ = t;
+            return res;
+          }
+        }
+        const int base = mode_ == Mode::kFree ? 0 : 3;
+        for (int q = 0; q < Count(); ++q)
+          if (found[static_cast<size_t>(base + 2 * q)] != 0 && (q != j_ || mode_ == Mode::kFree)) {
+            res.end = SegmentEnd::kContact;
+            res.contact = q;
+            res.sigma = last_ = t;
+            return res;
+          }
+        // A minimum of a gap, or a peak, that ends no segment: the rest of the step is still
+        // covered by its dense output.
+        double tn = t;
+        CVodeGetCurrentTime(in.mem, &tn);
+        if (on_stretch && tn > t_prev) on_stretch(t_prev, tn);
+        t_prev = std::max(t_prev, tn);
+        continue;
+      }
+      if (on_stretch && t > t_prev) on_stretch(t_prev, t);
+      t_prev = std::max(t_prev, t);
+      if (flag == CV_TSTOP_RETURN || t >= end) {
+        relaxed_ = relaxing_end;
+        res.sigma = last_ = end;
+        return res;
+      }
+    }
+  }
+
+  void Evaluate(double sigma, Vec& X, Vec& V) const override {
+    const double* Y = Dense(sigma);
+    X.resize(n_);
+    V.resize(n_);
+    for (Eigen::Index i = 0; i < n_; ++i) {
+      X[i] = X0_[i] + Y[i];
+      V[i] = Y[n_ + i];
+    }
+  }
+  double Gap(double sigma) const override { return GapOf(j_, sigma); }
+  double GapOf(int q, double sigma) const override {
+    const double* Y = Dense(sigma);
+    const auto& c = models_[static_cast<size_t>(q)]->shape;
+    double g = gap0_[static_cast<size_t>(q)];
+    for (Eigen::Index i = 0; i < n_; ++i) g += c[i] * Y[i];
+    if (q == j_ && mode_ == Mode::kFree) g -= SurfaceAt(sigma);
+    return g;
+  }
+
+  PhaseLoads Loads(double sigma) const override {
+    const double* Y = Dense(sigma);
+    PhaseLoads L;
+    const double g = OwnGap(Y);
+    L.integral = -stiffness_ * Y[2 * n_] - damping_ * (g - gap0_[static_cast<size_t>(j_)]);
+    L.dissipated = damping_ * Y[2 * n_ + 1];
+    L.peak = peak_;
+    L.peak_at = peak_at_;
+    L.penetration = penetration_;
+    L.penetration_at = penetration_at_;
+    const double lam = Force(Y);
+    if (lam > L.peak) {
+      L.peak = lam;
+      L.peak_at = sigma;
+    }
+    if (-g > L.penetration) {
+      L.penetration = -g;
+      L.penetration_at = sigma;
+    }
+    return L;
+  }
+
+  SolverStats stats() const override {
+    SolverStats s = totals_;
+    for (const Integrator* in : {&contact_, &flight_}) {
+      long v = 0;
+      if (CVodeGetNumSteps(in->mem, &v) == CV_SUCCESS) s.steps += v;
+      if (CVodeGetNumRhsEvals(in->mem, &v) == CV_SUCCESS) s.rhs_evals += v;
+      if (CVodeGetNumGEvals(in->mem, &v) == CV_SUCCESS) s.root_evals += v;
+      if (CVodeGetNumJacEvals(in->mem, &v) == CV_SUCCESS) s.jac_evals += v;
+      if (CVodeGetNumErrTestFails(in->mem, &v) == CV_SUCCESS) s.error_test_failures += v;
+    }
+    return s;
+  }
+
+ private:
+  static constexpr long kRhsPerStep = 100000;
+
+  int Count() const { return static_cast<int>(models_.size()); }
+
+  // The structure's acceleration at local time t with the contact force `lam` on it (0 in flight),
+  // in a scratch vector (no allocation per right-hand side).
+  // A sum of harmonics (docs/harmonics.md): f is 0 and each harmonic's term is added.
+  const Vec& Acceleration(double t, const double* Y, double lam) const {
+    const double phi = phase_ + m_.w * t, s = std::sin(phi);
+    acc_.resize(n_);
+    for (Eigen::Index i = 0; i < n_; ++i)
+      acc_[i] = -w2_[i] * (X0_[i] + Y[i]) - damp_[i] * Y[n_ + i] + TAf_[i] * s + m_.contact[i] * lam;
+    if (!m_.harmonics.empty()) acc_ += m_.harmonics.Vector(phi);
+    return acc_;
+  }
+  double OwnGap(const double* Y) const {
+    double g = gap0_[static_cast<size_t>(j_)];
+    for (Eigen::Index i = 0; i < n_; ++i) g += m_.shape[i] * Y[i];
+    return g;
+  }
+  double OwnRate(const double* Y) const {
+    double v = 0;
+    for (Eigen::Index i = 0; i < n_; ++i) v += m_.shape[i] * Y[n_ + i];
+    return v;
+  }
+  double Force(const double* Y) const { return -stiffness_ * OwnGap(Y) - damping_ * OwnRate(Y); }
+
+  bool MayGoOn() {
+    if (++rhs_in_call_ > kRhsPerStep) {
+      overworked_ = true;
+      return false;
+    }
+    if ((rhs_in_call_ & 255) == 0 && StopRequested()) {
+      stopped_in_rhs_ = true;
+      return false;
+    }
+    return true;
+  }
+
+  static int ContactRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    if (!m->MayGoOn()) return -1;
+    try {
+      const double* Y = N_VGetArrayPointer(y);
+      double* D = N_VGetArrayPointer(ydot);
+      const Eigen::Index n = m->n_;
+      const double g = m->OwnGap(Y), gd = m->OwnRate(Y);
+      const Vec& a = m->Acceleration(t, Y, -m->stiffness_ * g - m->damping_ * gd);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        D[i] = Y[n + i];
+        D[n + i] = a[i];
+      }
+      D[2 * n] = g;
+      D[2 * n + 1] = gd * gd;
+      return 0;
+    } catch (...) {
+      m->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  static int FlightRhs(sunrealtype t, N_Vector y, N_Vector ydot, void* user) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    if (!m->MayGoOn()) return -1;
+    try {
+      const double* Y = N_VGetArrayPointer(y);
+      double* D = N_VGetArrayPointer(ydot);
+      const Eigen::Index n = m->n_;
+      const Vec& a = m->Acceleration(t, Y, 0.0);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        D[i] = Y[n + i];
+        D[n + i] = a[i];
+      }
+      return 0;
+    } catch (...) {
+      m->pending_ = std::current_exception();
+      return -1;
+    }
+  }
+
+  // Every other contact's gap and its rate (contact j's own pair: constant, or `own`).
+  void OtherGaps(const double* Y, sunrealtype* g) const {
+    for (int q = 0; q < Count(); ++q) {
+      sunrealtype* r = g + 2 * q;
+      if (q == j_ || guards_off_) {
+        r[0] = r[1] = 1.0;
+        continue;
+      }
+      const auto& c = models_[static_cast<size_t>(q)]->shape;
+      double gap = gap0_[static_cast<size_t>(q)], rate = 0;
+      for (Eigen::Index i = 0; i < n_; ++i) {
+        gap += c[i] * Y[i];
+        rate += c[i] * Y[n_ + i];
+      }
+      r[0] = gap;
+      r[1] = rate;
+    }
+  }
+
+  static int ContactRoots(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    const double* Y = N_VGetArrayPointer(y);
+    m->OtherGaps(Y, g + 3);
+    if (m->guards_off_) {
+      g[0] = g[1] = g[2] = 1.0;
+      return 0;
+    }
+    const double gap = m->OwnGap(Y), gd = m->OwnRate(Y);
+    const double lam = -m->stiffness_ * gap - m->damping_ * gd;
+    const double gdd = m->m_.shape.dot(m->Acceleration(t, Y, lam));
+    const bool by_gap = m->m_.separation == Separation::kGap || m->damping_ == 0;
+    g[0] = by_gap ? gap : -lam;
+    g[1] = -m->stiffness_ * gd - m->damping_ * gdd;
+    g[2] = gd;
+    return 0;
+  }
+
+  static int FlightRoots(sunrealtype t, N_Vector y, sunrealtype* g, void* user) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    const double* Y = N_VGetArrayPointer(y);
+    m->OtherGaps(Y, g);
+    sunrealtype* own = g + 2 * m->j_;
+    if (m->guards_off_) return 0;
+    const double r = m->stiffness_ / m->damping_, ys = m->SurfaceAt(t);
+    const double d = m->OwnGap(Y) - ys, dd = m->OwnRate(Y) + r * ys;
+    if (!m->divide_) {
+      own[0] = d;
+      own[1] = dd;
+    } else if (t <= m->window_) {
+      own[0] = m->d2_ / 2;
+      own[1] = m->d2_;
+    } else {
+      own[0] = d / (t * t);
+      own[1] = dd / t;
+    }
+    return 0;
+  }
+
+  static int ContactJac(sunrealtype, N_Vector y, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    const Eigen::Index n = m->n_;
+    const double gd = m->OwnRate(N_VGetArrayPointer(y));
+    SUNMatZero(J);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      SM_ELEMENT_D(J, i, n + i) = 1.0;
+      SM_ELEMENT_D(J, n + i, i) = -m->w2_[i];
+      SM_ELEMENT_D(J, n + i, n + i) = -m->damp_[i];
+      for (Eigen::Index l = 0; l < n; ++l) {
+        SM_ELEMENT_D(J, n + i, l) -= m->m_.contact[i] * m->stiffness_ * m->m_.shape[l];
+        SM_ELEMENT_D(J, n + i, n + l) -= m->m_.contact[i] * m->damping_ * m->m_.shape[l];
+      }
+      SM_ELEMENT_D(J, 2 * n, i) = m->m_.shape[i];
+      SM_ELEMENT_D(J, 2 * n + 1, n + i) = 2 * gd * m->m_.shape[i];
+    }
+    return 0;
+  }
+
+  static int FlightJac(sunrealtype, N_Vector, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
+    auto* m = static_cast<CvodeCompliant*>(user);
+    const Eigen::Index n = m->n_;
+    SUNMatZero(J);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      SM_ELEMENT_D(J, i, n + i) = 1.0;
+      SM_ELEMENT_D(J, n + i, i) = -m->w2_[i];
+      SM_ELEMENT_D(J, n + i, n + i) = -m->damp_[i];
+    }
+    return 0;
+  }
+
+  static void ErrHandler(int, const char* module, const char* function, char* msg, void* user) {
+    static_cast<CvodeCompliant*>(user)->last_error_ =
+        fmt::format("{}/{}: {}", module ? module : "", function ? function : "", msg ? msg : "");
+  }
+
+  void Create(Integrator& in, sunindextype size, CVRhsFn rhs, CVRootFn roots, std::vector<int> dirs, CVLsJacFn jac) {
+    in.size = size;
+    in.y = N_VNew_Serial(size, context_.ctx);
+    in.tmp = N_VNew_Serial(size, context_.ctx);
+    N_VConst(0.0, in.y);
+    in.mem = CVodeCreate(run_.method == CvodeMethod::kBdf ? CV_BDF : CV_ADAMS, context_.ctx);
+    if (!in.y || !in.tmp || !in.mem) throw std::runtime_error("CVODE: allocation failed");
+    CVodeSetErrHandlerFn(in.mem, &CvodeCompliant::ErrHandler, this);
+    if (CVodeInit(in.mem, rhs, 0.0, in.y) < 0) throw std::runtime_error("CVodeInit failed");
+    CVodeSetUserData(in.mem, this);
+    CVodeSStolerances(in.mem, run_.rtol, run_.atol);
+    in.A = SUNDenseMatrix(size, size, context_.ctx);
+    in.LS = SUNLinSol_Dense(in.y, in.A, context_.ctx);
+    if (CVodeSetLinearSolver(in.mem, in.LS, in.A) < 0) throw std::runtime_error("CVODE linear solver");
+    CVodeSetJacFn(in.mem, jac);
+    CVodeRootInit(in.mem, static_cast<int>(dirs.size()), roots);
+    CVodeSetRootDirection(in.mem, dirs.data());
+    CVodeSetNoInactiveRootWarn(in.mem);
+    if (run_.max_step > 0) CVodeSetMaxStep(in.mem, run_.max_step);
+    CVodeSetMaxNumSteps(in.mem, run_.max_steps);
+  }
+
+  void Collect(Integrator& in) {
+    long v = 0;
+    if (CVodeGetNumSteps(in.mem, &v) == CV_SUCCESS) totals_.steps += v;
+    if (CVodeGetNumRhsEvals(in.mem, &v) == CV_SUCCESS) totals_.rhs_evals += v;
+    if (CVodeGetNumGEvals(in.mem, &v) == CV_SUCCESS) totals_.root_evals += v;
+    if (CVodeGetNumJacEvals(in.mem, &v) == CV_SUCCESS) totals_.jac_evals += v;
+    if (CVodeGetNumErrTestFails(in.mem, &v) == CV_SUCCESS) totals_.error_test_failures += v;
+  }
+
+  // The state at σ from the last step's dense output (the start values before any step).
+  const double* Dense(double sigma) const {
+    Integrator& in = *active_;
+    double tn = sigma, hu = 0;
+    CVodeGetCurrentTime(in.mem, &tn);
+    if (tn <= 0.0) return N_VGetArrayPointer(in.y);
+    CVodeGetLastStep(in.mem, &hu);
+    sigma = std::clamp(sigma, tn - hu, tn);
+    if (CVodeGetDky(in.mem, sigma, 0, in.tmp) < 0)
+      throw std::logic_error(fmt::format("CVodeGetDky outside the last step (σ = {}, compliant contact)", sigma));
+    return N_VGetArrayPointer(in.tmp);
+  }
+
+  SegmentResult Stopped(double t, const char* where) const {
+    SegmentResult stop{SegmentEnd::kFailure, t,
+                       fmt::format("stop requested inside {} (local time {:.6g}, compliant contact)", where, t)};
+    stop.stopped = true;
+    return stop;
+  }
+
+  RunSpec run_;
+  std::vector<const ModelT<double>*> models_;
+  int j_;
+  const ModelT<double>& m_;
+  Eigen::Index n_;
+  Vec w2_, damp_, TAf_;
+  mutable Vec acc_;  // Acceleration's scratch
+  Context context_;  // destroyed after the integrators that use it
+  Integrator contact_, flight_;
+  Integrator* active_ = &contact_;
+  SolverStats totals_;
+  std::string last_error_;
+  std::exception_ptr pending_;
+  long rhs_in_call_ = 0;
+  bool stopped_in_rhs_ = false, overworked_ = false, guards_off_ = false;
+  // The segment.
+  Mode mode_ = Mode::kSticking;
+  double phase_ = 0, scale_ = 1, last_ = 0;
+  Vec X0_;
+  std::vector<double> gap0_;  // every contact's gap at σ = 0 (contact j's to its stop)
+  SegmentEnd immediate_ = SegmentEnd::kLimit;
+  bool divide_ = false;
+  double window_ = 0, d2_ = 0;
+  double peak_ = 0, peak_at_ = 0, penetration_ = 0, penetration_at_ = 0;
+};
+
+std::unique_ptr<CompliantPhase> MakeCvodeCompliant(const RunSpec& run, const std::vector<const ModelT<double>*>& models,
+                                                   int contact) {
+  return std::make_unique<CvodeCompliant>(run, models, contact);
 }
 
 }  // namespace vibro::detail

@@ -4,7 +4,10 @@
 #pragma once
 
 #include <memory>
+#include <vector>
 
+#include "dynamics/compliant_contact.hpp"
+#include "dynamics/model_t.hpp"
 #include "dynamics/propagator.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/system.hpp"
@@ -30,5 +33,13 @@ class CvodeEngine final : public Propagator {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// A compliant contact's propagator integrated by CVODE (docs/compliant.md, "CVODE"): the contact
+// phase as the structure with the spring–dashpot force λ = −k g − c ġ on contact `contact` (its
+// exit by the separation rule, its peak force and largest penetration, every other gap, all by
+// CVODE's root finding), and the relaxing flight after a force-rule exit (the gap to the surface
+// y₀ e^(−kσ/c)). `models`: every contact's model, as the automaton holds them.
+std::unique_ptr<CompliantPhase> MakeCvodeCompliant(const RunSpec& run, const std::vector<const ModelT<double>*>& models,
+                                                   int contact);
 
 }  // namespace vibro::detail

@@ -227,9 +227,17 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
         events.reaction_integral.Read(first_ev, n_ev, ri.data());
         events.reaction_max.Read(first_ev, n_ev, rm.data());
       }
-      for (h5::Size i = 0; i < n_ev; ++i)
+      std::vector<double> pt(n_ev, nan), pm(n_ev, nan);  // a compliant contact phase's (docs/compliant.md)
+      if (events.has_compliant) {
+        events.peak_time.Read(first_ev, n_ev, pt.data());
+        events.penetration_max.Read(first_ev, n_ev, pm.data());
+      }
+      for (h5::Size i = 0; i < n_ev; ++i) {
         out.tail_events.push_back({static_cast<EventKind>(kind[i]), {ep[i], off[i]}, t[i], xB[i], vb[i], va[i],
                                    contact[i], simultaneous[i] != 0, imp[i], en[i], sd[i], ri[i], rm[i]});
+        out.tail_events.back().peak_time = pt[i];
+        out.tail_events.back().penetration_max = pm[i];
+      }
     }
 
     // Studies and branches (and their files since provenance was stored) have no /attractor.

@@ -50,6 +50,9 @@ void EventTable::Create(h5::Id g) {
   reaction_integral = h5::Column(g, "reaction_integral", h5::Type::F64(), 0);
   reaction_max = h5::Column(g, "reaction_max", h5::Type::F64(), 0);
   has_loads = true;
+  peak_time = h5::Column(g, "peak_time", h5::Type::F64(), 0);
+  penetration_max = h5::Column(g, "penetration_max", h5::Type::F64(), 0);
+  has_compliant = true;
 }
 
 void EventTable::Open(h5::Id g) {
@@ -72,6 +75,7 @@ void EventTable::Open(h5::Id g) {
   };
   group({"contact", "simultaneous"});
   group({"impulse", "energy_dissipated", "stick_duration", "reaction_integral", "reaction_max"});
+  group({"peak_time", "penetration_max"});
   has_contact = h5::Exists(g, "contact");
   if (has_contact) {
     contact = h5::Column::Open(g, "contact", h5::Type::I32());
@@ -84,6 +88,11 @@ void EventTable::Open(h5::Id g) {
     stick_duration = h5::Column::Open(g, "stick_duration", h5::Type::F64());
     reaction_integral = h5::Column::Open(g, "reaction_integral", h5::Type::F64());
     reaction_max = h5::Column::Open(g, "reaction_max", h5::Type::F64());
+  }
+  has_compliant = h5::Exists(g, "peak_time");
+  if (has_compliant) {
+    peak_time = h5::Column::Open(g, "peak_time", h5::Type::F64());
+    penetration_max = h5::Column::Open(g, "penetration_max", h5::Type::F64());
   }
 }
 
@@ -105,6 +114,10 @@ void EventTable::Push(const Event& e) {
     stick_duration.Push(e.stick_duration);
     reaction_integral.Push(e.reaction_integral);
     reaction_max.Push(e.reaction_max);
+  }
+  if (has_compliant) {
+    peak_time.Push(e.peak_time);
+    penetration_max.Push(e.penetration_max);
   }
 }
 

@@ -41,11 +41,13 @@ h5::Type EventKindType();
 // /events/contact and /events/simultaneous (docs/contacts.md) are absent from files written before
 // several contacts: such a file keeps its seven columns when resumed. The loads columns
 // (/events/impulse, energy_dissipated, stick_duration, reaction_integral, reaction_max,
-// docs/loads.md) are absent from files written before them: such a file keeps its columns.
+// docs/loads.md) are absent from files written before them: such a file keeps its columns. So are
+// a compliant contact phase's /events/peak_time and /events/penetration_max (docs/compliant.md).
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
   h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
-  bool has_contact = false, has_loads = false;
+  h5::Column peak_time, penetration_max;
+  bool has_contact = false, has_loads = false, has_compliant = false;
   void Create(h5::Id g);
   void Open(h5::Id g);
   void Push(const Event& e);
@@ -54,6 +56,7 @@ struct EventTable {
     if (has_contact) all.insert(all.end(), {&contact, &simultaneous});
     if (has_loads)
       all.insert(all.end(), {&impulse, &energy, &stick_duration, &reaction_integral, &reaction_max});
+    if (has_compliant) all.insert(all.end(), {&peak_time, &penetration_max});
     return all;
   }
 };

@@ -151,7 +151,7 @@ void CheckModalContacts(const Scene& s, Eigen::Index n_modes, Checker& c) {
 }
 
 // The compliant stops (docs/compliant.md): k ≥ 0 and c ≥ 0 finite, a damping only with a stiffness;
-// for now they run with the exact engine in double precision.
+// they run in double precision, with the exact engine's closed forms or CVODE.
 void CheckCompliance(const Scene& s, Checker& c) {
   const auto one = [&](const Compliance& k, const std::string& at) {
     c.Require(std::isfinite(k.stiffness) && k.stiffness >= 0 && k.stiffness <= kHuge, at + ".stiffness",
@@ -164,8 +164,6 @@ void CheckCompliance(const Scene& s, Checker& c) {
   if (s.contacts.empty()) one(s.stop_compliance, "stop");
   for (size_t j = 0; j < s.contacts.size(); ++j) one(s.contacts[j].compliance, fmt::format("contact[{}]", j));
   if (!HasCompliantContact(s)) return;
-  c.Require(s.run.engine == Engine::kExact, "run.engine", ToString(s.run.engine),
-            "\"exact\": a compliant stop runs in the exact engine's closed forms (docs/compliant.md)");
   c.Require(s.run.precision == Precision::kDouble, "run.precision", ToString(s.run.precision),
             "\"double\": a compliant stop's contact phase is not yet available in quad precision "
             "(docs/compliant.md)");

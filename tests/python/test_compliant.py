@@ -58,3 +58,51 @@ def test_cli_rigid_beside_and_located_errors(tmp_path):
     rigid = subprocess.run([CLI, "simulate", os.path.join(SCENES, "tube_loose_support.toml"), "--rigid-beside"],
                            capture_output=True, text=True)
     assert rigid.returncode == 2 and "no compliant stop" in rigid.stderr
+
+
+def test_check_compares_the_exact_engine_with_cvode():
+    # docs/compliant.md "CVODE and vibro check": the closed forms against CVODE's integration of the
+    # same law; the Poincaré solver is not attempted; the quad engine is refused, located.
+    r = vibro.check(vibro.load_scene(TUBE))
+    assert r["ok"] and r["orbit_status"] == "not attempted", [x for x in r["rows"] if not x["ok"]]
+    rows = {x["quantity"]: x for x in r["rows"]}
+    first = rows["first contact phase peak force"]
+    assert first["exact"] > 0 and first["exact"] != first["cvode"]  # two engines, not one run twice
+    assert abs(first["cvode"] / first["exact"] - 1) < 1e-8
+    assert any(q.startswith("contact phase 2 (contact") for q in rows)
+    quad = subprocess.run([CLI, "check", TUBE, "--precision", "quad"], capture_output=True, text=True)
+    assert quad.returncode == 2 and quad.stdout == ""
+    assert "compliant stop" in quad.stderr and "`vibro check --precision quad` does not handle it yet" in quad.stderr
+
+
+def test_peak_time_and_penetration_columns(tmp_path):
+    # docs/output.md: /events/peak_time and /events/penetration_max, the same in Python's events;
+    # a phase's peak lies inside it; at the largest penetration ġ = 0, so the force there is the
+    # spring's, k max(−g), at most the peak force; NaN for every other event.
+    out = tmp_path / "tube.h5"
+    r = vibro.simulate(TUBE, out=str(out), progress=False)
+    e = r.events
+    rel, stick = e[e["kind"] == 4], e[e["kind"] == 3]
+    assert len(rel) > 100 and len(stick) == len(rel)
+    assert np.all((stick["t"] <= rel["peak_time"]) & (rel["peak_time"] <= rel["t"]))
+    assert np.all(rel["penetration_max"] > 0)
+    assert np.all(1000.0 * rel["penetration_max"] <= rel["reaction_max"] * (1 + 1e-12))
+    assert np.all(np.isnan(e["peak_time"][e["kind"] != 4])) and np.all(np.isnan(e["penetration_max"][e["kind"] != 4]))
+    import h5py
+    with h5py.File(out) as f:
+        for name in ("peak_time", "penetration_max"):
+            np.testing.assert_array_equal(f["events"][name][:], e[name])
+
+
+def test_check_under_a_sum_of_harmonics(tmp_path):
+    # CVODE's contact phase takes every harmonic's forcing term (docs/compliant.md "CVODE"): the
+    # exact engine's closed form and CVODE agree on a two-harmonic scene's contact phases.
+    scene = tmp_path / "two.toml"
+    scene.write_text("[structure]\nmass = [[1.0]]\nstiffness = [[1.0]]\nforcing_dof = 0\ncontact_dof = 0\n"
+                     "damping_ratios = [0.05]\n[stop]\nposition = -0.5\nstiffness = 400.0\ndamping = 2.0\n"
+                     "[excitation]\namplitude = [1.0, 0.5]\nfrequency = [0.8, 1.6]\n[run]\nperiods = 60\n")
+    r = vibro.check(vibro.load_scene(str(scene)))
+    assert r["ok"], [x for x in r["rows"] if not x["ok"]]
+    rows = {x["quantity"]: x for x in r["rows"]}
+    assert abs(rows["contact phase 1 (contact 0) peak force"]["cvode"] /
+               rows["contact phase 1 (contact 0) peak force"]["exact"] - 1) < 1e-7

@@ -6,7 +6,8 @@
 //   λ = −K x − c ẋ = 0, tan ω_d t = −c ω_d/(K − cζω₀), which for k_s = 0 is Schwager & Pöschel's
 //   ω_d t = π − atan2(2ζ√(1−ζ²), 1 − 2ζ²), e = exp(−ζω₀ t) (checked here against their form to
 //   1e-15 with k_s = 0; the runs take k_s = 1e-6 K, the body's own spring, exactly). The peak force
-//   max λ by bisection on λ̇ of the closed form in long double;
+//   max λ by bisection on λ̇ of the closed form in long double. The exact engine to 1e-12, CVODE
+//   (run.engine = "cvode") to its tolerance;
 // - SDND101 (m = 100, k = 1e4, K_c = 1e6, v₀ = 1): the peak at π/(2ω_c), F_max = K_c v₀/ω_c, the
 //   duration π/ω_c, the impulse 2K_c v₀/ω_c², ω_c = √((k + K_c)/m);
 // - SDND122's conservative bilinear oscillator with a clearance d: free on x > −d (ω₁), stiffer on
@@ -154,6 +155,54 @@ INSTANTIATE_TEST_SUITE_P(Rules, IsolatedImpact,
                          ::testing::Combine(::testing::Values(0.01, 0.1, 0.3, 0.5),
                                             ::testing::Values(Separation::kGap, Separation::kForce)));
 
+// CVODE alone (run.engine = "cvode": the contact phase integrated with the spring–dashpot force,
+// its exit, peak and largest penetration by CVODE's root finding, docs/compliant.md "CVODE") against
+// the same closed forms, to its tolerance: at rtol = 1e-12, atol = 1e-14, every quantity within
+// kCvodeTol = 1000·rtol = 1e-9 relative (the peak's instant, where the force is flat, 1e-5). Measured:
+// restitution 1.4e-11, duration 6e-13, peak 2.5e-12, impulse 3.7e-12, the dashpot's energy (a
+// quadrature outside the error test) 2.6e-10.
+constexpr double kCvodeTol = 1e-9;
+
+class IsolatedImpactCvode : public ::testing::TestWithParam<std::tuple<double, Separation>> {};
+
+TEST_P(IsolatedImpactCvode, RestitutionDurationPeakAgainstClosedForms) {
+  const auto [zeta, rule] = GetParam();
+  const double m = 2.0, K = 8.0, v0 = 0.75, ks = 1e-6 * K;
+  const double c = 2 * zeta * std::sqrt((K + ks) * m);
+  Scene s = Impact(m, ks, K, c, rule, v0);
+  s.run.engine = Engine::kCvode;
+  s.run.rtol = 1e-12;
+  s.run.atol = 1e-14;
+  const Ran r = Simulated(s);
+  ASSERT_EQ(r.result.status, RunStatus::kOk) << r.result.message;
+  EXPECT_GT(r.result.solver.steps, 0);  // integrated, not the closed form
+  const auto rel = r.log.Of(EventKind::kRelease);
+  ASSERT_EQ(r.log.Of(EventKind::kStick).size(), 1u);
+  ASSERT_EQ(rel.size(), 1u);
+  const Isolated truth(m, K, c, v0, ks);
+  const long double t_exit = rule == Separation::kGap ? truth.ExitGap() : truth.ExitForce();
+  const double e_closed = rule == Separation::kGap ? std::exp(-zeta * M_PI / std::sqrt(1 - zeta * zeta))
+                                                   : static_cast<double>(truth.v(t_exit) / v0);
+  EXPECT_LT(Rel(rel[0].v_after / v0, e_closed), kCvodeTol) << "e = " << rel[0].v_after / v0;
+  EXPECT_LT(Rel(rel[0].stick_duration, static_cast<double>(t_exit)), kCvodeTol);
+  long double at = 0;
+  const long double peak = truth.Peak(t_exit, &at);
+  EXPECT_LT(Rel(rel[0].reaction_max, static_cast<double>(peak)), kCvodeTol) << rel[0].reaction_max;
+  if (at > 0) {
+    EXPECT_LT(Rel(rel[0].peak_time, static_cast<double>(at)), 1e-5);
+  }
+  EXPECT_LT(Rel(rel[0].reaction_integral, static_cast<double>(truth.Impulse(t_exit))), kCvodeTol);
+  const double xe = static_cast<double>(truth.x(t_exit));
+  const double lost = 0.5 * m * v0 * v0 * (1 - e_closed * e_closed) - 0.5 * ks * xe * xe;
+  EXPECT_LT(Rel(rel[0].energy_dissipated, lost), kCvodeTol);
+  const long double tp = std::atan2(truth.wd, truth.zeta * truth.w0) / truth.wd;
+  EXPECT_LT(Rel(rel[0].penetration_max, static_cast<double>(-truth.x(tp))), kCvodeTol);
+}
+
+INSTANTIATE_TEST_SUITE_P(Rules, IsolatedImpactCvode,
+                         ::testing::Combine(::testing::Values(0.01, 0.1, 0.3, 0.5),
+                                            ::testing::Values(Separation::kGap, Separation::kForce)));
+
 TEST(Compliant, Sdnd101PeakDurationImpulse) {
   const double m = 100, k = 1e4, Kc = 1e6, v0 = 1;
   const double wc = std::sqrt((k + Kc) / m);
@@ -258,6 +307,8 @@ TEST(Compliant, SceneKeysLocatedErrors) {
             std::string::npos);
   EXPECT_NE(errors("[stop]\nposition = 0.1\nstiffness = 2\n[run]\nprecision = \"quad\"\n").find("run.precision"),
             std::string::npos);
+  // CVODE takes a compliant stop (its contact phase integrated).
+  EXPECT_EQ(errors("[stop]\nposition = 0.1\nstiffness = 2\n[run]\nengine = \"cvode\"\n"), "");
   EXPECT_EQ(errors("[stop]\nposition = 0.1\nstiffness = 2\ndamping = 0.1\nseparation = \"gap\"\n"), "");
   EXPECT_EQ(errors("[stop]\nposition = 0.1\nrestitution = 0.5\n"), "");
   const Scene s = ParseScene(base + "contact_dof = 0\n[stop]\nposition = 0.1\nstiffness = 2\ndamping = 0.1\nseparation = \"gap\"\n",
