@@ -846,8 +846,10 @@ class Surfaces(Campaign):
         """A value of the pool: one it may hold three times in four."""
         k = pool.index(None)
         return self.rng.choice(pool[:k] if self.rng.random() < 0.75 else pool[k + 1:])
-    RIGID_ONLY = ["orbit", "continue", "prove", "check", "validate", "score", "basin", "attractors", "sweep",
-                  "partition", "curve", "diagram"]
+    # `check` takes a compliant stop since CVODE integrates its contact phase (docs/compliant.md): it is
+    # drawn as one of the commands that must run, with `--precision quad` as one that must refuse.
+    RIGID_ONLY = ["orbit", "continue", "prove", "validate", "score", "basin", "attractors", "sweep",
+                  "partition", "curve", "diagram", "check-quad"]
 
     @staticmethod
     def compliance_valid(k, c, sep, restitution):
@@ -924,7 +926,7 @@ class Surfaces(Campaign):
                     ok = self.compliance_valid(v if name == "stiffness" else "1e10", v if name == "damping" else None,
                                                v if name == "separation" else None, None)
                     valid = ok if valid is not False and ok is not True else valid
-        cmd = r.choice(["simulate"] * 6 + ["model"] * 2 + ["rigid-beside"] * 3) if r.random() < 0.75 else \
+        cmd = r.choice(["simulate"] * 6 + ["model"] * 2 + ["rigid-beside"] * 3 + ["check"]) if r.random() < 0.75 else \
             r.choice(self.RIGID_ONLY)
         out = self.fresh(".h5")
         if cmd == "simulate":
@@ -932,16 +934,21 @@ class Surfaces(Campaign):
             if r.random() < 0.3:
                 argv += ["--blocks", r.choice(["2", "10", "1", "100001"])]
             if r.random() < 0.15:
-                argv += ["--set", r.choice(['run.engine="cvode"', 'run.precision="quad"'])]
-                valid = False if valid is not None else None
+                if r.random() < 0.5:
+                    argv += ["--set", 'run.precision="quad"']
+                    valid = False if valid is not None else None
+                else:  # CVODE integrates a compliant contact phase too
+                    argv += ["--set", 'run.engine="cvode"']
         elif cmd == "rigid-beside":
             argv = ["simulate", scene, *sets, "--rigid-beside", "--json"] + (["--out", out] if r.random() < 0.3 else [])
         elif cmd == "model":
             argv = ["model", scene, *sets] + (["--json"] if r.random() < 0.5 else [])
+        elif cmd == "check":
+            argv = ["check", scene, *sets] + (["--json"] if r.random() < 0.5 else [])
         else:
             argv = {"orbit": ["orbit", scene, "--out", out], "continue": ["continue", scene, "--param",
                     "excitation.amplitude", "--to", "1.2", "--max-points", "3", "--out", out],
-                    "prove": ["prove", scene], "check": ["check", scene],
+                    "prove": ["prove", scene], "check-quad": ["check", scene, "--precision", "quad"],
                     "validate": ["validate", scene, self.seed_files["branch_csv"], "--param", "excitation.amplitude"],
                     "score": ["score", scene, self.seed_files["events_csv"]],
                     "basin": ["basin", scene, "--grid", "3,3", "--threads", "1", "--out", out],
@@ -966,7 +973,7 @@ class Surfaces(Campaign):
             self.find(f"compliant: {cmd} not refused", full, f"[compliant] exit {rc}: {err[-300:]}")
         elif rc in (0, 3) and valid is False:
             self.find("compliant: accepted a stop it must refuse", full, f"[compliant] exit {rc}: {err[-300:]}")
-        elif rc == 2 and valid is True and cmd in ("simulate", "model") and "cvode" not in " ".join(argv) \
+        elif rc == 2 and valid is True and cmd in ("simulate", "model", "check") and "cvode" not in " ".join(argv) \
                 and "quad" not in " ".join(argv) and "--blocks" not in argv:
             self.find("compliant: refused a valid stop", full, f"[compliant] {err[-300:]}")
         if cmd == "rigid-beside" and rc == 0:
