@@ -215,8 +215,6 @@ CLAIMS = [
     Claim("harmonics: probe H = 4 / H = 1", "docs/harmonics.md", r"\| 4 \| [0-9.]+ ns \| ([0-9.]+) \|",
           ("ratio", (VB, "BM_HarmonicsGapProbe/4", "s/probe"), (VB, "BM_HarmonicsGapProbe/1", "s/probe")), "",
           rate=False),
-    Claim("compliant tube: events/s", "docs/compliant.md", r"`BM_EventsCompliantTube`\) runs ([0-9.]+ ?[kM]) events",
-          (VB, "BM_EventsCompliantTube", "events/s"), "events/s"),
     Claim("basin cells/s, 1 thread, early stops", "docs/performance.md", r"\| early stops \(default\) \| ([0-9 ]+) cells/s",
           (VB, "Basin/threads:1/early_stop:1", "cells/s"), "cells/s"),
     Claim("basin cells/s, 2 threads, early stops", "docs/performance.md",
