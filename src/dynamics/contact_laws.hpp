@@ -476,6 +476,7 @@ bool Automaton<S>::AccumulationOrdered(int j, const std::vector<int>& held, cons
   const int k = before.contact;
   const ModelT<S>& mk = M(k);
   if (k == j || DelassusOffDiagonal(M(j), mk) == S(0)) return true;
+  if (std::find(held.begin(), held.end(), k) != held.end()) return true;  // held: it arrives nowhere
   const double gap = R::to_double(mk.ContactDisplacement(X) - mk.x0);
   const double rate = R::to_double(mk.ContactVelocity(V));
   const double accel = R::to_double(mk.shape.dot(ProjectAlong(models_, held, FreeAcceleration(mk, X, V, phase))));
