@@ -95,7 +95,26 @@ class TangentTracker final : public Observer {
     Eigen::MatrixXd dV;
     Eigen::VectorXd f_minus, c, X, V;
     double denom = 0, phase = 0;
+    // The flow held before the impact (held_, and held_set_ when it is kSet): a chattering tail
+    // beside it starts at this instant on that flow (HeldAccumulation).
+    int held_before = -2;
+    std::vector<int> set_before;
   };
+  // A chattering tail at contact k accumulating beside the held set S (docs/contacts.md, "Periodic
+  // orbits"): the jump L from the post-impact state, D L = diag(P_Z, P_Z)(Φ_S(Δ∞) + f_S(t∞⁻)∇Δ∞ᵀ)
+  // − f⁺(t∞)∇Δ∞ᵀ on Z = S ∪ {k}; the last term waits for the flow after (the acceleration LCP's).
+  void HeldAccumulation(const Reset& r);
+  struct PendingJumpTime {
+    bool active = false;
+    Eigen::RowVectorXd grad_phi;  // ∇Δ∞ᵀ Φ at the post-impact state
+    Eigen::VectorXd X, V;
+    double phase = 0;
+  };
+  PendingJumpTime pending_jump_;
+  // The flow held on `set` over `duration` (one contact: its closed form when it has one).
+  void HeldSetFlight(const std::vector<int>& set, double duration);
+  Eigen::VectorXd SetField(const std::vector<int>& set, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                           double phase) const;
   void Defer(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus, const Eigen::VectorXd& c,
              double denom, const Eigen::VectorXd& X, const Eigen::VectorXd& V, double phase);
   void Resolve(Mode mode, int contact, const std::vector<int>* set);

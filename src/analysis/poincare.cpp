@@ -240,7 +240,90 @@ void TangentTracker::Defer(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_m
   pending_.X = X;
   pending_.V = V;
   pending_.phase = phase;
+  pending_.held_before = held_;
+  pending_.set_before = held_set_;
   held_ = -2;  // the acceleration LCP decides the flow after: the next stretch names it
+}
+
+Eigen::VectorXd TangentTracker::SetField(const std::vector<int>& set, const Eigen::VectorXd& X,
+                                         const Eigen::VectorXd& V, double phase) const {
+  if (set.size() == 1) return Field(Mode::kSticking, X, V, phase, set.front());
+  Eigen::VectorXd z = Field(Mode::kFree, X, V, phase);
+  if (set.empty()) return z;
+  const auto n = sys_.dof();
+  z.tail(n) = SetProjection(set) * z.tail(n);
+  return z;
+}
+
+void TangentTracker::HeldSetFlight(const std::vector<int>& set, double duration) {
+  if (set.size() == 1) {
+    const ContactTangent& ct = contacts_[static_cast<size_t>(set.front())];
+    if (ct.closed_form)
+      HeldFlight(ct, duration);
+    else
+      phi_ = (ct.G_stick * duration).exp() * phi_;
+    return;
+  }
+  phi_ = (SetFlow(set) * duration).exp() * phi_;
+}
+
+// A chattering sequence at contact k = r.contact beside the held set S, jumped to its accumulation
+// point (dynamics/contact_laws.hpp, TryHeldAccumulation; docs/contacts.md "Periodic orbits"): the
+// jump L takes the post-impact state z_k over Δ∞(z_k) on the flow held on S (k free), then projects
+// onto Z = S ∪ {k} (g = ġ = 0 on Z: ∂ = P_Z on positions and velocities). As for one contact
+// (docs/model.md §5.4),
+//   D L = diag(P_Z, P_Z) (Φ_S(Δ∞) + f_S(t∞⁻) ∇Δ∞ᵀ) − f⁺(t∞) ∇Δ∞ᵀ,
+// with ∇Δ∞ the gradient of the prediction the automaton took (HeldTailGradient) and f⁺ the flow
+// after, which the acceleration LCP chooses (held on Z, on part of it, or free): that term is
+// applied when the next stretch names it. The last impact's saltation, deferred when it was an
+// impact while a set was held, takes the S-flow as its flow after: the tail flight starts on it.
+void TangentTracker::HeldAccumulation(const Reset& r) {
+  const auto n = sys_.dof();
+  std::vector<int> S;
+  const auto from = [&](int held, const std::vector<int>& set) {
+    if (held == kSet) return set;
+    return held >= 0 ? std::vector<int>{held} : std::vector<int>{};
+  };
+  if (pending_.active) {
+    S = from(pending_.held_before, pending_.set_before);
+    if (S.empty()) {
+      pending_.active = false;
+      Undefined("a chattering accumulation beside held contacts after an impact that left none held");
+      held_ = -2;
+      return;
+    }
+    Resolve(Mode::kSticking, S.front(), &S);
+  } else {
+    S = from(held_, held_set_);
+  }
+  held_ = -2;
+  held_set_.clear();
+  if (S.empty()) {
+    Undefined("a chattering accumulation beside held contacts without a held flow the tangent map knows");
+    return;
+  }
+  if (!r.delta_gradient || !r.X_end || !r.V_end) {
+    singular_ = true;
+    return;
+  }
+  const Eigen::RowVectorXd grad_phi = r.delta_gradient->transpose() * phi_;  // ∇Δ∞ᵀ Φ
+  HeldSetFlight(S, r.delta);                                                   // Φ_S(Δ∞) Φ
+  std::vector<int> Z = S;
+  if (std::find(Z.begin(), Z.end(), r.contact) == Z.end()) Z.push_back(r.contact);
+  std::sort(Z.begin(), Z.end());
+  const Eigen::MatrixXd P = SetProjection(Z);
+  const double phase_inf = r.phase + sys_.frequency() * r.delta;
+  const Eigen::VectorXd f_end = SetField(S, *r.X_end, *r.V_end, phase_inf);
+  phi_.topRows(n) = (P * phi_.topRows(n)).eval();
+  phi_.bottomRows(n) = (P * phi_.bottomRows(n)).eval();
+  Eigen::VectorXd jump(2 * n);
+  jump << P * f_end.head(n), P * f_end.tail(n);
+  phi_ += jump * grad_phi;
+  pending_jump_.active = true;
+  pending_jump_.grad_phi = grad_phi;
+  pending_jump_.X = r.X_after;
+  pending_jump_.V = r.V_after;
+  pending_jump_.phase = phase_inf;
 }
 
 void TangentTracker::Resolve(Mode mode, int contact, const std::vector<int>* set) {
@@ -258,6 +341,13 @@ void TangentTracker::OnStretch(const Stretch& s) {
   const bool multi = contacts_.size() > 1;
   const bool on_set = multi && s.mode == Mode::kSticking && s.held && s.held->size() > 1;
   if (pending_.active) Resolve(s.mode, s.contact, on_set ? s.held : nullptr);
+  if (pending_jump_.active) {  // − f⁺(t∞) ∇Δ∞ᵀ of a held accumulation, f⁺ the flow this stretch follows
+    pending_jump_.active = false;
+    const std::vector<int> set = s.mode == Mode::kFree ? std::vector<int>{}
+                                 : on_set              ? *s.held
+                                                       : std::vector<int>{multi ? s.contact : 0};
+    phi_ -= SetField(set, pending_jump_.X, pending_jump_.V, pending_jump_.phase) * pending_jump_.grad_phi;
+  }
   // A run that starts held (a section on a held set, or a Lyapunov frame): directions off the
   // held manifold are collapsed as a landing collapses them (a perturbation off a held contact
   // returns onto it): diag(P_S, P_S), a no-op on directions along the manifold.
@@ -557,7 +647,13 @@ void TangentTracker::SimultaneousImpact(const Reset& r) {
 
 void TangentTracker::OnReset(const Reset& r) {
   const auto n = sys_.dof();
-  if (pending_.active && !(r.kind == ResetKind::kHeldSet && r.cause == HeldSetCause::kEntry)) {
+  if (pending_jump_.active) {
+    pending_jump_.active = false;
+    Undefined("another event at the instant of a chattering accumulation beside held contacts: its "
+              "saltation is not implemented");
+  }
+  if (pending_.active && !(r.kind == ResetKind::kHeldSet &&
+                           (r.cause == HeldSetCause::kEntry || r.cause == HeldSetCause::kAccumulation))) {
     pending_.active = false;
     Undefined("another event at the instant of a plastic landing beside a held contact: its saltation is "
               "not implemented");
@@ -612,9 +708,7 @@ void TangentTracker::OnReset(const Reset& r) {
           ImpactWhileSetHeld(r);
           break;
         case HeldSetCause::kAccumulation:
-          Undefined("a chattering accumulation onto several held contacts: its tangent map is not "
-                    "implemented");
-          held_ = -2;
+          HeldAccumulation(r);
           break;
         case HeldSetCause::kGrazing:
           singular_ = true;  // a tangential arrival: the maps are singular there (docs/model.md §5.7)

@@ -382,6 +382,11 @@ class Automaton {
   static constexpr double kInterleavedResolution = 30;
   std::vector<double> last_event_t_;  // several contacts: each contact's last event time
   bool InterleavedChatter(int k);
+  // Whether the predicted accumulation point of contact j's run (the state X, Ẋ there, `held` held
+  // after it) is ordered against the next arrival of the contact it interleaves with; false (the
+  // run ended undetermined) when that arrival is within the timing resolution (contact_laws.hpp).
+  bool AccumulationOrdered(int j, const std::vector<int>& held, const Vec& X, const Vec& V, const S& phase,
+                           double t_inf);
   // How many contacts are held (Sample::held).
   int HeldCount() const {
     if (mode_ != Mode::kSticking) return 0;
@@ -799,6 +804,7 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     ++result_.chatter.impacts_followed;
     return false;
   }
+  if (multi() && !AccumulationOrdered(active_, {active_}, X, V, Phase(end), AbsTime(end))) return false;
   // Commit: the same flow with dense output, then the state at t∞.
   const Vec X_k = X_, V_k = V_;
   engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_k, V_k, S(0), FlightStart::kAfterImpact,
@@ -959,6 +965,7 @@ bool Automaton<S>::OnContact() {
   Emit(EventKind::kImpact, v_minus, m.ContactVelocity(V_));
   if (accumulating && Rc > 0) {
     if (TryAccumulation(Rc)) return true;
+    if (result_.status != RunStatus::kOk) return false;  // its accumulation point is not ordered
   }
   if (run_.chatter == ChatterTreatment::kNone && Rc > 0) {
     // Impacts followed one by one: stop once the next flight is below the resolution.
