@@ -143,7 +143,7 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   t.strings.emplace_back("events", events);
   t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
-  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
+  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}, {"closed_loop", b.closed_loop ? 1 : 0}};
   WriteTable(group + "/branch", t);
   std::vector<const std::vector<ContactLoads>*> loads;
   std::vector<std::string> notes;
@@ -154,9 +154,16 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   WriteTable(group + "/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
-  std::vector<double> bv, bb, bc, rot;
-  std::vector<std::string> kind, detail;
+  std::vector<double> bv, bb, bc, rot, nv, nd;
+  std::vector<std::string> kind, detail, ev0, ev1, sq0, sq1, through;
   for (const auto& x : b.bifurcations) {
+    ev0.push_back(x.events_before);
+    ev1.push_back(x.events_after);
+    sq0.push_back(x.sequence_before);
+    sq1.push_back(x.sequence_after);
+    through.push_back(x.through);
+    nv.push_back(x.new_impact_speed);
+    nd.push_back(x.new_impact_distance);
     rot.push_back(x.rotation_number);
     bv.push_back(x.value);
     bb.push_back(x.bracket);
@@ -168,7 +175,15 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
   bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
   bt.arrays.push_back({"rotation_number", {rot.size()}, rot});  // Neimark–Sacker points; NaN elsewhere
-  bt.strings = {{"kind", kind}, {"detail", detail}};
+  // Non-smooth points (continuation.hpp, Bifurcation): events and contact sequences before and
+  // past the point (empty: none, or a smooth kind), how the branch went through it ("past",
+  // "back", empty: it ended), and at a grazing it went through, the new impact's speed and
+  // distance at the first point past it (NaN elsewhere).
+  bt.arrays.push_back({"new_impact_speed", {nv.size()}, nv});
+  bt.arrays.push_back({"new_impact_distance", {nd.size()}, nd});
+  bt.strings = {{"kind", kind},          {"detail", detail},         {"events_before", ev0},
+                {"events_after", ev1},   {"sequence_before", sq0},   {"sequence_after", sq1},
+                {"through", through}};
   WriteTable(group + "/bifurcations", bt);
 
   // Signature changes that are no bifurcation (continuation.hpp, Relabel).
