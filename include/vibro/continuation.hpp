@@ -107,6 +107,11 @@ struct Bifurcation {
   // speed |ẋ⁻| at the first point past it, and that point's distance |λ − λ_g| (NaN otherwise).
   double new_impact_speed = std::numeric_limits<double>::quiet_NaN();
   double new_impact_distance = std::numeric_limits<double>::quiet_NaN();
+  // The index in Branch::points of the branch's point next to it on the side the branch came from
+  // (the orbit before it; −1: unknown). A branch that goes on through a grazing, or round a loop,
+  // passes the same λ again on other orbits: the orbit of the bifurcation is this point's, not the
+  // stored point nearest in λ (vibro prove --bifurcation BRANCH.h5 --point K, docs/prove.md).
+  long long point = -1;
 };
 
 // A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering

@@ -8,7 +8,9 @@
 
 #include <fmt/format.h>
 
+#include "analysis/mirror_symmetry.hpp"
 #include "analysis/orbit_probe.hpp"
+#include "vibro/contact_sequence.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -706,27 +708,78 @@ std::optional<Eigen::VectorXd> OnSection(const Problem& p, double lambda, double
   return out;
 }
 
-// Whether the branch's last bifurcation, a non-smooth point it went through, repeats an earlier
-// one of the branch: the same kind, the same events before and after, at the same λ (within 1e-9
-// relative, or their brackets). Then the branch is going round a loop through it again (e.g.
-// between two grazings close together, turning back at one and crossing back at the other).
-bool RepeatsATransition(const Branch& br) {
-  if (br.bifurcations.size() < 2) return false;
+// A non-smooth point the branch goes through again (docs/orbits.md, "Closed loops"): an earlier
+// bifurcation of the branch, `index`, that the last one repeats: the same kind at the same λ (within
+// 1e-9 relative, or their brackets) with the same orbits on its two sides, in either order (the
+// branch crossing it the other way), or those orbits mirrored (`mirrored`: the model's mirror
+// symmetry x ↦ −x, t ↦ t + T/2 maps one transition onto the other, contacts swapped). The orbits on
+// each side are compared by their contact sequences as cyclic words in their canonical rotation
+// (contact_sequence.hpp) with several contacts, by their events per period with one. From there
+// on the branch would draw again what it has drawn, or its mirror image: e.g. the tube's symmetric
+// orbit through its grazing at ω = 1.3646 onto a three-impact orbit, down to the asymmetric
+// orbits' grazing at 0.9559, through their pitchfork onto the mirror ones, and up through the
+// mirror grazings, round and round.
+struct RepeatedTransition {
+  size_t index = 0;
+  bool mirrored = false, reversed = false;
+};
+std::optional<RepeatedTransition> RepeatsATransition(const Branch& br, const Problem& p) {
+  if (br.bifurcations.size() < 2) return std::nullopt;
   const Bifurcation& g = br.bifurcations.back();
-  if (g.through.empty()) return false;
+  if (g.through.empty()) return std::nullopt;
+  const bool words = !g.sequence_before.empty() && !g.sequence_after.empty();
+  // A side as compared: the canonical text of its sequence (renamed by `image` when given), or its
+  // events per period.
+  const auto side = [&](const Bifurcation& b, bool after, const std::vector<int>* image) -> std::string {
+    const std::string& text = after ? b.sequence_after : b.sequence_before;
+    if (!words) return after ? b.events_after : b.events_before;
+    std::string problem;
+    const auto entries = ParseContactSequence(text, -1, problem);
+    if (!entries) return text;
+    return ContactSequenceText(image ? RenameContacts(*entries, *image) : *entries);
+  };
+  std::optional<std::vector<int>> image;
+  if (words) {
+    if (const auto scene = p.DecidingSceneAt(g.value)) image = MirrorImage(System(*scene));
+  }
+  const std::string before = side(g, false, nullptr), after = side(g, true, nullptr);
   for (size_t k = 0; k + 1 < br.bifurcations.size(); ++k) {
     const Bifurcation& e = br.bifurcations[k];
-    if (e.kind == g.kind && !e.through.empty() && e.events_before == g.events_before &&
-        e.events_after == g.events_after &&
-        std::abs(e.value - g.value) <= 1e-9 * std::max(1.0, std::abs(g.value)) + e.bracket + g.bracket)
-      return true;
+    if (e.kind != g.kind || e.through.empty() ||
+        std::abs(e.value - g.value) > 1e-9 * std::max(1.0, std::abs(g.value)) + e.bracket + g.bracket)
+      continue;
+    for (const bool mirrored : {false, true}) {
+      if (mirrored && !image) continue;
+      const std::vector<int>* im = mirrored ? &*image : nullptr;
+      const std::string b0 = side(e, false, im), a0 = side(e, true, im);
+      if (b0 == before && a0 == after) return RepeatedTransition{k, mirrored, false};
+      if (b0 == after && a0 == before) return RepeatedTransition{k, mirrored, true};
+    }
   }
-  return false;
+  return std::nullopt;
+}
+
+// The branch's end where it met a transition again (RepeatsATransition): a closed loop.
+void EndAtRepeat(Branch& br, const RepeatedTransition& r) {
+  const Bifurcation& g = br.bifurcations.back();
+  const Bifurcation& e = br.bifurcations[r.index];
+  const std::string way = r.reversed ? "the other way" : "the same way";
+  br.end = r.mirrored
+               ? fmt::format("closed loop: through the mirror image of the {} at λ = {:.17g} (bifurcation {}, "
+                             "{}; contact sequence {} ↔ {} mirrored, the model being symmetric under x ↦ −x, "
+                             "t ↦ t + T/2): from here on the branch is the mirror image of its part from there",
+                             e.kind, e.value, r.index, way, g.sequence_before, g.sequence_after)
+               : fmt::format("closed loop: through the {} at λ = {:.17g} again (bifurcation {}, {}; the same "
+                             "orbits on its two sides)",
+                             e.kind, e.value, r.index, way);
+  br.closed_loop = true;
 }
 
 // The branch as returned, with how many map evaluations needed the quad engine.
 Branch& Finish(Branch& br, const Problem& p) {
   br.quad_evaluations = p.quad_evaluations();
+  for (auto& b : br.bifurcations)  // found after the last point: that point is before it
+    if (b.point < 0 && !br.points.empty()) b.point = static_cast<long long>(br.points.size()) - 1;
   return br;
 }
 
@@ -770,6 +823,10 @@ Branch Continue(const ContinuationRequest& req) {
     // A point computed while a stop request came may rest on runs it cut short: not kept (the
     // branch kept is the start of the uninterrupted branch; the loop reports the interruption).
     if (stopped()) return;
+    // The bifurcations found since the last point lie between it and this one: the last point is
+    // the orbit before them (Bifurcation::point).
+    for (auto& b : br.bifurcations)
+      if (b.point < 0 && !br.points.empty()) b.point = static_cast<long long>(br.points.size()) - 1;
     const auto scene = p.SceneAt(pt.y[n2]);
     const System sys(*scene);
     BranchPoint b;
@@ -1491,10 +1548,8 @@ Branch Continue(const ContinuationRequest& req) {
               g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
               Count(g.events_after, 'I') - Count(g.events_before, 'I') > 1 ? "s" : "", near->speed, std::abs(d_near),
               far->speed, eps);
-          if (RepeatsATransition(br)) {
-            br.end = fmt::format("closed loop: through the {} at λ = {:.17g} again (the same events before and after)",
-                                 g.kind, g.value);
-            br.closed_loop = true;
+          if (const auto r = RepeatsATransition(br, p)) {
+            EndAtRepeat(br, *r);
             return Finish(br, p);
           }
           p.SetLambdaStep(std::clamp(1e-2 * eps * eps / std::max(1.0, std::abs(g.value)), 1e-12, 1e-6));
@@ -1517,10 +1572,8 @@ Branch Continue(const ContinuationRequest& req) {
       }
       if (goes_on) {
         br.bifurcations.back().through = "past";
-        if (RepeatsATransition(br)) {
-          br.end = fmt::format("closed loop: through the {} at λ = {:.17g} again (the same events before and after)",
-                               br.bifurcations.back().kind, br.bifurcations.back().value);
-          br.closed_loop = true;
+        if (const auto r = RepeatsATransition(br, p)) {
+          EndAtRepeat(br, *r);
           return Finish(br, p);
         }
       }

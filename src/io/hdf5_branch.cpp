@@ -154,7 +154,7 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   WriteTable(group + "/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
-  std::vector<double> bv, bb, bc, rot, nv, nd;
+  std::vector<double> bv, bb, bc, rot, nv, nd, bp;
   std::vector<std::string> kind, detail, ev0, ev1, sq0, sq1, through;
   for (const auto& x : b.bifurcations) {
     ev0.push_back(x.events_before);
@@ -168,12 +168,14 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
     bv.push_back(x.value);
     bb.push_back(x.bracket);
     bc.push_back(x.contact);
+    bp.push_back(static_cast<double>(x.point));
     kind.push_back(x.kind);
     detail.push_back(x.detail);
   }
   bt.arrays.push_back({"value", {bv.size()}, bv});
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
   bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
+  bt.arrays.push_back({"point", {bp.size()}, bp, 'i'});  // the branch's point before it (−1: unknown)
   bt.arrays.push_back({"rotation_number", {rot.size()}, rot});  // Neimark–Sacker points; NaN elsewhere
   // Non-smooth points (continuation.hpp, Bifurcation): events and contact sequences before and
   // past the point (empty: none, or a smooth kind), how the branch went through it ("past",
@@ -362,7 +364,18 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   }
 }
 
-StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart) {
+StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart, long long before) {
+  // The branch's point before the bifurcation, or the first one back from it at least `apart` from
+  // it (a branch through a grazing or round a loop passes the same λ on other orbits).
+  if (before >= 0) {
+    const auto last = ReadBranchPoint(path, 0);
+    if (before < last.points) {
+      for (long long k = before; k >= 0; --k) {
+        auto p = ReadBranchPoint(path, k);
+        if (std::abs(p.value - value) >= apart || k == 0) return p;
+      }
+    }
+  }
   const auto distance = [&](double v) { return std::abs(v - value) >= apart ? std::abs(v - value) : 1e300 + std::abs(v - value); };
   StoredBranchPoint near = ReadBranchPoint(path, 0);
   for (long long k = 1; k < near.points; ++k) {
@@ -385,12 +398,13 @@ std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   if (!h5::DatasetShape(g.get(), "value") || h5::DatasetClass(g.get(), "value") != h5::Class::kFloat)
     throw bad("value", "a float64 dataset");
   if (!h5::IsStringDataset(g.get(), "kind")) throw bad("kind", "a dataset of strings");
-  std::vector<double> value, bracket;
+  std::vector<double> value, bracket, point;
   std::vector<std::string> kind;
   try {
     value = h5::ReadDatasetDoubles(g.get(), "value");
     kind = h5::ReadDatasetStrings(g.get(), "kind");
     if (h5::DatasetShape(g.get(), "bracket")) bracket = h5::ReadDatasetDoubles(g.get(), "bracket");
+    if (h5::DatasetShape(g.get(), "point")) point = h5::ReadDatasetDoubles(g.get(), "point");
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: /bifurcations cannot be read: {}", path, e.what())});
   }
@@ -399,8 +413,26 @@ std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   for (size_t i = 0; i < value.size(); ++i) {
     if (!std::isfinite(value[i])) throw bad(fmt::format("value[{}]", i), fmt::format("a finite number, found {}", value[i]));
     out.push_back({kind[i], value[i], "", i < bracket.size() ? bracket[i] : 0.0});
+    if (i < point.size() && std::isfinite(point[i]) && point[i] >= 0) out.back().point = static_cast<long long>(point[i]);
   }
   return out;
+}
+
+long long BifurcationPointNear(const std::string& path, const std::string& kind, double value, double within) {
+  long long point = -1;
+  double best = within;
+  std::vector<Bifurcation> list;
+  try {
+    list = ReadBranchBifurcations(path);
+  } catch (const InputError&) {
+    return -1;  // not a branch with bifurcations: NearestBranchPoint says what the file is
+  }
+  for (const auto& b : list)
+    if (b.kind == kind && b.point >= 0 && std::abs(b.value - value) <= best) {
+      best = std::abs(b.value - value);
+      point = b.point;
+    }
+  return point;
 }
 
 }  // namespace vibro

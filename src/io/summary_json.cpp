@@ -312,7 +312,8 @@ nlohmann::json BranchObject(const Branch& b) {
   auto bif = nlohmann::json::array();
   for (const auto& x : b.bifurcations) {
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket},
-                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()}});
+                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()},
+                   {"point", x.point >= 0 ? nlohmann::json(x.point) : nlohmann::json()}});
     if (std::isfinite(x.rotation_number)) bif.back()["rotation_number"] = x.rotation_number;
     // Non-smooth points: the events (and contact sequences) before and past it, and how the branch
     // went through ("past", "back" at a grazing fold; null where it ended there).

@@ -303,3 +303,79 @@ def test_a_closed_loop_stops_where_it_returns_to_its_first_point(down, tmp_path)
             err = max(abs(float(q[m]) - b["q"][i][m]) for m in range(2))
             err = max(err, max(abs(float(qd[m]) - b["q_dot"][i][m]) for m in range(2)))
             assert err < 1e-9, (i, err)
+
+
+def flow_with_impacts(tube, t_s, q, qd, duration):
+    """The 30-digit flow from the free state (q, q') at t_s over `duration`, with the impacts."""
+    t, q, qd = mp.mpf(t_s), [mp.mpf(x) for x in q], [mp.mpf(x) for x in qd]
+    end = t + duration
+    while True:
+        t_n, c = tube.next_impact(t, q, qd)
+        if t_n >= end:
+            return tube.flow(t, q, qd, end)
+        q, qd = tube.flow(t, q, qd, t_n)
+        t = t_n
+        qd = [qd[0], -R * qd[1]]
+
+
+def cyclic_words_equal(a, b):
+    """Two contact sequences ("0:impact*2 1:impact") as cyclic words: one a rotation of the other."""
+    def expand(text):
+        out = []
+        for e in text.split():
+            name, _, n = e.partition("*")
+            out += [name] * int(n or 1)
+        return out
+    x, y = expand(a), expand(b)
+    return len(x) == len(y) and any(x == y[k:] + y[:k] for k in range(max(len(y), 1)))
+
+
+def swapped(text):
+    """The sequence with contacts 0 and 1 swapped: the tube's mirror image (q -> -q, t -> t + T/2)."""
+    return " ".join(("1" if e[0] == "0" else "0") + e[1:] for e in text.split())
+
+
+def test_a_branch_stops_where_it_meets_the_mirror_image_of_a_transition(tmp_path):
+    """From omega = 0.9 up, the symmetric orbit goes through its grazing at 1.3646 onto a
+    three-impact orbit, down to the asymmetric orbits' grazings near 0.9559 and back up. It comes
+    back to the symmetric orbit's grazing at 1.3646 from the other side and would go on along the
+    mirror image of the three-impact orbit: the mirror image of the first transition (contacts
+    swapped), from where the branch would only redraw its mirror image. It stops there, a closed
+    loop (before: it bounced between the mirror-image grazings until --max-points).
+    Independent: the orbits next to both transitions are the symmetric orbit (q(t + T/2) = -q(t))
+    of the 30-digit flow, periodic within 1e-9; the sequences are mirror images as cyclic words."""
+    out = tmp_path / "up.h5"
+    j = json.loads(vibro("continue", TUBE, "--param", KEY, "--to", 1.5, "--out", out, "--json", "--force"))
+    assert j["closed_loop"] is True and j["end"].startswith("closed loop: through the mirror image"), j["end"]
+    assert len(j["points"]) < 1000  # not --max-points
+    last = j["bifurcations"][-1]
+    assert last["kind"] == "grazing" and last["through"] in ("past", "back")
+    # The earlier transition it mirrors: the same kind at the same omega, sequences swapped.
+    earlier = [b for b in j["bifurcations"][:-1]
+               if b["kind"] == last["kind"] and b.get("through") and abs(b["value"] - last["value"]) < 1e-9]
+    assert earlier, [(b["kind"], b["value"]) for b in j["bifurcations"]]
+    e = earlier[0]
+    assert abs(e["value"] - 1.3646469653418) < 1e-9
+    fwd = cyclic_words_equal(swapped(e["sequence_before"]), last["sequence_before"]) and \
+        cyclic_words_equal(swapped(e["sequence_after"]), last["sequence_after"])
+    rev = cyclic_words_equal(swapped(e["sequence_before"]), last["sequence_after"]) and \
+        cyclic_words_equal(swapped(e["sequence_after"]), last["sequence_before"])
+    assert fwd or rev, (e, last)
+    assert not cyclic_words_equal(e["sequence_after"], last["sequence_after"])  # a mirror image, not the same
+    with h5py.File(out) as f:
+        b = f["branch"]
+        for bif in (e, last):
+            k = bif["point"]
+            # The branch's orbit before the transition, at least 1e-6 from the grazing (where its
+            # flight clears the stop plainly): walk back along the branch.
+            while abs(b["value"][k] - bif["value"]) < 1e-6:
+                k -= 1
+            assert abs(b["value"][k] - bif["value"]) < 1e-4
+            tube = Tube(b["value"][k])
+            q0, qd0 = b["q"][k], b["q_dot"][k]
+            q, qd = flow_with_impacts(tube, b["section_time"][k], q0, qd0, tube.T)
+            err = max(max(abs(float(q[m]) - q0[m]), abs(float(qd[m]) - qd0[m])) for m in range(2))
+            assert err < 1e-9, ("periodic", k, err)
+            q, qd = flow_with_impacts(tube, b["section_time"][k], q0, qd0, tube.T / 2)
+            err = max(max(abs(float(q[m]) + q0[m]), abs(float(qd[m]) + qd0[m])) for m in range(2))
+            assert err < 1e-9, ("symmetric", k, err)
