@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "proof/held_set_proof.hpp"
+#include "proof/sticking_search.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -85,44 +86,14 @@ void Coupling(const System& sys, const Scene& scene, const IntervalModel& model,
 FoundHeldSet FindHeldSetOrbit(const System& sys, const Scene& scene, const IntervalModel& model,
                               const ProofRequest& request, const Budget& budget) {
   FoundHeldSet f;
-  OrbitRequest req;
-  req.kind = OrbitKind::kSticking;
-  req.period = request.period;
-  req.transient_periods = request.start ? 0 : request.transient_periods;
-  req.start = request.start;
-  OrbitResult orbit;
   EventRecorder rec;
-  RunResult run;
-  budget.Watch([&] {
-    orbit = SolveOrbit(sys, scene, req);
-    if (orbit.status != "converged" || orbit.summary.kind != "sticking-periodic" || budget.passed()) return;
-    Scene two = scene;
-    two.run.periods = 2 * orbit.period + 1;
-    two.run.samples_per_period = 0;
-    two.run.lyapunov = false;
-    const InitialOverride start{orbit.section_time, orbit.X, orbit.V};
-    SimulationOptions opt;
-    opt.observers = {&rec};
-    opt.initial = &start;
-    run = Simulate(sys, two, opt);
-  });
-  if (budget.passed()) {
-    f.stopped = true;
+  const StickingSearch found = FollowStickingOrbit(sys, scene, request, budget, rec);
+  if (found.stopped || !found.failure.empty()) {
+    f.stopped = found.stopped;
+    f.failure = found.failure;
     return f;
   }
-  if (orbit.status != "converged") {
-    f.failure = "the Poincaré solver found no orbit to prove (" + orbit.status +
-                (orbit.message.empty() ? "" : ": " + orbit.message) + ")";
-    return f;
-  }
-  if (orbit.summary.kind != "sticking-periodic") {
-    f.failure = "the orbit found does not stick (try --kind impact)";
-    return f;
-  }
-  if (run.status != RunStatus::kOk) {
-    f.failure = "the orbit found could not be followed over its period: " + run.message;
-    return f;
-  }
+  const OrbitResult& orbit = found.orbit;
   // The events as landings (an impact, then a stick at the same instant, or not) and releases.
   std::vector<Transition> tr;
   const auto& it = rec.items;
