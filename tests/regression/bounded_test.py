@@ -151,10 +151,12 @@ while p.poll() is None:
     peak = max(peak, rss)
     if filled is None and rss - rss0 >= 240 * MB:
         filled = now
-    # Past 2.5 times the CPU time it took to fill 240 MB: more events than the limit can hold
+    # Past 3 times the CPU time it took to fill 240 MB: more events than the limit can hold
     # (checked below from the counts). CPU time, not wall time: under a load of 15 the wall-time
-    # rule stopped the run at 4.6 M impacts, short of the 4.8 M the check needs.
-    if filled is not None and now >= 2.5 * filled:
+    # rule stopped the run at 4.6 M impacts, short of the 4.8 M the check needs. 2.5 times fell
+    # 3 % short once an event carried a compliant phase's peak_time and penetration_max (240 MB
+    # fill with fewer events).
+    if filled is not None and now >= 3.0 * filled:
         break
     time.sleep(0.05)
 running = p.poll() is None
