@@ -4,7 +4,9 @@
 Draws what the file holds (docs/cli.md): for a run with dense samples PREFIX_xB (x_B against t,
 sticking shaded, impacts marked), PREFIX_reaction (only when the run sticks), PREFIX_phase and
 PREFIX_section (a run with several contacts: PREFIX_gaps, every gap, and PREFIX_phase and
-PREFIX_section of every gap); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
+PREFIX_section of every gap; a run with compliant stops: PREFIX_forces, every contact force
+against t with its certified peaks, and PREFIX_peaks, histograms of the peak forces and contact
+durations); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
 continuation (and PREFIX_branch_loads: mean contact force and work rate along it), PREFIX_partition for a
 partition (and PREFIX_partition_loads: the work rate over its plane), PREFIX_basin for a basin study, PREFIX_sweep for
 a sweep (with a continuation branch overlaid by --overlay BRANCH.h5), PREFIX_curves for the
@@ -990,6 +992,243 @@ def time_window(t, T, window):
     return t_from, t_to
 
 
+# ---------------------------------------------------------------------------------------------
+# Compliant stops (docs/compliant.md): the contact phase is linear too, so it is drawn exactly.
+
+def compliant_contacts(f):
+    """Per contact of a scene whose stops include a compliant one: (F_j, a_j, σ_j, d_j, k_j, c_j)
+    with the gap g_j = σ_j (a_jᵀX − d_j) on the modal state and the contact force λ_j entering the
+    modal equations as F_j λ_j (k_j = c_j = 0 for a rigid contact). None when no stop is compliant
+    or the scene's form does not give F_j (several contacts in the modal form)."""
+    a = f["model"].attrs
+    contacts = scene_contacts(f)
+    if not contacts:
+        stop = scene_table(f, "stop")
+        if not compliant_law(stop):
+            return None
+        c = np.asarray(a["contact_shape"], dtype=float)
+        return [(np.asarray(a["contact"], dtype=float), c, 1.0, float(a["stop"]),
+                 float(stop["stiffness"]), float(stop.get("damping", 0.0)))]
+    if not any(compliant_law(c) for c in contacts) or "mode_shapes" not in a:
+        return None
+    n = len(a["frequencies"])
+    phi = np.asarray(a["mode_shapes"], dtype=float).reshape(-1, n)
+    mass = np.asarray(scene_table(f, "structure")["mass"], dtype=float)
+    if phi.shape[0] != n or mass.shape != (n, n):
+        return None  # constrained DOFs: the modal force of a contact is not recoverable here
+    out = []
+    for c, (a_j, sigma, d, _) in zip(contacts, gap_coordinates(f, contacts)):
+        dofs = c.get("dofs", [c.get("dof", 0)])
+        w = np.zeros(n)
+        w[int(dofs[0])] = 1.0
+        if len(dofs) > 1:
+            w[int(dofs[1])] = -1.0
+        # M q̈ + … = σ w λ and q = Φ X: the modal force is Φ⁻¹ M⁻¹ σ w λ.
+        F = sigma * np.linalg.solve(phi, np.linalg.solve(mass, w))
+        law = compliant_law(c) is not None
+        out.append((F, a_j, sigma, d, float(c["stiffness"]) if law else 0.0,
+                    float(c.get("damping", 0.0)) if law else 0.0))
+    return out
+
+
+def phase_generator(model, contact=None):
+    """The generator A of a free flight (contact None) or of a compliant contact phase on
+    y = (X, Ẋ, sin φ_0, cos φ_0, …, 1), φ_h = ω_h t + ψ_h, so that y(t + s) = exp(s A) y(t):
+    Ẍ + DẊ + ΩX = Σ_h T_A^(h) f_h sin φ_h + F λ with λ = −k g − c ġ, g = σ (aᵀX − d)
+    (docs/compliant.md, "the contact phase")."""
+    a = model.attrs
+    w, z = np.asarray(a["frequencies"], float), np.asarray(a["damping_ratios"], float)
+    forcing = harmonics(model)
+    n, H = len(w), len(forcing)
+    d_all = 2 * n + 2 * H + 1
+    A = np.zeros((d_all, d_all))
+    A[:n, n:2 * n] = np.eye(n)
+    A[n:2 * n, :n] = -np.diag(w * w)
+    A[n:2 * n, n:2 * n] = -np.diag(2 * z * w)
+    for h, (fh, W, _, TA, _) in enumerate(forcing):
+        k = 2 * n + 2 * h
+        A[n:2 * n, k] = TA * fh
+        A[k, k + 1] = W
+        A[k + 1, k] = -W
+    if contact is not None:
+        F, a_j, sigma, d, k_j, c_j = contact
+        A[n:2 * n, :n] -= sigma * k_j * np.outer(F, a_j)
+        A[n:2 * n, n:2 * n] -= sigma * c_j * np.outer(F, a_j)
+        A[n:2 * n, -1] += sigma * k_j * d * F
+    return A
+
+
+def contact_force(contact, X, V):
+    """λ = −k g − c ġ of a compliant contact at the modal states X, Ẋ (rows)."""
+    _, a_j, sigma, d, k_j, c_j = contact
+    return -k_j * sigma * (np.atleast_2d(X) @ a_j - d) - c_j * sigma * (np.atleast_2d(V) @ a_j)
+
+
+def compliant_states(f, t_from, t_to, contacts, per_period=600):
+    """A run with compliant stops: the modal state on a dense grid of [t_from, t_to] and the
+    contact in which each point lies (−1 in flight), exact: from each stored sample forward
+    through the events of its sample step, the flight's or the contact phase's own linear flow
+    (phase_generator), switched at each entry (`stick`) and exit (`release`); the state is
+    continuous at both. A rigid impact in the step (a scene mixing rigid and compliant stops)
+    ends what is known of the step: a NaN row breaks the curve up to the next sample."""
+    model = f["model"]
+    T = float(f.attrs["forcing_period"])
+    # At least 2 000 points over a short window (one contact phase), at most about 2·10⁵.
+    per_period = max(50, min(max(per_period, int(2e3 * T / (t_to - t_from))), int(2e5 * T / (t_to - t_from))))
+    t = f["samples/t"][:]
+    lo = max(0, np.searchsorted(t, t_from) - 1)
+    hi = min(len(t), np.searchsorted(t, t_to) + 1)
+    ts = t[lo:hi]
+    Xs, Vs, ms = f["samples/X"][lo:hi], f["samples/V"][lo:hi], f["samples/mode"][lo:hi]
+    ev_t, kinds = f["events/t"][:], f["events/kind"][:]
+    ev_c = f["events/contact"][:] if "contact" in f["events"] else np.zeros(len(ev_t), dtype=int)
+    kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+    n = Xs.shape[1]
+    gens = [phase_generator(model)] + [phase_generator(model, c) if c[4] > 0 else None for c in contacts]
+    out_t, out_X, out_V, out_j = [], [], [], []
+
+    def emit(tt, y, j):
+        out_t.append(np.atleast_1d(tt))
+        out_X.append(np.atleast_2d(y)[:, :n])
+        out_V.append(np.atleast_2d(y)[:, n:2 * n])
+        out_j.append(np.full(len(np.atleast_1d(tt)), j))
+
+    def state(X, V, tt):
+        return np.concatenate([X, V, forcing_phases(model, [tt])[0], [1.0]])
+    sticks = kinds == kind_of["stick"]
+    releases = kinds == kind_of["release"]
+    peak_t = f["events/peak_time"][:] if "peak_time" in f["events"] else np.array([])
+    peak_t = np.sort(peak_t[np.isfinite(peak_t)])
+    for k in range(len(ts) - 1):
+        a, b = ts[k], ts[k + 1]
+        if b <= a:
+            continue
+        # The contact of the sample: the last entry at or before it, if the sample is in contact.
+        j = -1
+        if ms[k] != 0:
+            before = np.nonzero(sticks & (ev_t <= a))[0]
+            j = int(ev_c[before[-1]]) if len(before) else -1
+            if j < 0 or gens[j + 1] is None:
+                emit([a, np.nan], np.full((2, 2 * n), np.nan), -1)
+                continue
+        y = state(Xs[k], Vs[k], a)
+        grid = np.linspace(a, b, max(2, int(np.ceil(per_period * (b - a) / T))), endpoint=False)
+        # Each phase's peak force at its certified instant, so that the drawn force reaches it.
+        grid = np.union1d(grid, peak_t[(peak_t > a) & (peak_t < b)])
+        i0, i1 = np.searchsorted(ev_t, a, side="right"), np.searchsorted(ev_t, b, side="left")
+        stops = list(range(i0, i1)) + [None]
+        start = a
+        for i in stops:
+            end = b if i is None else ev_t[i]
+            pts = grid[(grid >= start) & (grid < end)]
+            pts = np.append(pts, end) if i is not None else pts
+            if len(pts):
+                E = expm_batch(gens[j + 1][None] * (pts - start)[:, None, None])
+                ys = np.einsum("mij,j->mi", E, y)
+                emit(pts, ys, j)
+            if i is None:
+                break
+            y = ys[-1] if len(pts) else y
+            start = end
+            if sticks[i] and gens[int(ev_c[i]) + 1] is None:
+                emit([np.nan], np.full((1, 2 * n), np.nan), -1)  # rigid sticking: not followed
+                break
+            if sticks[i]:
+                j = int(ev_c[i])
+            elif releases[i]:
+                j = -1
+            elif kinds[i] == kind_of["impact"] or kinds[i] == kind_of["accumulation"]:
+                emit([np.nan], np.full((1, 2 * n), np.nan), -1)  # a rigid impact: not followed
+                break
+    if len(ts):
+        before = np.nonzero(sticks & (ev_t <= ts[-1]))[0]
+        j = int(ev_c[before[-1]]) if ms[-1] != 0 and len(before) else -1
+        emit([ts[-1]], np.concatenate([Xs[-1], Vs[-1]])[None], j)
+    if not out_t:
+        return np.array([]), np.zeros((0, n)), np.zeros((0, n)), np.array([], dtype=int)
+    tt, XX, VV, jj = (np.concatenate(v) for v in (out_t, out_X, out_V, out_j))
+    sel = np.isnan(tt) | ((tt >= t_from) & (tt <= t_to))
+    return tt[sel], XX[sel], VV[sel], jj[sel]
+
+
+def contact_forces(contacts, XX, VV, jj):
+    """(m, J): every contact's force along compliant_states' points, 0 where it is not in contact."""
+    out = np.zeros((len(XX), len(contacts)))
+    for j, c in enumerate(contacts):
+        inside = jj == j
+        if inside.any():
+            out[inside, j] = contact_force(c, XX[inside], VV[inside])
+    out[~np.isfinite(XX).all(axis=1)] = np.nan
+    return out
+
+
+def plot_contact_forces(f, title, save, window, contacts):
+    """A run with compliant stops (docs/loads.md): PREFIX_forces, every compliant contact's force
+    λ = −k g − c ġ against t (exact, from compliant_states), with each phase's certified peak
+    (the release event's reaction_max at its peak_time) marked; and PREFIX_peaks, the histograms of
+    the peak forces and of the contact durations of every phase of the run."""
+    T = float(f.attrs["forcing_period"])
+    t = f["samples/t"][:]
+    t_from, t_to = time_window(t, T, window)
+    tt, XX, VV, jj = compliant_states(f, t_from, t_to, contacts)
+    lam = contact_forces(contacts, XX, VV, jj)
+    ev = f["events"]
+    kind_of = h5py.check_enum_dtype(ev["kind"].dtype)
+    kinds, ev_t = ev["kind"][:], ev["t"][:]
+    ev_c = ev["contact"][:] if "contact" in ev else np.zeros(len(kinds), dtype=int)
+    rel = kinds == kind_of["release"]
+    peak, peak_t, dur = ev["reaction_max"][:], ev["peak_time"][:], ev["stick_duration"][:]
+    ids = [j for j, c in enumerate(contacts) if c[4] > 0]
+    names = [f"contact {j}" for j in ids] if len(contacts) > 1 else ["the stop"]
+    status = text(f.attrs["status"])
+    # Only the contacts in contact somewhere in the window (all of them if none is).
+    shown = [j for j in ids if (jj == j).any()] or ids
+    fig, axes = figure(len(shown), 1, figsize=(9, 1.4 + 1.8 * len(shown)), sharex=True, squeeze=False)
+    if fig.get_layout_engine() is None:
+        fig.set_layout_engine("constrained")
+    for row, j in enumerate(shown):
+        ax = axes[row, 0]
+        ax.plot(tt, lam[:, j], lw=1, color=OKABE_ITO[j % 7], label=f"$\\lambda_{{{j}}}$")
+        ax.axhline(0, color="k", lw=0.8)
+        mine = rel & (ev_c == j) & (peak_t >= t_from) & (peak_t <= t_to) & np.isfinite(peak)
+        if mine.any():
+            ax.plot(peak_t[mine], peak[mine], "v", ms=3.5, color="k",
+                    label=f"certified peaks ({int(mine.sum())})")
+        ax.set_ylabel("$\\lambda$")
+        ax.set_title(f"{names[ids.index(j)]}: {compliant_law(scene_contacts(f)[j] if scene_contacts(f) else scene_table(f, 'stop'))}",
+                     fontsize=fs(9), loc="left")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
+    axes[-1, 0].set_xlabel("$t$")
+    axes[-1, 0].set_xlim(t_from, t_to)
+    absolute_time(axes[-1, 0])
+    if OPTIONS["title"] != "":
+        head = OPTIONS["title"] if OPTIONS["title"] is not None else \
+            f"{title}\ncontact force, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})"
+        fig.suptitle(head, fontsize=fs(10))
+    save(fig, "forces")
+
+    fig, axes = figure(len(ids), 2, figsize=(8.0, 1.0 + 2.4 * len(ids)), squeeze=False)
+    if fig.get_layout_engine() is None:
+        fig.set_layout_engine("constrained")
+    for row, j in enumerate(ids):
+        mine = rel & (ev_c == j) & np.isfinite(peak) & np.isfinite(dur)
+        for ax, data, label in ((axes[row, 0], peak[mine], "peak force"), (axes[row, 1], dur[mine], "contact duration")):
+            if len(data):
+                # Counts on a log scale: the few phases of a transient stay visible beside the
+                # steady state's many.
+                ax.hist(data, bins=min(40, max(5, int(np.sqrt(len(data))))), color=OKABE_ITO[row % 7], log=True)
+                ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
+                ax.axvline(data.max(), color="k", lw=0.8, ls="--", label=f"largest {data.max():.4g}")
+                ax.legend(fontsize=fs(8), frameon=False)
+            ax.set_xlabel(f"{label}, {names[row]}")
+            ax.set_ylabel("contact phases")
+    if OPTIONS["title"] != "":
+        head = OPTIONS["title"] if OPTIONS["title"] is not None else \
+            f"{title}\nevery contact phase of the run ({int(rel.sum())}, {status})"
+        fig.suptitle(head, fontsize=fs(10))
+    save(fig, "peaks")
+
+
 def plot_run(f, title, save, window, coordinate="x_B"):
     """Time plots of a run with dense samples: the coordinate (x_B by default) against t, the
     reaction, the phase portrait and the section of that coordinate."""
@@ -999,11 +1238,18 @@ def plot_run(f, title, save, window, coordinate="x_B"):
     status = text(f.attrs["status"])
     t = f["samples/t"][:]
     t_from, t_to = time_window(t, T, window)
-    tt, xx, vv, rstar, XX, VV = dense_run(f, t_from, t_to)
+    compliant = compliant_contacts(f)
+    if compliant:  # the contact phases drawn exactly, the penetration included
+        tt, XX, VV, _ = compliant_states(f, t_from, t_to, compliant)
+        c = np.asarray(model.attrs["contact_shape"], dtype=float)
+        xx, vv, rstar = XX @ c, VV @ c, None
+    else:
+        tt, xx, vv, rstar, XX, VV = dense_run(f, t_from, t_to)
     on_xB = coordinate == "x_B"
     w, sym = coordinate_choices(f)[coordinate]
     if not on_xB:
-        XX, VV = fill_stuck_states(f, tt, XX, VV)
+        if not compliant:
+            XX, VV = fill_stuck_states(f, tt, XX, VV)
         xx, vv = XX @ w, VV @ w
     labels = model.attrs["dof_labels"] if "dof_labels" in model.attrs else []
     what = ("contact displacement" if on_xB else
@@ -1051,7 +1297,9 @@ def plot_run(f, title, save, window, coordinate="x_B"):
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=fs(8), frameon=False)
     save(fig, "xB" if on_xB else coordinate)
 
-    if sticks_at_all:
+    if compliant:
+        plot_contact_forces(f, title, save, window, compliant)
+    elif sticks_at_all:
         ts = t[(t >= t_from) & (t <= t_to)]
         sel = (t >= t_from) & (t <= t_to)
         X, V, mode = f["samples/X"][sel], f["samples/V"][sel], f["samples/mode"][sel]
@@ -1377,7 +1625,11 @@ def plot_contacts_run(f, title, save, window, contacts, coordinate):
     t = f["samples/t"][:]
     t_from, t_to = time_window(t, T, window)
     span = f"{t_from:.6g} ≤ t ≤ {t_to:.6g}"
-    tt, XX, VV = dense_states(f, t_from, t_to)
+    compliant = compliant_contacts(f)
+    if compliant:  # the contact phases drawn exactly, the penetration included
+        tt, XX, VV, _ = compliant_states(f, t_from, t_to, compliant)
+    else:
+        tt, XX, VV = dense_states(f, t_from, t_to)
     sX, sV = f["section/X"][:], f["section/V"][:]
     k = np.arange(len(sX))
     if coordinate != "x_B":
@@ -1468,17 +1720,23 @@ def plot_gaps(f, title, save, window, contacts):
     fig, axes = figure(m, 1, figsize=(9, 1.2 + 1.5 * m), sharex=True, squeeze=False)
     if fig.get_layout_engine() is None:
         fig.set_layout_engine("constrained")
+    compliant = compliant_contacts(f)
+    if compliant:  # exact between the samples, through every contact phase (its penetration g < 0)
+        dense_t, dense_X, _, _ = compliant_states(f, t_from, t_to, compliant)
     for j, (c, ax) in enumerate(zip(contacts, axes[:, 0])):
         a, sigma, d, where = gaps[j]
-        g = sigma * (X @ a - d)
         mine = ev_c == j
-        zero_t = ev_t[mine & np.isin(kinds, [kind_of["impact"], kind_of["accumulation"], kind_of["stick"],
-                                            kind_of["release"], kind_of["grazing"]])]
-        tt = np.concatenate([t, zero_t])
-        gg = np.concatenate([g, np.zeros(len(zero_t))])
-        order = np.argsort(tt, kind="stable")
-        tt, gg = tt[order], gg[order]
-        sel = (tt >= t_from) & (tt <= t_to)
+        if compliant:
+            tt, gg = dense_t, sigma * (dense_X @ a - d)
+        else:
+            g = sigma * (X @ a - d)
+            zero_t = ev_t[mine & np.isin(kinds, [kind_of["impact"], kind_of["accumulation"], kind_of["stick"],
+                                                kind_of["release"], kind_of["grazing"]])]
+            tt = np.concatenate([t, zero_t])
+            gg = np.concatenate([g, np.zeros(len(zero_t))])
+            order = np.argsort(tt, kind="stable")
+            tt, gg = tt[order], gg[order]
+        sel = np.isnan(tt) | ((tt >= t_from) & (tt <= t_to))
         ax.plot(tt[sel], gg[sel], lw=1, color=OKABE_ITO[j % 7])
         ax.axhline(0, color="k", lw=1.0)
         sticks = ev_t[mine & (kinds == kind_of["stick"])]
@@ -1513,6 +1771,8 @@ def plot_gaps(f, title, save, window, contacts):
         head = chosen if chosen is not None else f"{title}\nevery gap, {t_from:.6g} ≤ t ≤ {t_to:.6g} ({status})"
         fig.suptitle((head + seq_line).lstrip("\n"), fontsize=fs(10))
     save(fig, "gaps")
+    if compliant:
+        plot_contact_forces(f, title, save, window, compliant)
     if "orbit" in f and "multipliers" in f["orbit"].attrs:
         plot_multipliers(f, title, save)
 

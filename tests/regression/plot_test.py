@@ -62,6 +62,66 @@ with tempfile.TemporaryDirectory() as d:
             check(f"{name}: closed-form flight reproduces the next sample ({compared} steps)",
                   compared > 100 and worst < 1e-9 * scale, f"worst {worst:.3g} over {compared}")
 
+    # Compliant stops (docs/compliant.md): the contact phase is linear, so the plot draws it
+    # exactly (vibro_plot.compliant_states). Its truth is the exact engine's samples: from each
+    # sample, through every entry and exit of its step, to the next sample; and the certified
+    # peak of each phase (the release's reaction_max) is never exceeded by the drawn force.
+    for name, scene in (("tube_compliant", "tube_compliant_support.toml"), ("sdnd121", "sdnd121_compliant.toml")):
+        h5 = simulate(d, name, scene, "run.periods=20", "run.samples_per_period=128")
+        with h5py.File(h5) as f:
+            cs = vibro_plot.compliant_contacts(f)
+            t, X, V = f["samples/t"][:], f["samples/X"][:], f["samples/V"][:]
+            ev, kinds = f["events/t"][:], f["events/kind"][:]
+            ev_c = f["events/contact"][:] if "contact" in f["events"] else np.zeros(len(ev), dtype=int)
+            kind_of = h5py.check_enum_dtype(f["events/kind"].dtype)
+            tt, XX, VV, jj = vibro_plot.compliant_states(f, t[0], t[-1], cs)
+            n = X.shape[1]
+            worst, compared = 0.0, 0
+            for k in range(len(t) - 1):
+                inside = np.nonzero((ev > t[k]) & (ev < t[k + 1]))[0]
+                if not len(inside):
+                    continue
+                i = inside[-1]
+                p_ = np.nonzero(tt == ev[i])[0]
+                if not len(p_):
+                    continue
+                after = int(ev_c[i]) if kinds[i] == kind_of["stick"] else -1
+                A = vibro_plot.phase_generator(f["model"], None if after < 0 else cs[after])
+                y = np.concatenate([XX[p_[-1]], VV[p_[-1]], vibro_plot.forcing_phases(f["model"], [ev[i]])[0], [1.0]])
+                y1 = vibro_plot.expm_batch(A[None] * (t[k + 1] - ev[i]))[0] @ y
+                worst = max(worst, np.abs(y1[:n] - X[k + 1]).max() / np.abs(X).max(),
+                            np.abs(y1[n:2 * n] - V[k + 1]).max() / np.abs(V).max())
+                compared += 1
+            rel = kinds == kind_of["release"]
+            check(f"{name}: the drawn contact phases and flights reach the next sample through every entry "
+                  f"and exit ({compared} steps)", compared >= rel.sum() and worst < 1e-9, f"worst {worst:.3g}")
+            lam = vibro_plot.contact_forces(cs, XX, VV, jj)
+            peaks = f["events/reaction_max"][:]
+            # The peaks' instants are on the drawn grid: phase by phase, the largest drawn force is
+            # the certified peak, evaluated independently (the matrix exponential of the phase).
+            durations = f["events/stick_duration"][:]
+            off, phases = 0.0, 0
+            for i in np.nonzero(rel)[0]:
+                j = int(ev_c[i])
+                span = (tt >= ev[i] - durations[i]) & (tt <= ev[i])
+                if not span.any():
+                    continue
+                off = max(off, abs(np.nanmax(lam[span, j]) - peaks[i]) / peaks[i])
+                phases += 1
+            check(f"{name}: every phase's drawn force reaches its certified peak and never exceeds it ({phases} phases)",
+                  phases == rel.sum() > 5 and off <= 1e-9, f"worst relative {off:.3g}")
+            inside = jj >= 0
+            check(f"{name}: in contact the drawn gap is a penetration (g ≤ 0), in flight a clearance",
+                  inside.any() and all((cs[j][2] * (XX[jj == j] @ cs[j][1] - cs[j][3]) <= 1e-12).all()
+                                       for j in set(jj[inside].tolist())), "")
+        for prefix in (name,):
+            out = os.path.join(d, prefix)
+            p = subprocess.run([vibro, "plot", h5, "--out", out], capture_output=True, text=True)
+            made = sorted(n_ for n_ in os.listdir(d) if n_.startswith(prefix + "_"))
+            check(f"{name}: vibro plot draws the forces and the peak histograms, no R* panel",
+                  p.returncode == 0 and f"{prefix}_forces.png" in made and f"{prefix}_peaks.png" in made
+                  and f"{prefix}_reaction.png" not in made, (p.returncode, p.stderr[-300:], made))
+
     # A run stored with 8 samples per period is drawn like one stored with 512.
     fine = simulate(d, "fine", "fig08_preload.toml", "run.periods=10", "run.samples_per_period=512")
     coarse = simulate(d, "coarse", "fig08_preload.toml", "run.periods=10", "run.samples_per_period=8")
