@@ -1259,7 +1259,11 @@ def check_impact(cert, m, ledger):
     def reason(node, text):
         prefix = interval_prefix(node, text, m)
         rest = text[len(prefix):]
-        g = re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period and no other contact "
+        # A frequency segment: uniqueness in the tube along the tangent (check_tangent), not in the box.
+        g = re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period in the tube along the "
+                         r"family's tangent \(the certificate's tangent: ũ \+ a\(ω − ω̃\) \+ W\) and no other "
+                         r"contact in its box of width (\S+) \(Krawczyk\)", rest) if in_frequency else \
+            re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period and no other contact "
                          r"in a box of width (\S+) around the orbit found \(Krawczyk\)", rest)
         if not g:
             raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")

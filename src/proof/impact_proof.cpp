@@ -560,8 +560,13 @@ Outcome ProveImpactOrbit(const IntervalModel& mdl, const ImpactGuess& guess, con
   for (std::size_t p = 0; p < u.size(); ++p) width = std::max(width, k.hi[p] - k.lo[p]);
   out.summary["box_width"] = width;
   out.proven = true;
-  out.reason = fmt::format("exactly one period-{} orbit with {} impact(s) per period and no other contact in a box of "
-                           "width {:.1e} around the orbit found (Krawczyk)", q, L.m, width);
+  // A frequency segment proves uniqueness in the tube along the tangent, not in the whole box.
+  out.reason = frequency_interval
+                   ? fmt::format("exactly one period-{} orbit with {} impact(s) per period in the tube along the "
+                                 "family's tangent (the certificate's tangent: ũ + a(ω − ω̃) + W) and no other contact "
+                                 "in its box of width {:.1e} (Krawczyk)", q, L.m, width)
+                   : fmt::format("exactly one period-{} orbit with {} impact(s) per period and no other contact in a "
+                                 "box of width {:.1e} around the orbit found (Krawczyk)", q, L.m, width);
   return out;
 }
 

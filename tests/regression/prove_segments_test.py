@@ -249,6 +249,13 @@ if tube_w:
              lambda c: c["tangent"].__setitem__("box", [[x / 100 for x in w] for w in c["tangent"]["box"]]))
     rejected(label, seg, "the tangent left out", lambda c: c.pop("tangent"))
 
+    def unique_in_box(c):  # uniqueness claimed in the whole box: the tangent's proof gives it in the tube only
+        head, rest = c["reason"].split(" in the tube along", 1)
+        width = rest.split("in its box of width ")[1].split(" ")[0]
+        c["reason"] = f"{head} and no other contact in a box of width {width} around the orbit found (Krawczyk)"
+        c["summary"]["reason"] = c["reason"]
+    rejected(label, seg, "uniqueness in the whole box claimed", unique_in_box)
+
     def narrow_time(c):
         c["summary"]["events"][0]["time"] = narrow(c["summary"]["events"][0]["time"], middle["times"][0])
     rejected(label, seg, "impact 0's time narrowed to the middle orbit's", narrow_time)
