@@ -115,6 +115,31 @@ void BM_ProveTubeGrazing(benchmark::State& state) {
   }
   state.counters["interval_width"] = width;
 }
+// Segments of a branch (docs/prove.md "Along a branch"): the tube over the amplitude, 0.3 to 0.302,
+// and over the forcing frequency, 0.9 to 0.901 (in a tube along the family's tangent, Taylor form in
+// ω): both ends' orbit searches (200-period transients, Newton) and the proof of every piece.
+void Segment(benchmark::State& state, const char* key, double lo, double hi) {
+  const std::string file = std::string(VIBRO_SCENES_DIR) + "/tube_loose_support.toml";
+  const auto at = [&](double v) {
+    return vibro::LoadScene(file, {"run.samples_per_period=0", std::string(key) + "=" + std::to_string(v)}).scene;
+  };
+  const auto a = at(lo), b = at(hi);
+  const vibro::System sa(a), sb(b);
+  vibro::ProofRequest req;
+  req.kind = vibro::OrbitKind::kImpact;
+  std::size_t pieces = 0;
+  for (auto _ : state) {
+    const auto r = vibro::ProveOrbitOverInterval(sa, a, req, sb, b, req);
+    if (!r.front().proven) state.SkipWithError(("not proven: " + r.front().reason).c_str());
+    pieces = r.size();
+  }
+  state.counters["pieces"] = static_cast<double>(pieces);
+}
+void BM_ProveTubeAmplitudeSegment(benchmark::State& s) { Segment(s, "excitation.amplitude", 0.3, 0.302); }
+void BM_ProveTubeFrequencySegment(benchmark::State& s) { Segment(s, "excitation.frequency", 0.9, 0.901); }
+
+BENCHMARK(BM_ProveTubeAmplitudeSegment)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ProveTubeFrequencySegment)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ProveTubeGrazing)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove1DofImpact)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Prove2DofSticking)->Unit(benchmark::kMillisecond);

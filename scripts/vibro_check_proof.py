@@ -319,6 +319,77 @@ def dexp(x):
     return iv.exp(x)
 
 
+class J2:
+    """A univariate second-order Taylor jet (value, first and second derivative), each an mpmath
+    interval: forward differentiation to second order in one variable, for the Taylor form of a
+    frequency segment (check_tangent). Over an interval of the variable, d2 encloses the second
+    derivative there."""
+
+    def __init__(self, v, d1=None, d2=None):
+        self.v, self.d1, self.d2 = v, ZERO if d1 is None else d1, ZERO if d2 is None else d2
+
+    @staticmethod
+    def lift(x):
+        return x if isinstance(x, J2) else J2(x)
+
+    def __add__(self, o):
+        o = J2.lift(o)
+        return J2(self.v + o.v, self.d1 + o.d1, self.d2 + o.d2)
+
+    __radd__ = __add__
+
+    def __neg__(self):
+        return J2(-self.v, -self.d1, -self.d2)
+
+    def __sub__(self, o):
+        return self + (-J2.lift(o))
+
+    def __rsub__(self, o):
+        return J2.lift(o) - self
+
+    def __mul__(self, o):
+        o = J2.lift(o)
+        return J2(self.v * o.v, self.d1 * o.v + self.v * o.d1, self.d2 * o.v + 2 * self.d1 * o.d1 + self.v * o.d2)
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, o):
+        o = J2.lift(o)
+        inv = 1 / o.v
+        return self * J2(inv, -o.d1 * inv * inv, 2 * o.d1 * o.d1 * inv * inv * inv - o.d2 * inv * inv)
+
+    def __rtruediv__(self, o):
+        return J2.lift(o) / self
+
+    def apply(self, f, f1, f2):
+        """f(self) from f, f' and f'' at the value: (f∘x)'' = f''(x) x'² + f'(x) x''."""
+        return J2(f, f1 * self.d1, f2 * self.d1 * self.d1 + f1 * self.d2)
+
+
+_dsin, _dcos, _dexp = dsin, dcos, dexp
+
+
+def dsin(x):  # noqa: F811
+    if isinstance(x, J2):
+        s, c = iv.sin(x.v), iv.cos(x.v)
+        return x.apply(s, c, -s)
+    return _dsin(x)
+
+
+def dcos(x):  # noqa: F811
+    if isinstance(x, J2):
+        s, c = iv.sin(x.v), iv.cos(x.v)
+        return x.apply(c, -s, -c)
+    return _dcos(x)
+
+
+def dexp(x):  # noqa: F811
+    if isinstance(x, J2):
+        e = iv.exp(x.v)
+        return x.apply(e, e, e)
+    return _dexp(x)
+
+
 def value(x):
     return x.v if isinstance(x, D) else x
 
@@ -413,9 +484,19 @@ class Model:
             return next(iter(self.ends))
         return None
 
+    def frequency_interval(self):
+        """True when the model's one parameter interval is the forcing frequency (a segment of a branch
+        in ω): the residual is not affine in it, and Krawczyk's constant term takes the mean-value
+        form in ω (frequency_slope)."""
+        return len(self.ends) == 1 and "frequency" in self.ends
+
     def with_parameter(self, name, x):
-        """This model with the parameter `name` (amplitude, stop, restitution) equal to x."""
+        """This model with the parameter `name` (amplitude, stop, restitution, frequency) equal to x."""
         m = copy.copy(self)
+        if name == "frequency":
+            m.w = x
+            m.T = 2 * iv.pi / x
+            return m
         if name == "amplitude":
             m.f = x
         elif name == "stop":
@@ -543,6 +624,34 @@ class Model:
         wt = self.w * t
         turns = mp.floor(mid(wt) / (2 * mp.pi))
         return wt - iv.mpf(turns) * 2 * iv.pi
+
+
+def flight_in_frequency(m, w, t0, X, V, s):
+    """The free flight with the forcing frequency w a differentiation variable (a D or a J2; t0, X,
+    V, s constants or of the same type): per mode the forced response U = P sin wt + Q cos wt of
+    Ü + 2σU̇ + ω_i²U = T_A f sin wt, plus the free part e^{−σs}(a cos ω_d s + b sin ω_d s) matching X
+    and V at t0 (σ = ζω_i, ω_d = ω_i√(1 − ζ²); undamped σ = 0, ω_d = ω_i). Written here in the plain
+    form (docs/model.md §2 and §7), for ∂F/∂ω of a frequency segment only."""
+    L = type(w).lift
+    t0, s = L(t0), L(s)
+    Xo, Vo = [], []
+    for i in range(m.n):
+        z = m.zeta[i] if m.zeta is not None else ZERO
+        wi = L(m.w_i[i])
+        sg, wd = L(z * m.w_i[i]), L(m.w_i[i] * iv.sqrt(1 - z * z))
+        det = wi * wi - w * w
+        damp = L(iv.mpf(2)) * sg * w
+        den = det * det + damp * damp
+        load = L(m.TA[i] * m.f)
+        P, Q = load * det / den, -(load * damp / den)
+        U = lambda t: P * dsin(w * t) + Q * dcos(w * t)  # noqa: E731
+        Ud = lambda t: w * (P * dcos(w * t) - Q * dsin(w * t))  # noqa: E731
+        a = L(X[i]) - U(t0)
+        b = (L(V[i]) - Ud(t0) + a * sg) / wd
+        e, cd, sd = dexp(-(s * sg)), dcos(s * wd), dsin(s * wd)
+        Xo.append(U(t0 + s) + e * (a * cd + b * sd))
+        Vo.append(Ud(t0 + s) + e * ((b * wd - a * sg) * cd - (a * wd + b * sg) * sd))
+    return Xo, Vo
 
 
 # ---- Claims ------------------------------------------------------------------------------------
@@ -896,15 +1005,18 @@ def check_impact(cert, m, ledger):
         b = j * per
         return vec[b], vec[b + 1:b + 1 + n], vec[b + 1 + n:b + per]
 
-    def residual(vec, m=m):
+    def residual(vec, m=m, w=None):
+        """The shooting residual F(vec) of the model m; with w (the forcing frequency a
+        differentiation variable: a D with vec constants, or a J2 with vec of J2) by
+        flight_in_frequency."""
         out = []
         for j in range(count):
             k = (j + 1) % count
             t, X, V = unpack(vec, j)
             tn, Xn, Vn = unpack(vec, k)
             if j == count - 1:
-                tn = tn + qT
-            Xe, Ve = m.flight(t, X, V, tn - t)
+                tn = tn + q * m.T if w is None else type(w).lift(tn) + type(w).lift(2 * q * iv.pi) / w
+            Xe, Ve = m.flight(t, X, V, tn - t) if w is None else flight_in_frequency(m, w, t, X, V, tn - t)
             Vp = m.impact(Ve, hits[k])
             out.append(m.contact_of(X, hits[j]) - m.contacts[hits[j]][2])
             out += [Xe[i] - Xn[i] for i in range(n)]
@@ -917,12 +1029,26 @@ def check_impact(cert, m, ledger):
     # for the whole of P at once, F(ũ, P) loses the correlation of its components, and C F(ũ, P)
     # comes out far wider than the orbits' spread over P (several modes: wider than the box).
     affine = m.affine_parameter()
+    # Over an interval P of the forcing frequency the residual is not affine: the mean-value form
+    # ũ − C F(ũ, ω̃) − (C ∂F/∂ω(ũ, P))(P − ω̃), ω̃ the middle of P, ∂F/∂ω over P at the point ũ by
+    # forward differentiation of flight_in_frequency (docs/prove.md "Along a branch").
+    in_frequency = m.frequency_interval()
+    swept = affine or ("frequency" if in_frequency else None)
 
     def krawczyk_over(model, ends):
         """Krawczyk's operator for every parameter of `model`; `ends`: the models at the two ends
-        of its affine parameter interval (or [model])."""
+        of its affine parameter interval (or [model]; a frequency interval: [model])."""
         def constant(center):
             """ũ − C F(ũ, p) for every p of the model's parameters, enclosed."""
+            if in_frequency:
+                P = model.w
+                wc = iv.mpf(mid(P))
+                u = [iv.mpf(x) for x in center]
+                F = [value(r) for r in residual(u, model.with_parameter("frequency", wc))]
+                dF = [r.g.get(0, ZERO) if isinstance(r, D) else ZERO
+                      for r in residual(u, model, variable(P, 0))]
+                return [iv.mpf(center[p]) - sum((C[p][j] * F[j] for j in range(N)), ZERO)
+                        - sum((C[p][j] * dF[j] for j in range(N)), ZERO) * (P - wc) for p in range(N)]
             parts = []
             for end in ends:
                 F = [value(r) for r in residual([iv.mpf(x) for x in center], end)]
@@ -951,8 +1077,15 @@ def check_impact(cert, m, ledger):
 
     krawczyk = krawczyk_over(m, [m.with_parameter(affine, e) for e in m.ends[affine]] if affine else [m])
 
-    # 1. Existence and uniqueness in the certificate's box.
-    K = krawczyk(u_mid, U)
+    # 1. Existence and uniqueness in the certificate's box. A frequency segment: in the tube along
+    # the family's tangent (check_tangent), K of the tube mapped to u.
+    if cert.has("tangent") != in_frequency:
+        (cert["tangent"] if cert.has("tangent") else cert).fail(
+            "a segment in the forcing frequency has a 'tangent' (docs/prove.md), nothing else has")
+    if in_frequency:
+        K, tube = check_tangent(cert["tangent"], m, residual, u_mid, U, C, N)
+    else:
+        K = krawczyk(u_mid, U)
     # 2. The true orbit, enclosed tightly: Newton at 192 bits from the midpoint, then Krawczyk's
     # test of the checker's own on a box of relative radius 2^-120 around it, inside U (so the
     # zero there is the one of U). A parameter interval has a set of orbits: K(U) ∩ U, iterated.
@@ -968,7 +1101,7 @@ def check_impact(cert, m, ledger):
     def flight_quantities(vec, mm, j):
         k = (j + 1) % count
         t, X, V = unpack(vec, j)
-        tn = unpack(vec, k)[0] + (qT if j == count - 1 else 0)
+        tn = unpack(vec, k)[0] + (q * mm.T if j == count - 1 else 0)
         S = tn - t
         Xe, Ve = mm.flight(t, X, V, S)
         M2 = [mm.derivative_bound(t, X, V, 2, l) for l in range(len(mm.contacts))]
@@ -1011,15 +1144,15 @@ def check_impact(cert, m, ledger):
     # the pieces.
     # The quantities over the box likewise: the hull over the pieces of their values over (U, P_k).
     piece_models = []
-    if affine:
-        p0, p1 = m.ends[affine]
+    if swept:
+        p0, p1 = m.ends[swept]
         cuts = [p0] + [p0 + (p1 - p0) * k / PARAMETER_PIECES for k in range(1, PARAMETER_PIECES)] + [p1]
         parts = []
         for k in range(PARAMETER_PIECES):
             a_, b_ = cuts[k], cuts[k + 1]
-            mk = m.with_parameter(affine, iv.mpf([lo(a_), hi(b_)]))
+            mk = m.with_parameter(swept, iv.mpf([lo(a_), hi(b_)]))
             piece_models.append(mk)
-            kk = krawczyk_over(mk, [m.with_parameter(affine, a_), m.with_parameter(affine, b_)])
+            kk = krawczyk_over(mk, [m.with_parameter(swept, a_), m.with_parameter(swept, b_)])
             Ek = E
             for _ in range(3):
                 Kn = kk([mid(x) for x in Ek], Ek)
@@ -1086,7 +1219,17 @@ def check_impact(cert, m, ledger):
         for l in range(len(m.contacts)):
             bottom = lo(ws) if l == cj else mp.mpf(0)
             top = hi(iv.mpf(hi(S)) - we) if l == ck else hi(S)
-            if bottom < top:
+            if bottom < top and in_frequency:
+                # A frequency segment: the orbits of each piece P_k lie in its tube T_k (check_tangent),
+                # far narrower than the box in the times; the gap over the union of (T_k, P_k).
+                starts = [unpack(tube(mk.w), j) + (mk,) for mk in piece_models]
+                positive_pieces(gap_nodes[l]["pieces"], bottom, top,
+                                lambda s, l=l: hull_tree([mk.contact_of(mk.flight(tk, Xk, Vk, s)[0], l) - mk.contacts[l][2]
+                                                          for tk, Xk, Vk, mk in starts]),
+                                lambda s, l=l: hull_tree([mk.contact_of(mk.flight(tk, Xk, Vk, s)[1], l)
+                                                          for tk, Xk, Vk, mk in starts]),
+                                f"the gap on {gap_where[l]}", budget)
+            elif bottom < top:
                 positive_pieces(gap_nodes[l]["pieces"], bottom, top,
                                 lambda s, l=l: m.contact_of(m.flight(t, X, V, s)[0], l) - m.contacts[l][2],
                                 lambda s, l=l: m.contact_of(m.flight(t, X, V, s)[1], l), f"the gap on {gap_where[l]}",
@@ -1116,7 +1259,11 @@ def check_impact(cert, m, ledger):
     def reason(node, text):
         prefix = interval_prefix(node, text, m)
         rest = text[len(prefix):]
-        g = re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period and no other contact "
+        # A frequency segment: uniqueness in the tube along the tangent (check_tangent), not in the box.
+        g = re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period in the tube along the "
+                         r"family's tangent \(the certificate's tangent: ũ \+ a\(ω − ω̃\) \+ W\) and no other "
+                         r"contact in its box of width (\S+) \(Krawczyk\)", rest) if in_frequency else \
+            re.fullmatch(r"exactly one period-(\d+) orbit with (\d+) impact\(s\) per period and no other contact "
                          r"in a box of width (\S+) around the orbit found \(Krawczyk\)", rest)
         if not g:
             raise NotConfirmed(f"{node.path}: '{text[:120]}' is not a statement the checker verifies")
@@ -1165,6 +1312,61 @@ def hull_tree(items):
 
 def matmul(A, B):
     return [[sum((A[i][k] * B[k][j] for k in range(len(B))), ZERO) for j in range(len(B[0]))] for i in range(len(A))]
+
+
+def check_tangent(node, m, residual, u_mid, U, C, N):
+    """Krawczyk's test of a segment in the forcing frequency (docs/prove.md "Along a branch"): with
+    the centre ω̃ ∈ P, the direction a and the box W ∋ 0 of the certificate's `tangent`, for every
+    p ∈ P the orbits are u = ũ + a(p − ω̃) + w, w ∈ W a zero of G_p(w) = F(ũ + a(p − ω̃) + w, p), and
+    K(W) = −C G_p(0) + (I − C J_u(T, P)) W ⊂ int W, T = ũ + a(P − ω̃) + W (inside the certificate's
+    box), proves one zero in W for each p. G_p(0) = g(p) by Taylor's theorem with the Lagrange
+    remainder, g(ω̃) + g'(ω̃)(p − ω̃) + g''(P)(p − ω̃)²/2, from second-order jets (J2) of the residual
+    with the frequency a variable, written here (flight_in_frequency). Returns K mapped to u,
+    ũ + a(P − ω̃) + K(W): the certificate's Krawczyk records must lie in the box and contain the
+    orbits it encloses."""
+    node.obj(("centre", "direction", "box"))
+    P = m.w
+    wc = iv.mpf(node["centre"].num())
+    if not (lo(P) <= lo(wc) and hi(wc) <= hi(P)):
+        node["centre"].fail(f"{node['centre'].v} is not inside the frequency interval")
+    a = [iv.mpf(x.num()) for x in node["direction"].items(exactly=N)]
+    W = [x.pair() for x in node["box"].items(exactly=N)]
+    for p in range(N):
+        if not (lo(W[p]) <= 0 <= hi(W[p])):
+            node["box"][p].fail("the tube's box must hold 0 (the centre of the expansion)")
+    delta = iv.mpf([min(lo(P - wc), 0), max(hi(P - wc), 0)])
+    d2 = iv.mpf([0, max(abs(lo(delta)), abs(hi(delta))) ** 2])  # (p − ω̃)² over P
+
+    def along(d):
+        dj = J2(d, ONE)
+        return residual([J2(iv.mpf(u_mid[p])) + J2(a[p]) * dj for p in range(N)], m, J2(wc) + dj)
+
+    at, over = along(ZERO), along(delta)
+    g = [J2.lift(at[l]).v + J2.lift(at[l]).d1 * delta + J2.lift(over[l]).d2 * d2 / 2 for l in range(N)]
+    T = [iv.mpf(u_mid[p]) + a[p] * delta + W[p] for p in range(N)]
+    for p in range(N):
+        if not inside(T[p], U[p]):
+            raise NotConfirmed(f"the tube's component {p}, {show_iv(T[p])}, is not inside the box {show_iv(U[p])}")
+    J = [r.g if isinstance(r, D) else {} for r in residual([variable(T[p], p) for p in range(N)], m)]
+    K, KU = [], []
+    for p in range(N):
+        k = -sum((C[p][j] * g[j] for j in range(N)), ZERO)
+        acc = {}
+        for j in range(N):
+            for l, d in J[j].items():
+                acc[l] = acc[l] + C[p][j] * d if l in acc else C[p][j] * d
+        for l in range(N):
+            k += ((ONE if l == p else ZERO) - acc.get(l, ZERO)) * W[l]
+        if not (lo(k) > lo(W[p]) and hi(k) < hi(W[p])):
+            raise NotConfirmed(f"Krawczyk's test in the tube fails: K(W) component {p}, {show_iv(k)}, is not inside "
+                               f"the interior of W = {show_iv(W[p])}")
+        K.append(k)
+        KU.append(iv.mpf(u_mid[p]) + a[p] * delta + k)
+
+    def tube(Pk):
+        """ũ + a(P_k − ω̃) + W: every orbit of a piece P_k of the interval lies in it."""
+        return [iv.mpf(u_mid[p]) + a[p] * (Pk - wc) + W[p] for p in range(N)]
+    return KU, tube
 
 
 def contract(residual, krawczyk, u_mid, U, K, C, point_model, thin_model=False):
@@ -3564,7 +3766,7 @@ def check(node):
         node.obj(CERT_KEYS + STICKING_MODES_KEYS, ("structure",))
     else:
         node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-                 (("tail",) if kind == "sticking" else ("impact_contacts",)) + ("structure",))
+                 (("tail",) if kind == "sticking" else ("impact_contacts", "tangent")) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]

@@ -17,6 +17,7 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -519,6 +520,48 @@ std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& 
   return {r.summary_json, r.certificate_json, false};
 }
 
+// vibro.prove_segment: the segment of `vibro prove --branch` between two parameter values of a
+// branch (docs/prove.md "Along a branch"): every orbit for every value of [lo, hi] at once, halved
+// as the CLI does. Each end's orbit is the branch's stored point nearest it (within 1e-9 relative),
+// or without a branch the one the scene's start reaches. The summaries and the certificates of the
+// pieces as JSON lists, and whether a stop request ended it.
+std::tuple<std::string, std::string, bool> ProveSegment(const PyScene& s, const std::string& key, double lo, double hi,
+                                                        const std::string& branch, double time_limit,
+                                                        bool handle_sigint) {
+  if (!(time_limit > 0) || !std::isfinite(time_limit))
+    throw vibro::InputError({fmt::format("time_limit {}: expected a positive number of seconds", time_limit)});
+  if (!std::isfinite(lo) || !std::isfinite(hi) || !(lo < hi))
+    throw vibro::InputError({fmt::format("lo {}, hi {}: expected two finite numbers, lo < hi", lo, hi)});
+  std::array<vibro::Scene, 2> scenes{vibro::frontend::SceneWith(s.origin, key, lo),
+                                     vibro::frontend::SceneWith(s.origin, key, hi)};
+  std::array<vibro::ProofRequest, 2> reqs;
+  for (int e = 0; e < 2; ++e) {
+    reqs[e].time_limit = time_limit;
+    if (branch.empty()) continue;
+    const double v = e ? hi : lo;
+    const auto near = vibro::NearestBranchPoint(branch, v, 1e-9 * (1 + std::abs(v)));
+    if (near.param != key)
+      throw vibro::InputError({fmt::format("branch {}: a branch in {}, not {}", branch, near.param, key)});
+    if (std::abs(near.value - v) > 1e-9 * (1 + std::abs(v)))
+      throw vibro::InputError({fmt::format("branch {}: no stored point at {} = {} (the nearest is at {})", branch,
+                                           key, v, near.value)});
+    reqs[e].start = vibro::InitialOverride{near.section_time, near.X, near.V};
+    reqs[e].period = near.period;
+  }
+  const vibro::System lo_sys(scenes[0]), hi_sys(scenes[1]);
+  SigintGuard guard(handle_sigint);
+  py::gil_scoped_release release;
+  for (auto& r : reqs) r.stop_requested = guard.flag();
+  const auto pieces = vibro::ProveOrbitOverInterval(lo_sys, scenes[0], reqs[0], hi_sys, scenes[1], reqs[1]);
+  if (pieces.front().interrupted || guard.interrupted()) return {"", "", true};
+  std::string summaries = "[", certificates = "[";
+  for (const auto& piece : pieces) {
+    summaries += (summaries.size() > 1 ? ", " : "") + piece.summary_json;
+    if (!piece.certificate_json.empty()) certificates += (certificates.size() > 1 ? ", " : "") + piece.certificate_json;
+  }
+  return {summaries + "]", certificates + "]", false};
+}
+
 std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string& key, double to,
                                             double step, long long max_points, long long period,
                                             const std::string& kind, const std::string& out,
@@ -944,6 +987,7 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("orbit", Entry("orbit", &Orbit));
   m.def("prove", Entry("prove", &Prove));
   m.def("prove_bifurcation", Entry("prove", &ProveBifurcationPoint));
+  m.def("prove_segment", Entry("prove", &ProveSegment));
   m.def("continue_branch", Entry("continue", &ContinueBranch));
   m.def("study", Entry("basin", &Study));
   m.def("sweep", Entry("sweep", &SweepScene));

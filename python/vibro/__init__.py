@@ -69,7 +69,7 @@ EVENT_KINDS = _EventKinds({1: "impact", 2: "accumulation", 3: "stick", 4: "relea
 #: Motion modes of ``samples["mode"]``: 0 free flight, 1 sticking.
 MODES = {0: "free", 1: "sticking"}
 
-__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "continue_", "curve",
+__all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "prove_segment", "continue_", "curve",
            "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
            "EVENT_KINDS", "MODES", "LOAD_FIELDS", "LimitError"]
@@ -444,6 +444,27 @@ def prove_bifurcation(scene, kind, param, value, out=None, time_limit=60.0, bran
     if out is not None:
         with open(_path("out", out), "w", encoding="utf-8") as fh:
             fh.write(certificate + "\n")
+    return _json.loads(text)
+
+
+def prove_segment(scene, param, lo, hi, branch=None, out=None, time_limit=60.0):
+    """Proves the segment of ``vibro prove --branch`` between two parameter values (docs/prove.md
+    "Along a branch"): for every value of ``param`` ("excitation.amplitude",
+    "excitation.frequency", the stop position or the restitution) in [``lo``, ``hi``], exactly one
+    impacting orbit with the ends' impact sequence in the box of each piece (the interval halved up
+    to 5 times). Each end's orbit is ``branch``'s stored point at that value (the HDF5 file of
+    ``continue_``), or without a branch the one the scene's start reaches. Returns the list of the
+    pieces' dicts (``verdict``, ``reason``, ``events``, ...); ``out`` receives
+    ``{"certificates": [...]}``, which ``vibro_check_proof.py`` re-verifies."""
+    text, certificates, interrupted = _vibro.prove_segment(_scene(scene), str(param), _float("lo", lo),
+                                                           _float("hi", hi),
+                                                           "" if branch is None else _path("branch", branch),
+                                                           _float("time_limit", time_limit), _main_thread())
+    if interrupted:
+        raise _interrupted("proof", None)
+    if out is not None:
+        with open(_path("out", out), "w", encoding="utf-8") as fh:
+            fh.write('{"certificates": ' + certificates + "}\n")
     return _json.loads(text)
 
 

@@ -67,8 +67,11 @@ struct AffineEnds {
   IntervalModel lo, hi;
 };
 
+// frequency_interval: the model's forcing frequency is the parameter interval P of a segment; the
+// residual is not affine in it, and Krawczyk's constant term takes the mean-value form in ω
+// (impact_proof.cpp CentreInFrequency; docs/prove.md "Along a branch").
 Outcome ProveImpactOrbit(const IntervalModel& model, const ImpactGuess& guess, const ProofRequest& request,
-                         const Budget& budget, const AffineEnds* ends = nullptr);
+                         const Budget& budget, const AffineEnds* ends = nullptr, bool frequency_interval = false);
 // A sticking orbit of several modes held on contact 0 with plastic landings (r = 0), as the
 // Poincaré solver found it: the release (time, modal state), then each landing (time, state just
 // after the plastic impact); every landing but the last departs at once (R < 0), the last sticks

@@ -550,8 +550,9 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
       }
       return m;
     };
-    // The residual is affine in the amplitude, the stop position and the restitution (not in the
-    // forcing frequency): Krawczyk's constant term from the two ends (proof_common.hpp AffineEnds).
+    // The residual is affine in the amplitude, the stop position and the restitution: Krawczyk's
+    // constant term from the two ends (proof_common.hpp AffineEnds). Not in the forcing frequency:
+    // there the mean-value form in ω (impact_proof.cpp CentreInFrequency).
     std::optional<proof::AffineEnds> ends;
     if (field != &frequency) ends = proof::AffineEnds{model_at(x0), model_at(x1)};
     const auto m = model_at("[" + x0 + ", " + x1 + "]");
@@ -568,7 +569,7 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
       g.X[j] = (X0 + X1) / 2;
       g.V[j] = (V0 + V1) / 2;
     }
-    auto o = proof::ProveImpactOrbit(m, g, lo, budget, ends ? &*ends : nullptr);
+    auto o = proof::ProveImpactOrbit(m, g, lo, budget, ends ? &*ends : nullptr, field == &frequency);
     const std::string interval = *field;
     const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
     const std::string xm = Decimal(vm);

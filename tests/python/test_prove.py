@@ -95,3 +95,37 @@ def test_prove_bifurcation_matches_the_command_and_its_certificate_is_confirmed(
     assert c.returncode == 0, c.stdout + c.stderr
     r = vibro.prove_bifurcation(str(path), "branch-point", "excitation.amplitude", 3.2860503583579958)
     assert r["verdict"] == "not-proven" and "no pitchfork is proven" in r["reason"]
+
+
+def test_prove_segment_in_the_frequency_contains_the_50_digit_orbits(tmp_path):
+    """vibro.prove_segment (docs/prove.md "Segments in the frequency"): the tube over ω = 0.9 to
+    0.901, each end's orbit the one the scene's start reaches; every piece proven, the certificates
+    confirmed, and the orbit at the ends and the middle of each piece (Newton at 50 digits on the
+    shooting map of tests/regression/prove_truth.py, nothing from vibro's sources) in its enclosures."""
+    sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "regression"))
+    import copy
+
+    from mpmath import mp, mpf
+    from prove_truth import inside, orbit_truth
+    mp.dps = 50
+    scene = os.path.join(SCENES, "tube_loose_support.toml")
+    cert = tmp_path / "segment.json"
+    pieces = vibro.prove_segment(scene, "excitation.frequency", 0.9, 0.901, out=cert)
+    assert pieces and all(p["verdict"] == "proven" for p in pieces), [p["reason"][:200] for p in pieces]
+    assert all(p["reason"].startswith("for every frequency in [") for p in pieces)
+    c = subprocess.run([sys.executable, CHECKER, str(cert)], capture_output=True, text=True, timeout=900)
+    assert c.returncode == 0, c.stdout + c.stderr
+    certs = json.load(open(cert))["certificates"]
+    assert len(certs) == len(pieces) and all("tangent" in x for x in certs)
+    for x, s in zip(certs, pieces):
+        a, z = (mpf(v.strip()) for v in x["model"]["frequency"][1:-1].split(","))
+        for value in (a, (a + z) / 2, z):
+            y = copy.deepcopy(x)
+            y["model"]["frequency"] = mp.nstr(value, 30)
+            tr = orbit_truth(y)
+            for j, e in enumerate(s["events"]):
+                assert inside(tr["times"][j], e["time"]) and inside(tr["vbefore"][j], e["velocity_before"])
+            t0, X0, V0 = tr["section"]
+            assert inside(t0, s["section"]["time"]) and all(inside(v, p) for v, p in zip(V0, s["section"]["V"]))
+    with pytest.raises(ValueError):  # lo < hi
+        vibro.prove_segment(scene, "excitation.frequency", 0.901, 0.9)

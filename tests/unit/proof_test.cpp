@@ -2,6 +2,7 @@
 // certified tests, against truths computed another way: decimals that doubles cannot hold, libm at
 // sample points, conservation of energy, finite differences, known spectra.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -13,6 +14,7 @@
 
 #include "proof/enclosure.hpp"
 #include "proof/interval.hpp"
+#include "proof/jet.hpp"
 #include "proof/positivity.hpp"
 #include "proof/proof_common.hpp"
 #include "vibro/stop_request.hpp"
@@ -93,6 +95,36 @@ TEST(Enclosure, TheImpactLawReversesAndScalesTheContactVelocity) {
   const auto after = Impact(m, std::vector<Interval>{Interval(-2.0)});
   EXPECT_TRUE(after[0].Contains(1.5));  // ẋ_B⁺ = −r ẋ_B⁻, r = 0.75
   EXPECT_LT(after[0].width(), 1e-30);
+}
+
+// The second-order jet of the frequency segments (jet.hpp) against closed-form derivatives:
+// f(x) = e^{−x/3} sin(x²)/(2 + cos x), f' and f'' written out by hand, at points (thin) and over an
+// interval, where every derivative at every point must lie in the enclosure.
+TEST(Jet2, EnclosesTheFirstAndSecondDerivativesOfAClosedForm) {
+  const auto f = [](const Jet2& x) { return Exp(-(x / Jet2(3.0))) * Sin(x * x) / (Jet2(2.0) + Cos(x)); };
+  const auto exact = [](double x) {
+    // f = u v / w: u = e^{−x/3}, v = sin x², w = 2 + cos x.
+    const double u = std::exp(-x / 3), du = -u / 3, ddu = u / 9;
+    const double v = std::sin(x * x), dv = 2 * x * std::cos(x * x), ddv = 2 * std::cos(x * x) - 4 * x * x * std::sin(x * x);
+    const double w = 2 + std::cos(x), dw = -std::sin(x), ddw = -std::cos(x);
+    const double g = u * v, dg = du * v + u * dv, ddg = ddu * v + 2 * du * dv + u * ddv;
+    const double d1 = (dg * w - g * dw) / (w * w);
+    const double d2 = (ddg * w - g * ddw) / (w * w) - 2 * dw * (dg * w - g * dw) / (w * w * w);
+    return std::array<double, 3>{g / w, d1, d2};
+  };
+  for (double x : {0.3, 1.1, 2.7}) {
+    const Jet2 y = f(Jet2::Variable(Interval(x)));
+    const auto e = exact(x);
+    EXPECT_NEAR(y.v.mid(), e[0], 1e-13);
+    EXPECT_NEAR(y.d1.mid(), e[1], 1e-12);
+    EXPECT_NEAR(y.d2.mid(), e[2], 1e-11);
+    EXPECT_LT(y.d2.hi() - y.d2.lo(), 1e-12);
+  }
+  const Jet2 over = f(Jet2::Variable(Interval::Hull(1.0, 1.01)));
+  for (int k = 0; k <= 100; ++k) {
+    const auto e = exact(1.0 + 0.01 * k / 100);
+    EXPECT_TRUE(over.d1.Contains(e[1]) && over.d2.Contains(e[2])) << k;
+  }
 }
 
 TEST(Positivity, ProvesAPositiveFunctionAndLocatesTheFailureOfAnother) {
