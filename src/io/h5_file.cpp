@@ -18,6 +18,7 @@
 
 #include <fmt/format.h>
 
+#include "io/chunk_deflate.hpp"
 #include "vibro/hdf5_store.hpp"
 
 // ---- The HDF5 C API, loaded at first use ----
@@ -44,7 +45,7 @@
     X(H5Aclose) X(H5Acreate2) X(H5Adelete) X(H5Aexists) X(H5Aget_space) X(H5Aget_type) \
     X(H5Aiterate2) X(H5Aiterate_by_name) X(H5Aopen) X(H5Aread) X(H5Awrite) X(H5Dclose) \
     X(H5Dcreate2) X(H5Dget_space) X(H5Dget_type) X(H5Dopen2) X(H5Dread) X(H5Dset_extent) \
-    X(H5Dvlen_reclaim) X(H5Dwrite) X(H5Eset_auto2) X(H5Ewalk2) X(H5Fclose) X(H5Fcreate) \
+    X(H5Dvlen_reclaim) X(H5Dwrite) X(H5Dwrite_chunk) X(H5Eset_auto2) X(H5Ewalk2) X(H5Fclose) X(H5Fcreate) \
     X(H5Fflush) X(H5Fget_mdc_size) X(H5Fget_name) X(H5Fget_vfd_handle) X(H5Fis_hdf5) X(H5Fopen) \
     X(H5Gclose) X(H5Gcreate2) X(H5Gget_info) X(H5Gopen2) X(H5Idec_ref) X(H5Iget_file_id) \
     X(H5Iget_type) X(H5Ldelete) X(H5Lexists) X(H5Lget_name_by_idx) X(H5Literate) \
@@ -53,7 +54,7 @@
     X(H5Pset_file_space_strategy) X(H5Pset_mdc_config) X(H5Pset_shuffle) X(H5Sclose) X(H5Scopy) \
     X(H5Screate) X(H5Screate_simple) X(H5Sget_simple_extent_dims) X(H5Sget_simple_extent_ndims) \
     X(H5Sget_simple_extent_npoints) X(H5Sselect_hyperslab) X(H5Tclose) X(H5Tcopy) \
-    X(H5Tdetect_class) X(H5Tenum_create) X(H5Tenum_insert) X(H5Tget_class) X(H5Tget_native_type) \
+    X(H5Tdetect_class) X(H5Tenum_create) X(H5Tequal) X(H5Tenum_insert) X(H5Tget_class) X(H5Tget_native_type) \
     X(H5Tget_size) X(H5Tis_variable_str) X(H5Tset_cset) X(H5Tset_size) X(H5check_version) \
     X(H5free_memory) X(H5open)
 
@@ -146,6 +147,7 @@ inline const Hdf5Api& Hdf5() {
 #define H5Dset_extent (::vibro::h5::Hdf5().H5Dset_extent)
 #define H5Dvlen_reclaim (::vibro::h5::Hdf5().H5Dvlen_reclaim)
 #define H5Dwrite (::vibro::h5::Hdf5().H5Dwrite)
+#define H5Dwrite_chunk (::vibro::h5::Hdf5().H5Dwrite_chunk)
 #define H5Eset_auto2 (::vibro::h5::Hdf5().H5Eset_auto2)
 #define H5Ewalk2 (::vibro::h5::Hdf5().H5Ewalk2)
 #define H5Fclose (::vibro::h5::Hdf5().H5Fclose)
@@ -192,6 +194,7 @@ inline const Hdf5Api& Hdf5() {
 #define H5Tdetect_class (::vibro::h5::Hdf5().H5Tdetect_class)
 #define H5Tenum_create (::vibro::h5::Hdf5().H5Tenum_create)
 #define H5Tenum_insert (::vibro::h5::Hdf5().H5Tenum_insert)
+#define H5Tequal (::vibro::h5::Hdf5().H5Tequal)
 #define H5Tget_class (::vibro::h5::Hdf5().H5Tget_class)
 #define H5Tget_native_type (::vibro::h5::Hdf5().H5Tget_native_type)
 #define H5Tget_size (::vibro::h5::Hdf5().H5Tget_size)
@@ -821,6 +824,9 @@ Column::Column(Id group, const std::string& name, const Type& type, Size cols)
                                   NoChunkCache().get()),
                        name),
                  H5Dclose);
+  // Whole chunks are encoded by the store itself (chunk_deflate.hpp) and written as they are, when
+  // the file's element is the memory's, byte for byte.
+  direct_ = H5Tequal(type.file(), type.memory()) > 0 && H5Tget_size(type.file()) == elem_size_;
 }
 
 Column Column::Open(Id group, const std::string& name, const Type& type, Size cols) {
@@ -868,13 +874,43 @@ void Column::WriteStaged() {
   const hsize_t n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
   if (n == 0) return;
   const int rank = cols_ > 0 ? 2 : 1;
-  const hsize_t dims[2] = {staged_first_ + n, cols_}, start[2] = {staged_first_, 0}, count[2] = {n, cols_};
+  const hsize_t dims[2] = {staged_first_ + n, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
-  Handle fs(H5Dget_space(dset_.get()), H5Sclose);
-  H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
-  Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
-  CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, staged_.data()), dset_.get(),
-             name_);
+  // The rows that fill whole chunks of their own (all of them in a long run's flushes) are encoded
+  // here, shuffled and deflated as HDF5's filters would (chunk_deflate.hpp), and written with
+  // H5Dwrite_chunk; the rows before the first whole chunk and after the last go through the
+  // library's filters (a chunk already in the file, partly written by an earlier flush, is read,
+  // merged and written again by the library).
+  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  hsize_t head = n, whole = 0;
+  if (direct_ && chunk_rows_ > 0) {
+    const hsize_t first_chunk = (staged_first_ + chunk_rows_ - 1) / chunk_rows_ * chunk_rows_;
+    const hsize_t end = staged_first_ + n;
+    if (first_chunk < end) {
+      head = first_chunk - staged_first_;
+      whole = (end - first_chunk) / chunk_rows_ * chunk_rows_;
+    }
+  }
+  const auto write_rows = [&](hsize_t from, hsize_t rows) {
+    if (rows == 0) return;
+    const hsize_t start_at[2] = {staged_first_ + from, 0}, rows_cols[2] = {rows, cols_};
+    Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+    H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start_at, nullptr, rows_cols, nullptr);
+    Handle ms(H5Screate_simple(rank, rows_cols, nullptr), H5Sclose);
+    CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT,
+                        staged_.data() + from * row_bytes),
+               dset_.get(), name_);
+  };
+  write_rows(0, head);
+  thread_local std::vector<unsigned char> shuffled, packed;
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes;
+  for (hsize_t r = head; r < head + whole; r += chunk_rows_) {
+    ShuffleDeflate(staged_.data() + r * row_bytes, chunk_bytes, elem_size_, shuffled, packed);
+    const hsize_t offset[2] = {staged_first_ + r, 0};
+    CheckWrite(H5Dwrite_chunk(dset_.get(), H5P_DEFAULT, 0, offset, packed.size(), packed.data()), dset_.get(),
+               name_);
+  }
+  write_rows(head + whole, n - head - whole);
   staged_bytes_ = 0;
 }
 

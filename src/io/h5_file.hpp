@@ -222,6 +222,7 @@ class Column {
   Size rows_ = 0;          // rows written or staged
   Size staged_first_ = 0;  // the first staged row
   Size chunk_rows_ = 0;    // rows per chunk (0: unknown, a dataset opened)
+  bool direct_ = false;    // whole chunks encoded here and written with H5Dwrite_chunk (WriteStaged)
   // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
   // Stage swaps the two (no copy of the staged rows, only of the rows after them).
   std::vector<unsigned char> buf_, staged_;
