@@ -250,6 +250,7 @@ void CheckStatus(herr_t status, const std::string& what) {
 std::mutex g_failed_mutex;
 std::set<hid_t> g_failed_files;
 std::atomic<bool> g_any_failed{false};
+std::atomic<bool> g_abandoned{false};  // Abandon: every handle left open, no close at all
 
 // The id of the open file `obj` belongs to (one per H5Fcreate/H5Fopen, shared by all its
 // objects); false for objects of no file (types, property lists).
@@ -398,6 +399,7 @@ Type Type::Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members
 }
 
 void Close(Id id, Closer closer) {
+  if (g_abandoned.load()) return;  // no HDF5 call at all any more (Abandon)
   if (g_any_failed.load()) {
     hid_t number = -1;
     if (FileNumber(id, number)) {
@@ -502,6 +504,11 @@ Size MetadataBytes(Id file) {
 }
 
 void MarkFailed(Id file) { MarkFileFailed(file); }
+
+void Abandon() {
+  g_abandoned.store(true);
+  g_any_failed.store(true);  // the clean-up at exit skipped too (SkipCleanUpAfterFailure)
+}
 
 // ---- Links and groups ----
 
@@ -866,31 +873,47 @@ void Column::Stage(bool whole_chunks) {
   if (rest > 0) std::memcpy(staged_.data(), buf_.data() + bytes, rest);
   std::swap(buf_, staged_);
   staged_bytes_ = bytes;
+  encoded_ = false;
   used_ = rest;
   rows_ += n;
+}
+
+void Column::EncodeStaged() {
+  const Size n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
+  // The rows that fill whole chunks of their own (all of them in a long run's flushes) are encoded
+  // here, shuffled and deflated as HDF5's filters would (chunk_deflate.hpp); the rows before the
+  // first whole chunk and after the last go through the library's filters in WriteStaged (a chunk
+  // already in the file, partly written by an earlier flush, is read, merged and written again by
+  // the library).
+  head_ = n;
+  whole_ = 0;
+  if (direct_ && chunk_rows_ > 0) {
+    const Size first_chunk = (staged_first_ + chunk_rows_ - 1) / chunk_rows_ * chunk_rows_;
+    const Size end = staged_first_ + n;
+    if (first_chunk < end) {
+      head_ = first_chunk - staged_first_;
+      whole_ = (end - first_chunk) / chunk_rows_ * chunk_rows_;
+    }
+  }
+  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes;
+  const size_t chunks = whole_ == 0 ? 0 : static_cast<size_t>(whole_ / chunk_rows_);
+  if (packed_.size() < chunks) packed_.resize(chunks);
+  for (size_t i = 0; i < chunks; ++i)
+    ShuffleDeflate(staged_.data() + (head_ + i * chunk_rows_) * row_bytes, chunk_bytes, elem_size_, scratch_,
+                   packed_[i]);
+  encoded_ = true;
 }
 
 void Column::WriteStaged() {
   const hsize_t n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
   if (n == 0) return;
+  if (!encoded_) EncodeStaged();
   const int rank = cols_ > 0 ? 2 : 1;
   const hsize_t dims[2] = {staged_first_ + n, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
-  // The rows that fill whole chunks of their own (all of them in a long run's flushes) are encoded
-  // here, shuffled and deflated as HDF5's filters would (chunk_deflate.hpp), and written with
-  // H5Dwrite_chunk; the rows before the first whole chunk and after the last go through the
-  // library's filters (a chunk already in the file, partly written by an earlier flush, is read,
-  // merged and written again by the library).
   const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
-  hsize_t head = n, whole = 0;
-  if (direct_ && chunk_rows_ > 0) {
-    const hsize_t first_chunk = (staged_first_ + chunk_rows_ - 1) / chunk_rows_ * chunk_rows_;
-    const hsize_t end = staged_first_ + n;
-    if (first_chunk < end) {
-      head = first_chunk - staged_first_;
-      whole = (end - first_chunk) / chunk_rows_ * chunk_rows_;
-    }
-  }
+  const hsize_t head = head_, whole = whole_;
   const auto write_rows = [&](hsize_t from, hsize_t rows) {
     if (rows == 0) return;
     const hsize_t start_at[2] = {staged_first_ + from, 0}, rows_cols[2] = {rows, cols_};
@@ -902,21 +925,21 @@ void Column::WriteStaged() {
                dset_.get(), name_);
   };
   write_rows(0, head);
-  thread_local std::vector<unsigned char> shuffled, packed;
-  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes;
-  for (hsize_t r = head; r < head + whole; r += chunk_rows_) {
-    ShuffleDeflate(staged_.data() + r * row_bytes, chunk_bytes, elem_size_, shuffled, packed);
+  for (hsize_t r = head, i = 0; r < head + whole; r += chunk_rows_, ++i) {
+    const std::vector<unsigned char>& packed = packed_[static_cast<size_t>(i)];
     const hsize_t offset[2] = {staged_first_ + r, 0};
     CheckWrite(H5Dwrite_chunk(dset_.get(), H5P_DEFAULT, 0, offset, packed.size(), packed.data()), dset_.get(),
                name_);
   }
   write_rows(head + whole, n - head - whole);
   staged_bytes_ = 0;
+  encoded_ = false;
 }
 
 void Column::Truncate(Size rows) {
   used_ = 0;
   staged_bytes_ = 0;
+  encoded_ = false;
   const hsize_t dims[2] = {rows, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;

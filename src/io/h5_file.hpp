@@ -111,6 +111,10 @@ void FlushFile(Id file);
 Size MetadataBytes(Id file);
 // Marks `file` failed as a failed write does (Close): it is never written or closed again.
 void MarkFailed(Id file);
+// Makes no HDF5 call at all from now on, not even to mark a file (which may allocate): every
+// handle is left open, the library's clean-up at exit is skipped, each file keeps its last flush.
+// For a process that has no memory left to give the library (memory_reserve.hpp).
+void Abandon();
 
 // ---- Links and groups ----
 bool Exists(Id loc, const std::string& path);
@@ -204,7 +208,13 @@ class Column {
   // whole_chunks: only those that fill whole chunks of the dataset (written once, never read back
   // and compressed again when the next rows come), the others stay buffered.
   void Stage(bool whole_chunks = false);
-  // Writes the staged rows (nothing when none are staged).
+  // Encodes the staged rows that fill whole chunks of their own (chunk_deflate.hpp) into the
+  // column's buffers: no HDF5 call and no shared state, so the store's writer thread does it while
+  // the simulation goes on; the HDF5 calls that write them are WriteStaged's, in the store's own
+  // thread (docs/output.md, "Writing").
+  void EncodeStaged();
+  // Writes the staged rows (nothing when none are staged), the whole chunks as EncodeStaged left
+  // them (encoded here when it was not called).
   void WriteStaged();
   void Truncate(Size rows);
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
@@ -223,6 +233,12 @@ class Column {
   Size staged_first_ = 0;  // the first staged row
   Size chunk_rows_ = 0;    // rows per chunk (0: unknown, a dataset opened)
   bool direct_ = false;    // whole chunks encoded here and written with H5Dwrite_chunk (WriteStaged)
+  // What EncodeStaged made of the staged rows: rows [head, head + whole) of them in whole chunks,
+  // chunk i's bytes in packed_[i] (buffers kept from one flush to the next).
+  bool encoded_ = false;
+  Size head_ = 0, whole_ = 0;
+  std::vector<std::vector<unsigned char>> packed_;
+  std::vector<unsigned char> scratch_;
   // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
   // Stage swaps the two (no copy of the staged rows, only of the rows after them).
   std::vector<unsigned char> buf_, staged_;
