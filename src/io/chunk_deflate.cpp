@@ -191,12 +191,20 @@ std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n) {
   return static_cast<std::uint32_t>((b << 16) | a);
 }
 
-void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out) {
-  const Tables& t = FixedTables();
+size_t ZlibFixedBound(size_t n) {
   // At most 9 bits per byte, the header, the block's 3 bits and its end, the Adler-32, and the 4
   // bytes a Put may write at once.
-  out.resize(n + n / 8 + 32);
-  unsigned char* o = out.data();
+  return n + n / 8 + 32;
+}
+
+void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out) {
+  out.resize(ZlibFixedBound(n));
+  out.resize(ZlibFixed(in, n, out.data()));
+}
+
+size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
+  const Tables& t = FixedTables();
+  unsigned char* o = out;
   *o++ = 0x78;  // CM = 8 (deflate), CINFO = 7 (32 KiB window)
   *o++ = 0x01;  // FLEVEL 0, FCHECK: 0x7801 is a multiple of 31
   BitWriter bw(o);
@@ -255,14 +263,20 @@ void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& ou
   *o++ = static_cast<unsigned char>(adler >> 16);
   *o++ = static_cast<unsigned char>(adler >> 8);
   *o++ = static_cast<unsigned char>(adler);
-  out.resize(static_cast<size_t>(o - out.data()));
+  return static_cast<size_t>(o - out);
 }
 
 void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
                     std::vector<unsigned char>& out) {
+  out.resize(ZlibFixedBound(n));
+  out.resize(ShuffleDeflate(in, n, elem, scratch, out.data()));
+}
+
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                      unsigned char* out) {
   if (scratch.size() < n) scratch.resize(n);
   Shuffle(in, n, elem, scratch.data());
-  ZlibFixed(scratch.data(), n, out);
+  return ZlibFixed(scratch.data(), n, out);
 }
 
 }  // namespace vibro::h5

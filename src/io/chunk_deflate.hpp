@@ -21,10 +21,17 @@ std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n);
 
 // The zlib stream of n bytes (header, one final fixed-Huffman block, Adler-32) in `out` (resized).
 void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out);
+// The most bytes ZlibFixed writes for n bytes.
+size_t ZlibFixedBound(size_t n);
+// The same stream written at `out` (ZlibFixedBound(n) bytes of room); returns its length.
+size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out);
 
 // Shuffle then ZlibFixed: the bytes HDF5's shuffle + deflate filters read back as `in`.
 // `scratch` holds the shuffled bytes (kept by the caller: no allocation per chunk).
 void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
                     std::vector<unsigned char>& out);
+// The same written at `out` (ZlibFixedBound(n) bytes of room, never cleared); returns its length.
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                      unsigned char* out);
 
 }  // namespace vibro::h5

@@ -862,6 +862,26 @@ Column Column::Open(Id group, const std::string& name, const Type& type, Size co
 }
 
 void Column::Stage(bool whole_chunks) {
+  if (direct_ && chunk_rows_ > 0) {
+    // buf_ begins at a chunk's first row (kept rows first): the rows staged are whole chunks, and
+    // with !whole_chunks the last part-filled one too, whose rows are kept for the next flush.
+    const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+    const Size total = used_ / row_bytes, kept = kept_bytes_ / row_bytes;
+    const Size full = total / chunk_rows_ * chunk_rows_;
+    const Size n = whole_chunks ? full : total;
+    if (total == kept || n == 0) return;
+    staged_first_ = rows_ - kept;
+    const size_t from = static_cast<size_t>(full) * row_bytes, rest = used_ - from;
+    if (staged_.size() < rest) staged_.resize(std::max(rest, buf_.size()));
+    if (rest > 0) std::memcpy(staged_.data(), buf_.data() + from, rest);
+    std::swap(buf_, staged_);
+    staged_bytes_ = static_cast<size_t>(n) * row_bytes;
+    encoded_ = false;
+    used_ = rest;
+    kept_bytes_ = whole_chunks ? 0 : rest;
+    rows_ = staged_first_ + n;
+    return;
+  }
   Size n = pending();
   if (whole_chunks && chunk_rows_ > 0) n = (rows_ + n) / chunk_rows_ * chunk_rows_ - std::min(rows_, (rows_ + n) / chunk_rows_ * chunk_rows_);
   if (n == 0) return;
@@ -879,30 +899,25 @@ void Column::Stage(bool whole_chunks) {
 }
 
 void Column::EncodeStaged() {
-  const Size n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
-  // The rows that fill whole chunks of their own (all of them in a long run's flushes) are encoded
-  // here, shuffled and deflated as HDF5's filters would (chunk_deflate.hpp); the rows before the
-  // first whole chunk and after the last go through the library's filters in WriteStaged (a chunk
-  // already in the file, partly written by an earlier flush, is read, merged and written again by
-  // the library).
-  head_ = n;
-  whole_ = 0;
-  if (direct_ && chunk_rows_ > 0) {
-    const Size first_chunk = (staged_first_ + chunk_rows_ - 1) / chunk_rows_ * chunk_rows_;
-    const Size end = staged_first_ + n;
-    if (first_chunk < end) {
-      head_ = first_chunk - staged_first_;
-      whole_ = (end - first_chunk) / chunk_rows_ * chunk_rows_;
-    }
-  }
-  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
-  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes;
-  const size_t chunks = whole_ == 0 ? 0 : static_cast<size_t>(whole_ / chunk_rows_);
-  if (packed_.size() < chunks) packed_.resize(chunks);
-  for (size_t i = 0; i < chunks; ++i)
-    ShuffleDeflate(staged_.data() + (head_ + i * chunk_rows_) * row_bytes, chunk_bytes, elem_size_, scratch_,
-                   packed_[i]);
   encoded_ = true;
+  if (!direct_ || chunk_rows_ == 0) return;  // written through the library's filters
+  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes, bound = ZlibFixedBound(chunk_bytes);
+  const size_t chunks = (staged_bytes_ + chunk_bytes - 1) / chunk_bytes;
+  if (packed_.size() < chunks * bound) packed_.resize(chunks * bound);
+  packed_len_.resize(chunks);
+  for (size_t i = 0; i < chunks; ++i) {
+    const unsigned char* rows = staged_.data() + i * chunk_bytes;
+    const size_t bytes = std::min(chunk_bytes, staged_bytes_ - i * chunk_bytes);
+    if (bytes < chunk_bytes) {
+      // The last chunk, part-filled: padded with zeros (the fill value HDF5 pads edge chunks with).
+      pad_.resize(chunk_bytes);
+      std::memcpy(pad_.data(), rows, bytes);
+      std::memset(pad_.data() + bytes, 0, chunk_bytes - bytes);
+      rows = pad_.data();
+    }
+    packed_len_[i] = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, packed_.data() + i * bound);
+  }
 }
 
 void Column::WriteStaged() {
@@ -912,26 +927,21 @@ void Column::WriteStaged() {
   const int rank = cols_ > 0 ? 2 : 1;
   const hsize_t dims[2] = {staged_first_ + n, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
-  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
-  const hsize_t head = head_, whole = whole_;
-  const auto write_rows = [&](hsize_t from, hsize_t rows) {
-    if (rows == 0) return;
-    const hsize_t start_at[2] = {staged_first_ + from, 0}, rows_cols[2] = {rows, cols_};
+  if (direct_ && chunk_rows_ > 0) {
+    const size_t bound = ZlibFixedBound(static_cast<size_t>(chunk_rows_) * elem_size_ * std::max<Size>(cols_, 1));
+    for (size_t i = 0; i < packed_len_.size(); ++i) {
+      const hsize_t offset[2] = {staged_first_ + i * chunk_rows_, 0};
+      CheckWrite(H5Dwrite_chunk(dset_.get(), H5P_DEFAULT, 0, offset, packed_len_[i], packed_.data() + i * bound),
+                 dset_.get(), name_);
+    }
+  } else {
+    const hsize_t start_at[2] = {staged_first_, 0}, rows_cols[2] = {n, cols_};
     Handle fs(H5Dget_space(dset_.get()), H5Sclose);
     H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start_at, nullptr, rows_cols, nullptr);
     Handle ms(H5Screate_simple(rank, rows_cols, nullptr), H5Sclose);
-    CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT,
-                        staged_.data() + from * row_bytes),
-               dset_.get(), name_);
-  };
-  write_rows(0, head);
-  for (hsize_t r = head, i = 0; r < head + whole; r += chunk_rows_, ++i) {
-    const std::vector<unsigned char>& packed = packed_[static_cast<size_t>(i)];
-    const hsize_t offset[2] = {staged_first_ + r, 0};
-    CheckWrite(H5Dwrite_chunk(dset_.get(), H5P_DEFAULT, 0, offset, packed.size(), packed.data()), dset_.get(),
+    CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, staged_.data()), dset_.get(),
                name_);
   }
-  write_rows(head + whole, n - head - whole);
   staged_bytes_ = 0;
   encoded_ = false;
 }
@@ -940,6 +950,8 @@ void Column::Truncate(Size rows) {
   used_ = 0;
   staged_bytes_ = 0;
   encoded_ = false;
+  kept_bytes_ = 0;
+  direct_ = direct_ && chunk_rows_ > 0 && rows % chunk_rows_ == 0;  // buf_ from a chunk's first row
   const hsize_t dims[2] = {rows, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;
