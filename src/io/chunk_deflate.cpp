@@ -6,6 +6,10 @@
 #include <array>
 #include <cstring>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace vibro::h5 {
 
 namespace {
@@ -162,22 +166,44 @@ std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n) {
   constexpr std::uint32_t kMod = 65521;
   constexpr size_t kLanes = 16, kBlock = 4096;
   std::uint64_t a = adler & 0xffffu, b = adler >> 16;
-  // Per block of k bytes: a += Σ x_j, b += k·a + Σ_j (k − j) x_j. The block is read 16 bytes at a
-  // time into 16 lanes: s[l] sums the lane's bytes, w[l] the running sums s[l] after each group,
-  // so that Σ_j (k − j) x_j = 16 Σ_l w[l] − Σ_l l·s[l] (k a multiple of 16; the rest byte by byte).
+  // Per block of k bytes (groups g = 0 … m − 1 of 16, k = 16 m): a += Σ x, and
+  // b += k·a + 16 Σ_g (m − 1 − g) S_g + Σ_g Σ_j (16 − j) x_gj, S_g the sum of group g's bytes: the
+  // first sum accumulates the groups' sums before each group (ps), the second weighs each group's
+  // bytes by 16 … 1 (w). All of it fits 32-bit lanes for k ≤ 4096, reduced mod 65521 after each block.
   while (n >= kLanes) {
     const size_t k = std::min(n, kBlock) / kLanes * kLanes;
-    std::uint32_t s[kLanes] = {}, w[kLanes] = {};
+    std::uint64_t sum = 0, ps = 0, weighted = 0;
+#if defined(__SSE2__)
+    // psadbw sums a group's 16 bytes; pmaddwd weighs them (bytes widened to 16 bits) by 16 … 1.
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i w_lo = _mm_setr_epi16(16, 15, 14, 13, 12, 11, 10, 9), w_hi = _mm_setr_epi16(8, 7, 6, 5, 4, 3, 2, 1);
+    __m128i v_sum = zero, v_ps = zero, v_w = zero;
     for (size_t g = 0; g < k; g += kLanes) {
-      for (size_t l = 0; l < kLanes; ++l) s[l] += p[g + l];
-      for (size_t l = 0; l < kLanes; ++l) w[l] += s[l];
+      const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + g));
+      v_ps = _mm_add_epi32(v_ps, v_sum);
+      v_sum = _mm_add_epi32(v_sum, _mm_sad_epu8(x, zero));
+      v_w = _mm_add_epi32(v_w, _mm_madd_epi16(_mm_unpacklo_epi8(x, zero), w_lo));
+      v_w = _mm_add_epi32(v_w, _mm_madd_epi16(_mm_unpackhi_epi8(x, zero), w_hi));
     }
-    std::uint64_t sum = 0, weighted = 0;
-    for (size_t l = 0; l < kLanes; ++l) {
-      sum += s[l];
-      weighted += kLanes * static_cast<std::uint64_t>(w[l]) - l * static_cast<std::uint64_t>(s[l]);
+    alignas(16) std::uint32_t l_sum[4], l_ps[4], l_w[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_sum), v_sum);
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_ps), v_ps);
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_w), v_w);
+    for (int l = 0; l < 4; ++l) {
+      sum += l_sum[l];
+      ps += l_ps[l];
+      weighted += l_w[l];
     }
-    b = (b + k * a + weighted) % kMod;
+#else
+    for (size_t g = 0; g < k; g += kLanes) {
+      ps += sum;
+      for (size_t j = 0; j < kLanes; ++j) {
+        sum += p[g + j];
+        weighted += (kLanes - j) * p[g + j];
+      }
+    }
+#endif
+    b = (b + k * a + kLanes * ps + weighted) % kMod;
     a = (a + sum) % kMod;
     p += k;
     n -= k;
