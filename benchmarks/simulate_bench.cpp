@@ -94,6 +94,13 @@ void BM_Events10DofStiff(benchmark::State& state) {
 }
 BENCHMARK(BM_Events10DofStiff)->Unit(benchmark::kMillisecond);
 
+// A compliant stop (docs/compliant.md): the tube in its two-sided spring–dashpot support, 200
+// periods; its events are the contact phases' entries and exits (counted as sticks and releases).
+void BM_EventsCompliantTube(benchmark::State& state) {
+  RunScene(state, "tube_compliant_support.toml", {"run.samples_per_period=0"});
+}
+BENCHMARK(BM_EventsCompliantTube)->Unit(benchmark::kMillisecond);
+
 }  // namespace
 
 namespace {

@@ -18,6 +18,7 @@
 
 #include <fmt/format.h>
 
+#include "io/chunk_deflate.hpp"
 #include "vibro/hdf5_store.hpp"
 
 // ---- The HDF5 C API, loaded at first use ----
@@ -44,7 +45,7 @@
     X(H5Aclose) X(H5Acreate2) X(H5Adelete) X(H5Aexists) X(H5Aget_space) X(H5Aget_type) \
     X(H5Aiterate2) X(H5Aiterate_by_name) X(H5Aopen) X(H5Aread) X(H5Awrite) X(H5Dclose) \
     X(H5Dcreate2) X(H5Dget_space) X(H5Dget_type) X(H5Dopen2) X(H5Dread) X(H5Dset_extent) \
-    X(H5Dvlen_reclaim) X(H5Dwrite) X(H5Eset_auto2) X(H5Ewalk2) X(H5Fclose) X(H5Fcreate) \
+    X(H5Dvlen_reclaim) X(H5Dwrite) X(H5Dwrite_chunk) X(H5Eset_auto2) X(H5Ewalk2) X(H5Fclose) X(H5Fcreate) \
     X(H5Fflush) X(H5Fget_mdc_size) X(H5Fget_name) X(H5Fget_vfd_handle) X(H5Fis_hdf5) X(H5Fopen) \
     X(H5Gclose) X(H5Gcreate2) X(H5Gget_info) X(H5Gopen2) X(H5Idec_ref) X(H5Iget_file_id) \
     X(H5Iget_type) X(H5Ldelete) X(H5Lexists) X(H5Lget_name_by_idx) X(H5Literate) \
@@ -53,7 +54,7 @@
     X(H5Pset_file_space_strategy) X(H5Pset_mdc_config) X(H5Pset_shuffle) X(H5Sclose) X(H5Scopy) \
     X(H5Screate) X(H5Screate_simple) X(H5Sget_simple_extent_dims) X(H5Sget_simple_extent_ndims) \
     X(H5Sget_simple_extent_npoints) X(H5Sselect_hyperslab) X(H5Tclose) X(H5Tcopy) \
-    X(H5Tdetect_class) X(H5Tenum_create) X(H5Tenum_insert) X(H5Tget_class) X(H5Tget_native_type) \
+    X(H5Tdetect_class) X(H5Tenum_create) X(H5Tequal) X(H5Tenum_insert) X(H5Tget_class) X(H5Tget_native_type) \
     X(H5Tget_size) X(H5Tis_variable_str) X(H5Tset_cset) X(H5Tset_size) X(H5check_version) \
     X(H5free_memory) X(H5open)
 
@@ -146,6 +147,7 @@ inline const Hdf5Api& Hdf5() {
 #define H5Dset_extent (::vibro::h5::Hdf5().H5Dset_extent)
 #define H5Dvlen_reclaim (::vibro::h5::Hdf5().H5Dvlen_reclaim)
 #define H5Dwrite (::vibro::h5::Hdf5().H5Dwrite)
+#define H5Dwrite_chunk (::vibro::h5::Hdf5().H5Dwrite_chunk)
 #define H5Eset_auto2 (::vibro::h5::Hdf5().H5Eset_auto2)
 #define H5Ewalk2 (::vibro::h5::Hdf5().H5Ewalk2)
 #define H5Fclose (::vibro::h5::Hdf5().H5Fclose)
@@ -192,6 +194,7 @@ inline const Hdf5Api& Hdf5() {
 #define H5Tdetect_class (::vibro::h5::Hdf5().H5Tdetect_class)
 #define H5Tenum_create (::vibro::h5::Hdf5().H5Tenum_create)
 #define H5Tenum_insert (::vibro::h5::Hdf5().H5Tenum_insert)
+#define H5Tequal (::vibro::h5::Hdf5().H5Tequal)
 #define H5Tget_class (::vibro::h5::Hdf5().H5Tget_class)
 #define H5Tget_native_type (::vibro::h5::Hdf5().H5Tget_native_type)
 #define H5Tget_size (::vibro::h5::Hdf5().H5Tget_size)
@@ -247,6 +250,7 @@ void CheckStatus(herr_t status, const std::string& what) {
 std::mutex g_failed_mutex;
 std::set<hid_t> g_failed_files;
 std::atomic<bool> g_any_failed{false};
+std::atomic<bool> g_abandoned{false};  // Abandon: every handle left open, no close at all
 
 // The id of the open file `obj` belongs to (one per H5Fcreate/H5Fopen, shared by all its
 // objects); false for objects of no file (types, property lists).
@@ -395,6 +399,7 @@ Type Type::Enum8(const std::vector<std::pair<std::string, std::int8_t>>& members
 }
 
 void Close(Id id, Closer closer) {
+  if (g_abandoned.load()) return;  // no HDF5 call at all any more (Abandon)
   if (g_any_failed.load()) {
     hid_t number = -1;
     if (FileNumber(id, number)) {
@@ -499,6 +504,11 @@ Size MetadataBytes(Id file) {
 }
 
 void MarkFailed(Id file) { MarkFileFailed(file); }
+
+void Abandon() {
+  g_abandoned.store(true);
+  g_any_failed.store(true);  // the clean-up at exit skipped too (SkipCleanUpAfterFailure)
+}
 
 // ---- Links and groups ----
 
@@ -821,6 +831,9 @@ Column::Column(Id group, const std::string& name, const Type& type, Size cols)
                                   NoChunkCache().get()),
                        name),
                  H5Dclose);
+  // Whole chunks are encoded by the store itself (chunk_deflate.hpp) and written as they are, when
+  // the file's element is the memory's, byte for byte.
+  direct_ = H5Tequal(type.file(), type.memory()) > 0 && H5Tget_size(type.file()) == elem_size_;
 }
 
 Column Column::Open(Id group, const std::string& name, const Type& type, Size cols) {
@@ -849,6 +862,26 @@ Column Column::Open(Id group, const std::string& name, const Type& type, Size co
 }
 
 void Column::Stage(bool whole_chunks) {
+  if (direct_ && chunk_rows_ > 0) {
+    // buf_ begins at a chunk's first row (kept rows first): the rows staged are whole chunks, and
+    // with !whole_chunks the last part-filled one too, whose rows are kept for the next flush.
+    const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+    const Size total = used_ / row_bytes, kept = kept_bytes_ / row_bytes;
+    const Size full = total / chunk_rows_ * chunk_rows_;
+    const Size n = whole_chunks ? full : total;
+    if (total == kept || n == 0) return;
+    staged_first_ = rows_ - kept;
+    const size_t from = static_cast<size_t>(full) * row_bytes, rest = used_ - from;
+    if (staged_.size() < rest) staged_.resize(std::max(rest, buf_.size()));
+    if (rest > 0) std::memcpy(staged_.data(), buf_.data() + from, rest);
+    std::swap(buf_, staged_);
+    staged_bytes_ = static_cast<size_t>(n) * row_bytes;
+    encoded_ = false;
+    used_ = rest;
+    kept_bytes_ = whole_chunks ? 0 : rest;
+    rows_ = staged_first_ + n;
+    return;
+  }
   Size n = pending();
   if (whole_chunks && chunk_rows_ > 0) n = (rows_ + n) / chunk_rows_ * chunk_rows_ - std::min(rows_, (rows_ + n) / chunk_rows_ * chunk_rows_);
   if (n == 0) return;
@@ -860,27 +893,65 @@ void Column::Stage(bool whole_chunks) {
   if (rest > 0) std::memcpy(staged_.data(), buf_.data() + bytes, rest);
   std::swap(buf_, staged_);
   staged_bytes_ = bytes;
+  encoded_ = false;
   used_ = rest;
   rows_ += n;
+}
+
+void Column::EncodeStaged() {
+  encoded_ = true;
+  if (!direct_ || chunk_rows_ == 0) return;  // written through the library's filters
+  const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * row_bytes, bound = ZlibFixedBound(chunk_bytes);
+  const size_t chunks = (staged_bytes_ + chunk_bytes - 1) / chunk_bytes;
+  if (packed_.size() < chunks * bound) packed_.resize(chunks * bound);
+  packed_len_.resize(chunks);
+  for (size_t i = 0; i < chunks; ++i) {
+    const unsigned char* rows = staged_.data() + i * chunk_bytes;
+    const size_t bytes = std::min(chunk_bytes, staged_bytes_ - i * chunk_bytes);
+    if (bytes < chunk_bytes) {
+      // The last chunk, part-filled: padded with zeros (the fill value HDF5 pads edge chunks with).
+      pad_.resize(chunk_bytes);
+      std::memcpy(pad_.data(), rows, bytes);
+      std::memset(pad_.data() + bytes, 0, chunk_bytes - bytes);
+      rows = pad_.data();
+    }
+    packed_len_[i] = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, packed_.data() + i * bound);
+  }
 }
 
 void Column::WriteStaged() {
   const hsize_t n = staged_bytes_ / (elem_size_ * std::max<Size>(cols_, 1));
   if (n == 0) return;
+  if (!encoded_) EncodeStaged();
   const int rank = cols_ > 0 ? 2 : 1;
-  const hsize_t dims[2] = {staged_first_ + n, cols_}, start[2] = {staged_first_, 0}, count[2] = {n, cols_};
+  const hsize_t dims[2] = {staged_first_ + n, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "extend");
-  Handle fs(H5Dget_space(dset_.get()), H5Sclose);
-  H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start, nullptr, count, nullptr);
-  Handle ms(H5Screate_simple(rank, count, nullptr), H5Sclose);
-  CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, staged_.data()), dset_.get(),
-             name_);
+  if (direct_ && chunk_rows_ > 0) {
+    const size_t bound = ZlibFixedBound(static_cast<size_t>(chunk_rows_) * elem_size_ * std::max<Size>(cols_, 1));
+    for (size_t i = 0; i < packed_len_.size(); ++i) {
+      const hsize_t offset[2] = {staged_first_ + i * chunk_rows_, 0};
+      CheckWrite(H5Dwrite_chunk(dset_.get(), H5P_DEFAULT, 0, offset, packed_len_[i], packed_.data() + i * bound),
+                 dset_.get(), name_);
+    }
+  } else {
+    const hsize_t start_at[2] = {staged_first_, 0}, rows_cols[2] = {n, cols_};
+    Handle fs(H5Dget_space(dset_.get()), H5Sclose);
+    H5Sselect_hyperslab(fs.get(), H5S_SELECT_SET, start_at, nullptr, rows_cols, nullptr);
+    Handle ms(H5Screate_simple(rank, rows_cols, nullptr), H5Sclose);
+    CheckWrite(H5Dwrite(dset_.get(), mem_type_.get(), ms.get(), fs.get(), H5P_DEFAULT, staged_.data()), dset_.get(),
+               name_);
+  }
   staged_bytes_ = 0;
+  encoded_ = false;
 }
 
 void Column::Truncate(Size rows) {
   used_ = 0;
   staged_bytes_ = 0;
+  encoded_ = false;
+  kept_bytes_ = 0;
+  direct_ = direct_ && chunk_rows_ > 0 && rows % chunk_rows_ == 0;  // buf_ from a chunk's first row
   const hsize_t dims[2] = {rows, cols_};
   CheckWrite(H5Dset_extent(dset_.get(), dims), dset_.get(), "truncate");
   rows_ = rows;

@@ -111,6 +111,10 @@ void FlushFile(Id file);
 Size MetadataBytes(Id file);
 // Marks `file` failed as a failed write does (Close): it is never written or closed again.
 void MarkFailed(Id file);
+// Makes no HDF5 call at all from now on, not even to mark a file (which may allocate): every
+// handle is left open, the library's clean-up at exit is skipped, each file keeps its last flush.
+// For a process that has no memory left to give the library (memory_reserve.hpp).
+void Abandon();
 
 // ---- Links and groups ----
 bool Exists(Id loc, const std::string& path);
@@ -183,8 +187,8 @@ class Column {
 
   Size cols() const { return cols_; }
   Size rows() const { return rows_ + pending(); }
-  Size pending() const { return used_ / (elem_size_ * std::max<Size>(cols_, 1)); }
-  Size pending_bytes() const { return used_; }
+  Size pending() const { return pending_bytes() / (elem_size_ * std::max<Size>(cols_, 1)); }
+  Size pending_bytes() const { return used_ - kept_bytes_; }
 
   template <class T>
   void Push(const T& v) {
@@ -201,10 +205,19 @@ class Column {
     WriteStaged();
   }
   // Sets the buffered rows aside for WriteStaged (the rows staged before must have been written);
-  // whole_chunks: only those that fill whole chunks of the dataset (written once, never read back
-  // and compressed again when the next rows come), the others stay buffered.
+  // whole_chunks: only those that fill whole chunks of the dataset, the others stay buffered.
+  // A column made here (not opened) stages whole chunks from a chunk's first row: the rows of its
+  // last chunk, when a flush leaves it part-filled, stay buffered after their write too ("kept"),
+  // so that the next flush encodes that chunk whole again instead of HDF5 reading it back.
   void Stage(bool whole_chunks = false);
-  // Writes the staged rows (nothing when none are staged).
+  // Encodes the staged rows, chunk by chunk (chunk_deflate.hpp; a last part-filled chunk padded
+  // with zeros as HDF5 pads an edge chunk), into the column's buffers: no HDF5 call and no shared
+  // state, so the store's writer thread does it while the simulation goes on; the HDF5 calls that
+  // write them are WriteStaged's, in the store's own thread (docs/output.md, "Writing").
+  void EncodeStaged();
+  // Writes the staged rows (nothing when none are staged): the chunks as EncodeStaged left them
+  // (encoded here when it was not called) with H5Dwrite_chunk, or, for an opened column or one
+  // whose file element differs from memory's, through the library's filters.
   void WriteStaged();
   void Truncate(Size rows);
   // Reads rows [first, first + n) into out (n · max(cols, 1) elements of the memory type).
@@ -222,6 +235,13 @@ class Column {
   Size rows_ = 0;          // rows written or staged
   Size staged_first_ = 0;  // the first staged row
   Size chunk_rows_ = 0;    // rows per chunk (0: unknown, a dataset opened)
+  bool direct_ = false;    // whole chunks encoded here and written with H5Dwrite_chunk (WriteStaged)
+  // What EncodeStaged made of the staged rows: chunk i's bytes at packed_ + i · bound, packed_len_[i]
+  // of them (buffers kept from one flush to the next, never cleared).
+  bool encoded_ = false;
+  std::vector<unsigned char> packed_, scratch_, pad_;
+  std::vector<size_t> packed_len_;
+  size_t kept_bytes_ = 0;  // the first bytes of buf_: rows already written, of a part-filled chunk
   // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
   // Stage swaps the two (no copy of the staged rows, only of the rows after them).
   std::vector<unsigned char> buf_, staged_;

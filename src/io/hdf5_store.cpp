@@ -234,10 +234,19 @@ void Hdf5Store::Impl::MaybeFlush() {
   // them while the simulation computes the next rows (a short run would otherwise leave it all to
   // Finish).
   constexpr size_t kFlushBytes = size_t{4} << 20;
-  size_t pending = 0;
-  for (h5::Column* c : Columns()) pending += c->pending_bytes();
-  if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) FlushBehind(false);
-  else if (pending >= kFlushBytes) FlushBehind(true);
+  size_t held = 0;
+  for (h5::Column* c : Columns()) held += c->pending_bytes();
+  if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) {
+    FlushBehind(false);
+  } else if (held >= kFlushBytes) {
+    FlushBehind(true);
+  } else if (pending && !writer.Busy()) {
+    // The writer has encoded the last flush: written now rather than at the next one.
+    Sync();
+    Room();
+  } else {
+    Room();  // taken back after a stretch of HDF5 calls that did not (a result written, stats())
+  }
 }
 
 void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoint_at, h5::Size n_events,
@@ -300,6 +309,7 @@ std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
 
 void Hdf5Store::Impl::Close() {
   Sync();
+  reserve.reset();  // its room is the closing's
   for (h5::Column* c : Columns()) *c = h5::Column();
   cells.reset();
   cells_group.Reset();
@@ -335,33 +345,44 @@ void Hdf5Store::Impl::Flush() {
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
   WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads);
   last_flush = std::chrono::steady_clock::now();
+  Room();
+}
+
+void Hdf5Store::Impl::WritePending() {
+  const Pending p = std::move(*pending);
+  pending.reset();
+  const h5::WritingScope writing;
+  if (p.metadata) WriteStagedAndMetadata(p.checkpoint, p.events, p.samples, p.sections, p.loads);
+  else WriteStagedAndMetadata(std::nullopt, 0, 0, 0, 0);
 }
 
 void Hdf5Store::Impl::StartWriter() {
   // The writer thread starts with the file: a thread the system refuses (ulimit -v) fails now,
-  // before any computation, not at the first flush; and the thread's own HDF5 state (its error
-  // stack, silenced) is set up while memory is there.
-  writer.Start([] { h5::Silence(); });
+  // before any computation, not at the first flush. It never calls HDF5.
+  writer.Start([] {});
   Sync();
 }
 
 void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
-  Sync();
-  // Only the staged rows and copies of the checkpoint go to the writer: the columns' buffers and
-  // the checkpoint fields stay the simulation's. The checkpoint's rows are all in the file only
-  // when every row before it is staged (a flush of whole chunks may leave some buffered): it is
-  // written with the interval's flushes, which stage every row.
-  for (h5::Column* c : Columns()) c->Stage(whole_chunks);
-  if (whole_chunks) {
-    writer.Start([this] { WriteStagedAndMetadata(std::nullopt, 0, 0, 0, 0); });
-    return;
+  Sync();  // the flush before, encoded by the writer, written
+  Room();   // the rows' buffers below are the run's memory, not the library's room
+  // Only the staged rows go to the writer, which encodes their whole chunks (no HDF5 call): the
+  // columns' buffers stay the simulation's, and the store's thread writes them at the next Sync.
+  // The checkpoint's rows are all in the file only when every row before it is staged (a flush of
+  // whole chunks may leave some buffered): it is written with the interval's flushes, which stage
+  // every row.
+  std::vector<h5::Column*> columns = Columns();
+  for (h5::Column* c : columns) c->Stage(whole_chunks);
+  Pending p;
+  if (!whole_chunks) {
+    if (last_checkpoint) checkpoint_on_disk = true;
+    p = {true, last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads};
+    last_flush = std::chrono::steady_clock::now();
   }
-  if (last_checkpoint) checkpoint_on_disk = true;
-  writer.Start([this, c = last_checkpoint, e = cp_events, s = cp_samples, x = cp_sections,
-                l = ld ? cp_loads : kNoLoads] {
-    WriteStagedAndMetadata(c, e, s, x, l);
+  pending = std::move(p);
+  writer.Start([columns = std::move(columns)] {
+    for (h5::Column* c : columns) c->EncodeStaged();
   });
-  last_flush = std::chrono::steady_clock::now();
 }
 
 void Hdf5Store::Impl::CheckRoom() {
@@ -406,6 +427,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Create(const std::string& path, const Stor
     store::WriteHeader(f, h);
     impl->Flush();
     impl->StartWriter();
+    impl->reserve.emplace();  // the library's room from now on (memory_reserve.hpp)
     // A destination that is (nearly) full fails now, before any computation.
     struct statvfs vfs{};
     if (statvfs(path.c_str(), &vfs) == 0 &&
@@ -465,6 +487,7 @@ void Hdf5Store::OnPeriodLoads(long long period, const std::vector<LoadsRow>& row
     m.ld->Create(m.loads.get(), static_cast<h5::Size>(rows.size()));
     m.loads_first = period;
     m.cp_loads = 0;
+    m.Room();
   }
   if (period != m.loads_first + static_cast<long long>(m.ld->impacts.rows()) ||
       static_cast<h5::Size>(rows.size()) != m.ld->impacts.cols()) {
@@ -505,6 +528,7 @@ void Hdf5Store::ReplayLoads(const std::function<void(const std::vector<LoadsRow>
 void Hdf5Store::Finish(const RunResult& r, const Attractor& a) {
   auto& m = *impl_;
   m.Sync();
+  m.reserve.reset();  // the store ends here: the room is its last writes' and the closing's
   const h5::Id f = m.file.get();
   h5::WriteString(f, "status", ToString(r.status));
   h5::WriteString(f, "message", r.message);
@@ -709,6 +733,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
   auto impl = prepare(path);
   impl->lock = std::move(lock);
   impl->StartWriter();
+  impl->reserve.emplace();  // the library's room from now on (memory_reserve.hpp)
   impl->last_flush = std::chrono::steady_clock::now();
   return std::unique_ptr<Hdf5Store>(new Hdf5Store(std::move(impl)));
 }

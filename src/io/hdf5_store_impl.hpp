@@ -7,12 +7,15 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <new>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "io/file_lock.hpp"
 #include "io/h5_file.hpp"
+#include "io/memory_reserve.hpp"
 #include "io/write_behind.hpp"
 #include "vibro/hdf5_store.hpp"
 #include "vibro/lyapunov.hpp"
@@ -143,16 +146,43 @@ struct Hdf5Store::Impl {
   std::optional<store::CellTable> cells;
   h5::Size zcols = 0;
 
+  // A flush whose rows the writer thread encodes (write-behind): written, with the checkpoint
+  // and the metadata when `metadata`, by the next Sync() in the store's thread.
+  struct Pending {
+    bool metadata = false;
+    std::optional<Checkpoint> checkpoint;
+    h5::Size events = 0, samples = 0, sections = 0, loads = 0;
+  };
+  std::optional<Pending> pending;
+  // Address space held for the library's allocations while the file is open (memory_reserve.hpp);
+  // destroyed after the writer thread ends and before the handles close, which it makes room for.
+  std::optional<h5::MemoryReserve> reserve;
   // Last member, destroyed first: its thread ends before the file's handles close.
   store::WriteBehind writer;
   void OpenGroups();
   void OpenColumns();
-  // Every HDF5 call of the store's own thread comes after Sync(): the writer thread's flush under
-  // way ends first (and its WriteError is thrown here).
-  void Sync() { writer.Wait(); }
-  // A run's periodic flush, on the writer thread (write-behind): the rows buffered so far are set
-  // aside and written while the run goes on.
+  // Every HDF5 call of the store comes after Sync(), in the store's own thread: the writer
+  // thread's encoding under way ends first (its exception is thrown here), the reserve is held
+  // (Room) then released for the calls that follow, and the flush the writer encoded is written.
+  // HDF5 is only ever called by the store's thread while the writer waits.
+  void Sync() {
+    writer.Wait();
+    Room();
+    if (reserve) reserve->Release();
+    if (pending) WritePending();
+  }
+  // The reserve held again (memory_reserve.hpp); when the system refuses it, std::bad_alloc and no
+  // HDF5 call any more (h5::Abandon): the file keeps its last flush.
+  void Room() {
+    if (reserve && !reserve->Take()) {
+      h5::Abandon();
+      throw std::bad_alloc();
+    }
+  }
+  // A run's periodic flush (write-behind): the rows buffered so far are set aside and encoded by
+  // the writer thread while the run goes on, and written by the store's thread at the next one.
   void MaybeFlush();
+  void WritePending();
   void StartWriter();  // the writer thread and its HDF5 state, set up with the file
   void CheckRoom();  // WriteError ("no space left") when a metadata flush may not fit
   // The checkpoint `c` (none: nothing) with the row counts at it.

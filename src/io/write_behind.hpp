@@ -1,8 +1,8 @@
 // The store's write-behind (docs/output.md, "Writing"): one writer thread that runs one job at a
-// time (a flush of the rows set aside), while the simulation goes on buffering the rows that
-// follow. The HDF5 library is not thread-safe: the store calls Wait() before any HDF5 call of its
-// own, so that the library is only ever used by one thread at a time. A job's exception (a
-// WriteError: full disk, I/O error) is thrown again by the next Wait() in the store's thread.
+// time (the encoding of the rows set aside for a flush), while the simulation goes on buffering
+// the rows that follow. The job makes no HDF5 call: the store's thread writes what it encoded
+// after Wait(), so that the library is only ever used by that thread, while the writer waits
+// (memory_reserve.hpp). A job's exception is thrown again by the next Wait() in the store's thread.
 #pragma once
 
 #include <signal.h>
@@ -42,6 +42,12 @@ class WriteBehind {
       error_ = nullptr;
       std::rethrow_exception(e);
     }
+  }
+
+  // Whether a job is under way (no wait).
+  bool Busy() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return static_cast<bool>(job_);
   }
 
   // Runs `job` on the writer thread (started on the first call); the caller has called Wait().

@@ -1,0 +1,308 @@
+// The store's chunk encoder (chunk_deflate.hpp): HDF5's shuffle, then a zlib stream of one
+// fixed-Huffman deflate block (RFC 1950, RFC 1951 §3.2.6).
+#include "io/chunk_deflate.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstring>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+namespace vibro::h5 {
+
+namespace {
+
+std::uint32_t Load32(const unsigned char* p) {
+  std::uint32_t v;
+  std::memcpy(&v, p, 4);
+  return v;
+}
+std::uint64_t Load64(const unsigned char* p) {
+  std::uint64_t v;
+  std::memcpy(&v, p, 8);
+  return v;
+}
+
+// A Huffman code as the bit stream carries it: deflate sends a code's most significant bit first,
+// and the stream is filled from each byte's least significant bit.
+std::uint32_t Reverse(std::uint32_t code, int len) {
+  std::uint32_t r = 0;
+  for (int k = 0; k < len; ++k) r |= ((code >> k) & 1u) << (len - 1 - k);
+  return r;
+}
+
+// Bits and their count, ready to send: a literal, a length (its code and extra bits), a distance.
+struct Code {
+  std::uint32_t bits;
+  std::uint32_t len;
+};
+
+// The fixed codes (RFC 1951 §3.2.6) and, per match length 3…258 and distance 1…32768, its code with
+// its extra bits.
+struct Tables {
+  std::array<Code, 288> lit{};
+  std::array<Code, 259> length{};
+  std::array<Code, 32769> dist{};
+  Tables() {
+    for (std::uint32_t v = 0; v < 288; ++v) {
+      std::uint32_t code = 0, len = 0;
+      if (v < 144) code = 0x30 + v, len = 8;
+      else if (v < 256) code = 0x190 + (v - 144), len = 9;
+      else if (v < 280) code = v - 256, len = 7;
+      else code = 0xC0 + (v - 280), len = 8;
+      lit[v] = {Reverse(code, static_cast<int>(len)), len};
+    }
+    for (std::uint32_t L = 3; L <= 258; ++L) {
+      std::uint32_t sym = 0, extra = 0, val = 0;
+      const std::uint32_t x = L - 3;
+      if (L == 258) {
+        sym = 285;
+      } else if (x < 8) {
+        sym = 257 + x;
+      } else {
+        const std::uint32_t msb = 31u - static_cast<std::uint32_t>(__builtin_clz(x));
+        sym = 257 + 4 * (msb - 1) + ((x >> (msb - 2)) & 3u);
+        extra = msb - 2;
+        val = x & ((1u << extra) - 1u);
+      }
+      const Code c = lit[sym];
+      length[L] = {c.bits | (val << c.len), c.len + extra};
+    }
+    for (std::uint32_t d = 1; d <= 32768; ++d) {
+      std::uint32_t sym = 0, extra = 0, val = 0;
+      const std::uint32_t x = d - 1;
+      if (d <= 4) {
+        sym = x;
+      } else {
+        const std::uint32_t msb = 31u - static_cast<std::uint32_t>(__builtin_clz(x));
+        sym = 2 * msb + ((x >> (msb - 1)) & 1u);
+        extra = msb - 1;
+        val = x & ((1u << extra) - 1u);
+      }
+      dist[d] = {Reverse(sym, 5) | (val << 5), 5 + extra};
+    }
+  }
+};
+
+const Tables& FixedTables() {
+  static const Tables t;
+  return t;
+}
+
+// The bit stream: up to 32 bits per Put (a match's length and distance codes with their extra bits
+// are at most 8 + 5 + 5 + 13 = 31).
+class BitWriter {
+ public:
+  explicit BitWriter(unsigned char* out) : out_(out) {}
+  void Put(std::uint32_t bits, std::uint32_t len) {
+    acc_ |= static_cast<std::uint64_t>(bits) << count_;
+    count_ += len;
+    if (count_ >= 32) {
+      const auto word = static_cast<std::uint32_t>(acc_);
+      std::memcpy(out_, &word, 4);  // little-endian, as the stream's byte order
+      out_ += 4;
+      acc_ >>= 32;
+      count_ -= 32;
+    }
+  }
+  // The last bits, padded to a whole byte; returns the end of the stream.
+  unsigned char* Finish() {
+    while (count_ > 0) {
+      *out_++ = static_cast<unsigned char>(acc_);
+      acc_ >>= 8;
+      count_ = count_ > 8 ? count_ - 8 : 0;
+    }
+    return out_;
+  }
+
+ private:
+  unsigned char* out_;
+  std::uint64_t acc_ = 0;
+  std::uint32_t count_ = 0;
+};
+
+constexpr int kHashBits = 15;
+constexpr size_t kWindow = 32768;  // deflate's largest distance
+constexpr size_t kMaxMatch = 258;
+
+}  // namespace
+
+void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out) {
+  const size_t count = elem > 0 ? n / elem : 0;
+  if (elem <= 1 || count <= 1) {
+    if (n > 0) std::memcpy(out, in, n);
+    return;
+  }
+  if (elem == 8) {
+    // Eight elements at a time: an 8 × 8 transpose of their bytes in three rounds of swaps (blocks
+    // of 4, 2 and 1 bytes), then one 8-byte store to each byte plane.
+    size_t i = 0;
+    for (; i + 8 <= count; i += 8) {
+      std::uint64_t a[8];
+      for (int r = 0; r < 8; ++r) a[r] = Load64(in + (i + static_cast<size_t>(r)) * 8);
+      constexpr std::uint64_t kMask[3] = {0x00000000FFFFFFFFull, 0x0000FFFF0000FFFFull, 0x00FF00FF00FF00FFull};
+      for (int round = 0, s = 4; round < 3; ++round, s /= 2)
+        for (int r = 0; r < 8; ++r) {
+          if (r & s) continue;
+          const std::uint64_t t = ((a[r] >> (8 * s)) ^ a[r + s]) & kMask[round];
+          a[r + s] ^= t;
+          a[r] ^= t << (8 * s);
+        }
+      for (size_t b = 0; b < 8; ++b) std::memcpy(out + b * count + i, &a[b], 8);
+    }
+    for (; i < count; ++i)
+      for (size_t b = 0; b < 8; ++b) out[b * count + i] = in[i * 8 + b];
+  } else {
+    for (size_t i = 0; i < count; ++i)
+      for (size_t b = 0; b < elem; ++b) out[b * count + i] = in[i * elem + b];
+  }
+  // Bytes after the last whole element (none in the store's chunks) stay as they are, as the filter's.
+  if (count * elem < n) std::memcpy(out + count * elem, in + count * elem, n - count * elem);
+}
+
+std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n) {
+  constexpr std::uint32_t kMod = 65521;
+  constexpr size_t kLanes = 16, kBlock = 4096;
+  std::uint64_t a = adler & 0xffffu, b = adler >> 16;
+  // Per block of k bytes (groups g = 0 … m − 1 of 16, k = 16 m): a += Σ x, and
+  // b += k·a + 16 Σ_g (m − 1 − g) S_g + Σ_g Σ_j (16 − j) x_gj, S_g the sum of group g's bytes: the
+  // first sum accumulates the groups' sums before each group (ps), the second weighs each group's
+  // bytes by 16 … 1 (w). All of it fits 32-bit lanes for k ≤ 4096, reduced mod 65521 after each block.
+  while (n >= kLanes) {
+    const size_t k = std::min(n, kBlock) / kLanes * kLanes;
+    std::uint64_t sum = 0, ps = 0, weighted = 0;
+#if defined(__SSE2__)
+    // psadbw sums a group's 16 bytes; pmaddwd weighs them (bytes widened to 16 bits) by 16 … 1.
+    const __m128i zero = _mm_setzero_si128();
+    const __m128i w_lo = _mm_setr_epi16(16, 15, 14, 13, 12, 11, 10, 9), w_hi = _mm_setr_epi16(8, 7, 6, 5, 4, 3, 2, 1);
+    __m128i v_sum = zero, v_ps = zero, v_w = zero;
+    for (size_t g = 0; g < k; g += kLanes) {
+      const __m128i x = _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + g));
+      v_ps = _mm_add_epi32(v_ps, v_sum);
+      v_sum = _mm_add_epi32(v_sum, _mm_sad_epu8(x, zero));
+      v_w = _mm_add_epi32(v_w, _mm_madd_epi16(_mm_unpacklo_epi8(x, zero), w_lo));
+      v_w = _mm_add_epi32(v_w, _mm_madd_epi16(_mm_unpackhi_epi8(x, zero), w_hi));
+    }
+    alignas(16) std::uint32_t l_sum[4], l_ps[4], l_w[4];
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_sum), v_sum);
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_ps), v_ps);
+    _mm_store_si128(reinterpret_cast<__m128i*>(l_w), v_w);
+    for (int l = 0; l < 4; ++l) {
+      sum += l_sum[l];
+      ps += l_ps[l];
+      weighted += l_w[l];
+    }
+#else
+    for (size_t g = 0; g < k; g += kLanes) {
+      ps += sum;
+      for (size_t j = 0; j < kLanes; ++j) {
+        sum += p[g + j];
+        weighted += (kLanes - j) * p[g + j];
+      }
+    }
+#endif
+    b = (b + k * a + kLanes * ps + weighted) % kMod;
+    a = (a + sum) % kMod;
+    p += k;
+    n -= k;
+  }
+  for (; n > 0; --n, ++p) {
+    a += *p;
+    b += a;
+  }
+  a %= kMod;
+  b %= kMod;
+  return static_cast<std::uint32_t>((b << 16) | a);
+}
+
+size_t ZlibFixedBound(size_t n) {
+  // At most 9 bits per byte, the header, the block's 3 bits and its end, the Adler-32, and the 4
+  // bytes a Put may write at once.
+  return n + n / 8 + 32;
+}
+
+void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out) {
+  out.resize(ZlibFixedBound(n));
+  out.resize(ZlibFixed(in, n, out.data()));
+}
+
+size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
+  const Tables& t = FixedTables();
+  unsigned char* o = out;
+  *o++ = 0x78;  // CM = 8 (deflate), CINFO = 7 (32 KiB window)
+  *o++ = 0x01;  // FLEVEL 0, FCHECK: 0x7801 is a multiple of 31
+  BitWriter bw(o);
+  bw.Put(3, 3);  // BFINAL = 1, BTYPE = 01 (fixed Huffman codes)
+  // The hash table of the last position of each 4-byte string. It is not cleared between chunks: a
+  // stale entry is checked like any other (a position before i whose 4 bytes match).
+  static thread_local std::vector<std::uint32_t> table(size_t{1} << kHashBits, 0);
+  std::uint32_t* head = table.data();
+  size_t i = 0, rep = 0;
+  while (i + 4 <= n) {
+    const std::uint32_t cur = Load32(in + i);
+    size_t d = 0;
+    if (rep != 0 && rep <= i && Load32(in + i - rep) == cur) {
+      d = rep;  // the last match's distance: a periodic column's period
+    } else {
+      const std::uint32_t h = (cur * 2654435761u) >> (32 - kHashBits);
+      const std::uint32_t c = head[h];
+      head[h] = static_cast<std::uint32_t>(i);
+      if (c < i && i - c <= kWindow && Load32(in + c) == cur) d = i - c;
+    }
+    if (d == 0) {
+      const Code& l = t.lit[in[i]];
+      bw.Put(l.bits, l.len);
+      ++i;
+      continue;
+    }
+    const size_t max_len = std::min(kMaxMatch, n - i);
+    size_t len = 4;
+    for (;;) {
+      if (len + 8 <= max_len) {
+        const std::uint64_t x = Load64(in + i + len) ^ Load64(in + i + len - d);
+        if (x != 0) {
+          len += static_cast<size_t>(__builtin_ctzll(x)) / 8;
+          break;
+        }
+        len += 8;
+        continue;
+      }
+      while (len < max_len && in[i + len] == in[i + len - d]) ++len;
+      break;
+    }
+    const Code& lc = t.length[len];
+    const Code& dc = t.dist[d];
+    bw.Put(lc.bits | (dc.bits << lc.len), lc.len + dc.len);
+    rep = d;
+    i += len;
+  }
+  for (; i < n; ++i) {
+    const Code& l = t.lit[in[i]];
+    bw.Put(l.bits, l.len);
+  }
+  bw.Put(t.lit[256].bits, t.lit[256].len);  // end of block
+  o = bw.Finish();
+  const std::uint32_t adler = Adler32(1, in, n);
+  *o++ = static_cast<unsigned char>(adler >> 24);
+  *o++ = static_cast<unsigned char>(adler >> 16);
+  *o++ = static_cast<unsigned char>(adler >> 8);
+  *o++ = static_cast<unsigned char>(adler);
+  return static_cast<size_t>(o - out);
+}
+
+void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                    std::vector<unsigned char>& out) {
+  out.resize(ZlibFixedBound(n));
+  out.resize(ShuffleDeflate(in, n, elem, scratch, out.data()));
+}
+
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                      unsigned char* out) {
+  if (scratch.size() < n) scratch.resize(n);
+  Shuffle(in, n, elem, scratch.data());
+  return ZlibFixed(scratch.data(), n, out);
+}
+
+}  // namespace vibro::h5

@@ -1,0 +1,37 @@
+// A whole chunk of a table, encoded as HDF5's shuffle and deflate filters decode it (docs/output.md,
+// "Writing"): the elements' bytes transposed (byte 0 of every element, then byte 1, … as the shuffle
+// filter), then a zlib stream (RFC 1950) of one fixed-Huffman deflate block (RFC 1951). Written
+// with H5Dwrite_chunk, it is read back by any HDF5 reader exactly as a chunk that the library's own
+// filters wrote; only the encoder differs: a greedy LZ77 search with one hash candidate and the
+// last match's distance tried first (a periodic run's columns repeat every period), and the fixed
+// code, about ten times faster than zlib's level 1 on the store's columns (docs/performance.md).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace vibro::h5 {
+
+// The byte transpose of HDF5's shuffle filter: n bytes of elements of `elem` bytes (n a multiple).
+void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out);
+
+// Adler-32 (RFC 1950) of n bytes, from `adler` (1 for a new stream).
+std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n);
+
+// The zlib stream of n bytes (header, one final fixed-Huffman block, Adler-32) in `out` (resized).
+void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out);
+// The most bytes ZlibFixed writes for n bytes.
+size_t ZlibFixedBound(size_t n);
+// The same stream written at `out` (ZlibFixedBound(n) bytes of room); returns its length.
+size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out);
+
+// Shuffle then ZlibFixed: the bytes HDF5's shuffle + deflate filters read back as `in`.
+// `scratch` holds the shuffled bytes (kept by the caller: no allocation per chunk).
+void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                    std::vector<unsigned char>& out);
+// The same written at `out` (ZlibFixedBound(n) bytes of room, never cleared); returns its length.
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+                      unsigned char* out);
+
+}  // namespace vibro::h5
