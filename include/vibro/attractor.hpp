@@ -54,6 +54,7 @@ class AttractorRecorder final : public Observer {
   AttractorRecorder(const System& system, const Scene& scene);
   void OnEvent(const Event& e) override;
   void OnSection(const Sample& s) override;
+  bool WantsResets() const override { return false; }
 
   // Classification of the motion over the final periods recorded.
   Attractor Classify() const;

@@ -177,6 +177,10 @@ class Observer {
   virtual void OnCheckpoint(const Checkpoint& /*checkpoint*/) {}
   virtual void OnStretch(const Stretch& /*stretch*/) {}
   virtual void OnReset(const Reset& /*reset*/) {}
+  // Whether this observer reads OnReset. The automaton builds a reset (copies of the states, and
+  // for a predicted accumulation the gradient of its jump time, docs/model.md §5.6) only when at
+  // least one of its observers wants it: an observer that ignores resets says false.
+  virtual bool WantsResets() const { return true; }
 };
 
 }  // namespace vibro

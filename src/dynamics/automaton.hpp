@@ -433,6 +433,9 @@ class Automaton {
   S sincos_[2] = {S(0), S(1)}, sincos_phase_{0};  // SinCos's memory
   bool sincos_valid_ = false;
   Vec tail_w_;  // PredictTail's scratch (no allocation per impact)
+  // TryAccumulation's states (no allocation per accepted prediction): at t∞, free at t∞⁻, and the
+  // post-impact state the tail starts from (the last two for the resets only).
+  Vec jump_X_, jump_V_, jump_X_end_, jump_V_end_, jump_X_k_, jump_V_k_;
   ContactLoadsT<S> loads_;  // impulses, energies, sticking phases (docs/loads.md)
   // Compliant stops: each compliant contact's propagator, its closed form or, with run.engine =
   // "cvode", CVODE's integration of the same law (double only: quad refuses them,
@@ -448,6 +451,9 @@ class Automaton {
   };
   std::vector<CompliantAccount> compliant_account_;
   bool stretch_loads_ = false;  // the sticking segment under way searches max R per stretch
+  // Some observer reads the resets (Observer::WantsResets): else none is built.
+  const bool resets_wanted_ = std::any_of(opt_.observers.begin(), opt_.observers.end(),
+                                          [](const Observer* o) { return o->WantsResets(); });
 };
 
 inline void Count(EventCounts& c, EventKind kind, bool simultaneous) {
@@ -504,7 +510,7 @@ void Automaton<S>::Emit(EventKind kind, const S& v_before, const S& v_after, int
 template <class S>
 void Automaton<S>::NotifyReset(ResetKind kind, const Vec& Xb, const Vec& Vb, int contact,
                                bool simultaneous, HeldSetCause cause) {
-  if (opt_.observers.empty()) return;
+  if (!resets_wanted_) return;
   if (contact < 0) contact = active_;
   const Reset r{kind, R::to_double(Phase(clock_)), D(Xb, dx_), D(Vb, dv_), D(X_, dx2_), D(V_, dv2_),
                 0.0, 0.0, nullptr, nullptr, nullptr, R::to_double(M(contact).ContactVelocity(Vb)),
@@ -788,9 +794,15 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
     if (!probe.stopped) last_jump_failure_ = probe.message;
     return false;
   }
-  Vec X, V;
+  // The state at t∞ (the engine's scratch: no allocation per prediction), and the free state there
+  // before the projection, kept only for the resets.
+  Vec& X = jump_X_;
+  Vec& V = jump_V_;
   engine_->Evaluate(delta, X, V);
-  const Vec X_end = X, V_end = V;
+  if (resets_wanted_) {
+    jump_X_end_ = X;
+    jump_V_end_ = V;
+  }
   m.ProjectOntoStop(X, V);
   ClockT<S> end = clock_;
   AdvanceClock(end, delta, period_ - clock_.offset);
@@ -806,8 +818,12 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   }
   if (multi() && !AccumulationOrdered(active_, {active_}, X, V, Phase(end), AbsTime(end))) return false;
   // Commit: the same flow with dense output, then the state at t∞.
-  const Vec X_k = X_, V_k = V_;
-  engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_k, V_k, S(0), FlightStart::kAfterImpact,
+  // (Begin copies the post-impact state; the reset below needs it after X_ has moved to t∞.)
+  if (resets_wanted_) {
+    jump_X_k_ = X_;
+    jump_V_k_ = V_;
+  }
+  engine_->Begin({Mode::kFree, phase_k, clock_.offset, X_, V_, S(0), FlightStart::kAfterImpact,
                   StickStart::kGeneric, active_, nullptr, nullptr, -1, sc});
   const ClockT<S> from = clock_;
   // Samples inside the tail show the state projected onto the stop: the free flow over Δ∞ sums
@@ -824,12 +840,14 @@ bool Automaton<S>::TryAccumulation(const S& reaction) {
   ++result_.chatter.accumulations_predicted;
   const double err = R::to_double(tail.error / period_);
   if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
-  if (!opt_.observers.empty()) {
+  if (resets_wanted_) {
     Eigen::VectorXd a, b, c, d, xe, ve;
+    const Vec& X_k = jump_X_k_;
+    const Vec& V_k = jump_V_k_;
     const Eigen::VectorXd grad = DeltaGradient<S>(m, X_k, V_k, phase_k, tail);
     const Reset jump{ResetKind::kAccumulation, R::to_double(phase_k), D(X_k, a), D(V_k, b),
                      D(X_, c), D(V_, d), R::to_double(delta), R::to_double(reaction),
-                     &grad, &D(X_end, xe), &D(V_end, ve),
+                     &grad, &D(jump_X_end_, xe), &D(jump_V_end_, ve),
                      std::numeric_limits<double>::quiet_NaN(), active_};
     for (auto* o : opt_.observers) o->OnReset(jump);
   }

@@ -1056,7 +1056,7 @@ int Automaton<S>::TryHeldAccumulation(int k) {
   ++result_.chatter.accumulations_predicted;
   const double err = R::to_double(error / period_);
   if (err > result_.chatter.max_estimated_error) result_.chatter.max_estimated_error = err;
-  if (!opt_.observers.empty()) {
+  if (resets_wanted_) {
     // The jump for the tangent map (docs/contacts.md, "Periodic orbits"): from the post-impact
     // state over Δ∞ on the S-flow, then the projection onto Z; ∇Δ∞ of the prediction taken.
     Eigen::VectorXd a, b, c, d, xe, ve;

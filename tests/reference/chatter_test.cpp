@@ -6,10 +6,13 @@
 //     t_∞ = Σ_{j≥0} 2 atan(r^j v_0 / x0)
 // and the body then rests on the stop for ever (R = x0 > 0).
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "support.hpp"
+#include "vibro/scene_file.hpp"
 
 namespace vibro::test {
 namespace {
@@ -113,6 +116,61 @@ TEST(Chatter, ElasticImpactsNeverAccumulate) {
     EXPECT_NEAR(impacts[i].t, static_cast<double>(i + 1) * M_PI / 2.0, 1e-12 * (1.0 + impacts[i].t));
     EXPECT_NEAR(impacts[i].v_before, -1.0, 1e-12);
   }
+}
+
+
+// Resets are built only when some observer reads them (Observer::WantsResets, docs/performance.md):
+// Fig. 8 (a chattering sequence and a predicted accumulation every period) with an event log that
+// reads no resets, alone and beside an observer that reads them. The events are the same to the
+// bit; alone, no reset reaches the log; beside the reader, every impact and every accumulation
+// gives one, the accumulation's with its jump-time gradient (2n) and the free state at t∞.
+struct EventsOnly final : Observer {
+  std::vector<Event> events;
+  int resets = 0;
+  void OnEvent(const Event& e) override { events.push_back(e); }
+  void OnReset(const Reset&) override { ++resets; }
+  bool WantsResets() const override { return false; }
+};
+struct ResetReader final : Observer {
+  int impacts = 0, accumulations = 0, with_gradient = 0;
+  void OnReset(const Reset& r) override {
+    if (r.kind == ResetKind::kImpact) ++impacts;
+    if (r.kind != ResetKind::kAccumulation) return;
+    ++accumulations;
+    if (r.delta_gradient && r.delta_gradient->size() == 2 && r.X_end && r.X_end->size() == 1 &&
+        std::isfinite((*r.delta_gradient)[0]) && r.delta > 0)
+      ++with_gradient;
+  }
+};
+
+TEST(Chatter, ResetsOnlyForObserversThatReadThem) {
+  const auto loaded = LoadScene(std::string(VIBRO_SCENES_DIR) + "/fig08_preload.toml",
+                                {"run.periods=20", "run.samples_per_period=0"});
+  const System sys(loaded.scene);
+  EventsOnly alone, beside;
+  ResetReader reader;
+  SimulationOptions a, b;
+  a.observers = {&alone};
+  b.observers = {&beside, &reader};
+  const RunResult ra = Simulate(sys, loaded.scene, a), rb = Simulate(sys, loaded.scene, b);
+  ASSERT_EQ(ra.status, RunStatus::kOk);
+  ASSERT_EQ(rb.status, RunStatus::kOk);
+  ASSERT_GT(ra.counts.accumulations, 10);
+  ASSERT_EQ(alone.events.size(), beside.events.size());
+  for (size_t i = 0; i < alone.events.size(); ++i) {
+    const Event &x = alone.events[i], &y = beside.events[i];
+    EXPECT_EQ(x.kind, y.kind);
+    EXPECT_EQ(x.clock.period, y.clock.period);
+    for (const auto& [u, v] : {std::pair{x.clock.offset, y.clock.offset}, {x.t, y.t}, {x.x_B, y.x_B},
+                               {x.v_before, y.v_before}, {x.v_after, y.v_after}, {x.impulse, y.impulse},
+                               {x.energy_dissipated, y.energy_dissipated}})
+      EXPECT_TRUE(u == v || (std::isnan(u) && std::isnan(v))) << "event " << i << ": " << u << " vs " << v;
+  }
+  EXPECT_EQ(alone.resets, 0);
+  EXPECT_GT(beside.resets, 0);
+  EXPECT_EQ(reader.impacts, rb.counts.impacts);
+  EXPECT_EQ(reader.accumulations, rb.counts.accumulations);
+  EXPECT_EQ(reader.with_gradient, reader.accumulations);
 }
 
 }  // namespace
