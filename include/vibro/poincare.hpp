@@ -41,8 +41,10 @@ inline constexpr char kCoupledSimultaneousImpact[] =
 // Π_j = I − (1 + r_j) T_j c_jᵀ/W_jj, det = r_j²); a sticking stretch follows the flow constrained
 // by the held contact; an impact of contact k while contact h sticks uses the 2 × 2 impact law
 // on {h, k} with its pattern fixed (h stays: both impulses; h pushed off: k's alone); impacts of
-// two contacts at one instant are the product of their saltations when W_jk = 0, and leave the
-// map without a Jacobian when W_jk ≠ 0 (the map is discontinuous there).
+// contacts at one instant (in free flight or beside held contacts, plastic or not) are the product
+// of their saltations taken one after the other when W_jk = 0 and every order gives the same product
+// (else the map has a corner there: corner()), and leave the map without a Jacobian when W_jk ≠ 0
+// (the map is discontinuous there).
 class TangentTracker final : public Observer {
  public:
   explicit TangentTracker(const System& system);
@@ -53,6 +55,11 @@ class TangentTracker final : public Observer {
   // Why the map has no Jacobian along the way (a simultaneous impact of coupled contacts, or an
   // event whose saltation is not implemented); empty when DF exists. Kept across Restart.
   const std::string& undefined() const { return undefined_; }
+  // A simultaneous impact at a corner of the map (docs/contacts.md, "Periodic orbits"): the orders in
+  // which a perturbation closes the gaps give different Jacobians, one piece each. The product follows
+  // the first order (piece 0) or the last (piece 1); corner() says where (empty: no corner met).
+  void SetCornerPiece(int piece) { piece_ = piece; }
+  const std::string& corner() const { return corner_; }
   // Starts the product again from `start` (2n rows; the identity for DF itself): the Lyapunov
   // observer carries its orthonormal frame this way.
   void Restart(const Eigen::MatrixXd& start);
@@ -79,7 +86,26 @@ class TangentTracker final : public Observer {
   void Saltation(const Eigen::MatrixXd& dV, const Eigen::VectorXd& f_minus,
                  const Eigen::VectorXd& f_plus, const Eigen::VectorXd& c, double denom);
   void ImpactWhileHeld(const Reset& r);
-  void SimultaneousImpact(const Reset& r);
+  // Contacts Z closing at one instant (in free flight, or while the contacts H are held): the
+  // composite saltation, taken when the next stretch names the flow after (ResolveSimultaneous).
+  void SimultaneousImpact(const Reset& r, std::vector<int> Z, std::vector<int> H);
+  struct PendingSimultaneous {
+    bool active = false;
+    std::vector<int> Z, H;  // the contacts closing, the contacts held before
+    Eigen::VectorXd X, V_before, V_after;
+    double phase = 0;
+  };
+  PendingSimultaneous pending_sim_;
+  int piece_ = 0;
+  std::string corner_;
+  void ResolveSimultaneous(const std::vector<int>& after);
+  std::vector<int> HeldNow() const;  // the contacts the tracker follows held now
+  std::vector<int> AtZeroGap(const Reset& r, const std::vector<int>& H) const;
+  // The composite saltation of the impacts of `order` taken one after the other at one instant
+  // from the held set H, ending on the flow held on `after`; false (with `why`) where the impact
+  // law's pattern or the contact-force LCP between them is not the one the tangent map follows.
+  bool SequenceSaltation(const std::vector<int>& order, const std::vector<int>& after, Eigen::MatrixXd& M,
+                         Eigen::VectorXd& V_end, std::string& why) const;
   // Several contacts held at once (docs/contacts.md, "Periodic orbits"): the flow constrained to
   // the set S, G_S = [[0, I], [−P_S Ω, −P_S D]] with P_S = I − T_S W_SS⁻¹ C_S (cached per set).
   const Eigen::MatrixXd& SetFlow(const std::vector<int>& set);
@@ -207,8 +233,9 @@ struct MapValue {
   bool singular = false;
   std::string undefined;  // TangentTracker::undefined(): why DF does not exist (empty: it does)
   RunStatus status = RunStatus::kOk;
+  std::string corner;     // TangentTracker::corner(): the map has pieces there, `jacobian` is piece `piece`'s
 };
 MapValue StroboscopicMap(const System& system, const Scene& scene, double t0,
-                         const Eigen::VectorXd& X, const Eigen::VectorXd& V, int q);
+                         const Eigen::VectorXd& X, const Eigen::VectorXd& V, int q, int piece = 0);
 
 }  // namespace vibro

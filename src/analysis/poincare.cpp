@@ -9,6 +9,8 @@
 
 #include <unsupported/Eigen/MatrixFunctions>
 
+#include <fmt/format.h>
+
 #include "vibro/contact_sequence.hpp"
 
 namespace vibro {
@@ -340,6 +342,10 @@ void TangentTracker::Resolve(Mode mode, int contact, const std::vector<int>* set
 void TangentTracker::OnStretch(const Stretch& s) {
   const bool multi = contacts_.size() > 1;
   const bool on_set = multi && s.mode == Mode::kSticking && s.held && s.held->size() > 1;
+  if (pending_sim_.active)  // the flow after a simultaneous impact: free, held on one contact, or on a set
+    ResolveSimultaneous(s.mode == Mode::kFree ? std::vector<int>{}
+                        : on_set              ? *s.held
+                                              : std::vector<int>{s.contact});
   if (pending_.active) Resolve(s.mode, s.contact, on_set ? s.held : nullptr);
   if (pending_jump_.active) {  // − f⁺(t∞) ∇Δ∞ᵀ of a held accumulation, f⁺ the flow this stretch follows
     pending_jump_.active = false;
@@ -565,9 +571,41 @@ void TangentTracker::ImpactWhileHeld(const Reset& r) {
 // bounces (1 + r_k). ∂g_V = I − T_A W_AA⁻¹ diag(1, …, 1 + r_k) C_A; A is read from the jump the
 // automaton took, P = W_ZZ⁻¹ C_Z (Ẋ⁺ − Ẋ⁻) over the contacts at zero gap. The guard is g_k, the flow
 // before the held one, the flow after the one the acceleration LCP chooses (the next stretch's).
+std::vector<int> TangentTracker::HeldNow() const {
+  return held_ >= 0 ? std::vector<int>{held_} : held_ == kSet ? held_set_ : std::vector<int>{};
+}
+
+// The contacts at zero gap after the reset r, those of H aside (r.contact among them).
+std::vector<int> TangentTracker::AtZeroGap(const Reset& r, const std::vector<int>& H) const {
+  std::vector<int> Z;
+  for (size_t j = 0; j < contacts_.size(); ++j) {
+    const ContactTangent& ct = contacts_[j];
+    const double gap = ct.c.dot(r.X_after) - ct.e;
+    const double tol = 1e-9 * (1.0 + std::abs(ct.e) + ct.c.cwiseProduct(r.X_after).cwiseAbs().sum());
+    const bool held = std::find(H.begin(), H.end(), static_cast<int>(j)) != H.end();
+    if ((std::abs(gap) <= tol && !held) || static_cast<int>(j) == r.contact) Z.push_back(static_cast<int>(j));
+  }
+  return Z;
+}
+
 void TangentTracker::ImpactWhileSetHeld(const Reset& r) {
   const auto n = sys_.dof();
   const int k = r.contact;
+  {
+    // Another free contact closing at this instant (its gap within rounding, its gap velocity < 0):
+    // a simultaneous impact beside the held contacts, not an impact of k alone.
+    const std::vector<int> H = HeldNow();
+    std::vector<int> closing{k};
+    for (const int j : AtZeroGap(r, H)) {
+      const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
+      if (j != k && ct.c.dot(r.V_before) < -1e-9 * (ct.c.cwiseProduct(r.V_before).cwiseAbs().sum() + 1e-300))
+        closing.push_back(j);
+    }
+    if (closing.size() > 1 && !H.empty()) {
+      SimultaneousImpact(r, closing, H);
+      return;
+    }
+  }
   std::vector<int> Z;
   for (size_t j = 0; j < contacts_.size(); ++j) {
     const ContactTangent& ct = contacts_[j];
@@ -602,51 +640,195 @@ void TangentTracker::ImpactWhileSetHeld(const Reset& r) {
   Defer(dV, HeldField(r.X_before, r.V_before, r.phase), K.c, vk, r.X_after, r.V_after, r.phase);
 }
 
-// Contacts closing at one instant (docs/contacts.md, "Periodic orbits"): with W_jk = 0 the impacts are
-// independent, and the saltation is the product of the single impacts' (taken one after the
-// other at the same instant); with W_jk ≠ 0 the map is discontinuous there: no Jacobian.
-void TangentTracker::SimultaneousImpact(const Reset& r) {
-  if (held_ >= 0) {
-    Undefined("an impact of two contacts at one instant while another contact sticks: its "
-              "saltation is not implemented");
-    return;
-  }
-  std::vector<int> Z;
-  for (size_t j = 0; j < contacts_.size(); ++j) {
-    const ContactTangent& ct = contacts_[j];
-    const double gap = ct.c.dot(r.X_after) - ct.e;
-    const double tol = 1e-9 * (1.0 + std::abs(ct.e) + ct.c.cwiseProduct(r.X_after).cwiseAbs().sum());
-    if (std::abs(gap) <= tol || static_cast<int>(j) == r.contact) Z.push_back(static_cast<int>(j));
-  }
+// Contacts Z closing at one instant (docs/contacts.md, "Periodic orbits"), in free flight (H empty)
+// or while the contacts H are held. With W_jk ≠ 0 between two of them the map is discontinuous there:
+// no Jacobian. With W_jk = 0 a perturbation splits the instant into the impacts one after the other,
+// in the order their gaps close; the map is piecewise smooth, one piece per order, and continuous. Its
+// Jacobian exists where every order gives the same one (the active set locally constant): the
+// composite saltation of each order is computed (SequenceSaltation) when the next stretch names the
+// flow after, and applied if they agree within rounding; otherwise the orbit is at a corner of the map
+// (a genuine non-smooth point) and says so.
+void TangentTracker::SimultaneousImpact(const Reset& r, std::vector<int> Z, std::vector<int> H) {
   for (size_t a = 0; a < Z.size(); ++a)
     for (size_t b = a + 1; b < Z.size(); ++b)
       if (Coupling(Z[a], Z[b]) != 0.0) {
         Undefined(kCoupledSimultaneousImpact);
         return;
       }
-  Eigen::VectorXd V = r.V_before, V_next;
-  for (int j : Z) {
-    const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
-    const double v = ct.c.dot(V);
-    if (ct.r == 0.0) {
-      Undefined("a plastic impact of two contacts at one instant: its saltation is not implemented");
+  std::sort(Z.begin(), Z.end());
+  std::sort(H.begin(), H.end());
+  pending_sim_.active = true;
+  pending_sim_.Z = std::move(Z);
+  pending_sim_.H = std::move(H);
+  pending_sim_.X = r.X_after;
+  pending_sim_.V_before = r.V_before;
+  pending_sim_.V_after = r.V_after;
+  pending_sim_.phase = r.phase;
+  held_ = -2;  // the contact-force LCP after the instant decides the flow: the next stretch names it
+  held_set_.clear();
+}
+
+// The impacts of `order` one after the other at one instant (flights of zero length between), from
+// the flow held on H to the one held on `after`. Each is the impact law on A = H ∪ {j} with its
+// pattern fixed (held contacts keep v = 0, factor 1; j bounces, 1 + r_j): ∂g_V = I − T_A W_AA⁻¹ diag(1,
+// …, 1 + r_j) C_A, guard g_j, and S_j = ∂g + (f⁺ − ∂g f⁻)∇hᵀ/(∇h·f⁻) (docs/model.md §5.6) with f⁻ the
+// flow before it and f⁺ the one after: held on H ∪ {j} when j lands plastically (r_j = 0) and the
+// contact-force LCP keeps it, on H otherwise, and `after` for the last. M = S_m ⋯ S_1.
+bool TangentTracker::SequenceSaltation(const std::vector<int>& order, const std::vector<int>& after,
+                                       Eigen::MatrixXd& M, Eigen::VectorXd& V_end, std::string& why) const {
+  const auto n = sys_.dof();
+  const Eigen::VectorXd& X = pending_sim_.X;
+  const double phase = pending_sim_.phase;
+  std::vector<int> H = pending_sim_.H;
+  Eigen::VectorXd V = pending_sim_.V_before;
+  Eigen::VectorXd f_prev = SetField(H, X, V, phase);
+  M = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+  const auto gather = [&](const std::vector<int>& set, Eigen::MatrixXd& T, Eigen::MatrixXd& C) {
+    const auto m = static_cast<Eigen::Index>(set.size());
+    T.resize(n, m);
+    C.resize(m, n);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      T.col(a) = contacts_[static_cast<size_t>(set[static_cast<size_t>(a)])].T;
+      C.row(a) = contacts_[static_cast<size_t>(set[static_cast<size_t>(a)])].c.transpose();
+    }
+  };
+  // The contact forces that hold `set` at (X, W): all positive, within the rounding of the forces.
+  const auto holds = [&](const std::vector<int>& set, const Eigen::VectorXd& W) {
+    if (set.empty()) return true;
+    Eigen::MatrixXd T, C;
+    gather(set, T, C);
+    const Eigen::VectorXd a = Field(Mode::kFree, X, W, phase).tail(n);
+    const Eigen::VectorXd Ca = C * a;
+    const Eigen::VectorXd lam = (C * T).fullPivLu().solve(-Ca);
+    const double tol = 1e-9 * (C.cwiseAbs() * a.cwiseAbs()).maxCoeff();
+    return (lam.array() > tol).all();
+  };
+  for (size_t i = 0; i < order.size(); ++i) {
+    const int j = order[i];
+    const ContactTangent& K = contacts_[static_cast<size_t>(j)];
+    const double d = K.c.dot(V);
+    std::vector<int> A = H;
+    A.push_back(j);
+    Eigen::MatrixXd T_A, C_A;
+    gather(A, T_A, C_A);
+    Eigen::VectorXd factor = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(A.size()));
+    factor[factor.size() - 1] = 1.0 + K.r;
+    const Eigen::MatrixXd W = C_A * T_A;
+    const Eigen::VectorXd P = W.fullPivLu().solve(-(factor.asDiagonal() * (C_A * V)));
+    for (size_t a = 0; a < H.size(); ++a)
+      if (P[static_cast<Eigen::Index>(a)] < -1e-9 * std::abs(P[P.size() - 1])) {
+        why = fmt::format("contact {}'s impact at the instant of a simultaneous impact pushes held contact {} "
+                          "off its stop: that pattern's saltation is not implemented",
+                          j, H[a]);
+        return false;
+      }
+    const Eigen::MatrixXd dV = Eigen::MatrixXd::Identity(n, n) - T_A * W.fullPivLu().solve(factor.asDiagonal() * C_A);
+    const Eigen::VectorXd V_next = dV * V;
+    std::vector<int> H_next;
+    if (i + 1 == order.size()) {
+      H_next = after;
+    } else if (K.r == 0.0) {  // j at rest: held with H if the contact-force LCP keeps it, else it leaves
+      std::vector<int> with = A;
+      std::sort(with.begin(), with.end());
+      if (holds(with, V_next)) {
+        H_next = with;
+      } else if (holds(H, V_next) && K.c.dot(SetField(H, X, V_next, phase).tail(n)) > 0) {
+        H_next = H;
+      } else {
+        why = fmt::format("contact {} lands plastically at the instant of a simultaneous impact with neither "
+                          "held nor leaving decided strictly (the active set changes there): no Jacobian",
+                          j);
+        return false;
+      }
+    } else {
+      H_next = H;
+      if (!holds(H, V_next)) {
+        why = fmt::format("contact {}'s impact at the instant of a simultaneous impact ends a held contact's force: "
+                          "the active set changes there, no Jacobian",
+                          j);
+        return false;
+      }
+    }
+    const Eigen::VectorXd f_next = SetField(H_next, X, V_next, phase);
+    Eigen::VectorXd u(2 * n);
+    u.head(n) = f_next.head(n) - f_prev.head(n);
+    u.tail(n) = f_next.tail(n) - dV * f_prev.tail(n);
+    Eigen::MatrixXd S = Eigen::MatrixXd::Identity(2 * n, 2 * n);
+    S.bottomRightCorner(n, n) = dV;
+    S.leftCols(n) += u * (K.c.transpose() / d);
+    M = (S * M).eval();
+    f_prev = f_next;
+    V = V_next;
+    H = std::move(H_next);
+  }
+  V_end = V;
+  return true;
+}
+
+void TangentTracker::ResolveSimultaneous(const std::vector<int>& after) {
+  pending_sim_.active = false;
+  std::vector<int> order = pending_sim_.Z;
+  const Eigen::VectorXd& V = pending_sim_.V_before;
+  for (const int j : order) {  // a contact at zero gap that does not close: a tangential touch
+    const ContactTangent& K = contacts_[static_cast<size_t>(j)];
+    if (!(K.c.dot(V) < -1e-9 * (K.c.cwiseProduct(V).cwiseAbs().sum() + 1e-300))) {
+      singular_ = true;
       return;
     }
-    if (!(v < 0)) {  // at zero gap without closing: a tangential touch
-      singular_ = true;
-      continue;
-    }
-    V_next = V + ct.T * (-(1.0 + ct.r) * v / ct.s);
-    const Reset one{ResetKind::kImpact, r.phase, r.X_after, V,       r.X_after, V_next,
-                    0.0,                0.0,     nullptr,   nullptr, nullptr,   v,
-                    j};
-    Impact(one, j);
-    V = V_next;
   }
+  std::string names;
+  for (const int j : order) names += (names.empty() ? "" : ", ") + std::to_string(j);
+  if (order.size() > 4) {
+    Undefined(fmt::format("a simultaneous impact of {} contacts ({}): its saltation is implemented for four at most",
+                          order.size(), names));
+    return;
+  }
+  Eigen::MatrixXd M0, M_last;
+  double apart = 0;
+  bool first = true;
+  do {
+    Eigen::MatrixXd M;
+    Eigen::VectorXd V_end;
+    std::string why;
+    if (!SequenceSaltation(order, after, M, V_end, why)) {
+      Undefined(why);
+      return;
+    }
+    const double vscale = pending_sim_.V_after.cwiseAbs().maxCoeff() + V.cwiseAbs().maxCoeff();
+    if ((V_end - pending_sim_.V_after).cwiseAbs().maxCoeff() > 1e-9 * vscale) {
+      Undefined(fmt::format("the simultaneous impact of contacts {} left the run with velocities its impact law "
+                            "taken one contact after the other does not give (another contact took an impulse): "
+                            "its saltation is not implemented",
+                            names));
+      return;
+    }
+    if (first) {
+      M0 = M;
+      first = false;
+    } else {
+      apart = std::max(apart, (M - M0).cwiseAbs().maxCoeff());
+    }
+    M_last = std::move(M);
+  } while (std::next_permutation(order.begin(), order.end()));
+  // Every order's Jacobian the same within rounding (1e-8 relative; at a corner they differ by O(1)
+  // in the entries the damping couples: measured 5e-3 to 1e-2): the map is smooth there.
+  if (apart > 1e-8 * (1.0 + M0.cwiseAbs().maxCoeff()) && corner_.empty())
+    corner_ = fmt::format("a simultaneous impact of contacts {} at a corner of the map (the orders in which a "
+                          "perturbation closes their gaps give Jacobians {:.3g} apart: the damping couples the "
+                          "impacts)",
+                          names, apart);
+  phi_ = ((piece_ == 0 ? M0 : M_last) * phi_).eval();
 }
 
 void TangentTracker::OnReset(const Reset& r) {
   const auto n = sys_.dof();
+  if (pending_sim_.active) {
+    // A simultaneous impact that leaves several contacts at rest names them (kSimultaneous): the
+    // contact-force LCP's choice is the next stretch's flow, which resolves the impact.
+    if (r.kind == ResetKind::kHeldSet && r.cause == HeldSetCause::kSimultaneous) return;
+    pending_sim_.active = false;
+    Undefined("another event at the instant of a simultaneous impact: its saltation is not implemented");
+  }
   if (pending_jump_.active) {
     pending_jump_.active = false;
     Undefined("another event at the instant of a chattering accumulation beside held contacts: its "
@@ -672,7 +854,7 @@ void TangentTracker::OnReset(const Reset& r) {
   switch (r.kind) {
     case ResetKind::kImpact:
       if (multi && r.simultaneous)
-        SimultaneousImpact(r);
+        SimultaneousImpact(r, AtZeroGap(r, HeldNow()), HeldNow());
       else if (another_held)
         ImpactWhileHeld(r);
       else
@@ -715,8 +897,8 @@ void TangentTracker::OnReset(const Reset& r) {
           held_ = -2;
           break;
         case HeldSetCause::kSimultaneous:
-          Undefined("contacts left at rest together by a simultaneous impact: its saltation is not "
-                    "implemented");
+          // Contacts left at rest together by a simultaneous impact: that impact's composite saltation
+          // waits for the next stretch (pending_sim_, which returned above), or was refused with its reason.
           held_ = -2;
           break;
       }
@@ -749,17 +931,18 @@ void TangentTracker::OnReset(const Reset& r) {
 }
 
 MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const Eigen::VectorXd& X,
-                         const Eigen::VectorXd& V, int q) {
+                         const Eigen::VectorXd& V, int q, int piece) {
   Scene sc = scene;
   sc.run.periods = q;
   sc.run.samples_per_period = 0;
   const InitialOverride init{t0, X, V};
   TangentTracker tracker(sys);
+  tracker.SetCornerPiece(piece);
   SimulationOptions opt;
   opt.initial = &init;
   opt.observers = {&tracker};
   const RunResult r = Simulate(sys, sc, opt);
-  return {r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status};
+  return {r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status, tracker.corner()};
 }
 
 namespace {
@@ -885,6 +1068,34 @@ void NewtonOnStroboscopicMap(const System& sys, const Scene& scene, double t0, E
     if (out.residual < req.tolerance) {
       out.status = "converged";
       if (!m.undefined.empty()) out.no_jacobian = "the orbit passes through " + m.undefined;
+      if (m.undefined.empty() && !m.corner.empty()) {
+        // A corner (docs/contacts.md, "Periodic orbits"): the map is piecewise smooth there, and its
+        // multipliers exist when the pieces share them (a symmetric orbit: the corner's rank-one
+        // difference maps antisymmetric perturbations onto symmetric ones only). The first order's
+        // monodromy against the last order's.
+        MapValue other = StroboscopicMap(sys, scene, t0, z.head(n), z.tail(n), q, 1);
+        if (!held.empty() && other.jacobian.size() > 0) other.jacobian = other.jacobian * Pz;
+        const auto spectrum = [](const Eigen::MatrixXd& A) {
+          Eigen::ComplexEigenSolver<Eigen::MatrixXcd> es(A.cast<std::complex<double>>());
+          std::vector<std::complex<double>> mu(es.eigenvalues().data(), es.eigenvalues().data() + es.eigenvalues().size());
+          std::sort(mu.begin(), mu.end(), [](auto x, auto y) {
+            return std::abs(x) != std::abs(y) ? std::abs(x) > std::abs(y) : std::arg(x) < std::arg(y);
+          });
+          return mu;
+        };
+        const auto a = spectrum(m.jacobian), b = spectrum(other.jacobian);
+        double gap = a.size() == b.size() ? 0.0 : 1.0;
+        for (size_t i = 0; i < a.size() && i < b.size(); ++i) {
+          // a complex pair's order within the pair is free: compare with the nearer of the two
+          double d = std::abs(a[i] - b[i]);
+          if (i + 1 < b.size()) d = std::min(d, std::abs(a[i] - b[i + 1]));
+          if (i > 0) d = std::min(d, std::abs(a[i] - b[i - 1]));
+          gap = std::max(gap, d);
+        }
+        if (gap > 1e-9)
+          out.no_jacobian = fmt::format("the orbit passes through {}, and the pieces' multipliers differ by {:.3g}: "
+                                        "no Floquet multipliers", m.corner, gap);
+      }
       break;
     }
     if (!m.undefined.empty()) {

@@ -1093,8 +1093,21 @@ bool Automaton<S>::ImpactWhileSetHeld(int k, const std::vector<int>& was, const 
   const ModelT<S>& mk = M(k);
   X_ -= mk.contact * ((mk.ContactDisplacement(X_) - mk.x0) / mk.s_B);
   std::vector<int> Z = was;
+  std::vector<int> still = was;  // the held and resting contacts at g = ġ = 0
+  for (const int j : resting) {
+    // A contact at zero gap closing faster than the floor is not at rest: it hits at this instant
+    // (a simultaneous impact beside the held ones) and takes the impact law with its own
+    // restitution below; only its gap is snapped. Projecting its velocity away would stop it with
+    // no impact (its event, impulse and bounce lost).
+    const ModelT<S>& mj = M(j);
+    const S floor_j = S(1000 * std::numeric_limits<double>::epsilon()) * mj.shape.cwiseProduct(V_).cwiseAbs().sum();
+    if (mj.ContactVelocity(V_) < -floor_j)
+      X_ -= mj.contact * ((mj.ContactDisplacement(X_) - mj.x0) / mj.s_B);
+    else
+      still.push_back(j);
+  }
   Z.insert(Z.end(), resting.begin(), resting.end());
-  ProjectOnto<S>(models_, Z, X_, V_);  // the held and resting contacts at g = ġ = 0
+  ProjectOnto<S>(models_, still, X_, V_);
   gaps_[static_cast<size_t>(k)] = 0;
   for (const int j : resting) gaps_[static_cast<size_t>(j)] = 0;
   const S v_minus = mk.ContactVelocity(V_);
