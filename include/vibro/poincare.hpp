@@ -78,7 +78,11 @@ class TangentTracker final : public Observer {
     // of its contact phase's flow, G_c = [[0, I], [−(Ω + k T cᵀ), −(D + c T cᵀ)]].
     bool compliant = false, gap_exit = false;
     double stiffness = 0, damping = 0;
+    // G_c balanced, D G_c D⁻¹ with D = diag(w I, I), w = √‖Ω + k T cᵀ‖∞: exp(G_c s) = D⁻¹ exp(D G_c D⁻¹ s) D,
+    // so that the exponential's normwise accuracy holds entry by entry (a stiff stop: ω_c s ~ π
+    // while the position-from-velocity entries are ~1/ω_c).
     Eigen::MatrixXd G_contact;
+    double balance = 1;
   };
   // A compliant contact's entry and exit (docs/compliant.md, eqs. (C3)-(C6)), the relaxing
   // surface's variation, and the check that the crossing is transversal (else: a grazing).

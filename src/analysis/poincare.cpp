@@ -153,6 +153,10 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
       t.G_contact = G_free;
       t.G_contact.bottomLeftCorner(n, n) -= t.stiffness * t.T * t.c.transpose();
       t.G_contact.bottomRightCorner(n, n) -= t.damping * t.T * t.c.transpose();
+      const double norm = t.G_contact.bottomLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
+      t.balance = norm > 0 ? std::sqrt(norm) : 1.0;
+      t.G_contact.topRightCorner(n, n) *= t.balance;
+      t.G_contact.bottomLeftCorner(n, n) /= t.balance;
     }
     contacts_.push_back(std::move(t));
   }
@@ -363,7 +367,12 @@ void TangentTracker::OnStretch(const Stretch& s) {
       contacts_[static_cast<size_t>(sj)].compliant) {
     if (compliant_ != sj) Undefined("a contact phase of a compliant stop began without an entry the tangent map knows");
     held_ = -1;
-    phi_ = (contacts_[static_cast<size_t>(sj)].G_contact * s.duration).exp() * phi_;
+    const ContactTangent& ct = contacts_[static_cast<size_t>(sj)];
+    Eigen::MatrixXd E = (ct.G_contact * s.duration).exp();  // of the balanced G_c
+    const auto n = sys_.dof();
+    E.topRightCorner(n, n) /= ct.balance;  // D⁻¹ E D
+    E.bottomLeftCorner(n, n) *= ct.balance;
+    phi_ = E * phi_;
     return;
   }
   if (s.mode == Mode::kFree && relax_contact_ >= 0) {

@@ -192,7 +192,7 @@ def vibro_orbit(tmp_path, rule, path=None):
     return o, t0, X, V
 
 
-def check_against_reference(o, t0, X, V, ref):
+def check_against_reference(o, t0, X, V, ref, loads_tol=1e-13):
     """vibro's orbit a fixed point of the reference's map (one DOF: the modal coordinate is q, mode
     shape 1 and modal mass m, `vibro model`); the multipliers against the eigenvalues of its Jacobian
     by central differences; each contact phase's loads."""
@@ -230,7 +230,7 @@ def check_against_reference(o, t0, X, V, ref):
             want = float(r[key])
             err = abs(p[key] - want) / abs(want) if want != 0 else abs(p[key])
             worst = max(worst, err)
-            assert err <= 1e-13, (key, p[key], want)
+            assert err <= loads_tol, (key, p[key], want)
     return max(errors), worst, mu_ref
 
 
@@ -251,7 +251,10 @@ def test_sdnd121_penalty_orbit_against_taylor_return_map(tmp_path):
     assert o["period"] == 1 and len(o["contact_phases"]) == 4, o
     ref = Ref("gap", m=156, ks=2e6, zeta=0, x0=-1e-3, k=1e10, c=0, amp=3000, freq=10 * mp.pi,
               entry_step="0.001", exit_step="0.00002", skip="0.00001")
-    check_against_reference(o, t0, X, V, ref)
+    # The orbit is a fixed point to 8e-12 relative (Newton's tolerance; the reference's map agrees to
+    # that), and at K = 1e10 the loads move with it: 2.6e-13 measured on the peak force.
+    err, worst, _ = check_against_reference(o, t0, X, V, ref, loads_tol=1e-11)
+    print(f"SDND121: multipliers {err:.2g}, loads {worst:.2g}")
     assert all(abs(abs(complex(a, b)) - 1) < 1e-12 for a, b in o["floquet_multipliers"])
 
 
