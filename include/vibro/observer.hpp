@@ -135,6 +135,13 @@ enum class ResetKind {
   kAccumulation,   // docs/model.md §5.4: free flight over `delta` from the post-impact state, projection
   kGrazing,        // tangential touch that stays free (the maps are singular there)
   kHeldSet,        // two or more contacts held at once, entered or left (docs/contacts.md): see HeldSetCause
+  // A compliant stop (docs/compliant.md): no jump at either (the state is continuous), the flow
+  // changes. Entry: the gap to the stop's surface reaches 0 closing (contact_velocity_before is its
+  // rate ḋ = ġ − ẏ; `surface` the surface's offset y there, 0 unless it still relaxed, `relaxing`
+  // whether it did). Exit: the separation rule's surface (rule "gap": g = 0; rule "force": λ = 0);
+  // `relaxing`: a force-rule exit inside the stop, the surface left at `surface` = g < 0.
+  kCompliantEntry,
+  kCompliantExit,
 };
 // What a kHeldSet reset is (docs/contacts.md, "Periodic orbits"): the entry into the acceleration
 // LCP after a plastic landing beside a held contact (no jump: the impact was its own kImpact
@@ -165,6 +172,8 @@ struct Reset {
   int contact = 0;
   bool simultaneous = false;
   HeldSetCause cause = HeldSetCause::kEntry;  // kHeldSet only
+  double surface = 0;     // kCompliantEntry / kCompliantExit: the relaxing surface's offset y
+  bool relaxing = false;  // kCompliantEntry: a re-contact of a relaxing surface; exit: it relaxes after
 };
 
 class Observer {

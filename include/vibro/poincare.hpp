@@ -60,6 +60,10 @@ class TangentTracker final : public Observer {
   // the first order (piece 0) or the last (piece 1); corner() says where (empty: no corner met).
   void SetCornerPiece(int piece) { piece_ = piece; }
   const std::string& corner() const { return corner_; }
+  // A compliant stop's surface still relaxing at the end of the run (after a force-rule exit): its
+  // contact (−1: none) and offset y; the map's state (X, Ẋ) does not hold it.
+  int relaxing_contact() const { return relax_contact_; }
+  double relaxing_surface() const { return relax_y_; }
   // Starts the product again from `start` (2n rows; the identity for DF itself): the Lyapunov
   // observer carries its orthonormal frame this way.
   void Restart(const Eigen::MatrixXd& start);
@@ -76,7 +80,21 @@ class TangentTracker final : public Observer {
     bool closed_form = false;
     Eigen::VectorXd v0, nu;
     Eigen::MatrixXd V, L;
+    // A compliant stop (docs/compliant.md, "Periodic orbits"): its stiffness k and damping c, whether
+    // it leaves at g = 0 (rule "gap", or no dashpot) rather than at λ = 0, and the first-order matrix
+    // of its contact phase's flow, G_c = [[0, I], [−(Ω + k T cᵀ), −(D + c T cᵀ)]].
+    bool compliant = false, gap_exit = false;
+    double stiffness = 0, damping = 0;
+    // G_c balanced, D G_c D⁻¹ with D = diag(w I, I), w = √‖Ω + k T cᵀ‖∞: exp(G_c s) = D⁻¹ exp(D G_c D⁻¹ s) D,
+    // so that the exponential's normwise accuracy holds entry by entry (a stiff stop: ω_c s ~ π
+    // while the position-from-velocity entries are ~1/ω_c).
+    Eigen::MatrixXd G_contact;
+    double balance = 1;
   };
+  // A compliant contact's entry and exit (docs/compliant.md, eqs. (C3)-(C6)), the relaxing
+  // surface's variation, and the check that the crossing is transversal (else: a grazing).
+  void CompliantEntry(const Reset& r);
+  void CompliantExit(const Reset& r);
   Eigen::VectorXd Field(Mode mode, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                         double phase, int contact = 0) const;
   void FreeFlight(double duration, Eigen::MatrixXd& m) const;
@@ -163,6 +181,11 @@ class TangentTracker final : public Observer {
   std::vector<int> held_set_;
   std::vector<std::pair<std::vector<int>, Eigen::MatrixXd>> set_flows_;
   PendingSaltation pending_;
+  // Compliant stops: the contact in a contact phase (−1: none); the contact whose surface relaxes
+  // after a force-rule exit (−1: none), the surface's offset y and its variation δy = dy_ δz(t0).
+  int compliant_ = -1, relax_contact_ = -1;
+  double relax_y_ = 0;
+  Eigen::RowVectorXd dy_;
 };
 
 // kAuto: the kind of the orbit found (of the attractor after a transient, or of the orbit through
@@ -212,6 +235,16 @@ struct OrbitResult {
   // Why the orbit has no Jacobian, so no multipliers (e.g. "the orbit passes through a
   // simultaneous impact of coupled contacts: the map has no Jacobian there"); empty when it has one.
   std::string no_jacobian;
+  // The contact phases of compliant stops over the orbit's q periods (docs/compliant.md, "Periodic
+  // orbits"), in order from the section: each phase's exact loads, as its release event carries
+  // them (entry and exit in absolute time from the section time).
+  struct ContactPhase {
+    int contact = 0;
+    double entry = 0, exit = 0, duration = 0;
+    double entry_velocity = 0, exit_velocity = 0;  // ḋ at the entry, ġ at the exit
+    double peak_force = 0, peak_time = 0, penetration = 0, impulse = 0, dissipated = 0;
+  };
+  std::vector<ContactPhase> contact_phases;
 };
 
 OrbitResult FindOrbit(const System& system, const Scene& scene, const OrbitRequest& request);

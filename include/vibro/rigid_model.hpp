@@ -5,10 +5,12 @@
 // (docs/loads.md, "The distance to the rigid model").
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
 #include "vibro/loads.hpp"
+#include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/system.hpp"
@@ -49,5 +51,22 @@ struct RigidComparison {
 RigidComparison CompareWithRigid(const Scene& scene, int blocks);
 // The comparison as JSON (docs/compliant.md lists its keys).
 std::string RigidComparisonJson(const RigidComparison& c);
+
+// The rigid model's orbit beside a compliant orbit (docs/compliant.md, "Periodic orbits"): Newton on
+// the rigid scene's stroboscopic map at the compliant orbit's section time, from its section state,
+// over the same q periods; its multipliers, both orbits' exact per-period loads, and the largest
+// distance between the two orbits over the q periods (dense samples at the same instants; physical
+// DOFs in the physical form, modal coordinates in the modal form, max norm).
+struct RigidOrbitComparison {
+  RigidEquivalent rigid;
+  OrbitResult orbit;  // the rigid model's orbit (status "converged" or not, and why)
+  LoadsSummary compliant_loads, rigid_loads;
+  double distance = std::numeric_limits<double>::quiet_NaN();       // over the q periods
+  double distance_time = std::numeric_limits<double>::quiet_NaN();  // where it is reached
+  double section_distance = std::numeric_limits<double>::quiet_NaN();  // at the section
+};
+RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& system, const OrbitResult& orbit,
+                                           const OrbitRequest& request);
+std::string RigidOrbitJson(const RigidOrbitComparison& c);
 
 }  // namespace vibro

@@ -457,7 +457,12 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   // The orbit's exact per-period contact loads (docs/loads.md), as `vibro orbit --json`.
   const bool converged = orbit.status == "converged";
   const vibro::LoadsSummary loads = converged ? vibro::OrbitLoads(sys, s.loaded.scene, orbit) : vibro::LoadsSummary{};
-  return {vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr), false};
+  std::string text = vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr);
+  // A compliant stop (docs/compliant.md, "Periodic orbits"): the rigid model's orbit beside it, as the CLI.
+  if (converged && vibro::HasCompliantContact(s.loaded.scene))
+    text = text.substr(0, text.rfind('}')) + ",\"rigid_model\":" +
+           vibro::RigidOrbitJson(vibro::CompareOrbitWithRigid(s.loaded.scene, sys, orbit, req)) + "}";
+  return {text, false};
 }
 
 // vibro.prove: the summary and the certificate of `vibro prove` (docs/prove.md), as JSON texts,

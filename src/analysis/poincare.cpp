@@ -7,6 +7,7 @@
 #include <tuple>
 #include <utility>
 
+#include <fmt/format.h>
 #include <unsupported/Eigen/MatrixFunctions>
 
 #include <fmt/format.h>
@@ -93,10 +94,14 @@ struct SequenceRecorder final : Observer {
     events.push_back(e);
   }
   int Collapsed(const System& sys) const {
-    if (stuck.empty()) return 0;
-    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(stuck.size()));
-    for (size_t k = 0; k < stuck.size(); ++k)
-      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(stuck[k])].shape;
+    // A compliant stop's contact phase collapses nothing (docs/compliant.md, "Periodic orbits").
+    std::vector<int> held;
+    for (int j : stuck)
+      if (!sys.contacts()[static_cast<size_t>(j)].spec.compliance.compliant()) held.push_back(j);
+    if (held.empty()) return 0;
+    Eigen::MatrixXd C(sys.dof(), static_cast<Eigen::Index>(held.size()));
+    for (size_t k = 0; k < held.size(); ++k)
+      C.col(static_cast<Eigen::Index>(k)) = sys.contacts()[static_cast<size_t>(held[k])].shape;
     Eigen::FullPivLU<Eigen::MatrixXd> lu(C);
     lu.setThreshold(1e-10);
     return 2 * static_cast<int>(lu.rank());
@@ -140,6 +145,21 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
       t.V = cm.vectors;
       t.L = cm.left;
     }
+    // A compliant stop's contact phase (docs/compliant.md (C2)): the structure gains k T cᵀ and c T cᵀ.
+    const Compliance& cc = k.spec.compliance;
+    if (cc.compliant()) {
+      t.compliant = true;
+      t.stiffness = cc.stiffness;
+      t.damping = cc.damping;
+      t.gap_exit = cc.separation == Separation::kGap || cc.damping == 0;
+      t.G_contact = G_free;
+      t.G_contact.bottomLeftCorner(n, n) -= t.stiffness * t.T * t.c.transpose();
+      t.G_contact.bottomRightCorner(n, n) -= t.damping * t.T * t.c.transpose();
+      const double norm = t.G_contact.bottomLeftCorner(n, n).cwiseAbs().rowwise().sum().maxCoeff();
+      t.balance = norm > 0 ? std::sqrt(norm) : 1.0;
+      t.G_contact.topRightCorner(n, n) *= t.balance;
+      t.G_contact.bottomLeftCorner(n, n) /= t.balance;
+    }
     contacts_.push_back(std::move(t));
   }
   phi_ = Eigen::MatrixXd::Identity(2 * n, 2 * n);
@@ -153,6 +173,7 @@ TangentTracker::TangentTracker(const System& sys) : sys_(sys) {
   held_s_.resize(n - 1);
   salt_u_.resize(2 * n);
   salt_v_.resize(n);
+  dy_ = Eigen::RowVectorXd::Zero(2 * n);
 }
 
 void TangentTracker::Restart(const Eigen::MatrixXd& start) {
@@ -341,6 +362,27 @@ void TangentTracker::Resolve(Mode mode, int contact, const std::vector<int>* set
 
 void TangentTracker::OnStretch(const Stretch& s) {
   const bool multi = contacts_.size() > 1;
+  // A compliant stop (docs/compliant.md, "Periodic orbits"): its contact phase is a linear flow,
+  // Φ ← exp(G_c s) Φ (C2); a free flight while its surface relaxes carries δy = e^(−ks/c) δy (C7).
+  const int sj = multi ? s.contact : 0;
+  if (s.mode == Mode::kSticking && (s.held == nullptr || s.held->size() <= 1) &&
+      contacts_[static_cast<size_t>(sj)].compliant) {
+    if (compliant_ != sj) Undefined("a contact phase of a compliant stop began without an entry the tangent map knows");
+    held_ = -1;
+    const ContactTangent& ct = contacts_[static_cast<size_t>(sj)];
+    Eigen::MatrixXd E = (ct.G_contact * s.duration).exp();  // of the balanced G_c
+    const auto n = sys_.dof();
+    E.topRightCorner(n, n) /= ct.balance;  // D⁻¹ E D
+    E.bottomLeftCorner(n, n) *= ct.balance;
+    phi_ = E * phi_;
+    return;
+  }
+  if (s.mode == Mode::kFree && relax_contact_ >= 0) {
+    const ContactTangent& ct = contacts_[static_cast<size_t>(relax_contact_)];
+    const double decay = std::exp(-ct.stiffness / ct.damping * s.duration);
+    dy_ *= decay;
+    relax_y_ *= decay;
+  }
   const bool on_set = multi && s.mode == Mode::kSticking && s.held && s.held->size() > 1;
   if (pending_sim_.active)  // the flow after a simultaneous impact: free, held on one contact, or on a set
     ResolveSimultaneous(s.mode == Mode::kFree ? std::vector<int>{}
@@ -820,7 +862,89 @@ void TangentTracker::ResolveSimultaneous(const std::vector<int>& after) {
   phi_ = ((piece_ == 0 ? M0 : M_last) * phi_).eval();
 }
 
+// The entry into a compliant stop's contact phase (docs/compliant.md (C3)-(C4)): the guard is the
+// gap to the surface d = cᵀX − e − y, crossed with ḋ < 0; no jump, and the flows before and after
+// differ by T λ = −c ḋ T in the acceleration and ḋ in ẏ (the surface follows the body in contact),
+// so that S = I + (0; −c T; 1)(cᵀ, 0, −1): δẊ ← δẊ − c T δd, δy ← cᵀδX, with δd = cᵀδX − δy (δy = 0
+// from an ordinary flight). A touch with ḋ = 0 is a grazing: the map is not smooth there.
+void TangentTracker::CompliantEntry(const Reset& r) {
+  const auto n = sys_.dof();
+  const int j = contacts_.size() > 1 ? r.contact : 0;
+  const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
+  const double rate = r.contact_velocity_before;
+  const double scale = ct.c.cwiseProduct(r.V_before).cwiseAbs().sum() +
+                       (r.relaxing ? ct.stiffness / ct.damping * std::abs(r.surface) : 0.0);
+  if (!(rate < -1e-9 * scale) || !(scale > 0)) {
+    Undefined(fmt::format("a contact phase of compliant contact {} that just touches (grazing: the gap's rate "
+                          "at entry is {:.3g}, forcing phase {:.17g}): the map is not smooth there",
+                          j, rate, r.phase));
+    return;
+  }
+  Eigen::RowVectorXd dd = ct.c.transpose() * phi_.topRows(n);
+  if (r.relaxing && relax_contact_ == j) dd -= dy_;
+  if (ct.damping != 0) phi_.bottomRows(n).noalias() -= (ct.damping * ct.T) * dd;
+  relax_contact_ = -1;
+  relax_y_ = 0;
+  dy_.setZero();
+  compliant_ = j;
+  held_ = -1;
+}
+
+// The exit of a compliant contact phase (docs/compliant.md (C5)-(C6)). Rule "gap" (or no dashpot):
+// the guard g = cᵀX − e, crossed with ġ > 0; λ = −c ġ there, so S = I + (0; c T)(cᵀ, 0): δẊ ← δẊ +
+// c T cᵀδX. Rule "force": the guard λ = −k g − c ġ, crossed with λ̇ < 0; the fields agree at λ = 0
+// (the surface's ẏ = −(k/c) y = ġ too): S = I, and the surface left at y₀ = g carries δy = cᵀδX.
+void TangentTracker::CompliantExit(const Reset& r) {
+  const auto n = sys_.dof();
+  const int j = contacts_.size() > 1 ? r.contact : 0;
+  const ContactTangent& ct = contacts_[static_cast<size_t>(j)];
+  const double gdot = r.contact_velocity_before;
+  compliant_ = -1;
+  if (ct.gap_exit) {
+    const double scale = ct.c.cwiseProduct(r.V_before).cwiseAbs().sum();
+    if (!(gdot > 1e-9 * scale) || !(scale > 0)) {
+      Undefined(fmt::format("a contact phase of compliant contact {} that ends tangentially (the gap's rate at "
+                            "exit is {:.3g}, forcing phase {:.17g}): the map is not smooth there",
+                            j, gdot, r.phase));
+      return;
+    }
+    if (ct.damping != 0) phi_.bottomRows(n).noalias() += (ct.damping * ct.T) * (ct.c.transpose() * phi_.topRows(n));
+  } else {
+    // λ̇ = −k ġ − c g̈ with g̈ = cᵀ(the free acceleration): λ = 0 at the exit.
+    const Eigen::VectorXd f = Field(Mode::kFree, r.X_before, r.V_before, r.phase);
+    const double gddot = ct.c.dot(f.tail(n));
+    const double rate = -ct.stiffness * gdot - ct.damping * gddot;
+    const double scale = ct.stiffness * ct.c.cwiseProduct(r.V_before).cwiseAbs().sum() +
+                         ct.damping * ct.c.cwiseProduct(f.tail(n)).cwiseAbs().sum();
+    if (!(rate < -1e-9 * scale) || !(scale > 0)) {
+      Undefined(fmt::format("a contact phase of compliant contact {} whose force returns to 0 tangentially "
+                            "(λ̇ = {:.3g} at exit, forcing phase {:.17g}): the map is not smooth there",
+                            j, rate, r.phase));
+      return;
+    }
+  }
+  if (r.relaxing) {
+    relax_contact_ = j;
+    relax_y_ = r.surface;
+    dy_ = ct.c.transpose() * phi_.topRows(n);
+  }
+}
+
 void TangentTracker::OnReset(const Reset& r) {
+  if (r.kind == ResetKind::kCompliantEntry) {
+    CompliantEntry(r);
+    return;
+  }
+  if (r.kind == ResetKind::kCompliantExit) {
+    CompliantExit(r);
+    return;
+  }
+  if (r.kind == ResetKind::kGrazing && contacts_[static_cast<size_t>(contacts_.size() > 1 ? r.contact : 0)].compliant) {
+    Undefined(fmt::format("a touch of compliant contact {} that the flow does not push in (grazing, forcing phase "
+                          "{:.17g}): the map is not smooth there",
+                          contacts_.size() > 1 ? r.contact : 0, r.phase));
+    return;
+  }
   const auto n = sys_.dof();
   if (pending_sim_.active) {
     // A simultaneous impact that leaves several contacts at rest names them (kSimultaneous): the
@@ -875,6 +999,9 @@ void TangentTracker::OnReset(const Reset& r) {
     case ResetKind::kRelease:
       held_ = -1;
       break;  // free and constrained fields coincide at R = 0: S = I
+    case ResetKind::kCompliantEntry:
+    case ResetKind::kCompliantExit:
+      break;  // handled above
     case ResetKind::kGrazing:
       singular_ = true;  // square-root singularity of the maps (docs/model.md §5.7)
       break;
@@ -942,7 +1069,19 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   opt.initial = &init;
   opt.observers = {&tracker};
   const RunResult r = Simulate(sys, sc, opt);
-  return {r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status, tracker.corner()};
+  MapValue v{r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status, tracker.corner()};
+  // A compliant stop's surface still relaxing at the section (docs/compliant.md, "Periodic orbits"):
+  // the state (X, Ẋ) does not hold the surface, so the map of (X, Ẋ) is not the flow's.
+  if (v.undefined.empty() && tracker.relaxing_contact() >= 0 && r.X.size() == sys.dof()) {
+    const ContactModel& c = sys.contacts()[static_cast<size_t>(tracker.relaxing_contact())];
+    const double scale = std::abs(c.stop) + c.shape.cwiseProduct(r.X).cwiseAbs().sum() + 1.0;
+    if (std::abs(tracker.relaxing_surface()) > 8 * std::numeric_limits<double>::epsilon() * scale)
+      v.undefined = fmt::format("a section inside the relaxing flight after a force-rule exit of compliant contact {} "
+                                "(the surface is still {:.3g} from the stop there): the section state does not "
+                                "hold the surface",
+                                tracker.relaxing_contact(), tracker.relaxing_surface());
+  }
+  return v;
 }
 
 namespace {
@@ -983,8 +1122,34 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   }
   // The contact sequence: every scene with [[contact]] tables, also a single one (docs/contacts.md).
   if (sys.contact_count() > 1 || !scene.contacts.empty()) out.sequence = ContactSequenceText(ContactSequenceOf(events.events));
-  // Directions collapsed by sticking (several contacts), −1: as one contact.
-  const int collapsed = sys.contact_count() > 1 ? events.Collapsed(sys) : -1;
+  // Directions collapsed by sticking (several contacts, or a compliant stop), −1: as one rigid contact.
+  const bool compliant = std::any_of(sys.contacts().begin(), sys.contacts().end(), [](const ContactModel& c) {
+    return c.spec.compliance.compliant();
+  });
+  const int collapsed = sys.contact_count() > 1 || compliant ? events.Collapsed(sys) : -1;
+  // The compliant contact phases of the orbit's q periods, with their loads (the release events).
+  out.contact_phases.clear();
+  std::vector<const Event*> open(static_cast<size_t>(sys.contact_count()), nullptr);
+  for (const Event& e : events.events) {
+    if (!sys.contacts()[static_cast<size_t>(e.contact)].spec.compliance.compliant()) continue;
+    if (e.kind == EventKind::kStick) open[static_cast<size_t>(e.contact)] = &e;
+    if (e.kind != EventKind::kRelease) continue;
+    OrbitResult::ContactPhase p;
+    p.contact = e.contact;
+    p.exit = e.t;
+    p.duration = e.stick_duration;
+    p.entry = open[static_cast<size_t>(e.contact)] ? open[static_cast<size_t>(e.contact)]->t : e.t - e.stick_duration;
+    p.entry_velocity = open[static_cast<size_t>(e.contact)] ? open[static_cast<size_t>(e.contact)]->v_before
+                                                            : std::numeric_limits<double>::quiet_NaN();
+    p.exit_velocity = e.v_before;
+    p.peak_force = e.reaction_max;
+    p.peak_time = e.peak_time;
+    p.penetration = e.penetration_max;
+    p.impulse = e.reaction_integral;
+    p.dissipated = e.energy_dissipated;
+    out.contact_phases.push_back(p);
+    open[static_cast<size_t>(e.contact)] = nullptr;
+  }
   if (!out.no_jacobian.empty()) {
     out.multipliers.clear();
     out.stable = false;

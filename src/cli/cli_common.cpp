@@ -60,6 +60,32 @@ void PrintRigidComparison(const vibro::RigidComparison& c) {
   }
 }
 
+void PrintRigidOrbitComparison(const vibro::RigidOrbitComparison& c) {
+  if (c.orbit.status != "converged") {
+    fmt::print("rigid model  the same scene with rigid stops: no orbit ({}{})\n", c.orbit.status,
+               c.orbit.message.empty() ? "" : ": " + c.orbit.message);
+    return;
+  }
+  fmt::print("rigid model  the same scene with rigid stops: its orbit from the same section, distance between the "
+             "orbits {:.4g} (largest, at t = {:.10g}), {:.4g} at the section\n",
+             c.distance, c.distance_time, c.section_distance);
+  fmt::print("  rigid orbit {}, multipliers {}, stable {}\n", c.orbit.summary.kind,
+             c.orbit.no_jacobian.empty() ? vibro::cli::FormatMultipliers(c.orbit.multipliers) : "none: " + c.orbit.no_jacobian,
+             c.orbit.no_jacobian.empty() ? (c.orbit.stable ? "yes" : "no") : "-");
+  for (size_t k = 0; k < c.compliant_loads.contacts.size() && k < c.rigid_loads.contacts.size(); ++k) {
+    const auto& a = c.compliant_loads.contacts[k];
+    const auto& b = c.rigid_loads.contacts[k];
+    const size_t j = static_cast<size_t>(a.contact);
+    fmt::print("  contact {}  ζ {:.6g} → r {:.6g}; compliant / rigid: impulse/T {:.6g} / {:.6g}, mean force {:.6g} / "
+               "{:.6g}, dissipated power {:.6g} / {:.6g}\n",
+               a.contact, j < c.rigid.zeta.size() ? c.rigid.zeta[j] : std::nan(""),
+               j < c.rigid.restitution.size() ? c.rigid.restitution[j] : std::nan(""),
+               a.impulse_per_period + a.reaction_integral_per_period,
+               b.impulse_per_period + b.reaction_integral_per_period, a.mean_force, b.mean_force,
+               a.dissipated_power, b.dissipated_power);
+  }
+}
+
 void PrintAttractor(const vibro::Attractor& a, double restitution, bool named) {
   fmt::print("{}", vibro::cli::AttractorText(a, restitution, "", named));
 }

@@ -52,6 +52,8 @@ int RunModel(const std::string& path, const std::vector<std::string>& sets, bool
 // time_limit: seconds for the whole run (0: none), see frontend/run_budget.hpp.
 // The rigid model beside a compliant scene (docs/compliant.md).
 void PrintRigidComparison(const vibro::RigidComparison& c);
+// `vibro orbit` on a compliant scene: the rigid model's orbit beside it (docs/compliant.md).
+void PrintRigidOrbitComparison(const vibro::RigidOrbitComparison& c);
 int RunSimulate(const std::string& path, const std::vector<std::string>& sets, bool json,
                 const std::string& out, bool resume, long long extend, int blocks = 10,
                 double time_limit = 86400.0, bool rigid_beside = false);

@@ -1,5 +1,6 @@
 // `vibro orbit SCENE`: a periodic orbit and its Floquet multipliers (docs/orbits.md).
 #include <cmath>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -9,6 +10,7 @@
 #include "vibro/hdf5_store.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
@@ -27,6 +29,9 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   const bool converged = orbit.status == "converged";
   // The orbit's exact per-period contact loads (docs/loads.md): one period simulated from it.
   const vibro::LoadsSummary loads = converged ? vibro::OrbitLoads(sys, loaded.scene, orbit) : vibro::LoadsSummary{};
+  // A compliant stop (docs/compliant.md, "Periodic orbits"): the rigid model's orbit beside it.
+  std::optional<vibro::RigidOrbitComparison> rigid;
+  if (converged && vibro::HasCompliantContact(loaded.scene)) rigid = vibro::CompareOrbitWithRigid(loaded.scene, sys, orbit, req);
   if (!out.empty() && converged) {
     const vibro::cli::FinalWrite writing;
     vibro::frontend::WriteOrbit(out, loaded, sys, orbit);
@@ -35,7 +40,9 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     vibro::frontend::WriteOrbitFailure(out, loaded, sys, orbit);
   }
   if (json) {
-    fmt::print("{}\n", vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr));
+    std::string text = vibro::OrbitJson(orbit, req.kind, converged ? &loads : nullptr);
+    if (rigid) text = text.substr(0, text.rfind('}')) + ",\"rigid_model\":" + vibro::RigidOrbitJson(*rigid) + "}";
+    fmt::print("{}\n", text);
   } else {
     fmt::print("status       {}{}\n", orbit.status, orbit.message.empty() ? "" : ": " + orbit.message);
     fmt::print("period       {} (Newton: {} iterations, residual {:.2e})\n", orbit.period,
@@ -61,7 +68,19 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
                                      : converged ? "none (superstable: one-DOF sticking)"
                                                                   : "-");
     fmt::print("stable       {}\n", !converged || !orbit.no_jacobian.empty() ? "-" : orbit.stable ? "yes" : "no");
+    // A compliant stop (docs/compliant.md, "Periodic orbits"): each contact phase's exact loads.
+    if (converged && !orbit.contact_phases.empty()) {
+      fmt::print("contact phases over the orbit's {} period(s) (times from the section, t0 = {:.10g}):\n", orbit.period,
+                 orbit.section_time);
+      fmt::print("  {:>7} {:>14} {:>14} {:>14} {:>14} {:>14} {:>14} {:>14}\n", "contact", "entry", "duration",
+                 "peak force", "peak at", "penetration", "impulse", "dissipated");
+      for (const auto& p : orbit.contact_phases)
+        fmt::print("  {:>7} {:>14.9g} {:>14.9g} {:>14.9g} {:>14.9g} {:>14.9g} {:>14.9g} {:>14.9g}\n", p.contact,
+                   p.entry - orbit.section_time, p.duration, p.peak_force, p.peak_time - orbit.section_time,
+                   p.penetration, p.impulse, p.dissipated);
+    }
     if (converged) PrintLoads(loads);
+    if (rigid) PrintRigidOrbitComparison(*rigid);
     if (orbit.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
                  "leaves undetermined)\n", orbit.quad_evaluations);

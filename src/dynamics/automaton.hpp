@@ -331,6 +331,9 @@ class Automaton {
   bool AfterCompliantSegment(const SegmentResultT<S>& seg, const ClockT<S>& from);
   bool ClassifyInitialCompliant();
   void CompliantEventLoads(Event& e, int contact);
+  // The tangent map's notice of a compliant entry or exit (ResetKind::kCompliantEntry/Exit): the
+  // state now, `rate` the rate of the surface crossed (entry: ḋ; exit: ġ), the surface's offset.
+  void NotifyCompliant(ResetKind kind, int contact, const S& rate, const S& surface, bool relaxing);
   bool TryAccumulation(const S& reaction);
   bool TailClearOfOtherContacts(const S& delta);
   void Checkpointed();

@@ -61,6 +61,7 @@ bool Automaton<S>::EnterContactPhase(int k) {
     if (!recontact && !(v < -floor)) {
       const S* sc = SinCos(Phase(clock_));
       if (!(m.ReactionSin(X_, V_, sc[0]) > 0)) {  // not pushed in: a touch, the flight goes on
+        NotifyReset(ResetKind::kGrazing, X_, V_, k);  // the maps are not smooth there
         Emit(EventKind::kGrazing, v, v, k);
         m.ProjectOntoStop(X_, V_);
         Depart(FlightStart::kDeparture);
@@ -78,6 +79,7 @@ bool Automaton<S>::EnterContactPhase(int k) {
     chatter_first_ = chatter_last_ = 0;
     gap_ = 0;
     compliant_account_[static_cast<size_t>(k)] = {};
+    NotifyCompliant(ResetKind::kCompliantEntry, k, S(v - surface_rate), recontact ? relax_y_ : S(0), recontact);
     Emit(EventKind::kStick, S(v - surface_rate), S(v - surface_rate), k);
     return true;
   }
@@ -126,6 +128,8 @@ bool Automaton<S>::AfterCompliantSegment(const SegmentResultT<S>& seg, const Clo
         // The spring's energy left in the surface is lost as it relaxes through the dashpot.
         compliant_account_[static_cast<size_t>(k)].dissipated += 0.5 * m.stiffness * g * g;
       }
+      const bool relaxes = !by_gap && g < 0;
+      NotifyCompliant(ResetKind::kCompliantExit, k, v, relaxes ? g : S(0), relaxes);
       Emit(EventKind::kRelease, v, v, k);
       mode_ = Mode::kFree;
       if (by_gap || !(g < 0)) {
@@ -209,6 +213,16 @@ bool Automaton<S>::ClassifyInitialCompliant() {
       starts_[j] = FlightStart::kGeneric;
     }
   return true;
+}
+
+template <class S>
+void Automaton<S>::NotifyCompliant(ResetKind kind, int contact, const S& rate, const S& surface, bool relaxing) {
+  if (opt_.observers.empty()) return;
+  Reset r{kind, R::to_double(Phase(clock_)), D(X_, dx_), D(V_, dv_), D(X_, dx2_), D(V_, dv2_), 0.0, 0.0, nullptr,
+          nullptr, nullptr, R::to_double(rate), contact};
+  r.surface = R::to_double(surface);
+  r.relaxing = relaxing;
+  for (auto* o : opt_.observers) o->OnReset(r);
 }
 
 // The compliant contact's fields of its entry (stick) and exit (release) events.

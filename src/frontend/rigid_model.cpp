@@ -12,8 +12,9 @@ namespace vibro::frontend {
 
 bool TakesCompliantStops(const std::string& command) {
   // check: the exact engine against CVODE (the quad engine, `check --precision quad`, does not
-  // take a contact phase yet).
-  static constexpr std::array<const char*, 3> kTakes = {"model", "simulate", "check"};
+  // take a contact phase yet); orbit: the Poincaré solver with the compliant saltations
+  // (docs/compliant.md, "Periodic orbits").
+  static constexpr std::array<const char*, 4> kTakes = {"model", "simulate", "check", "orbit"};
   return std::any_of(kTakes.begin(), kTakes.end(), [&](const char* c) { return command == c; });
 }
 
@@ -23,8 +24,8 @@ void CheckSceneModel(const std::string& command, const LoadedScene& loaded, cons
   throw InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in {}; {} does "
                                 "not handle it yet (docs/compliant.md)",
                                 scene,
-                                cli ? "`vibro simulate` (with --rigid-beside), `vibro model` and `vibro check`"
-                                    : "vibro.simulate (rigid_beside), vibro.model and vibro.check",
+                                cli ? "`vibro simulate` (with --rigid-beside), `vibro model`, `vibro check` and `vibro orbit`"
+                                    : "vibro.simulate (rigid_beside), vibro.model, vibro.check and vibro.orbit",
                                 command.find(' ') != std::string::npos ? fmt::format("`vibro {}`", command)
                                 : cli                                  ? "this command"
                                                                        : "this function")});

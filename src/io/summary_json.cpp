@@ -196,6 +196,24 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
   // Several contacts (docs/contacts.md): the contact sequence, and why there are no multipliers.
   if (!o.sequence.empty()) j["sequence"] = o.sequence;
   if (!o.no_jacobian.empty()) j["no_jacobian"] = o.no_jacobian;
+  // A compliant stop (docs/compliant.md, "Periodic orbits"): each contact phase of the orbit's q
+  // periods with its exact loads.
+  if (!o.contact_phases.empty()) {
+    auto phases = nlohmann::json::array();
+    for (const auto& p : o.contact_phases)
+      phases.push_back({{"contact", p.contact},
+                        {"entry", p.entry},
+                        {"exit", p.exit},
+                        {"duration", p.duration},
+                        {"entry_velocity", p.entry_velocity},
+                        {"exit_velocity", p.exit_velocity},
+                        {"peak_force", p.peak_force},
+                        {"peak_time", p.peak_time},
+                        {"penetration", p.penetration},
+                        {"impulse", p.impulse},
+                        {"energy_dissipated", p.dissipated}});
+    j["contact_phases"] = phases;
+  }
   j["distance_from_start"] = OrNull(o.distance_from_start);
   if (!o.reached.empty()) j["reached"] = o.reached;
   j["newton_iterations"] = o.newton_iterations;

@@ -181,4 +181,101 @@ std::string RigidComparisonJson(const RigidComparison& c) {
   return j.dump();
 }
 
+namespace {
+
+// The dense samples of q periods of an orbit from its section.
+std::vector<std::pair<double, Eigen::VectorXd>> OrbitSamples(const System& sys, const Scene& scene, double t0,
+                                                             const Eigen::VectorXd& X, const Eigen::VectorXd& V,
+                                                             int q, bool& ok) {
+  Scene sc = scene;
+  sc.run.periods = q;
+  sc.run.samples_per_period = 1024;
+  sc.run.lyapunov = false;
+  Trace trace;
+  const InitialOverride start{t0, X, V};
+  SimulationOptions opt;
+  opt.initial = &start;
+  opt.observers = {&trace};
+  ok = Simulate(sys, sc, opt).status == RunStatus::kOk;
+  std::vector<std::pair<double, Eigen::VectorXd>> out;
+  for (size_t i = 0; i < trace.t.size(); ++i) out.emplace_back(trace.t[i], trace.X[i]);
+  return out;
+}
+
+}  // namespace
+
+RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys, const OrbitResult& orbit,
+                                           const OrbitRequest& request) {
+  RigidOrbitComparison c;
+  c.rigid = RigidModelOf(scene, sys);
+  if (orbit.status != "converged") {
+    c.orbit.status = "not-converged";
+    c.orbit.message = "no compliant orbit to start from";
+    return c;
+  }
+  const System rigid_sys(c.rigid.scene);
+  const int q = orbit.period;
+  Eigen::VectorXd z(2 * sys.dof());
+  z << orbit.X, orbit.V;
+  c.orbit.period = q;
+  NewtonOnStroboscopicMap(rigid_sys, c.rigid.scene, orbit.section_time, z, q, request, c.orbit);
+  if (c.orbit.status != "converged") {
+    if (c.orbit.message.empty()) c.orbit.message = "Newton did not converge";
+    c.orbit.message = fmt::format("the rigid model's map from the compliant orbit's section: {}", c.orbit.message);
+    return c;
+  }
+  Characterize(rigid_sys, c.rigid.scene, c.orbit);
+  c.compliant_loads = OrbitLoads(sys, scene, orbit);
+  c.rigid_loads = OrbitLoads(rigid_sys, c.rigid.scene, c.orbit);
+  const auto physical = [&](const Eigen::VectorXd& X) -> Eigen::VectorXd {
+    return sys.physical() ? Eigen::VectorXd(sys.mode_shapes() * X) : X;
+  };
+  c.section_distance = (physical(orbit.X) - physical(c.orbit.X)).cwiseAbs().maxCoeff();
+  bool ok_c = false, ok_r = false;
+  const auto a = OrbitSamples(sys, scene, orbit.section_time, orbit.X, orbit.V, q, ok_c);
+  const auto b = OrbitSamples(rigid_sys, c.rigid.scene, orbit.section_time, c.orbit.X, c.orbit.V, q, ok_r);
+  if (!ok_c || !ok_r || a.size() != b.size()) return c;
+  c.distance = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    if (std::abs(a[i].first - b[i].first) > 1e-9 * (1 + std::abs(a[i].first))) return c;  // not the same instants
+    const double d = (physical(a[i].second) - physical(b[i].second)).cwiseAbs().maxCoeff();
+    if (i == 0 || d > c.distance) {
+      c.distance = d;
+      c.distance_time = a[i].first;
+    }
+  }
+  return c;
+}
+
+std::string RigidOrbitJson(const RigidOrbitComparison& c) {
+  const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  nlohmann::json j;
+  j["status"] = c.orbit.status;
+  if (!c.orbit.message.empty()) j["message"] = c.orbit.message;
+  j["restitution"] = c.rigid.restitution;
+  auto zeta = nlohmann::json::array();
+  for (double z : c.rigid.zeta) zeta.push_back(num(z));
+  j["zeta"] = zeta;
+  auto mu = nlohmann::json::array();
+  for (const auto& m : c.orbit.multipliers) mu.push_back({m.real(), m.imag()});
+  j["floquet_multipliers"] = mu;
+  j["stable"] = c.orbit.status == "converged" && c.orbit.no_jacobian.empty() ? nlohmann::json(c.orbit.stable)
+                                                                              : nlohmann::json(nullptr);
+  j["attractor_kind"] = c.orbit.summary.kind;
+  j["distance"] = {{"max", num(c.distance)}, {"time_of_max", num(c.distance_time)}, {"at_section", num(c.section_distance)}};
+  auto loads = nlohmann::json::array();
+  for (size_t k = 0; k < c.compliant_loads.contacts.size() && k < c.rigid_loads.contacts.size(); ++k) {
+    const ContactLoads& a = c.compliant_loads.contacts[k];
+    const ContactLoads& b = c.rigid_loads.contacts[k];
+    // The impulse per period: impacts' and contact phases' (∫λ dt) together.
+    loads.push_back({{"contact", a.contact},
+                     {"impulse_per_period", {num(a.impulse_per_period + a.reaction_integral_per_period),
+                                             num(b.impulse_per_period + b.reaction_integral_per_period)}},
+                     {"mean_force", {num(a.mean_force), num(b.mean_force)}},
+                     {"dissipated_power", {num(a.dissipated_power), num(b.dissipated_power)}}});
+  }
+  j["loads"] = loads;  // per contact: [compliant, rigid]
+  return j.dump();
+}
+
 }  // namespace vibro

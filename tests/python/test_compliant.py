@@ -62,10 +62,13 @@ def test_cli_rigid_beside_and_located_errors(tmp_path):
 
 def test_check_compares_the_exact_engine_with_cvode():
     # docs/compliant.md "CVODE and vibro check": the closed forms against CVODE's integration of the
-    # same law; the Poincaré solver is not attempted; the quad engine is refused, located.
+    # same law; the Poincaré solver finds the orbit (docs/compliant.md, "Periodic orbits"), its leading
+    # multiplier the exact engine's transient decay; the quad engine is refused, located.
     r = vibro.check(vibro.load_scene(TUBE))
-    assert r["ok"] and r["orbit_status"] == "not attempted", [x for x in r["rows"] if not x["ok"]]
+    assert r["ok"] and r["orbit_status"] == "converged", [x for x in r["rows"] if not x["ok"]]
     rows = {x["quantity"]: x for x in r["rows"]}
+    decay = rows["leading |multiplier| vs transient decay"]
+    assert abs(decay["orbit"] / decay["exact"] - 1) < 1e-4
     first = rows["first contact phase peak force"]
     assert first["exact"] > 0 and first["exact"] != first["cvode"]  # two engines, not one run twice
     assert abs(first["cvode"] / first["exact"] - 1) < 1e-8
