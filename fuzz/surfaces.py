@@ -907,7 +907,10 @@ class Surfaces(Campaign):
                 return False
         if sep is not None and sep not in ("\"force\"", "\"gap\""):
             return False
-        if math.isinf(kv) or kv < 1e-300 or (c is not None and math.isinf(float(c))):
+        # Every magnitude of a scene is at most 1e100 (docs/compliant.md, docs/reliability.md).
+        if kv > 1e100 or (c is not None and float(c) > 1e100):
+            return False
+        if kv < 1e-300:
             return None
         return True
 
