@@ -4,9 +4,9 @@ once, late or never, given to Campaign.run as if they were vibro, each with the 
 get (docs/reliability.md, "Fuzz campaign").
 
 - prompt: exit 130 at once after SIGTERM: no finding;
-- busy / sleepy / child: 2.5 s of computing, of sleeping, or of a child process computing that
+- busy / sleepy / child: 1.6 s of computing, of sleeping, or of a child process computing that
   it waits for, then exit 130: "slow stop";
-- late-exit-0: 2.5 s of computing after the signal, then exit 0: "stop request ignored";
+- late-exit-0: 1.6 s of computing after the signal, then exit 0: "stop request ignored";
 - deaf-busy / deaf-sleep: SIGTERM ignored, computing or sleeping for ever: "hang ignoring SIGTERM";
 - loaded / loaded-exit-0: 0.15 s of computing after the signal, then exit 130 (or 0), while the
   program shares one CPU, at nice 10, with a competing busy process at nice 0: its wall time is
@@ -39,16 +39,16 @@ FAKE = textwrap.dedent('''\
 
     def on_stop(signum, frame):
         if mode in ("busy",):
-            spin(2.5)
+            spin(1.6)
         elif mode == "sleepy":
-            time.sleep(2.5)
+            time.sleep(1.6)
         elif mode == "child":
             subprocess.run([sys.executable, "-c",
-                            "import time\\nt = time.process_time()\\nwhile time.process_time() - t < 2.5: pass"])
+                            "import time\\nt = time.process_time()\\nwhile time.process_time() - t < 1.6: pass"])
         elif mode.startswith("loaded"):
             spin(0.15)
         elif mode == "late-exit-0":
-            spin(2.5)
+            spin(1.6)
             os._exit(0)
         if mode == "loaded-exit-0":
             os._exit(0)
