@@ -156,6 +156,10 @@ class StopClock:
         self.pid = pid
         self.wall0 = time.monotonic()
         self.cpu0 = process_cpu(pid)
+        # The processes below it at the signal: their CPU so far is not the stop's, but reaches the
+        # process's own (cutime) when it waits for them after the signal.
+        if self.cpu0 is not None:
+            self.cpu0 += sum(x for x in (process_cpu(c) for c in _descendants(pid)) if x is not None)
         self.cpu_last = self.cpu0
         self.idle = 0.0
         self._done = threading.Event()
@@ -180,7 +184,10 @@ class StopClock:
         return time.monotonic() - self.wall0
 
     def cpu(self):
-        return 0.0 if self.cpu0 is None or self.cpu_last is None else max(0.0, self.cpu_last - self.cpu0)
+        if self.cpu0 is None or self.cpu_last is None:
+            return 0.0
+        # No more than every CPU for the whole wall time (plus two clock ticks of rounding).
+        return min(max(0.0, self.cpu_last - self.cpu0), self.wall() * (os.cpu_count() or 1) + 2 * TICK)
 
     def own(self):
         """The process's own time since the stop request, so far."""

@@ -8,6 +8,9 @@ get (docs/reliability.md, "Fuzz campaign").
   it waits for, then exit 130: "slow stop";
 - late-exit-0: 1.6 s of computing after the signal, then exit 0: "stop request ignored";
 - deaf-busy / deaf-sleep: SIGTERM ignored, computing or sleeping for ever: "hang ignoring SIGTERM";
+- child-before: a child process computing since before the signal, stopped (SIGKILL) and waited
+  for after it, then exit 130 at once: no finding (the child's CPU before the signal reaches the
+  program's own when it waits, and is not the stop's);
 - loaded / loaded-exit-0: 0.15 s of computing after the signal, then exit 130 (or 0), while the
   program shares one CPU, at nice 10, with a competing busy process at nice 0: its wall time is
   several seconds (asserted, else the case shows nothing) but its own time is 0.15 s: no finding.
@@ -45,6 +48,13 @@ FAKE = textwrap.dedent('''\
         elif mode == "child":
             subprocess.run([sys.executable, "-c",
                             "import time\\nt = time.process_time()\\nwhile time.process_time() - t < 1.6: pass"])
+        elif mode == "child-before":
+            with open(f"/proc/{kid.pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            print(f"child cpu {(int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')}", file=sys.stderr,
+                  flush=True)
+            kid.kill()
+            kid.wait()
         elif mode.startswith("loaded"):
             spin(0.15)
         elif mode == "late-exit-0":
@@ -63,6 +73,9 @@ FAKE = textwrap.dedent('''\
     else:
         signal.signal(signal.SIGTERM, on_stop)
         signal.signal(signal.SIGINT, on_stop)
+    if mode == "child-before":
+        kid = subprocess.Popen([sys.executable, "-c", "import time\\nt = time.process_time()\\n"
+                                "while time.process_time() - t < 1.3: pass\\ntime.sleep(1000)"])
     print("ready", flush=True)
     if mode == "deaf-busy" or mode.startswith("loaded"):
         while True:
@@ -76,6 +89,7 @@ CASES = {  # mode: the finding kind it must get (None: none)
     "busy": "slow stop",
     "sleepy": "slow stop",
     "child": "slow stop",
+    "child-before": None,
     "late-exit-0": "stop request ignored",
     "deaf-busy": "hang ignoring SIGTERM",
     "deaf-sleep": "hang ignoring SIGTERM",
@@ -112,13 +126,15 @@ def main():
                                        preexec_fn=lambda: os.sched_setaffinity(0, {cpu}))
             t0 = time.monotonic()
             try:
-                # The signal 2 s after the start: the fake program is ready long before (it says so).
-                c.run("liveness", [mode], signals=[(2.0, signal.SIGTERM)], limit=30)
+                # The signal after the start: the fake program is ready long before (it says so);
+                # 30 s for child-before, whose child must have computed 1.3 s by then.
+                delay = 30.0 if mode == "child-before" else 2.0
+                rc, err = c.run("liveness", [mode], signals=[(delay, signal.SIGTERM)], limit=60)
             finally:
                 if hog is not None:
                     hog.kill()
                     hog.wait()
-            wall = time.monotonic() - t0 - 2.0
+            wall = time.monotonic() - t0 - delay
             kinds = [x["kind"] for x in c.findings]
             got = kinds[0] if kinds else None
             ok = got == want and len(kinds) <= 1
@@ -126,6 +142,12 @@ def main():
             if mode.startswith("loaded") and wall <= campaign.LIVENESS:
                 ok = False
                 note = " (no load: the program stopped within the liveness bound of wall time, the case shows nothing)"
+            if mode == "child-before":
+                got_cpu = [float(x.split()[-1]) for x in err.splitlines() if x.startswith("child cpu")]
+                note = f" (the child had computed {got_cpu[0] if got_cpu else '?'} s before the signal)"
+                if not got_cpu or got_cpu[0] <= campaign.LIVENESS:
+                    ok = False
+                    note += ": not past the liveness bound, the case shows nothing"
             failures += not ok
             print(f"{'ok  ' if ok else 'FAIL'} {mode:14s} wall {wall:5.2f} s after the signal; findings {kinds} "
                   f"(expected {want}){note}", flush=True)
