@@ -14,7 +14,8 @@ Runs the binary thousands of times, one process at a time, on generated inputs:
 Each run is judged against what vibro promises:
 
 - no crash: the process ends by exit(), not by a signal it was not sent;
-- no hang: a run past its time limit gets SIGTERM and must be gone within LIVENESS seconds;
+- no hang: a run past its time limit gets SIGTERM and must be gone within LIVENESS seconds of its own
+  time (below);
 - exit codes 0, 2, 3 and 130 only (4 for `check`/`validate`/`score`, whose methods, claims or runs may disagree,
   and for `prove`: not proven);
 - exit 2 creates and changes nothing in the run's directory or the files it was given, and
@@ -26,6 +27,14 @@ Each run is judged against what vibro promises:
 
 usage: campaign.py VIBRO SCENES_DIR [--runs N] [--seed S] [--minutes M] [--report FILE.json] [--only CATEGORY]
 A run that hangs past SIGTERM is reported with the stacks of its threads (gdb, when installed).
+
+How long a stop takes is judged by the program's own time, not by the wall clock (StopClock): its
+CPU time after the signal (every thread, and the children it waited for) plus the time during which
+none of its threads nor any of its child processes could run (sleeping by its own choice). Time
+spent waiting for a CPU on a loaded machine counts in neither, so a stop costing 0.3 s of work that
+a load of 19 on 2 cores stretches to 3 s of wall time is on time, and a stop that computes or sleeps
+for 2 s is late on a quiet machine and a loaded one alike. The wall clock is only an outer bound
+(HANG_WALL, for a program that no clock above can see progressing).
 Exits 1 when there are findings; the report lists each with its command line.
 """
 import argparse
@@ -35,16 +44,19 @@ import os
 import random
 import shutil
 import signal
+import resource
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import h5py
 import numpy as np
 
-LIVENESS = 1.0  # seconds from a stop request to the exit that vibro promises
-HANG = 5.0      # past this the run is a hang (the margin is for a loaded machine)
+LIVENESS = 1.0    # seconds of its own time (StopClock) from a stop request to the exit that vibro promises
+HANG = 5.0        # past this much of its own time after a stop request the run is a hang
+HANG_WALL = 60.0  # past this wall time after a stop request the run is a hang, whatever the clocks say
 STARTUP = 0.05  # a signal this soon may come while the loader maps vibro's libraries (10-30 ms loaded)
 CORNERS = ["nan", "inf", "-inf", "1e999", "-1e999", "0", "-0.0", "-1", "1", "5e-324", "-5e-324", "1e-310",
            "2.2250738585072014e-308", "1e308", "1.7976931348623157e308", "-1e308", "1e100", "1e-100",
@@ -65,6 +77,152 @@ STRINGS = {"run.engine": ["exact", "cvode", "lsoda", ""], "run.chatter": ["accum
 def default_stop_signals():
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+# ---- The stop clock: a process's own time after a signal -------------------------------------
+
+TICK = 1.0 / os.sysconf("SC_CLK_TCK")
+SAMPLE = 0.01  # seconds between two looks at the process's threads
+
+
+def _stat_fields(path):
+    """The fields of a /proc/.../stat line after the command name (which may hold spaces and
+    parentheses): [state, ppid, ...]; None once the process is gone."""
+    try:
+        with open(path, "rb") as f:
+            line = f.read().decode(errors="replace")
+    except OSError:
+        return None
+    return line[line.rfind(")") + 2:].split()
+
+
+def process_cpu(pid):
+    """CPU seconds of a process: every thread's, and those of the children it waited for
+    (utime + stime + cutime + cstime of /proc/PID/stat); None once it is gone."""
+    f = _stat_fields(f"/proc/{pid}/stat")
+    if f is None or len(f) < 15:
+        return None
+    return sum(int(x) for x in f[11:15]) * TICK
+
+
+def _thread_states(pid):
+    try:
+        tids = os.listdir(f"/proc/{pid}/task")
+    except OSError:
+        return []
+    out = []
+    for tid in tids:
+        f = _stat_fields(f"/proc/{pid}/task/{tid}/stat")
+        if f:
+            out.append(f[0])
+    return out
+
+
+def _descendants(pid):
+    """The processes below `pid` (a scan of /proc: done only while pid's own threads all sleep)."""
+    parent = {}
+    for name in os.listdir("/proc"):
+        if name.isdigit():
+            f = _stat_fields(f"/proc/{name}/stat")
+            if f and len(f) > 1:
+                parent[int(name)] = int(f[1])
+    below, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        kids = [c for c, pp in parent.items() if pp == p]
+        below += kids
+        todo += kids
+    return below
+
+
+def runnable(pid):
+    """Whether the process, or any process below it, has a thread that is running, waiting for a
+    CPU (R) or in an uninterruptible wait, disk I/O mostly (D): then the time passing is not the
+    process's own sleep. None once the process is gone (a zombie counts as gone)."""
+    states = _thread_states(pid)
+    if not states or all(s in "ZX" for s in states):
+        return None
+    if any(s in "RD" for s in states):
+        return True
+    return any(s in "RD" for c in _descendants(pid) for s in _thread_states(c))
+
+
+class StopClock:
+    """A process's own time from a stop request to its exit (see the module's docstring): CPU time
+    (from the process's /proc stat, or exactly from the caller's rusage once it is reaped) plus the
+    wall time during which nothing of it was runnable, sampled every SAMPLE s by a thread."""
+
+    def __init__(self, pid):
+        self.pid = pid
+        self.wall0 = time.monotonic()
+        self.cpu0 = process_cpu(pid)
+        # The processes below it at the signal: their CPU so far is not the stop's, but reaches the
+        # process's own (cutime) when it waits for them after the signal.
+        if self.cpu0 is not None:
+            self.cpu0 += sum(x for x in (process_cpu(c) for c in _descendants(pid)) if x is not None)
+        self.cpu_last = self.cpu0
+        self.idle = 0.0
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+
+    def _sample(self):
+        last = time.monotonic()
+        while not self._done.wait(SAMPLE):
+            now = time.monotonic()
+            state = runnable(self.pid)
+            if state is None:
+                break
+            cpu = process_cpu(self.pid)
+            if cpu is not None:
+                self.cpu_last = cpu
+            if state is False:
+                self.idle += now - last
+            last = now
+
+    def wall(self):
+        return time.monotonic() - self.wall0
+
+    def cpu(self):
+        if self.cpu0 is None or self.cpu_last is None:
+            return 0.0
+        # No more than every CPU for the whole wall time (plus two clock ticks of rounding).
+        return min(max(0.0, self.cpu_last - self.cpu0), self.wall() * (os.cpu_count() or 1) + 2 * TICK)
+
+    def own(self):
+        """The process's own time since the stop request, so far."""
+        return self.cpu() + self.idle
+
+    def finish(self, cpu_total=None):
+        """Stops the sampling once the process is gone; `cpu_total`: its whole CPU time from its
+        rusage (exact, where the sampled value may miss the last 10 ms or, under load, more)."""
+        self._done.set()
+        self._thread.join()
+        if cpu_total is not None and self.cpu0 is not None:
+            self.cpu_last = max(cpu_total, self.cpu_last or 0.0)
+        return self.own()
+
+    def describe(self):
+        return f"{self.own():.2f} s of its own ({self.cpu():.2f} s CPU, {self.idle:.2f} s asleep), {self.wall():.2f} s wall"
+
+
+def children_cpu():
+    """CPU seconds of every child this process has reaped so far."""
+    u = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return u.ru_utime + u.ru_stime
+
+
+def wait_stopping(p, clock):
+    """Waits for `p` after a stop request, reading its pipes; (stdout, stderr, hung). Hung: past
+    HANG s of its own time or HANG_WALL s of wall time, still there (it is left running: the caller
+    takes its stacks and kills it)."""
+    while True:
+        try:
+            out, err = p.communicate(timeout=0.1)
+            return out, err, False
+        except subprocess.TimeoutExpired:
+            if clock.own() > HANG or clock.wall() > HANG_WALL:
+                return None, None, True
 
 
 def compliant_scene(text):
@@ -136,7 +294,8 @@ class Campaign:
         self.findings = []
         self.exits = {}
         self.located = [0, 0]  # exit-2 messages that say where, of all exit-2 messages
-        self.slow_stops = []   # stop requests honoured in more than LIVENESS s (machine load)
+        self.slow_stops = []   # stop requests honoured in more than LIVENESS s of the program's own time
+        self.stop_walls = []   # (wall, own) seconds of every stop, for the report
         self.categories = {}
         self.physics_checked = 0
         self.scene_texts = {name: open(os.path.join(scenes, name)).read()
@@ -175,9 +334,10 @@ class Campaign:
         # Default dispositions for the stop signals, whatever this script inherited: started in the
         # background by a shell, SIGINT is ignored, and a SIGINT sent while vibro's libraries are
         # still being loaded (before its handlers exist) would be silently lost, not a hang.
+        cpu_before = children_cpu()
         p = subprocess.Popen(full, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=scratch,
                              preexec_fn=default_stop_signals)
-        sent, t_signal, first_after = [], None, None
+        sent, clock, first_after = [], None, None
         start = time.monotonic()
         for delay, sig in signals:
             try:
@@ -186,31 +346,30 @@ class Campaign:
             except subprocess.TimeoutExpired:
                 p.send_signal(sig)
                 sent.append(sig)
-                if t_signal is None:
-                    t_signal = time.monotonic()
-                    first_after = t_signal - start
+                if clock is None:
+                    clock = StopClock(p.pid)
+                    first_after = clock.wall0 - start
         hung = False
-        try:
-            if t_signal is None:
+        if clock is None:
+            try:
                 out_, err = p.communicate(timeout=limit)
-            else:
-                out_, err = p.communicate(timeout=HANG - (time.monotonic() - t_signal))
-        except subprocess.TimeoutExpired:
-            if t_signal is None:  # past its limit: a stop request must end it
+            except subprocess.TimeoutExpired:  # past its limit: a stop request must end it
                 p.send_signal(signal.SIGTERM)
                 sent.append(signal.SIGTERM)
-                t_signal = time.monotonic()
-                try:
-                    out_, err = p.communicate(timeout=HANG)
-                except subprocess.TimeoutExpired:
-                    hung = True
-            else:
-                hung = True
+                clock = StopClock(p.pid)
+        if clock is not None:
+            out_, err, hung = wait_stopping(p, clock)
             if hung:
-                stacks = backtrace(p.pid)
+                stacks = backtrace(p.pid)  # (gdb: a child of this process, so no rusage below)
                 p.kill()
                 out_, err = p.communicate()
-        took = time.monotonic() - t_signal if t_signal is not None else None
+                took = clock.finish()
+            else:
+                # The child's whole CPU time, exactly: it is the only child reaped since cpu_before.
+                took = clock.finish(children_cpu() - cpu_before)
+                self.stop_walls.append((clock.wall(), took))
+        else:
+            took = None
         rc = p.returncode
         err = err.decode(errors="replace")
         out_ = out_.decode(errors="replace")
@@ -219,7 +378,8 @@ class Campaign:
         tag = f"[{category}]"
         if hung:
             self.find("hang ignoring SIGTERM", full,
-                      f"{tag} still running {HANG} s after SIGTERM (signals {signals}, sent {sent}); stacks:\n{stacks}")
+                      f"{tag} still running after SIGTERM, {clock.describe()} (signals {signals}, sent {sent}); "
+                      f"stacks:\n{stacks}")
         elif rc < 0 and -rc in sent and first_after is not None and first_after < STARTUP:
             self.before_main += 1  # the signal came while the program was being loaded
         elif rc < 0:
@@ -231,10 +391,11 @@ class Campaign:
                 self.find(f"exit {rc}", full, f"{tag} {err}")
             if took is not None and took > LIVENESS and rc == 130:
                 self.slow_stops.append(took)
+                self.find("slow stop", full, f"{tag} exit 130 after {clock.describe()} from the signal; {err[-300:]}")
             if sent and rc not in (130, 2) and took is not None and took > LIVENESS:
                 # A run may finish as the signal comes (exit 0 or 3 at once); one that runs on
                 # past the liveness bound and then reports no interruption ignored it.
-                self.find("stop request ignored", full, f"{tag} exit {rc} {took:.2f} s after a signal; {err}")
+                self.find("stop request ignored", full, f"{tag} exit {rc} after {clock.describe()} from a signal; {err}")
             if rc == 2:
                 self.located[1] += 1
                 if self.is_located(err, argv):
@@ -669,8 +830,11 @@ def write_report(c, t0, path, extra):
         "runs": c.runs, "distinct_inputs": len(c.inputs), "minutes": round((time.monotonic() - t0) / 60, 1),
         "runs_by_category": c.categories, "exit_codes": {str(k): v for k, v in sorted(c.exits.items(), key=lambda kv: str(kv[0]))},
         "exit2_located": f"{c.located[0]} of {c.located[1]}", "ok_files_checked_for_physics": c.physics_checked,
+        "stops_timed": len(c.stop_walls),
         "stops_slower_than_1s": len(c.slow_stops),
         "slowest_stop_s": round(max(c.slow_stops), 2) if c.slow_stops else None,
+        "slowest_stop_own_s": round(max(o for _, o in c.stop_walls), 2) if c.stop_walls else None,
+        "slowest_stop_wall_s": round(max(w for w, _ in c.stop_walls), 2) if c.stop_walls else None,
         **extra,
         "findings": c.findings,
     }

@@ -32,7 +32,8 @@ its surface:
   an altered state) is never reported as agreeing (exit 4, or that row not `confirmed`);
 - an unaltered input is accepted (exit 0);
 - Python raises ValueError or TypeError for a bad argument (never MemoryError, IndexError,
-  SystemError or a crash), and KeyboardInterrupt within LIVENESS s of Ctrl-C;
+  SystemError or a crash), and KeyboardInterrupt within LIVENESS s of its own time (campaign.py's
+  StopClock: CPU time and time asleep, not the time a loaded machine keeps it waiting) of Ctrl-C;
 - a second writer is refused with exit 2 naming the process that holds the file, and the first
   run ends as it would alone, its file readable;
 - a full disk ends a run with exit 3 ("no space") or 130, never 1 or a crash, its file readable.
@@ -60,7 +61,8 @@ import h5py
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from campaign import Campaign, default_stop_signals, write_report, HANG, LIVENESS  # noqa: E402
+from campaign import (Campaign, StopClock, children_cpu, default_stop_signals, wait_stopping,  # noqa: E402
+                      write_report, HANG, HANG_WALL, LIVENESS)
 
 CATEGORIES = ["from-branch", "validate-input", "score-input", "python-api", "two-writers", "full-disk", "prove-branch",
               "contacts", "sequence-column", "extend-fsize", "compliant", "harmonics", "curve", "prove-bifurcation",
@@ -518,23 +520,35 @@ class Surfaces(Campaign):
             "except BaseException as e:\n"
             "    print(json.dumps({'outcome': type(e).__name__, 'message': str(e)[:500]}))\n")
         env = dict(os.environ, PYTHONPATH=self.pythonpath)
+        cpu_before = children_cpu()
         p = subprocess.Popen(["/usr/bin/python3", "-c", prog], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              cwd=self.work, env=env, preexec_fn=default_stop_signals, text=True)
-        t_sig = None
+        clock = None
         if signals:
             # Ctrl-C once the call is under way (the interpreter printed 'started').
             line = p.stdout.readline()
             if line.strip() == "started":
                 time.sleep(signals[0][0])
                 p.send_signal(signals[0][1])
-                t_sig = time.monotonic()
-        try:
-            out, err = p.communicate(timeout=limit if t_sig is None else HANG)
-        except subprocess.TimeoutExpired:
-            p.kill()
-            out, err = p.communicate()
-            return None, None, err, None
-        took = time.monotonic() - t_sig if t_sig is not None else None
+                clock = StopClock(p.pid)
+        self.last_clock = clock
+        if clock is None:
+            try:
+                out, err = p.communicate(timeout=limit)
+            except subprocess.TimeoutExpired:
+                p.kill()
+                out, err = p.communicate()
+                return None, None, err, None
+            took = None
+        else:
+            out, err, hung = wait_stopping(p, clock)
+            if hung:
+                p.kill()
+                out, err = p.communicate()
+                clock.finish()
+                return None, None, err, None
+            took = clock.finish(children_cpu() - cpu_before)
+            self.stop_walls.append((clock.wall(), took))
         outcome = None
         for line in out.splitlines()[::-1]:
             if line.startswith("{"):
@@ -552,12 +566,13 @@ class Surfaces(Campaign):
             rc, outcome, err, took = self.python(code, signals=[(r.uniform(0.1, 1.5), signal.SIGINT)], limit=60)
             full = ["python", code]
             if rc is None:
-                self.find("Python ignored Ctrl-C", full, f"[python-api] still running {HANG} s after SIGINT")
+                self.find("Python ignored Ctrl-C", full, "[python-api] still running after SIGINT, " +
+                          (self.last_clock.describe() if self.last_clock else "(never said 'started': no signal)"))
             elif outcome is None or outcome["outcome"] not in ("KeyboardInterrupt", "ok"):
                 self.find("Python Ctrl-C gave no KeyboardInterrupt", full, f"[python-api] rc {rc} {outcome} {err[-300:]}")
             elif took is not None and took > LIVENESS and outcome["outcome"] == "KeyboardInterrupt":
                 self.slow_stops.append(took)
-                self.find("Python answered Ctrl-C late", full, f"[python-api] {took:.2f} s")
+                self.find("Python answered Ctrl-C late", full, f"[python-api] {self.last_clock.describe()}")
             return
         name, code = r.choice(self.PY_CASES)
         self.inputs.add(("python", code))
@@ -602,7 +617,15 @@ class Surfaces(Campaign):
             self.wait_for(out, first)
             time.sleep(0.3)
             first.send_signal(signal.SIGTERM)
-            first.communicate(timeout=HANG)
+            clock = StopClock(first.pid)
+            _, e, hung = wait_stopping(first, clock)
+            if hung:
+                first.kill()
+                _, e = first.communicate()
+                self.find("hang ignoring SIGTERM", full, f"[two-writers] {what}: the first run, {clock.describe()}")
+                clock.finish()
+                return
+            clock.finish()
             a = subprocess.Popen(full + ["--resume"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
                                  preexec_fn=default_stop_signals)
             b = subprocess.Popen(full + ["--resume"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
@@ -621,24 +644,35 @@ class Surfaces(Campaign):
             b = subprocess.Popen(full + extra, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=self.work,
                                  preexec_fn=default_stop_signals)
             procs = [a, b]
-        # The second (or one of two concurrent resumes) must be refused at once: it is given up to
-        # HANG s to end by itself (its test read of the file takes a while on a loaded machine; a
-        # stop request sent before it ends it with exit 130, no refusal to judge).
-        end = time.monotonic() + HANG
-        while time.monotonic() < end and all(p.poll() is None for p in procs):
+        # The second (or one of two concurrent resumes) must be refused at once: it is given until
+        # one of the two ends, up to HANG s of its own time (its test read of the file takes a while
+        # on a loaded machine; a stop request sent before it ends it with exit 130, no refusal to
+        # judge), or HANG_WALL s of wall time.
+        waiting = StopClock(procs[-1].pid)
+        while waiting.own() < HANG and waiting.wall() < HANG_WALL and all(p.poll() is None for p in procs):
             time.sleep(0.02)
+        waiting.finish()
         time.sleep(r.uniform(0.2, 1.0))
+        clocks = {}
         for p in procs:
             if p.poll() is None:
                 p.send_signal(signal.SIGTERM)
+                clocks[p.pid] = StopClock(p.pid)
         codes, errs = [], []
         for p in procs:
-            try:
-                _, e = p.communicate(timeout=HANG)
-            except subprocess.TimeoutExpired:
-                p.kill()
+            clock = clocks.get(p.pid)
+            if clock is None:
                 _, e = p.communicate()
-                self.find("hang ignoring SIGTERM", full, f"[two-writers] {what}")
+            else:
+                _, e, hung = wait_stopping(p, clock)
+                if hung:
+                    p.kill()
+                    _, e = p.communicate()
+                    self.find("hang ignoring SIGTERM", full, f"[two-writers] {what}: {clock.describe()}")
+                took = clock.finish()
+                if not hung and p.returncode == 130 and took > LIVENESS:
+                    self.slow_stops.append(took)
+                    self.find("slow stop", full + [f"({what})"], f"[two-writers] exit 130 after {clock.describe()}")
             codes.append(p.returncode)
             errs.append(e.decode(errors="replace"))
         refused = [i for i, c in enumerate(codes) if c == 2 and "in use" in errs[i]]
@@ -873,7 +907,10 @@ class Surfaces(Campaign):
                 return False
         if sep is not None and sep not in ("\"force\"", "\"gap\""):
             return False
-        if math.isinf(kv) or kv < 1e-300 or (c is not None and math.isinf(float(c))):
+        # Every magnitude of a scene is at most 1e100 (docs/compliant.md, docs/reliability.md).
+        if kv > 1e100 or (c is not None and float(c) > 1e100):
+            return False
+        if kv < 1e-300:
             return None
         return True
 

@@ -3206,6 +3206,99 @@ def pitchfork_at(m, c0, e0, r, P, frequency, root, fold=False):
             "flight": flight, "Delta": Dv}
 
 
+# The summary of a bifurcation certificate: every key it may hold, by the type of the point.
+BIFURCATION_SUMMARY = ("verdict", "reason", "kind", "period", "bifurcation", "parameter", "located", "center",
+                       "interval", "width", "box_width", "slope", "param", "events", "sequence", "section",
+                       "multipliers", "stability", "modal_data")
+BIFURCATION_SUMMARY_KEYS = {
+    "pitchfork": BIFURCATION_SUMMARY + ("g_at_ends", "speed", "half_map_multipliers"),
+    "fold": BIFURCATION_SUMMARY + ("g_at_ends", "speed"),
+    "grazing": BIFURCATION_SUMMARY + ("curvature", "grazing_contact", "grazing_flight", "grazing_time",
+                                      "impact_contacts", "symmetric"),
+    "orbit-pitchfork": BIFURCATION_SUMMARY + ("impact_contacts", "symmetric"),
+}
+
+
+def bifurcation_summary(node, s, kind, name, P):
+    """A bifurcation certificate's summary, read whole before any proof (an unknown or a missing key,
+    a value of the wrong type: not a certificate), and its claims that the proof of the point does
+    not reach: the kind of point, the parameter's key, the interval's centre (inside the interval)
+    and width (the interval's, to one rounding), the modal data, and no orbit's events, sequence,
+    section, multipliers or stability (a bifurcation proof claims none)."""
+    s.obj(BIFURCATION_SUMMARY_KEYS[kind])
+    label = "pitchfork" if kind == "orbit-pitchfork" else kind
+    if s["bifurcation"].text(("pitchfork", "fold", "grazing")) != label:
+        raise NotConfirmed(f"{s['bifurcation'].path}: '{s['bifurcation'].v}', the certificate proves a {label}")
+    if s["param"].text() != f"excitation.{name}":
+        raise NotConfirmed(f"{s['param'].path}: '{s['param'].v}', the certificate's parameter is excitation.{name}")
+    s["located"].num()  # where the point was looked for (the request: information)
+    if not lo(P) <= s["center"].num() <= hi(P):
+        raise NotConfirmed(f"{s['center'].path} = {s['center'].v!r} is not in the interval {show_iv(P)}")
+    # The width of the prover's double enclosure of the interval's decimal ends: at least the
+    # interval's, and above it by a few units in the last place of its ends at most.
+    width, ulp = hi(P) - lo(P), max(abs(lo(P)), abs(hi(P))) * mp.mpf(2) ** -52
+    for key in ("width", "box_width"):
+        w = s[key].num()
+        if not width <= w * (1 + mp.mpf(2) ** -52) or not w <= width + 8 * ulp:
+            raise NotConfirmed(f"{s[key].path} = {s[key].v!r}: the interval is {show(width)} wide")
+    s["slope"].pair()
+    for key in ("events", "sequence", "multipliers"):
+        if s[key].items():
+            raise NotConfirmed(f"{s[key].path}: a bifurcation certificate claims no orbit's {key}")
+    if s["section"].v is not None:
+        raise NotConfirmed(f"{s['section'].path}: a bifurcation certificate claims no orbit's section (null)")
+    if s["stability"].text(("stable", "unstable", "undecided")) != "undecided":
+        raise NotConfirmed(f"{s['stability'].path}: '{s['stability'].v}', a bifurcation certificate claims no "
+                           "stability ('undecided')")
+    claimed = s["modal_data"].text(("given", "enclosed"))
+    if claimed != ("enclosed" if node.has("structure") else "given"):
+        raise NotConfirmed(f"{s['modal_data'].path}: modal data '{claimed}' but the certificate "
+                           f"{'carries' if node.has('structure') else 'has no'} structure")
+    return s["period"].integer(1, 1 << 20)
+
+
+# The reasons of bifurcation certificates (src/proof/*.cpp): `{slope}` is an interval "[a, b]"
+# that must contain the checker's enclosure of the derivative it names.
+BIFURCATION_REASONS = {
+    "pitchfork": "exactly one {name} in [{lo}, {hi}] at which the symmetric orbit's half-period map has the multiplier "
+                 "−1 (its period map the multiplier +1 with an antisymmetric eigenvector: the symmetry-breaking "
+                 "pitchfork); det(DH + I) changes sign there and its derivative along the branch, {slope}, is nonzero "
+                 "over the whole interval: the crossing is transversal",
+    "fold": "exactly one {name} in [{lo}, {hi}] at which the two symmetric orbits merge (a fold of the symmetric branch: "
+            "the discriminant of their quadratic changes sign there, and its derivative, {slope}, is nonzero over the "
+            "whole interval: the fold is nondegenerate)",
+    "grazing": "exactly one {name} in [{lo}, {hi}] at which flight {flight} of the orbit touches contact {contact} with "
+               "zero velocity (a grazing): the minimum gap m on that flight is zero there and its derivative "
+               "dm/d{name}, {slope}, is nonzero over the whole interval: the crossing is transversal (below the point "
+               "the flight {below} the contact, above it it {above}){mirror}",
+    "orbit-pitchfork": "exactly one {name} in [{lo}, {hi}] at which the symmetric orbit's antisymmetric block is "
+                       "singular (its period map has the multiplier +1 with an antisymmetric eigenvector: the "
+                       "symmetry-breaking pitchfork); the bordering μ (zero exactly there) has "
+                       "dμ/d{name} = {slope}, nonzero over the whole interval: the crossing is transversal",
+}
+MIRROR = ("; the orbit is symmetric (proven as its half: the second half is the first mirrored), so at the same point "
+          "flight 1 touches contact {other} likewise")
+
+
+def bifurcation_reason(node, kind, E, **fields):
+    """The reason of a bifurcation certificate is the prover's sentence for this point, with its
+    kind, parameter, interval, flight and contact, and the derivative's interval in it contains the
+    checker's enclosure E of that derivative (docs/prove.md)."""
+    r = node["reason"]
+    text = r.text()
+    head, tail = BIFURCATION_REASONS[kind].format(slope="\0", **fields).split("\0")
+    if not (text.startswith(head) and text.endswith(tail) and len(text) > len(head) + len(tail)):
+        raise NotConfirmed(f"{r.path}: not the sentence of this {kind} ('{head[:60]}...')")
+    middle = text[len(head):len(text) - len(tail)]
+    g = re.fullmatch(r"\[([^,\[\]]+), ([^,\[\]]+)\]", middle)
+    if not g:
+        raise NotConfirmed(f"{r.path}: '{middle[:60]}' where the sentence has an interval [a, b]")
+    C = iv.mpf([lo(decimal(r, g.group(1))), hi(decimal(r, g.group(2)))])
+    if not inside(E, C):
+        raise NotConfirmed(f"{r.path}: the derivative's interval {middle} does not contain the checker's enclosure "
+                           f"{show_iv(E)}")
+
+
 def check_bifurcation(node):
     """A bifurcation certificate: the parameter interval holds exactly one pitchfork of the
     symmetric orbit, crossed transversally, recomputed here (g = det(DH + I) of the half-period map
@@ -3236,13 +3329,17 @@ def check_bifurcation(node):
         if not pitch:
             pairs += (("contact", "grazing_contact"), ("flight", "grazing_flight"), ("symmetric", "symmetric"))
         for key, skey in pairs:
+            if not s.has(skey):
+                s.fail(f"no '{skey}'")
             if s[skey].v != b[key].v:
                 raise NotConfirmed(f"{s[skey].path} = {s[skey].v!r} and {b[key].path} = {b[key].v!r} differ")
-        if s["bifurcation"].v != ("pitchfork" if pitch else "grazing"):
-            raise NotConfirmed(f"{s['bifurcation'].path} = {s['bifurcation'].v!r}: not the certificate's kind")
+        P = iv.mpf([lo(plo), hi(phi)])
+        period = bifurcation_summary(node, s, "orbit-pitchfork" if pitch else "grazing", name, P)
+        if pitch and not s["symmetric"].boolean():
+            raise NotConfirmed(f"{s['symmetric'].path}: false, the pitchfork proven is of a symmetric orbit")
         if pitch:
-            return check_orbit_pitchfork(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
-        return check_grazing(node, m, b, s, iv.mpf([lo(plo), hi(phi)]), name)
+            return check_orbit_pitchfork(node, m, b, s, P, name)
+        return check_grazing(node, m, b, s, P, name, period)
     b.obj(("type", "parameter", "interval", "root", "g_at_ends", "slope", "speed", "window"))
     kind = b["type"].text(("pitchfork", "fold"))
     fold = kind == "fold"
@@ -3255,9 +3352,19 @@ def check_bifurcation(node):
     if not hi(phi) - lo(plo) <= mp.mpf("1e-10") or not lo(plo) < hi(phi):
         raise NotConfirmed(f"{b['interval'].path}: {show(hi(phi) - lo(plo))} wide, not in (0, 1e-10]")
     b["root"].integer(-1, 1)  # the prover's branch of its own quadratic (information)
+    if not b["window"].num() > 0:  # the prover's window at the impacts (information)
+        b["window"].fail("a window must be > 0")
     for key in ("interval", "parameter"):
         if s[key].v != b[key].v:
             raise NotConfirmed(f"{s[key].path} = {s[key].v!r} and {b[key].path} = {b[key].v!r} differ")
+    if bifurcation_summary(node, s, kind, name, iv.mpf([lo(plo), hi(phi)])) != 1:
+        raise NotConfirmed(f"{s['period'].path}: {s['period'].v}, the symmetric orbit has period 1")
+    for g_node in (b["g_at_ends"], s["g_at_ends"]):
+        for x in g_node.items(exactly=2):
+            x.pair()
+    if not fold:
+        for x in s["half_map_multipliers"].items(exactly=2):
+            x.pair()
     c0, e0, r = symmetric_model(node, m)
     frequency = name == "frequency"
     # The branch: the root of (T2) whose speed the certificate claims.
@@ -3314,6 +3421,7 @@ def check_bifurcation(node):
                    (s["half_map_multipliers"][1], -over["det"], "the other multiplier of DH"))
     for claim, E, what in claims:
         claim_contains(claim, E, what)
+    bifurcation_reason(node, kind, over["slope"], name=name, lo=ends[0].v, hi=ends[1].v)
     # The orbit over the whole interval: Δ − y > 0 and y + Δ > 0 on the open flight (time s = Ωt),
     # windows at the impacts where ẏ < 0 (y leaves +Δ downwards and reaches −Δ downwards).
     th, fl, Dv = over["theta"], over["flight"], over["Delta"]
@@ -3376,8 +3484,9 @@ class Grazing:
     """The orbit of a grazing certificate: unknowns u = (t_j, X_j, V_j) per impact (one impact and
     its mirror image for a symmetric orbit), the parameter p, the tangency time s on flight J."""
 
-    def __init__(self, m, name, hits, symmetric, J, l):
+    def __init__(self, m, name, hits, symmetric, J, l, period=1):
         self.m, self.freq, self.hits, self.sym, self.J, self.l = m, name == "frequency", hits, symmetric, J, l
+        self.q = period  # forcing periods of the orbit (the certificate's period)
         self.count = 1 if symmetric else len(hits)
         self.per = 2 * m.n + 1
         self.N = self.count * self.per
@@ -3396,7 +3505,7 @@ class Grazing:
         k = (j + 1) % self.count
         end = D.lift(self.part(u, k)[0])
         if j == self.count - 1:
-            end = end + D.lift(2 * iv.pi) / D.lift(w)
+            end = end + D.lift(2 * self.q * iv.pi) / D.lift(w)
         return end - D.lift(self.part(u, j)[0])
 
     def flight(self, u, j, p, s):
@@ -3645,12 +3754,14 @@ def check_orbit_pitchfork(node, m, b, s, P, name):
         raise NotConfirmed(f"{b['slope'].path}: dp/dμ = {show_iv(dpdmu)} may vanish: transversality not confirmed")
     claim_contains(b["slope"], 1 / dpdmu, "dμ/dp")
     claim_contains(s["slope"], 1 / dpdmu, "dμ/dp")
+    ends = b["interval"].items(exactly=2)
+    bifurcation_reason(node, "orbit-pitchfork", 1 / dpdmu, name=name, lo=ends[0].v, hi=ends[1].v)
     # (4) The symmetric orbit is an orbit over the box.
     orbit_gaps(node, G, X[:h], P)
     return 4
 
 
-def check_grazing(node, m, b, s, P, name):
+def check_grazing(node, m, b, s, P, name, period=1):
     """A grazing certificate (docs/prove.md "Bifurcation points"), recomputed: Krawczyk on the orbit
     over the interval (for every p one orbit in the box), Krawczyk on the orbit with its tangency
     (exactly one (u, s, p) in the box), dm/dp = 1/(J⁻¹)_{last,last} enclosed and nonzero from
@@ -3665,15 +3776,18 @@ def check_grazing(node, m, b, s, P, name):
     l = b["contact"].integer(0, k_count - 1)
     if sym:
         mirrored_model(node, m, hits, b['symmetric'])
-    G = Grazing(m, name, hits, sym, 0, l)
+    G = Grazing(m, name, hits, sym, 0, l, period)
     G.J = b["flight"].integer(0, G.count - 1)
     N = G.N
     boxes = b["box"].items(exactly=N + 1)
     X = [x.pair() for x in boxes]
     mids = b["midpoint"].items(exactly=N + 1)
     xm = [iv.mpf(x.num()) for x in mids]
-    if len(b["unknowns"].items(exactly=N + 1)) != N + 1:
-        pass
+    names = [f"{v}_{j}" + (f"[{i}]" if v != "t" else "") for j in range(G.count)
+             for v, count in (("t", 1), ("X", m.n), ("V", m.n)) for i in range(count)] + ["s"]
+    for x, want in zip(b["unknowns"].items(exactly=N + 1), names):
+        if x.text() != want:
+            raise NotConfirmed(f"{x.path}: '{x.v}', the unknown there is {want}")
     for k in range(N + 1):
         if not inside(xm[k], X[k]):
             raise NotConfirmed(f"{mids[k].path}: the midpoint is not in the box")
@@ -3733,6 +3847,13 @@ def check_grazing(node, m, b, s, P, name):
 
     bisect(node, lambda u, v: positive(G.gap_at(U, P, G.J, l, iv.mpf([u, v]))[2]), wa, wb,
            "the gap's convexity on the window")
+    ends = b["interval"].items(exactly=2)
+    opens = positive(slope)
+    if not (opens or negative(slope)):
+        raise NotConfirmed(f"{b['slope'].path}: the sign of dm/dp is not confirmed")
+    bifurcation_reason(node, "grazing", slope, name=name, lo=ends[0].v, hi=ends[1].v, flight=G.J, contact=l,
+                       below="crosses" if opens else "clears", above="clears" if opens else "crosses",
+                       mirror=MIRROR.format(other=1 - l) if sym else "")
     # (4) The orbit is an orbit over the box.
     orbit_gaps(node, G, U, P, (wa, wb))
     return 5

@@ -319,6 +319,7 @@ struct CvodeEngine::Impl {
       double* D = N_VGetArrayPointer(ydot);
       for (Eigen::Index i = 0; i < k; ++i) D[i] = Y[k + i];
       m->StickAcc(t, Y, D + k);
+      if (k == 0) D[0] = 0.0;  // one DOF: the placeholder unknown (see the constructor)
       return 0;
     } catch (...) {
       m->pending = std::current_exception();
@@ -588,7 +589,14 @@ CvodeEngine::CvodeEngine(const System& sys, const RunSpec& run)
   m.guards.resize(m.contacts.size());
   m.hd = &m.contacts.front();
   m.Create(m.free, 2 * n, &Impl::FreeRhs, &Impl::FreeRoots, &Impl::FreeJac);
-  if (n >= 2) m.Create(m.stick, 2 * (n - 1), &Impl::StickRhs, &Impl::StickRoots, &Impl::StickJac);
+  // Sticking: the reduced system of 2(n − 1) unknowns. One DOF held on its stop has none: its
+  // reaction is a function of time alone, which matters only under a sum of harmonics (one harmonic
+  // rests in closed form, automaton.hpp's RestingStick; a sum's release is searched by the engine,
+  // docs/harmonics.md). CVODE then integrates one placeholder unknown with ẏ = 0, so that its root
+  // finding locates the release on R(σ); its steps are capped at a 32nd of the fastest period
+  // (nothing else bounds them: the placeholder has no error).
+  m.Create(m.stick, n >= 2 ? 2 * (n - 1) : 1, &Impl::StickRhs, &Impl::StickRoots, &Impl::StickJac);
+  if (n < 2) CVodeSetMaxStep(m.stick.mem, run.max_step > 0 ? std::min(run.max_step, m.cap / 8) : m.cap / 8);
 }
 
 CvodeEngine::~CvodeEngine() = default;
@@ -652,6 +660,7 @@ void CvodeEngine::Begin(const SegmentStart& s) {
       Y[i] = xi[i];
       Y[k + i] = eta[i];
     }
+    if (k == 0) Y[0] = 0.0;  // one DOF: the placeholder unknown (see the constructor)
     m.xi0 = xi;
     Impl::Guard& gd = m.guards[static_cast<size_t>(s.contact)];
     gd.order = static_cast<int>(s.stick_start);  // kGeneric 0, kRising 1, kTangent 2

@@ -29,7 +29,7 @@ import sys
 from mpmath import mp, mpf, tan, sqrt, atan2, pi, sin, cos, findroot, matrix, det
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prove_truth import Harness  # noqa: E402
+from prove_truth import Harness, bifurcation_reading_mutations  # noqa: E402
 
 mp.dps = 50
 VIBRO, CHECKER = sys.argv[1:3]
@@ -131,6 +131,15 @@ def mutants(label, cert, truth):
         edit(c)
         code, v = check_doc(c)
         expect(code in (1, 2) and v and v["verdict"] != "confirmed", f"{label}: {what}: rejected (exit {code}, {v})")
+    if label in READING:  # the checker reads the whole certificate (issue 38): once per kind of point
+        READING.discard(label)
+        for what, c in bifurcation_reading_mutations(cert):
+            code, v = check_doc(c)
+            expect(code in (1, 2) and v and v["verdict"] != "confirmed" and "the checker failed" not in v["reason"],
+                   f"{label}: {what}: rejected (exit {code}, {v})")
+
+
+READING = {"pitchfork r=0.6 w=2.0", "fold"}
 
 
 def proven_bifurcation(label, scene, source, truth, *extra):

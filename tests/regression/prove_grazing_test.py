@@ -36,7 +36,7 @@ import sys
 from mpmath import mp, mpf, pi, findroot
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prove_truth import Harness, Truth, scene_model  # noqa: E402
+from prove_truth import Harness, Truth, bifurcation_reading_mutations, scene_model  # noqa: E402
 
 mp.dps = 50
 VIBRO, CHECKER, SCENES = sys.argv[1:4]
@@ -284,9 +284,12 @@ def mutants(label, cert):
                                                      c["summary"].__setitem__("symmetric", False)])
     edit("the amplitude edited", lambda c: c["model"].__setitem__("amplitude", "0.3000001" if c["model"]["amplitude"] == "0.3"
                                                                  else "2.000001"))
+    # The checker reads the whole certificate (issue 38).
+    out += bifurcation_reading_mutations(cert)
     for what, c in out:
         code, v = check_doc(c)
-        expect(code in (1, 2), f"{label}: {what}: rejected ({v and v['reason'][:160]})")
+        expect(code in (1, 2) and v and "the checker failed" not in v["reason"],
+               f"{label}: {what}: rejected ({v and v['reason'][:160]})")
 
 
 TRUTH = {}
@@ -376,6 +379,10 @@ if code == 0:
         edit(c)
         code, v = check_doc(c)
         expect(code in (1, 2), f"tube pitchfork: {what}: rejected ({v and v['reason'][:160]})")
+    for what, c in bifurcation_reading_mutations(cert):  # the checker reads the whole certificate (issue 38)
+        code, v = check_doc(c)
+        expect(code in (1, 2) and v and "the checker failed" not in v["reason"],
+               f"tube pitchfork: {what}: rejected ({v and v['reason'][:160]})")
     for d in (mpf("1e-9"), mpf("-1e-9")):
         code, s2, err = prove(tube, "--bifurcation", f"branch-point:excitation.frequency={mp.nstr(w + d, 17)}", "--from", up)
         expect(code == 4 and s2 and s2["verdict"] == "not-proven",

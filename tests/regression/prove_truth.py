@@ -71,6 +71,84 @@ class Harness:
         sys.exit(1 if self.failures else 0)
 
 
+def bifurcation_reading_mutations(cert):
+    """Edits of a bifurcation certificate (pitchfork, fold, grazing, or a symmetric orbit's pitchfork)
+    that the checker must reject (exit 1 or 2), each a hole of the checker before issue 38: the
+    summary read whole (an unknown key, every key it never read deleted or of the wrong type), the
+    claims it never checked (the kind of point, the parameter's key, the centre and width of the
+    interval, the modal data, an orbit's events, sequence, section, multipliers or stability that
+    no bifurcation proof makes, the period, the reason's sentence and the derivative's interval in
+    it), lists of two grown to three or given as objects, the prover's window and the grazing's
+    unknowns of the wrong type. Returns [(what, edited copy)]."""
+    import copy
+    out = []
+    b, s = cert["bifurcation"], cert["summary"]
+    kind = b["type"]
+
+    def edit(what, f):
+        c = copy.deepcopy(cert)
+        f(c)
+        out.append((what, c))
+
+    def both(key, value):
+        return lambda c: [c.__setitem__(key, value), c["summary"].__setitem__(key, value)]
+
+    edit("summary: an unknown key", lambda c: c["summary"].__setitem__("note", 1))
+    wrong = {"bifurcation": 5, "width": "x", "box_width": "x", "center": None, "located": "x", "param": 5,
+             "stability": 1, "events": {}, "sequence": "x", "section": 5, "multipliers": {}, "modal_data": 1}
+    for key, value in wrong.items():
+        edit(f"summary.{key} deleted", lambda c, key=key: c["summary"].pop(key))
+        edit(f"summary.{key} of the wrong type", lambda c, key=key, value=value: c["summary"].__setitem__(key, value))
+    other = {"pitchfork": "fold", "fold": "pitchfork", "grazing": "pitchfork", "orbit-pitchfork": "grazing"}[kind]
+    edit(f"summary.bifurcation '{other}'", lambda c: c["summary"].__setitem__("bifurcation", other))
+    edit("summary.stability 'stable'", lambda c: c["summary"].__setitem__("stability", "stable"))
+    edit("summary.multipliers claimed", lambda c: c["summary"].__setitem__(
+        "multipliers", [{"re": [-1.0, -1.0], "im": [0.0, 0.0]}]))
+    edit("summary.sequence claimed", lambda c: c["summary"].__setitem__("sequence", ["impact"]))
+    edit("summary.events claimed", lambda c: c["summary"].__setitem__("events", [
+        {"kind": "impact", "contact": 0, "time": [0.0, 1.0], "phase": [0.0, 1.0], "velocity_before": [-1.0, 0.0]}]))
+    edit("summary.section claimed", lambda c: c["summary"].__setitem__("section", {"time": [0.0, 1.0]}))
+    edit("summary.width doubled", lambda c: c["summary"].__setitem__("width", 2 * s["width"]))
+    edit("summary.box_width halved", lambda c: c["summary"].__setitem__("box_width", s["box_width"] / 2))
+    edit("summary.center outside the interval", lambda c: c["summary"].__setitem__(
+        "center", float(s["interval"][1]) + 1e-6))
+    edit("summary.param another key", lambda c: c["summary"].__setitem__(
+        "param", "excitation.frequency" if s["parameter"] == "amplitude" else "excitation.amplitude"))
+    edit("summary.modal_data the other one", lambda c: c["summary"].__setitem__(
+        "modal_data", "given" if s["modal_data"] == "enclosed" else "enclosed"))
+    edit("the period 2", both("period", 2))
+    edit("the reason says at least one", both("reason", cert["reason"].replace("exactly one", "at least one", 1)))
+    # The derivative's interval in the reason moved off the truth by its width and more.
+    import re
+    g = re.search(r"\[(-?[0-9.e+-]+), (-?[0-9.e+-]+)\]", cert["reason"][cert["reason"].index("]") + 1:])
+    if g:
+        a, z = float(g.group(1)), float(g.group(2))
+        d = 3 * (z - a) + 1e-9 * abs(z)
+        moved = cert["reason"].replace(g.group(0), f"[{a + d!r}, {z + d!r}]")
+        edit("the reason's derivative moved", both("reason", moved))
+    if kind in ("pitchfork", "fold"):
+        edit("bifurcation.window of the wrong type", lambda c: c["bifurcation"].__setitem__("window", "x"))
+        edit("bifurcation.window negative", lambda c: c["bifurcation"].__setitem__("window", -1.0))
+        for where in ("bifurcation", "summary"):
+            edit(f"{where}.g_at_ends grown to three", lambda c, where=where: c[where]["g_at_ends"].append(
+                c[where]["g_at_ends"][-1]))
+            edit(f"{where}.g_at_ends an object", lambda c, where=where: c[where].__setitem__(
+                "g_at_ends", {"0": c[where]["g_at_ends"][0], "1": c[where]["g_at_ends"][1]}))
+    if kind == "pitchfork":
+        edit("summary.half_map_multipliers grown to three", lambda c: c["summary"]["half_map_multipliers"].append(
+            [5.0, 5.0]))
+        edit("summary.half_map_multipliers' first deleted", lambda c: c["summary"]["half_map_multipliers"].pop(0))
+        edit("summary.half_map_multipliers an object", lambda c: c["summary"].__setitem__(
+            "half_map_multipliers", {"0": [-1, -1]}))
+    if kind == "orbit-pitchfork":
+        edit("summary.symmetric false", lambda c: c["summary"].__setitem__("symmetric", False))
+        edit("summary.symmetric of the wrong type", lambda c: c["summary"].__setitem__("symmetric", "yes"))
+    if kind == "grazing":
+        edit("bifurcation.unknowns' first entry a number", lambda c: c["bifurcation"]["unknowns"].__setitem__(0, 5))
+        edit("bifurcation.unknowns renamed", lambda c: c["bifurcation"]["unknowns"].__setitem__(0, "s"))
+    return out
+
+
 class Truth:
     """The damped modal model of a certificate, at 50 digits."""
 
