@@ -104,7 +104,10 @@ struct Bifurcation {
   // the same side as the old one, and the branch turns back along it; docs/orbits.md).
   std::string through{};
   // A grazing the branch went through onto an orbit with a new low-velocity impact: that impact's
-  // speed |ẋ⁻| at the first point past it, and that point's distance |λ − λ_g| (NaN otherwise).
+  // speed |ẋ⁻| at the first point past it, and that point's distance |λ − λ_g|. A grazing met from
+  // the side of its slow impact (the impact dies out there): that impact's speed at the branch's
+  // orbit nearest to the grazing, followed by the speed itself, and that orbit's distance |λ − λ_g|
+  // (docs/orbits.md, "Through a grazing"). NaN otherwise.
   double new_impact_speed = std::numeric_limits<double>::quiet_NaN();
   double new_impact_distance = std::numeric_limits<double>::quiet_NaN();
   // The index in Branch::points of the branch's point next to it on the side the branch came from

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <optional>
 
@@ -457,6 +458,19 @@ std::optional<std::vector<BranchPoint::Impact>> ImpactsAt(const Problem& p, cons
   return ImpactsOf(sys, *scene, p.SectionTime(*scene), z.head(n), z.tail(n), p.period());
 }
 
+// The closest approach of the orbit's free flights to a stop over its range (OrbitProbe::flight_gap)
+// from 16384 samples per period instead of the 256 of Examine: the parabola through three samples
+// is off by O(Δt³) (about 1e-6 of the range with 256), far above the gaps next to a grazing.
+double PreciseGap(const Problem& p, const Eigen::VectorXd& y) {
+  const auto n2 = y.size() - 1;
+  const auto scene = p.DecidingSceneAt(y[n2]);
+  if (!scene) return std::numeric_limits<double>::quiet_NaN();
+  const System sys(*scene);
+  const auto n = sys.dof();
+  const auto pr = ProbeOrbit(sys, *scene, p.SectionTime(*scene), y.head(n), y.segment(n, n), p.period(), 16384);
+  return pr.ok ? pr.flight_gap : std::numeric_limits<double>::quiet_NaN();
+}
+
 // The slowest impact speed |ẋ⁻| of a list (∞ when it is empty).
 double Slowest(const std::vector<BranchPoint::Impact>& impacts) {
   double v = std::numeric_limits<double>::infinity();
@@ -511,7 +525,12 @@ std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, doub
     const Eigen::VectorXd G = *F - z;
     const double res = G.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
     const double res_v = std::abs(std::sqrt(*v2) - v_t) / v_t;
-    if ((res < 1e-13 || (res < 1e-11 && res > 0.1 * last)) && res_v < 1e-6) {
+    // The map's rounding floor grows with |DF| (each slow impact contributes a factor 1/v): once
+    // Newton stops gaining, a residual within 1e-14·|DF| of it is converged (10⁻¹¹ otherwise).
+    const double floor = 1e-11 * std::max(1.0, 1e-3 * DF.cwiseAbs().maxCoeff());
+    // The speed itself is known to the rounding of the depth over v (1e-16/v): once Newton stalls
+    // it is held within 1e-3 of v_t (the caller measures the speed it got).
+    if ((res < 1e-13 && res_v < 1e-6) || (res < floor && res > 0.1 * last && res_v < 1e-3)) {
       const Evaluation e = p.Evaluate(z, lambda);
       if (!e.ok) return std::nullopt;
       Eigen::VectorXd y(N + 1);
@@ -521,18 +540,39 @@ std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, doub
     last = res;
     Eigen::MatrixXd J(N + 1, N + 1);
     J.topLeftCorner(N, N) = DF - Eigen::MatrixXd::Identity(N, N);
-    const double hl = 1e-9 * std::max(1.0, std::abs(lambda));
+    // At a fixed state, λ moves the depth of the slow impact at a rate of order one, and F has a
+    // square-root term in that depth (∝ v): its difference in λ is a derivative only over steps
+    // that change v² by a small fraction of itself. The step is cut to 1e-3 of v_t² over the
+    // rate at which v² changes (v² being linear in the depth, its own difference is exact).
+    double hl = 1e-9 * std::max(1.0, std::abs(lambda));
+    auto vp = speed2(z, lambda + hl), vm = speed2(z, lambda - hl);
+    for (int k = 0; k < 4 && !(vp && vm); ++k) {  // the slow impact lost within hl: shorter
+      hl *= 1e-2;
+      vp = speed2(z, lambda + hl);
+      vm = speed2(z, lambda - hl);
+    }
+    if (vp && vm) {
+      const double rate = std::abs(*vp - *vm) / (2 * hl);
+      if (rate * hl > 1e-3 * v_t * v_t)
+        hl = std::max(1e-3 * v_t * v_t / rate, 1e-15 * std::max(1.0, std::abs(lambda)));
+      vp = speed2(z, lambda + hl);
+      vm = speed2(z, lambda - hl);
+    }
     const auto Fp = p.Map(z, lambda + hl, nullptr), Fm = p.Map(z, lambda - hl, nullptr);
-    const auto vp = speed2(z, lambda + hl), vm = speed2(z, lambda - hl);
     if (!Fp || !Fm || !vp || !vm) return std::nullopt;
     J.topRightCorner(N, 1) = (*Fp - *Fm) / (2 * hl);
     J(N, N) = (*vp - *vm) / (2 * hl);
     for (long k = 0; k < N; ++k) {
-      const double h = 1e-9 * (1.0 + std::abs(z[k]));
-      Eigen::VectorXd zp = z, zm = z;
-      zp[k] += h;
-      zm[k] -= h;
-      const auto a = speed2(zp, lambda), b = speed2(zm, lambda);
+      double h = 1e-9 * (1.0 + std::abs(z[k]));
+      std::optional<double> a, b;
+      for (int j = 0; j < 5 && !(a && b); ++j, h *= 1e-2) {  // shorter where the impact is lost within h
+        Eigen::VectorXd zp = z, zm = z;
+        zp[k] += h;
+        zm[k] -= h;
+        a = speed2(zp, lambda);
+        b = speed2(zm, lambda);
+        if (a && b) break;
+      }
       if (!a || !b) return std::nullopt;
       J(N, k) = (*a - *b) / (2 * h);
     }
@@ -625,6 +665,99 @@ std::optional<AcrossGrazingResult> AcrossGrazing(const Problem& p, const Point& 
     }
   }
   return std::nullopt;
+}
+
+// ---- Approaching a grazing from the side of its slow impact (docs/orbits.md, "Through a grazing") ----
+
+// A transition is named a grazing only where the grazing quantity of the orbit at the located
+// point — its slowest isolated impact's speed, or its flight's closest approach to a stop, over
+// the contact's largest speed or range (orbit_probe.hpp) — is below this.
+constexpr double kGrazingTolerance = 1e-5;
+// A branch whose slowest impact is slower than this (same measure) and slowing down is followed
+// to the grazing by the speed itself (ApproachGrazing), not by arclength.
+constexpr double kApproachSpeed = 1e-2;
+
+// The orbits of a branch whose slowest impact slows down towards a grazing, followed with that
+// speed as the parameter: Newton on {F(z; λ) = z, v(z, λ) = v_t} (NewtonOnNewImpact: λ unknown)
+// for v_t = v₀/4, v₀/16, … down to 1e-8 of the contact's largest speed, or as far as Newton
+// converges. Near the grazing the orbit is strongly unstable (DF grows like 1/v): pseudo-arclength
+// steps creep there, while in v the orbit and λ are smooth (λ − λ_g = v/c₁ + O(v²), docs/orbits.md
+// "Near a grazing"). λ_g is where λ(v) extrapolates to v = 0: the constant of the cubic (or,
+// with fewer points, quadratic) least-squares fit through the slowest ones; `bracket` is its
+// distance to the fit of one degree less, plus the rounding of λ.
+struct GrazingApproach {
+  std::vector<Point> points;   // the march's orbits, the slow impact slowing down
+  std::vector<double> speeds;  // its speed |ẋ⁻| on each
+  double scale = 1;            // the contact's largest speed (the probe's scale)
+  double value = 0, bracket = 0;
+  bool located = false;  // the last speed is below kGrazingTolerance·scale and λ_g is fitted
+};
+GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::function<bool()>& stop) {
+  GrazingApproach a;
+  const auto n2 = from.y.size() - 1;
+  const auto imp = ImpactsAt(p, from.y.head(n2), from.y[n2]);
+  if (!imp || imp->empty()) return a;
+  const double v0 = Slowest(*imp);
+  if (!(v0 > 0) || !(from.probe.impact_speed > 0) || !std::isfinite(from.probe.impact_speed)) return a;
+  a.scale = v0 / from.probe.impact_speed;
+  const size_t more = imp->size();
+  std::vector<Eigen::VectorXd> ys = {from.y};
+  std::vector<double> vs = {v0};
+  for (int k = 1; k <= 24; ++k) {
+    if (stop()) return a;
+    const double v_t = v0 * std::pow(0.25, k);
+    // The predictor: the Lagrange polynomial in v through the last three orbits (the last orbit
+    // itself before there are three). It must be quadratic: the orbit is z_g + a·v + b·v² + …,
+    // and the depth the seed's flight reaches, which sets its speed, is ∝ v² with a contributing
+    // nothing to it: a linear predictor gets the depth wrong by more than itself (the seed then has
+    // no slow impact at all), while the last orbit's is 16 times too deep, which Newton corrects.
+    Eigen::VectorXd y = ys.back();
+    const size_t j = ys.size() - 1;
+    if (ys.size() >= 3) {
+      const double a0 = vs[j - 2], a1 = vs[j - 1], a2 = vs[j];
+      y = ((v_t - a1) * (v_t - a2) / ((a0 - a1) * (a0 - a2))) * ys[j - 2] +
+          ((v_t - a0) * (v_t - a2) / ((a1 - a0) * (a1 - a2))) * ys[j - 1] +
+          ((v_t - a0) * (v_t - a1) / ((a2 - a0) * (a2 - a1))) * ys[j];
+    }
+    auto pt = NewtonOnNewImpact(p, y.head(n2), y[n2], v_t, more, stop);
+    if (!pt || !SameFamily(from, *pt)) break;
+    const auto pi = ImpactsAt(p, pt->y.head(n2), pt->y[n2]);
+    if (!pi) break;
+    ys.push_back(pt->y);
+    vs.push_back(Slowest(*pi));
+    a.points.push_back(std::move(*pt));
+    a.speeds.push_back(vs.back());
+    if (v_t < 1e-8 * a.scale) break;
+  }
+  if (a.points.size() < 3 || !(a.speeds.back() < kGrazingTolerance * a.scale)) return a;
+  // λ(v) through the slowest (up to six) orbits of the march, v scaled by the largest of them.
+  const size_t count = std::min<size_t>(6, ys.size()), first = ys.size() - count;
+  const double vmax = vs[first];
+  // The constant of the fit, and (sigma) its standard error from the fit's residuals: λ of the
+  // slowest orbits carries the rounding of a map whose DF grows like 1/v.
+  const auto fit = [&](int degree, double* sigma) {
+    Eigen::MatrixXd A(static_cast<long>(count), degree + 1);
+    Eigen::VectorXd l(static_cast<long>(count));
+    for (size_t i = 0; i < count; ++i) {
+      for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow(vs[first + i] / vmax, d);
+      l[static_cast<long>(i)] = ys[first + i][n2] - ys.back()[n2];
+    }
+    const Eigen::VectorXd c = A.colPivHouseholderQr().solve(l);
+    if (sigma) {
+      const long dof = static_cast<long>(count) - (degree + 1);
+      const double s2 = dof > 0 ? (A * c - l).squaredNorm() / static_cast<double>(dof) : 0.0;
+      const Eigen::MatrixXd cov = (A.transpose() * A).inverse();
+      *sigma = std::sqrt(s2 * std::max(cov(0, 0), 0.0));
+    }
+    return ys.back()[n2] + c[0];
+  };
+  const int degree = count >= 5 ? 3 : 2;
+  double sigma = 0;
+  a.value = fit(degree, &sigma);
+  a.bracket = std::abs(a.value - fit(degree - 1, nullptr)) + 3.0 * sigma +
+              4 * std::numeric_limits<double>::epsilon() * std::abs(a.value);
+  a.located = std::isfinite(a.value);
+  return a;
 }
 
 // How far apart two orbits at one λ are, from what does not depend on where their sections sit:
@@ -1174,6 +1307,117 @@ Branch Continue(const ContinuationRequest& req) {
     bracket = fit_bracket;
   };
 
+  // The branch's slowest impact dies out (docs/orbits.md, "Through a grazing", from the side of the
+  // slow impact): the grazing is located by ApproachGrazing and the march's orbits are recorded;
+  // then the orbit without that impact is looked for at λ_g ± δ, δ = 4 |λ_last − λ_g| (at least
+  // 1e-9 relative), by Newton with λ held from the march's last state. It must be the grazing's
+  // own orbit: its flight's closest approach to the stop at 2δ is twice that at δ (within 15 %:
+  // linear in the distance). Returns 0 when the grazing is not located (the caller goes on as
+  // before), 1 when the branch goes on along that orbit, 2 when it ends there (no orbit goes on,
+  // or a closed loop).
+  double approach_failed_at = std::numeric_limits<double>::infinity();  // the probe's speed where a march failed
+  const auto through_slow_side = [&](const Point& from) -> int {
+    GrazingApproach a = ApproachGrazing(p, from, stop_requested);
+    if (!a.located || stop_requested()) {
+      approach_failed_at = from.probe.impact_speed;
+      return 0;
+    }
+    const Point last = a.points.back();
+    const double lg = a.value, d_last = last.y[n2] - lg;
+    const double toward = d_last > 0 ? -1.0 : 1.0;  // the march's direction in λ
+    const double delta = std::max(4.0 * std::abs(d_last), 1e-9 * std::max(1.0, std::abs(lg)));
+    const auto held = [&](const Eigen::VectorXd& seed, double lambda) -> std::optional<Point> {
+      Eigen::VectorXd y = seed;
+      y[n2] = lambda;
+      Eigen::VectorXd e_lambda = Eigen::VectorXd::Zero(n2 + 1);
+      e_lambda[n2] = 1.0;
+      int iters = 0;
+      const auto yc = Correct(p, y, e_lambda, iters);
+      return yc ? p.Examine(*yc) : std::nullopt;
+    };
+    std::optional<Point> after;
+    double side = 0, gap1 = 0, gap2 = 0;
+    for (const double s : {toward, -toward}) {
+      if (stop_requested()) break;
+      const auto q1 = held(last.y, lg + s * delta);
+      if (!q1 || SameFamily(from, *q1) || Sticks(*q1) != Sticks(from) ||
+          Count(q1->probe.signature, 'I') >= Count(from.probe.signature, 'I'))
+        continue;
+      const auto q2 = held(q1->y, lg + 2.0 * s * delta);
+      if (!q2 || !SameFamily(*q1, *q2)) continue;
+      const double g1 = PreciseGap(p, q1->y), g2 = PreciseGap(p, q2->y);
+      if (!(g1 > 0 && std::isfinite(g1) && std::isfinite(g2) && std::abs(g2 / g1 - 2.0) < 0.3)) continue;
+      after = q1;
+      side = s;
+      gap1 = g1;
+      gap2 = g2;
+      break;
+    }
+    if (stop_requested()) return 0;
+    for (const auto& pt : a.points) record(pt);
+    const double v_last = a.speeds.back();
+    const int c = m > 1 ? from.probe.at.impact_speed : -1;
+    Bifurcation g{"grazing", lg, "", a.bracket, c};
+    g.events_before = from.probe.signature;
+    g.sequence_before = from.orbit.sequence;
+    g.events_after = after ? after->probe.signature : "";
+    g.sequence_after = after ? after->orbit.sequence : "";
+    g.through = !after ? "" : side == toward ? "past" : "back";
+    g.new_impact_speed = v_last;
+    g.new_impact_distance = std::abs(d_last);
+    const std::string on = m > 1 ? fmt::format(" on contact {}", c) : "";
+    const std::string change =
+        after ? fmt::format("events per period {} → {}{}", g.events_before,
+                            g.events_after.empty() ? "(none: a free orbit)" : g.events_after,
+                            m > 1 ? fmt::format("; contact sequence {} → {}", g.sequence_before, g.sequence_after) : "")
+              : fmt::format("events per period {}{}", g.events_before,
+                            m > 1 ? fmt::format("; contact sequence {}", g.sequence_before) : "");
+    g.detail = fmt::format(
+        "the slowest impact{} dies out: followed by its speed, it falls to {:.2e} ({:.1e} of the contact's "
+        "largest speed; grazing tolerance {:.0e}) at {:.1e} from here, where λ against that speed extrapolates "
+        "to 0 ({} orbits from speed {:.2e}); {}; {}",
+        on, v_last, v_last / a.scale, kGrazingTolerance, std::abs(d_last), a.points.size(), a.speeds.front(), change,
+        !after ? fmt::format("no orbit without it is found at λ_g ± {:.1e}: the orbit does not go on", delta)
+        : fmt::format("the branch {} along the orbit without it (its closest approach to the stop {:.2e} at {:.1e} "
+                      "from the grazing, {:.2e} at {:.1e}: linear in the distance)",
+                      g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
+                      gap1, delta, gap2, 2.0 * delta));
+    br.bifurcations.push_back(g);
+    transition.reset();
+    if (!after) {
+      br.end = "grazing (the orbit does not go on)";
+      return 2;
+    }
+    if (const auto r = RepeatsATransition(br, p)) {
+      record(*after);  // the branch's last orbit: the one it reached, where it would redraw itself
+      EndAtRepeat(br, *r);
+      return 2;
+    }
+    cur = *after;
+    t = Tangent(cur.eval, Eigen::VectorXd());
+    if (t[n2] * side < 0) t = -t;  // away from the grazing
+    section_fresh = false;
+    record(cur);
+    ds = std::max(4.0 * delta, ds_retry_far);
+    grazing_crossed = lg;
+    if (cur.probe.section_margin < 0.3 && !move_section()) {
+      br.end = "grazing (the orbit past it is too degenerate to continue)";
+      return 2;
+    }
+    return 1;
+  };
+  // A stall (docs/orbits.md, "Through a grazing"): the last kStallSteps accepted steps, all on
+  // strongly unstable orbits (largest |multiplier| above 1e3), add up to less than 1e-3 of the span
+  // in arclength. The corrector creeps there (near a fold of an orbit next to a grazing, where DF
+  // grows like 1/v): the branch ends with the numbers, rather than spend its points there.
+  constexpr size_t kStallSteps = 40;
+  std::deque<double> recent_steps;  // arclength of the last accepted steps on strongly unstable orbits
+  const auto largest_multiplier = [](const Point& x) {
+    double lead = 0;
+    for (const auto& mu : x.orbit.multipliers) lead = std::max(lead, std::abs(mu));
+    return lead;
+  };
+
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
       br.status = "interrupted";
@@ -1354,6 +1598,7 @@ Branch Continue(const ContinuationRequest& req) {
           }
         }
       }
+      const double speed_before = cur.probe.impact_speed, step = (next->y - cur.y).norm();
       cur = *next;
       t = t_new;
       section_fresh = false;
@@ -1365,6 +1610,32 @@ Branch Continue(const ContinuationRequest& req) {
         went_away = true;
       transition.reset();
       ds = std::min(ds * 1.5, ds_max);
+      // A slow impact slowing down: followed to its grazing by its speed (ApproachGrazing).
+      const double speed = cur.probe.impact_speed;
+      if (speed < kApproachSpeed && speed < speed_before && speed < 0.5 * approach_failed_at && !stop_requested()) {
+        const int r = through_slow_side(cur);
+        if (r == 2) return Finish(br, p);
+        if (r == 1) {
+          recent_steps.clear();
+          continue;
+        }
+      }
+      if (largest_multiplier(cur) > 1e3) {
+        recent_steps.push_back(step);
+        if (recent_steps.size() > kStallSteps) recent_steps.pop_front();
+        double total = 0;
+        for (const double x : recent_steps) total += x;
+        if (recent_steps.size() == kStallSteps && total < 1e-3 * std::abs(span)) {
+          br.end = fmt::format("stalled at λ = {:.17g}: the last {} steps add up to {:.1e} in arclength (1e-3 of the "
+                               "span is {:.1e}) on strongly unstable orbits (largest |multiplier| {:.3g} here; slowest "
+                               "impact speed {:.1e} of its contact's largest, grazing quantity {:.1e})",
+                               cur.y[n2], kStallSteps, total, 1e-3 * std::abs(span), largest_multiplier(cur),
+                               cur.probe.impact_speed, std::min(cur.probe.impact_speed, cur.probe.flight_gap));
+          return Finish(br, p);
+        }
+      } else {
+        recent_steps.clear();
+      }
     } else if (ds > ds_retry) {
       ds *= 0.5;  // the corrector may just need a shorter step, or jumped to another orbit
       continue;
@@ -1437,6 +1708,25 @@ Branch Continue(const ContinuationRequest& req) {
         }
         continue;
       }
+      // A grazing met from the side of its slow impact (cur's slowest impact is the grazing
+      // quantity): located by the speed itself (through_slow_side), as after a smooth step.
+      if (kind == "grazing" && cur.probe.impact_speed <= cur.probe.flight_gap &&
+          cur.probe.impact_speed < 0.5 * approach_failed_at && !stop_requested()) {
+        const int r = through_slow_side(cur);
+        if (r == 2) return Finish(br, p);
+        if (r == 1) continue;
+      }
+      // A grazing is named so only where the grazing quantity at the located point (cur) is below
+      // kGrazingTolerance: otherwise the corrector gave out before the grazing (e.g. creeping next
+      // to a fold of a strongly unstable orbit), and the point is reported for what is known.
+      if (kind == "grazing" && std::min(cur.probe.impact_speed, cur.probe.flight_gap) > kGrazingTolerance) {
+        detail = fmt::format("not located as a grazing: the grazing quantity at λ = {:.17g} is {:.1e} (slowest impact "
+                             "speed {:.1e} of its contact's largest, closest approach to a stop {:.1e} of its range), "
+                             "above the tolerance {:.0e}; {}",
+                             cur.y[n2], std::min(cur.probe.impact_speed, cur.probe.flight_gap), cur.probe.impact_speed,
+                             cur.probe.flight_gap, kGrazingTolerance, detail);
+        kind = "non-smooth";
+      }
       // Past cur the map could not be evaluated because a chattering sequence stayed undetermined
       // (CVODE, or beyond quad too): the bisection found where this precision gives out, which
       // need not be where the motion changes. Say so rather than name a bifurcation there.
@@ -1460,6 +1750,11 @@ Branch Continue(const ContinuationRequest& req) {
       if (kind == "non-smooth" && !past) {
         double lead = 0;
         for (const auto& mu : cur.orbit.multipliers) lead = std::max(lead, std::abs(mu));
+        if (detail.rfind("not located as a grazing", 0) == 0) {
+          br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}; largest |multiplier| {:.3g}): {}", at,
+                               bracket, lead, detail);
+          return Finish(br, p);
+        }
         br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}) and no test quantity vanishes "
                              "there ({}; largest |multiplier| {:.3g}): not a bifurcation",
                              at, bracket, detail.substr(detail.find('(') + 1, detail.find(')') - detail.find('(') - 1),
