@@ -679,12 +679,13 @@ constexpr double kApproachSpeed = 1e-2;
 
 // The orbits of a branch whose slowest impact slows down towards a grazing, followed with that
 // speed as the parameter: Newton on {F(z; λ) = z, v(z, λ) = v_t} (NewtonOnNewImpact: λ unknown)
-// for v_t = v₀/4, v₀/16, … down to 1e-8 of the contact's largest speed, or as far as Newton
+// for v_t = v₀/4, v₀/16, … down to 1e-6 of the contact's largest speed, or as far as Newton
 // converges. Near the grazing the orbit is strongly unstable (DF grows like 1/v): pseudo-arclength
 // steps creep there, while in v the orbit and λ are smooth (λ − λ_g = v/c₁ + O(v²), docs/orbits.md
 // "Near a grazing"). λ_g is where λ(v) extrapolates to v = 0: the constant of the cubic (or,
 // with fewer points, quadratic) least-squares fit through the slowest ones; `bracket` is its
-// distance to the fit of one degree less, plus the rounding of λ.
+// distance to the fit of one degree less, three standard errors and the largest change when one
+// orbit is left out (below 1e-6 of the scale the orbits add rounding, not accuracy).
 struct GrazingApproach {
   std::vector<Point> points;   // the march's orbits, the slow impact slowing down
   std::vector<double> speeds;  // its speed |ẋ⁻| on each
@@ -703,9 +704,12 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
   const size_t more = imp->size();
   std::vector<Eigen::VectorXd> ys = {from.y};
   std::vector<double> vs = {v0};
-  for (int k = 1; k <= 24; ++k) {
+  // Each step divides the speed by 4; a step whose Newton fails is retried dividing it by 2, then
+  // by √2, before the march ends.
+  double factor = 0.25;
+  for (int k = 1; k <= 40; ++k) {
     if (stop()) return a;
-    const double v_t = v0 * std::pow(0.25, k);
+    const double v_t = vs.back() * factor;
     // The predictor: the Lagrange polynomial in v through the last three orbits (the last orbit
     // itself before there are three). It must be quadratic: the orbit is z_g + a·v + b·v² + …,
     // and the depth the seed's flight reaches, which sets its speed, is ∝ v² with a contributing
@@ -720,31 +724,39 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
           ((v_t - a0) * (v_t - a1) / ((a2 - a0) * (a2 - a1))) * ys[j];
     }
     auto pt = NewtonOnNewImpact(p, y.head(n2), y[n2], v_t, more, stop);
-    if (!pt || !SameFamily(from, *pt)) break;
-    const auto pi = ImpactsAt(p, pt->y.head(n2), pt->y[n2]);
-    if (!pi) break;
+    const auto pi = pt && SameFamily(from, *pt) ? ImpactsAt(p, pt->y.head(n2), pt->y[n2]) : std::nullopt;
+    if (!pi || !(Slowest(*pi) < vs.back())) {
+      if (factor > 0.7) break;
+      factor = std::sqrt(factor);
+      continue;
+    }
+    factor = 0.25;
     ys.push_back(pt->y);
     vs.push_back(Slowest(*pi));
     a.points.push_back(std::move(*pt));
     a.speeds.push_back(vs.back());
-    if (v_t < 1e-8 * a.scale) break;
+    if (v_t < 1e-6 * a.scale) break;
   }
   if (a.points.size() < 3 || !(a.speeds.back() < kGrazingTolerance * a.scale)) return a;
   // λ(v) through the slowest (up to six) orbits of the march, v scaled by the largest of them.
   const size_t count = std::min<size_t>(6, ys.size()), first = ys.size() - count;
   const double vmax = vs[first];
-  // The constant of the fit, and (sigma) its standard error from the fit's residuals: λ of the
-  // slowest orbits carries the rounding of a map whose DF grows like 1/v.
-  const auto fit = [&](int degree, double* sigma) {
-    Eigen::MatrixXd A(static_cast<long>(count), degree + 1);
-    Eigen::VectorXd l(static_cast<long>(count));
+  // The constant of the fit (leaving out the orbit `skip`, if any), and (sigma) its standard error
+  // from the fit's residuals: λ of the slowest orbits carries the rounding of a map whose DF grows
+  // like 1/v.
+  const auto fit = [&](int degree, double* sigma, size_t skip) {
+    const long rows = static_cast<long>(count) - (skip < count ? 1 : 0);
+    Eigen::MatrixXd A(rows, degree + 1);
+    Eigen::VectorXd l(rows);
+    long r = 0;
     for (size_t i = 0; i < count; ++i) {
-      for (int d = 0; d <= degree; ++d) A(static_cast<long>(i), d) = std::pow(vs[first + i] / vmax, d);
-      l[static_cast<long>(i)] = ys[first + i][n2] - ys.back()[n2];
+      if (i == skip) continue;
+      for (int d = 0; d <= degree; ++d) A(r, d) = std::pow(vs[first + i] / vmax, d);
+      l[r++] = ys[first + i][n2] - ys.back()[n2];
     }
     const Eigen::VectorXd c = A.colPivHouseholderQr().solve(l);
     if (sigma) {
-      const long dof = static_cast<long>(count) - (degree + 1);
+      const long dof = rows - (degree + 1);
       const double s2 = dof > 0 ? (A * c - l).squaredNorm() / static_cast<double>(dof) : 0.0;
       const Eigen::MatrixXd cov = (A.transpose() * A).inverse();
       *sigma = std::sqrt(s2 * std::max(cov(0, 0), 0.0));
@@ -753,8 +765,13 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
   };
   const int degree = count >= 5 ? 3 : 2;
   double sigma = 0;
-  a.value = fit(degree, &sigma);
-  a.bracket = std::abs(a.value - fit(degree - 1, nullptr)) + 3.0 * sigma +
+  a.value = fit(degree, &sigma, count);
+  // The bracket: the distance to the fit of one degree less, three standard errors, and the
+  // largest change when one orbit is left out (with enough orbits left for the degree).
+  double jack = 0;
+  if (count >= static_cast<size_t>(degree) + 3)
+    for (size_t i = 0; i < count; ++i) jack = std::max(jack, std::abs(fit(degree, nullptr, i) - a.value));
+  a.bracket = std::abs(a.value - fit(degree - 1, nullptr, count)) + 3.0 * sigma + jack +
               4 * std::numeric_limits<double>::epsilon() * std::abs(a.value);
   a.located = std::isfinite(a.value);
   return a;
@@ -1709,9 +1726,11 @@ Branch Continue(const ContinuationRequest& req) {
         continue;
       }
       // A grazing met from the side of its slow impact (cur's slowest impact is the grazing
-      // quantity): located by the speed itself (through_slow_side), as after a smooth step.
-      if (kind == "grazing" && cur.probe.impact_speed <= cur.probe.flight_gap &&
-          cur.probe.impact_speed < 0.5 * approach_failed_at && !stop_requested()) {
+      // quantity, below kApproachSpeed; a corrector that gives out next to it sees no vanishing
+      // test quantity yet): located by the speed itself (through_slow_side), as after a smooth step.
+      if ((kind == "grazing" || kind == "non-smooth") && cur.probe.impact_speed <= cur.probe.flight_gap &&
+          cur.probe.impact_speed < kApproachSpeed && cur.probe.impact_speed < 0.5 * approach_failed_at &&
+          !stop_requested()) {
         const int r = through_slow_side(cur);
         if (r == 2) return Finish(br, p);
         if (r == 1) continue;
