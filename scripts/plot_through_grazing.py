@@ -58,9 +58,9 @@ def main():
         ax.set_xlabel(param)
         ax.set_ylabel(ylabel)
     ax0.legend(fontsize=8, title="contact sequence", title_fontsize=8)
-    for (at, before, after, how) in marks:
-        ax1.annotate(f"grazing at {at:.8f}\nthe branch goes {'back' if how == 'back' else 'on past it'}",
-                     xy=(at, 0), xytext=(0.35, 0.55), textcoords="axes fraction", fontsize=8,
+    for i, (at, before, after, how) in enumerate(marks):  # one text line per grazing, stacked
+        ax1.annotate(f"grazing at {at:.10f}: the branch goes {'back' if how == 'back' else 'on past it'}",
+                     xy=(at, 0), xytext=(0.05, 0.9 - 0.1 * i), textcoords="axes fraction", fontsize=7,
                      arrowprops=dict(arrowstyle="->", lw=0.6))
     if marks:
         at, before, after, how = marks[0]

@@ -684,8 +684,9 @@ constexpr double kApproachSpeed = 1e-2;
 // steps creep there, while in v the orbit and λ are smooth (λ − λ_g = v/c₁ + O(v²), docs/orbits.md
 // "Near a grazing"). λ_g is where λ(v) extrapolates to v = 0: the constant of the cubic (or,
 // with fewer points, quadratic) least-squares fit through the slowest ones; `bracket` is its
-// distance to the fit of one degree less, three standard errors and the largest change when one
-// orbit is left out (below 1e-6 of the scale the orbits add rounding, not accuracy).
+// distance to the fit of one degree less, three standard errors, the largest change when one
+// orbit is left out and the distance to the line through the two slowest. Below 1e-6 of the
+// scale the orbits add rounding to λ, not accuracy: the march stops there.
 struct GrazingApproach {
   std::vector<Point> points;   // the march's orbits, the slow impact slowing down
   std::vector<double> speeds;  // its speed |ẋ⁻| on each
@@ -771,8 +772,12 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
   double jack = 0;
   if (count >= static_cast<size_t>(degree) + 3)
     for (size_t i = 0; i < count; ++i) jack = std::max(jack, std::abs(fit(degree, nullptr, i) - a.value));
+  // And the line through the two slowest orbits alone: near v = 0 it is the leading term, and its
+  // distance to the fit measures the rounding of those orbits' λ that the fit smooths over.
+  const size_t e = ys.size() - 1;
+  const double line = ys[e][n2] - vs[e] * (ys[e][n2] - ys[e - 1][n2]) / (vs[e] - vs[e - 1]);
   a.bracket = std::abs(a.value - fit(degree - 1, nullptr, count)) + 3.0 * sigma + jack +
-              4 * std::numeric_limits<double>::epsilon() * std::abs(a.value);
+              std::abs(a.value - line) + 4 * std::numeric_limits<double>::epsilon() * std::abs(a.value);
   a.located = std::isfinite(a.value);
   return a;
 }
