@@ -37,11 +37,22 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 TUBE = os.path.join(HERE, "..", "..", "data", "scenes", "tube_loose_support.toml")
 KEY = "excitation.frequency"
 
-mp.mp.dps = 30
-R = mp.mpf("0.7")
-F = mp.mpf("0.3")
-ZETA = mp.mpf("0.02")
-GAP = mp.mpf("0.1")
+
+@pytest.fixture(autouse=True, scope="module")
+def _thirty_digits():
+    """30 digits for this module's tests only (set at import, it would hold for every module
+    collected with it: test_branch_switch's truths need their 40)."""
+    dps = mp.mp.dps
+    mp.mp.dps = 30
+    yield
+    mp.mp.dps = dps
+
+
+with mp.workdps(30):  # the constants at 30 digits, whatever precision the import runs at
+    R = mp.mpf("0.7")
+    F = mp.mpf("0.3")
+    ZETA = mp.mpf("0.02")
+    GAP = mp.mpf("0.1")
 
 
 def vibro(*args):
