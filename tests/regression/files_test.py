@@ -403,6 +403,19 @@ for n in (2 ** 31, 2 ** 40):  # a dataset that declares n elements (no storage a
                                                                       chunks=(1024,))]), "/branch/value")
 
 
+# prove --bifurcation FILE --point K with the bifurcation table missing a column (found by the
+# surfaces campaign, seed 51, on a damaged symbol table): a located exit 2, not "internal error".
+for column in ("kind", "value"):
+    nokind = variant(f"no_{column}", lambda f, c=column: f.__delitem__(f"bifurcations/{c}"))
+    r = run("prove", fig8, "--set", "stop.restitution=0.0", "--bifurcation", nokind, "--point", "1",
+            "--out", os.path.join(tmp, f"no_{column}.json"), timeout=120)
+    check(f"prove --bifurcation, /bifurcations/{column} missing: exit 2 naming the file and the column",
+          r.returncode == 2 and nokind in r.stderr and column in r.stderr and "internal error" not in r.stderr,
+          f"exit {r.returncode}: {r.stderr[-400:]}")
+    check(f"prove --bifurcation, /bifurcations/{column} missing: nothing written",
+          not os.path.exists(os.path.join(tmp, f"no_{column}.json")), "")
+
+
 def damaged_strings(f):
     """The event strings (not needed for a restart) replaced by ones in a damaged global heap."""
     del f["branch/events"]
