@@ -794,12 +794,13 @@ SegmentResult CvodeEngine::Advance(double sigma_max, bool detect_events,
         r.contact = hit;
         return r;
       }
-      // A minimum of a gap (or of R) that did not cross: the rest of the step is still
-      // covered by the dense output of this step.
-      double tn = t;
-      CVodeGetCurrentTime(in.mem, &tn);
-      if (on_stretch && tn > t_prev) on_stretch(t_prev, tn);
-      t_prev = std::max(t_prev, tn);
+      // A minimum of a gap (or of R) that did not cross: the stretch is covered up to the root only.
+      // The rest of the step, (t, tn], comes with the next call, which returns first any later root
+      // of the same step (a crossing there ends the segment before it) and then tn itself
+      // (CV_ONE_STEP returns tn once): covering up to tn here put samples and sections past a
+      // crossing found next (found by the surfaces campaign on a compliant stop's exit).
+      if (on_stretch && t > t_prev) on_stretch(t_prev, t);
+      t_prev = std::max(t_prev, t);
     }
   }
 }
@@ -1064,12 +1065,9 @@ class CvodeCompliant final : public CompliantPhase {
             res.sigma = last_ = t;
             return res;
           }
-        // A minimum of a gap, or a peak, that ends no segment: the rest of the step is still
-        // covered by its dense output.
-        double tn = t;
-        CVodeGetCurrentTime(in.mem, &tn);
-        if (on_stretch && tn > t_prev) on_stretch(t_prev, tn);
-        t_prev = std::max(t_prev, tn);
+        // A minimum of a gap, or a peak, that ends no segment: covered up to the root only; the rest
+        // of the step comes with the next call, after any later root of the step (the exit among
+        // them), as in CvodeEngine::Advance.
         continue;
       }
       if (on_stretch && t > t_prev) on_stretch(t_prev, t);

@@ -109,3 +109,45 @@ def test_check_under_a_sum_of_harmonics(tmp_path):
     rows = {x["quantity"]: x for x in r["rows"]}
     assert abs(rows["contact phase 1 (contact 0) peak force"]["cvode"] /
                rows["contact phase 1 (contact 0) peak force"]["exact"] - 1) < 1e-7
+
+
+def test_cvode_sections_and_samples_once_each_when_an_exit_follows_a_peak(tmp_path):
+    """A dashpot of 1e6 on a spring of 1e-8 (the surfaces campaign's seed 7): each contact phase ends
+    4e-6 before the section at t = kT, and CVODE found the phase's peak and then its exit in one step.
+    The stretch after the peak was covered to the step's end, past the exit, so every section was
+    stored twice (119 for 60 periods). Both engines now store the same 61 sections and samples."""
+    scene = tmp_path / "dashpot.toml"
+    scene.write_text("""
+[structure]
+mass = [[1.0]]
+stiffness = [[1.0]]
+forcing_dof = 0
+contact_dof = 0
+damping_ratios = [0.0]
+[excitation]
+amplitude = 0.5
+frequency = 0.8
+[stop]
+position = 0.0
+stiffness = 1e-8
+damping = 1e6
+[initial]
+displacement = [0.0]
+velocity = [0.0]
+[run]
+periods = 60
+""")
+    runs = {}
+    for engine in ("exact", "cvode"):
+        out = tmp_path / f"{engine}.h5"
+        p = subprocess.run([CLI, "simulate", str(scene), "--set", f'run.engine="{engine}"', "--out", str(out)],
+                           capture_output=True, text=True)
+        assert p.returncode == 0, p.stderr
+        import h5py
+        with h5py.File(out) as f:
+            runs[engine] = (f["section/t"][()], f["samples/t"][()])
+    for engine, (section, samples) in runs.items():
+        assert len(section) == 61 and np.all(np.diff(section) > 0), engine
+        assert np.all(np.diff(samples) > 0), engine
+    assert np.allclose(runs["cvode"][0], runs["exact"][0], rtol=0, atol=1e-12)
+    assert len(runs["cvode"][1]) == len(runs["exact"][1])
