@@ -322,7 +322,8 @@ class Campaign:
         shown = detail[:2500] if "stacks:" in detail else detail[-400:]
         print(f"FINDING {kind}: {' '.join(argv)[:300]}\n    {shown}", flush=True)
 
-    # One run of the binary, judged. `signals`: [(delay, signal), ...] sent in order.
+    # One run of the binary, judged. `signals`: [(delay, signal), ...] sent in order; a delay may be
+    # a predicate on the program's pid instead (liveness_test.py: a state the program shows, polled).
     def run(self, category, argv, signals=(), limit=20.0, watch=(), out=None, key=None, content=None):
         self.runs += 1
         self.categories[category] = self.categories.get(category, 0) + 1
@@ -341,7 +342,13 @@ class Campaign:
         start = time.monotonic()
         for delay, sig in signals:
             try:
-                p.wait(timeout=max(0.0, start + delay - time.monotonic()))
+                if callable(delay):
+                    while p.poll() is None and not delay(p.pid):
+                        time.sleep(SAMPLE)
+                    if p.poll() is None:
+                        raise subprocess.TimeoutExpired(full, 0)
+                else:
+                    p.wait(timeout=max(0.0, start + delay - time.monotonic()))
                 break
             except subprocess.TimeoutExpired:
                 p.send_signal(sig)

@@ -98,6 +98,28 @@ CASES = {  # mode: the finding kind it must get (None: none)
 }
 
 
+def stop_disposition_set(pid):
+    """Whether the program has set its disposition of SIGTERM, caught or ignored (SigCgt, SigIgn of
+    /proc/PID/status): the fake does so just before it says "ready"."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            fields = dict(line.split(":", 1) for line in f if ":" in line)
+        masks = int(fields["SigCgt"], 16) | int(fields["SigIgn"], 16)
+    except (OSError, KeyError, ValueError):
+        return False
+    return bool(masks & (1 << (signal.SIGTERM - 1)))
+
+
+def child_computed(campaign, pid):
+    """child-before: the disposition set and the child done with its 1.3 s of computing (asleep
+    after more than 1.25 s of CPU)."""
+    if not stop_disposition_set(pid):
+        return False
+    kids = campaign._descendants(pid)
+    return bool(kids) and all((campaign.process_cpu(k) or 0.0) >= 1.25 and
+                              set(campaign._thread_states(k)) == {"S"} for k in kids)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--campaign", default=os.path.dirname(os.path.abspath(__file__)))
@@ -124,17 +146,23 @@ def main():
             if mode.startswith("loaded"):
                 hog = subprocess.Popen([sys.executable, "-c", "while True: pass"],
                                        preexec_fn=lambda: os.sched_setaffinity(0, {cpu}))
+            shown = {}
+
+            def moment(pid, mode=mode, shown=shown):
+                """The signal once the fake shows it is ready for it (polled, never a fixed delay):
+                its SIGTERM disposition set; for child-before, its child done computing too."""
+                if child_computed(campaign, pid) if mode == "child-before" else stop_disposition_set(pid):
+                    shown["at"] = time.monotonic()
+                    return True
+                return False
             t0 = time.monotonic()
             try:
-                # The signal after the start: the fake program is ready long before (it says so);
-                # 30 s for child-before, whose child must have computed 1.3 s by then.
-                delay = 30.0 if mode == "child-before" else 2.0
-                rc, err = c.run("liveness", [mode], signals=[(delay, signal.SIGTERM)], limit=60)
+                rc, err = c.run("liveness", [mode], signals=[(moment, signal.SIGTERM)], limit=60)
             finally:
                 if hog is not None:
                     hog.kill()
                     hog.wait()
-            wall = time.monotonic() - t0 - delay
+            wall = time.monotonic() - shown.get("at", t0)
             kinds = [x["kind"] for x in c.findings]
             got = kinds[0] if kinds else None
             ok = got == want and len(kinds) <= 1
