@@ -8,6 +8,7 @@
 #include <utility>
 #include <vector>
 
+#include "vibro/block_recycler.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/scene.hpp"
 #include "vibro/system.hpp"
@@ -99,7 +100,8 @@ class AttractorRecorder final : public Observer {
   int max_period_;
   double tolerance_;
   std::deque<Section> sections_;
-  std::deque<Event> events_;
+  // Its nodes recycled (block_recycler.hpp): the window slides by a period at a time.
+  std::deque<Event, BlockRecycler<Event>> events_;
   size_t max_events_ = kDefaultMaxEvents;
   long long events_dropped_ = 0;
   // Ring of the last section points (2n values and the mode each), oldest at ring_next_ once full;

@@ -54,8 +54,10 @@ class ExactEngineT final : public PropagatorT<S> {
   // The same for contact j (free flight).
   ProbeT<S> GapProbe(int j, const S& sigma, const S& H, const S& rest) const;
   // kWeighted: general c_i; else every c_i is 0 or 1 (contact 0), without the products.
+  // Flattened: every mode's closed form, bounds and far bound inlined into the probe (the
+  // same operations in the same order: docs/performance.md, "Probes per event").
   template <bool kWeighted>
-  ProbeT<S> GapProbeOf(int j, const S& sigma, const S& H, const S& rest) const;
+  [[gnu::flatten]] ProbeT<S> GapProbeOf(int j, const S& sigma, const S& H, const S& rest) const;
   // Reaction R and its derivatives, with a bound on |R'''| (sticking, n ≥ 2), likewise.
   ProbeT<S> ReactionProbe(const S& sigma, const S& H, const S& rest = S(0)) const;
 
