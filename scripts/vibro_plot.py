@@ -557,7 +557,8 @@ def mark_sequences(fig, ax, f):
             ax.axvline(0.5 * (value[runs[k - 1][1]] + value[first]), color="0.45", lw=0.8, ls=":")
         ax.annotate(names[s], (0.5 * (value[first] + value[last]), 1.0), xycoords=("data", "axes fraction"),
                     xytext=(0, -11), textcoords="offset points", ha="center", fontsize=fs(8), color="0.25")
-    ax.plot([], [], ":", color="0.45", lw=0.8, label="contact sequence changes")
+    if len(runs) > 1:  # no key for a change the branch does not have (one sequence: no line drawn)
+        ax.plot([], [], ":", color="0.45", lw=0.8, label="contact sequence changes")
     shown = 6  # the key lists this many sequences, long ones cut (all are in /branch/sequence)
     lines = [f"{n}: {s if len(s) <= 110 else s[:107] + '...'}" for s, n in list(names.items())[:shown]]
     if len(names) > shown:

@@ -164,6 +164,15 @@ def test_plot_and_python_show_the_strobe(tmp_path):
     assert np.isin(strobe[:, 0], drawn).all()
     assert "t_0 + kT" in ax.get_ylabel() and "contacts 0, 1" in ax.get_ylabel(), ax.get_ylabel()
     plt.close(fig)
+    # One contact sequence along the whole branch (0:impact 1:impact, the section moving does not
+    # change it): no dotted line and no key saying the sequence changes (issue 37, item 8).
+    fig, ax = plt.subplots()
+    with h5py.File(out) as f:
+        vibro_plot.mark_sequences(fig, ax, f)
+        assert len({bytes(s) if not isinstance(s, str) else s for s in f["branch/sequence"][()]}) == 1
+    assert not [ln for ln in ax.get_lines() if ln.get_linestyle() == ":" and len(ln.get_xdata()) > 0]
+    assert "contact sequence changes" not in ax.get_legend_handles_labels()[1], ax.get_legend_handles_labels()[1]
+    plt.close(fig)
     vibro_py = pytest.importorskip("vibro")
     d = vibro_py.continue_(str(path), "excitation.frequency", 1.6)
     assert d["strobe"].shape == (len(b["points"]), 2)
