@@ -241,6 +241,10 @@ class Column {
   bool encoded_ = false;
   std::vector<unsigned char> packed_, scratch_, pad_;
   std::vector<size_t> packed_len_;
+  // A chunk of one element repeated (a column that the run leaves constant: a single contact's
+  // index, NaN where no compliant phase is recorded) is encoded once: its element and its encoding
+  // are kept and copied for the next such chunk of the same element.
+  std::vector<unsigned char> constant_elem_, constant_packed_;
   size_t kept_bytes_ = 0;  // the first bytes of buf_: rows already written, of a part-filled chunk
   // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
   // Stage swaps the two (no copy of the staged rows, only of the rows after them).
