@@ -319,13 +319,13 @@ size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
   return static_cast<size_t>(o - out);
 }
 
-void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, Bytes& scratch,
                     std::vector<unsigned char>& out) {
   out.resize(ZlibFixedBound(n));
   out.resize(ShuffleDeflate(in, n, elem, scratch, out.data()));
 }
 
-size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, Bytes& scratch,
                       unsigned char* out) {
   if (scratch.size() < n) scratch.resize(n);
   Shuffle(in, n, elem, scratch.data());
