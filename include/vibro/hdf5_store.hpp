@@ -133,6 +133,9 @@ class Hdf5Store final : public Observer, public LoadsSink {
   void OnSample(const Sample& s) override;
   void OnSection(const Sample& s) override;
   void OnCheckpoint(const Checkpoint& c) override;
+  // The store records events, samples, sections and checkpoints, never resets: a run whose other
+  // observers do not read them either builds none (Observer::WantsResets).
+  bool WantsResets() const override { return false; }
   // The loads of each period as it ends (LoadsRecorder::SetSink): /loads, one row per period,
   // from the run's first period (or, resumed from a file without them, from its checkpoint's).
   // A period out of sequence ends the table's rows (a resume then finds it short: unknown).

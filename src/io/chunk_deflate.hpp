@@ -9,9 +9,35 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace vibro::h5 {
+
+// An allocator whose resize leaves new bytes as they come (no zero fill): the store's buffers are
+// always written before they are read, and the zero fill of their growth was a few per cent of a
+// stored run (docs/performance.md). Allocation failure still throws std::bad_alloc.
+template <class T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <class U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;  // default-initialized: left as it is
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+using Bytes = std::vector<unsigned char, UninitializedAllocator<unsigned char>>;
 
 // The byte transpose of HDF5's shuffle filter: n bytes of elements of `elem` bytes (n a multiple).
 void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out);
@@ -28,10 +54,10 @@ size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out);
 
 // Shuffle then ZlibFixed: the bytes HDF5's shuffle + deflate filters read back as `in`.
 // `scratch` holds the shuffled bytes (kept by the caller: no allocation per chunk).
-void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+void ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, Bytes& scratch,
                     std::vector<unsigned char>& out);
 // The same written at `out` (ZlibFixedBound(n) bytes of room, never cleared); returns its length.
-size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, std::vector<unsigned char>& scratch,
+size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, Bytes& scratch,
                       unsigned char* out);
 
 }  // namespace vibro::h5

@@ -916,7 +916,19 @@ void Column::EncodeStaged() {
       std::memset(pad_.data() + bytes, 0, chunk_bytes - bytes);
       rows = pad_.data();
     }
-    packed_len_[i] = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, packed_.data() + i * bound);
+    unsigned char* out = packed_.data() + i * bound;
+    // Every element equal to the first (each byte equal to the one an element further on).
+    if (std::memcmp(rows, rows + elem_size_, chunk_bytes - elem_size_) == 0) {
+      if (constant_elem_.size() != elem_size_ || std::memcmp(constant_elem_.data(), rows, elem_size_) != 0) {
+        constant_elem_.assign(rows, rows + elem_size_);
+        const size_t len = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, out);
+        constant_packed_.assign(out, out + len);
+      }
+      std::memcpy(out, constant_packed_.data(), constant_packed_.size());
+      packed_len_[i] = constant_packed_.size();
+      continue;
+    }
+    packed_len_[i] = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, out);
   }
 }
 

@@ -19,6 +19,8 @@
 
 #include <Eigen/Dense>
 
+#include "io/chunk_deflate.hpp"
+
 namespace vibro::h5 {
 
 using Id = std::int64_t;     // hid_t
@@ -239,12 +241,16 @@ class Column {
   // What EncodeStaged made of the staged rows: chunk i's bytes at packed_ + i · bound, packed_len_[i]
   // of them (buffers kept from one flush to the next, never cleared).
   bool encoded_ = false;
-  std::vector<unsigned char> packed_, scratch_, pad_;
+  Bytes packed_, scratch_, pad_;
   std::vector<size_t> packed_len_;
+  // A chunk of one element repeated (a column that the run leaves constant: a single contact's
+  // index, NaN where no compliant phase is recorded) is encoded once: its element and its encoding
+  // are kept and copied for the next such chunk of the same element.
+  Bytes constant_elem_, constant_packed_;
   size_t kept_bytes_ = 0;  // the first bytes of buf_: rows already written, of a part-filled chunk
   // buf_: its first used_ bytes are rows; staged_: its first staged_bytes_ are the staged rows.
   // Stage swaps the two (no copy of the staged rows, only of the rows after them).
-  std::vector<unsigned char> buf_, staged_;
+  Bytes buf_, staged_;
   size_t used_ = 0, staged_bytes_ = 0;
 
   void Append(const void* p, size_t bytes) {

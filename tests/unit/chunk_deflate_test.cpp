@@ -7,6 +7,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -52,14 +53,18 @@ TEST(ChunkDeflate, Adler32KnownValues) {
 }
 
 TEST(ChunkDeflate, ShuffleIsHdf5sByteTranspose) {
-  for (size_t elem : {1u, 2u, 4u, 8u}) {
-    const size_t count = 37;  // not a multiple of 8: the tail loop too
-    std::vector<unsigned char> in(count * elem), out(in.size());
-    for (size_t i = 0; i < in.size(); ++i) in[i] = static_cast<unsigned char>(i * 31 + 7);
-    vibro::h5::Shuffle(in.data(), in.size(), elem, out.data());
-    for (size_t i = 0; i < count; ++i)
-      for (size_t b = 0; b < elem; ++b) ASSERT_EQ(out[b * count + i], in[i * elem + b]) << elem << " " << i;
-  }
+  std::mt19937 g(3);
+  for (size_t elem : {1u, 2u, 4u, 8u})
+    // 37: not a multiple of 8 nor 16 (the 16-element SIMD loop, the 8-element loop and the tail);
+    // 16 384 + 21: a store chunk and a tail.
+    for (size_t count : {size_t{1}, size_t{16}, size_t{37}, size_t{16384 + 21}}) {
+      std::vector<unsigned char> in(count * elem), out(in.size());
+      for (auto& x : in) x = static_cast<unsigned char>(g());
+      vibro::h5::Shuffle(in.data(), in.size(), elem, out.data());
+      for (size_t i = 0; i < count; ++i)
+        for (size_t b = 0; b < elem; ++b)
+          ASSERT_EQ(out[b * count + i], in[i * elem + b]) << elem << " " << count << " " << i;
+    }
 }
 
 // A table written through h5::Column (whole chunks by the encoder, the rest by the library) reads
@@ -69,7 +74,7 @@ TEST(ChunkDeflate, ColumnsReadBackThroughHdf5) {
   std::mt19937_64 g(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const size_t rows = 5 * 16384 + 1234;
-  std::vector<double> periodic(rows), random(rows), wide(rows * 3);
+  std::vector<double> periodic(rows), random(rows), wide(rows * 3), nan(rows, std::nan("")), pieces(rows);
   std::vector<std::int64_t> count(rows);
   std::vector<std::int8_t> flag(rows);
   std::vector<double> period(36);
@@ -79,6 +84,10 @@ TEST(ChunkDeflate, ColumnsReadBackThroughHdf5) {
     random[i] = u(g) * 1e3;
     count[i] = static_cast<std::int64_t>(i / 36);
     flag[i] = static_cast<std::int8_t>(i % 5 == 0);
+    // Constant chunks (encoded once, then copied): 0.5 in chunks 0 and 1, −3 in chunk 2, 0.5 again
+    // in chunk 3, one other value in chunk 4, 0 in the last (part-filled, padded with zeros).
+    const size_t chunk = i / 16384;
+    pieces[i] = chunk == 2 ? -3.0 : chunk == 5 ? 0.0 : chunk == 4 && i % 16384 == 100 ? 7.0 : 0.5;
     for (size_t c = 0; c < 3; ++c) wide[i * 3 + c] = c == 1 ? 0.25 : u(g);
   }
   {
@@ -89,6 +98,8 @@ TEST(ChunkDeflate, ColumnsReadBackThroughHdf5) {
     vibro::h5::Column cc(file.get(), "count", vibro::h5::Type::I64(), 0);
     vibro::h5::Column cf(file.get(), "flag", vibro::h5::Type::I8(), 0);
     vibro::h5::Column cw(file.get(), "wide", vibro::h5::Type::F64(), 3);
+    vibro::h5::Column cn(file.get(), "nan", vibro::h5::Type::F64(), 0);
+    vibro::h5::Column cq(file.get(), "pieces", vibro::h5::Type::F64(), 0);
     Eigen::VectorXd row(3);
     // Flushes at a partial chunk (the library's path, read back and merged later), of whole
     // chunks only, and of everything at the end.
@@ -100,15 +111,17 @@ TEST(ChunkDeflate, ColumnsReadBackThroughHdf5) {
         cr.Push(random[at]);
         cc.Push(count[at]);
         cf.Push(flag[at]);
+        cn.Push(nan[at]);
+        cq.Push(pieces[at]);
         row << wide[at * 3], wide[at * 3 + 1], wide[at * 3 + 2];
         cw.PushRow(row);
       }
-      for (vibro::h5::Column* c : {&cp, &cr, &cc, &cf, &cw}) {
+      for (vibro::h5::Column* c : {&cp, &cr, &cc, &cf, &cw, &cn, &cq}) {
         c->Stage(k == 1);
         c->WriteStaged();
       }
     }
-    for (vibro::h5::Column* c : {&cp, &cr, &cc, &cf, &cw}) c->Flush();
+    for (vibro::h5::Column* c : {&cp, &cr, &cc, &cf, &cw, &cn, &cq}) c->Flush();
     std::vector<double> d(rows), w(rows * 3);
     std::vector<std::int64_t> n(rows);
     std::vector<std::int8_t> f(rows);
@@ -122,6 +135,10 @@ TEST(ChunkDeflate, ColumnsReadBackThroughHdf5) {
     EXPECT_EQ(n, count);
     cf.Read(0, rows, f.data());
     EXPECT_EQ(f, flag);
+    cn.Read(0, rows, d.data());
+    EXPECT_EQ(std::memcmp(d.data(), nan.data(), rows * 8), 0);
+    cq.Read(0, rows, d.data());
+    EXPECT_EQ(std::memcmp(d.data(), pieces.data(), rows * 8), 0);
     cw.Read(0, rows, w.data());
     EXPECT_EQ(std::memcmp(w.data(), wide.data(), rows * 3 * 8), 0);
   }
