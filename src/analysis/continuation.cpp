@@ -202,6 +202,7 @@ std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene
   SimulationOptions opt;
   opt.initial = &here;
   opt.observers = {&log};
+  opt.max_segments = kMapSegmentsPerPeriod * q;
   Simulate(sys, sc, opt);
   const double cycle = 2.0 * M_PI * q, w = sys.frequency();
   std::vector<BranchPoint::Impact> out;
@@ -244,6 +245,7 @@ std::vector<double> StrobeOf(const System& sys, const Scene& scene, double t0, c
     opt.section_origin = origin + j * T;
     opt.observers = {&last};
     opt.loads = false;
+    opt.max_segments = kMapSegmentsPerPeriod * sc.run.periods;
     if (Simulate(sys, sc, opt).status != RunStatus::kOk || !last.X) return out;
     at = *last.X;
   }
@@ -858,6 +860,7 @@ std::optional<Eigen::VectorXd> OnSection(const Problem& p, double lambda, double
   opt.section_origin = t_to - j * T;
   opt.observers = {&near};
   opt.loads = false;
+  opt.max_segments = kMapSegmentsPerPeriod * scene->run.periods;
   if (Simulate(sys, *scene, opt).status != RunStatus::kOk || near.best > 1e-6 * T) return std::nullopt;
   out << near.X, near.V, lambda;
   return out;
