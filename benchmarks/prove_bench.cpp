@@ -4,6 +4,7 @@
 // number of impacts per period.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -71,7 +72,7 @@ void BM_ProveHeldSet3DofDamped(benchmark::State& s) {
   Prove(s, "../../tests/scenes/contacts_two_held_chain.toml", {}, vibro::OrbitKind::kAuto);
 }
 // A bifurcation point: the tube's grazing near ω = 1.3646 (docs/prove.md "Grazings"), located by a
-// continuation in the set-up (not timed), proven from the branch point just before it: the orbit
+// continuation in the set-up (not timed), proven from the branch point just before it (Bifurcation::point): the orbit
 // search from that state, Newton on the orbit with its tangency, the two Krawczyk tests, the gaps.
 void BM_ProveTubeGrazing(benchmark::State& state) {
   const std::string file = std::string(VIBRO_SCENES_DIR) + "/tube_loose_support.toml";
@@ -88,14 +89,18 @@ void BM_ProveTubeGrazing(benchmark::State& state) {
   c.from = 0.9;
   c.to = 1.5;
   const auto branch = vibro::Continue(c);
+  // The grazing nearest 1.3646 (the branch goes on through grazings and passes others near the
+  // pitchfork), proven from its own orbit before it: Bifurcation::point, the branch's point next to
+  // it on the side the branch came from.
   const vibro::Bifurcation* graze = nullptr;
   for (const auto& b : branch.bifurcations)
-    if (b.kind == "grazing") graze = &b;
-  if (graze == nullptr || branch.points.size() < 2) {
+    if (b.kind == "grazing" && (graze == nullptr || std::abs(b.value - 1.3646) < std::abs(graze->value - 1.3646)))
+      graze = &b;
+  if (graze == nullptr || graze->point < 0 || graze->point >= static_cast<long long>(branch.points.size())) {
     state.SkipWithError("no grazing located");
     return;
   }
-  const auto& before = branch.points[branch.points.size() - 2];
+  const auto& before = branch.points[static_cast<size_t>(graze->point)];
   vibro::BifurcationRequest req;
   req.kind = "grazing";
   req.parameter = "excitation.frequency";

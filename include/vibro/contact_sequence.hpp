@@ -49,4 +49,10 @@ std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entri
 // "*k" (OrbitResult::sequence, and every sequence vibro writes).
 std::string ContactSequenceText(const std::vector<std::string>& entries);
 
+// The sequence with every contact j renamed image[j] (the contacts of a simultaneous impact
+// sorted again), e.g. a mirror symmetry's (analysis/mirror_symmetry.hpp). An index not below
+// image.size() is kept. Compare the result with SameContactSequence, or bring it to its canonical
+// rotation with CanonicalRotation.
+std::vector<std::string> RenameContacts(const std::vector<std::string>& entries, const std::vector<int>& image);
+
 }  // namespace vibro

@@ -94,6 +94,27 @@ struct Bifurcation {
   // A Neimark–Sacker point: θ/2π of its multipliers e^{±iθ}, θ ∈ (0, π), per period of the orbit
   // (`period` forcing periods); NaN for other kinds.
   double rotation_number = std::numeric_limits<double>::quiet_NaN();
+  // A non-smooth point (grazing, sticking-lost, rising, …): the orbit's events per period
+  // (orbit_probe.hpp signature) and, with several contacts, its contact sequence (the canonical
+  // rotation, contact_sequence.hpp) before the point and past it; "after" is empty where no orbit
+  // goes on. Empty for the smooth kinds.
+  std::string events_before{}, events_after{}, sequence_before{}, sequence_after{};
+  // How the branch went on through a non-smooth point: "" (it ended there), "past" (onto the
+  // orbit on the other side), or "back" (a grazing fold: the orbit with the new impact exists on
+  // the same side as the old one, and the branch turns back along it; docs/orbits.md).
+  std::string through{};
+  // A grazing the branch went through onto an orbit with a new low-velocity impact: that impact's
+  // speed |ẋ⁻| at the first point past it, and that point's distance |λ − λ_g|. A grazing met from
+  // the side of its slow impact (the impact dies out there): that impact's speed at the branch's
+  // orbit nearest to the grazing, followed by the speed itself, and that orbit's distance |λ − λ_g|
+  // (docs/orbits.md, "Through a grazing"). NaN otherwise.
+  double new_impact_speed = std::numeric_limits<double>::quiet_NaN();
+  double new_impact_distance = std::numeric_limits<double>::quiet_NaN();
+  // The index in Branch::points of the branch's point next to it on the side the branch came from
+  // (the orbit before it; −1: unknown). A branch that goes on through a grazing, or round a loop,
+  // passes the same λ again on other orbits: the orbit of the bifurcation is this point's, not the
+  // stored point nearest in λ (vibro prove --bifurcation BRANCH.h5 --point K, docs/prove.md).
+  long long point = -1;
 };
 
 // A change of the branch's event signature that is bookkeeping, not a bifurcation: a chattering
@@ -122,6 +143,9 @@ struct Branch {
   std::vector<Relabel> relabels;  // signature changes that are no bifurcation
   std::vector<LevelCrossing> crossings;
   std::string end;  // why the branch stopped
+  // The branch came back to its first point (the same orbit at the same λ, after it had gone
+  // 1e-3 away from it): a closed loop, stored once; `end` starts with "closed loop".
+  bool closed_loop = false;
   // Map evaluations done in quad precision because the double engine left a chattering sequence
   // undetermined there (near the end of a sticking branch; docs/chattering.md).
   int quad_evaluations = 0;

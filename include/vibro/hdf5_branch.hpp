@@ -45,8 +45,16 @@ StoredBranchPoint ReadBranchPoint(const std::string& path, long long k);
 
 // The stored point of the branch in `path` nearest `value` among those at least `apart` from it
 // (the nearest of all when none is): e.g. the orbit just before a grazing, where it clears the
-// contact plainly. Throws as ReadBranchPoint.
-StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart);
+// contact plainly. With `before` ≥ 0, a bifurcation's point (Bifurcation::point, the branch's
+// point before it): that point, or the first one back along the branch from it that is at least
+// `apart` from `value` (a branch that goes on through a grazing or round a loop passes the same
+// value again on other orbits). Throws as ReadBranchPoint.
+StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart, long long before = -1);
+
+// The point before the stored bifurcation of `kind` nearest `value` (Bifurcation::point), among
+// those within `within` of it; −1 when there is none or the file does not say. For a bifurcation
+// named by its value (`vibro prove --bifurcation KIND:KEY=VALUE --from BRANCH.h5`).
+long long BifurcationPointNear(const std::string& path, const std::string& kind, double value, double within);
 
 // The bifurcations stored with the branch in `path` (/bifurcations: kind, value, bracket; detail
 // and contact are not read). Throws InputError naming the file and dataset when they are missing

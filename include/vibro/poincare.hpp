@@ -260,6 +260,12 @@ void NewtonOnStroboscopicMap(const System& system, const Scene& scene, double t0
 void Characterize(const System& system, const Scene& scene, OrbitResult& orbit);
 
 // One evaluation of the stroboscopic map: z(t0) ↦ z(t0 + q T) and DF.
+// The segment budget (SimulationOptions::max_segments) of the runs that evaluate an orbit over its
+// periods — the map, the orbit's characterization and probes, the continuation's impacts and
+// strobes: per forcing period, far above any orbit's events (a chattering sequence's followed
+// impacts included), so that exhausting it is a failed evaluation, never an endless run.
+inline constexpr long long kMapSegmentsPerPeriod = 100000;
+
 struct MapValue {
   Eigen::VectorXd X, V;
   Eigen::MatrixXd jacobian;

@@ -149,9 +149,17 @@ struct SimulationOptions {
   // origin. The state at a fixed forcing phase whatever the start (the stroboscopic state of a
   // branch point, docs/output.md).
   std::optional<double> section_origin;
+  // A budget of segments (the flights and held phases between two events, period boundaries
+  // included): past it the run stops with kNumericalFailure and says so. 0: no budget. A map
+  // evaluation inside a Newton or a continuation (StroboscopicMap) always has one, so that a trial
+  // point whose motion chatters without end, or takes far more events than an orbit of the
+  // family, is a failed evaluation rather than an endless run (docs/orbits.md).
+  long long max_segments = 0;
 };
 
 // Runs the scene's initial state for scene.run.periods forcing periods with the scene's engine.
+// A forcing frequency that is not finite and positive (a scene built in code, not validated by
+// LoadScene: a continuation's Newton iterate, say) is refused: kNumericalFailure, nothing run.
 RunResult Simulate(const System& system, const Scene& scene, const SimulationOptions& options);
 
 }  // namespace vibro

@@ -508,7 +508,10 @@ std::tuple<std::string, std::string, bool> ProveBifurcationPoint(const PyScene& 
   req.value = value;
   req.time_limit = time_limit;
   if (!branch.empty()) {  // a grazing's orbit: the stored point nearest it, as `prove --from BRANCH.h5`
-    const auto near = vibro::NearestBranchPoint(branch, value, 1e-6 * (1 + std::abs(value)));
+    // (the point before the branch's bifurcation of this kind at this value, when it stores one:
+    // a branch through a grazing may pass the same value again on other orbits)
+    const double apart = 1e-6 * (1 + std::abs(value));
+    const auto near = vibro::NearestBranchPoint(branch, value, apart, vibro::BifurcationPointNear(branch, kind, value, apart));
     if (near.param != key)
       throw vibro::InputError({fmt::format("branch {}: a branch in {}, not {}", branch, near.param, key)});
     req.start = vibro::InitialOverride{near.section_time, near.X, near.V};

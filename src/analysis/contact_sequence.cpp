@@ -305,4 +305,27 @@ std::string ContactSequenceText(const std::vector<std::string>& entries) {
   return out;
 }
 
+std::vector<std::string> RenameContacts(const std::vector<std::string>& entries, const std::vector<int>& image) {
+  std::vector<std::string> out;
+  out.reserve(entries.size());
+  for (const auto& e : entries) {
+    const OrderKey key = KeyOf(e);
+    if (key.malformed) {
+      out.push_back(e);
+      continue;
+    }
+    std::vector<long long> ids;
+    for (long long id : key.contacts)
+      ids.push_back(id < static_cast<long long>(image.size()) ? image[static_cast<size_t>(id)] : id);
+    std::sort(ids.begin(), ids.end());
+    std::string name;
+    for (long long id : ids) {
+      if (!name.empty()) name.push_back('+');
+      name.append(std::to_string(id));
+    }
+    out.push_back(name + e.substr(e.find(':')));
+  }
+  return out;
+}
+
 }  // namespace vibro

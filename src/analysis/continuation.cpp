@@ -3,12 +3,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <optional>
 
 #include <fmt/format.h>
 
+#include "analysis/mirror_symmetry.hpp"
 #include "analysis/orbit_probe.hpp"
+#include "vibro/contact_sequence.hpp"
 #include "vibro/observer.hpp"
 #include "vibro/orbit_from_state.hpp"
 
@@ -52,6 +55,9 @@ class Problem {
   double phase() const { return phase_; }
   int period() const { return q_; }
   void MoveSection(double phase) { phase_ = phase; }
+  // The relative step of the central differences in λ (1e-6; smaller next to a grazing the branch
+  // went through, where F varies on the scale of the distance to it).
+  void SetLambdaStep(double h) { lambda_step_ = h; }
 
   // The scene at λ in the precision that decides its chattering sequences: double, or quad at the
   // values of λ where double left one undetermined (a map evaluation there switched).
@@ -101,7 +107,7 @@ class Problem {
     Evaluation e;
     Eigen::MatrixXd DF;
     const auto F = Map(z, lambda, &DF);
-    const double h = 1e-6 * std::max(1.0, std::abs(lambda));
+    const double h = lambda_step_ * std::max(1.0, std::abs(lambda));
     const auto Fp = Map(z, lambda + h, nullptr), Fm = Map(z, lambda - h, nullptr);
     // At an end of the key's valid range (a damping ratio of 0): a one-sided difference.
     if (!F || (!Fp && !Fm)) return e;
@@ -176,6 +182,7 @@ class Problem {
   mutable int quad_evaluations_ = 0;
   mutable bool undetermined_ = false;
   mutable std::string no_jacobian_;
+  double lambda_step_ = 1e-6;
 };
 
 // Every impact of q periods of the orbit from the free state (X, V) at t0.
@@ -195,6 +202,7 @@ std::vector<BranchPoint::Impact> ImpactsOf(const System& sys, const Scene& scene
   SimulationOptions opt;
   opt.initial = &here;
   opt.observers = {&log};
+  opt.max_segments = kMapSegmentsPerPeriod * q;
   Simulate(sys, sc, opt);
   const double cycle = 2.0 * M_PI * q, w = sys.frequency();
   std::vector<BranchPoint::Impact> out;
@@ -237,6 +245,7 @@ std::vector<double> StrobeOf(const System& sys, const Scene& scene, double t0, c
     opt.section_origin = origin + j * T;
     opt.observers = {&last};
     opt.loads = false;
+    opt.max_segments = kMapSegmentsPerPeriod * sc.run.periods;
     if (Simulate(sys, sc, opt).status != RunStatus::kOk || !last.X) return out;
     at = *last.X;
   }
@@ -439,9 +448,496 @@ NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
           where};
 }
 
+// ---- Through a grazing (docs/orbits.md, "Through a grazing") ----
+
+// The impacts of one period of the orbit from z at λ (section of `p`), or nothing when it cannot
+// be simulated.
+std::optional<std::vector<BranchPoint::Impact>> ImpactsAt(const Problem& p, const Eigen::VectorXd& z, double lambda) {
+  const auto scene = p.DecidingSceneAt(lambda);
+  if (!scene) return std::nullopt;
+  const System sys(*scene);
+  const auto n = sys.dof();
+  return ImpactsOf(sys, *scene, p.SectionTime(*scene), z.head(n), z.tail(n), p.period());
+}
+
+// The closest approach of the orbit's free flights to a stop over its range (OrbitProbe::flight_gap)
+// from 16384 samples per period instead of the 256 of Examine: the parabola through three samples
+// is off by O(Δt³) (about 1e-6 of the range with 256), far above the gaps next to a grazing.
+double PreciseGap(const Problem& p, const Eigen::VectorXd& y) {
+  const auto n2 = y.size() - 1;
+  const auto scene = p.DecidingSceneAt(y[n2]);
+  if (!scene) return std::numeric_limits<double>::quiet_NaN();
+  const System sys(*scene);
+  const auto n = sys.dof();
+  const auto pr = ProbeOrbit(sys, *scene, p.SectionTime(*scene), y.head(n), y.segment(n, n), p.period(), 16384);
+  return pr.ok ? pr.flight_gap : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The slowest impact speed |ẋ⁻| of a list (∞ when it is empty).
+double Slowest(const std::vector<BranchPoint::Impact>& impacts) {
+  double v = std::numeric_limits<double>::infinity();
+  for (const auto& i : impacts) v = std::min(v, std::abs(i.v_before));
+  return v;
+}
+
+// Newton for the orbit with the new low-velocity impact(s) next to a grazing, on the bordered
+// system {F(z; λ) − z = 0, v(z, λ)² − v_t² = 0}, v the slowest impact speed of the period from
+// (z, λ): λ is an unknown and the new impact's speed is held at v_t. The map has a square-root
+// term in the depth x to which the flight would cross the stop (v = √(2a·x), Nordmark), so Newton
+// with λ held overshoots into the orbits without the impact from any seed deeper than the orbit;
+// v², linear in x, is smooth, and holding it fixes the depth, where the square root is smooth on
+// the scale of the corrections. The solution's λ falls on whichever side of the grazing the orbit
+// exists. A step that loses the new impact is halved until it keeps it. ∂/∂λ and ∇v² by central
+// differences with steps far below the depth's scale.
+std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, double lambda, double v_t, size_t more,
+                                       const std::function<bool()>& stop) {
+  const auto N = z.size();
+  // The new impact: the slowest of the seed's period, followed by its contact and phase (another
+  // new impact, e.g. the mirror one of a symmetric orbit, may be as slow: v as the slowest of
+  // both would have a kink).
+  const auto first = ImpactsAt(p, z, lambda);
+  if (!first || first->size() < more) return std::nullopt;
+  const auto slowest = std::min_element(first->begin(), first->end(), [](const auto& a, const auto& b) {
+    return std::abs(a.v_before) < std::abs(b.v_before);
+  });
+  const int contact = slowest->contact;
+  const double phase = slowest->phase, cycle = 2.0 * M_PI * p.period();
+  const auto speed2 = [&](const Eigen::VectorXd& zz, double l) -> std::optional<double> {
+    const auto imp = ImpactsAt(p, zz, l);
+    if (!imp || imp->size() < more) return std::nullopt;
+    double best = std::numeric_limits<double>::infinity(), v = 0;
+    for (const auto& i : *imp) {
+      if (i.contact != contact) continue;
+      const double d = std::abs(std::remainder(i.phase - phase, cycle));
+      if (d < best) {
+        best = d;
+        v = i.v_before;
+      }
+    }
+    if (!std::isfinite(best)) return std::nullopt;
+    return v * v;
+  };
+  double last = std::numeric_limits<double>::infinity();
+  for (int it = 0; it < 40; ++it) {
+    if (stop()) return std::nullopt;
+    Eigen::MatrixXd DF;
+    const auto F = p.Map(z, lambda, &DF);
+    const auto v2 = speed2(z, lambda);
+    if (!F || !v2) return std::nullopt;
+    const Eigen::VectorXd G = *F - z;
+    const double res = G.cwiseAbs().maxCoeff() / (1.0 + z.cwiseAbs().maxCoeff());
+    const double res_v = std::abs(std::sqrt(*v2) - v_t) / v_t;
+    // The map's rounding floor grows with |DF| (each slow impact contributes a factor 1/v): once
+    // Newton stops gaining, a residual within 1e-14·|DF| of it is converged (10⁻¹¹ otherwise).
+    const double floor = 1e-11 * std::max(1.0, 1e-3 * DF.cwiseAbs().maxCoeff());
+    // The speed itself is known to the rounding of the depth over v (1e-16/v): once Newton stalls
+    // it is held within 1e-3 of v_t (the caller measures the speed it got).
+    if ((res < 1e-13 && res_v < 1e-6) || (res < floor && res > 0.1 * last && res_v < 1e-3)) {
+      const Evaluation e = p.Evaluate(z, lambda);
+      if (!e.ok) return std::nullopt;
+      Eigen::VectorXd y(N + 1);
+      y << z, lambda;
+      return p.Examine({y, e});
+    }
+    last = res;
+    Eigen::MatrixXd J(N + 1, N + 1);
+    J.topLeftCorner(N, N) = DF - Eigen::MatrixXd::Identity(N, N);
+    // At a fixed state, λ moves the depth of the slow impact at a rate of order one, and F has a
+    // square-root term in that depth (∝ v): its difference in λ is a derivative only over steps
+    // that change v² by a small fraction of itself. The step is cut to 1e-3 of v_t² over the
+    // rate at which v² changes (v² being linear in the depth, its own difference is exact).
+    double hl = 1e-9 * std::max(1.0, std::abs(lambda));
+    auto vp = speed2(z, lambda + hl), vm = speed2(z, lambda - hl);
+    for (int k = 0; k < 4 && !(vp && vm); ++k) {  // the slow impact lost within hl: shorter
+      hl *= 1e-2;
+      vp = speed2(z, lambda + hl);
+      vm = speed2(z, lambda - hl);
+    }
+    if (vp && vm) {
+      const double rate = std::abs(*vp - *vm) / (2 * hl);
+      if (rate * hl > 1e-3 * v_t * v_t)
+        hl = std::max(1e-3 * v_t * v_t / rate, 1e-15 * std::max(1.0, std::abs(lambda)));
+      vp = speed2(z, lambda + hl);
+      vm = speed2(z, lambda - hl);
+    }
+    const auto Fp = p.Map(z, lambda + hl, nullptr), Fm = p.Map(z, lambda - hl, nullptr);
+    if (!Fp || !Fm || !vp || !vm) return std::nullopt;
+    J.topRightCorner(N, 1) = (*Fp - *Fm) / (2 * hl);
+    J(N, N) = (*vp - *vm) / (2 * hl);
+    for (long k = 0; k < N; ++k) {
+      double h = 1e-9 * (1.0 + std::abs(z[k]));
+      std::optional<double> a, b;
+      for (int j = 0; j < 5 && !(a && b); ++j, h *= 1e-2) {  // shorter where the impact is lost within h
+        Eigen::VectorXd zp = z, zm = z;
+        zp[k] += h;
+        zm[k] -= h;
+        a = speed2(zp, lambda);
+        b = speed2(zm, lambda);
+        if (a && b) break;
+      }
+      if (!a || !b) return std::nullopt;
+      J(N, k) = (*a - *b) / (2 * h);
+    }
+    Eigen::VectorXd r(N + 1);
+    r << G, *v2 - v_t * v_t;
+    const Eigen::VectorXd dy = -J.fullPivLu().solve(r);
+    if (!dy.allFinite()) return std::nullopt;
+    // Backtracking on the residual (the speed's in speed units: (v² − v_t²)/2v_t): a full step
+    // leaves the depth's scale when the seed is not yet close.
+    const auto merit = [&](const Eigen::VectorXd& zz, double l) -> std::optional<double> {
+      const auto FF = p.Map(zz, l, nullptr);
+      const auto vv = speed2(zz, l);
+      if (!FF || !vv) return std::nullopt;
+      return std::hypot((*FF - zz).norm(), (*vv - v_t * v_t) / (2 * v_t));
+    };
+    const double m0 = std::hypot(G.norm(), (*v2 - v_t * v_t) / (2 * v_t));
+    double w = 1.0;
+    bool moved = false;
+    for (int k = 0; k < 30; ++k, w *= 0.5) {
+      const auto mk = merit(z + w * dy.head(N), lambda + w * dy[N]);
+      if (mk && *mk < (1 - 1e-4 * w) * m0) {
+        moved = true;
+        break;
+      }
+    }
+    if (!moved) return std::nullopt;
+    z += w * dy.head(N);
+    lambda += w * dy[N];
+  }
+  return std::nullopt;
+}
+
+// The orbit with the new impact(s) whose slowest impact has speed v_t, next to a grazing at λ_g
+// where `graze` is the branch's orbit (at λ ≈ λ_g: its flight touches a stop). Seeds: along the
+// line z_g + α·d at λ_g (d: the state part of the branch tangent, then each coordinate), the
+// states whose first period has the new impact(s) are bounded at some α₀ (bisected on the impact
+// count); Newton starts just past it.
+struct AcrossGrazingResult {
+  Point point;
+  double speed = 0;  // the slowest impact speed of its period: the new impact's
+};
+std::optional<AcrossGrazingResult> AcrossGrazing(const Problem& p, const Point& graze, const Eigen::VectorXd& tangent,
+                                                 double lambda, double v_t, const std::function<bool()>& stop) {
+  const auto n2 = graze.y.size() - 1;
+  const Eigen::VectorXd zg = graze.y.head(n2);
+  const auto base = ImpactsAt(p, zg, graze.y[n2]);
+  if (!base) return std::nullopt;
+  const size_t more = base->size() + 1;
+  const double scale = 1.0 + zg.cwiseAbs().maxCoeff();
+  std::vector<Eigen::VectorXd> directions;
+  if (tangent.head(n2).norm() > 1e-12) directions.push_back(tangent.head(n2).normalized());
+  for (long k = 0; k < n2; ++k) directions.push_back(Eigen::VectorXd::Unit(n2, k));
+  const auto has_more = [&](double alpha, const Eigen::VectorXd& d) -> std::optional<bool> {
+    const auto imp = ImpactsAt(p, zg + alpha * d, lambda);
+    if (!imp) return std::nullopt;
+    return imp->size() >= more;
+  };
+  for (const auto& d : directions) {
+    if (stop()) return std::nullopt;
+    const auto at0 = has_more(0.0, d);
+    if (!at0) continue;
+    // The nearest α on either side where the count changes, then bisection to the boundary.
+    for (const double sign : {1.0, -1.0}) {
+      double a = 0, b = 0;
+      bool found = false;
+      for (int k = 0; k < 50 && !found; ++k) {
+        b = sign * 1e-12 * scale * std::pow(2.0, k);
+        const auto f = has_more(b, d);
+        if (!f) break;
+        if (*f != *at0) found = true;
+        else a = b;
+      }
+      if (!found) continue;
+      // a: the count at α = 0; b: the other. Bisect to the boundary.
+      for (int k = 0; k < 200 && std::abs(b - a) > 1e-15 * scale; ++k) {
+        const double mid = 0.5 * (a + b);
+        const auto f = has_more(mid, d);
+        if (!f) break;
+        (*f == *at0 ? a : b) = mid;
+      }
+      const double outside = *at0 ? b : a, inside = *at0 ? a : b;  // without / with the new impact
+      for (int j = 0; j < 8; ++j) {
+        const double alpha = inside + (inside - outside) * (std::pow(16.0, j) - 1.0);
+        const auto pt = NewtonOnNewImpact(p, zg + alpha * d, lambda, v_t, more, stop);
+        if (!pt) continue;
+        const auto imp = ImpactsAt(p, pt->y.head(n2), pt->y[n2]);
+        if (!imp || imp->size() < more || SameFamily(graze, *pt)) continue;
+        return AcrossGrazingResult{*pt, Slowest(*imp)};
+      }
+    }
+  }
+  return std::nullopt;
+}
+
+// ---- Approaching a grazing from the side of its slow impact (docs/orbits.md, "Through a grazing") ----
+
+// A transition is named a grazing only where the grazing quantity of the orbit at the located
+// point — its slowest isolated impact's speed, or its flight's closest approach to a stop, over
+// the contact's largest speed or range (orbit_probe.hpp) — is below this.
+constexpr double kGrazingTolerance = 1e-5;
+// A branch whose slowest impact is slower than this (same measure) and slowing down is followed
+// to the grazing by the speed itself (ApproachGrazing), not by arclength.
+constexpr double kApproachSpeed = 1e-2;
+
+// The orbits of a branch whose slowest impact slows down towards a grazing, followed with that
+// speed as the parameter: Newton on {F(z; λ) = z, v(z, λ) = v_t} (NewtonOnNewImpact: λ unknown)
+// for v_t = v₀/4, v₀/16, … down to 1e-6 of the contact's largest speed, or as far as Newton
+// converges. Near the grazing the orbit is strongly unstable (DF grows like 1/v): pseudo-arclength
+// steps creep there, while in v the orbit and λ are smooth (λ − λ_g = v/c₁ + O(v²), docs/orbits.md
+// "Near a grazing"). λ_g is where λ(v) extrapolates to v = 0: the constant of the cubic (or,
+// with fewer points, quadratic) least-squares fit through the slowest ones; `bracket` is its
+// distance to the fit of one degree less, three standard errors, the largest change when one
+// orbit is left out and the distance to the line through the two slowest. Below 1e-6 of the
+// scale the orbits add rounding to λ, not accuracy: the march stops there.
+struct GrazingApproach {
+  std::vector<Point> points;   // the march's orbits, the slow impact slowing down
+  std::vector<double> speeds;  // its speed |ẋ⁻| on each
+  double scale = 1;            // the contact's largest speed (the probe's scale)
+  double value = 0, bracket = 0;
+  bool located = false;  // the last speed is below kGrazingTolerance·scale and λ_g is fitted
+};
+GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::function<bool()>& stop) {
+  GrazingApproach a;
+  const auto n2 = from.y.size() - 1;
+  const auto imp = ImpactsAt(p, from.y.head(n2), from.y[n2]);
+  if (!imp || imp->empty()) return a;
+  const double v0 = Slowest(*imp);
+  if (!(v0 > 0) || !(from.probe.impact_speed > 0) || !std::isfinite(from.probe.impact_speed)) return a;
+  a.scale = v0 / from.probe.impact_speed;
+  const size_t more = imp->size();
+  std::vector<Eigen::VectorXd> ys = {from.y};
+  std::vector<double> vs = {v0};
+  // Each step divides the speed by 4; a step whose Newton fails is retried dividing it by 2, then
+  // by √2, before the march ends.
+  double factor = 0.25;
+  for (int k = 1; k <= 40; ++k) {
+    if (stop()) return a;
+    const double v_t = vs.back() * factor;
+    // The predictor: the Lagrange polynomial in v through the last three orbits (the last orbit
+    // itself before there are three). It must be quadratic: the orbit is z_g + a·v + b·v² + …,
+    // and the depth the seed's flight reaches, which sets its speed, is ∝ v² with a contributing
+    // nothing to it: a linear predictor gets the depth wrong by more than itself (the seed then has
+    // no slow impact at all), while the last orbit's is 16 times too deep, which Newton corrects.
+    Eigen::VectorXd y = ys.back();
+    const size_t j = ys.size() - 1;
+    if (ys.size() >= 3) {
+      const double a0 = vs[j - 2], a1 = vs[j - 1], a2 = vs[j];
+      y = ((v_t - a1) * (v_t - a2) / ((a0 - a1) * (a0 - a2))) * ys[j - 2] +
+          ((v_t - a0) * (v_t - a2) / ((a1 - a0) * (a1 - a2))) * ys[j - 1] +
+          ((v_t - a0) * (v_t - a1) / ((a2 - a0) * (a2 - a1))) * ys[j];
+    }
+    auto pt = NewtonOnNewImpact(p, y.head(n2), y[n2], v_t, more, stop);
+    const auto pi = pt && SameFamily(from, *pt) ? ImpactsAt(p, pt->y.head(n2), pt->y[n2]) : std::nullopt;
+    if (!pi || !(Slowest(*pi) < vs.back())) {
+      if (factor > 0.7) break;
+      factor = std::sqrt(factor);
+      continue;
+    }
+    factor = 0.25;
+    ys.push_back(pt->y);
+    vs.push_back(Slowest(*pi));
+    a.points.push_back(std::move(*pt));
+    a.speeds.push_back(vs.back());
+    if (v_t < 1e-6 * a.scale) break;
+  }
+  if (a.points.size() < 3 || !(a.speeds.back() < kGrazingTolerance * a.scale)) return a;
+  // λ(v) through the slowest (up to six) orbits of the march, v scaled by the largest of them.
+  const size_t count = std::min<size_t>(6, ys.size()), first = ys.size() - count;
+  const double vmax = vs[first];
+  // The constant of the fit (leaving out the orbit `skip`, if any), and (sigma) its standard error
+  // from the fit's residuals: λ of the slowest orbits carries the rounding of a map whose DF grows
+  // like 1/v.
+  const auto fit = [&](int degree, double* sigma, size_t skip) {
+    const long rows = static_cast<long>(count) - (skip < count ? 1 : 0);
+    Eigen::MatrixXd A(rows, degree + 1);
+    Eigen::VectorXd l(rows);
+    long r = 0;
+    for (size_t i = 0; i < count; ++i) {
+      if (i == skip) continue;
+      for (int d = 0; d <= degree; ++d) A(r, d) = std::pow(vs[first + i] / vmax, d);
+      l[r++] = ys[first + i][n2] - ys.back()[n2];
+    }
+    const Eigen::VectorXd c = A.colPivHouseholderQr().solve(l);
+    if (sigma) {
+      const long dof = rows - (degree + 1);
+      const double s2 = dof > 0 ? (A * c - l).squaredNorm() / static_cast<double>(dof) : 0.0;
+      const Eigen::MatrixXd cov = (A.transpose() * A).inverse();
+      *sigma = std::sqrt(s2 * std::max(cov(0, 0), 0.0));
+    }
+    return ys.back()[n2] + c[0];
+  };
+  const int degree = count >= 5 ? 3 : 2;
+  double sigma = 0;
+  a.value = fit(degree, &sigma, count);
+  // The bracket: the distance to the fit of one degree less, three standard errors, and the
+  // largest change when one orbit is left out (with enough orbits left for the degree).
+  double jack = 0;
+  if (count >= static_cast<size_t>(degree) + 3)
+    for (size_t i = 0; i < count; ++i) jack = std::max(jack, std::abs(fit(degree, nullptr, i) - a.value));
+  // And the line through the two slowest orbits alone: near v = 0 it is the leading term, and its
+  // distance to the fit measures the rounding of those orbits' λ that the fit smooths over.
+  const size_t e = ys.size() - 1;
+  const double line = ys[e][n2] - vs[e] * (ys[e][n2] - ys[e - 1][n2]) / (vs[e] - vs[e - 1]);
+  a.bracket = std::abs(a.value - fit(degree - 1, nullptr, count)) + 3.0 * sigma + jack +
+              std::abs(a.value - line) + 4 * std::numeric_limits<double>::epsilon() * std::abs(a.value);
+  a.located = std::isfinite(a.value);
+  return a;
+}
+
+// How far apart two orbits at one λ are, from what does not depend on where their sections sit:
+// their impacts over the period (phase mod 2π·q, sorted; contact; speed), max of |Δphase| and
+// |Δv|/(1 + the largest speed); ∞ when they have different impacts. Orbits without impacts: their
+// stroboscopic states (one contact coordinate each, at the scene's forcing phase).
+double OrbitDistance(const BranchPoint& a, const BranchPoint& b, int q) {
+  if (a.impacts.size() != b.impacts.size()) return std::numeric_limits<double>::infinity();
+  const double cycle = 2.0 * M_PI * q;
+  auto sa = a.impacts, sb = b.impacts;
+  const auto by_phase = [](const auto& x, const auto& y) { return x.phase < y.phase; };
+  std::sort(sa.begin(), sa.end(), by_phase);
+  std::sort(sb.begin(), sb.end(), by_phase);
+  double scale = 1.0, d = 0.0;
+  for (const auto& i : sa) scale = std::max(scale, 1.0 + std::abs(i.v_before));
+  // The first impact of one list may sort last in the other (a phase next to 0 ≡ 2π·q): match
+  // every rotation, keep the best.
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t shift = 0; shift < std::max<size_t>(sb.size(), 1); ++shift) {
+    d = 0.0;
+    for (size_t k = 0; k < sa.size() && d < best; ++k) {
+      const auto& x = sa[k];
+      const auto& y = sb[(k + shift) % sb.size()];
+      if (x.contact != y.contact) {
+        d = std::numeric_limits<double>::infinity();
+        break;
+      }
+      d = std::max({d, std::abs(std::remainder(x.phase - y.phase, cycle)),
+                    std::abs(x.v_before - y.v_before) / scale});
+    }
+    best = std::min(best, d);
+  }
+  if (sa.empty()) {
+    best = 0.0;
+    if (a.strobe.size() != b.strobe.size()) return std::numeric_limits<double>::infinity();
+    for (size_t j = 0; j < a.strobe.size(); ++j) best = std::max(best, std::abs(a.strobe[j] - b.strobe[j]));
+    if (!std::isfinite(best)) return std::numeric_limits<double>::infinity();
+  }
+  return best;
+}
+
+// The state (X, V, λ) at the section time phase/ω (mod q·T) of the periodic orbit through the free
+// state (X, V) at t0, at λ: the orbit's point on another section (closed loops compare a branch's
+// first point with its current one on the current section). Nothing when it cannot be simulated.
+std::optional<Eigen::VectorXd> OnSection(const Problem& p, double lambda, double t0, const Eigen::VectorXd& X,
+                                         const Eigen::VectorXd& V, double phase) {
+  auto scene = p.DecidingSceneAt(lambda);
+  if (!scene) return std::nullopt;
+  const System sys(*scene);
+  const double T = 2.0 * M_PI / sys.frequency(), cycle = p.period() * T;
+  double t_to = phase / sys.frequency();
+  t_to += std::ceil((t0 - t_to) / cycle) * cycle;  // the first section time at or after t0
+  Eigen::VectorXd out(2 * X.size() + 1);
+  if (std::abs(t_to - t0) < 1e-12 * cycle) {
+    out << X, V, lambda;
+    return out;
+  }
+  struct Near final : Observer {
+    double target = 0, best = std::numeric_limits<double>::infinity();
+    Eigen::VectorXd X, V;
+    void OnSection(const Sample& s) override {
+      if (std::abs(s.t - target) < best) {
+        best = std::abs(s.t - target);
+        X = s.X;
+        V = s.V;
+      }
+    }
+  } near;
+  near.target = t_to;
+  const int j = static_cast<int>(std::ceil((t_to - t0) / T - 1e-9));
+  scene->run.periods = j + 1;
+  scene->run.samples_per_period = 0;
+  const InitialOverride here{t0, X, V};
+  SimulationOptions opt;
+  opt.initial = &here;
+  opt.section_origin = t_to - j * T;
+  opt.observers = {&near};
+  opt.loads = false;
+  opt.max_segments = kMapSegmentsPerPeriod * scene->run.periods;
+  if (Simulate(sys, *scene, opt).status != RunStatus::kOk || near.best > 1e-6 * T) return std::nullopt;
+  out << near.X, near.V, lambda;
+  return out;
+}
+
+// A non-smooth point the branch goes through again (docs/orbits.md, "Closed loops"): an earlier
+// bifurcation of the branch, `index`, that the last one repeats: the same kind at the same λ (within
+// 1e-9 relative, or their brackets) with the same orbits on its two sides, in either order (the
+// branch crossing it the other way), or those orbits mirrored (`mirrored`: the model's mirror
+// symmetry x ↦ −x, t ↦ t + T/2 maps one transition onto the other, contacts swapped). The orbits on
+// each side are compared by their contact sequences as cyclic words in their canonical rotation
+// (contact_sequence.hpp) with several contacts, by their events per period with one. From there
+// on the branch would draw again what it has drawn, or its mirror image: e.g. the tube's symmetric
+// orbit through its grazing at ω = 1.3646 onto a three-impact orbit, down to the asymmetric
+// orbits' grazing at 0.9559, through their pitchfork onto the mirror ones, and up through the
+// mirror grazings, round and round.
+struct RepeatedTransition {
+  size_t index = 0;
+  bool mirrored = false, reversed = false;
+};
+std::optional<RepeatedTransition> RepeatsATransition(const Branch& br, const Problem& p) {
+  if (br.bifurcations.size() < 2) return std::nullopt;
+  const Bifurcation& g = br.bifurcations.back();
+  if (g.through.empty()) return std::nullopt;
+  const bool words = !g.sequence_before.empty() && !g.sequence_after.empty();
+  // A side as compared: the canonical text of its sequence (renamed by `image` when given), or its
+  // events per period.
+  const auto side = [&](const Bifurcation& b, bool after, const std::vector<int>* image) -> std::string {
+    const std::string& text = after ? b.sequence_after : b.sequence_before;
+    if (!words) return after ? b.events_after : b.events_before;
+    std::string problem;
+    const auto entries = ParseContactSequence(text, -1, problem);
+    if (!entries) return text;
+    return ContactSequenceText(image ? RenameContacts(*entries, *image) : *entries);
+  };
+  std::optional<std::vector<int>> image;
+  if (words) {
+    if (const auto scene = p.DecidingSceneAt(g.value)) image = MirrorImage(System(*scene));
+  }
+  const std::string before = side(g, false, nullptr), after = side(g, true, nullptr);
+  for (size_t k = 0; k + 1 < br.bifurcations.size(); ++k) {
+    const Bifurcation& e = br.bifurcations[k];
+    if (e.kind != g.kind || e.through.empty() ||
+        std::abs(e.value - g.value) > 1e-9 * std::max(1.0, std::abs(g.value)) + e.bracket + g.bracket)
+      continue;
+    for (const bool mirrored : {false, true}) {
+      if (mirrored && !image) continue;
+      const std::vector<int>* im = mirrored ? &*image : nullptr;
+      const std::string b0 = side(e, false, im), a0 = side(e, true, im);
+      if (b0 == before && a0 == after) return RepeatedTransition{k, mirrored, false};
+      if (b0 == after && a0 == before) return RepeatedTransition{k, mirrored, true};
+    }
+  }
+  return std::nullopt;
+}
+
+// The branch's end where it met a transition again (RepeatsATransition): a closed loop.
+void EndAtRepeat(Branch& br, const RepeatedTransition& r) {
+  const Bifurcation& g = br.bifurcations.back();
+  const Bifurcation& e = br.bifurcations[r.index];
+  const std::string way = r.reversed ? "the other way" : "the same way";
+  br.end = r.mirrored
+               ? fmt::format("closed loop: through the mirror image of the {} at λ = {:.17g} (bifurcation {}, "
+                             "{}; contact sequence {} ↔ {} mirrored, the model being symmetric under x ↦ −x, "
+                             "t ↦ t + T/2): from here on the branch is the mirror image of its part from there",
+                             e.kind, e.value, r.index, way, g.sequence_before, g.sequence_after)
+               : fmt::format("closed loop: through the {} at λ = {:.17g} again (bifurcation {}, {}; the same "
+                             "orbits on its two sides)",
+                             e.kind, e.value, r.index, way);
+  br.closed_loop = true;
+}
+
 // The branch as returned, with how many map evaluations needed the quad engine.
 Branch& Finish(Branch& br, const Problem& p) {
   br.quad_evaluations = p.quad_evaluations();
+  for (auto& b : br.bifurcations)  // found after the last point: that point is before it
+    if (b.point < 0 && !br.points.empty()) b.point = static_cast<long long>(br.points.size()) - 1;
   return br;
 }
 
@@ -474,12 +970,21 @@ Branch Continue(const ContinuationRequest& req) {
   const double span = req.to - req.from;
   double ds = req.step > 0 ? req.step : std::abs(span) / 50.0;
   const double ds_max = req.max_step > 0 ? req.max_step : std::abs(span) / 10.0;
-  const double ds_retry = 1e-4 * std::abs(span);  // below this a failed step means a boundary
+  // Below this a failed step means a boundary. Next to a grazing the branch went through, the
+  // orbit's new impact is slow (speed ∝ the distance d to it) and DF grows like 1/v per new impact:
+  // the corrector's basin shrinks with d, so the floor is a fiftieth of d there.
+  const double ds_retry_far = 1e-4 * std::abs(span);
+  double ds_retry = ds_retry_far;
+  std::optional<double> grazing_crossed;  // λ of the last grazing the branch went through
 
   const auto record = [&](const Point& pt) {
     // A point computed while a stop request came may rest on runs it cut short: not kept (the
     // branch kept is the start of the uninterrupted branch; the loop reports the interruption).
     if (stopped()) return;
+    // The bifurcations found since the last point lie between it and this one: the last point is
+    // the orbit before them (Bifurcation::point).
+    for (auto& b : br.bifurcations)
+      if (b.point < 0 && !br.points.empty()) b.point = static_cast<long long>(br.points.size()) - 1;
     const auto scene = p.SceneAt(pt.y[n2]);
     const System sys(*scene);
     BranchPoint b;
@@ -521,6 +1026,9 @@ Branch Continue(const ContinuationRequest& req) {
   }
   Point cur = *first;
   record(cur);
+  bool went_away = false;  // the branch has been 1e-3 away from its first point (closed loops)
+  Eigen::VectorXd first_y = cur.y;  // the first point on the section first_phase (closed loops)
+  double first_phase = p.phase();
   Eigen::VectorXd t = Tangent(cur.eval, Eigen::VectorXd());
   if (t[n2] * span < 0) t = -t;
 
@@ -824,11 +1332,127 @@ Branch Continue(const ContinuationRequest& req) {
     bracket = fit_bracket;
   };
 
+  // The branch's slowest impact dies out (docs/orbits.md, "Through a grazing", from the side of the
+  // slow impact): the grazing is located by ApproachGrazing and the march's orbits are recorded;
+  // then the orbit without that impact is looked for at λ_g ± δ, δ = 4 |λ_last − λ_g| (at least
+  // 1e-9 relative), by Newton with λ held from the march's last state. It must be the grazing's
+  // own orbit: its flight's closest approach to the stop at 2δ is twice that at δ (within 15 %:
+  // linear in the distance). Returns 0 when the grazing is not located (the caller goes on as
+  // before), 1 when the branch goes on along that orbit, 2 when it ends there (no orbit goes on,
+  // or a closed loop).
+  double approach_failed_at = std::numeric_limits<double>::infinity();  // the probe's speed where a march failed
+  const auto through_slow_side = [&](const Point& from) -> int {
+    GrazingApproach a = ApproachGrazing(p, from, stop_requested);
+    if (!a.located || stop_requested()) {
+      approach_failed_at = from.probe.impact_speed;
+      return 0;
+    }
+    const Point last = a.points.back();
+    const double lg = a.value, d_last = last.y[n2] - lg;
+    const double toward = d_last > 0 ? -1.0 : 1.0;  // the march's direction in λ
+    const double delta = std::max(4.0 * std::abs(d_last), 1e-9 * std::max(1.0, std::abs(lg)));
+    const auto held = [&](const Eigen::VectorXd& seed, double lambda) -> std::optional<Point> {
+      Eigen::VectorXd y = seed;
+      y[n2] = lambda;
+      Eigen::VectorXd e_lambda = Eigen::VectorXd::Zero(n2 + 1);
+      e_lambda[n2] = 1.0;
+      int iters = 0;
+      const auto yc = Correct(p, y, e_lambda, iters);
+      return yc ? p.Examine(*yc) : std::nullopt;
+    };
+    std::optional<Point> after;
+    double side = 0, gap1 = 0, gap2 = 0;
+    for (const double s : {toward, -toward}) {
+      if (stop_requested()) break;
+      const auto q1 = held(last.y, lg + s * delta);
+      if (!q1 || SameFamily(from, *q1) || Sticks(*q1) != Sticks(from) ||
+          Count(q1->probe.signature, 'I') >= Count(from.probe.signature, 'I'))
+        continue;
+      const auto q2 = held(q1->y, lg + 2.0 * s * delta);
+      if (!q2 || !SameFamily(*q1, *q2)) continue;
+      const double g1 = PreciseGap(p, q1->y), g2 = PreciseGap(p, q2->y);
+      if (!(g1 > 0 && std::isfinite(g1) && std::isfinite(g2) && std::abs(g2 / g1 - 2.0) < 0.3)) continue;
+      after = q1;
+      side = s;
+      gap1 = g1;
+      gap2 = g2;
+      break;
+    }
+    if (stop_requested()) return 0;
+    for (const auto& pt : a.points) record(pt);
+    const double v_last = a.speeds.back();
+    const int c = m > 1 ? from.probe.at.impact_speed : -1;
+    Bifurcation g{"grazing", lg, "", a.bracket, c};
+    g.events_before = from.probe.signature;
+    g.sequence_before = from.orbit.sequence;
+    g.events_after = after ? after->probe.signature : "";
+    g.sequence_after = after ? after->orbit.sequence : "";
+    g.through = !after ? "" : side == toward ? "past" : "back";
+    g.new_impact_speed = v_last;
+    g.new_impact_distance = std::abs(d_last);
+    const std::string on = m > 1 ? fmt::format(" on contact {}", c) : "";
+    const std::string change =
+        after ? fmt::format("events per period {} → {}{}", g.events_before,
+                            g.events_after.empty() ? "(none: a free orbit)" : g.events_after,
+                            m > 1 ? fmt::format("; contact sequence {} → {}", g.sequence_before, g.sequence_after) : "")
+              : fmt::format("events per period {}{}", g.events_before,
+                            m > 1 ? fmt::format("; contact sequence {}", g.sequence_before) : "");
+    g.detail = fmt::format(
+        "the slowest impact{} dies out: followed by its speed, it falls to {:.2e} ({:.1e} of the contact's "
+        "largest speed; grazing tolerance {:.0e}) at {:.1e} from here, where λ against that speed extrapolates "
+        "to 0 ({} orbits from speed {:.2e}); {}; {}",
+        on, v_last, v_last / a.scale, kGrazingTolerance, std::abs(d_last), a.points.size(), a.speeds.front(), change,
+        !after ? fmt::format("no orbit without it is found at λ_g ± {:.1e}: the orbit does not go on", delta)
+        : fmt::format("the branch {} along the orbit without it (its closest approach to the stop {:.2e} at {:.1e} "
+                      "from the grazing, {:.2e} at {:.1e}: linear in the distance)",
+                      g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
+                      gap1, delta, gap2, 2.0 * delta));
+    br.bifurcations.push_back(g);
+    transition.reset();
+    if (!after) {
+      br.end = "grazing (the orbit does not go on)";
+      return 2;
+    }
+    if (const auto r = RepeatsATransition(br, p)) {
+      record(*after);  // the branch's last orbit: the one it reached, where it would redraw itself
+      EndAtRepeat(br, *r);
+      return 2;
+    }
+    cur = *after;
+    t = Tangent(cur.eval, Eigen::VectorXd());
+    if (t[n2] * side < 0) t = -t;  // away from the grazing
+    section_fresh = false;
+    record(cur);
+    ds = std::max(4.0 * delta, ds_retry_far);
+    grazing_crossed = lg;
+    if (cur.probe.section_margin < 0.3 && !move_section()) {
+      br.end = "grazing (the orbit past it is too degenerate to continue)";
+      return 2;
+    }
+    return 1;
+  };
+  // A stall (docs/orbits.md, "Through a grazing"): the last kStallSteps accepted steps, all on
+  // strongly unstable orbits (largest |multiplier| above 1e3), add up to less than 1e-3 of the span
+  // in arclength. The corrector creeps there (near a fold of an orbit next to a grazing, where DF
+  // grows like 1/v): the branch ends with the numbers, rather than spend its points there.
+  constexpr size_t kStallSteps = 40;
+  std::deque<double> recent_steps;  // arclength of the last accepted steps on strongly unstable orbits
+  const auto largest_multiplier = [](const Point& x) {
+    double lead = 0;
+    for (const auto& mu : x.orbit.multipliers) lead = std::max(lead, std::abs(mu));
+    return lead;
+  };
+
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
       br.status = "interrupted";
       br.end = "interrupted";
       return Finish(br, p);
+    }
+    if (grazing_crossed) {
+      const double d = std::abs(cur.y[n2] - *grazing_crossed);
+      ds_retry = std::min(ds_retry_far, 0.02 * d * std::hypot(1.0, cur.y.head(n2).norm()));
+      p.SetLambdaStep(std::clamp(1e-2 * d * d / std::max(1.0, std::abs(cur.y[n2])), 1e-12, 1e-6));
     }
     const auto next = trial(ds);
     // Step control (Allgower & Georg): a step whose corrected point strays far from the predictor
@@ -958,12 +1582,85 @@ Branch Continue(const ContinuationRequest& req) {
         br.end = "reached the end value";
         return Finish(br, p);
       }
+      // A closed loop (docs/orbits.md, "Closed loops"): after the branch went away from its first
+      // point, the step crosses the hyperplane through the first orbit (taken to the current
+      // section) normal to the branch, near it and on its events; the orbit corrected on that
+      // hyperplane is the first one again (impacts within 1e-7, same λ). The branch stops there:
+      // going on would draw the loop again.
+      if (went_away && next->probe.signature == br.points.front().signature && !stop_requested()) {
+        const double l0 = br.points.front().value;
+        std::optional<Corrected> yc;
+        int iters = 0;
+        if (p.phase() != first_phase) {  // the first orbit on the current section
+          const BranchPoint& f0 = br.points.front();
+          if (auto y = OnSection(p, l0, f0.section_time, f0.X, f0.V, p.phase())) {
+            first_y = *y;
+            first_phase = p.phase();
+          }
+        }
+        if (p.phase() == first_phase) {
+          const double a0 = t.dot(cur.y - first_y), a1 = t.dot(next->y - first_y);
+          if (a0 * a1 <= 0 && a0 != a1 && (cur.y - first_y).norm() < 4.0 * ds + 1e-9) {
+            const Eigen::VectorXd from_here = cur.y + (a0 / (a0 - a1)) * (next->y - cur.y);
+            yc = Correct(p, first_y, t, iters, false, &from_here);
+          }
+        }
+        const auto back = yc ? p.Examine(*yc) : std::nullopt;
+        if (back && SameFamily(cur, *back)) {
+          const size_t before = br.points.size();
+          record(*back);
+          if (br.points.size() > before) {
+            const double d = std::max(OrbitDistance(br.points.front(), br.points.back(), p.period()),
+                                      std::abs(br.points.back().value - l0) / std::max(1.0, std::abs(l0)));
+            if (d < 1e-7) {
+              br.end = fmt::format("closed loop: back at its first point (λ = {:.17g}; orbit within {:.1e}) after "
+                                   "{} points",
+                                   br.points.back().value, d, br.points.size() - 1);
+              br.closed_loop = true;
+              return Finish(br, p);
+            }
+            br.points.pop_back();
+          }
+        }
+      }
+      const double speed_before = cur.probe.impact_speed, step = (next->y - cur.y).norm();
       cur = *next;
       t = t_new;
       section_fresh = false;
       record(cur);
+      if (!went_away && br.points.size() > 1 &&
+          OrbitDistance(br.points.front(), br.points.back(), p.period()) +
+                  std::abs(br.points.back().value - br.points.front().value) /
+                      std::max(1.0, std::abs(br.points.front().value)) > 1e-3)
+        went_away = true;
       transition.reset();
       ds = std::min(ds * 1.5, ds_max);
+      // A slow impact slowing down: followed to its grazing by its speed (ApproachGrazing).
+      const double speed = cur.probe.impact_speed;
+      if (speed < kApproachSpeed && speed < speed_before && speed < 0.5 * approach_failed_at && !stop_requested()) {
+        const int r = through_slow_side(cur);
+        if (r == 2) return Finish(br, p);
+        if (r == 1) {
+          recent_steps.clear();
+          continue;
+        }
+      }
+      if (largest_multiplier(cur) > 1e3) {
+        recent_steps.push_back(step);
+        if (recent_steps.size() > kStallSteps) recent_steps.pop_front();
+        double total = 0;
+        for (const double x : recent_steps) total += x;
+        if (recent_steps.size() == kStallSteps && total < 1e-3 * std::abs(span)) {
+          br.end = fmt::format("stalled at λ = {:.17g}: the last {} steps add up to {:.1e} in arclength (1e-3 of the "
+                               "span is {:.1e}) on strongly unstable orbits (largest |multiplier| {:.3g} here; slowest "
+                               "impact speed {:.1e} of its contact's largest, grazing quantity {:.1e})",
+                               cur.y[n2], kStallSteps, total, 1e-3 * std::abs(span), largest_multiplier(cur),
+                               cur.probe.impact_speed, std::min(cur.probe.impact_speed, cur.probe.flight_gap));
+          return Finish(br, p);
+        }
+      } else {
+        recent_steps.clear();
+      }
     } else if (ds > ds_retry) {
       ds *= 0.5;  // the corrector may just need a shorter step, or jumped to another orbit
       continue;
@@ -1036,6 +1733,27 @@ Branch Continue(const ContinuationRequest& req) {
         }
         continue;
       }
+      // A grazing met from the side of its slow impact (cur's slowest impact is the grazing
+      // quantity, below kApproachSpeed; a corrector that gives out next to it sees no vanishing
+      // test quantity yet): located by the speed itself (through_slow_side), as after a smooth step.
+      if ((kind == "grazing" || kind == "non-smooth") && cur.probe.impact_speed <= cur.probe.flight_gap &&
+          cur.probe.impact_speed < kApproachSpeed && cur.probe.impact_speed < 0.5 * approach_failed_at &&
+          !stop_requested()) {
+        const int r = through_slow_side(cur);
+        if (r == 2) return Finish(br, p);
+        if (r == 1) continue;
+      }
+      // A grazing is named so only where the grazing quantity at the located point (cur) is below
+      // kGrazingTolerance: otherwise the corrector gave out before the grazing (e.g. creeping next
+      // to a fold of a strongly unstable orbit), and the point is reported for what is known.
+      if (kind == "grazing" && std::min(cur.probe.impact_speed, cur.probe.flight_gap) > kGrazingTolerance) {
+        detail = fmt::format("not located as a grazing: the grazing quantity at λ = {:.17g} is {:.1e} (slowest impact "
+                             "speed {:.1e} of its contact's largest, closest approach to a stop {:.1e} of its range), "
+                             "above the tolerance {:.0e}; {}",
+                             cur.y[n2], std::min(cur.probe.impact_speed, cur.probe.flight_gap), cur.probe.impact_speed,
+                             cur.probe.flight_gap, kGrazingTolerance, detail);
+        kind = "non-smooth";
+      }
       // Past cur the map could not be evaluated because a chattering sequence stayed undetermined
       // (CVODE, or beyond quad too): the bisection found where this precision gives out, which
       // need not be where the motion changes. Say so rather than name a bifurcation there.
@@ -1059,6 +1777,11 @@ Branch Continue(const ContinuationRequest& req) {
       if (kind == "non-smooth" && !past) {
         double lead = 0;
         for (const auto& mu : cur.orbit.multipliers) lead = std::max(lead, std::abs(mu));
+        if (detail.rfind("not located as a grazing", 0) == 0) {
+          br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}; largest |multiplier| {:.3g}): {}", at,
+                               bracket, lead, detail);
+          return Finish(br, p);
+        }
         br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}) and no test quantity vanishes "
                              "there ({}; largest |multiplier| {:.3g}): not a bifurcation",
                              at, bracket, detail.substr(detail.find('(') + 1, detail.find(')') - detail.find('(') - 1),
@@ -1103,8 +1826,12 @@ Branch Continue(const ContinuationRequest& req) {
         double value = at, width = bracket;
         if (kind == "sticking-entry") refine_entry(cur, t, p.phase(), value, width);
         br.bifurcations.push_back({kind, value, detail, width, contact});
+        br.bifurcations.back().events_before = cur.probe.signature;
+        br.bifurcations.back().sequence_before = cur.orbit.sequence;
         transition = Transition{br.bifurcations.size() - 1, br.points.size(), cur, t, p.phase(), {}};
       }
+      br.bifurcations.back().events_after = past ? past->probe.signature : "";
+      br.bifurcations.back().sequence_after = past ? past->orbit.sequence : "";
       // The branch goes on when the orbit past the point is of the same kind (a sticking orbit
       // that lost one of its sticking phases still sticks).
       // (Not when the orbit past it is itself at a sticking-lost boundary: e.g. a symmetric orbit
@@ -1112,6 +1839,66 @@ Branch Continue(const ContinuationRequest& req) {
       const bool goes_on = past && Sticks(*past) == Sticks(cur) &&
                            past->probe.signature.find_first_of("RI") != std::string::npos &&
                            !(kind == "sticking-lost" && past->probe.shortest_stick < 1e-6);
+      if (!goes_on && kind == "grazing" && !past) {
+        // Where the branch's orbit grazes a stop and no orbit with the same events goes on, the orbit
+        // with the new low-velocity impact(s) is looked for on both sides, at ε and ε/2 from the
+        // grazing: its new impact speed must grow linearly with the distance (docs/orbits.md, "Near a
+        // grazing": v = √(2a)·μ/c + O(μ²)), which tells an orbit born at this grazing from another one.
+        Bifurcation& g = br.bifurcations.back();
+        const double dir = t[n2] != 0 ? (t[n2] > 0 ? 1.0 : -1.0) : (span > 0 ? 1.0 : -1.0);
+        double v_scale = 0;
+        for (const auto& imp : br.points.back().impacts) v_scale = std::max(v_scale, std::abs(imp.v_before));
+        const double v_t = 1e-3 * (v_scale > 0 ? v_scale : 1.0);
+        std::optional<AcrossGrazingResult> near, far = AcrossGrazing(p, cur, t, g.value, v_t, stop_requested);
+        if (far) near = AcrossGrazing(p, cur, t, g.value, 0.5 * v_t, stop_requested);
+        const double d_far = far ? far->point.y[n2] - g.value : 0.0, d_near = near ? near->point.y[n2] - g.value : 0.0;
+        // Linear in the distance, on one side: d_near/d_far = 1/2 up to the O(μ²) term.
+        if (!(near && d_far * d_near > 0 && std::abs(d_near / d_far - 0.5) < 0.15)) far.reset();
+        const double eps = std::abs(d_far), side = d_far > 0 ? 1.0 : -1.0;
+        if (far && near) {
+          g.through = side == dir ? "past" : "back";
+          g.events_after = far->point.probe.signature;
+          g.sequence_after = far->point.orbit.sequence;
+          g.new_impact_speed = near->speed;
+          g.new_impact_distance = std::abs(near->point.y[n2] - g.value);
+          if (const auto k = g.detail.find("; events per period"); k != std::string::npos) g.detail.resize(k);
+          g.detail += fmt::format(
+              "; events per period {} → {}{}; the branch {} along the orbit with the new impact{} (speed "
+              "{:.3e} at {:.1e} from the grazing, {:.3e} at {:.1e}: linear in the distance)",
+              g.events_before, g.events_after,
+              m > 1 ? fmt::format("; contact sequence {} → {}", g.sequence_before, g.sequence_after) : "",
+              g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
+              Count(g.events_after, 'I') - Count(g.events_before, 'I') > 1 ? "s" : "", near->speed, std::abs(d_near),
+              far->speed, eps);
+          if (const auto r = RepeatsATransition(br, p)) {
+            EndAtRepeat(br, *r);
+            return Finish(br, p);
+          }
+          p.SetLambdaStep(std::clamp(1e-2 * eps * eps / std::max(1.0, std::abs(g.value)), 1e-12, 1e-6));
+          record(near->point);
+          cur = far->point;
+          cur.eval = p.Evaluate(cur.y.head(n2), cur.y[n2]);
+          t = Tangent(cur.eval, Eigen::VectorXd());
+          if (t[n2] * side < 0) t = -t;  // away from the grazing
+          section_fresh = false;
+          record(cur);
+          ds = 0.25 * eps;
+          grazing_crossed = g.value;
+          transition.reset();
+          if (cur.probe.section_margin < 0.3 && !move_section()) {
+            br.end = "grazing (the orbit past it is too degenerate to continue)";
+            return Finish(br, p);
+          }
+          continue;
+        }
+      }
+      if (goes_on) {
+        br.bifurcations.back().through = "past";
+        if (const auto r = RepeatsATransition(br, p)) {
+          EndAtRepeat(br, *r);
+          return Finish(br, p);
+        }
+      }
       if (!goes_on) {
         br.end = kind == "sticking-lost" || kind == "undetermined" || kind == "no-jacobian" ? kind
                  : past && past->probe.signature.find_first_of("RI") == std::string::npos

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "vibro/observer.hpp"
+#include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 
 namespace vibro {
@@ -141,6 +142,7 @@ OrbitProbe ProbeOrbit(const System& sys, const Scene& scene, double t0, const Ei
   SimulationOptions opt;
   opt.initial = &init;
   opt.observers = {&observer};
+  opt.max_segments = kMapSegmentsPerPeriod * q;
   if (Simulate(sys, sc, opt).status != RunStatus::kOk) return p;
   p.ok = true;
   const auto& ev = rec.events;

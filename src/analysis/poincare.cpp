@@ -1068,6 +1068,7 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   SimulationOptions opt;
   opt.initial = &init;
   opt.observers = {&tracker};
+  opt.max_segments = kMapSegmentsPerPeriod * q;
   const RunResult r = Simulate(sys, sc, opt);
   MapValue v{r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status, tracker.corner()};
   // A compliant stop's surface still relaxing at the section (docs/compliant.md, "Periodic orbits"):
@@ -1109,6 +1110,7 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
     SimulationOptions opt;
     opt.initial = &here;
     opt.observers = {&rec, &events};
+    opt.max_segments = kMapSegmentsPerPeriod * sc.run.periods;
     const RunStatus status = Simulate(sys, at, opt).status;
     out.summary = rec.Classify();
     return status;

@@ -208,6 +208,7 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
                           const ProveArgs& args) {
   vibro::BifurcationRequest req;
   req.time_limit = args.request.time_limit;
+  long long before = -1;  // the branch's point before the bifurcation read from BRANCH.h5 (−1: unknown)
   const auto& src = args.bifurcation;
   const auto colon = src.find(':'), equals = src.find('=');
   if (colon != std::string::npos && equals != std::string::npos && colon < equals && !std::filesystem::exists(src)) {
@@ -230,17 +231,21 @@ int ProveBifurcationPoint(const std::string& path, const std::vector<std::string
     req.kind = b.kind;
     req.value = b.value;
     req.bracket = b.bracket;
+    before = b.point;
     req.parameter = vibro::ReadBranchPoint(src, 0).param;
   }
   if (req.kind == "grazing" || req.kind == "branch-point") {
     // The orbit that grazes (or whose symmetry breaks), from the stored point nearest the grazing but at least 1e-6 (relative)
-    // from it, where the orbit clears the contact plainly (the branch ends at the grazing): of
-    // --from BRANCH.h5, or of the branch the bifurcation was read from.
+    // from it, where the orbit clears the contact plainly: of --from BRANCH.h5, or of the branch
+    // the bifurcation was read from, there the branch's point before it (Bifurcation::point: past
+    // a grazing the branch may come back to the same value on other orbits).
     const bool given = colon != std::string::npos && equals != std::string::npos && colon < equals &&
                        !std::filesystem::exists(src);
     const std::string file = given ? args.from : src;
     if (!file.empty()) {
-      const auto near = vibro::NearestBranchPoint(file, req.value, 1e-6 * (1 + std::abs(req.value)));
+      const double apart = 1e-6 * (1 + std::abs(req.value));
+      if (given) before = vibro::BifurcationPointNear(file, req.kind, req.value, apart);
+      const auto near = vibro::NearestBranchPoint(file, req.value, apart, before);
       if (near.param != req.parameter)
         throw vibro::InputError({fmt::format("--from {}: a branch in {}, not {}", file, near.param, req.parameter)});
       req.start = vibro::InitialOverride{near.section_time, near.X, near.V};

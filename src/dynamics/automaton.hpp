@@ -1090,8 +1090,15 @@ RunResult Automaton<S>::Run() {
 
   const S tiny = S(4) * Eps<S>() * period_;
   int stalled = 0;
+  long long segments = 0;
   while (clock_.period < run_.periods && result_.status == RunStatus::kOk) {
     if (!Guarded()) break;
+    if (opt_.max_segments > 0 && ++segments > opt_.max_segments) {
+      Fail(fmt::format("segment budget exhausted at t = {:.17g} (period {}): more than {} flights and held "
+                       "phases",
+                       AbsTime(clock_), clock_.period, opt_.max_segments));
+      break;
+    }
     if (StopPolled()) {
       result_.status = RunStatus::kInterrupted;
       // Where what was computed is kept, and how to go on, is the caller's to say

@@ -2,6 +2,11 @@
 // engine, or in quad precision with the exact engine (dynamics/simulate_quad.cpp).
 #include "vibro/simulator.hpp"
 
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
 #include "dynamics/automaton.hpp"
 #include "dynamics/engine_factory.hpp"
 #include "dynamics/simulate_quad.hpp"
@@ -41,6 +46,17 @@ const char* ToString(EventKind k) {
 }
 
 RunResult Simulate(const System& system, const Scene& scene, const SimulationOptions& options) {
+  // The clock counts periods of 2π/ω: with ω ≤ 0 (or NaN) a period boundary is never reached,
+  // and the run would not end.
+  if (!(std::isfinite(system.frequency()) && system.frequency() > 0)) {
+    RunResult r;
+    r.status = RunStatus::kNumericalFailure;
+    r.message = fmt::format("excitation.frequency = {:.17g}: the forcing frequency must be finite and > 0",
+                            system.frequency());
+    r.X = Eigen::VectorXd::Constant(system.dof(), std::numeric_limits<double>::quiet_NaN());
+    r.V = r.X;
+    return r;
+  }
   if (scene.run.precision == Precision::kQuad) return detail::SimulateQuad(system, scene, options);
   const detail::ModelT<double> model(system);
   detail::Automaton<double> a(system, model, scene, options,

@@ -143,7 +143,7 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   t.strings.emplace_back("events", events);
   t.strings.emplace_back("sequence", sequence);
   t.text = {{"param", b.param}, {"end", b.end}, {"status", b.status}};
-  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}};
+  t.integers = {{"period", b.period}, {"quad_evaluations", b.quad_evaluations}, {"closed_loop", b.closed_loop ? 1 : 0}};
   WriteTable(group + "/branch", t);
   std::vector<const std::vector<ContactLoads>*> loads;
   std::vector<std::string> notes;
@@ -154,21 +154,38 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
   WriteTable(group + "/branch/loads", LoadsTable(loads, notes));
 
   H5Table bt;
-  std::vector<double> bv, bb, bc, rot;
-  std::vector<std::string> kind, detail;
+  std::vector<double> bv, bb, bc, rot, nv, nd, bp;
+  std::vector<std::string> kind, detail, ev0, ev1, sq0, sq1, through;
   for (const auto& x : b.bifurcations) {
+    ev0.push_back(x.events_before);
+    ev1.push_back(x.events_after);
+    sq0.push_back(x.sequence_before);
+    sq1.push_back(x.sequence_after);
+    through.push_back(x.through);
+    nv.push_back(x.new_impact_speed);
+    nd.push_back(x.new_impact_distance);
     rot.push_back(x.rotation_number);
     bv.push_back(x.value);
     bb.push_back(x.bracket);
     bc.push_back(x.contact);
+    bp.push_back(static_cast<double>(x.point));
     kind.push_back(x.kind);
     detail.push_back(x.detail);
   }
   bt.arrays.push_back({"value", {bv.size()}, bv});
   bt.arrays.push_back({"bracket", {bb.size()}, bb});
   bt.arrays.push_back({"contact", {bc.size()}, bc, 'i'});
+  bt.arrays.push_back({"point", {bp.size()}, bp, 'i'});  // the branch's point before it (−1: unknown)
   bt.arrays.push_back({"rotation_number", {rot.size()}, rot});  // Neimark–Sacker points; NaN elsewhere
-  bt.strings = {{"kind", kind}, {"detail", detail}};
+  // Non-smooth points (continuation.hpp, Bifurcation): events and contact sequences before and
+  // past the point (empty: none, or a smooth kind), how the branch went through it ("past",
+  // "back", empty: it ended), and at a grazing it went through, the new impact's speed and
+  // distance at the first point past it (NaN elsewhere).
+  bt.arrays.push_back({"new_impact_speed", {nv.size()}, nv});
+  bt.arrays.push_back({"new_impact_distance", {nd.size()}, nd});
+  bt.strings = {{"kind", kind},          {"detail", detail},         {"events_before", ev0},
+                {"events_after", ev1},   {"sequence_before", sq0},   {"sequence_after", sq1},
+                {"through", through}};
   WriteTable(group + "/bifurcations", bt);
 
   // Signature changes that are no bifurcation (continuation.hpp, Relabel).
@@ -349,7 +366,18 @@ void Hdf5Store::WritePartition(const std::string& param1, const std::string& par
   }
 }
 
-StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart) {
+StoredBranchPoint NearestBranchPoint(const std::string& path, double value, double apart, long long before) {
+  // The branch's point before the bifurcation, or the first one back from it at least `apart` from
+  // it (a branch through a grazing or round a loop passes the same λ on other orbits).
+  if (before >= 0) {
+    const auto last = ReadBranchPoint(path, 0);
+    if (before < last.points) {
+      for (long long k = before; k >= 0; --k) {
+        auto p = ReadBranchPoint(path, k);
+        if (std::abs(p.value - value) >= apart || k == 0) return p;
+      }
+    }
+  }
   const auto distance = [&](double v) { return std::abs(v - value) >= apart ? std::abs(v - value) : 1e300 + std::abs(v - value); };
   StoredBranchPoint near = ReadBranchPoint(path, 0);
   for (long long k = 1; k < near.points; ++k) {
@@ -374,12 +402,13 @@ std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   if (!h5::DatasetShape(g.get(), "value") || h5::DatasetClass(g.get(), "value") != h5::Class::kFloat)
     throw bad("value", "a float64 dataset");
   if (!h5::IsStringDataset(g.get(), "kind")) throw bad("kind", "a dataset of strings");
-  std::vector<double> value, bracket;
+  std::vector<double> value, bracket, point;
   std::vector<std::string> kind;
   try {
     value = h5::ReadDatasetDoubles(g.get(), "value");
     kind = h5::ReadDatasetStrings(g.get(), "kind");
     if (h5::DatasetShape(g.get(), "bracket")) bracket = h5::ReadDatasetDoubles(g.get(), "bracket");
+    if (h5::DatasetShape(g.get(), "point")) point = h5::ReadDatasetDoubles(g.get(), "point");
   } catch (const std::exception& e) {
     throw InputError({fmt::format("{}: /bifurcations cannot be read: {}", path, e.what())});
   }
@@ -388,8 +417,26 @@ std::vector<Bifurcation> ReadBranchBifurcations(const std::string& path) {
   for (size_t i = 0; i < value.size(); ++i) {
     if (!std::isfinite(value[i])) throw bad(fmt::format("value[{}]", i), fmt::format("a finite number, found {}", value[i]));
     out.push_back({kind[i], value[i], "", i < bracket.size() ? bracket[i] : 0.0});
+    if (i < point.size() && std::isfinite(point[i]) && point[i] >= 0) out.back().point = static_cast<long long>(point[i]);
   }
   return out;
+}
+
+long long BifurcationPointNear(const std::string& path, const std::string& kind, double value, double within) {
+  long long point = -1;
+  double best = within;
+  std::vector<Bifurcation> list;
+  try {
+    list = ReadBranchBifurcations(path);
+  } catch (const InputError&) {
+    return -1;  // not a branch with bifurcations: NearestBranchPoint says what the file is
+  }
+  for (const auto& b : list)
+    if (b.kind == kind && b.point >= 0 && std::abs(b.value - value) <= best) {
+      best = std::abs(b.value - value);
+      point = b.point;
+    }
+  return point;
 }
 
 }  // namespace vibro

@@ -330,8 +330,23 @@ nlohmann::json BranchObject(const Branch& b) {
   auto bif = nlohmann::json::array();
   for (const auto& x : b.bifurcations) {
     bif.push_back({{"kind", x.kind}, {"value", x.value}, {"detail", x.detail}, {"bracket", x.bracket},
-                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()}});
+                   {"contact", x.contact >= 0 ? nlohmann::json(x.contact) : nlohmann::json()},
+                   {"point", x.point >= 0 ? nlohmann::json(x.point) : nlohmann::json()}});
     if (std::isfinite(x.rotation_number)) bif.back()["rotation_number"] = x.rotation_number;
+    // Non-smooth points: the events (and contact sequences) before and past it, and how the branch
+    // went through ("past", "back" at a grazing fold; null where it ended there).
+    if (!x.events_before.empty()) {
+      auto& o = bif.back();
+      o["events_before"] = x.events_before;
+      o["events_after"] = x.events_after.empty() ? nlohmann::json() : nlohmann::json(x.events_after);
+      o["sequence_before"] = x.sequence_before;
+      o["sequence_after"] = x.events_after.empty() ? nlohmann::json() : nlohmann::json(x.sequence_after);
+      o["through"] = x.through.empty() ? nlohmann::json() : nlohmann::json(x.through);
+      if (std::isfinite(x.new_impact_speed)) {
+        o["new_impact_speed"] = x.new_impact_speed;
+        o["new_impact_distance"] = x.new_impact_distance;
+      }
+    }
   }
   j["bifurcations"] = bif;
   auto rel = nlohmann::json::array();
@@ -339,6 +354,7 @@ nlohmann::json BranchObject(const Branch& b) {
     rel.push_back({{"value", x.value}, {"from", x.from}, {"to", x.to}, {"detail", x.detail}, {"bracket", x.bracket}});
   j["relabels"] = rel;
   j["end"] = b.end;
+  j["closed_loop"] = b.closed_loop;
   j["quad_evaluations"] = b.quad_evaluations;
   return j;
 }

@@ -186,6 +186,10 @@ void KeepPoints(DiagramBranch& n, size_t first, size_t last) {
   }
   pts.erase(pts.begin() + static_cast<std::ptrdiff_t>(last + 1), pts.end());
   pts.erase(pts.begin(), pts.begin() + static_cast<std::ptrdiff_t>(first));
+  for (auto& b : n.branch.bifurcations)  // Bifurcation::point in the kept points
+    b.point = b.point >= static_cast<long long>(first) && b.point <= static_cast<long long>(last)
+                  ? b.point - static_cast<long long>(first)
+                  : -1;
   const auto outside = [&](double v) { return v < lo - step || v > hi + step; };
   std::erase_if(n.branch.bifurcations, [&](const Bifurcation& b) { return outside(b.value); });
   std::erase_if(n.branch.relabels, [&](const Relabel& r) { return outside(r.value); });
@@ -422,7 +426,13 @@ Branch Builder::Follow(double lambda0, double to, const OrbitRequest& orbit) con
   br.param = out_.param;
   if (left && !Stopped()) {
     // The points beyond the range are dropped; the branch ended there, not by an interruption.
-    std::erase_if(br.points, [&](const BranchPoint& p) { return p.value < lo_ - slack_ || p.value > hi_ + slack_; });
+    const auto beyond = [&](const BranchPoint& p) { return p.value < lo_ - slack_ || p.value > hi_ + slack_; };
+    std::vector<long long> kept(br.points.size(), -1);  // Bifurcation::point in the kept points
+    for (size_t i = 0, k = 0; i < br.points.size(); ++i)
+      if (!beyond(br.points[i])) kept[i] = static_cast<long long>(k++);
+    for (auto& b : br.bifurcations)
+      b.point = b.point >= 0 && b.point < static_cast<long long>(kept.size()) ? kept[static_cast<size_t>(b.point)] : -1;
+    std::erase_if(br.points, beyond);
     std::erase_if(br.bifurcations, [&](const Bifurcation& b) { return b.value < lo_ - slack_ || b.value > hi_ + slack_; });
     br.status = "ok";
     br.end = fmt::format("left [{:.12g}, {:.12g}] (turned back at a fold; next point at {:.12g})", lo_, hi_, left_at);
@@ -607,8 +617,12 @@ void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, 
   // point, the seed's orbit, is the way down's first).
   for (auto it = down.points.rbegin(); it != down.points.rend(); ++it) br.points.push_back(*it);
   for (size_t i = has_down && !down.points.empty() ? 1 : 0; i < up.points.size(); ++i) br.points.push_back(up.points[i]);
+  const long long seed_at = has_down && !down.points.empty() ? static_cast<long long>(down.points.size()) - 1 : 0;
   for (const Branch* h : {&down, &up}) {
-    br.bifurcations.insert(br.bifurcations.end(), h->bifurcations.begin(), h->bifurcations.end());
+    for (Bifurcation b : h->bifurcations) {  // Bifurcation::point in the joined points
+      if (b.point >= 0) b.point = h == &down ? seed_at - b.point : seed_at + b.point;
+      br.bifurcations.push_back(std::move(b));
+    }
     br.relabels.insert(br.relabels.end(), h->relabels.begin(), h->relabels.end());
     br.crossings.insert(br.crossings.end(), h->crossings.begin(), h->crossings.end());
     br.quad_evaluations += h->quad_evaluations;

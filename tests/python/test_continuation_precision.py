@@ -190,8 +190,11 @@ def test_preload_grazing_whatever_the_end_value(tmp_path):
     for args in (["--to", 3.6], ["--to", 3.0], ["--to", 3.9, "--step", 0.001], ["--to", 2.0, "--step", 0.5]):
         b = json.loads(vibro("continue", path, "--param", "excitation.amplitude", "--transient", 0, "--kind",
                              "impact", "--period", 1, *args, "--json"))
-        assert [x["kind"] for x in b["bifurcations"]] == ["grazing"], (args, b["bifurcations"])
+        # The grazing first; past it the branch goes on along the orbit with the new impact
+        # (docs/orbits.md, "Through a grazing"), where later points (a flip) may follow.
+        assert [x["kind"] for x in b["bifurcations"]][:1] == ["grazing"], (args, b["bifurcations"])
         g = b["bifurcations"][0]
+        assert len(b["bifurcations"]) == 1 or g["through"] in ("past", "back"), (args, g)
         assert abs(mp.mpf(g["value"]) - a_g) < 1e-12 * a_g, (args, g, mp.nstr(a_g, 20))
         assert g["bracket"] < 1e-11, (args, g)
 

@@ -1,6 +1,12 @@
 // Continuation: the end of the sticking branch against f_free-flight of docs/model.md §6.3, branch points
 // against direct orbit solves, and a Neimark–Sacker point bracketed by direct solves.
+#include <atomic>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <future>
+#include <thread>
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -458,6 +464,55 @@ TEST(Continuation, RegroupedChatteringIsARelabelNotABifurcationAndTheOrbitIsSmoo
     for (const auto& mu : near->multipliers) lead = std::max(lead, std::abs(mu));
     EXPECT_NEAR(MeasureBySimulation(at(near->value), *near).mu, lead, 1e-6);
   }
+}
+
+// The tube (data/scenes/tube_loose_support.toml) continued in ω from 0.9 to 1.5 as the library's
+// caller BM_ProveTubeGrazing does (run.samples_per_period = 0, ω set in code, so no validation of
+// the trial values): before the fix a corrector iterate at ω = −0.863 reached the simulator, whose
+// clock then looped without end (the merge ea4a9ea was reverted for it). The continuation must
+// return, its branch must meet the grazing near 1.3646 (docs/orbits.md, "Through a grazing") and
+// name the branch point just before it. Watched: a stop is requested after 120 s (an interrupted
+// branch fails the test) and a continuation that still has not returned 30 s later ends the
+// binary (exit 1): the old loop polled nothing.
+TEST(Continuation, TubeFrom09To15EndsWithEveryMapEvaluationBounded) {
+  const std::string file = std::string(VIBRO_SCENES_DIR) + "/tube_loose_support.toml";
+  ContinuationRequest req;
+  req.scene_at = [&](double w) {
+    auto scene = LoadScene(file, {"run.samples_per_period=0"}).scene;
+    scene.frequency = w;
+    return scene;
+  };
+  req.orbit.kind = OrbitKind::kImpact;
+  req.from = 0.9;
+  req.to = 1.5;
+  std::atomic<bool> stop{false};
+  req.stop_requested = &stop;
+  std::packaged_task<Branch()> task([&] { return Continue(req); });
+  auto result = task.get_future();
+  std::thread worker(std::move(task));
+  if (result.wait_for(std::chrono::seconds(120)) != std::future_status::ready) {
+    stop = true;
+    if (result.wait_for(std::chrono::seconds(30)) != std::future_status::ready) {
+      std::fprintf(stderr, "FAILED: Continue did not return 30 s after a stop request (an endless map evaluation)\n");
+      std::fflush(stderr);
+      std::_Exit(1);
+    }
+  }
+  worker.join();
+  const Branch b = result.get();
+  ASSERT_EQ(b.status, "ok") << b.end;
+  ASSERT_GE(b.points.size(), 2u);
+  const Bifurcation* graze = nullptr;
+  for (const auto& x : b.bifurcations)
+    if (x.kind == "grazing" && (!graze || std::abs(x.value - 1.3646) < std::abs(graze->value - 1.3646))) graze = &x;
+  ASSERT_NE(graze, nullptr);
+  EXPECT_NEAR(graze->value, 1.3646, 1e-3);
+  ASSERT_GE(graze->point, 0);
+  ASSERT_LT(graze->point, static_cast<long long>(b.points.size()));
+  // The point before the grazing lies on the side the branch came from (ω below it) and near it.
+  const BranchPoint& before = b.points[static_cast<size_t>(graze->point)];
+  EXPECT_LT(before.value, graze->value);
+  EXPECT_GT(before.value, graze->value - 0.1);
 }
 
 }  // namespace
