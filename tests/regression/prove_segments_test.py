@@ -304,9 +304,8 @@ if tube_w:
         for row in c["spectral_bound"][0]["similarity"]:
             row[0] = 0.0
     rejected(label, seg, "a singular similarity", singular)
-    rejected(label, seg, "the blocks of the norm changed", lambda c: c["spectral_bound"][0].__setitem__(
-        "blocks", [1] * len(c["spectral_bound"][0]["similarity"])) if 2 in c["spectral_bound"][0]["blocks"] else
-        c["spectral_bound"][0].__setitem__("blocks", [2] * (len(c["spectral_bound"][0]["similarity"]) // 2)))
+    # (Other blocks for the same S give another valid norm: a bound still above it is true, and confirmed.)
+    rejected(label, seg, "a sub-piece's bound claimed as 1", lambda c: c["spectral_bound"][0].__setitem__("bound", 1.0))
     rejected(label, seg, "a sub-piece's tube box shrunk 1000 times", lambda c: c["spectral_bound"][0]["tangent"].__setitem__(
         "box", [[x / 1000 for x in w] for w in c["spectral_bound"][0]["tangent"]["box"]]))
     rejected(label, seg, "a sub-piece's tube moved off the segment's (its midpoint's time + 1e-3)",
