@@ -948,6 +948,7 @@ class Truth:
         self.contacts = None    # the contact of each event (None: all at contact 0)
         self.held_note = False  # a sticking orbit of several modes (the held note is about it)
         self.set_note = False   # a sticking orbit held on sets of contacts
+        self.radius_below_one = False  # a frequency segment's spectral_bound, verified (check_spectral_bound)
 
 
 def prime_factors(q):
@@ -1241,9 +1242,18 @@ def check_impact(cert, m, ledger):
     for i in range(2 * n):
         for j in range(2 * n):
             claim_contains(mono_nodes[i][j], M[i][j], f"the monodromy entry ({i}, {j}) of the orbit")
+    # Stability along a frequency segment: the spectral radius below 1 on sub-pieces (docs/prove.md
+    # "Stability along a segment").
+    radius_below_one = False
+    if cert.has("spectral_bound"):
+        if not in_frequency:
+            cert["spectral_bound"].fail("only a segment in the forcing frequency has a 'spectral_bound'")
+        check_spectral_bound(cert["spectral_bound"], cert, m, residual, orbit_values, U, N, n)
+        radius_below_one = True
 
     truth = Truth()
     truth.kind, truth.period = "impact", q
+    truth.radius_below_one = radius_below_one
     truth.sequence = ["impact"] * count
     truth.contacts = hits
     for j in range(count):
@@ -1367,6 +1377,120 @@ def check_tangent(node, m, residual, u_mid, U, C, N):
         """ũ + a(P_k − ω̃) + W: every orbit of a piece P_k of the interval lies in it."""
         return [iv.mpf(u_mid[p]) + a[p] * (Pk - wc) + W[p] for p in range(N)]
     return KU, tube
+
+
+def exact_inverse(S, node):
+    """The inverse of a matrix of doubles, exactly (rational Gauss-Jordan), as mpmath intervals."""
+    from fractions import Fraction
+    n = len(S)
+    A = [[Fraction(float(x)) for x in row] + [Fraction(int(i == j)) for j in range(n)] for i, row in enumerate(S)]
+    for c in range(n):
+        r = next((r for r in range(c, n) if A[r][c] != 0), None)
+        if r is None:
+            node.fail("the similarity matrix is singular")
+        A[c], A[r] = A[r], A[c]
+        piv = A[c][c]
+        A[c] = [x / piv for x in A[c]]
+        for r in range(n):
+            if r != c and A[r][c] != 0:
+                f = A[r][c]
+                A[r] = [x - f * y for x, y in zip(A[r], A[c])]
+    return [[iv.mpf(x.numerator) / iv.mpf(x.denominator) for x in row[n:]] for row in A]
+
+
+def block_norm_bound(B, blocks):
+    """max_b Σ_c ‖B_bc‖₂ (an upper bound), the induced norm of B for ‖x‖ = max_b ‖x_b‖₂ over the blocks:
+    a 1 x 1 block its modulus, a diagonal 2 x 2 block its spectral norm √((F + √(F² − 4 det²))/2),
+    F = ‖·‖_F², any other block its Frobenius norm."""
+    starts = [sum(blocks[:k]) for k in range(len(blocks))]
+    worst = mp.mpf(0)
+    for b, (r0, rb) in enumerate(zip(starts, blocks)):
+        total = ZERO
+        for c, (c0, cb) in enumerate(zip(starts, blocks)):
+            sub = [[B[r0 + i][c0 + j] for j in range(cb)] for i in range(rb)]
+            if rb == cb == 1:
+                norm = iv.mpf([0, max(abs(lo(sub[0][0])), abs(hi(sub[0][0])))])
+            else:
+                F = sum((x * x for row in sub for x in row), ZERO)
+                if rb == cb == 2 and b == c:
+                    det = sub[0][0] * sub[1][1] - sub[0][1] * sub[1][0]
+                    Fh = iv.mpf(hi(F))
+                    d2 = iv.mpf(max(lo(det * det), 0))
+                    root = iv.sqrt(iv.mpf([0, max(hi(Fh * Fh - 4 * d2), 0)]))
+                    norm = iv.sqrt((Fh + root) / 2)
+                else:
+                    norm = iv.sqrt(iv.mpf([0, hi(F)]))
+            total = total + iv.mpf(hi(norm))
+        worst = max(worst, hi(total))
+    return worst
+
+
+def check_spectral_bound(node, cert, m, residual, orbit_values, U, N, n):
+    """A segment in the forcing frequency proven stable (docs/prove.md "Stability along a segment"):
+    its sub-pieces P_k, contiguous and covering the interval, each with a tube of its own (Krawczyk's
+    test in the tube along its tangent, check_tangent) lying inside the segment's tube for every
+    ω ∈ P_k (so its orbit is the segment's orbit), and a bound: with the certificate's S and its exact
+    inverse, ρ(M) = ρ(S⁻¹MS) ≤ max_b Σ_c ‖(S⁻¹MS)_bc‖₂ for every monodromy M of the orbits of P_k (the
+    checker's own monodromy over its own enclosure of them), below the claimed bound, itself < 1."""
+    pieces = node.items(at_least=1, at_most=MAX_PIECES)
+    seg = cert["tangent"]
+    u_seg = [iv.mpf(x.num()) for x in cert["midpoint"].items(exactly=N)]
+    a_seg = [iv.mpf(x.num()) for x in seg["direction"].items(exactly=N)]
+    W_seg = [x.pair() for x in seg["box"].items(exactly=N)]
+    wc_seg = iv.mpf(seg["centre"].num())
+    text = m.texts["frequency"]
+    first, last = [e.strip() for e in text[1:-1].split(",")]
+    previous = first
+    for k, piece in enumerate(pieces):
+        piece.obj(("interval", "midpoint", "tangent", "similarity", "blocks", "bound"))
+        t = piece["interval"].text()
+        g = re.fullmatch(r"\[([^,\]]+), ([^,\]]+)\]", t)
+        if not g:
+            piece["interval"].fail("not an interval '[a, b]' of two decimals")
+        if g.group(1) != previous:
+            piece["interval"].fail(f"starts at {g.group(1)}, expected {previous} (the sub-pieces must be contiguous "
+                                   "and cover the segment's interval)")
+        a_, b_ = decimal(piece["interval"], g.group(1)), decimal(piece["interval"], g.group(2))
+        if not hi(a_) < lo(b_):
+            piece["interval"].fail("an empty sub-piece")
+        previous = g.group(2)
+        mk = m.with_parameter("frequency", iv.mpf([lo(a_), hi(b_)]))
+        u_k = [x.num() for x in piece["midpoint"].items(exactly=N)]
+        tn = piece["tangent"]
+        wc_k = iv.mpf(tn["centre"].num())
+        # The checker's own preconditioner: the inverse of the Jacobian at (u_k, ω̃_k).
+        Jr = residual([variable(iv.mpf(u_k[p]), p) for p in range(N)], mk.with_parameter("frequency", wc_k))
+        Jm = mp.matrix([[mid(r.g.get(l, ZERO)) if isinstance(r, D) else 0 for l in range(N)] for r in Jr])
+        try:
+            Ci = mp.inverse(Jm)
+        except ZeroDivisionError:
+            raise NotConfirmed(f"{piece.path}: the shooting map's Jacobian at the sub-piece's midpoint is singular")
+        C = [[iv.mpf(Ci[p, l]) for l in range(N)] for p in range(N)]
+        KU, _ = check_tangent(tn, mk, residual, u_k, U, C, N)
+        a_k = [iv.mpf(x.num()) for x in tn["direction"].items(exactly=N)]
+        W_k = [x.pair() for x in tn["box"].items(exactly=N)]
+        for p in range(N):
+            d = (iv.mpf(u_k[p]) - u_seg[p] + a_seg[p] * (wc_seg - wc_k)) + (a_k[p] - a_seg[p]) * (mk.w - wc_k) + W_k[p]
+            if not inside(d, W_seg[p]):
+                raise NotConfirmed(f"{piece.path}: the sub-piece's tube leaves the segment's tube in component {p} "
+                                   f"({show_iv(d)} is not inside W = {show_iv(W_seg[p])})")
+        M = orbit_values(KU, mk)[1]
+        S_rows = [[x.num() for x in row.items(exactly=2 * n)] for row in piece["similarity"].items(exactly=2 * n)]
+        blocks = [x.integer(1, 2) for x in piece["blocks"].items(at_least=1, at_most=2 * n)]
+        if sum(blocks) != 2 * n:
+            piece["blocks"].fail(f"the blocks add up to {sum(blocks)}, not {2 * n}")
+        Sinv = exact_inverse(S_rows, piece["similarity"])
+        S = [[iv.mpf(x) for x in row] for row in S_rows]
+        B = matmul(Sinv, matmul(M, S))
+        rho = block_norm_bound(B, blocks)
+        claim = piece["bound"].num()
+        if not claim < 1:
+            piece["bound"].fail("a spectral radius bound of a stable orbit must be < 1")
+        if not rho <= claim:
+            raise NotConfirmed(f"{piece['bound'].path} = {claim!r}: the checker bounds the spectral radius over "
+                               f"{t} by {show(rho)}")
+    if previous != last:
+        node.fail(f"the sub-pieces end at {previous}, not at the segment's end {last}")
 
 
 def contract(residual, krawczyk, u_mid, U, K, C, point_model, thin_model=False):
@@ -1742,13 +1866,16 @@ def check_tail(cert, m, ledger, count, tL, vplus, reaction, w1s):
 
 SUMMARY_KEYS = ("verdict", "reason", "kind", "period", "sequence", "events", "section", "multipliers", "stability",
                 "box_width")
+SEGMENT_STABLE = ("the spectral radius of the monodromy is below 1 for every frequency of the interval (spectral_bound: "
+                  "a similarity by the eigenvectors of a midpoint monodromy and a block norm, on sub-pieces)")
 NOTES = ("the discriminant of the 2 x 2 monodromy is not separated from 0",
          "a multiplier enclosure meets the unit circle",
          "the eigenvalues of the enclosed monodromy could not be separated (Rump's test)", SUPERSTABLE,
          "sticking collapses the contact's displacement and velocity: the monodromy has rank 2n - 2, its two "
          "other multipliers are 0",
          "sticking on the contacts held at the section collapses their displacements and velocities: the "
-         "multipliers listed are those of the monodromy on the held subspace, its other multipliers are 0")
+         "multipliers listed are those of the monodromy on the held subspace, its other multipliers are 0",
+         SEGMENT_STABLE)
 
 
 def summary_shape(s, n):
@@ -1845,10 +1972,12 @@ def check_summary(cert, s, truth, m):
         mods = [ZERO, ZERO]
     else:
         if truth.not_enclosed:
-            if claims or stability != "undecided":
+            if claims or stability != "undecided" and not (stability == "stable" and truth.radius_below_one):
                 raise NotConfirmed(f"{s['multipliers'].path}: the checker cannot enclose the multipliers of the "
                                    f"monodromy, so it confirms no multiplier and no stability")
             mods = None
+        elif not claims and truth.radius_below_one:
+            mods = None  # a frequency segment's stability by its spectral bound: no multiplier claimed
         else:
             if len(claims) != len(truth.multipliers):
                 raise NotConfirmed(f"{s['multipliers'].path}: {len(claims)} multipliers, the orbit has "
@@ -1859,13 +1988,17 @@ def check_summary(cert, s, truth, m):
                 raise NotConfirmed(f"{s['multipliers'].path}: no claimed multiplier contains the multiplier that the "
                                    f"checker encloses in {show_iv(re)} + i {show_iv(im)}")
             mods = [re * re + im * im for re, im in truth.multipliers]
-    if stability == "stable" and not (mods is not None and all(hi(x) < 1 for x in mods)):
+    if stability == "stable" and not (mods is not None and all(hi(x) < 1 for x in mods)) and \
+            not truth.radius_below_one:
         raise NotConfirmed(f"{s['stability'].path}: 'stable', but the checker's |multiplier|² are "
                            f"{', '.join(show_iv(x) for x in mods or [])}")
     if stability == "unstable" and not (mods is not None and any(lo(x) > 1 for x in mods)):
         raise NotConfirmed(f"{s['stability'].path}: 'unstable', but the checker's |multiplier|² are "
                            f"{', '.join(show_iv(x) for x in mods or [])}")
     held = truth.held_note
+    if (note == SEGMENT_STABLE) != (truth.radius_below_one and stability == "stable" and not claims):
+        raise NotConfirmed(f"{s['stability_note'].path if note else s.path}: the note '{SEGMENT_STABLE[:40]}...' "
+                           "goes with a verified spectral_bound, exactly")
     if note == SUPERSTABLE and truth.multipliers != "zero" or note is not None and note != SUPERSTABLE and \
             truth.multipliers == "zero" or note == HELD_NOTE and not held or \
             note == SET_NOTE and not truth.set_note or truth.set_note and note not in (SET_NOTE,) + NOTES[:3]:
@@ -3887,7 +4020,7 @@ def check(node):
         node.obj(CERT_KEYS + STICKING_MODES_KEYS, ("structure",))
     else:
         node.obj(CERT_KEYS + (IMPACT_KEYS if kind == "impact" else STICKING_KEYS),
-                 (("tail",) if kind == "sticking" else ("impact_contacts", "tangent")) + ("structure",))
+                 (("tail",) if kind == "sticking" else ("impact_contacts", "tangent", "spectral_bound")) + ("structure",))
     node["libraries"].text()  # the interval library's versions (information)
     node["precision_bits"].integer(1, 1 << 20)
     s = node["summary"]

@@ -147,8 +147,12 @@ int RunProveBranch(const std::string& path, const std::vector<std::string>& sets
       if (!json)
         fmt::print("segment     {} in [{:.10g}, {:.10g}] {}: {}\n", pt.param, std::min(previous->value, pt.value),
                    std::max(previous->value, pt.value), seg_proven ? "proven    " : "not proven",
-                   seg_proven ? fmt::format("{} piece(s), each with exactly one orbit in its {}", pieces.size(),
-                                            pt.param == "excitation.frequency" ? "tube along the tangent" : "box")
+                   seg_proven ? fmt::format("{} piece(s), each with exactly one orbit in its {}{}", pieces.size(),
+                                            pt.param == "excitation.frequency" ? "tube along the tangent" : "box",
+                                            std::all_of(pieces.begin(), pieces.end(),
+                                                        [](const auto& p) { return p.stability == "stable"; })
+                                                ? ", stable throughout"
+                                                : "")
                               : pieces.front().reason);
     }
     previous = Point{loaded.scene, req, r.proven, pt.value};

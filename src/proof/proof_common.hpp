@@ -2,6 +2,7 @@
 // verified (the certificate's "inequalities", docs/prove.md), and intervals as JSON pairs.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -98,6 +99,42 @@ inline void StateLeastPeriod(Outcome& outcome, int requested) {
   outcome.reason += "; its least period " + std::to_string(p) + " divides the requested period " +
                     std::to_string(requested) + ", so it is also the period-" + std::to_string(requested) + " orbit";
 }
+
+// The monodromy of an impacting orbit enclosed over the box U of its unknowns (t_j, X_j, V_j per
+// impact, as ProveImpactOrbit's) and the model's parameter intervals (impact_proof.cpp).
+std::vector<std::vector<Interval>> ImpactMonodromy(const IntervalModel& model, const std::vector<int>& contacts,
+                                                   int impacts, int q, const std::vector<Interval>& U);
+
+// Krawczyk's test in the tube along the family's tangent (impact_proof.cpp TangentTest) over the
+// model's frequency interval, from the orbit `guess` near its middle: for every ω of the interval
+// exactly one orbit in u + tangent(ω − centre) + W; K holds it (the certificate's "krawczyk" form).
+struct SubTube {
+  bool proven = false;
+  double centre = 0;
+  std::vector<double> u, tangent;
+  std::vector<Interval> W, K;
+};
+SubTube TangentOrbits(const IntervalModel& model, const std::vector<int>& contacts, int impacts, int q,
+                      const std::vector<double>& guess, double radius);
+
+// Over a segment in the forcing frequency (a certificate with a `tangent`, impact_proof.cpp
+// TangentTest): the spectral radius of the monodromy below 1 for every frequency of the segment,
+// proven on sub-pieces P_k (halved where the bound fails) from the monodromy over the sub-tubes
+// ũ + a(P_k − ω̃) + W (segment_stability.cpp, docs/prove.md "Stability along a segment").
+// model_at(text): the model with the frequency at the decimal interval text "[a, b]".
+struct SegmentStability {
+  bool proven = false;
+  Json certificate;    // the certificate's "spectral_bound"
+  double bound = 0;    // the largest claimed bound
+  int pieces = 0;
+  std::string reason;  // why not proven
+};
+SegmentStability ProveSegmentStability(const std::function<IntervalModel(const std::string&)>& model_at,
+                                       const std::string& lo, const std::string& hi, const Json& certificate,
+                                       int q, const Budget& budget);
+inline constexpr const char* kSegmentStableNote =
+    "the spectral radius of the monodromy is below 1 for every frequency of the interval (spectral_bound: a "
+    "similarity by the eigenvectors of a midpoint monodromy and a block norm, on sub-pieces)";
 
 // ωt mod 2π, enclosed (the integer number of turns taken from the midpoint).
 Interval Phase(const IntervalModel& model, const Interval& t);

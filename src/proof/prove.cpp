@@ -518,7 +518,7 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
   }
   // The parameter interval [p_lo, p_hi] is proven whole, or halved (at a decimal shared by both
   // halves) up to kMaxSplit times, each piece with the orbits interpolated between the two ends.
-  constexpr int kMaxSplit = 5;
+  constexpr int kMaxSplit = 10;
   std::string* field = differs.front() == "amplitude"     ? &amplitude
                        : differs.front() == "frequency"   ? &frequency
                        : differs.front() == "restitution" ? &restitution
@@ -574,6 +574,22 @@ std::vector<ProofResult> proof::ProveOrbitOverInterval(const System& system_lo, 
     const double v0 = Interval::Decimal(x0).mid(), v1 = Interval::Decimal(x1).mid(), vm = v0 + (v1 - v0) / 2;
     const std::string xm = Decimal(vm);
     const bool can_split = depth < kMaxSplit && !budget.passed() && v0 < vm && vm < v1;
+    if (o.proven && field == &frequency) {
+      // Stability along the piece: the spectral radius below 1 on sub-pieces (segment_stability.cpp).
+      // No multiplier enclosure is claimed over a frequency piece: the checker's, the hull over its
+      // own pieces of the interval, need not lie in the prover's enclosure over the whole box (near
+      // the pitchfork, where two real multipliers nearly meet, it did not).
+      o.summary["multipliers"] = Json::array();
+      o.summary["stability"] = "undecided";
+      o.summary.erase("stability_note");
+      const auto st = proof::ProveSegmentStability(model_at, x0, x1, o.certificate, g_lo.period, budget);
+      *field = interval;
+      if (st.proven) {
+        o.certificate["spectral_bound"] = st.certificate;
+        o.summary["stability"] = "stable";
+        o.summary["stability_note"] = proof::kSegmentStableNote;
+      }
+    }
     if (o.proven) {
       o.reason = "for every " + differs.front() + " in " + interval + ": " + o.reason;
       results.push_back(Wrap(o, "impact", m, lo, budget, "during the proof", scene_structure));

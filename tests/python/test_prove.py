@@ -117,6 +117,15 @@ def test_prove_segment_in_the_frequency_contains_the_50_digit_orbits(tmp_path):
     assert c.returncode == 0, c.stdout + c.stderr
     certs = json.load(open(cert))["certificates"]
     assert len(certs) == len(pieces) and all("tangent" in x for x in certs)
+    # Stability along the segment (docs/prove.md "Stability along a segment"): every piece stable, and
+    # the 50-digit spectral radius at each sub-piece's middle below that sub-piece's bound.
+    assert all(p["stability"] == "stable" and not p["multipliers"] for p in pieces)
+    for x in certs:
+        for sub in x["spectral_bound"][::max(1, len(x["spectral_bound"]) // 3)]:
+            a, z = (mpf(v.strip()) for v in sub["interval"][1:-1].split(","))
+            y = copy.deepcopy(x)
+            y["model"]["frequency"] = mp.nstr((a + z) / 2, 30)
+            assert max(abs(mu) for mu in orbit_truth(y)["multipliers"]) <= sub["bound"] < 1
     for x, s in zip(certs, pieces):
         a, z = (mpf(v.strip()) for v in x["model"]["frequency"][1:-1].split(","))
         for value in (a, (a + z) / 2, z):

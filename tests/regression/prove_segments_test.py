@@ -70,7 +70,7 @@ def truth_at(cert, key, value):
     return orbit_truth(c)
 
 
-def contains_truth(label, s, tr):
+def contains_truth(label, s, tr, cert=None, value=None):
     """Every claim of the segment's summary contains the orbit `tr` (one parameter of the segment)."""
     m = tr["m"]
     expect(tr["positive"], f"{label}: the 50-digit orbit keeps every gap positive between its impacts")
@@ -92,8 +92,17 @@ def contains_truth(label, s, tr):
     expect(inside(t0, sec["time"]) and all(inside(x, p) for x, p in zip(X0, sec["X"])) and
            all(inside(v, p) for v, p in zip(V0, sec["V"])), f"{label}: the section state contains the truth")
     claims, used = s["multipliers"], set()
-    if not claims:  # not enclosed over the whole box: the stability claims nothing
+    if not claims and not (cert and "spectral_bound" in cert):  # not enclosed over the box: no stability claimed
         expect(s["stability"] == "undecided", f"{label}: no multiplier claimed, stability undecided ({s['stability']})")
+    if cert and "spectral_bound" in cert:
+        # Stability along a frequency segment: the 50-digit multipliers at this parameter below the
+        # bound claimed for the sub-piece that holds it, and inside the unit disc.
+        expect(s["stability"] == "stable", f"{label}: a spectral bound, stability stable ({s['stability']})")
+        where = [p for p in cert["spectral_bound"] if ends(p["interval"])[0] <= mpf(value) <= ends(p["interval"])[1]]
+        rho = max(abs(mu) for mu in tr["multipliers"])
+        expect(where and all(rho <= p["bound"] < 1 for p in where),
+               f"{label}: the spectral radius {mp.nstr(rho, 12)} (50 digits) below the sub-piece's bound "
+               f"{[p['bound'] for p in where]}")
     for mu in tr["multipliers"] if claims else []:
         hit = next((k for k, c in enumerate(claims) if k not in used and inside(mp.re(mu), c["re"]) and
                     inside(mp.im(mu), c["im"])), None)
@@ -130,7 +139,15 @@ def segments_proven(label, scene, param, to, step, points, *sets):
                    z_text]
         for value in samples:
             expect(a <= mpf(value) <= z, f"{label}: the sample {value} lies in [{a_text}, {z_text}]")
-            contains_truth(f"{label} [{a_text}, {z_text}] at {key} = {value}", c["summary"], truth_at(c, key, value))
+            contains_truth(f"{label} [{a_text}, {z_text}] at {key} = {value}", c["summary"], truth_at(c, key, value),
+                           c, value)
+        # The middle of the first, the middle and the last stability sub-piece, against the truth too.
+        subs = c.get("spectral_bound", [])
+        for sub in [subs[0], subs[len(subs) // 2], subs[-1]] if subs else []:
+            x0, x1 = ends(sub["interval"])[:2]
+            value = mp.nstr((x0 + x1) / 2, 30)
+            contains_truth(f"{label} sub-piece {sub['interval']} at {key} = {value}", c["summary"],
+                           truth_at(c, key, value), c, value)
         out.append(c)
     return out
 
@@ -230,6 +247,12 @@ segments_proven("chain2_amplitude", chain, "excitation.amplitude", "5.02", "0.00
 # the piece's enclosures.
 tube_w = segments_proven("tube_frequency", tube, "excitation.frequency", "0.91", "0.002", 3)
 segments_proven("chain2_frequency", chain, "excitation.frequency", "0.81", "0.001", 3, "--set", "excitation.amplitude=5")
+# Next to the tube's pitchfork (ω* = 0.955442599911…): the largest |μ| reaches 0.995 at 0.955, the
+# Krawczyk pieces and the stability sub-pieces are smallest there; every piece proven stable.
+near = segments_proven("tube_near_pitchfork", tube, "excitation.frequency", "0.955", "0.001", 2,
+                       "--set", "excitation.frequency=0.954")
+expect(bool(near) and all(c["summary"]["stability"] == "stable" for c in near),
+       "next to the pitchfork: every piece proven stable")
 if tube_w:
     seg = tube_w[-1]
     a, z, a_text, z_text = ends(seg["model"]["frequency"])
@@ -259,7 +282,39 @@ if tube_w:
     def narrow_time(c):
         c["summary"]["events"][0]["time"] = narrow(c["summary"]["events"][0]["time"], middle["times"][0])
     rejected(label, seg, "impact 0's time narrowed to the middle orbit's", narrow_time)
-    rejected(label, seg, "'stable' claimed without the multipliers", lambda c: c["summary"].__setitem__("stability", "stable"))
+    # Stability along the segment (docs/prove.md "Stability along a segment"): edits of the spectral bound.
+    expect(seg["summary"]["stability"] == "stable" and seg.get("spectral_bound"),
+           f"{label}: proven stable with a spectral bound ({seg['summary']['stability']})")
+    rejected(label, seg, "'stable' claimed with the spectral bound left out", lambda c: c.pop("spectral_bound"))
+    sub0 = seg["spectral_bound"][0]
+    x0, x1 = ends(sub0["interval"])[:2]
+    rho0 = max(abs(mu) for mu in truth_at(seg, "frequency", mp.nstr((x0 + x1) / 2, 30))["multipliers"])
+
+    def bound_below_truth(c):  # a bound below the 50-digit spectral radius in the sub-piece
+        c["spectral_bound"][0]["bound"] = float(rho0) - 1e-3
+    rejected(label, seg, f"a sub-piece's bound below the true spectral radius {mp.nstr(rho0, 8)}", bound_below_truth)
+    if len(seg["spectral_bound"]) > 1:
+        rejected(label, seg, "the last sub-piece left out (not covering the interval)",
+                 lambda c: c["spectral_bound"].pop())
+        rejected(label, seg, "the first sub-piece left out", lambda c: c["spectral_bound"].pop(0))
+    rejected(label, seg, "a sub-piece's interval moved past the segment's end", lambda c: c["spectral_bound"][-1].__setitem__(
+        "interval", c["spectral_bound"][-1]["interval"].split(",")[0] + f", {mp.nstr(2 * z - a, 20)}]"))
+
+    def singular(c):
+        for row in c["spectral_bound"][0]["similarity"]:
+            row[0] = 0.0
+    rejected(label, seg, "a singular similarity", singular)
+    # (Other blocks for the same S give another valid norm: a bound still above it is true, and confirmed.)
+    rejected(label, seg, "a sub-piece's bound claimed as 1", lambda c: c["spectral_bound"][0].__setitem__("bound", 1.0))
+    rejected(label, seg, "a sub-piece's tube box shrunk 1000 times", lambda c: c["spectral_bound"][0]["tangent"].__setitem__(
+        "box", [[x / 1000 for x in w] for w in c["spectral_bound"][0]["tangent"]["box"]]))
+    rejected(label, seg, "a sub-piece's tube moved off the segment's (its midpoint's time + 1e-3)",
+             lambda c: c["spectral_bound"][0]["midpoint"].__setitem__(0, c["spectral_bound"][0]["midpoint"][0] + 1e-3))
+    rejected(label, seg, "the note left out", lambda c: c["summary"].pop("stability_note"))
+    if tube_segments:
+        rejected("tube amplitude segment", tube_segments[0], "a spectral bound given to a segment in the amplitude",
+                 lambda c: (c.__setitem__("spectral_bound", copy.deepcopy(seg["spectral_bound"])),
+                            c["summary"].__setitem__("stability", "stable")))
     if tube_segments:
         rejected("tube amplitude segment", tube_segments[0], "a tangent given to a segment in the amplitude",
                  lambda c: c.__setitem__("tangent", copy.deepcopy(seg["tangent"])))
