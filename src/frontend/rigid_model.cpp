@@ -14,7 +14,7 @@ bool TakesCompliantStops(const std::string& command) {
   // check: the exact engine against CVODE (the quad engine, `check --precision quad`, does not
   // take a contact phase yet); orbit: the Poincaré solver with the compliant saltations
   // (docs/compliant.md, "Periodic orbits").
-  static constexpr std::array<const char*, 4> kTakes = {"model", "simulate", "check", "orbit"};
+  static constexpr std::array<const char*, 5> kTakes = {"model", "simulate", "check", "orbit", "continue"};
   return std::any_of(kTakes.begin(), kTakes.end(), [&](const char* c) { return command == c; });
 }
 

@@ -247,6 +247,24 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
   return c;
 }
 
+void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
+                              const OrbitRequest& request, const std::atomic<bool>* stop_requested) {
+  for (BranchPoint& pt : branch.points) {
+    if (stop_requested && stop_requested->load()) return;
+    const Scene scene = scene_at(pt.value);
+    if (!HasCompliantContact(scene)) return;
+    const System sys(scene);
+    OrbitResult orbit;
+    orbit.status = "converged";
+    orbit.period = branch.period;
+    orbit.section_time = pt.section_time;
+    orbit.X = pt.X;
+    orbit.V = pt.V;
+    const RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request);
+    pt.rigid_distance = c.orbit.status == "converged" ? c.distance : std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
 std::string RigidOrbitJson(const RigidOrbitComparison& c) {
   const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json j;
