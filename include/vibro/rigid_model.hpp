@@ -73,7 +73,9 @@ std::string RigidOrbitJson(const RigidOrbitComparison& c);
 // Along a continued branch of a compliant scene (docs/compliant.md, "Along a continued branch"): at
 // every point the rigid model's orbit beside the point's orbit (CompareOrbitWithRigid, from the
 // point's section state, the scene at the point's value from `scene_at`), its largest distance in
-// BranchPoint::rigid_distance (NaN where the rigid model's map has no orbit from there). Polls
+// BranchPoint::rigid_distance. NaN where the rigid model's map has no orbit from there, or reaches
+// one that is not beside it: not an impact orbit with one impact per contact phase of the point's
+// orbit on each contact (another orbit, near a bifurcation of either model). Polls
 // `stop_requested` between points (the points not reached keep NaN). A rigid scene: nothing done.
 void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
                               const OrbitRequest& request, const std::atomic<bool>* stop_requested = nullptr);

@@ -261,7 +261,16 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
     orbit.X = pt.X;
     orbit.V = pt.V;
     const RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request);
-    pt.rigid_distance = c.orbit.status == "converged" ? c.distance : std::numeric_limits<double>::quiet_NaN();
+    // The rigid model's orbit beside this one: an impact orbit with one impact per contact phase of
+    // the point's orbit, on the same contacts. Another orbit that the rigid map's Newton reached from
+    // the point's state (near a bifurcation of either model) is no distance between the two models.
+    std::vector<int> phases(static_cast<size_t>(sys.contact_count()), 0), impacts(phases.size(), 0);
+    for (const auto& p : pt.contact_phases)
+      if (p.contact >= 0 && static_cast<size_t>(p.contact) < phases.size()) ++phases[static_cast<size_t>(p.contact)];
+    for (const int j : c.orbit.summary.impact_contacts)
+      if (j >= 0 && static_cast<size_t>(j) < impacts.size()) ++impacts[static_cast<size_t>(j)];
+    const bool beside = c.orbit.status == "converged" && c.orbit.summary.kind == "impact-periodic" && phases == impacts;
+    pt.rigid_distance = beside ? c.distance : std::numeric_limits<double>::quiet_NaN();
   }
 }
 
