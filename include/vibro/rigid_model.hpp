@@ -75,7 +75,8 @@ std::string RigidOrbitJson(const RigidOrbitComparison& c);
 // point's section state, the scene at the point's value from `scene_at`), its largest distance in
 // BranchPoint::rigid_distance. NaN where the rigid model's map has no orbit from there, or reaches
 // one that is not beside it: not an impact orbit with one impact per contact phase of the point's
-// orbit on each contact (another orbit, near a bifurcation of either model). Polls
+// orbit on each contact, each impact within its phase widened by the phase's duration on either
+// side (another orbit, near a bifurcation of either model). Polls
 // `stop_requested` between points (the points not reached keep NaN). A rigid scene: nothing done.
 void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
                               const OrbitRequest& request, const std::atomic<bool>* stop_requested = nullptr);

@@ -269,7 +269,21 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
       if (p.contact >= 0 && static_cast<size_t>(p.contact) < phases.size()) ++phases[static_cast<size_t>(p.contact)];
     for (const int j : c.orbit.summary.impact_contacts)
       if (j >= 0 && static_cast<size_t>(j) < impacts.size()) ++impacts[static_cast<size_t>(j)];
-    const bool beside = c.orbit.status == "converged" && c.orbit.summary.kind == "impact-periodic" && phases == impacts;
+    bool beside = c.orbit.status == "converged" && c.orbit.summary.kind == "impact-periodic" && phases == impacts;
+    // ... and each impact inside a contact phase of its contact, widened by the phase's duration on
+    // either side (forcing phases compared mod 2π).
+    const double w = sys.frequency();
+    const auto& a = c.orbit.summary;
+    for (size_t i = 0; beside && i < a.impact_phases.size() && i < a.impact_contacts.size(); ++i) {
+      bool inside = false;
+      for (const auto& p : pt.contact_phases) {
+        if (p.contact != a.impact_contacts[i]) continue;
+        const double from = w * (p.entry - p.duration), span = w * 3 * p.duration;
+        const double rel = std::remainder(a.impact_phases[i] - from - span / 2, 2 * M_PI) + span / 2;
+        inside = inside || (rel >= 0 && rel <= span);
+      }
+      beside = inside;
+    }
     pt.rigid_distance = beside ? c.distance : std::numeric_limits<double>::quiet_NaN();
   }
 }

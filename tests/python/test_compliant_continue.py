@@ -114,3 +114,42 @@ def test_branch_json_equals_cli_and_rigid_unchanged(tmp_path):
     t = subprocess.run([cli, "continue", str(rigid), "--param", "excitation.frequency", "--to", "0.85"],
                        capture_output=True, text=True, timeout=600)
     assert t.returncode == 0 and "peak_force" not in t.stdout, t.stdout
+
+
+def test_orbit_file_holds_contact_phases(tmp_path):
+    """`vibro orbit --out` (vibro.orbit(out=...)) stores the orbit's contact phases in
+    /orbit/contact_phases, the JSON's numbers."""
+    path = tmp_path / "s.toml"
+    path.write_text(scene_text("force"))
+    out = tmp_path / "o.h5"
+    o = vibro.orbit(vibro.load_scene(str(path)), out=str(out))
+    assert o["attractor_kind"] == "contact-periodic"
+    with h5py.File(out, "r") as f:
+        g = f["/orbit/contact_phases"]
+        for key in ("contact", "entry", "exit", "duration", "entry_velocity", "exit_velocity", "peak_force",
+                    "peak_time", "penetration", "impulse", "energy_dissipated"):
+            assert list(g[key][:]) == [p[key] for p in o["contact_phases"]], key
+
+
+def test_branch_in_the_stiffness_approaches_the_rigid_model():
+    """Continued in the stop's stiffness (k = 400 to 40000, c = 2), the orbit's distance to the rigid
+    model's orbit beside it (restitution e(ζ) of each point's ζ = c/(2√k)) falls like k^(−1/2), the
+    rate of docs/loads.md's convergence (the penetration scales as v/ω_c): the fitted slope over the
+    last decade in log-log, and the peak force grows like √k (F_max ≈ √(k m) v for a small ζ)."""
+    import tempfile
+    with tempfile.TemporaryDirectory() as work:
+        path = os.path.join(work, "s.toml")
+        with open(path, "w") as f:
+            f.write(scene_text("force"))
+        b = vibro.continue_(vibro.load_scene(path), "stop.stiffness", 40000.0)
+    assert b["end"] == "reached the end value", b["end"]
+    k = np.array([p["value"] for p in b["points"]])
+    d = b["contact_phases"]["rigid_distance"]
+    peak = b["contact_phases"]["peak_force"][:, 0]
+    assert np.all(np.isfinite(d)) and np.all(np.diff(d) < 0), d
+    last = k >= 4000
+    slope = np.polyfit(np.log(k[last]), np.log(d[last]), 1)[0]
+    assert abs(slope + 0.5) < 0.05, slope
+    slope_peak = np.polyfit(np.log(k[last]), np.log(peak[last]), 1)[0]
+    assert abs(slope_peak - 0.5) < 0.1, slope_peak
+    print(f"distance slope {slope:.3f}, peak-force slope {slope_peak:.3f}")
