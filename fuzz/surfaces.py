@@ -882,8 +882,9 @@ class Surfaces(Campaign):
         return self.rng.choice(pool[:k] if self.rng.random() < 0.75 else pool[k + 1:])
     # `check` takes a compliant stop since CVODE integrates its contact phase (docs/compliant.md): it is
     # drawn as one of the commands that must run, with `--precision quad` as one that must refuse;
-    # `orbit` too, since the Poincaré solver follows a contact phase (docs/compliant.md, "Periodic orbits").
-    RIGID_ONLY = ["continue", "prove", "validate", "score", "basin", "attractors", "sweep",
+    # `orbit` too, since the Poincaré solver follows a contact phase (docs/compliant.md, "Periodic orbits"),
+    # and `continue`, the same map along a branch ("Along a continued branch").
+    RIGID_ONLY = ["prove", "validate", "score", "basin", "attractors", "sweep",
                   "partition", "curve", "diagram", "check-quad"]
 
     @staticmethod
@@ -964,7 +965,7 @@ class Surfaces(Campaign):
                     ok = self.compliance_valid(v if name == "stiffness" else "1e10", v if name == "damping" else None,
                                                v if name == "separation" else None, None)
                     valid = ok if valid is not False and ok is not True else valid
-        cmd = r.choice(["simulate"] * 6 + ["model"] * 2 + ["rigid-beside"] * 3 + ["check", "orbit"]) if r.random() < 0.75 else \
+        cmd = r.choice(["simulate"] * 6 + ["model"] * 2 + ["rigid-beside"] * 3 + ["check", "orbit", "continue"]) if r.random() < 0.75 else \
             r.choice(self.RIGID_ONLY)
         out = self.fresh(".h5")
         if cmd == "simulate":
@@ -1011,7 +1012,7 @@ class Surfaces(Campaign):
             self.find(f"compliant: {cmd} not refused", full, f"[compliant] exit {rc}: {err[-300:]}")
         elif rc in (0, 3) and valid is False:
             self.find("compliant: accepted a stop it must refuse", full, f"[compliant] exit {rc}: {err[-300:]}")
-        elif rc == 2 and valid is True and cmd in ("simulate", "model", "check", "orbit") and "cvode" not in " ".join(argv) \
+        elif rc == 2 and valid is True and cmd in ("simulate", "model", "check", "orbit", "continue") and "cvode" not in " ".join(argv) \
                 and "quad" not in " ".join(argv) and "--blocks" not in argv:
             self.find("compliant: refused a valid stop", full, f"[compliant] {err[-300:]}")
         if cmd == "rigid-beside" and rc == 0:
@@ -1022,6 +1023,8 @@ class Surfaces(Campaign):
                 self.find("--rigid-beside --json without rigid_model", full, f"[compliant] {self.last_stdout[-300:]}")
         # `vibro orbit` says why on its status line (stdout), its stderr giving what to try next.
         said_by_orbit = cmd == "orbit" and any(l.startswith("status") and ":" in l for l in self.last_stdout.splitlines())
+        # `vibro continue` says why its branch ended on its `end` line (stdout).
+        said_by_orbit = said_by_orbit or (cmd == "continue" and any(l.startswith("end ") for l in self.last_stdout.splitlines()))
         if rc == 3 and "--rigid-beside" not in argv and not said_by_orbit and \
                 not any(w in err for w in ("time limit", "out of", "per time unit", "numerical", "undetermined",
                                            "failed", "could not", "stopped")):

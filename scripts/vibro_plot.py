@@ -7,7 +7,9 @@ PREFIX_section (a run with several contacts: PREFIX_gaps, every gap, and PREFIX_
 PREFIX_section of every gap; a run with compliant stops: PREFIX_forces, every contact force
 against t with its certified peaks, and PREFIX_peaks, histograms of the peak forces and contact
 durations); PREFIX_multipliers for an orbit with multipliers; PREFIX_branch for a
-continuation (and PREFIX_branch_loads: mean contact force and work rate along it), PREFIX_partition for a
+continuation (and PREFIX_branch_loads: mean contact force and work rate along it; compliant stops:
+PREFIX_branch_peaks, the certified peak force, contact duration and distance to the rigid model along
+it), PREFIX_partition for a
 partition (and PREFIX_partition_loads: the work rate over its plane), PREFIX_basin for a basin study, PREFIX_sweep for
 a sweep (with a continuation branch overlaid by --overlay BRANCH.h5), PREFIX_curves for the
 two-parameter curves of `vibro curve` (drawn over a partition's picture by
@@ -795,6 +797,43 @@ def plot_branch_loads(f, title, save):
               + (f" ({unknown} unknown values: see /branch/loads/note)" if unknown else ""))
     axes[-1, 0].set_xlabel(axis_label(param))
     save(fig, "branch_loads")
+
+
+def plot_branch_peaks(f, title, save):
+    """A compliant stop's contact phases along a branch (docs/compliant.md, "Along a continued
+    branch"): per contact the largest certified peak force and the longest contact duration of the
+    orbit's phases, and the largest distance between the orbit and the rigid model's, against the
+    parameter; solid where the orbit is stable, dashed where unstable."""
+    b = f["branch"]
+    if "contact_phases" not in b or len(b["value"]) == 0:
+        return
+    g = b["contact_phases"]
+    peak, duration, rigid = g["peak_force"][:], g["duration"][:], g["rigid_distance"][:]
+    param = text(b.attrs["param"])
+    value = b["value"][:]
+    stable = b["stable"][:].astype(bool)
+    m = peak.shape[1]
+    fig, axes = figure(3, 1, figsize=(7.5, 8.0), sharex=True, squeeze=False)
+    rows = ((axes[0, 0], peak, "peak contact force", True), (axes[1, 0], duration, "contact duration", True),
+            (axes[2, 0], rigid[:, None], "distance to the rigid model", False))
+    for ax, y, label, per_contact in rows:
+        for j in range(y.shape[1]):
+            colour = BRANCH if (m == 1 or not per_contact) else OKABE_ITO[j % 7]
+            start = 0
+            for i in range(1, len(value) + 1):
+                if i == len(value) or stable[i] != stable[start]:
+                    k = min(i + 1, len(value))
+                    ax.plot(value[start:k], y[start:k, j], "-" if stable[start] else "--", color=colour, lw=1.4,
+                            label=(f"contact {j}" if m > 1 and per_contact else None) if start == 0 else None)
+                    start = i
+        if (~stable).any():
+            ax.plot([], [], "--", color="0.4", label="unstable")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+        ax.set_ylabel(label)
+    set_title(axes[0, 0], title, f"contact phases along the branch in ${SYMBOLS.get(param, param)}$, exact per orbit")
+    axes[-1, 0].set_xlabel(axis_label(param))
+    save(fig, "branch_peaks")
 
 
 def plot_partition_loads(f, title, save):
@@ -1852,6 +1891,7 @@ def draw(args, save, window):
         if "branch" in f:
             plot_branch(f, title, save)
             plot_branch_loads(f, title, save)
+            plot_branch_peaks(f, title, save)
         if "partition" in f:
             plot_partition(f, title, save, args.overlay)
             plot_partition_loads(f, title, save)

@@ -15,9 +15,17 @@
 
 namespace vibro {
 
+// Whether an attractor kind holds a contact over a phase of each period: "sticking-periodic" (a
+// rigid stop's sticking) or "contact-periodic" (compliant stops' contact phases). The orbit solver's
+// OrbitKind::kSticking finds both.
+inline bool HoldsContact(const std::string& kind) { return kind == "sticking-periodic" || kind == "contact-periodic"; }
+
 struct Attractor {
-  // "sticking-periodic" | "impact-periodic" | "no-contact-periodic" | "permanent-contact" |
-  // "not-periodic"
+  // "sticking-periodic" | "contact-periodic" | "impact-periodic" | "no-contact-periodic" |
+  // "permanent-contact" | "not-periodic". "contact-periodic": every phase held on a contact is a
+  // contact phase of a compliant stop (docs/compliant.md), which is neither an impact nor sticking;
+  // stick_phases then lists the contact phases and sticking_fraction is the fraction of time in
+  // contact.
   std::string kind = "not-periodic";
   std::optional<int> period;                   // forcing periods; none when not periodic
   std::optional<long long> impacts_per_period;  // none when a period holds a chattering sequence

@@ -76,7 +76,24 @@ struct BranchPoint {
   // be simulated. loads_note also names the contacts whose loads are unknown (NaN fields).
   std::vector<ContactLoads> loads;
   std::string loads_note;
+  // A compliant stop (docs/compliant.md, "Along a continued branch"): every contact phase of the
+  // orbit's period (q forcing periods) from its section, with its exact loads (certified peak force,
+  // duration, penetration, impulse, dissipated energy; times absolute), as `vibro orbit` gives them;
+  // empty for a rigid scene.
+  std::vector<OrbitResult::ContactPhase> contact_phases;
+  // The rigid model's orbit beside it (vibro/rigid_model.hpp, CompareOrbitWithRigid, filled by
+  // AddRigidModelAlongBranch): the largest distance between the two orbits over the period; NaN when
+  // not computed (a rigid scene) or when the rigid model's map has no orbit there.
+  double rigid_distance = std::numeric_limits<double>::quiet_NaN();
 };
+
+// Per contact j < contacts, over a point's contact phases: the largest peak force, the longest
+// duration (NaN where the contact has no phase) and the number of phases (docs/compliant.md).
+struct ContactPhaseExtremes {
+  std::vector<double> peak_force, duration;
+  std::vector<int> phases;
+};
+ContactPhaseExtremes ExtremesOf(const std::vector<OrbitResult::ContactPhase>& phases, int contacts);
 
 struct Bifurcation {
   // "fold" | "flip" | "neimark-sacker" | "branch-point" (a real multiplier crosses +1 where the

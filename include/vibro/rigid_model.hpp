@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "vibro/continuation.hpp"
 #include "vibro/loads.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/scene.hpp"
@@ -68,5 +69,16 @@ struct RigidOrbitComparison {
 RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& system, const OrbitResult& orbit,
                                            const OrbitRequest& request);
 std::string RigidOrbitJson(const RigidOrbitComparison& c);
+
+// Along a continued branch of a compliant scene (docs/compliant.md, "Along a continued branch"): at
+// every point the rigid model's orbit beside the point's orbit (CompareOrbitWithRigid, from the
+// point's section state, the scene at the point's value from `scene_at`), its largest distance in
+// BranchPoint::rigid_distance. NaN where the rigid model's map has no orbit from there, or reaches
+// one that is not beside it: not an impact orbit with one impact per contact phase of the point's
+// orbit on each contact, each impact within its phase widened by the phase's duration on either
+// side (another orbit, near a bifurcation of either model). Polls
+// `stop_requested` between points (the points not reached keep NaN). A rigid scene: nothing done.
+void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
+                              const OrbitRequest& request, const std::atomic<bool>* stop_requested = nullptr);
 
 }  // namespace vibro

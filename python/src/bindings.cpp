@@ -625,6 +625,9 @@ std::pair<std::string, bool> ContinueBranch(const PyScene& s, const std::string&
   req.stop_requested = guard.flag();
   auto branch = vibro::Continue(req);
   branch.param = key;
+  // A compliant stop: the rigid model's orbit beside every point (docs/compliant.md).
+  if (vibro::HasCompliantContact(s.loaded.scene))
+    vibro::AddRigidModelAlongBranch(branch, req.scene_at, req.orbit, guard.flag());
   if (store) {
     store->WriteBranch(branch);
     vibro::RunResult r;

@@ -494,6 +494,29 @@ def _loads_arrays(rows):
     return out
 
 
+def _contact_phase_arrays(points):
+    """A compliant stop's contact phases along a branch (each point's ``contact_phases``,
+    docs/compliant.md "Along a continued branch") as a dict: ``peak_force`` and ``duration``, shape
+    (points, contacts), the largest certified peak force and the longest duration of each contact's
+    phases over the orbit's period (NaN: no phase), ``phases`` their number, and ``rigid_distance``,
+    shape (points,), the rigid model's orbit's largest distance (NaN: none). None for a rigid scene."""
+    if not any(p.get("contact_phases") for p in points):
+        return None
+    m = max([1] + [len(p.get("loads") or []) for p in points]
+            + [int(c["contact"]) + 1 for p in points for c in p.get("contact_phases") or []])
+    out = {"peak_force": _np.full((len(points), m), _np.nan), "duration": _np.full((len(points), m), _np.nan),
+           "phases": _np.zeros((len(points), m), dtype=int), "rigid_distance": _np.full(len(points), _np.nan)}
+    for i, p in enumerate(points):
+        for c in p.get("contact_phases") or []:
+            j = int(c["contact"])
+            out["peak_force"][i, j] = _np.fmax(out["peak_force"][i, j], c["peak_force"])
+            out["duration"][i, j] = _np.fmax(out["duration"][i, j], c["duration"])
+            out["phases"][i, j] += 1
+        if p.get("rigid_distance") is not None:
+            out["rigid_distance"][i] = p["rigid_distance"]
+    return out
+
+
 def _strobe_array(points):
     """Each branch point's stroboscopic state (its ``strobe`` list: every contact's coordinate at
     t ≡ initial.time mod the orbit's period, docs/output.md) as an array (points, contacts); NaN
@@ -515,7 +538,12 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     point's exact per-period contact loads (docs/loads.md) as arrays of shape (points, contacts),
     one per name of :data:`LOAD_FIELDS` (NaN: unknown; each point's ``loads_note`` says why), and
     ``strobe``, shape (points, contacts): each contact's coordinate at the forcing phase of the
-    start, t ≡ initial.time (mod the orbit's period), as a sweep's ``x_B`` (docs/output.md). With
+    start, t ≡ initial.time (mod the orbit's period), as a sweep's ``x_B`` (docs/output.md). A
+    scene with a compliant stop also has ``contact_phases``: ``peak_force`` and ``duration`` of
+    shape (points, contacts), the largest certified peak force and the longest duration of each
+    contact's phases over the orbit's period, ``phases`` their number, and ``rigid_distance``, the
+    rigid model's orbit's largest distance from the point's (each point's own ``contact_phases``
+    list holds every phase, as :func:`orbit` gives them; docs/compliant.md). With
     several contacts each point has its contact ``sequence`` and each bifurcation the ``contact``
     where it happens.
 
@@ -544,6 +572,9 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     d["table"] = _branch_table(d.get("points", []))
     d["loads"] = _loads_arrays(d.get("points", []))
     d["strobe"] = _strobe_array(d.get("points", []))
+    phases = _contact_phase_arrays(d.get("points", []))
+    if phases is not None:
+        d["contact_phases"] = phases
     return d
 
 

@@ -410,8 +410,13 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
     a.stick_contacts.push_back(contact);
   }
   if (accumulations == 0) a.impacts_per_period = impacts;
+  // Every held phase a compliant stop's contact phase: no sticking (docs/compliant.md).
+  const bool compliant_only = std::all_of(phases.begin(), phases.end(), [&](const auto& ph) {
+    const int c = std::get<2>(ph);
+    return c >= 0 && c < sys_.contact_count() && sys_.contacts()[static_cast<size_t>(c)].spec.compliance.compliant();
+  });
   if (released)
-    a.kind = "sticking-periodic";
+    a.kind = compliant_only ? "contact-periodic" : "sticking-periodic";
   else if (impacts > 0)
     a.kind = "impact-periodic";
   else

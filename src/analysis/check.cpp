@@ -210,14 +210,14 @@ CheckReport CrossCheck(const System& sys, const Scene& scene, bool with_quad) {
                    qd ? ", " + status_note("quad", qd->result) : ""),
        {}});
 
-  const bool periodic = ex.attractor.kind == "sticking-periodic" || ex.attractor.kind == "impact-periodic";
+  const bool periodic = HoldsContact(ex.attractor.kind) || ex.attractor.kind == "impact-periodic";
   // A compliant stop (docs/compliant.md): the engines are compared, and the Poincaré solver with the
   // compliant saltations ("Periodic orbits") finds the orbit as for a rigid stop.
   const bool compliant = HasCompliantContact(scene);
   OrbitResult orbit;
   if (periodic) {
     OrbitRequest req;
-    req.kind = ex.attractor.kind == "sticking-periodic" ? OrbitKind::kSticking : OrbitKind::kImpact;
+    req.kind = HoldsContact(ex.attractor.kind) ? OrbitKind::kSticking : OrbitKind::kImpact;
     req.period = *ex.attractor.period;
     orbit = FindOrbit(sys, scene, req);
   } else {

@@ -1008,6 +1008,7 @@ Branch Continue(const ContinuationRequest& req) {
     auto loads = OrbitLoads(sys, *scene, pt.orbit);  // docs/loads.md, per contact
     b.loads = std::move(loads.contacts);
     b.loads_note = std::move(loads.note);
+    b.contact_phases = pt.orbit.contact_phases;  // compliant stops: each phase's loads (docs/compliant.md)
     br.points.push_back(std::move(b));
     if (req.progress) req.progress(br.points.size(), pt.y[n2]);
   };

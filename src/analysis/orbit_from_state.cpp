@@ -208,7 +208,7 @@ OrbitResult SolveOrbit(const System& sys, const Scene& scene, const OrbitRequest
 
   std::vector<OrbitKind> kinds = {req.kind};
   if (req.kind == OrbitKind::kAuto) {
-    if (reached.kind == "sticking-periodic") kinds = {OrbitKind::kSticking};
+    if (HoldsContact(reached.kind)) kinds = {OrbitKind::kSticking};
     else if (reached.kind == "impact-periodic") kinds = {OrbitKind::kImpact};
     // Not settled: Newton from where the transient ended, whichever kind it converges to; then
     // each kind on its own (an impact orbit may be searched from other departures).

@@ -1165,7 +1165,7 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
   // Several contacts: two per independent held contact (DF has that many zero eigenvalues).
   if (collapsed >= 0)
     mu.resize(mu.size() >= static_cast<size_t>(collapsed) ? mu.size() - static_cast<size_t>(collapsed) : 0);
-  else if (!out.summary.stick_phases.empty() || out.summary.kind == "sticking-periodic")
+  else if (!out.summary.stick_phases.empty() || HoldsContact(out.summary.kind))
     mu.resize(mu.size() >= 2 ? mu.size() - 2 : 0);
   out.multipliers = mu;
   out.stable = std::all_of(mu.begin(), mu.end(), [](auto x) { return std::abs(x) < 1.0; });
@@ -1311,7 +1311,7 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
     a = rec.Classify();
   };
   const auto matches = [&](const Attractor& a) {
-    if (req.kind == OrbitKind::kSticking) return a.kind == "sticking-periodic";
+    if (req.kind == OrbitKind::kSticking) return HoldsContact(a.kind);
     return a.kind == "impact-periodic" &&
            (req.impacts == 0 || a.impacts_per_period == req.impacts);
   };
@@ -1502,9 +1502,9 @@ OrbitResult FindOrbit(const System& sys, const Scene& scene, const OrbitRequest&
   // 4. Summary over the converged orbit, and the multipliers.
   Characterize(sys, scene, out);
   // kAuto (a transient that has not settled): an orbit of either kind is what was asked for.
-  const bool kind_ok = req.kind == OrbitKind::kSticking ? out.summary.kind == "sticking-periodic"
+  const bool kind_ok = req.kind == OrbitKind::kSticking ? HoldsContact(out.summary.kind)
                        : req.kind == OrbitKind::kImpact ? out.summary.kind == "impact-periodic"
-                                                        : out.summary.kind == "sticking-periodic" ||
+                                                        : HoldsContact(out.summary.kind) ||
                                                               out.summary.kind == "impact-periodic";
   if (!kind_ok) {
     out.status = "no-orbit";

@@ -13,6 +13,7 @@
 #include "vibro/continuation.hpp"
 #include "vibro/hdf5_branch.hpp"
 #include "vibro/hdf5_store.hpp"
+#include "vibro/rigid_model.hpp"
 #include "vibro/scene_file.hpp"
 #include "vibro/summary_json.hpp"
 #include "vibro/system.hpp"
@@ -107,6 +108,9 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
   if (!out.empty()) store = vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys));  // fails early
   auto branch = vibro::Continue(req);
   branch.param = key;
+  // A compliant stop: the rigid model's orbit beside every point (docs/compliant.md).
+  if (vibro::HasCompliantContact(loaded.scene))
+    vibro::AddRigidModelAlongBranch(branch, req.scene_at, req.orbit, &vibro::cli::StopFlag());
   // The file's status and the exit code say the same thing (docs/output.md).
   const vibro::RunStatus status = branch.status == "interrupted" ? vibro::RunStatus::kInterrupted
                                   : branch.status == "ok"        ? vibro::RunStatus::kOk
@@ -143,6 +147,17 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
     for (size_t j = 0; j < contacts; ++j)
       head += contacts == 1 ? fmt::format(" {:>12} {:>12}", "mean_force", "work_rate")
                             : fmt::format(" {:>12} {:>12}", fmt::format("mean_force{}", j), fmt::format("work_rate{}", j));
+    // A compliant stop (docs/compliant.md, "Along a continued branch"): per contact the largest
+    // certified peak force and the longest contact duration of the point's contact phases, and the
+    // rigid model's distance.
+    const bool compliant = std::any_of(branch.points.begin(), branch.points.end(),
+                                       [](const auto& p) { return !p.contact_phases.empty(); });
+    if (compliant) {
+      for (size_t j = 0; j < contacts; ++j)
+        head += contacts == 1 ? fmt::format(" {:>12} {:>12}", "peak_force", "duration")
+                              : fmt::format(" {:>12} {:>12}", fmt::format("peak_force{}", j), fmt::format("duration{}", j));
+      head += fmt::format(" {:>12}", "rigid_dist");
+    }
     // Several contacts: the contact sequence of each point ("0:impact 1:impact") instead of the
     // one-stop event letters.
     const bool several = sys.contact_count() > 1;
@@ -154,6 +169,12 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
       for (size_t j = 0; j < contacts; ++j) {
         const auto cell = [](double v) { return std::isfinite(v) ? fmt::format(" {:>12.6g}", v) : fmt::format(" {:>12}", "-"); };
         loads += j < p.loads.size() ? cell(p.loads[j].mean_force) + cell(p.loads[j].work_rate) : cell(std::nan("")) + cell(std::nan(""));
+      }
+      if (compliant) {
+        const auto cell = [](double v) { return std::isfinite(v) ? fmt::format(" {:>12.6g}", v) : fmt::format(" {:>12}", "-"); };
+        const vibro::ContactPhaseExtremes e = vibro::ExtremesOf(p.contact_phases, static_cast<int>(contacts));
+        for (size_t j = 0; j < contacts; ++j) loads += cell(e.peak_force[j]) + cell(e.duration[j]);
+        loads += cell(p.rigid_distance);
       }
       fmt::print("{:>16.10g} {:>12.8f} {:>8} {:>12.6g}{}  {}\n", p.value,
                  p.summary.sticking_fraction.value_or(0.0), p.stable ? "yes" : "no", lead, loads,

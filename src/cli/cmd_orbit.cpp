@@ -89,7 +89,7 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
     const bool sticking = req.kind == vibro::OrbitKind::kSticking, impact = req.kind == vibro::OrbitKind::kImpact;
     std::string hint = "vibro: try ";
     if (sticking && orbit.reached == "impact-periodic") hint += "--kind impact (the attractor has impacts and no sticking), ";
-    if (impact && orbit.reached == "sticking-periodic") hint += "--kind sticking (the attractor sticks), ";
+    if (impact && vibro::HoldsContact(orbit.reached)) hint += "--kind sticking (the attractor sticks), ";
     // What applies to this attempt, the cheapest first: from a transient, Newton from a state on
     // the orbit (--transient 0) or from a guess; from a guess or a start state, another one or a
     // transient after it.

@@ -50,13 +50,18 @@ std::string FormatMultipliers(const std::vector<std::complex<double>>& raw, int 
 std::string AttractorText(const Attractor& a, double restitution, const std::string& indent, bool named) {
   std::string s = fmt::format("{}attractor    {}", indent, a.kind);
   if (a.period) s += fmt::format(", period {}", *a.period);
-  if (a.impacts_per_period)
+  // Compliant stops (docs/compliant.md): contact phases, neither impacts nor sticking; impacts on
+  // rigid contacts beside them are still counted.
+  const bool contact = a.kind == "contact-periodic";
+  if (contact)
+    s += fmt::format(", {} contact phase{} per orbit period", a.stick_phases.size(), a.stick_phases.size() == 1 ? "" : "s");
+  if (a.impacts_per_period && (!contact || *a.impacts_per_period > 0))
     s += fmt::format(", {} impact{} per orbit period", *a.impacts_per_period,
                      *a.impacts_per_period == 1 ? "" : "s");
   if (a.searched_period)
     s += *a.searched_period > 0 ? fmt::format(" (no period ≤ {}, run.max_period)", *a.searched_period)
                                 : std::string(" (too short a record to search a period)");
-  if (a.sticking_fraction) s += fmt::format(", sticking fraction {:.6f}", *a.sticking_fraction);
+  if (a.sticking_fraction) s += fmt::format(", {} fraction {:.6f}", contact ? "contact" : "sticking", *a.sticking_fraction);
   s += "\n";
   if (a.recurrence_period)
     s += fmt::format("{}recurrence   the section repeats with period {} (to {:.1e}): rerun with "
@@ -74,7 +79,7 @@ std::string AttractorText(const Attractor& a, double restitution, const std::str
       p += fmt::format("{}{}[{:.6f}, {:.6f}]", p.empty() ? "" : (named ? "; " : " "),
                        c.empty() ? "" : c.substr(0, c.size() - 2) + " ", b, e);
     }
-    s += fmt::format("{}stick phases {}\n", indent, p.empty() ? "none" : p);
+    s += fmt::format("{}{} {}\n", indent, contact ? "in contact  " : "stick phases", p.empty() ? "none" : p);
   }
   for (size_t k = 0; k < a.impact_phases.size(); ++k) {
     const double before = k < a.impact_velocities.size() ? a.impact_velocities[k] : std::nan("");

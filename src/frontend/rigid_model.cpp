@@ -13,8 +13,8 @@ namespace vibro::frontend {
 bool TakesCompliantStops(const std::string& command) {
   // check: the exact engine against CVODE (the quad engine, `check --precision quad`, does not
   // take a contact phase yet); orbit: the Poincaré solver with the compliant saltations
-  // (docs/compliant.md, "Periodic orbits").
-  static constexpr std::array<const char*, 4> kTakes = {"model", "simulate", "check", "orbit"};
+  // (docs/compliant.md, "Periodic orbits"); continue: the same map along a branch ("Along a continued branch").
+  static constexpr std::array<const char*, 5> kTakes = {"model", "simulate", "check", "orbit", "continue"};
   return std::any_of(kTakes.begin(), kTakes.end(), [&](const char* c) { return command == c; });
 }
 
@@ -24,8 +24,8 @@ void CheckSceneModel(const std::string& command, const LoadedScene& loaded, cons
   throw InputError({fmt::format("{}: a compliant stop (a stiffness on [stop] or a [[contact]]) runs in {}; {} does "
                                 "not handle it yet (docs/compliant.md)",
                                 scene,
-                                cli ? "`vibro simulate` (with --rigid-beside), `vibro model`, `vibro check` and `vibro orbit`"
-                                    : "vibro.simulate (rigid_beside), vibro.model, vibro.check and vibro.orbit",
+                                cli ? "`vibro simulate` (with --rigid-beside), `vibro model`, `vibro check`, `vibro orbit` and `vibro continue`"
+                                    : "vibro.simulate (rigid_beside), vibro.model, vibro.check, vibro.orbit and vibro.continue_",
                                 command.find(' ') != std::string::npos ? fmt::format("`vibro {}`", command)
                                 : cli                                  ? "this command"
                                                                        : "this function")});

@@ -3,8 +3,8 @@
 // command line (src/cli/main.cpp) and the Python module (python/src/bindings.cpp) alike.
 //
 // A compliant stop (a stiffness on [stop] or a [[contact]]) runs in `simulate` (with
-// --rigid-beside), `model`, `check` (the exact engine against CVODE) and `orbit` (the compliant
-// saltations of docs/compliant.md, "Periodic orbits"); continuation,
+// --rigid-beside), `model`, `check` (the exact engine against CVODE), `orbit` (the compliant
+// saltations of docs/compliant.md, "Periodic orbits") and `continue` (the same map along a branch);
 // proofs, `check --precision quad`, `validate`, `score`, the studies, `sweep`, `partition`, `curve`
 // and `diagram` do not handle its contact phase yet: they refuse such a scene before anything is
 // computed, rather than answer for a rigid stop.

@@ -56,6 +56,69 @@ H5Table LoadsTable(const std::vector<const std::vector<ContactLoads>*>& rows, co
   return t;
 }
 
+// A compliant stop's contact phases along a branch (docs/compliant.md, "Along a continued
+// branch"; docs/output.md): per point and contact the largest peak force, the longest duration and
+// the number of phases, (N, m); the rigid model's distance, (N); and every phase of every point, in
+// flat columns, point i's phases at rows offsets[i] .. offsets[i+1] (as /branch/impact_*).
+H5Table ContactPhasesTable(const Branch& b) {
+  const size_t N = b.points.size();
+  int m = 1;
+  for (const auto& pt : b.points) {
+    m = std::max(m, static_cast<int>(pt.loads.size()));
+    for (const auto& p : pt.contact_phases) m = std::max(m, p.contact + 1);
+  }
+  const auto M = static_cast<size_t>(m);
+  std::vector<double> peak(N * M, kNaN), duration(N * M, kNaN), count(N * M, 0), rigid, offsets{0};
+  std::vector<double> contact, entry, exit, dur, vin, vout, force, tpeak, pen, impulse, energy;
+  for (size_t i = 0; i < N; ++i) {
+    const auto& pt = b.points[i];
+    const ContactPhaseExtremes e = ExtremesOf(pt.contact_phases, m);
+    for (size_t j = 0; j < M; ++j) {
+      peak[i * M + j] = e.peak_force[j];
+      duration[i * M + j] = e.duration[j];
+      count[i * M + j] = e.phases[j];
+    }
+    rigid.push_back(pt.rigid_distance);
+    for (const auto& p : pt.contact_phases) {
+      contact.push_back(p.contact);
+      entry.push_back(p.entry);
+      exit.push_back(p.exit);
+      dur.push_back(p.duration);
+      vin.push_back(p.entry_velocity);
+      vout.push_back(p.exit_velocity);
+      force.push_back(p.peak_force);
+      tpeak.push_back(p.peak_time);
+      pen.push_back(p.penetration);
+      impulse.push_back(p.impulse);
+      energy.push_back(p.dissipated);
+    }
+    offsets.push_back(static_cast<double>(contact.size()));
+  }
+  H5Table t;
+  t.arrays.push_back({"peak_force", {N, M}, peak});
+  t.arrays.push_back({"duration", {N, M}, duration});
+  t.arrays.push_back({"phases", {N, M}, count, 'i'});
+  t.arrays.push_back({"rigid_distance", {N}, rigid});
+  t.arrays.push_back({"offsets", {N + 1}, offsets, 'i'});
+  const auto col = [&](const char* name, std::vector<double> v, char type = 'f') {
+    const size_t rows = v.size();
+    t.arrays.push_back({name, {rows}, std::move(v), type});
+  };
+  col("phase_contact", contact, 'i');
+  col("phase_entry", entry);
+  col("phase_exit", exit);
+  col("phase_duration", dur);
+  col("phase_entry_velocity", vin);
+  col("phase_exit_velocity", vout);
+  col("phase_peak_force", force);
+  col("phase_peak_time", tpeak);
+  col("phase_penetration", pen);
+  col("phase_impulse", impulse);
+  col("phase_energy_dissipated", energy);
+  t.integers = {{"contacts", static_cast<long long>(m)}};
+  return t;
+}
+
 }  // namespace
 
 void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
@@ -152,6 +215,8 @@ void Hdf5Store::WriteBranch(const Branch& b, const std::string& group) {
     notes.push_back(pt.loads_note);
   }
   WriteTable(group + "/branch/loads", LoadsTable(loads, notes));
+  if (std::any_of(b.points.begin(), b.points.end(), [](const BranchPoint& pt) { return !pt.contact_phases.empty(); }))
+    WriteTable(group + "/branch/contact_phases", ContactPhasesTable(b));
 
   H5Table bt;
   std::vector<double> bv, bb, bc, rot, nv, nd, bp;

@@ -1,6 +1,8 @@
 // A periodic orbit in the store (docs/output.md, /orbit): scalars and the section point as
 // attributes, the Floquet multipliers as an (m, 2) [re, im] attribute, the contact sequence of an
-// orbit with several contacts as a string attribute.
+// orbit with several contacts as a string attribute, a compliant orbit's contact phases as a table.
+#include <vector>
+
 #include <fmt/format.h>
 
 #include "io/hdf5_store_impl.hpp"
@@ -29,6 +31,31 @@ void Hdf5Store::WriteOrbit(const OrbitResult& orbit) {
   // Jacobian on the orbit (docs/output.md).
   if (!orbit.sequence.empty()) h5::WriteString(o, "sequence", orbit.sequence);
   if (!orbit.no_jacobian.empty()) h5::WriteString(o, "no_jacobian", orbit.no_jacobian);
+  // Compliant stops: each contact phase of the orbit's q periods with its exact loads, one row per
+  // phase in order from the section (docs/compliant.md, "Periodic orbits"; docs/output.md).
+  if (!orbit.contact_phases.empty()) {
+    H5Table t;
+    const size_t P = orbit.contact_phases.size();
+    const auto col = [&](const char* name, double OrbitResult::ContactPhase::*field) {
+      std::vector<double> v;
+      for (const auto& p : orbit.contact_phases) v.push_back(p.*field);
+      t.arrays.push_back({name, {P}, std::move(v)});
+    };
+    std::vector<double> contact;
+    for (const auto& p : orbit.contact_phases) contact.push_back(p.contact);
+    t.arrays.push_back({"contact", {P}, std::move(contact), 'i'});
+    col("entry", &OrbitResult::ContactPhase::entry);
+    col("exit", &OrbitResult::ContactPhase::exit);
+    col("duration", &OrbitResult::ContactPhase::duration);
+    col("entry_velocity", &OrbitResult::ContactPhase::entry_velocity);
+    col("exit_velocity", &OrbitResult::ContactPhase::exit_velocity);
+    col("peak_force", &OrbitResult::ContactPhase::peak_force);
+    col("peak_time", &OrbitResult::ContactPhase::peak_time);
+    col("penetration", &OrbitResult::ContactPhase::penetration);
+    col("impulse", &OrbitResult::ContactPhase::impulse);
+    col("energy_dissipated", &OrbitResult::ContactPhase::dissipated);
+    WriteTable("/orbit/contact_phases", t);
+  }
 }
 
 InitialOverride ReadOrbitSection(const std::string& path) {

@@ -165,6 +165,29 @@ std::string SimulationJson(const Scene& scene, const RunResult& r, const Attract
   return j.dump();
 }
 
+namespace {
+
+// The contact phases of compliant stops over an orbit's q periods (docs/compliant.md), as `vibro
+// orbit --json` and each point of `vibro continue --json` give them.
+nlohmann::json ContactPhasesJson(const std::vector<OrbitResult::ContactPhase>& contact_phases) {
+  auto phases = nlohmann::json::array();
+  for (const auto& p : contact_phases)
+    phases.push_back({{"contact", p.contact},
+                      {"entry", p.entry},
+                      {"exit", p.exit},
+                      {"duration", p.duration},
+                      {"entry_velocity", p.entry_velocity},
+                      {"exit_velocity", p.exit_velocity},
+                      {"peak_force", p.peak_force},
+                      {"peak_time", p.peak_time},
+                      {"penetration", p.penetration},
+                      {"impulse", p.impulse},
+                      {"energy_dissipated", p.dissipated}});
+  return phases;
+}
+
+}  // namespace
+
 std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* loads) {
   nlohmann::json j;
   j["status"] = o.status;
@@ -198,22 +221,7 @@ std::string OrbitJson(const OrbitResult& o, OrbitKind kind, const LoadsSummary* 
   if (!o.no_jacobian.empty()) j["no_jacobian"] = o.no_jacobian;
   // A compliant stop (docs/compliant.md, "Periodic orbits"): each contact phase of the orbit's q
   // periods with its exact loads.
-  if (!o.contact_phases.empty()) {
-    auto phases = nlohmann::json::array();
-    for (const auto& p : o.contact_phases)
-      phases.push_back({{"contact", p.contact},
-                        {"entry", p.entry},
-                        {"exit", p.exit},
-                        {"duration", p.duration},
-                        {"entry_velocity", p.entry_velocity},
-                        {"exit_velocity", p.exit_velocity},
-                        {"peak_force", p.peak_force},
-                        {"peak_time", p.peak_time},
-                        {"penetration", p.penetration},
-                        {"impulse", p.impulse},
-                        {"energy_dissipated", p.dissipated}});
-    j["contact_phases"] = phases;
-  }
+  if (!o.contact_phases.empty()) j["contact_phases"] = ContactPhasesJson(o.contact_phases);
   j["distance_from_start"] = OrNull(o.distance_from_start);
   if (!o.reached.empty()) j["reached"] = o.reached;
   j["newton_iterations"] = o.newton_iterations;
@@ -325,6 +333,12 @@ nlohmann::json BranchObject(const Branch& b) {
                       {"section_phase", pt.section_phase},
                       {"strobe", StrobeJson(pt.strobe)}});
     AddPointLoads(points.back(), pt.loads, pt.loads_note);
+    // A compliant stop (docs/compliant.md, "Along a continued branch"): the point's contact phases
+    // and the rigid model's distance (null: not computed, or no rigid orbit there).
+    if (!pt.contact_phases.empty()) {
+      points.back()["contact_phases"] = ContactPhasesJson(pt.contact_phases);
+      points.back()["rigid_distance"] = std::isfinite(pt.rigid_distance) ? nlohmann::json(pt.rigid_distance) : nlohmann::json(nullptr);
+    }
   }
   j["points"] = points;
   auto bif = nlohmann::json::array();

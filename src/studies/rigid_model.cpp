@@ -247,6 +247,47 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
   return c;
 }
 
+void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
+                              const OrbitRequest& request, const std::atomic<bool>* stop_requested) {
+  for (BranchPoint& pt : branch.points) {
+    if (stop_requested && stop_requested->load()) return;
+    const Scene scene = scene_at(pt.value);
+    if (!HasCompliantContact(scene)) return;
+    const System sys(scene);
+    OrbitResult orbit;
+    orbit.status = "converged";
+    orbit.period = branch.period;
+    orbit.section_time = pt.section_time;
+    orbit.X = pt.X;
+    orbit.V = pt.V;
+    const RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request);
+    // The rigid model's orbit beside this one: an impact orbit with one impact per contact phase of
+    // the point's orbit, on the same contacts. Another orbit that the rigid map's Newton reached from
+    // the point's state (near a bifurcation of either model) is no distance between the two models.
+    std::vector<int> phases(static_cast<size_t>(sys.contact_count()), 0), impacts(phases.size(), 0);
+    for (const auto& p : pt.contact_phases)
+      if (p.contact >= 0 && static_cast<size_t>(p.contact) < phases.size()) ++phases[static_cast<size_t>(p.contact)];
+    for (const int j : c.orbit.summary.impact_contacts)
+      if (j >= 0 && static_cast<size_t>(j) < impacts.size()) ++impacts[static_cast<size_t>(j)];
+    bool beside = c.orbit.status == "converged" && c.orbit.summary.kind == "impact-periodic" && phases == impacts;
+    // ... and each impact inside a contact phase of its contact, widened by the phase's duration on
+    // either side (forcing phases compared mod 2π).
+    const double w = sys.frequency();
+    const auto& a = c.orbit.summary;
+    for (size_t i = 0; beside && i < a.impact_phases.size() && i < a.impact_contacts.size(); ++i) {
+      bool inside = false;
+      for (const auto& p : pt.contact_phases) {
+        if (p.contact != a.impact_contacts[i]) continue;
+        const double from = w * (p.entry - p.duration), span = w * 3 * p.duration;
+        const double rel = std::remainder(a.impact_phases[i] - from - span / 2, 2 * M_PI) + span / 2;
+        inside = inside || (rel >= 0 && rel <= span);
+      }
+      beside = inside;
+    }
+    pt.rigid_distance = beside ? c.distance : std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
 std::string RigidOrbitJson(const RigidOrbitComparison& c) {
   const auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
   nlohmann::json j;

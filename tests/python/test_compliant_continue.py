@@ -1,0 +1,155 @@
+"""Contact loads along a continued branch of a compliant stop (docs/compliant.md, "Along a continued
+branch"), against the truth of tests/python/test_compliant_orbit.py, written without vibro's code:
+the return map of mpmath's Taylor ODE solver at 30 digits, phase by phase, each entry and exit by
+bisection, the peak force from λ' = 0, the impulse and the dashpot's energy by mpmath.quad.
+
+The scene: test_compliant_orbit's one-DOF structure (unit mass, ζ = 0.05, F = 0.5 sin ωt) on a
+spring–dashpot stop at −0.5 (k = 400, c = 2), both separation rules, continued in ω from 0.8 to 1.0
+(the peak force falls from 15.8 to 14.7 near ω = 0.9, then rises). At the first, a middle and the
+last point of the branch, from the point's stored section state (/branch/section_time, X, V):
+
+* the state is a fixed point of the reference's map at that ω (to Newton's 1e-12);
+* each contact phase of the point (vibro.continue_()["points"][i]["contact_phases"]): entry and exit
+  to 1e-12, peak force, penetration, impulse and dissipated energy to 1e-13 relative;
+* ``contact_phases["peak_force"]`` and ``["duration"]`` (per contact) are the largest of them, and
+  the HDF5 file's /branch/contact_phases holds the same numbers as the JSON; the CLI's --json equals
+  the Python dict.
+
+A rigid scene's branch has none of these keys (its outputs unchanged).
+"""
+import json
+import os
+import subprocess
+
+import h5py
+import mpmath as mp
+import numpy as np
+import pytest
+
+vibro = pytest.importorskip("vibro")
+
+from test_compliant_orbit import Ref, return_map, scene_text  # noqa: E402  (the same reference)
+
+
+@pytest.fixture(autouse=True)
+def _keep_mpmath_precision():
+    dps = mp.mp.dps
+    yield
+    mp.mp.dps = dps
+
+
+@pytest.mark.parametrize("rule", ["force", "gap"])
+def test_branch_contact_phases_against_taylor_return_map(tmp_path, rule):
+    path = tmp_path / f"{rule}.toml"
+    path.write_text(scene_text(rule))
+    out = tmp_path / f"{rule}.h5"
+    b = vibro.continue_(vibro.load_scene(str(path)), "excitation.frequency", 1.0, out=str(out))
+    pts = b["points"]
+    assert b["end"] == "reached the end value" and len(pts) > 5, b["end"]
+    cp = b["contact_phases"]
+    with h5py.File(out, "r") as f:
+        g = f["/branch"]
+        t0s, Xs, Vs = g["section_time"][:], g["X"][:], g["V"][:]
+        h = f["/branch/contact_phases"]
+        np.testing.assert_array_equal(h["peak_force"][:], cp["peak_force"])
+        np.testing.assert_array_equal(h["duration"][:], cp["duration"])
+        np.testing.assert_array_equal(h["phases"][:], cp["phases"])
+        np.testing.assert_array_equal(h["rigid_distance"][:], cp["rigid_distance"])
+        offsets = h["offsets"][:]
+        for i, p in enumerate(pts):
+            rows = range(offsets[i], offsets[i + 1])
+            assert [h["phase_peak_force"][r] for r in rows] == [c["peak_force"] for c in p["contact_phases"]]
+            assert [h["phase_duration"][r] for r in rows] == [c["duration"] for c in p["contact_phases"]]
+    worst = 0.0
+    for i in (0, len(pts) // 2, len(pts) - 1):
+        p = pts[i]
+        omega = p["value"]
+        mp.mp.dps = 30
+        ref = Ref(rule, freq=mp.mpf(omega))
+        z = [mp.mpf(float(Xs[i][0])), mp.mpf(float(Vs[i][0]))]
+        Pz, phases = return_map(mp.mpf(float(t0s[i])), z, ref, periods=b["period"], loads=True)
+        scale = max(abs(z[0]), abs(z[1]))
+        assert max(abs(Pz[k] - z[k]) for k in range(2)) <= 1e-12 * (1 + scale), (omega, Pz, z)
+        got = p["contact_phases"]
+        assert len(got) == len(phases) == 1, (got, phases)
+        for c, r in zip(got, phases):
+            assert abs(c["entry"] - float(r["entry"])) <= 1e-12 * abs(float(r["entry"]))
+            assert abs(c["exit"] - float(r["exit"])) <= 1e-12 * abs(float(r["exit"]))
+            assert abs(c["duration"] - float(r["exit"] - r["entry"])) <= 1e-11 * float(r["exit"] - r["entry"])
+            for key in ("peak_force", "penetration", "impulse", "energy_dissipated"):
+                want = float(r[key])
+                err = abs(c[key] - want) / abs(want)
+                worst = max(worst, err)
+                assert err <= 1e-13, (omega, key, c[key], want)
+        assert cp["peak_force"][i, 0] == max(c["peak_force"] for c in got)
+        assert cp["duration"][i, 0] == max(c["duration"] for c in got)
+        assert cp["phases"][i, 0] == len(got)
+        # The rigid model's orbit beside it: found at every point of this branch, within the clearance.
+        assert 0 < cp["rigid_distance"][i] < 0.5, cp["rigid_distance"][i]
+    print(f"{rule}: loads along the branch within {worst:.2g} of the 30-digit reference")
+
+
+def test_branch_json_equals_cli_and_rigid_unchanged(tmp_path):
+    cli = os.environ.get("VIBRO_CLI", "")
+    if not cli:
+        pytest.skip("VIBRO_CLI is not set")
+    scene = tmp_path / "s.toml"
+    scene.write_text(scene_text("force"))
+    got = vibro.continue_(vibro.load_scene(str(scene)), "excitation.frequency", 0.85)
+    p = subprocess.run([cli, "continue", str(scene), "--param", "excitation.frequency", "--to", "0.85", "--json"],
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    want = json.loads(p.stdout)
+    assert got["points"] == want["points"]
+    t = subprocess.run([cli, "continue", str(scene), "--param", "excitation.frequency", "--to", "0.85"],
+                       capture_output=True, text=True, timeout=600)
+    assert t.returncode == 0 and "peak_force" in t.stdout and "rigid_dist" in t.stdout, t.stdout
+    # A rigid stop: no contact phases, no new keys or columns.
+    rigid = tmp_path / "r.toml"
+    rigid.write_text(scene_text("force").replace("stiffness = 400.0\ndamping = 2.0\nseparation = \"force\"\n",
+                                                 "restitution = 0.8\n"))
+    r = vibro.continue_(vibro.load_scene(str(rigid)), "excitation.frequency", 0.85)
+    assert "contact_phases" not in r and all("contact_phases" not in q and "rigid_distance" not in q
+                                             for q in r["points"])
+    t = subprocess.run([cli, "continue", str(rigid), "--param", "excitation.frequency", "--to", "0.85"],
+                       capture_output=True, text=True, timeout=600)
+    assert t.returncode == 0 and "peak_force" not in t.stdout, t.stdout
+
+
+def test_orbit_file_holds_contact_phases(tmp_path):
+    """`vibro orbit --out` (vibro.orbit(out=...)) stores the orbit's contact phases in
+    /orbit/contact_phases, the JSON's numbers."""
+    path = tmp_path / "s.toml"
+    path.write_text(scene_text("force"))
+    out = tmp_path / "o.h5"
+    o = vibro.orbit(vibro.load_scene(str(path)), out=str(out))
+    assert o["attractor_kind"] == "contact-periodic"
+    with h5py.File(out, "r") as f:
+        g = f["/orbit/contact_phases"]
+        for key in ("contact", "entry", "exit", "duration", "entry_velocity", "exit_velocity", "peak_force",
+                    "peak_time", "penetration", "impulse", "energy_dissipated"):
+            assert list(g[key][:]) == [p[key] for p in o["contact_phases"]], key
+
+
+def test_branch_in_the_stiffness_approaches_the_rigid_model():
+    """Continued in the stop's stiffness (k = 400 to 40000, c = 2), the orbit's distance to the rigid
+    model's orbit beside it (restitution e(ζ) of each point's ζ = c/(2√k)) falls like k^(−1/2), the
+    rate of docs/loads.md's convergence (the penetration scales as v/ω_c): the fitted slope over the
+    last decade in log-log, and the peak force grows like √k (F_max ≈ √(k m) v for a small ζ)."""
+    import tempfile
+    with tempfile.TemporaryDirectory() as work:
+        path = os.path.join(work, "s.toml")
+        with open(path, "w") as f:
+            f.write(scene_text("force"))
+        b = vibro.continue_(vibro.load_scene(path), "stop.stiffness", 40000.0)
+    assert b["end"] == "reached the end value", b["end"]
+    k = np.array([p["value"] for p in b["points"]])
+    d = b["contact_phases"]["rigid_distance"]
+    peak = b["contact_phases"]["peak_force"][:, 0]
+    assert np.all(np.isfinite(d)) and np.all(np.diff(d) < 0), d
+    last = k >= 4000
+    slope = np.polyfit(np.log(k[last]), np.log(d[last]), 1)[0]
+    assert abs(slope + 0.5) < 0.05, slope
+    slope_peak = np.polyfit(np.log(k[last]), np.log(peak[last]), 1)[0]
+    assert abs(slope_peak - 0.5) < 0.1, slope_peak
+    print(f"distance slope {slope:.3f}, peak-force slope {slope_peak:.3f}")
