@@ -150,7 +150,7 @@ def test_plot_and_python_show_the_strobe(tmp_path):
     path = tmp_path / "tube.toml"
     path.write_text(TUBE.format(w=0.9))
     out = tmp_path / "tube.h5"
-    b = json.loads(vibro("continue", path, "--param", "excitation.frequency", "--to", 1.6, "--out", out, "--json"))
+    b = json.loads(vibro("continue", path, "--param", "excitation.frequency", "--to", 1.3, "--out", out, "--json"))
     sys.path.insert(0, os.path.join(ROOT, "scripts"))
     import matplotlib
     matplotlib.use("Agg")
@@ -164,8 +164,10 @@ def test_plot_and_python_show_the_strobe(tmp_path):
     assert np.isin(strobe[:, 0], drawn).all()
     assert "t_0 + kT" in ax.get_ylabel() and "contacts 0, 1" in ax.get_ylabel(), ax.get_ylabel()
     plt.close(fig)
-    # One contact sequence along the whole branch (0:impact 1:impact, the section moving does not
-    # change it): no dotted line and no key saying the sequence changes (issue 37, item 8).
+    # One contact sequence along the whole branch up to 1.3, below the grazing at 1.3646 (0:impact
+    # 1:impact, the section moving does not change it): no dotted line and no key saying the
+    # sequence changes (issue 37, item 8). Past the grazing the branch goes on with 0:impact*2
+    # 1:impact, a true change.
     fig, ax = plt.subplots()
     with h5py.File(out) as f:
         vibro_plot.mark_sequences(fig, ax, f)
@@ -174,6 +176,6 @@ def test_plot_and_python_show_the_strobe(tmp_path):
     assert "contact sequence changes" not in ax.get_legend_handles_labels()[1], ax.get_legend_handles_labels()[1]
     plt.close(fig)
     vibro_py = pytest.importorskip("vibro")
-    d = vibro_py.continue_(str(path), "excitation.frequency", 1.6)
+    d = vibro_py.continue_(str(path), "excitation.frequency", 1.3)
     assert d["strobe"].shape == (len(b["points"]), 2)
     assert np.array_equal(d["strobe"], np.array([p["strobe"] for p in b["points"]]))
