@@ -34,7 +34,8 @@ bool SameContactSequence(const std::vector<std::string>& a, const std::vector<st
 
 // The sequence of `events` in order (as ParseContactSequence returns it): one entry per event,
 // the contacts of one simultaneous impact (flagged `simultaneous`, at one time) in one entry.
-std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events);
+// `first` (when given) receives, for each entry, the index in `events` of its first event.
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events, std::vector<size_t>* first = nullptr);
 
 // The canonical rotation of a cyclic sequence (docs/contacts.md, "Contact sequences are cyclic
 // words"): the rotation whose tokens form the least word, a token being an entry or a whole chattering run at
@@ -45,6 +46,11 @@ std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events);
 // the same order, form the least word. Every rotation of a word gives the same result; the word's
 // length and entries are kept (nothing is reduced to its repeating unit).
 std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entries);
+// Where that rotation starts: the index in `entries` of its first entry (0 for fewer than two
+// entries; of several starts giving the one word, the one this computes). CanonicalRotation is
+// `entries` rotated to start there; an orbit's events are listed from there (poincare.hpp,
+// StartAtCanonicalRotation).
+size_t CanonicalStart(const std::vector<std::string>& entries);
 // The text of a sequence in its canonical rotation, runs of k equal entries written once with
 // "*k" (OrbitResult::sequence, and every sequence vibro writes).
 std::string ContactSequenceText(const std::vector<std::string>& entries);

@@ -166,6 +166,11 @@ struct Branch {
   // Map evaluations done in quad precision because the double engine left a chattering sequence
   // undetermined there (near the end of a sticking branch; docs/chattering.md).
   int quad_evaluations = 0;
+  // The branch met a corner of the map (TangentTracker::corner(): a simultaneous impact whose orders
+  // of closing give different Jacobians, docs/contacts.md "Periodic orbits"): where (the first one
+  // met, with its λ), and that the Newton steps, multipliers and bifurcations follow the first
+  // order's piece. Empty when none was met.
+  std::string corner;
 };
 
 Branch Continue(const ContinuationRequest& request);

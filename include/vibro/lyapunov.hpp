@@ -37,6 +37,11 @@ struct LyapunovSpectrum {
   int blocks = 0;         // blocks of periods behind the interval
   long long singular_periods = 0;  // periods left out: a grazing contact made the map singular
   std::string undefined;           // why there are no exponents; empty when there are
+  // The run passed through a corner of the map (TangentTracker::corner(): a simultaneous impact whose
+  // orders of closing give different Jacobians, docs/contacts.md "Periodic orbits"): where, and that
+  // the exponents follow the first order's piece (the gaps closing in ascending contact order).
+  // Empty when no corner was met.
+  std::string corner;
   // The largest exponent is positive beyond its confidence interval.
   bool chaotic() const { return undefined.empty() && !ci.empty() && ci.front().first > 0; }
 };

@@ -236,8 +236,9 @@ bool SameContactSequence(const std::vector<std::string>& a, const std::vector<st
   return false;
 }
 
-std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
+std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events, std::vector<size_t>* first) {
   std::vector<std::string> out;
+  if (first) first->clear();
   std::vector<int> together;  // the contacts of the entry being built
   const Event* last = nullptr;
   const auto flush = [&] {
@@ -255,7 +256,10 @@ std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
   };
   for (const Event& e : events) {
     const bool joins = last && e.simultaneous && last->simultaneous && e.t == last->t && e.kind == last->kind;
-    if (!joins) flush();
+    if (!joins) {
+      flush();
+      if (first) first->push_back(static_cast<size_t>(&e - events.data()));
+    }
     together.push_back(e.contact);
     last = &e;
   }
@@ -263,8 +267,8 @@ std::vector<std::string> ContactSequenceOf(const std::vector<Event>& events) {
   return out;
 }
 
-std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entries) {
-  if (entries.size() < 2) return entries;
+size_t CanonicalStart(const std::vector<std::string>& entries) {
+  if (entries.size() < 2) return 0;
   const std::vector<Token> tokens = Tokens(entries);
   std::vector<std::string> names;
   names.reserve(tokens.size());
@@ -283,8 +287,12 @@ std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entri
       }
     start += LeastRotation(Ranked(blocks)) * unit;
   }
+  return tokens[start % tokens.size()].first;
+}
+
+std::vector<std::string> CanonicalRotation(const std::vector<std::string>& entries) {
   std::vector<std::string> out(entries);
-  std::rotate(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(tokens[start % tokens.size()].first), out.end());
+  std::rotate(out.begin(), out.begin() + static_cast<std::ptrdiff_t>(CanonicalStart(entries)), out.end());
   return out;
 }
 

@@ -97,6 +97,8 @@ class Problem {
       no_jacobian_ = m.undefined;
       return std::nullopt;
     }
+    // A corner of the map: the derivative is the first order's piece's (the tracker's default).
+    if (jac && !m.corner.empty() && corner_.empty()) corner_ = fmt::format("{} at λ = {:.17g}", m.corner, lambda);
     if (jac) *jac = m.jacobian;
     Eigen::VectorXd out(2 * n);
     out << m.X, m.V;
@@ -173,6 +175,8 @@ class Problem {
   }
   // Why the last map evaluation that failed for lack of a derivative had none (empty: none failed so).
   const std::string& no_jacobian() const { return no_jacobian_; }
+  // The first corner of the map a derivative was taken at (empty: none), with its λ.
+  const std::string& corner() const { return corner_; }
 
  private:
   const ContinuationRequest& req_;
@@ -182,6 +186,7 @@ class Problem {
   mutable int quad_evaluations_ = 0;
   mutable bool undetermined_ = false;
   mutable std::string no_jacobian_;
+  mutable std::string corner_;
   double lambda_step_ = 1e-6;
 };
 
@@ -936,6 +941,9 @@ void EndAtRepeat(Branch& br, const RepeatedTransition& r) {
 // The branch as returned, with how many map evaluations needed the quad engine.
 Branch& Finish(Branch& br, const Problem& p) {
   br.quad_evaluations = p.quad_evaluations();
+  if (!p.corner().empty())
+    br.corner = p.corner() + ": the branch's Newton steps, multipliers and bifurcations follow the first order's "
+                             "piece (the gaps closing in ascending contact order)";
   for (auto& b : br.bifurcations)  // found after the last point: that point is before it
     if (b.point < 0 && !br.points.empty()) b.point = static_cast<long long>(br.points.size()) - 1;
   return br;

@@ -178,6 +178,10 @@ LyapunovSpectrum LyapunovObserver::Spectrum() const {
   LyapunovSpectrum out;
   out.periods = measured_;
   out.singular_periods = singular_;
+  // A corner of the map met on the way: the frame followed piece 0 (the tracker's default).
+  if (!tangent_.corner().empty())
+    out.corner = tangent_.corner() + ": the exponents follow the first order's piece (the gaps closing in "
+                                     "ascending contact order); the other orders' pieces may give other exponents";
   if (measured_ == 0) {
     out.undefined = "no period of the second half of the run was measured";
     return out;

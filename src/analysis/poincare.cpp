@@ -1172,6 +1172,97 @@ void Characterize(const System& sys, const Scene& scene, OrbitResult& out) {
 }
 
 
+namespace {
+
+// The orbit's events over its q periods from its section, in time order (as Characterize reads
+// its sequence); none when the run fails.
+std::vector<Event> EventsFromSection(const System& sys, const Scene& scene, const OrbitResult& o) {
+  Scene sc = scene;
+  sc.initial_time = o.section_time;
+  sc.run.periods = o.period;
+  sc.run.samples_per_period = 0;
+  const InitialOverride here{o.section_time, o.X, o.V};
+  const auto run = [&](const Scene& at) {
+    SequenceRecorder events(o.period, o.section_time, HeldAtSection(sys, Stack(o.X, o.V)));
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.observers = {&events};
+    opt.max_segments = kMapSegmentsPerPeriod * o.period;
+    const RunStatus status = Simulate(sys, at, opt).status;
+    return std::make_pair(status, std::move(events.events));
+  };
+  auto [status, events] = run(sc);
+  if (status == RunStatus::kUndetermined && QuadDecides(sc)) {
+    sc.run.precision = Precision::kQuad;
+    std::tie(status, events) = run(sc);
+  }
+  return status == RunStatus::kOk ? events : std::vector<Event>{};
+}
+
+}  // namespace
+
+void StartAtCanonicalRotation(const System& sys, const Scene& scene, const OrbitRequest& req, OrbitResult& orbit) {
+  if (orbit.status != "converged" || orbit.sequence.empty() || orbit.period < 1) return;
+  const std::vector<Event> events = EventsFromSection(sys, scene, orbit);
+  std::vector<size_t> first;
+  const std::vector<std::string> word = ContactSequenceOf(events, &first);
+  if (word.size() < 2 || CanonicalRotation(word) == word) return;  // already read from its start
+  const size_t s = CanonicalStart(word);
+  if (s == 0 || s >= first.size() || first[s] == 0) return;
+  // The stretch between the event before the canonical start and its first event: its middle, on
+  // a grid of T/N from the section (N = 1024·2^k, fine enough for a quarter of the stretch).
+  const double T = sys.period(), t_prev = events[first[s] - 1].t, t_first = events[first[s]].t;
+  const double stretch = t_first - t_prev;
+  long long N = 1024;
+  while (T / static_cast<double>(N) > stretch / 4 && N < (1LL << 16)) N *= 2;
+  if (!(T / static_cast<double>(N) <= stretch / 4)) return;  // too short a stretch: kept as found
+  const double h = T / static_cast<double>(N);
+  const long long j = std::llround((0.5 * (t_prev + t_first) - orbit.section_time) / h);
+  SampleCatcher catcher;
+  catcher.target_time = orbit.section_time + static_cast<double>(j) * h;
+  catcher.half_spacing = 0.5 * h;
+  {
+    Scene sc = scene;
+    sc.initial_time = orbit.section_time;
+    sc.run.periods = static_cast<long long>(std::floor(static_cast<double>(j) / static_cast<double>(N))) + 1;
+    sc.run.samples_per_period = static_cast<int>(N);
+    const InitialOverride here{orbit.section_time, orbit.X, orbit.V};
+    SimulationOptions opt;
+    opt.initial = &here;
+    opt.observers = {&catcher};
+    opt.max_segments = kMapSegmentsPerPeriod * sc.run.periods;
+    const RunStatus status = Simulate(sys, sc, opt).status;
+    if (status != RunStatus::kOk && !(status == RunStatus::kUndetermined && QuadDecides(sc))) return;
+    if (status != RunStatus::kOk) {
+      sc.run.precision = Precision::kQuad;
+      catcher.caught = false;
+      catcher.seen = 0;
+      Simulate(sys, sc, opt);
+    }
+  }
+  if (!catcher.caught || !(catcher.t > t_prev && catcher.t < t_first)) return;
+  if (sys.contact_count() < 2 && catcher.mode != Mode::kFree) return;
+  // Newton there (a polish: the point is on the orbit to the transport's rounding), then the
+  // orbit characterized again from it.
+  OrbitResult moved;
+  moved.period = orbit.period;
+  NewtonOnStroboscopicMap(sys, scene, catcher.t, Stack(catcher.X, catcher.V), orbit.period, req, moved);
+  if (moved.status != "converged") return;
+  Characterize(sys, scene, moved);
+  if (moved.sequence != orbit.sequence || moved.summary.kind != orbit.summary.kind ||
+      moved.summary.period != orbit.summary.period)
+    return;
+  const std::vector<std::string> from_new = ContactSequenceOf(EventsFromSection(sys, scene, moved));
+  if (from_new != CanonicalRotation(from_new)) return;
+  moved.newton_iterations += orbit.newton_iterations;
+  moved.quad_evaluations += orbit.quad_evaluations;
+  moved.message = orbit.message;
+  moved.distance_from_start = orbit.distance_from_start;
+  moved.reached = orbit.reached;
+  moved.undetermined = orbit.undetermined;
+  orbit = std::move(moved);
+}
+
 // Newton on F(z) − z from z at the section time t0, with the analytic DF; the step is halved while
 // it would put a contact on or through its stop. A section held on contacts S (an orbit of several
 // contacts whose every period has a contact held, e.g. a stacked cradle whose lower mass never

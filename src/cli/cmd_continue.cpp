@@ -186,6 +186,7 @@ int RunContinue(const std::string& path, std::vector<std::string> sets, bool jso
       fmt::print("relabel      {} → {} at {} = {:#.17g} (bracket {:.1e}; no bifurcation): {}\n", r.from, r.to, key,
                  r.value, r.bracket, r.detail);
     fmt::print("end          {}\n", branch.end);
+    if (!branch.corner.empty()) fmt::print("corner       {}\n", branch.corner);
     if (branch.quad_evaluations > 0)
       fmt::print("quad         {} map evaluations in quad precision (chattering sequences that double "
                  "leaves undetermined)\n", branch.quad_evaluations);

@@ -103,9 +103,10 @@ std::string LyapunovText(const LyapunovSpectrum& s, const std::string& indent) {
     else
       list += fmt::format("{:.4g}", e);
   }
-  return fmt::format("{}lyapunov     {} per unit time ({} periods{}){}\n", indent, list, s.periods,
+  return fmt::format("{}lyapunov     {} per unit time ({} periods{}){}\n{}", indent, list, s.periods,
                      s.singular_periods ? fmt::format(", {} left out for a grazing", s.singular_periods) : "",
-                     s.chaotic() ? ": chaotic" : "");
+                     s.chaotic() ? ": chaotic" : "",
+                     s.corner.empty() ? "" : fmt::format("{}corner       {}\n", indent, s.corner));
 }
 
 std::string LargestExponentCell(const std::optional<LyapunovSpectrum>& s) {

@@ -372,7 +372,7 @@ bool Automaton<S>::PairChatter(int k) {
   return Fail(fmt::format("contacts {} ({}) and {} ({}) chatter together toward one accumulation point "
                           "near t = {:.17g}: {} alternating impacts within 1e-9 T (last closing speed "
                           "{:.3g}). The accumulation point of two contacts chattering at once is not "
-                          "predicted (docs/contacts.md): undetermined, not guessed. Move the parameter",
+                          "predicted (docs/contacts.md): undetermined, not guessed. Move the parameter.",
                           std::min(k, other), labels_[static_cast<size_t>(std::min(k, other))],
                           std::max(k, other), labels_[static_cast<size_t>(std::max(k, other))], now,
                           pair_cascade_ + 1, R::to_double(speed)),
@@ -448,7 +448,7 @@ bool Automaton<S>::InterleavedChatter(int k) {
                           "after contact {}'s last event, within {:.3g} times the timing its gap's rounding "
                           "allows, so their order is below this run's resolution. The accumulation point "
                           "of two contacts chattering at once is not predicted (docs/contacts.md): "
-                          "undetermined, not guessed. Move the parameter",
+                          "undetermined, not guessed. Move the parameter.",
                           lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)], now,
                           runs_.size(), k, v, delta, j, v * delta / rounding),
               RunStatus::kUndetermined);
@@ -495,7 +495,7 @@ bool Automaton<S>::AccumulationOrdered(int j, const std::vector<int>& held, cons
                           "gap velocity {:.3g}): whether it arrives before or after that accumulation point "
                           "is below this run's resolution. The accumulation point of two contacts "
                           "chattering at once is not predicted (docs/contacts.md): undetermined, not "
-                          "guessed. Move the parameter",
+                          "guessed. Move the parameter.",
                           lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
                           AbsTime(clock_), runs_.size(), j, t_inf, k, reach / rounding, gap, rate),
               RunStatus::kUndetermined);
@@ -564,7 +564,7 @@ bool Automaton<S>::OnContactMulti(int k) {
                                   "they are coupled, so the order of their impacts decides the motion, "
                                   "and this precision cannot tell it. The accumulation point of "
                                   "two contacts chattering at once is not predicted (docs/contacts.md): "
-                                  "undetermined, not guessed. Move the parameter",
+                                  "undetermined, not guessed. Move the parameter.",
                                   lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
                                   AbsTime(clock_), -R::to_double(M(lo).ContactVelocity(V_)),
                                   -R::to_double(M(hi).ContactVelocity(V_))),
@@ -605,7 +605,7 @@ bool Automaton<S>::DecidableBesideHeld(int k) {
                             "They are coupled, so the order of their impacts decides the motion, and "
                             "this precision cannot tell it. The accumulation point of two contacts "
                             "chattering at once is not predicted (docs/contacts.md): undetermined, "
-                            "not guessed. Move the parameter",
+                            "not guessed. Move the parameter.",
                             lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
                             now, held, k, R::to_double(M(k).ContactVelocity(V_)), j),
                 RunStatus::kUndetermined);
@@ -638,7 +638,7 @@ bool Automaton<S>::ImpactWhileHeld(int k) {
                             "near t = {:.17g}: contact {} is at its stop within the rounding of its gap, "
                             "leaving it at {:.3g}, where contact {} is held after its impacts, as when two "
                             "contacts lift each other off in turn. The accumulation point of two contacts chattering at once is "
-                            "not predicted (docs/contacts.md): undetermined, not guessed. Move the parameter",
+                            "not predicted (docs/contacts.md): undetermined, not guessed. Move the parameter.",
                             lo, labels_[static_cast<size_t>(lo)], hi, labels_[static_cast<size_t>(hi)],
                             AbsTime(clock_), k, R::to_double(v_minus), j),
                 RunStatus::kUndetermined);
@@ -855,7 +855,7 @@ bool Automaton<S>::EnterActiveSet(std::vector<int> Z0, const std::vector<int>& w
       if (lam[a] <= tol && acc[a] <= tol)
         return Fail(fmt::format("contact {} at rest at t = {:.17g} with zero force and zero "
                                 "acceleration (a degenerate entry into sticking, docs/contacts.md): "
-                                "undetermined at this order. Move the parameter",
+                                "undetermined at this order. Move the parameter.",
                                 j, AbsTime(clock_)),
                     RunStatus::kUndetermined);
       gaps_[static_cast<size_t>(j)] = 0;

@@ -50,7 +50,7 @@ nlohmann::json AttractorObject(const Attractor& a) {
 nlohmann::json FiniteOrNull(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
 
 // The keys of a Lyapunov spectrum (docs/output.md): lyapunov_exponents (largest first, per unit
-// time, null for −∞), lyapunov_ci, lyapunov_periods, [lyapunov_singular_periods],
+// time, null for −∞), lyapunov_ci, lyapunov_periods, [lyapunov_singular_periods], [lyapunov_corner],
 // [lyapunov_undefined], chaotic.
 void AddLyapunov(nlohmann::json& j, const LyapunovSpectrum& ly) {
   auto exponents = nlohmann::json::array(), ci = nlohmann::json::array();
@@ -60,6 +60,7 @@ void AddLyapunov(nlohmann::json& j, const LyapunovSpectrum& ly) {
   j["lyapunov_ci"] = ci;
   j["lyapunov_periods"] = ly.periods;
   if (ly.singular_periods) j["lyapunov_singular_periods"] = ly.singular_periods;
+  if (!ly.corner.empty()) j["lyapunov_corner"] = ly.corner;
   if (!ly.undefined.empty()) j["lyapunov_undefined"] = ly.undefined;
   j["chaotic"] = ly.chaotic();
 }
@@ -370,6 +371,7 @@ nlohmann::json BranchObject(const Branch& b) {
   j["end"] = b.end;
   j["closed_loop"] = b.closed_loop;
   j["quad_evaluations"] = b.quad_evaluations;
+  if (!b.corner.empty()) j["corner"] = b.corner;
   return j;
 }
 }  // namespace
