@@ -262,14 +262,15 @@ void Characterize(const System& system, const Scene& scene, OrbitResult& orbit);
 // The orbit reported from the start of its contact sequence's canonical rotation
 // (contact_sequence.hpp; docs/orbits.md, "Where the orbit's listing starts"): when its events from
 // its section do not read in that rotation, the section moves along the orbit to the middle of the
-// stretch (free flight, or held on other contacts) just before the rotation's first event, Newton
+// free flight just before the rotation's first event, Newton
 // polishes the point there (F(z) − z is evaluated anew, usually 0 iterations; newton_iterations
 // adds them) and the orbit is characterized again, so that section_time, X, V, the monodromy, the
 // summary's impacts, the contact phases and every listing of its events start there. Nothing
 // changes when the orbit has no contact sequence (a [stop]), when its events already read in the
 // canonical rotation (an orbit of one contact with impacts only), or when the move fails (a
-// stretch shorter than 2^-14 T, or Newton or the characterization differing there): the orbit is
-// then kept as found. Called by SolveOrbit (orbit_from_state.hpp).
+// stretch shorter than 2^-14 T or not free, or Newton or the characterization differing there): the
+// orbit is then kept as found. Called where an orbit is reported as such: `vibro orbit` and
+// vibro.orbit (not by prove, continuation or check, which keep their own sections).
 void StartAtCanonicalRotation(const System& system, const Scene& scene, const OrbitRequest& request,
                               OrbitResult& orbit);
 

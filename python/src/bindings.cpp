@@ -446,7 +446,9 @@ std::pair<std::string, bool> Orbit(const PyScene& s, const std::string& kind, lo
   CreateStore(out, HeaderOf(s.loaded, sys)).reset();  // fail early
   SigintGuard guard(handle_sigint);
   py::gil_scoped_release release;
-  const auto orbit = vibro::SolveOrbit(sys, s.loaded.scene, req);
+  auto orbit = vibro::SolveOrbit(sys, s.loaded.scene, req);
+  // As the CLI: reported from the start of its contact sequence's canonical rotation (docs/orbits.md).
+  vibro::StartAtCanonicalRotation(sys, s.loaded.scene, req, orbit);
   if (guard.interrupted()) {
     if (!out.empty()) std::remove(out.c_str());
     return {"", true};

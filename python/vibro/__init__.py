@@ -385,7 +385,9 @@ def orbit(scene, kind="auto", period=0, impacts=0, guess=None, out=None, force=F
     phase ωt of the release (or first impact), or (phase, contact velocity): Newton starts there
     unless ``transient`` periods are asked for. Without a guess, ``transient`` defaults to 200;
     ``transient=0`` starts Newton at the scene's initial state (``vibro orbit --transient 0``). With
-    several contacts the dict also has ``sequence``, the orbit's contact sequence (docs/contacts.md),
+    several contacts the dict also has ``sequence``, the orbit's contact sequence (docs/contacts.md;
+    the orbit, its impacts and ``section_time`` reported from the start of its canonical rotation,
+    docs/orbits.md "Where the orbit's listing starts"),
     and ``no_jacobian`` when the orbit has no multipliers (a simultaneous impact of coupled contacts)."""
     if transient is None:
         transient = 0 if guess is not None else 200

@@ -192,13 +192,7 @@ OrbitResult SolveOrbit(const System& sys, const Scene& scene, const OrbitRequest
     const auto init = sys.Initial(scene);
     start = {init.time, init.X, init.V};
   }
-  // Either way the orbit is reported from the start of its sequence's canonical rotation
-  // (poincare.hpp, StartAtCanonicalRotation).
-  if (req.transient_periods <= 0) {
-    OrbitResult out = OrbitFromState(sys, scene, start, req);
-    StartAtCanonicalRotation(sys, scene, req, out);
-    return out;
-  }
+  if (req.transient_periods <= 0) return OrbitFromState(sys, scene, start, req);
 
   // The transient, seen at one forcing phase of the start (a sample in a free flight of its first
   // period, or the start itself), to measure the distance from the start to what it reaches.
@@ -264,7 +258,6 @@ OrbitResult SolveOrbit(const System& sys, const Scene& scene, const OrbitRequest
                                 "of {} periods: the orbit the start reaches, not one through it",
                                 d, req.transient_periods);
   }
-  StartAtCanonicalRotation(sys, scene, req, out);
   return out;
 }
 

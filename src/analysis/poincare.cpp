@@ -1241,7 +1241,8 @@ void StartAtCanonicalRotation(const System& sys, const Scene& scene, const Orbit
     }
   }
   if (!catcher.caught || !(catcher.t > t_prev && catcher.t < t_first)) return;
-  if (sys.contact_count() < 2 && catcher.mode != Mode::kFree) return;
+  // A free section only: one inside a held phase would cut that phase's stick from its release.
+  if (catcher.mode != Mode::kFree) return;
   // Newton there (a polish: the point is on the orbit to the transport's rounding), then the
   // orbit characterized again from it.
   OrbitResult moved;

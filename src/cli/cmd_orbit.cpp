@@ -24,7 +24,9 @@ int RunOrbit(const std::string& path, const std::vector<std::string>& sets, bool
   if (!out.empty()) vibro::Hdf5Store::Create(out, vibro::frontend::HeaderOf(loaded, sys)).reset();  // fail early
   // An orbit is found whole or not at all: a stop request removes the unfilled file and leaves.
   vibro::cli::DiscardOnStop(out);
-  const auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
+  auto orbit = vibro::SolveOrbit(sys, loaded.scene, req);
+  // Reported from the start of its contact sequence's canonical rotation (docs/orbits.md).
+  vibro::StartAtCanonicalRotation(sys, loaded.scene, req, orbit);
   vibro::cli::KeepOnStop();
   const bool converged = orbit.status == "converged";
   // The orbit's exact per-period contact loads (docs/loads.md): one period simulated from it.
