@@ -183,5 +183,25 @@ TEST(ContactSequence, EveryRotationIsWrittenTheSame) {
   }
 }
 
+
+// Where the canonical rotation starts (an orbit's events are listed from there, docs/orbits.md):
+// the word rotated to start there is the canonical rotation, for every rotation of random words;
+// issue 37's scene D read from Newton's section, 1:impact*4 0:impact, starts at its entry 4.
+TEST(ContactSequence, CanonicalStartIsWhereTheCanonicalRotationBegins) {
+  const std::vector<std::string> d = {"1:impact", "1:impact", "1:impact", "1:impact", "0:impact"};
+  EXPECT_EQ(CanonicalStart(d), 4u);
+  EXPECT_EQ(CanonicalStart(CanonicalRotation(d)), 0u);
+  EXPECT_EQ(CanonicalStart(std::vector<std::string>{"0:impact"}), 0u);
+  std::mt19937 rng(37);
+  const std::vector<std::string> entries = {"0:impact", "1:impact", "0+1:impact", "0:accumulation",
+                                            "0:stick", "0:release", "1:stick", "1:release"};
+  for (int trial = 0; trial < 2000; ++trial) {
+    std::vector<std::string> w(1 + rng() % 8);
+    for (auto& e : w) e = entries[rng() % entries.size()];
+    const size_t s = CanonicalStart(w);
+    ASSERT_LT(s, w.size());
+    ASSERT_EQ(Rotated(w, s), CanonicalRotation(w)) << ContactSequenceText(w);
+  }
+}
 }  // namespace
 }  // namespace vibro
