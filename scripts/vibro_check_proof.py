@@ -403,8 +403,8 @@ def variable(x, k):
 MODEL_KEYS = ("frequencies", "forcing", "contact", "shape", "stop", "restitution", "amplitude", "frequency")
 
 
-# How many flights the checker remembers (Model.flight) before it forgets them all.
-FLIGHT_MEMO = 200_000
+# How many flights the checker remembers (Model.flight) before it forgets them all (a few KB each).
+FLIGHT_MEMO = 20_000
 _FLIGHTS = {}
 
 
@@ -2085,7 +2085,7 @@ def _raw_matmul(A, B):
 # The exponentials e^{As} of the held flows (Held.exp), remembered for every flow built on the same
 # matrix A (its exact entries and the precision): a pure function of A and s, and the checker run on
 # many edits of one certificate builds the same flows again. At most EXP_MEMO matrices.
-EXP_MEMO = 256
+EXP_MEMO = 8
 _EXPS = {}
 
 
