@@ -403,6 +403,11 @@ def variable(x, k):
 MODEL_KEYS = ("frequencies", "forcing", "contact", "shape", "stop", "restitution", "amplitude", "frequency")
 
 
+# How many flights the checker remembers (Model.flight) before it forgets them all (a few KB each).
+FLIGHT_MEMO = 20_000
+_FLIGHTS = {}
+
+
 class Model:
     """The modal model of docs/model.md with exact decimal parameters: undamped, or with the modal
     damping ratios ζ_i of docs/model.md §7 ("damping", one per mode)."""
@@ -542,7 +547,38 @@ class Model:
         """The closed-form free flight from (t0, X, V) over s (eqs (13)-(14)) in the cancellation-free
         form of docs/model.md §2: X(t0+s) = X cos ω_i s + V sin(ω_i s)/ω_i + T_A f K(s),
         K = [sin ωt0 (cos ωs − cos ω_i s) + cos ωt0 (sin ωs − (ω/ω_i) sin ω_i s)]/(ω_i² − ω²),
-        cos x − 1 = −2 sin²(x/2). Works on intervals and on D. Damped: damped_flight."""
+        cos x − 1 = −2 sin²(x/2). Works on intervals and on D. Damped: damped_flight.
+        On intervals the result is remembered by the exact endpoints of every input (the model's
+        parameters, t0, X, V, s) and the precision: a pure function, computed once for each (the
+        checker run on many edits of one certificate recomputes the same flights, FLIGHT_MEMO); so
+        are flights of D (value and gradient), which nothing changes in place."""
+        key = self._flight_key(t0, X, V, s)
+        if key is not None:
+            hit = _FLIGHTS.get(key)
+            if hit is None:
+                if len(_FLIGHTS) >= FLIGHT_MEMO:
+                    _FLIGHTS.clear()
+                hit = _FLIGHTS[key] = tuple(tuple(z) for z in self._flight(t0, X, V, s))
+            return list(hit[0]), list(hit[1])
+        return self._flight(t0, X, V, s)
+
+    def _flight_key(self, t0, X, V, s):
+        """The memo's key: the endpoints of every input, an interval or a D (its value and gradient,
+        D is never changed in place), and of the model's parameters; None for anything else."""
+        params = (self.f, self.w, *self.w_i, *self.TA, *(self.zeta or ()))
+        if len(X) != self.n or len(V) != self.n or any(type(z) is not IV for z in params):
+            return None
+        key = [iv.prec, self.n, self.zeta is not None] + [z._mpi_ for z in params]
+        for z in (t0, s, *X, *V):
+            if type(z) is IV:
+                key.append(z._mpi_)
+            elif type(z) is D and type(z.v) is IV and all(type(d) is IV and type(k) is int for k, d in z.g.items()):
+                key.append((z.v._mpi_, tuple(sorted((k, d._mpi_) for k, d in z.g.items()))))
+            else:
+                return None
+        return tuple(key)
+
+    def _flight(self, t0, X, V, s):
         if self.zeta is not None:
             return self.damped_flight(t0, X, V, s)
         if any(isinstance(z, D) for z in (t0, s, *X, *V)):
@@ -2046,6 +2082,27 @@ def _raw_matmul(A, B):
     return out
 
 
+# The exponentials e^{As} of the held flows (Held.exp), remembered for every flow built on the same
+# matrix A (its exact entries and the precision): a pure function of A and s, and the checker run on
+# many edits of one certificate builds the same flows again. At most EXP_MEMO matrices.
+EXP_MEMO = 8
+_EXPS = {}
+
+
+def exponentials_of(A):
+    """The table s ↦ e^{As} shared by every flow of matrix A (a fresh one unless every entry is an
+    interval)."""
+    if any(type(x) is not IV for row in A for x in row):
+        return {}
+    key = (iv.prec, len(A)) + tuple(x._mpi_ for row in A for x in row)
+    table = _EXPS.get(key)
+    if table is None:
+        if len(_EXPS) >= EXP_MEMO:
+            _EXPS.clear()
+        table = _EXPS[key] = {}
+    return table
+
+
 class Held:
     """The flow of the structure held at contact 0 (docs/prove.md "Sticking orbits of several
     modes"), written directly: Ẍ = Ẍ_free + T_B R with R chosen so that c·Ẍ = 0, i.e.
@@ -2076,7 +2133,7 @@ class Held:
         self.l = [c[i] * m.w_i[i] ** 2 / m.sB for i in range(n)] + [c[i] * D_[i] / m.sB for i in range(n)] + \
             [-m.sA * m.f / m.sB, ZERO]
         self.lA = [sum((self.l[i] * A[i][k] for i in range(N)), ZERO) for k in range(N)]
-        self.cache = {}
+        self.cache = exponentials_of(A)
 
     def state(self, t, X, V):
         wt = t * self.m.w if isinstance(t, D) else self.m.w * t
@@ -2524,7 +2581,7 @@ class HeldSet(Held):
         self.A = A
         self.force = force
         self.rate = [[sum((f[i] * A[i][k] for i in range(N)), ZERO) for k in range(N)] for f in force]
-        self.cache = {}
+        self.cache = exponentials_of(A)
 
     def row_power(self, row, k):
         for _ in range(k):

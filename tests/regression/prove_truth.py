@@ -7,13 +7,14 @@ as the eigenvalues of the stroboscopic map's Jacobian by central differences (h 
 ~1e-30), each impact located by a root finder at 50 digits; the determinant of that Jacobian against
 its closed form Π r_j² · e^{-qT Σ 2σ_i} (docs/model.md §5.6). Nothing here reads vibro's sources.
 """
+import importlib.util
 import json
 import os
 import subprocess
 import sys
 import tempfile
 
-from mpmath import mp, mpf, sin, cos, exp, sqrt, pi, eig, matrix
+from mpmath import mp, iv, mpf, sin, cos, exp, sqrt, pi, eig, matrix
 
 mp.dps = 50
 
@@ -31,6 +32,7 @@ class Harness:
         self.vibro, self.checker, self.verbose = vibro, checker, verbose
         self.tmp = tempfile.mkdtemp(prefix=prefix)
         self.failures, self.passed = [], []
+        self.checker_module = None
 
     def expect(self, cond, what):
         self.passed.append(what)
@@ -53,11 +55,31 @@ class Harness:
         return p.returncode, (json.loads(p.stdout) if p.stdout.strip() else None)
 
     def check_doc(self, doc):
-        """The checker on a certificate held in memory."""
-        path = os.path.join(self.tmp, "doc.json")
-        with open(path, "w") as fh:
-            json.dump(doc, fh)
-        return self.check(path)
+        """The checker on a certificate held in memory (an edit), in this process: its check_document
+        on the bytes the command would read, with the verdict the command's --json prints. The
+        checker works in mpmath's global contexts at its own precision (PREC, set when it is
+        loaded); each call runs at that precision and gives this process its own back. `check` runs
+        the command on a file (one line, the exit code)."""
+        if self.checker_module is None:
+            saved = mp.prec, iv.prec
+            try:
+                spec = importlib.util.spec_from_file_location("vibro_check_proof_in_process", self.checker)
+                module = importlib.util.module_from_spec(spec)
+                spec.loader.exec_module(module)
+            finally:
+                mp.prec, iv.prec = saved
+            sys.setrecursionlimit(max(sys.getrecursionlimit(), 10000))  # as the command sets it
+            self.checker_module = module
+        saved = mp.prec, iv.prec
+        try:
+            mp.prec = iv.prec = self.checker_module.PREC
+            code, line = self.checker_module.check_document(json.dumps(doc).encode())
+        finally:
+            mp.prec, iv.prec = saved
+        if "\n" in line:
+            self.expect(False, f"the checker answers in one line: {line[:300]!r}")
+        verdict = line.split(":", 1)[0]
+        return code, {"verdict": verdict, "reason": line.split(": ", 1)[1] if ": " in line else line}
 
     def scene_file(self, name, text):
         path = os.path.join(self.tmp, name)
