@@ -5,11 +5,13 @@
 //
 // - Seeds. Every periodic attractor of the sweep (up and down, so hysteresis shows) and of the
 //   searches (a grid of x_B, v_B starts at `searches` evenly spaced values) is a seed, in that
-//   order. A seed already on a branch found so far (the coverage test below) is skipped; otherwise
-//   its orbit is solved from the run's final state (OrbitFromState) and continued both ways to the
-//   ends of [from, to].
-// - Switching. At every branch point and flip of a new branch (a flip only when the doubled
-//   period is at most max_period), SwitchBranch gives the first points of the other branch(es);
+//   order, whatever its period (up to the scene's run.max_period, the longest its classification
+//   tries; max_period bounds only the switching). A seed already on a branch found so far (the
+//   coverage test below) is skipped; otherwise its orbit is solved from the run's final state
+//   (OrbitFromState) and continued both ways to the ends of [from, to].
+// - Switching. At every branch point and flip of a new branch (when the period switched to, 2q at
+//   a flip, q at a branch point, is at most max_period), SwitchBranch gives the first points of
+//   the other branch(es);
 //   each half is continued away from the bifurcation. Recursively, up to max_branches branches.
 // - Identity. A new branch is the same as a stored one when their periods divide one another and,
 //   at up to six of its points spread over it (past the first fifth of a switched branch, where it
@@ -17,16 +19,18 @@
 //   sequence (SameContactSequence, on the CanonicalRotation every sequence is written in) and the
 //   same impacts, phases mod 2π and speeds: interpolated between the stored branch's two points
 //   around λ (within identity_tolerance plus a tenth of their difference), or solved by Newton
-//   from the nearer one (within identity_tolerance). Such a branch is counted in `duplicates` and
-//   not stored: a branch reached twice (from both ends, or through a loop of switches) is kept
+//   from the nearer one (within identity_tolerance), at every one of them (a sample outside the
+//   stored branch's range of λ makes it a different branch). Such a branch is counted in
+//   `duplicates` and not stored: a branch reached twice (from both ends, or through a loop of switches) is kept
 //   once.
 // - Coverage. A periodic attractor of the sweep at λ is covered by a stored branch of its period
 //   when the branch's orbit at λ (Newton from the branch point nearest to λ, of a segment around λ
 //   with a stable end) is stable and has the attractor's contact sequence (several contacts) and
 //   impacts (phases mod 2π, speeds; or sticking phases) within coverage_tolerance. Every other
 //   attractor is reported uncovered, with the reason: not periodic (chaotic, or a period above
-//   run.max_period), period above max_period, or no stable branch there. The attractors of the
-//   searches are checked the same way.
+//   run.max_period), or no stable branch there (with what became of its seed). The attractors of
+//   the searches are checked the same way. The not-periodic ones are also grouped into windows of
+//   consecutive sweep values (uncovered_windows).
 //
 // Continuations never leave [from, to]: a branch that turns back (a fold) and crosses the other
 // end stops there ("left the range at …"). A stop request ends the diagram with the branches
@@ -52,7 +56,7 @@ struct DiagramRequest {
   int record = 16;         // section points kept per sweep run
   int searches = 3;        // attractor searches at this many values (0: none)
   int search_grid = 6;     // each a search_grid × search_grid grid of (x_B, v_B) starts
-  int max_period = 4;      // longest period continued or switched to (forcing periods)
+  int max_period = 4;      // longest period switched to (forcing periods); seeds: any period
   int max_branches = 24;   // branches stored at most
   int max_points = 400;    // per continuation
   double coverage_tolerance = 1e-4;
@@ -87,6 +91,16 @@ struct CoverageEntry {
   std::string reason;          // why uncovered
 };
 
+// A run of consecutive attractors of one source (the sweep up, the sweep down, or a search's
+// value) that are uncovered because they are not periodic: the chaotic windows, [from, to] in the
+// order of the sweep's values (from = to for a single value).
+struct UncoveredWindow {
+  double from = 0, to = 0;
+  std::string source;  // "sweep up" | "sweep down" | "search"
+  int count = 0;       // attractors in it
+  std::string reason;  // their common reason, or a summary when they differ
+};
+
 struct DiagramResult {
   std::string status = "ok";  // "ok" | "interrupted"
   std::string param;
@@ -95,6 +109,8 @@ struct DiagramResult {
   std::vector<DiagramBranch> branches;
   // One per sweep point, in sweep order, then one per attractor of the searches.
   std::vector<CoverageEntry> coverage;
+  // The not-periodic uncovered entries of `coverage`, grouped into windows (each entry in one).
+  std::vector<UncoveredWindow> uncovered_windows;
   int duplicates = 0;        // branches found again and not stored
   int seeds_tried = 0;       // seeds continued (not already covered)
   std::vector<std::string> notes;  // switches and seeds that gave nothing, and why

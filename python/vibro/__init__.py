@@ -584,10 +584,12 @@ def diagram(scene, param, from_, to, steps=40, record=16, searches=3, grid=6, ma
             max_points=400, coverage_tolerance=1e-3, threads=0, out=None, force=False):
     """The whole one-parameter bifurcation diagram of ``param`` over [``from_``, ``to``] (``vibro
     diagram --json``, docs/diagram.md): a sweep up and down and ``searches`` attractor searches
-    seed continuations both ways; every branch point and flip is switched at (periods up to
-    ``max_period``); a branch reached twice is kept once; every attractor of the sweep and the
-    searches is checked to lie on a stable branch (within ``coverage_tolerance``) or reported
-    uncovered with the reason.
+    seed continuations both ways (every periodic attractor, whatever its period); every branch
+    point and flip is switched at (periods up to ``max_period``); a branch reached twice is kept
+    once; every attractor of the sweep and the searches is checked to lie on a stable branch
+    (within ``coverage_tolerance``) or reported uncovered with the reason; ``uncovered_windows``
+    groups the uncovered not-periodic ones into windows of consecutive sweep values (``from``,
+    ``to``, ``source``, ``count``, ``reason``).
 
     Each entry of ``branches`` holds the branch as :func:`continue_` gives it (``points``,
     ``bifurcations``, ``end``), how it was found (``origin``: "seed", "branch-point" or "flip";

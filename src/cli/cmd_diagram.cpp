@@ -1,5 +1,6 @@
 // `vibro diagram SCENE --param KEY --from A --to B`: the whole one-parameter bifurcation diagram
 // (docs/diagram.md).
+#include <algorithm>
 #include <memory>
 
 #include <fmt/format.h>
@@ -67,8 +68,14 @@ int RunDiagram(const std::string& path, const std::vector<std::string>& sets, bo
   for (const auto& c : d.coverage) uncovered += c.branch < 0 ? 1 : 0;
   fmt::print("coverage     {} of {} attractors of the sweep and searches lie on a stable branch (within {:.1e}); {} uncovered\n",
              d.coverage.size() - static_cast<size_t>(uncovered), d.coverage.size(), spec.coverage_tolerance, uncovered);
+  // The not-periodic ones as windows [a, b] of consecutive values (the chaotic windows); every
+  // other uncovered attractor on its own line.
+  for (const auto& w : d.uncovered_windows)
+    fmt::print("uncovered    {} in [{:.10g}, {:.10g}] ({}, {} value{}): {}\n", spec.key, std::min(w.from, w.to),
+               std::max(w.from, w.to), w.source, w.count,
+               w.count == 1 ? "" : "s", w.reason);
   for (const auto& c : d.coverage)
-    if (c.branch < 0)
+    if (c.branch < 0 && !(c.period == 0 && c.kind == "not-periodic"))
       fmt::print("uncovered    {} = {:.10g} ({}): {}: {}\n", spec.key, c.value, c.source, c.kind, c.reason);
   for (const auto& n : d.notes) fmt::print("note         {}\n", n);
   fmt::print("time         sweep {:.2f} s, searches {:.2f} s, continuation {:.2f} s, switching {:.2f} s, coverage "

@@ -240,7 +240,7 @@ int main(int argc, char** argv) {
     diagram->add_option("--record", dia.record, "section points kept per sweep value (default 16)");
     diagram->add_option("--searches", dia.searches, "attractor searches at this many values (default 3; 0: none)");
     diagram->add_option("--grid", dia.grid, "each search: a GRID × GRID grid of (x_B, v_B) starts (default 6)");
-    diagram->add_option("--max-period", dia.max_period, "longest period continued or switched to (default 4)");
+    diagram->add_option("--max-period", dia.max_period, "longest period switched to at a flip or branch point (default 4; every periodic attractor found is continued, whatever its period)");
     diagram->add_option("--max-branches", dia.max_branches, "branches stored at most (default 24)");
     diagram->add_option("--max-points", dia.max_points, "points per continuation at most (default 400)");
     diagram->add_option("--coverage-tolerance", dia.coverage_tolerance,

@@ -507,6 +507,10 @@ std::string DiagramJson(const DiagramResult& d) {
   }
   j["coverage"] = coverage;
   j["uncovered"] = uncovered;
+  auto windows = nlohmann::json::array();
+  for (const auto& w : d.uncovered_windows)
+    windows.push_back({{"from", w.from}, {"to", w.to}, {"source", w.source}, {"count", w.count}, {"reason", w.reason}});
+  j["uncovered_windows"] = windows;
   j["notes"] = d.notes;
   j["sweep"] = nlohmann::json::parse(SweepJson(d.sweep))["points"];
   return j.dump();

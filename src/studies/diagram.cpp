@@ -197,6 +197,27 @@ void KeepPoints(DiagramBranch& n, size_t first, size_t last) {
   n.branch.end = fmt::format("first end: {}; last end: {}", n.end_first, n.end_last);
 }
 
+// The not-periodic uncovered entries of a coverage list grouped into windows: runs of consecutive
+// entries of one source (the sweep's way up, its way down, a search's attractors at one value).
+std::vector<UncoveredWindow> UncoveredWindows(const std::vector<CoverageEntry>& coverage) {
+  std::vector<UncoveredWindow> windows;
+  bool open = false;  // the previous entry is in windows.back()
+  for (const auto& c : coverage) {
+    if (!(c.branch < 0 && c.period == 0 && c.kind == "not-periodic")) {
+      open = false;
+      continue;
+    }
+    if (!open || windows.back().source != c.source || (c.source == "search" && windows.back().from != c.value))
+      windows.push_back({c.value, c.value, c.source, 0, c.reason});
+    auto& w = windows.back();
+    w.to = c.value;
+    ++w.count;
+    if (w.reason != c.reason) w.reason = "not periodic (each value's reason is in the coverage list)";
+    open = true;
+  }
+  return windows;
+}
+
 class Builder {
  public:
   explicit Builder(const DiagramRequest& req) : req_(req) {
@@ -251,6 +272,15 @@ class Builder {
   double lo_ = 0, hi_ = 1, slack_ = 0;
   DiagramResult out_;
   bool full_noted_ = false;
+  // What became of Add's last branch when it was not stored (empty: stored).
+  std::string not_stored_;
+  // Seeds whose branch was not stored, and why: (λ, period, why), named by the coverage check.
+  struct SeedOutcome {
+    double value;
+    int period;
+    std::string why;
+  };
+  std::vector<SeedOutcome> seed_outcomes_;
 };
 
 std::vector<OrbitResult> Builder::OrbitsAt(const DiagramBranch& b, double lambda, bool stable_end) const {
@@ -287,10 +317,6 @@ std::pair<int, double> Builder::CoveredBy(double lambda, const Attractor& a, std
                                a.searched_period.value_or(0));
     return {-1, 0};
   }
-  if (*a.period > req_.max_period) {
-    reason = fmt::format("period {} above --max-period {}", *a.period, req_.max_period);
-    return {-1, 0};
-  }
   double nearest = kInf;
   for (size_t k = 0; k < out_.branches.size(); ++k) {
     const auto& b = out_.branches[k];
@@ -305,6 +331,8 @@ std::pair<int, double> Builder::CoveredBy(double lambda, const Attractor& a, std
                ? fmt::format("no stable branch within {:.1e} (nearest orbit of a branch: {:.2e})",
                              req_.coverage_tolerance, nearest)
                : "no stable continued branch of its period holds it";
+  for (const auto& o : seed_outcomes_)
+    if (o.period == *a.period && std::abs(o.value - lambda) <= slack_) reason += "; " + o.why;
   return {-1, 0};
 }
 
@@ -349,14 +377,14 @@ bool Builder::Repeats(const DiagramBranch& n, const DiagramBranch& e) const {
   const size_t count = std::min<size_t>(6, pts.size() - first);
   for (size_t s = 0; s < count; ++s)
     samples.push_back(first + (count > 1 ? s * (pts.size() - 1 - first) / (count - 1) : 0));
-  size_t inside = 0;
+  // Every sample must be held: a sample outside e's range of λ is an orbit e does not have (the
+  // new branch reaches further, e.g. a seed's branch running into a stored one from outside it).
+  // Such a branch is not a repeat; TrimOverlap keeps its stretch that no stored branch holds.
   for (size_t i : samples) {
     const auto [bracketed, same] = Holds(e, pts[i], true);
-    if (!bracketed) continue;
-    ++inside;
-    if (!same) return false;
+    if (!bracketed || !same) return false;
   }
-  return inside >= std::max<size_t>(1, (samples.size() + 1) / 2);
+  return true;
 }
 
 int Builder::TrimOverlap(DiagramBranch& n, size_t birth) const {
@@ -467,10 +495,13 @@ bool Builder::KeepLeastPeriod(DiagramBranch& n, size_t birth) {
 }
 
 void Builder::Add(DiagramBranch n, size_t birth) {
+  not_stored_ = "no points";
   if (n.branch.points.empty()) return;
+  not_stored_ = "its orbit has a shorter least period";
   if (!KeepLeastPeriod(n, birth)) return;
   const int dup = DuplicateOf(n);
   if (dup >= 0) {
+    not_stored_ = fmt::format("its branch repeats branch {}", dup);
     ++out_.duplicates;
     out_.notes.push_back(fmt::format("the {} at {} = {:.12g} leads to branch {} again (not stored twice)",
                                      n.origin == "seed" ? "seed" : n.origin, out_.param, n.born_at, dup));
@@ -478,18 +509,24 @@ void Builder::Add(DiagramBranch n, size_t birth) {
   }
   const int joined = TrimOverlap(n, birth);
   if (joined >= 0) {
+    not_stored_ = fmt::format("its branch joins branch {} at once", joined);
     ++out_.duplicates;
     out_.notes.push_back(fmt::format("the {} at {} = {:.12g} joins branch {} at once (not stored)", n.origin,
                                      out_.param, n.born_at, joined));
     return;
   }
   if (static_cast<int>(out_.branches.size()) >= req_.max_branches) {
+    not_stored_ = fmt::format("--max-branches {} was reached before it", req_.max_branches);
+    if (n.origin == "seed")
+      out_.notes.push_back(fmt::format("the seed at {} = {:.12g} was not stored: --max-branches {} reached",
+                                       out_.param, n.born_at, req_.max_branches));
     if (!full_noted_)
       out_.notes.push_back(fmt::format("--max-branches {} reached: further branches were not followed",
                                        req_.max_branches));
     full_noted_ = true;
     return;
   }
+  not_stored_.clear();
   out_.branches.push_back(std::move(n));
   SwitchAt(out_.branches.size() - 1);
 }
@@ -504,10 +541,13 @@ void Builder::SwitchAt(size_t stored) {
     if (bif.kind != "branch-point" && bif.kind != "flip") continue;
     // Where the branch was born: switching there leads back to its parent.
     if (b.origin != "seed" && std::abs(bif.value - b.born_at) <= 1e-6 * std::max(1.0, std::abs(b.born_at))) continue;
-    if (bif.kind == "flip" && 2 * b.branch.period > req_.max_period) {
-      out_.notes.push_back(fmt::format("branch {}: the flip at {} = {:.12g} was not switched at (period {} above "
+    // The period of the branch(es) switched to: 2q at a flip, q at a branch point (a seeded
+    // branch may have any period the sweep found; switching is bounded by max_period).
+    const int switched_period = bif.kind == "flip" ? 2 * b.branch.period : b.branch.period;
+    if (switched_period > req_.max_period) {
+      out_.notes.push_back(fmt::format("branch {}: the {} at {} = {:.12g} was not switched at (period {} above "
                                        "--max-period {})",
-                                       index, out_.param, bif.value, 2 * b.branch.period, req_.max_period));
+                                       index, bif.kind, out_.param, bif.value, switched_period, req_.max_period));
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -581,7 +621,9 @@ void Builder::SwitchAt(size_t stored) {
 
 void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
                    const std::string& source) {
-  if (a.kind == "not-periodic" || !a.period || *a.period > req_.max_period || X.size() == 0) return;
+  // Every periodic attractor is a seed, whatever its period (up to the run.max_period its
+  // classification tried): --max-period bounds only the switching.
+  if (a.kind == "not-periodic" || !a.period || X.size() == 0) return;
   std::string reason;
   const auto t0 = std::chrono::steady_clock::now();
   const bool covered = CoveredBy(lambda, a, reason).first >= 0;
@@ -604,6 +646,7 @@ void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, 
   if ((has_down && down.status == "no-orbit") || (has_up && up.status == "no-orbit")) {
     out_.notes.push_back(fmt::format("the {} attractor of the {} at {} = {:.12g} gave no orbit: {}", a.kind, source,
                                      out_.param, lambda, (has_down ? down : up).end));
+    seed_outcomes_.push_back({lambda, *a.period, "its seed gave no orbit: " + (has_down ? down : up).end});
     return;
   }
   DiagramBranch n;
@@ -634,6 +677,7 @@ void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, 
   br.end = fmt::format("towards {:.12g}: {}; towards {:.12g}: {}", lo_, n.end_first, hi_, n.end_last);
   const size_t birth = has_down && !down.points.empty() ? down.points.size() - 1 : 0;
   Add(std::move(n), birth);
+  if (!not_stored_.empty()) seed_outcomes_.push_back({lambda, *a.period, "its seed was continued, but " + not_stored_});
 }
 
 DiagramResult Builder::Run() {
@@ -735,6 +779,7 @@ DiagramResult Builder::Run() {
     out_.coverage.back().source = "search";
   }
   out_.coverage_seconds += Seconds(t0);
+  out_.uncovered_windows = UncoveredWindows(out_.coverage);
   if (Stopped()) out_.status = "interrupted";
   return std::move(out_);
 }
