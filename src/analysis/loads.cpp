@@ -373,6 +373,10 @@ LoadsSummary LoadsRecorder::SummaryOfClosed(int blocks) const {
         *point[q] = centre;  // the mean of equal blocks: the mean over the window
       }
     }
+    if (c.compliant) {  // no impacts: the rigid-limit normal work of §4 does not apply (not a zero)
+      c.work_rate = std::numeric_limits<double>::quiet_NaN();
+      c.work_rate_ci.reset();
+    }
     if (!std::isfinite(c.mean_force))
       s.note += fmt::format("{}contact {}: phases held together with other contacts are not accounted "
                             "(docs/loads.md): its reaction integral, mean force and contact fraction "
