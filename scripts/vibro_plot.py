@@ -792,6 +792,11 @@ def plot_branch_loads(f, title, save):
             ax.legend(fontsize=fs(8), loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
         ax.set_ylabel(label)
     log_scale_if_wide(axes[1, 0], work)
+    if np.isnan(work).all():  # compliant stops only: no impacts, no rigid-limit work (docs/loads.md)
+        axes[1, 0].text(0.5, 0.5, "does not apply: a compliant stop has no impacts\n(its peak forces and "
+                        "durations: PREFIX_branch_peaks)", transform=axes[1, 0].transAxes, ha="center",
+                        va="center", fontsize=fs(9), color="0.3")
+        axes[1, 0].set_yticks([])
     unknown = int(np.isnan(force).sum())
     set_title(axes[0, 0], title, f"contact loads along the branch in ${SYMBOLS.get(param, param)}$, exact per period"
               + (f" ({unknown} unknown values: see /branch/loads/note)" if unknown else ""))

@@ -31,6 +31,15 @@ struct ContactLoads {
   using Interval = std::optional<std::pair<double, double>>;
   Interval impacts_per_period_ci, impulse_per_period_ci, reaction_integral_per_period_ci,
       mean_force_ci, dissipated_power_ci, work_rate_ci, contact_fraction_ci;
+  // A compliant stop (docs/compliant.md; docs/loads.md, "Peak force and contact duration over a
+  // run"): its contact phases per period, and per contact phase the mean certified peak force and
+  // the mean duration, each the ratio estimator Σ/Σ phases over the window (intervals from the
+  // block ratios), and the largest certified peak force of the window's phases. NaN when the
+  // window holds no phase (or a replayed period does not know its phases). A rigid contact:
+  // compliant false, the impacts, impulse and work rate (rigid limit) are its loads.
+  bool compliant = false;
+  double phases_per_period = 0, peak_force_mean = 0, contact_duration_mean = 0, peak_force_max = 0;
+  Interval phases_per_period_ci, peak_force_mean_ci, contact_duration_mean_ci;
 };
 
 struct LoadsSummary {
@@ -55,6 +64,10 @@ struct LoadsRow {
   // without loads, SimulationOptions::loads): its ∫R dt and duration are unknown, so are the
   // reaction, mean force and contact fraction (docs/loads.md).
   bool partial = false;
+  // A compliant stop's contact phases ended this period (at their release event): their number, the
+  // sums of their certified peak forces and of their durations, and the largest peak force (0 when
+  // none). NaN: not known (a period replayed from a file written before these sums were stored).
+  double phases = 0, peak_sum = 0, duration_sum = 0, peak_max = 0;
 };
 
 // Where a LoadsRecorder gives each period's rows (one per contact) once the period has ended:
@@ -113,6 +126,7 @@ class LoadsRecorder final : public Observer {
   double period_;
   long long skip_, cap_, head_periods_;
   std::vector<double> mass_, restitution_;
+  std::vector<bool> compliant_;
   // rows_[contact][k]: the sums of periods begin + [k·bucket_, (k + 1)·bucket_), begin = first_ + skip_
   // (the periods before begin are not analysed and not kept).
   std::vector<std::vector<Row>> rows_;

@@ -116,6 +116,13 @@ struct Checkpoint {
   // (0, 0, NaN when not held), so that its release reports the whole phase after a resume and a
   // per-period account sees the reaction of a phase still open at a period boundary.
   std::vector<double> stick_duration, reaction_integral, reaction_max;
+  // Compliant stops (docs/compliant.md), so that a resumed run goes on as the run that went through:
+  // the open contact phase's account, 4 per contact (peak force, its time, largest penetration,
+  // dissipated energy so far; empty when the scene has no compliant stop), and the relaxing flight
+  // after a force-rule exit (its contact, −1: none, and the surface's offset y at the checkpoint).
+  std::vector<double> compliant_account;
+  int relax_contact = -1;
+  double relax_surface = 0;
 };
 
 // For analyses that differentiate the hybrid flow (the Poincaré solver): every smooth stretch and

@@ -348,12 +348,13 @@ long Count(const std::string& s, char c) { return std::count(s.begin(), s.end(),
 // The non-smooth bifurcation between `lo` (on the branch) and `hi` (past it, if the orbit goes
 // on): named by the probe quantity that vanishes there (docs/model.md §5.7, orbit_probe.hpp), or
 // "relabel" when only the grouping of a chattering sequence changed (no bifurcation). With several
-// contacts (`m` > 1) the detail names the contact, and `contact` is set.
+// contacts (`m` > 1) the detail names the contact, and `contact` is set. `compliant[j]`: contact j
+// is a compliant stop (docs/compliant.md), whose grazing is a contact phase that just touches.
 struct NonSmooth {
   std::string kind, detail;
   int contact = -1;
 };
-NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
+NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m, const std::vector<bool>& compliant) {
   // The smaller of lo's and hi's value of a probe quantity, with the contact where it is.
   struct Value {
     double value;
@@ -426,7 +427,12 @@ NonSmooth NameNonSmooth(const Point& lo, const Point* hi, int m) {
       {"rising", interior.value <= release.value ? interior : release,
        "R touches zero inside a sticking phase" + on(interior.value <= release.value ? interior.contact : release.contact)},
       {"sticking-entry", entry, "R vanishes at the landing" + on(entry.contact)},
-      {"grazing", grazing, "a free flight touches the stop tangentially" + on(grazing.contact)},
+      {"grazing", grazing,
+       (grazing.contact >= 0 && static_cast<size_t>(grazing.contact) < compliant.size() &&
+                compliant[static_cast<size_t>(grazing.contact)]
+            ? std::string("a contact phase on the compliant stop just touches (zero penetration, tangential)")
+            : std::string("a free flight touches the stop tangentially")) +
+           on(grazing.contact)},
       {"rising", closing,
        fmt::format("contact {} closes tangentially while contact {} sticks", closing.contact, closing_held)},
       {"simultaneous", simultaneous, simultaneous_what},
@@ -975,6 +981,8 @@ Branch Continue(const ContinuationRequest& req) {
   const auto n2 = start.X.size() * 2;
   const auto n = n2 / 2;
   const int m = first_sys.contact_count();
+  std::vector<bool> compliant;
+  for (const ContactModel& c : first_sys.contacts()) compliant.push_back(c.spec.compliance.compliant());
   const double span = req.to - req.from;
   double ds = req.step > 0 ? req.step : std::abs(span) / 50.0;
   const double ds_max = req.max_step > 0 ? req.max_step : std::abs(span) / 10.0;
@@ -1725,7 +1733,7 @@ Branch Continue(const ContinuationRequest& req) {
         auto po = trial(s_over);
         if (po && !SameFamily(cur, *po) && (po->y - cur.y).norm() < 1e3 * s_over) past = po;
       }
-      auto [kind, detail, contact] = NameNonSmooth(cur, past ? &*past : nullptr, m);
+      auto [kind, detail, contact] = NameNonSmooth(cur, past ? &*past : nullptr, m, compliant);
       // The boundary lies between cur and its predictor at arclength hi.
       const double at = cur.y[n2] + 0.5 * hi * t[n2], bracket = hi * std::abs(t[n2]);
       if (moved) record(cur);

@@ -25,13 +25,20 @@ double StudentT975(long long df) {
   return z + (z * z * z + z) / (4 * d) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * d * d);
 }
 
-// The seven quantities of a sum of n periods of one contact (docs/loads.md §5).
-std::array<double, 7> Quantities(const LoadsRecorder::Row& sum, double n, double period) {
+// The quantities of a sum of n periods of one contact (docs/loads.md §5): the seven loads, then a
+// compliant stop's contact phases per period and, per phase, the mean peak force and mean duration
+// (ratio estimators: Σ over the phases / their number, NaN when there is none; docs/loads.md,
+// "Peak force and contact duration over a run").
+constexpr size_t kQuantities = 10;
+std::array<double, kQuantities> Quantities(const LoadsRecorder::Row& sum, double n, double period) {
   const double t = n * period;
   const double unknown = std::numeric_limits<double>::quiet_NaN();
-  return std::array<double, 7>{sum.impacts / n, sum.impulse / n, sum.partial ? unknown : sum.reaction / n,
-                               sum.partial ? unknown : (sum.impulse + sum.reaction) / t,
-                               sum.energy / t, sum.work / t, sum.partial ? unknown : sum.held / t};
+  const bool phases = sum.phases > 0;  // false for 0 and for NaN (not known)
+  return std::array<double, kQuantities>{sum.impacts / n, sum.impulse / n, sum.partial ? unknown : sum.reaction / n,
+                                         sum.partial ? unknown : (sum.impulse + sum.reaction) / t,
+                                         sum.energy / t, sum.work / t, sum.partial ? unknown : sum.held / t,
+                                         sum.phases / n, phases ? sum.peak_sum / sum.phases : unknown,
+                                         phases ? sum.duration_sum / sum.phases : unknown};
 }
 
 void Add(LoadsRecorder::Row& sum, const LoadsRecorder::Row& r) {
@@ -42,6 +49,12 @@ void Add(LoadsRecorder::Row& sum, const LoadsRecorder::Row& r) {
   sum.energy += r.energy;
   sum.work += r.work;
   sum.held += r.held;
+  sum.phases += r.phases;
+  sum.peak_sum += r.peak_sum;
+  sum.duration_sum += r.duration_sum;
+  // The largest peak: NaN (not known) wins, as in the sums.
+  sum.peak_max = std::isnan(sum.peak_max) || std::isnan(r.peak_max) ? std::numeric_limits<double>::quiet_NaN()
+                                                                    : std::max(sum.peak_max, r.peak_max);
 }
 
 long long PowerOfTwoAtLeast(long long n) {
@@ -57,6 +70,7 @@ LoadsRecorder::LoadsRecorder(const System& system, long long skip, long long buc
   for (const ContactModel& c : system.contacts()) {
     mass_.push_back(1.0 / c.s_B);
     restitution_.push_back(c.restitution);
+    compliant_.push_back(c.spec.compliance.compliant());
   }
   rows_.resize(mass_.size());
   head_.resize(mass_.size());
@@ -179,8 +193,17 @@ void LoadsRecorder::OnEvent(const Event& e) {
       if (!std::isfinite(e.reaction_integral)) row.partial = true;  // held with other contacts
       if (std::isfinite(e.reaction_integral)) row.reaction += e.reaction_integral - open_reaction_[j];
       if (std::isfinite(e.stick_duration)) row.held += e.stick_duration - open_held_[j];
-      // A compliant stop's contact phase (docs/compliant.md): the energy its dashpot took.
-      if (std::isfinite(e.peak_time) && std::isfinite(e.energy_dissipated)) row.energy += e.energy_dissipated;
+      // A compliant stop's contact phase (docs/compliant.md): the energy its dashpot took, and the
+      // phase's certified peak force and duration, counted in the period of its release
+      // (docs/loads.md, "Peak force and contact duration over a run").
+      if (std::isfinite(e.peak_time)) {
+        if (std::isfinite(e.energy_dissipated)) row.energy += e.energy_dissipated;
+        row.phases += 1;
+        row.peak_sum += e.reaction_max;
+        row.duration_sum += e.stick_duration;
+        row.peak_max = std::isnan(row.peak_max) || std::isnan(e.reaction_max) ? std::numeric_limits<double>::quiet_NaN()
+                                                                               : std::max(row.peak_max, e.reaction_max);
+      }
       open_reaction_[j] = open_held_[j] = 0;
       break;
     case EventKind::kGrazing: break;
@@ -281,22 +304,30 @@ LoadsSummary LoadsRecorder::SummaryOfClosed(int blocks) const {
     const auto row = [&](long long k) {
       return k >= 0 && k < static_cast<long long>(rows.size()) ? rows[static_cast<size_t>(k)] : Row{};
     };
-    // The seven quantities of the rows [a, b) (periods, or buckets once merged) of the window.
-    const auto means = [&](long long a, long long b) {
+    // The sums of the rows [a, b) (periods, or buckets once merged) of the window, and their quantities.
+    const auto sum_of = [&](long long a, long long b) {
       Row sum;
       for (long long k = a; k < b; ++k) Add(sum, row(k));
-      return Quantities(sum, static_cast<double>((b - a) * bucket_), period_);
+      return sum;
+    };
+    const auto means = [&](long long a, long long b) {
+      return Quantities(sum_of(a, b), static_cast<double>((b - a) * bucket_), period_);
     };
     ContactLoads c;
     c.contact = static_cast<int>(j);
-    std::array<double, 7> m{};
+    c.compliant = compliant_[j];
+    std::array<double, kQuantities> m{};
+    double* point[kQuantities] = {&c.impacts_per_period, &c.impulse_per_period, &c.reaction_integral_per_period,
+                                  &c.mean_force,         &c.dissipated_power,   &c.work_rate,
+                                  &c.contact_fraction,   &c.phases_per_period,  &c.peak_force_mean,
+                                  &c.contact_duration_mean};
     if (s.periods > 0) {
+      Row sum;
       if (!merged || means_of_blocks) {
-        m = means((s.first_period - begin) / bucket_, (s.first_period - begin + s.periods + bucket_ - 1) / bucket_);
+        sum = sum_of((s.first_period - begin) / bucket_, (s.first_period - begin + s.periods + bucket_ - 1) / bucket_);
       } else {
         // Merged: from period s.first_period on, one by one through the head, then the buckets
         // beyond it (the part of bucket 0 beyond the head kept apart once bucket 0 is longer).
-        Row sum;
         const long long from = s.first_period - begin;
         const auto& head = head_[j];
         for (long long k = from; k < head_periods_; ++k)
@@ -307,42 +338,44 @@ LoadsSummary LoadsRecorder::SummaryOfClosed(int blocks) const {
           k0 = 1;
         }
         for (long long k = k0; k < static_cast<long long>(rows.size()); ++k) Add(sum, rows[static_cast<size_t>(k)]);
-        m = Quantities(sum, static_cast<double>(s.periods), period_);
       }
-      c.impacts_per_period = m[0];
-      c.impulse_per_period = m[1];
-      c.reaction_integral_per_period = m[2];
-      c.mean_force = m[3];
-      c.dissipated_power = m[4];
-      c.work_rate = m[5];
-      c.contact_fraction = m[6];
+      m = Quantities(sum, static_cast<double>(s.periods), period_);
+      for (size_t q = 0; q < kQuantities; ++q) *point[q] = m[q];
+      c.peak_force_max = sum.phases > 0 ? sum.peak_max : std::numeric_limits<double>::quiet_NaN();
     }
     if (s.block_periods > 0) {
       // The blocks: the last blocks·L periods (merged: of the whole buckets).
       const long long per = L / bucket_, start = merged ? whole - per * blocks : (s.first_period - begin);
-      std::vector<std::array<double, 7>> b;
+      std::vector<std::array<double, kQuantities>> b;
       for (int i = 0; i < blocks; ++i) b.push_back(means(start + i * per, start + (i + 1) * per));
       const double t = StudentT975(blocks - 1);
-      ContactLoads::Interval* ci[7] = {&c.impacts_per_period_ci, &c.impulse_per_period_ci,
-                                       &c.reaction_integral_per_period_ci, &c.mean_force_ci,
-                                       &c.dissipated_power_ci, &c.work_rate_ci, &c.contact_fraction_ci};
-      double* point[7] = {&c.impacts_per_period, &c.impulse_per_period, &c.reaction_integral_per_period,
-                          &c.mean_force, &c.dissipated_power, &c.work_rate, &c.contact_fraction};
-      for (int q = 0; q < 7; ++q) {
+      ContactLoads::Interval* ci[kQuantities] = {
+          &c.impacts_per_period_ci, &c.impulse_per_period_ci, &c.reaction_integral_per_period_ci,
+          &c.mean_force_ci,         &c.dissipated_power_ci,   &c.work_rate_ci,
+          &c.contact_fraction_ci,   &c.phases_per_period_ci,  &c.peak_force_mean_ci,
+          &c.contact_duration_mean_ci};
+      for (size_t q = 0; q < kQuantities; ++q) {
         double mean = 0, var = 0;
-        for (const auto& x : b) mean += x[static_cast<size_t>(q)];
+        for (const auto& x : b) mean += x[q];
         mean /= blocks;
-        for (const auto& x : b) var += (x[static_cast<size_t>(q)] - mean) * (x[static_cast<size_t>(q)] - mean);
+        for (const auto& x : b) var += (x[q] - mean) * (x[q] - mean);
         var /= blocks - 1;
         // At least the rounding of the sums (a settled periodic run has equal block means).
         const double half = std::max(t * std::sqrt(var / blocks),
                                      16 * std::numeric_limits<double>::epsilon() * static_cast<double>(L) * std::abs(mean));
         // Merged, the means' window may differ from the blocks' by a few periods at its ends: the
-        // interval is centred on the mean reported.
-        const double centre = merged && !means_of_blocks ? *point[q] : mean;
+        // interval is centred on the mean reported. The per-phase means (ratio estimators) are
+        // centred on the window's ratio Σ/Σ phases, not on the mean of the block ratios (which
+        // differs from it by O(1/L) when the blocks hold different numbers of phases).
+        const bool ratio = q >= 8;
+        const double centre = (merged && !means_of_blocks) || ratio ? *point[q] : mean;
         if (std::isfinite(mean) && std::isfinite(centre)) *ci[q] = std::pair{centre - half, centre + half};
         *point[q] = centre;  // the mean of equal blocks: the mean over the window
       }
+    }
+    if (c.compliant) {  // no impacts: the rigid-limit normal work of §4 does not apply (not a zero)
+      c.work_rate = std::numeric_limits<double>::quiet_NaN();
+      c.work_rate_ci.reset();
     }
     if (!std::isfinite(c.mean_force))
       s.note += fmt::format("{}contact {}: phases held together with other contacts are not accounted "

@@ -1,6 +1,8 @@
 // What the command files of src/cli share (cli_common.hpp).
 #include "cli/cli_common.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "cli/text_format.hpp"
@@ -21,14 +23,32 @@ void PrintLoads(const vibro::LoadsSummary& s) {
   const auto pm = [](double v, const vibro::ContactLoads::Interval& ci) {
     return ci ? fmt::format("{:.6g} ± {:.2g}", v, 0.5 * (ci->second - ci->first)) : fmt::format("{:.6g}", v);
   };
-  for (const auto& c : s.contacts)
-    fmt::print("  contact {}  impacts/T {}, impulse/T {}, ∫R dt/T {}, mean force {}, dissipated power {}, "
-               "work rate {}, contact fraction {}\n",
-               c.contact, pm(c.impacts_per_period, c.impacts_per_period_ci),
-               pm(c.impulse_per_period, c.impulse_per_period_ci),
+  for (const auto& c : s.contacts) {
+    if (!c.compliant) {
+      fmt::print("  contact {}  impacts/T {}, impulse/T {}, ∫R dt/T {}, mean force {}, dissipated power {}, "
+                 "work rate {}, contact fraction {}\n",
+                 c.contact, pm(c.impacts_per_period, c.impacts_per_period_ci),
+                 pm(c.impulse_per_period, c.impulse_per_period_ci),
+                 pm(c.reaction_integral_per_period, c.reaction_integral_per_period_ci),
+                 pm(c.mean_force, c.mean_force_ci), pm(c.dissipated_power, c.dissipated_power_ci),
+                 pm(c.work_rate, c.work_rate_ci), pm(c.contact_fraction, c.contact_fraction_ci));
+      continue;
+    }
+    // A compliant stop (docs/loads.md, "Peak force and contact duration over a run"): no impacts,
+    // so no impact impulse and no rigid-limit work rate; its contact phases instead.
+    fmt::print("  contact {}  compliant: contact phases/T {}, ∫λ dt/T {}, mean force {}, dissipated power {}, "
+               "contact fraction {}\n",
+               c.contact, pm(c.phases_per_period, c.phases_per_period_ci),
                pm(c.reaction_integral_per_period, c.reaction_integral_per_period_ci),
                pm(c.mean_force, c.mean_force_ci), pm(c.dissipated_power, c.dissipated_power_ci),
-               pm(c.work_rate, c.work_rate_ci), pm(c.contact_fraction, c.contact_fraction_ci));
+               pm(c.contact_fraction, c.contact_fraction_ci));
+    fmt::print("             per contact phase: peak force {}, duration {}; largest peak force {:.6g} (certified)\n",
+               pm(c.peak_force_mean, c.peak_force_mean_ci), pm(c.contact_duration_mean, c.contact_duration_mean_ci),
+               c.peak_force_max);
+  }
+  if (std::any_of(s.contacts.begin(), s.contacts.end(), [](const auto& c) { return c.compliant; }))
+    fmt::print("  (a compliant stop has no impacts: impacts/T, impact impulse/T and the rigid-limit work rate do not "
+               "apply to it, docs/loads.md)\n");
 }
 
 void PrintRigidComparison(const vibro::RigidComparison& c) {

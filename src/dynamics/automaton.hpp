@@ -337,6 +337,10 @@ class Automaton {
   bool TryAccumulation(const S& reaction);
   bool TailClearOfOtherContacts(const S& delta);
   void Checkpointed();
+  // A compliant stop's open contact phase and relaxing flight into and out of a checkpoint
+  // (dynamics/compliant_transitions.hpp).
+  void SaveCompliant(Checkpoint& cp) const;
+  void RestoreCompliant(const Checkpoint& cp);
   bool Fail(std::string message, RunStatus status = RunStatus::kNumericalFailure);
 
   // Physics invariants, checked where they arise (docs/reliability.md): a state below the stop
@@ -1029,6 +1033,7 @@ void Automaton<S>::Checkpointed() {
     cp.gaps[j] = R::to_double(gaps_[j]);
     cp.start_kinds[j] = static_cast<int>(starts_[j]);
   }
+  SaveCompliant(cp);
   for (auto* o : opt_.observers) o->OnCheckpoint(cp);
 }
 
@@ -1052,6 +1057,7 @@ RunResult Automaton<S>::Run() {
     result_.chatter = {cp.chatter_predicted, cp.chatter_followed, cp.chatter_max_error};
     active_ = cp.contact >= 0 && cp.contact < static_cast<int>(models_.size()) ? cp.contact : 0;
     loads_.Restore(cp);
+    RestoreCompliant(cp);
     if (cp.held.size() > 1) held_set_ = cp.held;
     if (cp.contact_counts.size() == counts_.size()) counts_ = cp.contact_counts;
     else if (counts_.size() == 1) counts_[0] = cp.counts;

@@ -225,6 +225,38 @@ void Automaton<S>::NotifyCompliant(ResetKind kind, int contact, const S& rate, c
   for (auto* o : opt_.observers) o->OnReset(r);
 }
 
+// Into a checkpoint: the account of the open contact phase of each compliant contact and the
+// relaxing flight, so that a resumed run reports the whole phase at its exit and measures its next
+// entry to the surface as the run that went through does (docs/compliant.md, docs/output.md).
+template <class S>
+void Automaton<S>::SaveCompliant(Checkpoint& cp) const {
+  cp.relax_contact = relaxing_ ? relax_contact_ : -1;
+  cp.relax_surface = relaxing_ ? R::to_double(relax_y_) : 0.0;
+  const bool any = std::any_of(compliant_.begin(), compliant_.end(), [](const auto& c) { return c != nullptr; });
+  cp.compliant_account.clear();
+  if (!any) return;
+  for (const CompliantAccount& a : compliant_account_)
+    cp.compliant_account.insert(cp.compliant_account.end(), {a.peak, a.peak_time, a.penetration, a.dissipated});
+}
+
+template <class S>
+void Automaton<S>::RestoreCompliant(const Checkpoint& cp) {
+  if (cp.compliant_account.size() == 4 * compliant_account_.size())
+    for (size_t j = 0; j < compliant_account_.size(); ++j) {
+      const double* a = cp.compliant_account.data() + 4 * j;
+      compliant_account_[j] = {a[0], a[1], a[2], a[3]};
+    }
+  const int k = cp.relax_contact;
+  if (mode_ != Mode::kFree || k < 0 || static_cast<size_t>(k) >= compliant_.size() || !compliant_[static_cast<size_t>(k)])
+    return;
+  if constexpr (std::is_same_v<S, double>) {  // compliant stops run in double only
+    relaxing_ = true;
+    relax_contact_ = k;
+    relax_y_ = cp.relax_surface;
+    compliant_[static_cast<size_t>(k)]->SetSurface(cp.relax_surface);
+  }
+}
+
 // The compliant contact's fields of its entry (stick) and exit (release) events.
 template <class S>
 void Automaton<S>::CompliantEventLoads(Event& e, int contact) {

@@ -146,6 +146,17 @@ StoredRun ReadStoredRun(const std::string& path, int tail_periods) {
       if (c.reaction_integral.size() != c.stick_duration.size() ||
           c.reaction_max.size() != c.stick_duration.size())
         bad("stick_duration, reaction_integral, reaction_max (one per contact)");
+      // Compliant stops (docs/compliant.md): absent in files written before them, and for rigid scenes.
+      c.compliant_account = h5::ReadDoubles(g, "compliant_account");
+      if (!c.compliant_account.empty()) {
+        const auto relax = h5::ReadInt(g, "relax_contact");
+        const std::vector<double> surface = h5::ReadDoubles(g, "relax_surface");
+        if (c.compliant_account.size() % 4 != 0 || !relax || surface.size() != 1 || !std::isfinite(surface[0]) ||
+            *relax < -1 || *relax >= static_cast<long long>(c.compliant_account.size() / 4))
+          bad("compliant_account, relax_contact, relax_surface");
+        c.relax_contact = static_cast<int>(*relax);
+        c.relax_surface = surface[0];
+      }
       cp_events = static_cast<h5::Size>(*h5::ReadInt(g, "events"));
       cp_sections = static_cast<h5::Size>(*h5::ReadInt(g, "sections"));
       const auto cp_samples = *h5::ReadInt(g, "samples");

@@ -8,6 +8,7 @@
 #include <sys/statvfs.h>
 
 #include <algorithm>
+#include <limits>
 #include <cstdio>
 #include <new>
 #include <optional>
@@ -156,6 +157,15 @@ void LoadsTable::Create(h5::Id g, h5::Size contacts) {
   work = h5::Column(g, "work", h5::Type::F64(), contacts);
   held = h5::Column(g, "held", h5::Type::F64(), contacts);
   partial = h5::Column(g, "partial", h5::Type::I8(), contacts);
+  CreatePhases(g, contacts);
+}
+
+void LoadsTable::CreatePhases(h5::Id g, h5::Size contacts) {
+  phases = h5::Column(g, "contact_phases", h5::Type::F64(), contacts);
+  peak_sum = h5::Column(g, "peak_force_sum", h5::Type::F64(), contacts);
+  duration_sum = h5::Column(g, "contact_duration_sum", h5::Type::F64(), contacts);
+  peak_max = h5::Column(g, "peak_force_max", h5::Type::F64(), contacts);
+  has_phases = true;
 }
 
 void LoadsTable::Open(h5::Id g) {
@@ -167,6 +177,13 @@ void LoadsTable::Open(h5::Id g) {
   work = h5::Column::Open(g, "work", h5::Type::F64(), n);
   held = h5::Column::Open(g, "held", h5::Type::F64(), n);
   partial = h5::Column::Open(g, "partial", h5::Type::I8(), n);
+  has_phases = h5::Exists(g, "contact_phases");
+  if (has_phases) {
+    phases = h5::Column::Open(g, "contact_phases", h5::Type::F64(), n);
+    peak_sum = h5::Column::Open(g, "peak_force_sum", h5::Type::F64(), n);
+    duration_sum = h5::Column::Open(g, "contact_duration_sum", h5::Type::F64(), n);
+    peak_max = h5::Column::Open(g, "peak_force_max", h5::Type::F64(), n);
+  }
 }
 
 void LoadsTable::Push(const std::vector<LoadsRow>& rows) {
@@ -177,6 +194,11 @@ void LoadsTable::Push(const std::vector<LoadsRow>& rows) {
   for (const LoadsRow& r : rows) work.Push(r.work);
   for (const LoadsRow& r : rows) held.Push(r.held);
   for (const LoadsRow& r : rows) partial.Push(static_cast<std::int8_t>(r.partial ? 1 : 0));
+  if (!has_phases) return;
+  for (const LoadsRow& r : rows) phases.Push(r.phases);
+  for (const LoadsRow& r : rows) peak_sum.Push(r.peak_sum);
+  for (const LoadsRow& r : rows) duration_sum.Push(r.duration_sum);
+  for (const LoadsRow& r : rows) peak_max.Push(r.peak_max);
 }
 
 }  // namespace store
@@ -287,6 +309,13 @@ void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoin
     h5::WriteDoubles(g, "stick_duration", c.stick_duration);
     h5::WriteDoubles(g, "reaction_integral", c.reaction_integral);
     h5::WriteDoubles(g, "reaction_max", c.reaction_max);
+  }
+  if (!c.compliant_account.empty()) {
+    // Compliant stops (docs/compliant.md): the open contact phase's account (4 per contact) and
+    // the relaxing flight (its contact, −1: none, and the surface's offset).
+    h5::WriteDoubles(g, "compliant_account", c.compliant_account, 4);
+    h5::WriteInt(g, "relax_contact", c.relax_contact);
+    h5::WriteDoubles(g, "relax_surface", std::vector<double>{c.relax_surface});
   }
   h5::WriteInt(g, "events", static_cast<long long>(n_events));
   h5::WriteInt(g, "samples", static_cast<long long>(n_samples));
@@ -503,13 +532,17 @@ void Hdf5Store::ReplayLoads(const std::function<void(const std::vector<LoadsRow>
   m.Sync();
   const h5::Size n = m.cp_loads, w = m.ld->impacts.cols();
   constexpr h5::Size kBlock = 4096;
-  std::vector<double> c[6];
+  std::vector<double> c[10];
   std::vector<std::int8_t> partial;
   std::vector<LoadsRow> rows(static_cast<size_t>(w));
-  h5::Column* cols[6] = {&m.ld->impacts, &m.ld->impulse, &m.ld->reaction, &m.ld->energy, &m.ld->work, &m.ld->held};
+  h5::Column* cols[10] = {&m.ld->impacts, &m.ld->impulse, &m.ld->reaction,     &m.ld->energy,   &m.ld->work,
+                          &m.ld->held,    &m.ld->phases,  &m.ld->peak_sum,     &m.ld->duration_sum, &m.ld->peak_max};
+  // A table written before the compliant stops' columns: its periods do not know their phases.
+  const int q_end = m.ld->has_phases ? 10 : 6;
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
   for (h5::Size first = 0; first < n; first += kBlock) {
     const h5::Size k = std::min(kBlock, n - first);
-    for (int q = 0; q < 6; ++q) {
+    for (int q = 0; q < q_end; ++q) {
       c[q].resize(static_cast<size_t>(k * w));
       cols[q]->Read(first, k, c[q].data());
     }
@@ -518,7 +551,16 @@ void Hdf5Store::ReplayLoads(const std::function<void(const std::vector<LoadsRow>
     for (h5::Size i = 0; i < k; ++i) {
       for (h5::Size j = 0; j < w; ++j) {
         const auto at = static_cast<size_t>(i * w + j);
-        rows[static_cast<size_t>(j)] = {c[0][at], c[1][at], c[2][at], c[3][at], c[4][at], c[5][at], partial[at] != 0};
+        LoadsRow& r = rows[static_cast<size_t>(j)];
+        r = {c[0][at], c[1][at], c[2][at], c[3][at], c[4][at], c[5][at], partial[at] != 0};
+        if (q_end == 10) {
+          r.phases = c[6][at];
+          r.peak_sum = c[7][at];
+          r.duration_sum = c[8][at];
+          r.peak_max = c[9][at];
+        } else {
+          r.phases = r.peak_sum = r.duration_sum = r.peak_max = unknown;
+        }
       }
       each(rows);
     }

@@ -77,10 +77,20 @@ struct StateTable {
 // /loads: one row per period of the run (docs/loads.md §5), each column of width `contacts` (column
 // j = contact j): the period's sums of a LoadsRecorder, from which a resumed or extended run
 // rebuilds the loads of the whole run. Attribute first_period: the period of row 0.
+// The compliant stops' columns (contact phases ended, sums of their peak forces and durations, the
+// largest peak: docs/loads.md, "Peak force and contact duration over a run") are absent from files
+// written before them: such a file keeps its columns, and its replayed periods do not know their phases.
 struct LoadsTable {
   h5::Column impacts, impulse, reaction, energy, work, held, partial;
-  std::vector<h5::Column*> All() { return {&impacts, &impulse, &reaction, &energy, &work, &held, &partial}; }
+  h5::Column phases, peak_sum, duration_sum, peak_max;
+  bool has_phases = false;
+  std::vector<h5::Column*> All() {
+    std::vector<h5::Column*> all{&impacts, &impulse, &reaction, &energy, &work, &held, &partial};
+    if (has_phases) all.insert(all.end(), {&phases, &peak_sum, &duration_sum, &peak_max});
+    return all;
+  }
   void Create(h5::Id g, h5::Size contacts);
+  void CreatePhases(h5::Id g, h5::Size contacts);
   void Open(h5::Id g);
   void Push(const std::vector<LoadsRow>& rows);
 };

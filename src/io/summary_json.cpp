@@ -71,6 +71,22 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
     return c ? nlohmann::json::array({c->first, c->second}) : nlohmann::json(nullptr);
   };
   for (const ContactLoads& c : s.contacts) {
+    // A compliant stop (docs/loads.md, "Peak force and contact duration over a run"): its contact
+    // phases per period, the mean peak force and duration per phase, the largest peak force.
+    const auto compliant = [&](nlohmann::json& o) {
+      if (!c.compliant) return;
+      // No impacts, so no normal work in the rigid limit (docs/loads.md §4): not a zero.
+      o["work_rate"] = nullptr;
+      if (s.blocks != 0) o["work_rate_ci"] = nullptr;
+      o["contact_phases_per_period"] = c.phases_per_period;
+      o["peak_force_mean"] = c.peak_force_mean;
+      o["contact_duration_mean"] = c.contact_duration_mean;
+      o["peak_force_max"] = c.peak_force_max;
+      if (s.blocks == 0) return;
+      o["contact_phases_per_period_ci"] = ci(c.phases_per_period_ci);
+      o["peak_force_mean_ci"] = ci(c.peak_force_mean_ci);
+      o["contact_duration_mean_ci"] = ci(c.contact_duration_mean_ci);
+    };
     if (s.blocks == 0) {  // a periodic orbit's exact values: no interval
       arr.push_back({{"contact", c.contact},
                      {"impacts_per_period", c.impacts_per_period},
@@ -80,6 +96,7 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
                      {"dissipated_power", c.dissipated_power},
                      {"work_rate", c.work_rate},
                      {"contact_fraction", c.contact_fraction}});
+      compliant(arr.back());
       continue;
     }
     arr.push_back({{"contact", c.contact},
@@ -97,6 +114,7 @@ void AddLoads(nlohmann::json& j, const LoadsSummary& s) {
                    {"work_rate_ci", ci(c.work_rate_ci)},
                    {"contact_fraction", c.contact_fraction},
                    {"contact_fraction_ci", ci(c.contact_fraction_ci)}});
+    compliant(arr.back());
   }
   j["loads"] = arr;
   if (s.blocks == 0) {
