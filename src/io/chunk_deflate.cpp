@@ -9,6 +9,9 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#endif
 
 namespace vibro::h5 {
 
@@ -95,7 +98,7 @@ const Tables& FixedTables() {
 // are at most 8 + 5 + 5 + 13 = 31).
 class BitWriter {
  public:
-  explicit BitWriter(unsigned char* out) : out_(out) {}
+  explicit BitWriter(unsigned char* out) : base_(out), out_(out) {}
   void Put(std::uint32_t bits, std::uint32_t len) {
     acc_ |= static_cast<std::uint64_t>(bits) << count_;
     count_ += len;
@@ -107,17 +110,30 @@ class BitWriter {
       count_ -= 32;
     }
   }
-  // The last bits, padded to a whole byte; returns the end of the stream.
+  // The position of the next bit, from the start of the stream.
+  size_t BitPosition() const { return static_cast<size_t>(out_ - base_) * 8 + count_; }
+  // Sets bit `pos` (already put) to 1.
+  void SetBit(size_t pos) {
+    const size_t flushed = static_cast<size_t>(out_ - base_) * 8;
+    if (pos < flushed) base_[pos / 8] |= static_cast<unsigned char>(1u << (pos % 8));
+    else acc_ |= std::uint64_t{1} << (pos - flushed);
+  }
+  // The last bits, padded to a whole byte; returns where the next byte goes (the writer may go on
+  // with Put from there: Restart).
   unsigned char* Finish() {
     while (count_ > 0) {
       *out_++ = static_cast<unsigned char>(acc_);
       acc_ >>= 8;
       count_ = count_ > 8 ? count_ - 8 : 0;
     }
+    acc_ = 0;
     return out_;
   }
+  // Goes on at `at`, a byte boundary after what Finish returned.
+  void Restart(unsigned char* at) { out_ = at; }
 
  private:
+  unsigned char* base_;
   unsigned char* out_;
   std::uint64_t acc_ = 0;
   std::uint32_t count_ = 0;
@@ -126,13 +142,16 @@ class BitWriter {
 constexpr int kHashBits = 15;
 constexpr size_t kWindow = 32768;  // deflate's largest distance
 constexpr size_t kMaxMatch = 258;
+// Literal runs of this many bytes or more are stored blocks; after 2^kSkipShift misses in a row the
+// search skips positions (ZlibFixed).
+constexpr size_t kStoredRun = 128;
+constexpr int kSkipShift = 4;
 
 }  // namespace
 
-void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out) {
-  const size_t count = elem > 0 ? n / elem : 0;
-  if (elem <= 1 || count <= 1) {
-    if (n > 0) std::memcpy(out, in, n);
+void ShuffleInto(const unsigned char* in, size_t count, size_t elem, unsigned char* out, size_t stride) {
+  if (elem == 1) {
+    if (count > 0) std::memcpy(out, in, count);
     return;
   }
   if (elem == 8) {
@@ -159,8 +178,8 @@ void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out)
       }
       for (int k = 0; k < 4; ++k) {  // sixteen elements: byte 2k, then byte 2k + 1
         const __m128i lo = _mm_unpacklo_epi64(b[k], b[k + 4]), hi = _mm_unpackhi_epi64(b[k], b[k + 4]);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + static_cast<size_t>(2 * k) * count + i), lo);
-        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + static_cast<size_t>(2 * k + 1) * count + i), hi);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + static_cast<size_t>(2 * k) * stride + i), lo);
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + static_cast<size_t>(2 * k + 1) * stride + i), hi);
       }
     }
 #endif
@@ -177,22 +196,82 @@ void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out)
           a[r + s] ^= t;
           a[r] ^= t << (8 * s);
         }
-      for (size_t b = 0; b < 8; ++b) std::memcpy(out + b * count + i, &a[b], 8);
+      for (size_t b = 0; b < 8; ++b) std::memcpy(out + b * stride + i, &a[b], 8);
     }
     for (; i < count; ++i)
-      for (size_t b = 0; b < 8; ++b) out[b * count + i] = in[i * 8 + b];
+      for (size_t b = 0; b < 8; ++b) out[b * stride + i] = in[i * 8 + b];
   } else {
     for (size_t i = 0; i < count; ++i)
-      for (size_t b = 0; b < elem; ++b) out[b * count + i] = in[i * elem + b];
+      for (size_t b = 0; b < elem; ++b) out[b * stride + i] = in[i * elem + b];
   }
+}
+
+void Shuffle(const unsigned char* in, size_t n, size_t elem, unsigned char* out) {
+  const size_t count = elem > 0 ? n / elem : 0;
+  if (elem <= 1 || count <= 1) {
+    if (n > 0) std::memcpy(out, in, n);
+    return;
+  }
+  ShuffleInto(in, count, elem, out, count);
   // Bytes after the last whole element (none in the store's chunks) stay as they are, as the filter's.
   if (count * elem < n) std::memcpy(out + count * elem, in + count * elem, n - count * elem);
 }
+
+#if defined(__x86_64__) && defined(__GNUC__)
+namespace {
+
+// Adler32's sums over the first n bytes, n a multiple of 32, with AVX2 (the same sums as below, 32
+// bytes per group: psadbw for the sums, pmaddubsw then pmaddwd for the bytes weighed 32 … 1); used
+// when the processor has AVX2 (Adler32 asks it once).
+__attribute__((target("avx2"))) void Adler32Avx2(std::uint64_t& a, std::uint64_t& b, const unsigned char* p,
+                                                 size_t n) {
+  constexpr std::uint32_t kMod = 65521;
+  constexpr size_t kLanes = 32, kBlock = 4096;
+  const __m256i zero = _mm256_setzero_si256(), ones = _mm256_set1_epi16(1);
+  const __m256i weights = _mm256_setr_epi8(32, 31, 30, 29, 28, 27, 26, 25, 24, 23, 22, 21, 20, 19, 18, 17, 16, 15, 14,
+                                           13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1);
+  while (n > 0) {
+    const size_t k = std::min(n, kBlock);
+    __m256i v_sum = zero, v_ps = zero, v_w = zero;
+    for (size_t g = 0; g < k; g += kLanes) {
+      const __m256i x = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(p + g));
+      v_ps = _mm256_add_epi32(v_ps, v_sum);
+      v_sum = _mm256_add_epi32(v_sum, _mm256_sad_epu8(x, zero));
+      v_w = _mm256_add_epi32(v_w, _mm256_madd_epi16(_mm256_maddubs_epi16(x, weights), ones));
+    }
+    alignas(32) std::uint32_t l_sum[8], l_ps[8], l_w[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(l_sum), v_sum);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(l_ps), v_ps);
+    _mm256_store_si256(reinterpret_cast<__m256i*>(l_w), v_w);
+    std::uint64_t sum = 0, ps = 0, weighted = 0;
+    for (int l = 0; l < 8; ++l) {
+      sum += l_sum[l];
+      ps += l_ps[l];
+      weighted += l_w[l];
+    }
+    b = (b + k * a + kLanes * ps + weighted) % kMod;
+    a = (a + sum) % kMod;
+    p += k;
+    n -= k;
+  }
+}
+
+}  // namespace
+#endif
 
 std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n) {
   constexpr std::uint32_t kMod = 65521;
   constexpr size_t kLanes = 16, kBlock = 4096;
   std::uint64_t a = adler & 0xffffu, b = adler >> 16;
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  if (avx2 && n >= 32) {
+    const size_t whole = n / 32 * 32;
+    Adler32Avx2(a, b, p, whole);
+    p += whole;
+    n -= whole;
+  }
+#endif
   // Per block of k bytes (groups g = 0 … m − 1 of 16, k = 16 m): a += Σ x, and
   // b += k·a + 16 Σ_g (m − 1 − g) S_g + Σ_g Σ_j (16 − j) x_gj, S_g the sum of group g's bytes: the
   // first sum accumulates the groups' sums before each group (ps), the second weighs each group's
@@ -261,12 +340,42 @@ size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
   *o++ = 0x78;  // CM = 8 (deflate), CINFO = 7 (32 KiB window)
   *o++ = 0x01;  // FLEVEL 0, FCHECK: 0x7801 is a multiple of 31
   BitWriter bw(o);
-  bw.Put(3, 3);  // BFINAL = 1, BTYPE = 01 (fixed Huffman codes)
+  size_t block = bw.BitPosition();  // the current fixed block's header (its BFINAL bit, set at the end)
+  bw.Put(2, 3);  // BFINAL = 0, BTYPE = 01 (fixed Huffman codes)
+  // The bytes [lit, i) found no match: sent as literals of the fixed code when a match or the end
+  // comes, or, a run of kStoredRun bytes or more, as stored blocks (RFC 1951 §3.2.4) between two
+  // fixed ones: a literal costs 8 or 9 bits, a stored byte 8, and a stored block is written by
+  // memcpy (the byte planes of a column such as t, which seldom repeat, are most of the encoding).
+  size_t lit = 0;
+  const auto send_literals = [&](size_t end) {
+    if (end - lit >= kStoredRun) {
+      bw.Put(t.lit[256].bits, t.lit[256].len);  // end of the fixed block
+      while (lit < end) {
+        const size_t len = std::min<size_t>(end - lit, 65535);
+        bw.Put(0, 3);  // BFINAL = 0, BTYPE = 00 (stored), then the next byte boundary
+        unsigned char* p = bw.Finish();
+        p[0] = static_cast<unsigned char>(len);
+        p[1] = static_cast<unsigned char>(len >> 8);
+        p[2] = static_cast<unsigned char>(~len);
+        p[3] = static_cast<unsigned char>(~len >> 8);
+        std::memcpy(p + 4, in + lit, len);
+        bw.Restart(p + 4 + len);
+        lit += len;
+      }
+      block = bw.BitPosition();
+      bw.Put(2, 3);  // a fixed block again
+      return;
+    }
+    for (; lit < end; ++lit) {
+      const Code& l = t.lit[in[lit]];
+      bw.Put(l.bits, l.len);
+    }
+  };
   // The hash table of the last position of each 4-byte string. It is not cleared between chunks: a
   // stale entry is checked like any other (a position before i whose 4 bytes match).
   static thread_local std::vector<std::uint32_t> table(size_t{1} << kHashBits, 0);
   std::uint32_t* head = table.data();
-  size_t i = 0, rep = 0;
+  size_t i = 0, rep = 0, misses = 0;
   while (i + 4 <= n) {
     const std::uint32_t cur = Load32(in + i);
     size_t d = 0;
@@ -279,13 +388,32 @@ size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
       if (c < i && i - c <= kWindow && Load32(in + c) == cur) d = i - c;
     }
     if (d == 0) {
-      const Code& l = t.lit[in[i]];
-      bw.Put(l.bits, l.len);
-      ++i;
+      // No match here: after kSkipAfter misses in a row the search looks at every second position,
+      // then every third, … (the bytes passed over are literals), so that bytes that do not repeat
+      // cost little more than their copy; a match resets it.
+      i += 1 + (misses++ >> kSkipShift);
       continue;
     }
+    misses = 0;
     const size_t max_len = std::min(kMaxMatch, n - i);
     size_t len = 4;
+#if defined(__SSE2__)
+    // 32 bytes per step (a periodic column's matches are mostly of the longest length, 258).
+    while (len + 32 <= max_len) {
+      const auto* a = reinterpret_cast<const __m128i*>(in + i + len);
+      const auto* b = reinterpret_cast<const __m128i*>(in + i + len - d);
+      const auto lo = static_cast<std::uint32_t>(
+          _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(a), _mm_loadu_si128(b))));
+      const auto hi = static_cast<std::uint32_t>(
+          _mm_movemask_epi8(_mm_cmpeq_epi8(_mm_loadu_si128(a + 1), _mm_loadu_si128(b + 1))));
+      const std::uint32_t differ = ~(lo | (hi << 16));
+      if (differ != 0) {
+        len += static_cast<size_t>(__builtin_ctz(differ));
+        goto matched;
+      }
+      len += 32;
+    }
+#endif
     for (;;) {
       if (len + 8 <= max_len) {
         const std::uint64_t x = Load64(in + i + len) ^ Load64(in + i + len - d);
@@ -299,16 +427,19 @@ size_t ZlibFixed(const unsigned char* in, size_t n, unsigned char* out) {
       while (len < max_len && in[i + len] == in[i + len - d]) ++len;
       break;
     }
+#if defined(__SSE2__)
+  matched:
+#endif
+    send_literals(i);
     const Code& lc = t.length[len];
     const Code& dc = t.dist[d];
     bw.Put(lc.bits | (dc.bits << lc.len), lc.len + dc.len);
     rep = d;
     i += len;
+    lit = i;
   }
-  for (; i < n; ++i) {
-    const Code& l = t.lit[in[i]];
-    bw.Put(l.bits, l.len);
-  }
+  send_literals(n);
+  bw.SetBit(block);  // the last block is the final one
   bw.Put(t.lit[256].bits, t.lit[256].len);  // end of block
   o = bw.Finish();
   const std::uint32_t adler = Adler32(1, in, n);
@@ -330,6 +461,16 @@ size_t ShuffleDeflate(const unsigned char* in, size_t n, size_t elem, Bytes& scr
   if (scratch.size() < n) scratch.resize(n);
   Shuffle(in, n, elem, scratch.data());
   return ZlibFixed(scratch.data(), n, out);
+}
+
+size_t ShuffleDeflatePadded(const unsigned char* in, size_t n, size_t chunk, size_t elem, Bytes& scratch,
+                            unsigned char* out) {
+  if (scratch.size() < chunk) scratch.resize(chunk);
+  const size_t count = n / elem, stride = chunk / elem;
+  // Each byte plane: the rows' bytes, then zeros up to the chunk's length.
+  ShuffleInto(in, count, elem, scratch.data(), stride);
+  for (size_t b = 0; b < elem; ++b) std::memset(scratch.data() + b * stride + count, 0, stride - count);
+  return ZlibFixed(scratch.data(), chunk, out);
 }
 
 }  // namespace vibro::h5

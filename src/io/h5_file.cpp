@@ -5,6 +5,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <cstdio>
@@ -906,29 +907,30 @@ void Column::EncodeStaged() {
   const size_t chunks = (staged_bytes_ + chunk_bytes - 1) / chunk_bytes;
   if (packed_.size() < chunks * bound) packed_.resize(chunks * bound);
   packed_len_.resize(chunks);
+  // The shuffled bytes of a chunk: one buffer per thread (the writer's, or the store's own when it
+  // encodes), not one per column.
+  static thread_local Bytes scratch;
   for (size_t i = 0; i < chunks; ++i) {
     const unsigned char* rows = staged_.data() + i * chunk_bytes;
     const size_t bytes = std::min(chunk_bytes, staged_bytes_ - i * chunk_bytes);
-    if (bytes < chunk_bytes) {
-      // The last chunk, part-filled: padded with zeros (the fill value HDF5 pads edge chunks with).
-      pad_.resize(chunk_bytes);
-      std::memcpy(pad_.data(), rows, bytes);
-      std::memset(pad_.data() + bytes, 0, chunk_bytes - bytes);
-      rows = pad_.data();
-    }
     unsigned char* out = packed_.data() + i * bound;
-    // Every element equal to the first (each byte equal to the one an element further on).
-    if (std::memcmp(rows, rows + elem_size_, chunk_bytes - elem_size_) == 0) {
+    // Every element equal to the first (each byte equal to the one an element further on); the
+    // last chunk, part-filled, is padded with zeros (the fill value HDF5 pads edge chunks with), so
+    // it is constant only when its rows are zeros.
+    const bool constant = std::memcmp(rows, rows + elem_size_, bytes - elem_size_) == 0 &&
+                          (bytes == chunk_bytes || std::all_of(rows, rows + elem_size_, [](unsigned char b) { return b == 0; }));
+    if (constant) {
       if (constant_elem_.size() != elem_size_ || std::memcmp(constant_elem_.data(), rows, elem_size_) != 0) {
         constant_elem_.assign(rows, rows + elem_size_);
-        const size_t len = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, out);
+        const size_t len = ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, scratch, out);
         constant_packed_.assign(out, out + len);
       }
       std::memcpy(out, constant_packed_.data(), constant_packed_.size());
       packed_len_[i] = constant_packed_.size();
       continue;
     }
-    packed_len_[i] = ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch_, out);
+    packed_len_[i] = bytes < chunk_bytes ? ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, scratch, out)
+                                         : ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch, out);
   }
 }
 

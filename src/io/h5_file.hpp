@@ -241,7 +241,7 @@ class Column {
   // What EncodeStaged made of the staged rows: chunk i's bytes at packed_ + i · bound, packed_len_[i]
   // of them (buffers kept from one flush to the next, never cleared).
   bool encoded_ = false;
-  Bytes packed_, scratch_, pad_;
+  Bytes packed_;
   std::vector<size_t> packed_len_;
   // A chunk of one element repeated (a column that the run leaves constant: a single contact's
   // index, NaN where no compliant phase is recorded) is encoded once: its element and its encoding

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <Eigen/Dense>
+#include <zlib.h>
 
 #include "io/chunk_deflate.hpp"
 #include "io/h5_file.hpp"
@@ -64,6 +65,62 @@ TEST(ChunkDeflate, ShuffleIsHdf5sByteTranspose) {
       for (size_t i = 0; i < count; ++i)
         for (size_t b = 0; b < elem; ++b)
           ASSERT_EQ(out[b * count + i], in[i * elem + b]) << elem << " " << count << " " << i;
+    }
+}
+
+// The zlib stream of ZlibFixed, inflated by zlib itself (an independent decoder), gives back its
+// input: bytes that repeat (fixed-Huffman matches), runs that do not (stored blocks, one longer
+// than a stored block's 65 535 bytes), the two interleaved, short inputs, and the padded chunk of
+// ShuffleDeflatePadded equal to ShuffleDeflate of the rows padded with zeros.
+TEST(ChunkDeflate, StreamsInflateWithZlib) {
+  std::mt19937 g(5);
+  const auto round_trip = [](const std::vector<unsigned char>& in) {
+    std::vector<unsigned char> z;
+    vibro::h5::ZlibFixed(in.data(), in.size(), z);
+    EXPECT_LE(z.size(), vibro::h5::ZlibFixedBound(in.size()));
+    std::vector<unsigned char> back(in.size() + 16);
+    uLongf len = back.size();
+    EXPECT_EQ(uncompress(back.data(), &len, z.data(), z.size()), Z_OK) << in.size();
+    back.resize(len);
+    EXPECT_EQ(back, in) << in.size();
+    return z.size();
+  };
+  for (size_t n : {size_t{0}, size_t{1}, size_t{4}, size_t{127}, size_t{128}, size_t{129}, size_t{1000},
+                   size_t{65535}, size_t{65536 + 300}, size_t{200000}}) {
+    std::vector<unsigned char> random(n), mixed(n), periodic(n);
+    for (auto& x : random) x = static_cast<unsigned char>(g());
+    // Runs of 37-byte periods and of random bytes, 50 to 2000 bytes long in turn.
+    for (size_t i = 0; i < n;) {
+      const size_t run = 50 + g() % 1950;
+      const bool repeats = (i / 7) % 2 == 0;
+      for (size_t k = 0; k < run && i < n; ++k, ++i)
+        mixed[i] = repeats ? static_cast<unsigned char>(k % 37) : static_cast<unsigned char>(g());
+      for (size_t k = 0; k < 8 && i < n; ++k, ++i) mixed[i] = static_cast<unsigned char>(g());
+    }
+    for (size_t i = 0; i < n; ++i) periodic[i] = static_cast<unsigned char>((i % 36) * 7);
+    const size_t random_size = round_trip(random);
+    round_trip(mixed);
+    const size_t periodic_size = round_trip(periodic);
+    // Random bytes cost their own size and a few bytes per stored block; a period, little.
+    EXPECT_LE(random_size, n + 16 + 16 * (n / 65535));
+    if (n >= 1000) {
+      EXPECT_LT(periodic_size, n / 10);
+    }
+  }
+  // A part-filled chunk: ShuffleDeflatePadded of its rows as ShuffleDeflate of the padded rows.
+  for (size_t elem : {size_t{1}, size_t{4}, size_t{8}})
+    for (size_t count : {size_t{1}, size_t{37}, size_t{1000}}) {
+      const size_t chunk = 2048 * elem;
+      std::vector<unsigned char> rows(chunk, 0);
+      for (size_t i = 0; i < count * elem; ++i) rows[i] = static_cast<unsigned char>(g());
+      vibro::h5::Bytes scratch;
+      std::vector<unsigned char> whole(vibro::h5::ZlibFixedBound(chunk)), padded(whole.size());
+      const size_t a = vibro::h5::ShuffleDeflate(rows.data(), chunk, elem, scratch, whole.data());
+      std::fill(scratch.begin(), scratch.end(), 0xAB);  // stale bytes that the zeros must replace
+      const size_t b = vibro::h5::ShuffleDeflatePadded(rows.data(), count * elem, chunk, elem, scratch, padded.data());
+      whole.resize(a);
+      padded.resize(b);
+      EXPECT_EQ(padded, whole) << elem << " " << count;
     }
 }
 
