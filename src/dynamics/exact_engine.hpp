@@ -5,6 +5,8 @@
 #pragma once
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <type_traits>
 #include <vector>
 
@@ -119,6 +121,16 @@ class ExactEngineT final : public PropagatorT<S> {
   std::vector<OscillatorT<S>> free_modes_;   // ω_i, ζ_i, T_A,i f
   std::vector<int> free_order_;                 // mode indices, fastest first
   mutable std::vector<ModeSample> samples_;     // scratch of the probes (no allocation per probe)
+  // The last free-flight probe's flows, kept for the state at the same σ (docs/performance.md,
+  // "The state at the root"): a search that ends within half an ulp of its last probe returns that
+  // probe's σ, and Evaluate/EvaluateWithGap there reuse each mode's (Δq, v) instead of its closed
+  // form again: the same function of the same arguments, so the same doubles. Valid while
+  // `memo_contact_` ≥ 0: the probe was of that contact and flowed every mode (no zero weight
+  // skipped); σ is compared bit for bit (±0 differ). Begin invalidates it.
+  mutable std::vector<OscillatorStateT<S>> memo_flow_;
+  mutable S memo_sigma_{0};
+  mutable int memo_contact_ = -1;
+  bool MemoHit(const S& sigma) const;
   bool damped_sticking_ = false;             // non-proportional damping in the constrained modes
   // Its closed form (docs/model.md §7): DampedStickingT<Quad> is declared in
   // dynamics/damped_sticking_quad.hpp, which the quad instantiation includes
@@ -246,6 +258,7 @@ ExactEngineT<S>::ExactEngineT(const System& sys, const ModelT<S>& m)
     }
   }
   samples_.resize(std::max(free_modes_.size(), stick_max));
+  memo_flow_.resize(free_modes_.size());
   if (!m.harmonics.empty()) {
     const size_t H = m.harmonics.size();
     for (const auto& hh : m.harmonics.h) h_omega_.push_back(hh.omega);
@@ -339,6 +352,7 @@ void ExactEngineT<S>::AddFarBound(ProbeT<S>& p, const std::vector<OscillatorT<S>
 template <class S>
 void ExactEngineT<S>::Begin(const SegmentStartT<S>& s) {
   taylor_ready_ = false;
+  memo_contact_ = -1;
   mode_ = s.mode;
   phase_ = s.phase;
   trig_ = s.phase_sincos ? PhaseTrigT<S>(s.phase_sincos[0], s.phase_sincos[1]) : PhaseTrigT<S>(s.phase);
@@ -390,13 +404,18 @@ ProbeT<S> ExactEngineT<S>::GapProbeOf(int j, const S& sigma, const S& H, const S
   S dq_sum(0);
   const size_t Hn = h_omega_.size();
   if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
+  bool every_mode = true;
   for (size_t i = 0; i < free_modes_.size(); ++i) {
     const auto ii = static_cast<Eigen::Index>(i);
     const S ci = c[ii];
-    if (ci == S(0)) continue;
+    if (ci == S(0)) {
+      every_mode = false;
+      continue;
+    }
     const OscillatorT<S>& o = free_modes_[i];
     const auto st = Hn ? FlowSum<S>(o, &free_hF_[i * Hn], h_omega_, h_trig_, h_at_, X0_[ii], V0_[ii], sigma)
                        : Flow<S>(o, omega_, trig_, X0_[ii], V0_[ii], sigma, fw);
+    memo_flow_[i] = st;
     const S x = X0_[ii] + st.dq;
     const S acc = -o.nu * o.nu * x - S(2) * o.zeta * o.nu * st.v +
                   (Hn ? HForce(&free_hF_[i * Hn]) : S(o.F * s_forcing));
@@ -421,6 +440,8 @@ ProbeT<S> ExactEngineT<S>::GapProbeOf(int j, const S& sigma, const S& H, const S
     }
   }
   p.jet.g += dq_sum;
+  memo_sigma_ = sigma;
+  memo_contact_ = every_mode && mode_ == Mode::kFree ? j : -1;
   p.M *= BoundMargin<S>();
   if (far && p.jet.g > 0)
     AddFarBound(p, free_modes_, cd.free_far, free_order_, &c, {S(0), S(0), S(0)}, S(0), H, rest);
@@ -698,6 +719,14 @@ void ExactEngineT<S>::Evaluate(S sigma, Vec& X, Vec& V) const {
   X.resize(n);
   V.resize(n);
   const size_t Hn = h_omega_.size();
+  if (mode_ == Mode::kFree && MemoHit(sigma)) {
+    for (int i = 0; i < n; ++i) {
+      const auto& st = memo_flow_[static_cast<size_t>(i)];
+      X[i] = X0_[i] + st.dq;
+      V[i] = st.v;
+    }
+    return;
+  }
   if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   if (mode_ == Mode::kFree) {
     const ForcingTrigT<S> fw(omega_, sigma);
@@ -906,8 +935,19 @@ S ExactEngineT<S>::EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
   V.resize(n);
   const ModelT<S>& mc = *contacts_[static_cast<size_t>(start_contact_)].m;
   const auto& c = mc.shape;
-  const ForcingTrigT<S> fw(omega_, sigma);
   S dq_sum(0);
+  if (MemoHit(sigma) && memo_contact_ == start_contact_) {
+    for (int i = 0; i < n; ++i) {
+      const auto& st = memo_flow_[static_cast<size_t>(i)];
+      X[i] = X0_[i] + st.dq;
+      V[i] = st.v;
+      if (c[i] == S(0)) continue;
+      dq_sum += mc.unit_shape ? st.dq : S(c[i] * st.dq);
+    }
+    const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(start_contact_)] : gap0_;
+    return g0 + dq_sum;
+  }
+  const ForcingTrigT<S> fw(omega_, sigma);
   const size_t Hn = h_omega_.size();
   if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
   for (int i = 0; i < n; ++i) {
@@ -922,6 +962,15 @@ S ExactEngineT<S>::EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
   }
   const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(start_contact_)] : gap0_;
   return g0 + dq_sum;
+}
+
+template <class S>
+bool ExactEngineT<S>::MemoHit(const S& sigma) const {
+  if (memo_contact_ < 0) return false;
+  if constexpr (std::is_same_v<S, double>)
+    return std::bit_cast<std::uint64_t>(sigma) == std::bit_cast<std::uint64_t>(memo_sigma_);
+  else
+    return false;  // quad: no memo (its scalar's bits are not compared here)
 }
 
 template <class S>

@@ -4,8 +4,16 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "dynamics/exact_engine.hpp"
+#include "dynamics/model_t.hpp"
 #include "dynamics/oscillator.hpp"
 #include "support.hpp"
+#include "vibro/scene_file.hpp"
 
 namespace vibro::test {
 namespace {
@@ -208,6 +216,83 @@ TEST(ExactEngine, ExactResonanceRuns) {
   ASSERT_EQ(run.result.status, RunStatus::kOk);
   EXPECT_GT(run.result.counts.impacts, 10);
   for (const auto& e : run.log.events) EXPECT_TRUE(std::isfinite(e.t));
+}
+
+// The state at a point the last probe visited reuses that probe's flows (docs/performance.md, "The
+// state at the root"); it must be the closed form evaluated afresh, bit for bit, at that point and
+// nowhere else: after a probe of another contact (whose gap is not the start contact's), at the
+// next double, at −0 against +0, and after a new segment begins.
+TEST(ExactEngine, StateAtAProbedPointIsTheFreshClosedForm) {
+  const auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  for (const char* file : {"contacts_chain2.toml", "fig08_preload.toml", "chain3.toml"}) {
+    SCOPED_TRACE(file);
+    const auto loaded = LoadScene(std::string(VIBRO_SCENES_DIR) + "/" + file, {});
+    const System sys(loaded.scene);
+    const detail::ModelT<double> model(sys);
+    const int n = model.dof(), m = sys.contact_count();
+    Eigen::VectorXd X(n), V(n), X2(n), V2(n);
+    for (int i = 0; i < n; ++i) {
+      X[i] = 0.3 - 0.17 * i;
+      V[i] = -0.4 + 0.11 * i;
+      X2[i] = -0.2 + 0.05 * i;
+      V2[i] = 0.7 - 0.3 * i;
+    }
+    std::vector<double> gaps(static_cast<size_t>(m)), gaps2(static_cast<size_t>(m));
+    for (int j = 0; j < m; ++j) {
+      gaps[static_cast<size_t>(j)] = 0.25 + 0.1 * j;
+      gaps2[static_cast<size_t>(j)] = 0.5 + 0.2 * j;
+    }
+    const auto begin = [&](detail::ExactEngine& e, const Eigen::VectorXd& x, const Eigen::VectorXd& v,
+                           const std::vector<double>& g, double phase) {
+      detail::SegmentStartT<double> st{Mode::kFree, phase, 0.0, x, v, g[0], detail::FlightStart::kGeneric,
+                                       detail::StickStart::kGeneric};
+      if (m > 1) st.gaps = &g;
+      e.Begin(st);
+    };
+    const double cap = detail::StepCap<double>(model);
+    for (const double sigma : {0.0, -0.0, 1e-9, 0.3141, 1.7}) {
+      detail::ExactEngine fresh(sys, model);
+      begin(fresh, X, V, gaps, 0.9);
+      Eigen::VectorXd Xf, Vf;
+      const double gf = fresh.EvaluateWithGap(sigma, Xf, Vf);
+      for (int j = 0; j < m; ++j) {
+        SCOPED_TRACE(j);
+        detail::ExactEngine e(sys, model);
+        begin(e, X, V, gaps, 0.9);
+        (void)e.GapProbe(j, sigma, cap, 10.0);
+        Eigen::VectorXd Xe, Ve;
+        EXPECT_EQ(bits(e.EvaluateWithGap(sigma, Xe, Ve)), bits(gf));
+        for (int i = 0; i < n; ++i) {
+          EXPECT_EQ(bits(Xe[i]), bits(Xf[i]));
+          EXPECT_EQ(bits(Ve[i]), bits(Vf[i]));
+        }
+        (void)e.GapProbe(j, sigma, cap, 10.0);
+        e.Evaluate(sigma, Xe, Ve);
+        for (int i = 0; i < n; ++i) {
+          EXPECT_EQ(bits(Xe[i]), bits(Xf[i]));
+          EXPECT_EQ(bits(Ve[i]), bits(Vf[i]));
+        }
+        // The next double, and the other signed zero: the fresh closed form there.
+        const double other = sigma == 0.0 ? -sigma : std::nextafter(sigma, 10.0);
+        (void)e.GapProbe(j, sigma, cap, 10.0);
+        Eigen::VectorXd Xo, Vo;
+        const double go = fresh.EvaluateWithGap(other, Xo, Vo);
+        EXPECT_EQ(bits(e.EvaluateWithGap(other, Xe, Ve)), bits(go));
+        for (int i = 0; i < n; ++i) EXPECT_EQ(bits(Ve[i]), bits(Vo[i]));
+        // A new segment: its own start, not the probe's.
+        (void)e.GapProbe(j, sigma, cap, 10.0);
+        begin(e, X2, V2, gaps2, 2.1);
+        detail::ExactEngine fresh2(sys, model);
+        begin(fresh2, X2, V2, gaps2, 2.1);
+        Eigen::VectorXd Xn, Vn;
+        EXPECT_EQ(bits(e.EvaluateWithGap(sigma, Xe, Ve)), bits(fresh2.EvaluateWithGap(sigma, Xn, Vn)));
+        for (int i = 0; i < n; ++i) {
+          EXPECT_EQ(bits(Xe[i]), bits(Xn[i]));
+          EXPECT_EQ(bits(Ve[i]), bits(Vn[i]));
+        }
+      }
+    }
+  }
 }
 
 }  // namespace
