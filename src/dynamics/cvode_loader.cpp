@@ -5,6 +5,7 @@
 #include <dlfcn.h>
 
 #include <mutex>
+#include <new>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,17 @@
 
 namespace vibro::detail {
 namespace {
+
+// A plugin that could not be mapped because the address space or memory ran out (ulimit -v, the
+// process's RLIMIT_AS) is memory exhausted like any refused allocation: std::bad_alloc (exit 3 from
+// the command line, MemoryError in Python), not a missing file. `error`: dlerror()'s text.
+std::string RefuseOutOfMemory(const char* error) {
+  std::string e = error != nullptr ? error : "no error reported";
+  if (e.find("failed to map segment") != std::string::npos || e.find("cannot map zero-fill") != std::string::npos ||
+      e.find("Cannot allocate memory") != std::string::npos || e.find("out of memory") != std::string::npos)
+    throw std::bad_alloc();
+  return e;
+}
 
 // The plugin beside the object this code is in (libvibro.so: build/ in the build tree, lib/ once
 // installed), or in ../lib of it (a program linked with a static libvibro, installed in bin/).
@@ -27,13 +39,15 @@ const VibroCvodeApi* LoadCvode() {
   }
   std::string path = dir + VIBRO_CVODE_PLUGIN, tried = path;
   void* plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
+  if (plugin == nullptr) RefuseOutOfMemory(dlerror());
   if (plugin == nullptr && !dir.empty()) {
     path = dir + "../" VIBRO_LIBDIR "/" VIBRO_CVODE_PLUGIN;
     tried += " or " + path;
     plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
   }
+  const std::string error = plugin == nullptr ? RefuseOutOfMemory(dlerror()) : std::string();
   if (plugin == nullptr)
-    throw std::runtime_error("run.engine = \"cvode\": cannot load the CVODE engine " + tried + ": " + dlerror());
+    throw std::runtime_error("run.engine = \"cvode\": cannot load the CVODE engine " + tried + ": " + error);
   auto* entry = reinterpret_cast<const VibroCvodeApi* (*)()>(dlsym(plugin, "vibro_cvode_api"));
   if (entry == nullptr) throw std::runtime_error("run.engine = \"cvode\": " + path + " lacks vibro_cvode_api");
   const VibroCvodeApi* api = entry();
