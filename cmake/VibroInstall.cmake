@@ -12,6 +12,8 @@ install(TARGETS vibro EXPORT vibroTargets
 install(DIRECTORY include/vibro DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS vibro_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(TARGETS vibro_prove LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})  # beside libvibro (prove_loader.cpp)
+install(TARGETS vibro_cvode LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})  # beside libvibro (cvode_loader.cpp)
+install(TARGETS vibro_parallel LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})  # beside libvibro (parallel_for.cpp)
 if(VIBRO_MPI)  # beside libvibro, where src/studies/distribute.cpp looks for it
   install(TARGETS vibro_mpi LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
 endif()

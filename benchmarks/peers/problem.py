@@ -122,13 +122,14 @@ class Problem:
         self.W = self.C @ self.Tc.T  # Delassus matrix
         self.damped = bool(np.any(self.zeta > 0))
         self.sA = float(self.TA.sum())
+        self.w2 = self.w ** 2
 
     # --- free dynamics and the contact quantities ------------------------------------------
     def force(self, t):
         return self.f * math.sin(self.omega * t)
 
     def acc_free(self, t, X, V):
-        return -self.w ** 2 * X - self.D * V + self.TA * self.force(t)
+        return -self.w2 * X - self.D * V + self.TA * self.force(t)
 
     def gaps(self, X):
         return self.C @ X - self.e
@@ -144,6 +145,13 @@ class Problem:
             return a
         lam = np.linalg.solve(self.W[np.ix_(S, S)], -(self.C[S] @ a))
         return a + self.Tc[S].T @ lam
+
+    def held_operators(self, S):
+        """For a held set S (a list): (R, P) with λ_S = R a and the held acceleration a + P a, R = −W_SS⁻¹ C_S
+        and P = T_Sᵀ R: what reactions() and acc_held() compute, factored once per held set rather than
+        at every right-hand side."""
+        R = -np.linalg.solve(self.W[np.ix_(S, S)], self.C[S])
+        return R, self.Tc[S].T @ R
 
     def onto_stops(self, X, Z):
         """X moved along the T_j of Z so that g_j = 0 exactly for j in Z (the impulsive directions)."""

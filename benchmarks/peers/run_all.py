@@ -6,7 +6,8 @@ without chattering, the chains, the several-contact scenes).
 
 Every run is a process of its own (peer_process.py, or `vibro simulate` itself), timed two ways:
   * whole process: the CPU (user + system, rusage of the child) of the whole process, interpreter
-    start-up and imports included for the peers, vibro's start-up for `vibro simulate`;
+    start-up and imports included for the peers, vibro's start-up for `vibro simulate` (asked for
+    what the peers compute, the events and the end state: no samples, no Lyapunov exponents);
   * call: the CPU of the engine's call inside that process (the peers' Python call with its model
     set-up; for vibro the Python module's `vibro.simulate` on a scene loaded beforehand).
 Ratios are taken whole process against whole process and call against call, each against vibro's
@@ -73,10 +74,14 @@ PYTHON = "/usr/bin/python3"
 
 def settings(quick, event_driven, plugin, m):
     """(engine, setting label, kind, args) for one scene."""
-    out = [("vibro exact", "defaults", "vibro", ['run.engine="exact"'])]
+    # vibro computes what the peers compute: the events and the end state (no samples, no file, no
+    # Lyapunov exponents, which the peers do not compute).
+    same_work = ["run.lyapunov=false"]
+    out = [("vibro exact", "defaults", "vibro", ['run.engine="exact"'] + same_work)]
     for rtol in ([1e-6, 1e-8, 1e-10, 1e-12] if not quick else [1e-8]):
         out.append(("vibro CVODE", f"Adams rtol {rtol:g}", "vibro",
-                    ['run.engine="cvode"', 'run.method="adams"', f"run.rtol={rtol:g}", f"run.atol={rtol * 1e-2:g}"]))
+                    ['run.engine="cvode"', 'run.method="adams"', f"run.rtol={rtol:g}", f"run.atol={rtol * 1e-2:g}"]
+                    + same_work))
     for rtol in ([1e-6, 1e-8, 1e-10, 1e-12] if not quick else [1e-10]):
         out.append(("SciPy DOP853", f"rtol {rtol:g}, plastic below 1e-6", "scipy",
                     dict(rtol=rtol, plastic_below=1e-6, wall_limit=WALL)))
@@ -130,7 +135,8 @@ def run_process(spec, repeat):
 
 
 def vibro_whole(vibro, scene, periods, sets, repeat):
-    """CPU of whole `vibro simulate --json` processes (no file, as the peers write none)."""
+    """CPU of whole `vibro simulate --json` processes (no file, as the peers write none; no samples and
+    no Lyapunov exponents, which the peers do not compute: `sets`)."""
     cmd = [vibro, "simulate", os.path.join(ROOT, "data", "scenes", scene) if os.sep not in scene else scene,
            "--json", "--set", f"run.periods={periods}", "--set", "run.samples_per_period=0"]
     for s in sets:

@@ -3,9 +3,7 @@
 #include <cstddef>
 #include <exception>
 
-#include <tbb/global_control.h>
-#include <tbb/parallel_for.h>
-
+#include "analysis/parallel_for.hpp"
 #include "vibro/contact_sequence.hpp"
 #include "vibro/continuation.hpp"
 
@@ -92,9 +90,9 @@ std::vector<PartitionColumn> Partition(const PartitionRequest& req) {
               [](const auto& a, const auto& b) { return a.value < b.value; });
     col.sequences = Spans(std::move(sequences));
   };
-  const int threads = req.threads > 0 ? req.threads : tbb::info::default_concurrency();
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(threads));
-  tbb::parallel_for(size_t{0}, columns.size(), one);
+  detail::ParallelFor(columns.size(), req.threads > 0 ? req.threads : 0, [&](size_t begin, size_t end) {
+    for (size_t k = begin; k != end; ++k) one(k);
+  });
   return columns;
 }
 

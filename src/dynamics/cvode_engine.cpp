@@ -21,6 +21,9 @@
 // Compliant stops (docs/compliant.md): their contact phase and relaxing flight are integrated by
 // CvodeCompliant at the end of this file (MakeCvodeCompliant), with the same law as the exact
 // engine's closed form.
+// This file is the plugin libvibro_cvode.so (cvode_api.hpp), loaded on the first CVODE run of a
+// process (cvode_loader.cpp): no other process maps SUNDIALS.
+#include "dynamics/cvode_api.hpp"
 #include "dynamics/cvode_engine.hpp"
 
 #include "dynamics/flight_window.hpp"
@@ -1386,9 +1389,21 @@ class CvodeCompliant final : public CompliantPhase {
   double peak_ = 0, peak_at_ = 0, penetration_ = 0, penetration_at_ = 0;
 };
 
-std::unique_ptr<CompliantPhase> MakeCvodeCompliant(const RunSpec& run, const std::vector<const ModelT<double>*>& models,
-                                                   int contact) {
+std::unique_ptr<CompliantPhase> CreateCvodeCompliant(const RunSpec& run, const std::vector<const ModelT<double>*>& models,
+                                                     int contact) {
   return std::make_unique<CvodeCompliant>(run, models, contact);
 }
 
+std::unique_ptr<Propagator> CreateCvodeEngine(const System& system, const RunSpec& run) {
+  return std::make_unique<CvodeEngine>(system, run);
+}
+
 }  // namespace vibro::detail
+
+// The plugin's entry point (cvode_api.hpp): libvibro's MakeCvodeEngine and MakeCvodeCompliant
+// (cvode_loader.cpp) call through this table.
+extern "C" __attribute__((visibility("default"))) const VibroCvodeApi* vibro_cvode_api() {
+  static const VibroCvodeApi api{sizeof(vibro::RunSpec), sizeof(vibro::detail::ModelT<double>),
+                                 &vibro::detail::CreateCvodeEngine, &vibro::detail::CreateCvodeCompliant};
+  return &api;
+}

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "dynamics/cvode_engine.hpp"
+#include "dynamics/cvode_api.hpp"
 #include "dynamics/exact_engine.hpp"
 
 namespace vibro::detail {
@@ -13,7 +13,7 @@ std::unique_ptr<Propagator> MakeEngine(const System& system, const ModelT<double
     case Engine::kExact:
       return std::make_unique<ExactEngine>(system, model);
     case Engine::kCvode:
-      return std::make_unique<CvodeEngine>(system, run);
+      return MakeCvodeEngine(system, run);  // the plugin, loaded on first use
   }
   throw std::invalid_argument("unknown engine");
 }

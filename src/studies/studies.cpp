@@ -8,10 +8,7 @@
 #include <random>
 #include <exception>
 
-#include <oneapi/tbb/blocked_range.h>
-#include <oneapi/tbb/global_control.h>
-#include <oneapi/tbb/parallel_for.h>
-
+#include "analysis/parallel_for.hpp"
 #include "vibro/poincare.hpp"
 #include "vibro/simulator.hpp"
 #include "vibro/stop_request.hpp"
@@ -351,14 +348,10 @@ void RunCells(const System& sys, const Scene& scene, const Coordinate& a, const 
     const long long d = ++done;
     if (opt.progress) opt.progress(d, n);
   };
-  std::optional<tbb::global_control> limit;
-  if (opt.threads > 0)
-    limit.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(opt.threads));
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, indices.size()),
-                    [&](const tbb::blocked_range<size_t>& r) {
-                      ThreadLocalsFirst();
-                      for (size_t k = r.begin(); k != r.end(); ++k) cell(indices[k]);
-                    });
+  detail::ParallelFor(indices.size(), opt.threads, [&](size_t begin, size_t end) {
+    ThreadLocalsFirst();
+    for (size_t k = begin; k != end; ++k) cell(indices[k]);
+  });
 }
 
 StudyResult LabelCells(const System& sys, const Scene& scene,
@@ -398,25 +391,27 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
     const size_t m = out.attractors.size();
     std::vector<std::optional<Attractor>> solved(m);
     std::vector<ClassOrbit> orbits(m);
-    tbb::parallel_for(size_t{0}, m, [&](size_t k) {
+    detail::ParallelFor(m, 0, [&](size_t begin, size_t end) {
       ThreadLocalsFirst();
-      const Attractor& a = out.attractors[k].attractor;
-      if (a.kind != "sticking-periodic" && a.kind != "impact-periodic") return;
-      const CellResult& c = cells[first_cell[k]];
-      OrbitRequest req;
-      req.kind = a.kind == "impact-periodic" ? OrbitKind::kImpact : OrbitKind::kSticking;
-      req.period = *a.period;
-      req.transient_periods = 4 * *a.period + 4;
-      const auto dof = c.z.size() / 2;
-      req.start = InitialOverride{scene.initial_time + static_cast<double>(c.periods) * sys.period(),
-                                  c.z.head(dof), c.z.tail(dof)};
-      const OrbitResult r = FindOrbit(sys, scene, req);
-      orbits[k].status = r.status;
-      orbits[k].residual = r.residual;
-      if (r.status != "converged") return;
-      orbits[k].multipliers = r.multipliers;
-      orbits[k].stable = r.stable;
-      solved[k] = r.summary;
+      for (size_t k = begin; k != end; ++k) {
+        const Attractor& a = out.attractors[k].attractor;
+        if (a.kind != "sticking-periodic" && a.kind != "impact-periodic") continue;
+        const CellResult& c = cells[first_cell[k]];
+        OrbitRequest req;
+        req.kind = a.kind == "impact-periodic" ? OrbitKind::kImpact : OrbitKind::kSticking;
+        req.period = *a.period;
+        req.transient_periods = 4 * *a.period + 4;
+        const auto dof = c.z.size() / 2;
+        req.start = InitialOverride{scene.initial_time + static_cast<double>(c.periods) * sys.period(),
+                                    c.z.head(dof), c.z.tail(dof)};
+        const OrbitResult r = FindOrbit(sys, scene, req);
+        orbits[k].status = r.status;
+        orbits[k].residual = r.residual;
+        if (r.status != "converged") continue;
+        orbits[k].multipliers = r.multipliers;
+        orbits[k].stable = r.stable;
+        solved[k] = r.summary;
+      }
     });
     std::vector<int> merge(m);
     for (size_t k = 0; k < m; ++k) {
@@ -475,9 +470,10 @@ StudyResult LabelCells(const System& sys, const Scene& scene,
       if (l == -1 && from.back() == cells.size() && cells[i].state == State::kClassified) from.back() = i;
     }
     std::vector<std::optional<LyapunovSpectrum>> spectra(from.size());
-    tbb::parallel_for(size_t{0}, from.size(), [&](size_t k) {
+    detail::ParallelFor(from.size(), 0, [&](size_t begin, size_t end) {
       ThreadLocalsFirst();
-      if (from[k] < cells.size()) spectra[k] = LyapunovFrom(sys, scene, cells[from[k]]);
+      for (size_t k = begin; k != end; ++k)
+        if (from[k] < cells.size()) spectra[k] = LyapunovFrom(sys, scene, cells[from[k]]);
     });
     for (size_t k = 0; k < out.attractors.size(); ++k) out.attractors[k].lyapunov = std::move(spectra[k]);
     out.unresolved_lyapunov = std::move(spectra.back());

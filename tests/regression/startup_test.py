@@ -6,9 +6,12 @@ the test holds on any machine and under any load.
     startup_test.py VIBRO SCENES_DIR [--mpiexec MPIEXEC]
 
   * `vibro --version` and a 20-period `vibro simulate` without --out load no HDF5, no libcurl, no
-    GnuTLS, no MPI library, and not the prover's Arb, FLINT, NTL, gf2x, MPFR or GMP;
-  * the same run with --out loads HDF5, and `vibro prove` the prover plugin with Arb and FLINT (so
-    the trace does see a library loaded at first use: the checks above can fail);
+    GnuTLS, no MPI library, not the prover's Arb, FLINT, NTL, gf2x, MPFR or GMP, no SUNDIALS and
+    no oneTBB (the CVODE engine and the parallel loops are plugins), and no libfmt, toml++ or
+    libquadmath (compiled into libvibro);
+  * the same run with --out loads HDF5, `vibro prove` the prover plugin with Arb and FLINT, a run
+    with run.engine = "cvode" the CVODE plugin with SUNDIALS, and a basin the parallel-loop plugin
+    with oneTBB (so the trace does see a library loaded at first use: the checks above can fail);
   * with --mpiexec, a basin under `mpirun -np 2` loads the MPI plugin and libmpi (each rank).
 The speed itself is measured by benchmarks/startup_bench.cpp.
 """
@@ -21,8 +24,8 @@ import tempfile
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 
-HEAVY = re.compile(r"lib(hdf5|curl|gnutls|mpi|open-pal|open-rte|hwloc|vibro_mpi|vibro_prove|flint|arb|ntl|gf2x|mpfr|gmp)"
-                   r"[^/]*\.so")
+HEAVY = re.compile(r"lib(hdf5|curl|gnutls|mpi|open-pal|open-rte|hwloc|vibro_mpi|vibro_prove|flint|arb|ntl|gf2x|mpfr|gmp"
+                   r"|vibro_cvode|sundials|vibro_parallel|tbb|fmt|tomlplusplus|quadmath)[^/]*\.so")
 
 
 def traced(cmd, work, env=None):
@@ -57,7 +60,8 @@ def main():
             heavy = [p for p in libs if HEAVY.search(os.path.basename(p))]
             check(f"{name}: exit 0", rc == 0, out[-2000:])
             check(f"{name}: the loader's trace lists libraries", len(libs) >= 5, libs)
-            check(f"{name}: loads no HDF5, libcurl, GnuTLS, MPI, Arb, FLINT, NTL, gf2x, MPFR or GMP", not heavy, heavy)
+            check(f"{name}: loads no HDF5, libcurl, GnuTLS, MPI, Arb, FLINT, NTL, gf2x, MPFR, GMP, SUNDIALS, oneTBB, "
+                  "libfmt, toml++ or libquadmath", not heavy, heavy)
         h5 = os.path.join(work, "run.h5")
         rc, libs, out = loaded([vibro, "simulate", scene, "--set", "run.periods=20", "--out", h5], work)
         check("vibro simulate --out: exit 0", rc == 0, out[-2000:])
@@ -70,6 +74,17 @@ def main():
         check("vibro prove: loads the prover plugin, Arb and FLINT when it proves",
               all(any(n.startswith(lib) for n in names) for lib in ("libvibro_prove.so", "libflint-arb", "libflint.so")),
               names)
+        rc, libs, out = loaded([vibro, "simulate", scene, "--set", "run.periods=20", "--set", 'run.engine="cvode"'], work)
+        names = [os.path.basename(p) for p in libs]
+        check("vibro simulate, run.engine = \"cvode\": exit 0", rc == 0, out[-2000:])
+        check("vibro simulate, run.engine = \"cvode\": loads the CVODE plugin and SUNDIALS CVODE",
+              all(any(n.startswith(lib) for n in names) for lib in ("libvibro_cvode.so", "libsundials_cvode")), names)
+        rc, libs, out = loaded([vibro, "basin", os.path.join(scenes, "fig05_coexistence.toml"), "--grid", "3,3",
+                                "--threads", "2"], work)
+        names = [os.path.basename(p) for p in libs]
+        check("vibro basin: exit 0", rc == 0, out[-2000:])
+        check("vibro basin: loads the parallel-loop plugin and oneTBB",
+              all(any(n.startswith(lib) for n in names) for lib in ("libvibro_parallel.so", "libtbb")), names)
         if mpiexec:
             env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
             rc, per_process, out = traced([mpiexec, "-np", "2", "--oversubscribe", vibro, "basin",
