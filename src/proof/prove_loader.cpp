@@ -2,42 +2,21 @@
 // plugin libvibro_prove.so (proof/prove_api.hpp) on their first call and forward to it, so that
 // no process maps Arb, FLINT and their libraries before it proves something (docs/performance.md,
 // "Start-up").
-#include <dlfcn.h>
-
 #include <mutex>
 #include <stdexcept>
-#include <string>
 
+#include "dynamics/plugin_loader.hpp"
 #include "proof/prove_api.hpp"
 
 namespace vibro {
 namespace {
 
-// The plugin beside the object this code is in (libvibro.so: build/ in the build tree, lib/ once
-// installed), or in ../lib of it (a program linked with a static libvibro, installed in bin/).
-// RTLD_NODELETE: loaded once for the life of the process.
 const VibroProveApi* LoadProver() {
-  Dl_info self{};
-  std::string dir;
-  if (dladdr(reinterpret_cast<void*>(&LoadProver), &self) != 0 && self.dli_fname != nullptr) {
-    const std::string object = self.dli_fname;
-    const auto slash = object.rfind('/');
-    if (slash != std::string::npos) dir = object.substr(0, slash + 1);
-  }
-  std::string path = dir + VIBRO_PROVE_PLUGIN, tried = path;
-  void* plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
-  if (plugin == nullptr && !dir.empty()) {
-    path = dir + "../" VIBRO_LIBDIR "/" VIBRO_PROVE_PLUGIN;
-    tried += " or " + path;
-    plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
-  }
-  if (plugin == nullptr)
-    throw std::runtime_error("vibro prove: cannot load the prover " + tried + ": " + dlerror());
-  auto* entry = reinterpret_cast<const VibroProveApi* (*)()>(dlsym(plugin, "vibro_prove_api"));
-  if (entry == nullptr) throw std::runtime_error("vibro prove: " + path + " lacks vibro_prove_api");
-  const VibroProveApi* api = entry();
+  const detail::LoadedPlugin plugin =
+      detail::LoadPlugin({VIBRO_PROVE_PLUGIN, "vibro_prove_api", false, "vibro prove: ", "the prover ", ""});
+  const VibroProveApi* api = reinterpret_cast<const VibroProveApi* (*)()>(plugin.entry)();
   if (api->result_size != sizeof(ProofResult) || api->request_size != sizeof(ProofRequest))
-    throw std::runtime_error("vibro prove: " + path + " was built from other headers than this libvibro");
+    throw std::runtime_error("vibro prove: " + plugin.path + " was built from other headers than this libvibro");
   return api;
 }
 

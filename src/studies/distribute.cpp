@@ -9,8 +9,7 @@
 #include <string>
 
 #ifdef VIBRO_MPI
-#include <dlfcn.h>
-
+#include "dynamics/plugin_loader.hpp"
 #include "studies/mpi_api.hpp"
 #endif
 
@@ -29,30 +28,12 @@ void MpiCheck(int rc, const char* what) {
   if (rc != 0) throw std::runtime_error(std::string("MPI: ") + what + " failed");
 }
 
-// The plugin beside the object this code is in (libvibro.so: build/ in the build tree, lib/ once
-// installed), or in ../lib of it (a program linked with a static libvibro, installed in bin/).
 // RTLD_GLOBAL: OpenMPI's own components, which it dlopens in turn, resolve their symbols against
 // libmpi and libopen-pal.
 const VibroMpiApi* LoadMpi() {
-  Dl_info self{};
-  std::string dir;
-  if (dladdr(reinterpret_cast<void*>(&LaunchedByMpirun), &self) != 0 && self.dli_fname != nullptr) {
-    const std::string object = self.dli_fname;
-    const auto slash = object.rfind('/');
-    if (slash != std::string::npos) dir = object.substr(0, slash + 1);
-  }
-  std::string path = dir + VIBRO_MPI_PLUGIN, tried = path;
-  void* plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
-  if (plugin == nullptr && !dir.empty()) {
-    path = dir + "../" VIBRO_LIBDIR "/" VIBRO_MPI_PLUGIN;
-    tried += " or " + path;
-    plugin = dlopen(path.c_str(), RTLD_NOW | RTLD_GLOBAL | RTLD_NODELETE);
-  }
-  if (plugin == nullptr)
-    throw std::runtime_error("MPI: cannot load " + tried + ", which a run under mpirun needs: " + dlerror());
-  auto* api = reinterpret_cast<const VibroMpiApi* (*)()>(dlsym(plugin, "vibro_mpi_api"));
-  if (api == nullptr) throw std::runtime_error("MPI: " + path + " lacks vibro_mpi_api");
-  return api();
+  const detail::LoadedPlugin plugin =
+      detail::LoadPlugin({VIBRO_MPI_PLUGIN, "vibro_mpi_api", true, "MPI: ", "", ", which a run under mpirun needs"});
+  return reinterpret_cast<const VibroMpiApi* (*)()>(plugin.entry)();
 }
 #endif
 
