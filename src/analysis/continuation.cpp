@@ -689,6 +689,13 @@ constexpr double kGrazingTolerance = 1e-5;
 // A branch whose slowest impact is slower than this (same measure) and slowing down is followed
 // to the grazing by the speed itself (ApproachGrazing), not by arclength.
 constexpr double kApproachSpeed = 1e-2;
+// A corrected point is on the branch only within this many arclength steps of its predictor
+// (docs/orbits.md, "One orbit family per branch"): along one family, a point corrected on the
+// hyperplane at arclength s lies O(s) from it, by at most s/cos θ where the family turns by θ at
+// a non-smooth point between (4: θ up to 75°). A point farther is another orbit, which the
+// corrector reached on the same hyperplane (the tube's four-impact orbit at ω = 0.41290, whose
+// corrector converged 153 steps away onto the symmetric two-impact orbit at ω = 0.42964).
+constexpr double kSameFamilyReach = 4.0;
 
 // The orbits of a branch whose slowest impact slows down towards a grazing, followed with that
 // speed as the parameter: Newton on {F(z; λ) = z, v(z, λ) = v_t} (NewtonOnNewImpact: λ unknown)
@@ -1460,6 +1467,29 @@ Branch Continue(const ContinuationRequest& req) {
     return lead;
   };
 
+  // Another orbit the corrector converged to, beyond reach of its predictor (kSameFamilyReach),
+  // since the last accepted point: said in the branch's end if it ends there.
+  struct OtherOrbit {
+    double lambda, distance, step;
+    std::string sequence;
+  };
+  std::optional<OtherOrbit> other;
+  const auto reach_floor = [&] { return 1e-9 * (1.0 + cur.y.norm()); };
+  const auto note_other = [&](const Point& q, double s) {
+    std::string sequence = m > 1 ? q.orbit.sequence : q.probe.signature;
+    if (sequence.empty()) sequence = "a free orbit";
+    other = OtherOrbit{q.y[n2], (q.y - cur.y).norm(), s, sequence};
+  };
+  const auto within_reach = [&](const Point& q, double s) {
+    return (q.y - cur.y).norm() <= kSameFamilyReach * s + reach_floor();
+  };
+  const auto other_note = [&]() -> std::string {
+    if (!other) return "";
+    return fmt::format("; the corrector converges only to another orbit ({} at λ = {:.10g}, {:.2e} away for a step "
+                       "of {:.2e}), not joined to this branch",
+                       other->sequence, other->lambda, other->distance, other->step);
+  };
+
   while (static_cast<int>(br.points.size()) < req.max_points) {
     if (stop_requested()) {
       br.status = "interrupted";
@@ -1471,7 +1501,14 @@ Branch Continue(const ContinuationRequest& req) {
       ds_retry = std::min(ds_retry_far, 0.02 * d * std::hypot(1.0, cur.y.head(n2).norm()));
       p.SetLambdaStep(std::clamp(1e-2 * d * d / std::max(1.0, std::abs(cur.y[n2])), 1e-12, 1e-6));
     }
-    const auto next = trial(ds);
+    auto next = trial(ds);
+    // A corrected point beyond reach of its predictor is another orbit, whatever the step: never
+    // joined to this branch (kSameFamilyReach); the step is shortened below, or the branch ends
+    // saying so.
+    if (next && (next->y - (cur.y + ds * t)).norm() > kSameFamilyReach * ds + reach_floor()) {
+      note_other(*next, ds);
+      next.reset();
+    }
     // Step control (Allgower & Georg): a step whose corrected point strays far from the predictor
     // or changes the sticking fraction a lot may have jumped over part of the branch.
     const auto sp = [](const Point& x) { return x.orbit.summary.sticking_fraction.value_or(0.0); };
@@ -1651,6 +1688,7 @@ Branch Continue(const ContinuationRequest& req) {
                       std::max(1.0, std::abs(br.points.front().value)) > 1e-3)
         went_away = true;
       transition.reset();
+      other.reset();
       ds = std::min(ds * 1.5, ds_max);
       // A slow impact slowing down: followed to its grazing by its speed (ApproachGrazing).
       const double speed = cur.probe.impact_speed;
@@ -1690,20 +1728,30 @@ Branch Continue(const ContinuationRequest& req) {
       double lo = 0.0, hi = ds;
       bool moved = false;
       std::optional<Point> past = next;
+      double s_past = ds;  // the arclength from cur at which `past` was corrected
       p.ClearUndetermined();
       for (int it = 0; it < 100; ++it) {
         if (stop_requested()) break;
         const double mid = 0.5 * (lo + hi);
         auto pm = trial(mid);
+        if (pm && !within_reach(*pm, mid)) {  // another orbit: as if the corrector had failed
+          note_other(*pm, mid);
+          pm.reset();
+        }
         if (pm && SameFamily(cur, *pm)) {
           cur = *pm;  // the branch point nearest to the boundary so far
           moved = true;
           hi -= mid;
+          s_past -= mid;
           lo = 0.0;
         } else {
           hi = mid;
-          if (pm) past = pm;
-          else if (past && (past->y - cur.y).norm() > 2.0 * hi) past.reset();
+          if (pm) {
+            past = pm;
+            s_past = mid;
+          } else if (past && (past->y - cur.y).norm() > 2.0 * hi) {
+            past.reset();
+          }
         }
         const double l_hi = past ? past->y[n2] : cur.y[n2] + hi * t[n2];
         if (std::abs(l_hi - cur.y[n2]) < 1e-13 * std::max(1.0, std::abs(cur.y[n2])) && it > 5) break;
@@ -1716,8 +1764,9 @@ Branch Continue(const ContinuationRequest& req) {
         return Finish(br, p);
       }
       // A point of another orbit met on the same corrector hyperplane is not "past" anything:
-      // along one branch, corrected points an arclength h apart are O(h) apart.
-      if (past && (past->y - cur.y).norm() > 1e3 * hi + 1e-7) {
+      // along one branch, corrected points an arclength h apart are O(h) apart (kSameFamilyReach).
+      if (past && !within_reach(*past, std::max(s_past, hi))) {
+        note_other(*past, std::max(s_past, hi));
         past.reset();
         if (moved) {
           record(cur);
@@ -1731,7 +1780,29 @@ Branch Continue(const ContinuationRequest& req) {
         const double s_over = hi + ds_retry * std::pow(2.0, k - 4);
         if (s_over > std::max(ds, 16.0 * ds_retry)) break;
         auto po = trial(s_over);
-        if (po && !SameFamily(cur, *po) && (po->y - cur.y).norm() < 1e3 * s_over) past = po;
+        if (po && !SameFamily(cur, *po)) {
+          if (within_reach(*po, s_over)) {
+            past = po;
+            s_past = s_over;
+          } else {
+            note_other(*po, s_over);
+          }
+        }
+      }
+      // Isolated impacts vanish across a transition only by slowing down to zero there (a grazing,
+      // docs/orbits.md "Near a grazing"): where the orbit past the point has fewer of them than the
+      // located orbit, whose slowest impact is not slow (its test quantity not below the 1e-3 at
+      // which NameNonSmooth calls one vanishing), the point is where the corrector gave out, short
+      // of the grazing, and the orbit on the far side is another family met on the same hyperplane
+      // (next to a grazing fold, e.g. the tube's symmetric two-impact orbit 1e-4 from its
+      // four-impact one near ω = 0.4129, both meeting at the grazing at 0.41277): not joined.
+      // (A regrouped chattering sequence changes the count of I without a vanishing impact: a
+      // relabel, left alone.)
+      if (past && past->probe.coarse_signature != cur.probe.coarse_signature &&
+          Count(past->probe.signature, 'I') < Count(cur.probe.signature, 'I') && cur.probe.impact_speed >= 1e-3 &&
+          cur.probe.impact_speed <= cur.probe.flight_gap) {
+        note_other(*past, std::max(s_past, hi));
+        past.reset();
       }
       auto [kind, detail, contact] = NameNonSmooth(cur, past ? &*past : nullptr, m, compliant);
       // The boundary lies between cur and its predictor at arclength hi.
@@ -1740,6 +1811,7 @@ Branch Continue(const ContinuationRequest& req) {
       if (kind == "relabel") {  // bookkeeping: recorded as such, and the branch goes on
         br.relabels.push_back({at, cur.probe.signature, past->probe.signature, detail, bracket});
         t = Tangent(past->eval, t);
+        other.reset();
         cur = *past;
         section_fresh = false;
         record(cur);
@@ -1758,7 +1830,10 @@ Branch Continue(const ContinuationRequest& req) {
           !stop_requested()) {
         const int r = through_slow_side(cur);
         if (r == 2) return Finish(br, p);
-        if (r == 1) continue;
+        if (r == 1) {
+          other.reset();
+          continue;
+        }
       }
       // A grazing is named so only where the grazing quantity at the located point (cur) is below
       // kGrazingTolerance: otherwise the corrector gave out before the grazing (e.g. creeping next
@@ -1795,14 +1870,14 @@ Branch Continue(const ContinuationRequest& req) {
         double lead = 0;
         for (const auto& mu : cur.orbit.multipliers) lead = std::max(lead, std::abs(mu));
         if (detail.rfind("not located as a grazing", 0) == 0) {
-          br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}; largest |multiplier| {:.3g}): {}", at,
-                               bracket, lead, detail);
+          br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}; largest |multiplier| {:.3g}): {}{}", at,
+                               bracket, lead, detail, other_note());
           return Finish(br, p);
         }
         br.end = fmt::format("no orbit found past λ = {:.17g} (bracket {:.1e}) and no test quantity vanishes "
-                             "there ({}; largest |multiplier| {:.3g}): not a bifurcation",
+                             "there ({}; largest |multiplier| {:.3g}): not a bifurcation{}",
                              at, bracket, detail.substr(detail.find('(') + 1, detail.find(')') - detail.find('(') - 1),
-                             lead);
+                             lead, other_note());
         return Finish(br, p);
       }
       // One transition, one bifurcation: a transition found again within 1e-6 (relative) of the
@@ -1893,6 +1968,7 @@ Branch Continue(const ContinuationRequest& req) {
           }
           p.SetLambdaStep(std::clamp(1e-2 * eps * eps / std::max(1.0, std::abs(g.value)), 1e-12, 1e-6));
           record(near->point);
+          other.reset();
           cur = far->point;
           cur.eval = p.Evaluate(cur.y.head(n2), cur.y[n2]);
           t = Tangent(cur.eval, Eigen::VectorXd());
@@ -1921,9 +1997,11 @@ Branch Continue(const ContinuationRequest& req) {
                  : past && past->probe.signature.find_first_of("RI") == std::string::npos
                      ? kind + " (permanent contact beyond)"
                      : kind + " (the orbit does not go on)";
+        if (!past) br.end += other_note();
         return Finish(br, p);
       }
       t = Tangent(past->eval, t);
+      other.reset();
       cur = *past;
       section_fresh = false;
       record(cur);
