@@ -25,7 +25,10 @@ Checked:
 - the branch ends at the point where the corrector gives out, saying that the corrector converges
   only to another orbit there, and that other orbit (named at its omega) is, by the independent map,
   an orbit with two impacts per period: a different orbit, not the branch's.
-The old build fails the first two checks (points 19 on are two-impact orbits, |d omega| = 0.0167).
+- the same near the lower grazing (0.569366): the branch from omega = 0.52 ends at 0.5704 naming the
+  two-impact orbit, with no `non-smooth` point, its points four-impact orbits of the map.
+The old build fails all three (points 19 on are two-impact orbits, |d omega| = 0.0167; the branch
+from 0.52 goes on along the two-impact orbit past a `non-smooth` point at 0.57040).
 """
 import json
 import os
@@ -214,3 +217,30 @@ def test_the_other_orbit_is_a_two_impact_one(branch):
         assert len(events) == 2 and {e[0] for e in events} == {0, 1}, (om, events)
     # and it is not the branch's last orbit (four impacts, at another omega).
     assert abs(target - b["value"][-1]) > 1e-5
+
+
+def test_four_impact_branch_from_0_52_ends_short_of_its_grazing_without_joining(tmp_path):
+    # The same at the lower grazing (omega_g = 0.569366, where the four-impact orbit's two slow
+    # impacts die out together): continued from its attractor at omega = 0.52, up round its fold at
+    # 0.6179 and back down, the branch ends where its corrector gives out (omega = 0.5704) and
+    # names the two-impact orbit found instead; before, the step over that point joined that orbit
+    # (a `non-smooth` point I0I0I1I1 -> I0I1) and the branch went on along it. Points of the
+    # branch are fixed points of the independent map with four impacts.
+    out = tmp_path / "b.h5"
+    p = vibro("continue", TUBE, "--set", f"{KEY}=0.52", "--param", KEY, "--to", 1.6, "--json", "--out", out)
+    d = json.loads(p.stdout)
+    assert {pt["sequence"] for pt in d["points"]} == {"0:impact*2 1:impact*2"}
+    assert "another orbit (0:impact 1:impact" in d["end"], d["end"]
+    assert abs(d["points"][-1]["value"] - 0.5704) < 1e-3, d["points"][-1]["value"]
+    assert not [b for b in d["bifurcations"] if b["kind"] == "non-smooth"], d["bifurcations"]
+    with h5py.File(out, "r") as f:
+        g = f["branch"]
+        value, q, qd, ts, mm = (g["value"][:], g["q"][:], g["q_dot"][:], g["section_time"][:],
+                                g["max_multiplier"][:])
+    for i in (len(value) // 2, len(value) - 1):
+        tube = Tube(float(value[i]))
+        z = np.concatenate([q[i], qd[i]])
+        events = []
+        res = np.abs(tube.period_map(z, float(ts[i]), events) - z).max() / (1 + np.abs(z).max())
+        assert res < 1e-9 * max(1.0, mm[i]), (value[i], res)
+        assert len(events) == 4, events
