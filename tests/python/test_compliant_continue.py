@@ -84,6 +84,18 @@ def test_branch_contact_phases_against_taylor_return_map(tmp_path, rule):
         assert cp["peak_force"][i, 0] == max(c["peak_force"] for c in got)
         assert cp["duration"][i, 0] == max(c["duration"] for c in got)
         assert cp["phases"][i, 0] == len(got)
+        # The same point's long-run keys as numpy arrays (vibro.COMPLIANT_LOAD_FIELDS): one phase per
+        # period, so its mean peak force and duration are that phase's, checked above against the
+        # reference; NaN nowhere.
+        ld = b["loads"]
+        assert ld["contact_phases_per_period"][i, 0] == len(got) / b["period"]
+        assert abs(ld["peak_force_mean"][i, 0] - float(phases[0]["peak_force"])) <= 1e-13 * ld["peak_force_mean"][i, 0]
+        assert abs(ld["peak_force_max"][i, 0] - float(phases[0]["peak_force"])) <= 1e-13 * ld["peak_force_max"][i, 0]
+        want_d = float(phases[0]["exit"] - phases[0]["entry"])
+        assert abs(ld["contact_duration_mean"][i, 0] - want_d) <= 1e-11 * want_d
+    for k in vibro.COMPLIANT_LOAD_FIELDS:
+        assert b["loads"][k].shape == (len(pts), 1) and not np.isnan(b["loads"][k]).any(), k
+        assert list(b["loads"][k][:, 0]) == [q["loads"][0][k] for q in pts], k
         # The rigid model's orbit beside it: found at every point of this branch, within the clearance.
         assert 0 < cp["rigid_distance"][i] < 0.5, cp["rigid_distance"][i]
     print(f"{rule}: loads along the branch within {worst:.2g} of the 30-digit reference")
@@ -111,6 +123,7 @@ def test_branch_json_equals_cli_and_rigid_unchanged(tmp_path):
     r = vibro.continue_(vibro.load_scene(str(rigid)), "excitation.frequency", 0.85)
     assert "contact_phases" not in r and all("contact_phases" not in q and "rigid_distance" not in q
                                              for q in r["points"])
+    assert set(r["loads"]) == set(vibro.LOAD_FIELDS)
     t = subprocess.run([cli, "continue", str(rigid), "--param", "excitation.frequency", "--to", "0.85"],
                        capture_output=True, text=True, timeout=600)
     assert t.returncode == 0 and "peak_force" not in t.stdout, t.stdout
