@@ -32,6 +32,9 @@ struct Attractor {
   // Time on the stop per period / period length. For "not-periodic": the average over the
   // analysed window (the last max_period periods).
   std::optional<double> sticking_fraction;
+  // "not-periodic" on a scene whose every contact is a compliant stop: sticking_fraction is then
+  // the fraction of time in a contact phase (there is no sticking), as for "contact-periodic".
+  bool contact_fraction = false;
   // Sticking phases [start, end] as ωt mod 2π·period (start = accumulation point or plastic
   // impact, end = release); end = start + ω·duration, so end may exceed 2π·period when a phase
   // wraps. Sorted by start.

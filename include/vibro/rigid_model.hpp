@@ -66,17 +66,22 @@ struct RigidOrbitComparison {
   double distance_time = std::numeric_limits<double>::quiet_NaN();  // where it is reached
   double section_distance = std::numeric_limits<double>::quiet_NaN();  // at the section
 };
+// Newton on the rigid model's map starts from the compliant orbit's section state, or from `start`
+// (positions then velocities at orbit.section_time) when given.
 RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& system, const OrbitResult& orbit,
-                                           const OrbitRequest& request);
+                                           const OrbitRequest& request, const Eigen::VectorXd* start = nullptr);
 std::string RigidOrbitJson(const RigidOrbitComparison& c);
 
 // Along a continued branch of a compliant scene (docs/compliant.md, "Along a continued branch"): at
-// every point the rigid model's orbit beside the point's orbit (CompareOrbitWithRigid, from the
-// point's section state, the scene at the point's value from `scene_at`), its largest distance in
-// BranchPoint::rigid_distance. NaN where the rigid model's map has no orbit from there, or reaches
-// one that is not beside it: not an impact orbit with one impact per contact phase of the point's
-// orbit on each contact, each impact within its phase widened by the phase's duration on either
-// side (another orbit, near a bifurcation of either model). Polls
+// every point the rigid model's orbit beside the point's orbit (CompareOrbitWithRigid, the scene at
+// the point's value from `scene_at`), its largest distance in BranchPoint::rigid_distance. Beside:
+// an impact orbit with one impact per contact phase of the point's orbit on each contact, each
+// impact within its phase widened by the phase's duration on either side. Newton starts from the
+// point's section state and, from the second point on, also from the rigid orbit beside the last
+// point that had one (followed along the branch: the rigid map may have several orbits that pass,
+// and Newton from the compliant state alone may reach another one); of the orbits beside the point
+// the nearest is taken. NaN where neither start reaches one beside it (no orbit from there, or
+// another orbit, near a bifurcation of either model). Polls
 // `stop_requested` between points (the points not reached keep NaN). A rigid scene: nothing done.
 void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
                               const OrbitRequest& request, const std::atomic<bool>* stop_requested = nullptr);

@@ -72,7 +72,7 @@ MODES = {0: "free", 1: "sticking"}
 __all__ = ["Scene", "SimulationResult", "Group", "load_scene", "model", "simulate", "orbit", "prove", "prove_bifurcation", "prove_segment", "continue_", "curve",
            "diagram",
            "attractors", "basin", "sweep", "check", "info", "validate", "score", "partition", "read",
-           "EVENT_KINDS", "MODES", "LOAD_FIELDS", "LimitError"]
+           "EVENT_KINDS", "MODES", "LOAD_FIELDS", "COMPLIANT_LOAD_FIELDS", "LimitError"]
 
 
 def _toml_value(value):
@@ -480,17 +480,24 @@ def _branch_table(points):
 
 LOAD_FIELDS = ("impacts_per_period", "impulse_per_period", "reaction_integral_per_period", "mean_force",
                "dissipated_power", "work_rate", "contact_fraction")
+# A compliant stop's loads besides LOAD_FIELDS (docs/loads.md, "Peak force and contact duration over
+# a run"): contact phases per period, mean certified peak force and mean duration per phase, the
+# largest peak. Rigid contacts have none (NaN).
+COMPLIANT_LOAD_FIELDS = ("contact_phases_per_period", "peak_force_mean", "contact_duration_mean", "peak_force_max")
 
 
 def _loads_arrays(rows):
     """Per-row contact loads (the "loads" lists of branch points or partition cells) as a dict
     field → array of shape (rows, m), m the most contacts of any row; NaN where a row has no value
-    (no loads, a contact it lacks, or a load reported unknown, null in the JSON; docs/loads.md)."""
+    (no loads, a contact it lacks, or a load reported unknown, null in the JSON; docs/loads.md).
+    The fields are LOAD_FIELDS, and COMPLIANT_LOAD_FIELDS too when a row has a compliant contact."""
     m = max([0] + [len(r.get("loads") or []) for r in rows])
-    out = {k: _np.full((len(rows), m), _np.nan) for k in LOAD_FIELDS}
+    compliant = any("peak_force_mean" in c for r in rows for c in r.get("loads") or [])
+    fields = LOAD_FIELDS + (COMPLIANT_LOAD_FIELDS if compliant else ())
+    out = {k: _np.full((len(rows), m), _np.nan) for k in fields}
     for i, r in enumerate(rows):
         for c in r.get("loads") or []:
-            for k in LOAD_FIELDS:
+            for k in fields:
                 if c.get(k) is not None:
                     out[k][i, int(c["contact"])] = c[k]
     return out

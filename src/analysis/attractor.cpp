@@ -390,6 +390,9 @@ Attractor AttractorRecorder::ClassifyRecord(bool check_decay) const {
   if (period == 0) {
     a.kind = "not-periodic";
     a.sticking_fraction = always_stuck ? 1.0 : stuck / (p * T);
+    a.contact_fraction = sys_.contact_count() > 0 &&
+                         std::all_of(sys_.contacts().begin(), sys_.contacts().end(),
+                                     [](const auto& c) { return c.spec.compliance.compliant(); });
     // The periods tried: up to max_period, on a record long enough for three windows of each.
     a.searched_period = std::min<int>(max_period_, static_cast<int>((n - 1) / 3));
     FindRecurrence(a);

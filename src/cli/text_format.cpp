@@ -61,7 +61,8 @@ std::string AttractorText(const Attractor& a, double restitution, const std::str
   if (a.searched_period)
     s += *a.searched_period > 0 ? fmt::format(" (no period ≤ {}, run.max_period)", *a.searched_period)
                                 : std::string(" (too short a record to search a period)");
-  if (a.sticking_fraction) s += fmt::format(", {} fraction {:.6f}", contact ? "contact" : "sticking", *a.sticking_fraction);
+  if (a.sticking_fraction)
+    s += fmt::format(", {} fraction {:.6f}", contact || a.contact_fraction ? "contact" : "sticking", *a.sticking_fraction);
   s += "\n";
   if (a.recurrence_period)
     s += fmt::format("{}recurrence   the section repeats with period {} (to {:.1e}): rerun with "

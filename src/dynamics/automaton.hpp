@@ -283,9 +283,9 @@ class Automaton {
   }
   std::string UndeterminedHint() const {
     if (std::is_same_v<S, double>)
-      return fmt::format("Use run.precision = \"quad\"{}, or move the parameter",
+      return fmt::format("Use run.precision = \"quad\"{}, or move the parameter.",
                          cvode_ ? " with run.engine = \"exact\"" : "");
-    return "Move the parameter";
+    return "Move the parameter.";
   }
   S ContactSpeedFloor() const {
     // Rounding floor of ẋ_B = Σ c_i Ẋ_i (docs/model.md §5.4).
@@ -1191,7 +1191,7 @@ RunResult Automaton<S>::Run() {
       if (!(multi() ? OnContactMulti(seg.contact) : OnContact())) break;
       if (grazing_streak_ > 1000) {
         Fail(fmt::format("1000 tangential contacts in a row near t = {:.17g}{}: the contact is "
-                         "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}",
+                         "degenerate (R ≈ 0 within rounding with the body at rest on the stop){}.",
                          AbsTime(clock_), AtContact(),
                          cvode_ ? "; tighten run.rtol or use run.engine = \"exact\""
                                 : " (e.g. next to a rising bifurcation); move the parameter slightly"));

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -205,7 +206,7 @@ std::vector<std::pair<double, Eigen::VectorXd>> OrbitSamples(const System& sys, 
 }  // namespace
 
 RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys, const OrbitResult& orbit,
-                                           const OrbitRequest& request) {
+                                           const OrbitRequest& request, const Eigen::VectorXd* start) {
   RigidOrbitComparison c;
   c.rigid = RigidModelOf(scene, sys);
   if (orbit.status != "converged") {
@@ -216,7 +217,10 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
   const System rigid_sys(c.rigid.scene);
   const int q = orbit.period;
   Eigen::VectorXd z(2 * sys.dof());
-  z << orbit.X, orbit.V;
+  if (start && start->size() == z.size())
+    z = *start;
+  else
+    z << orbit.X, orbit.V;
   c.orbit.period = q;
   NewtonOnStroboscopicMap(rigid_sys, c.rigid.scene, orbit.section_time, z, q, request, c.orbit);
   if (c.orbit.status != "converged") {
@@ -247,8 +251,43 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
   return c;
 }
 
+namespace {
+
+// Whether the rigid model's orbit of `c` is beside the branch point's orbit (rigid_model.hpp,
+// AddRigidModelAlongBranch): an impact orbit with one impact per contact phase of the point's orbit
+// on each contact, each impact inside a contact phase of its contact widened by the phase's
+// duration on either side (forcing phases compared mod 2π).
+bool Beside(const RigidOrbitComparison& c, const BranchPoint& pt, const System& sys) {
+  if (c.orbit.status != "converged" || c.orbit.summary.kind != "impact-periodic" || !std::isfinite(c.distance))
+    return false;
+  std::vector<int> phases(static_cast<size_t>(sys.contact_count()), 0), impacts(phases.size(), 0);
+  for (const auto& p : pt.contact_phases)
+    if (p.contact >= 0 && static_cast<size_t>(p.contact) < phases.size()) ++phases[static_cast<size_t>(p.contact)];
+  for (const int j : c.orbit.summary.impact_contacts)
+    if (j >= 0 && static_cast<size_t>(j) < impacts.size()) ++impacts[static_cast<size_t>(j)];
+  if (phases != impacts) return false;
+  const double w = sys.frequency();
+  const auto& a = c.orbit.summary;
+  for (size_t i = 0; i < a.impact_phases.size() && i < a.impact_contacts.size(); ++i) {
+    bool inside = false;
+    for (const auto& p : pt.contact_phases) {
+      if (p.contact != a.impact_contacts[i]) continue;
+      const double from = w * (p.entry - p.duration), span = w * 3 * p.duration;
+      const double rel = std::remainder(a.impact_phases[i] - from - span / 2, 2 * M_PI) + span / 2;
+      inside = inside || (rel >= 0 && rel <= span);
+    }
+    if (!inside) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,
                               const OrbitRequest& request, const std::atomic<bool>* stop_requested) {
+  // The rigid orbit beside the last point that had one: its section state, a Newton start for the
+  // next point (the section is at one forcing phase along the branch, so the states correspond).
+  std::optional<Eigen::VectorXd> followed;
   for (BranchPoint& pt : branch.points) {
     if (stop_requested && stop_requested->load()) return;
     const Scene scene = scene_at(pt.value);
@@ -260,31 +299,18 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
     orbit.section_time = pt.section_time;
     orbit.X = pt.X;
     orbit.V = pt.V;
-    const RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request);
-    // The rigid model's orbit beside this one: an impact orbit with one impact per contact phase of
-    // the point's orbit, on the same contacts. Another orbit that the rigid map's Newton reached from
-    // the point's state (near a bifurcation of either model) is no distance between the two models.
-    std::vector<int> phases(static_cast<size_t>(sys.contact_count()), 0), impacts(phases.size(), 0);
-    for (const auto& p : pt.contact_phases)
-      if (p.contact >= 0 && static_cast<size_t>(p.contact) < phases.size()) ++phases[static_cast<size_t>(p.contact)];
-    for (const int j : c.orbit.summary.impact_contacts)
-      if (j >= 0 && static_cast<size_t>(j) < impacts.size()) ++impacts[static_cast<size_t>(j)];
-    bool beside = c.orbit.status == "converged" && c.orbit.summary.kind == "impact-periodic" && phases == impacts;
-    // ... and each impact inside a contact phase of its contact, widened by the phase's duration on
-    // either side (forcing phases compared mod 2π).
-    const double w = sys.frequency();
-    const auto& a = c.orbit.summary;
-    for (size_t i = 0; beside && i < a.impact_phases.size() && i < a.impact_contacts.size(); ++i) {
-      bool inside = false;
-      for (const auto& p : pt.contact_phases) {
-        if (p.contact != a.impact_contacts[i]) continue;
-        const double from = w * (p.entry - p.duration), span = w * 3 * p.duration;
-        const double rel = std::remainder(a.impact_phases[i] - from - span / 2, 2 * M_PI) + span / 2;
-        inside = inside || (rel >= 0 && rel <= span);
-      }
-      beside = inside;
+    std::optional<RigidOrbitComparison> best;
+    const auto consider = [&](const Eigen::VectorXd* start) {
+      RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request, start);
+      if (Beside(c, pt, sys) && (!best || c.distance < best->distance)) best = std::move(c);
+    };
+    consider(nullptr);
+    if (followed) consider(&*followed);
+    pt.rigid_distance = best ? best->distance : std::numeric_limits<double>::quiet_NaN();
+    if (best) {
+      followed = Eigen::VectorXd(2 * sys.dof());
+      *followed << best->orbit.X, best->orbit.V;
     }
-    pt.rigid_distance = beside ? c.distance : std::numeric_limits<double>::quiet_NaN();
   }
 }
 

@@ -158,6 +158,13 @@ def test_irregular_tube_intervals_from_the_per_phase_rows(tmp_path):
             assert hi - lo > 1e-4 * c[key], (key, lo, hi)
             assert close(hi - lo, rhi - rlo, 1e-9) and close(lo, rlo) and close(hi, rhi), (key, (lo, hi), (rlo, rhi))
         assert c["work_rate"] is None and c["work_rate_ci"] is None
+    # The text's attractor line: a compliant stop is never "sticking" (docs/compliant.md), also when
+    # the motion is not periodic.
+    text = subprocess.run([cli(), "simulate", TUBE, "--set", "excitation.frequency=1.45", "--set", "run.periods=300"],
+                          capture_output=True, text=True, timeout=600)
+    assert text.returncode == 0, text.stderr
+    line = next(x for x in text.stdout.splitlines() if x.startswith("attractor"))
+    assert "not-periodic" in line and "contact fraction" in line and "sticking" not in line, line
 
 
 def interrupt(args, path, past_period):
