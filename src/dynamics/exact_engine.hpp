@@ -936,29 +936,22 @@ S ExactEngineT<S>::EvaluateWithGap(S sigma, Vec& X, Vec& V) const {
   const ModelT<S>& mc = *contacts_[static_cast<size_t>(start_contact_)].m;
   const auto& c = mc.shape;
   S dq_sum(0);
-  if (MemoHit(sigma) && memo_contact_ == start_contact_) {
-    for (int i = 0; i < n; ++i) {
-      const auto& st = memo_flow_[static_cast<size_t>(i)];
-      X[i] = X0_[i] + st.dq;
-      V[i] = st.v;
-      if (c[i] == S(0)) continue;
-      dq_sum += mc.unit_shape ? st.dq : S(c[i] * st.dq);
-    }
-    const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(start_contact_)] : gap0_;
-    return g0 + dq_sum;
-  }
-  const ForcingTrigT<S> fw(omega_, sigma);
-  const size_t Hn = h_omega_.size();
-  if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
-  for (int i = 0; i < n; ++i) {
-    const auto st =
-        Hn ? FlowSum<S>(free_modes_[static_cast<size_t>(i)], &free_hF_[static_cast<size_t>(i) * Hn], h_omega_,
-                        h_trig_, h_at_, X0_[i], V0_[i], sigma)
-           : Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw);
+  // Mode i's (Δq, v) into X, V and the gap's sum (the same operations on either path below).
+  const auto put = [&](int i, const OscillatorStateT<S>& st) {
     X[i] = X0_[i] + st.dq;
     V[i] = st.v;
-    if (c[i] == S(0)) continue;
-    dq_sum += mc.unit_shape ? st.dq : S(c[i] * st.dq);
+    if (c[i] != S(0)) dq_sum += mc.unit_shape ? st.dq : S(c[i] * st.dq);
+  };
+  if (MemoHit(sigma) && memo_contact_ == start_contact_) {
+    for (int i = 0; i < n; ++i) put(i, memo_flow_[static_cast<size_t>(i)]);
+  } else {
+    const ForcingTrigT<S> fw(omega_, sigma);
+    const size_t Hn = h_omega_.size();
+    if (Hn) h_at_.At(h_omega_, h_trig_, sigma);
+    for (int i = 0; i < n; ++i)
+      put(i, Hn ? FlowSum<S>(free_modes_[static_cast<size_t>(i)], &free_hF_[static_cast<size_t>(i) * Hn],
+                             h_omega_, h_trig_, h_at_, X0_[i], V0_[i], sigma)
+                : Flow<S>(free_modes_[static_cast<size_t>(i)], omega_, trig_, X0_[i], V0_[i], sigma, fw));
   }
   const S g0 = contacts_.size() > 1 ? gap0s_[static_cast<size_t>(start_contact_)] : gap0_;
   return g0 + dq_sum;
