@@ -12,7 +12,17 @@
 // - Switching. At every branch point and flip of a new branch (when the period switched to, 2q at
 //   a flip, q at a branch point, is at most max_period), SwitchBranch gives the first points of
 //   the other branch(es);
-//   each half is continued away from the bifurcation. Recursively, up to max_branches branches.
+//   each half is continued away from the bifurcation. Recursively: a seed's branch is switched
+//   at as soon as it is stored, and so are the branches that gives, before the next seed.
+// - The cap. At most max_branches branches are stored, and the seeds come first (their branches
+//   hold the attractors the coverage check is about): a switch is followed during the seeding
+//   only when the cap leaves room for both its halves and for every periodic attractor still to
+//   be tried as a seed; the switches that would not are deferred until every seed is continued,
+//   then followed in order, breadth first, while the cap allows. Once it is reached nothing more
+//   is continued: every seed and every switch left out is named in the notes and counted
+//   (seeds_left_out, switches_left_out), and an attractor whose seed was left out is reported
+//   uncovered with that reason. Below the cap (the default leaves ample room) the order is the
+//   depth-first one above.
 // - Identity. A new branch is the same as a stored one when their periods divide one another and,
 //   at up to six of its points spread over it (past the first fifth of a switched branch, where it
 //   meets its parent), the stored branch's orbit at the same parameter has the same cyclic contact
@@ -48,20 +58,40 @@
 
 namespace vibro {
 
+// The defaults of a diagram's options, in one place: the library's DiagramRequest, `vibro
+// diagram`'s options (src/frontend/diagram.hpp) and Python's `vibro.diagram` (which reads them
+// from the extension module) all take them from here (docs/diagram.md, "The cap on branches, and the defaults").
+struct DiagramDefaults {
+  static constexpr int sweep_steps = 40;
+  static constexpr int record = 16;
+  static constexpr int searches = 3;
+  static constexpr int search_grid = 6;
+  static constexpr int max_period = 4;
+  // A bound against runaway switching, not a budget: the tube scene over ω ∈ [0.4, 1.6] stores
+  // 40 branches (docs/diagram.md), the two-sided oscillator over a ∈ [1, 8] 15.
+  static constexpr int max_branches = 100;
+  static constexpr int max_points = 400;
+  // Relative distance between a simulated attractor's impacts and a branch's orbit (phases mod
+  // 2π in radians, speeds relative to 1 + the largest speed).
+  static constexpr double coverage_tolerance = 1e-3;
+  static constexpr double identity_tolerance = 1e-6;
+  static constexpr int threads = 0;
+};
+
 struct DiagramRequest {
   std::function<Scene(double)> scene_at;  // the scene with the key at λ (throws outside its range)
   std::string param;                      // the key (for output)
   double from = 0, to = 1;
-  int sweep_steps = 40;    // the sweep: steps + 1 values up, and back down
-  int record = 16;         // section points kept per sweep run
-  int searches = 3;        // attractor searches at this many values (0: none)
-  int search_grid = 6;     // each a search_grid × search_grid grid of (x_B, v_B) starts
-  int max_period = 4;      // longest period switched to (forcing periods); seeds: any period
-  int max_branches = 24;   // branches stored at most
-  int max_points = 400;    // per continuation
-  double coverage_tolerance = 1e-4;
-  double identity_tolerance = 1e-6;
-  int threads = 0;         // searches (oneTBB; 0: all cores)
+  int sweep_steps = DiagramDefaults::sweep_steps;    // the sweep: steps + 1 values up, and back down
+  int record = DiagramDefaults::record;              // section points kept per sweep run
+  int searches = DiagramDefaults::searches;          // attractor searches at this many values (0: none)
+  int search_grid = DiagramDefaults::search_grid;    // each a search_grid × search_grid grid of (x_B, v_B) starts
+  int max_period = DiagramDefaults::max_period;      // longest period switched to (forcing periods); seeds: any
+  int max_branches = DiagramDefaults::max_branches;  // branches stored at most (a hard bound)
+  int max_points = DiagramDefaults::max_points;      // per continuation
+  double coverage_tolerance = DiagramDefaults::coverage_tolerance;
+  double identity_tolerance = DiagramDefaults::identity_tolerance;
+  int threads = DiagramDefaults::threads;            // searches (oneTBB; 0: all cores)
   const std::atomic<bool>* stop_requested = nullptr;
   std::function<void(const std::string& stage, long long branches)> progress;
 };
@@ -113,6 +143,10 @@ struct DiagramResult {
   std::vector<UncoveredWindow> uncovered_windows;
   int duplicates = 0;        // branches found again and not stored
   int seeds_tried = 0;       // seeds continued (not already covered)
+  // max_branches reached: the seeds not continued and the switches (a bifurcation, or one half
+  // of it) not followed because of it, each also named in `notes`.
+  bool cap_reached = false;
+  int seeds_left_out = 0, switches_left_out = 0;
   std::vector<std::string> notes;  // switches and seeds that gave nothing, and why
   // Wall time of each stage, seconds.
   double sweep_seconds = 0, search_seconds = 0, continuation_seconds = 0, switching_seconds = 0,

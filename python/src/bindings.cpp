@@ -1005,6 +1005,21 @@ PYBIND11_MODULE(_vibro, m) {
   m.def("study", Entry("basin", &Study));
   m.def("sweep", Entry("sweep", &SweepScene));
   m.def("diagram", Entry("diagram", &DiagramScene));
+  // The defaults of `vibro.diagram`, the library's and `vibro diagram`'s (include/vibro/diagram.hpp).
+  m.def("diagram_defaults", [] {
+    using D = vibro::DiagramDefaults;
+    py::dict d;
+    d["steps"] = D::sweep_steps;
+    d["record"] = D::record;
+    d["searches"] = D::searches;
+    d["grid"] = D::search_grid;
+    d["max_period"] = D::max_period;
+    d["max_branches"] = D::max_branches;
+    d["max_points"] = D::max_points;
+    d["coverage_tolerance"] = D::coverage_tolerance;
+    d["threads"] = D::threads;
+    return d;
+  });
   m.def("check", Entry("check", &Check));
   m.def("info", &Info);
   m.def("validate", Entry("validate", &Validate));

@@ -587,8 +587,15 @@ def continue_(scene, param, to, step=0.0, max_points=1000, period=0, kind="auto"
     return d
 
 
-def diagram(scene, param, from_, to, steps=40, record=16, searches=3, grid=6, max_period=4, max_branches=24,
-            max_points=400, coverage_tolerance=1e-3, threads=0, out=None, force=False):
+# The defaults of `diagram`, from the library (include/vibro/diagram.hpp, DiagramDefaults): the
+# same as `vibro diagram`'s, set in one place.
+_DIAGRAM = _vibro.diagram_defaults()
+
+
+def diagram(scene, param, from_, to, steps=_DIAGRAM["steps"], record=_DIAGRAM["record"],
+            searches=_DIAGRAM["searches"], grid=_DIAGRAM["grid"], max_period=_DIAGRAM["max_period"],
+            max_branches=_DIAGRAM["max_branches"], max_points=_DIAGRAM["max_points"],
+            coverage_tolerance=_DIAGRAM["coverage_tolerance"], threads=_DIAGRAM["threads"], out=None, force=False):
     """The whole one-parameter bifurcation diagram of ``param`` over [``from_``, ``to``] (``vibro
     diagram --json``, docs/diagram.md): a sweep up and down and ``searches`` attractor searches
     seed continuations both ways (every periodic attractor, whatever its period); every branch
@@ -596,7 +603,11 @@ def diagram(scene, param, from_, to, steps=40, record=16, searches=3, grid=6, ma
     once; every attractor of the sweep and the searches is checked to lie on a stable branch
     (within ``coverage_tolerance``) or reported uncovered with the reason; ``uncovered_windows``
     groups the uncovered not-periodic ones into windows of consecutive sweep values (``from``,
-    ``to``, ``source``, ``count``, ``reason``).
+    ``to``, ``source``, ``count``, ``reason``). ``max_branches`` is a hard bound that keeps
+    room for the seeds' branches before switched ones (docs/diagram.md, "The cap on branches");
+    ``cap_reached``, ``seeds_left_out`` and ``switches_left_out`` say what it left out (each named
+    in ``notes``). The defaults are
+    ``vibro diagram``'s (docs/diagram.md).
 
     Each entry of ``branches`` holds the branch as :func:`continue_` gives it (``points``,
     ``bifurcations``, ``end``), how it was found (``origin``: "seed", "branch-point" or "flip";

@@ -77,6 +77,11 @@ int RunDiagram(const std::string& path, const std::vector<std::string>& sets, bo
   for (const auto& c : d.coverage)
     if (c.branch < 0 && !(c.period == 0 && c.kind == "not-periodic"))
       fmt::print("uncovered    {} = {:.10g} ({}): {}: {}\n", spec.key, c.value, c.source, c.kind, c.reason);
+  if (d.cap_reached)
+    fmt::print("left out     --max-branches {} reached: {} seed{} not continued, {} switch{} not followed (each named "
+               "in the notes)\n",
+               spec.max_branches, d.seeds_left_out, d.seeds_left_out == 1 ? "" : "s", d.switches_left_out,
+               d.switches_left_out == 1 ? "" : "es");
   for (const auto& n : d.notes) fmt::print("note         {}\n", n);
   fmt::print("time         sweep {:.2f} s, searches {:.2f} s, continuation {:.2f} s, switching {:.2f} s, coverage "
              "{:.2f} s\n",

@@ -236,17 +236,29 @@ int main(int argc, char** argv) {
     diagram->add_option("--param", dia.key, "numeric scene key to vary")->required();
     diagram->add_option("--from", dia.from, "one end of the range")->check(kFinite)->required();
     diagram->add_option("--to", dia.to, "the other end")->check(kFinite)->required();
-    diagram->add_option("--steps", dia.steps, "steps of the sweep between them (default 40)");
-    diagram->add_option("--record", dia.record, "section points kept per sweep value (default 16)");
-    diagram->add_option("--searches", dia.searches, "attractor searches at this many values (default 3; 0: none)");
-    diagram->add_option("--grid", dia.grid, "each search: a GRID × GRID grid of (x_B, v_B) starts (default 6)");
-    diagram->add_option("--max-period", dia.max_period, "longest period switched to at a flip or branch point (default 4; every periodic attractor found is continued, whatever its period)");
-    diagram->add_option("--max-branches", dia.max_branches, "branches stored at most (default 24)");
-    diagram->add_option("--max-points", dia.max_points, "points per continuation at most (default 400)");
+    using DD = vibro::DiagramDefaults;
+    diagram->add_option("--steps", dia.steps, fmt::format("steps of the sweep between them (default {})", DD::sweep_steps));
+    diagram->add_option("--record", dia.record, fmt::format("section points kept per sweep value (default {})", DD::record));
+    diagram->add_option("--searches", dia.searches,
+                        fmt::format("attractor searches at this many values (default {}; 0: none)", DD::searches));
+    diagram->add_option("--grid", dia.grid,
+                        fmt::format("each search: a GRID × GRID grid of (x_B, v_B) starts (default {})", DD::search_grid));
+    diagram->add_option("--max-period", dia.max_period,
+                        fmt::format("longest period switched to at a flip or branch point (default {}; every periodic "
+                                    "attractor found is continued, whatever its period)",
+                                    DD::max_period));
+    diagram->add_option("--max-branches", dia.max_branches,
+                        fmt::format("branches stored at most, a hard bound that keeps room for every seed's branch "
+                                    "before switched ones; what it left out is listed (default {})",
+                                    DD::max_branches));
+    diagram->add_option("--max-points", dia.max_points,
+                        fmt::format("points per continuation at most (default {})", DD::max_points));
     diagram->add_option("--coverage-tolerance", dia.coverage_tolerance,
-                        "relative distance (impact phases, speeds) within which a sweep attractor lies on a branch "
-                        "(default 1e-3)");
-    diagram->add_option("--threads", dia.threads, "threads of the searches (default 0: all cores)");
+                        fmt::format("relative distance (impact phases, speeds) within which a sweep attractor lies on "
+                                    "a branch (default {:g})",
+                                    DD::coverage_tolerance));
+    diagram->add_option("--threads", dia.threads,
+                        fmt::format("threads of the searches (default {}: all cores)", DD::threads));
     diagram->add_option("--out", dia_out, "write the sweep, every branch and the coverage to HDF5");
   }
 

@@ -10,12 +10,16 @@
 
 namespace vibro::frontend {
 
+// The defaults are the library's (DiagramDefaults, include/vibro/diagram.hpp), the one place
+// they are set for the library, the CLI and Python.
 struct DiagramSpec {
+  using D = DiagramDefaults;
   std::string key;
   double from = 0, to = 0;
-  long long steps = 40, record = 16, searches = 3, grid = 6, max_period = 4, max_branches = 24, max_points = 400;
-  double coverage_tolerance = 1e-3;
-  long long threads = 0;
+  long long steps = D::sweep_steps, record = D::record, searches = D::searches, grid = D::search_grid,
+            max_period = D::max_period, max_branches = D::max_branches, max_points = D::max_points;
+  double coverage_tolerance = D::coverage_tolerance;
+  long long threads = D::threads;
 };
 
 // The request for `spec` on the scene of `origin`: both ends valid values of the key (the scene

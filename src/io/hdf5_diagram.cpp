@@ -1,6 +1,7 @@
 // A diagram in the store (docs/diagram.md): the sweep as /sweep, every branch as a continuation
 // branch under /diagram/branches/NNN (the layout of /branch, include/vibro/hdf5_branch.hpp), the
-// coverage of the sweep's attractors as /diagram/coverage.
+// coverage of the sweep's attractors as /diagram/coverage and its not-periodic ones grouped into
+// windows as /diagram/uncovered_windows.
 #include <fmt/format.h>
 
 #include "io/hdf5_store_impl.hpp"
@@ -19,6 +20,9 @@ void Hdf5Store::WriteDiagram(const DiagramResult& d, const SweepSpec& spec) {
     h5::WriteInt(g.get(), "branches", static_cast<long long>(d.branches.size()));
     h5::WriteInt(g.get(), "duplicates", d.duplicates);
     h5::WriteInt(g.get(), "seeds_tried", d.seeds_tried);
+    h5::WriteInt(g.get(), "cap_reached", d.cap_reached ? 1 : 0);
+    h5::WriteInt(g.get(), "seeds_left_out", d.seeds_left_out);
+    h5::WriteInt(g.get(), "switches_left_out", d.switches_left_out);
     h5::WriteDouble(g.get(), "sweep_seconds", d.sweep_seconds);
     h5::WriteDouble(g.get(), "search_seconds", d.search_seconds);
     h5::WriteDouble(g.get(), "continuation_seconds", d.continuation_seconds);
@@ -57,6 +61,21 @@ void Hdf5Store::WriteDiagram(const DiagramResult& d, const SweepSpec& spec) {
               {"branch", {n}, branch, 'i'}, {"distance", {n}, distance}};
   c.strings = {{"kind", kind}, {"reason", reason}};
   WriteTable("/diagram/coverage", c);
+  // The not-periodic uncovered attractors grouped into windows, as JSON's `uncovered_windows`.
+  H5Table w;
+  std::vector<double> w_from, w_to, w_count;
+  std::vector<std::string> w_source, w_reason;
+  for (const auto& x : d.uncovered_windows) {
+    w_from.push_back(x.from);
+    w_to.push_back(x.to);
+    w_count.push_back(x.count);
+    w_source.push_back(x.source);
+    w_reason.push_back(x.reason);
+  }
+  const size_t m = w_from.size();
+  w.arrays = {{"from", {m}, w_from}, {"to", {m}, w_to}, {"count", {m}, w_count, 'i'}};
+  w.strings = {{"source", w_source}, {"reason", w_reason}};
+  WriteTable("/diagram/uncovered_windows", w);
 }
 
 }  // namespace vibro

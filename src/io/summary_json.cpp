@@ -492,6 +492,9 @@ std::string DiagramJson(const DiagramResult& d) {
   j["status"] = d.status;
   j["duplicates"] = d.duplicates;
   j["seeds_tried"] = d.seeds_tried;
+  j["cap_reached"] = d.cap_reached;
+  j["seeds_left_out"] = d.seeds_left_out;
+  j["switches_left_out"] = d.switches_left_out;
   j["seconds"] = {{"sweep", d.sweep_seconds},
                   {"search", d.search_seconds},
                   {"continuation", d.continuation_seconds},

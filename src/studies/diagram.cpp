@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <optional>
 #include <thread>
@@ -255,16 +256,24 @@ class Builder {
   int TrimOverlap(DiagramBranch& n, size_t birth) const;
   // Continues from `orbit` at λ0 towards `to`, never beyond [lo, hi].
   Branch Follow(double lambda0, double to, const OrbitRequest& orbit) const;
-  // Stores `n` unless it repeats a stored branch; then switches at its bifurcations (recursively).
+  // Stores `n` unless it repeats a stored branch; then switches at its bifurcations (SwitchAt).
   // `birth`: the index of the point it was found at (a seed's orbit; 0 for a switched branch).
   void Add(DiagramBranch n, size_t birth = 0);
+  bool Full() const { return static_cast<int>(out_.branches.size()) >= req_.max_branches; }
+  // Notes that the cap was reached (once).
+  void NoteFull();
   // Keeps of `n` only its stretch around `birth` whose orbits have least period n.branch.period
   // (a continuation may run into the orbit of a divisor period, continued as a multiple: that
   // stretch is the shorter period's branch again); false when the orbit at `birth` has a shorter
   // least period itself.
   bool KeepLeastPeriod(DiagramBranch& n, size_t birth);
-  // Switches at the branch points and flips of stored branch `stored` (recursively, through Add).
-  void SwitchAt(size_t stored);
+  // Switches at the branch points and flips of stored branch `stored`, from its bifurcation
+  // `first` on; the branches found are stored by Add. During the seeding (seeding_) it switches
+  // depth first (recursively, through Add) as long as the cap leaves room for both halves of the
+  // switch and for every seed still to come (reserve_); the switches that would not leave that
+  // room are deferred (deferred_) until every seed is continued. After the seeding, Add only
+  // queues the branches it stores (breadth first).
+  void SwitchAt(size_t stored, size_t first = 0);
   void Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, const Eigen::VectorXd& V,
             const std::string& source);
 
@@ -272,6 +281,13 @@ class Builder {
   double lo_ = 0, hi_ = 1, slack_ = 0;
   DiagramResult out_;
   bool full_noted_ = false;
+  // The periodic attractors still to be tried as seeds after the current one: room kept under
+  // the cap while seeds are still to come (an upper bound: some of them will be covered).
+  int reserve_ = 0;
+  bool seeding_ = true;
+  // Switches not followed yet, (branch, index of its first bifurcation not switched at), in
+  // order: deferred while seeds were still to come, then the branches stored after the seeds.
+  std::deque<std::pair<size_t, size_t>> deferred_;
   // What became of Add's last branch when it was not stored (empty: stored).
   std::string not_stored_;
   // Seeds whose branch was not stored, and why: (λ, period, why), named by the coverage check.
@@ -331,8 +347,9 @@ std::pair<int, double> Builder::CoveredBy(double lambda, const Attractor& a, std
                ? fmt::format("no stable branch within {:.1e} (nearest orbit of a branch: {:.2e})",
                              req_.coverage_tolerance, nearest)
                : "no stable continued branch of its period holds it";
-  for (const auto& o : seed_outcomes_)
-    if (o.period == *a.period && std::abs(o.value - lambda) <= slack_) reason += "; " + o.why;
+  for (const auto& o : seed_outcomes_)  // each outcome once (the sweep up and down may share a λ)
+    if (o.period == *a.period && std::abs(o.value - lambda) <= slack_ && reason.find(o.why) == std::string::npos)
+      reason += "; " + o.why;
   return {-1, 0};
 }
 
@@ -515,28 +532,46 @@ void Builder::Add(DiagramBranch n, size_t birth) {
                                      out_.param, n.born_at, joined));
     return;
   }
-  if (static_cast<int>(out_.branches.size()) >= req_.max_branches) {
+  if (Full()) {  // reached since its continuation began (another half of the same switch)
     not_stored_ = fmt::format("--max-branches {} was reached before it", req_.max_branches);
-    if (n.origin == "seed")
-      out_.notes.push_back(fmt::format("the seed at {} = {:.12g} was not stored: --max-branches {} reached",
+    NoteFull();
+    if (n.origin == "seed") {
+      ++out_.seeds_left_out;
+      out_.notes.push_back(fmt::format("the seed at {} = {:.12g} was continued but not stored: --max-branches {} "
+                                       "reached",
                                        out_.param, n.born_at, req_.max_branches));
-    if (!full_noted_)
-      out_.notes.push_back(fmt::format("--max-branches {} reached: further branches were not followed",
-                                       req_.max_branches));
-    full_noted_ = true;
+    } else {
+      ++out_.switches_left_out;
+      out_.notes.push_back(fmt::format("branch {}: a half of its {} at {} = {:.12g} was continued but not stored: "
+                                       "--max-branches {} reached",
+                                       n.parent, n.origin, out_.param, n.born_at, req_.max_branches));
+    }
     return;
   }
   not_stored_.clear();
   out_.branches.push_back(std::move(n));
-  SwitchAt(out_.branches.size() - 1);
+  if (seeding_)
+    SwitchAt(out_.branches.size() - 1);
+  else
+    deferred_.emplace_back(out_.branches.size() - 1, 0);
 }
 
-void Builder::SwitchAt(size_t stored) {
+void Builder::NoteFull() {
+  out_.cap_reached = true;
+  if (full_noted_) return;
+  full_noted_ = true;
+  out_.notes.push_back(fmt::format("--max-branches {} reached: nothing more was continued; each seed and switch "
+                                   "left out is named below",
+                                   req_.max_branches));
+}
+
+void Builder::SwitchAt(size_t stored, size_t first) {
   const int index = static_cast<int>(stored);
   Progress("switching");
   // Switching at its branch points and flips (a copy: out_.branches grows below).
   const DiagramBranch b = out_.branches[stored];
-  for (const auto& bif : b.branch.bifurcations) {
+  for (size_t at = first; at < b.branch.bifurcations.size(); ++at) {
+    const auto& bif = b.branch.bifurcations[at];
     if (Stopped()) return;
     if (bif.kind != "branch-point" && bif.kind != "flip") continue;
     // Where the branch was born: switching there leads back to its parent.
@@ -548,6 +583,18 @@ void Builder::SwitchAt(size_t stored) {
       out_.notes.push_back(fmt::format("branch {}: the {} at {} = {:.12g} was not switched at (period {} above "
                                        "--max-period {})",
                                        index, bif.kind, out_.param, bif.value, switched_period, req_.max_period));
+      continue;
+    }
+    if (seeding_ && static_cast<int>(out_.branches.size()) + 2 + reserve_ > req_.max_branches) {
+      deferred_.emplace_back(stored, at);  // the room is kept for the seeds still to come
+      return;
+    }
+    if (Full()) {
+      NoteFull();
+      ++out_.switches_left_out;
+      out_.notes.push_back(fmt::format("branch {}: the {} at {} = {:.12g} was not switched at: --max-branches {} "
+                                       "reached",
+                                       index, bif.kind, out_.param, bif.value, req_.max_branches));
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
@@ -629,6 +676,16 @@ void Builder::Seed(double lambda, const Attractor& a, const Eigen::VectorXd& X, 
   const bool covered = CoveredBy(lambda, a, reason).first >= 0;
   out_.coverage_seconds += Seconds(t0);
   if (covered) return;
+  if (Full()) {
+    NoteFull();
+    ++out_.seeds_left_out;
+    out_.notes.push_back(fmt::format("the {} attractor (period {}) of the {} at {} = {:.12g} was not continued: "
+                                     "--max-branches {} reached",
+                                     a.kind, *a.period, source, out_.param, lambda, req_.max_branches));
+    seed_outcomes_.push_back(
+        {lambda, *a.period, fmt::format("its seed was not continued: --max-branches {} reached", req_.max_branches)});
+    return;
+  }
   ++out_.seeds_tried;
   const Scene scene = req_.scene_at(lambda);
   OrbitRequest o;
@@ -739,17 +796,36 @@ DiagramResult Builder::Run() {
     }
   }
   out_.search_seconds = Seconds(t0);
-  // 3. Seeds, in order: the sweep's attractors, then the searches'.
+  // 3. Seeds, in order: the sweep's attractors, then the searches'; each seed's branch is
+  // switched at as soon as it is stored while the cap leaves room for the seeds still to come.
   Progress("continuation");
+  const auto candidate = [](const Attractor& a, const Eigen::VectorXd& X) {
+    return a.kind != "not-periodic" && a.period && X.size() > 0;
+  };
+  reserve_ = 0;
+  for (const auto& p : out_.sweep) reserve_ += p.status == "ok" && candidate(p.attractor, p.X) ? 1 : 0;
+  for (const auto& f : searched) reserve_ += candidate(f.attractor, f.X) ? 1 : 0;
   for (const auto& p : out_.sweep) {
     if (Stopped()) break;
-    if (p.status == "ok") Seed(p.value, p.attractor, p.X, p.V, p.upward ? "sweep up" : "sweep down");
+    if (p.status != "ok") continue;
+    if (candidate(p.attractor, p.X)) --reserve_;
+    Seed(p.value, p.attractor, p.X, p.V, p.upward ? "sweep up" : "sweep down");
   }
   for (const auto& f : searched) {
     if (Stopped()) break;
+    if (candidate(f.attractor, f.X)) --reserve_;
     Seed(f.value, f.attractor, f.X, f.V, "search");
   }
-  // 4. Coverage of every attractor of the sweep and of the searches.
+  // 4. The switches deferred to keep room for the seeds, then those of the branches they give,
+  // breadth first, up to the cap.
+  seeding_ = false;
+  reserve_ = 0;
+  while (!deferred_.empty() && !Stopped()) {
+    const auto [k, first] = deferred_.front();
+    deferred_.pop_front();
+    SwitchAt(k, first);
+  }
+  // 5. Coverage of every attractor of the sweep and of the searches.
   t0 = std::chrono::steady_clock::now();
   Progress("coverage");
   const auto cover = [&](double value, bool upward, const Attractor& a, const std::string& status) {

@@ -15,12 +15,17 @@ free flight of one DOF in mpmath (40 digits) and nothing of vibro:
       periods: no branch of period q holds an orbit whose impacts repeat after fewer periods (the
       period-1 orbit continued as a period-3 one), and no orbit, compared over its least period,
       lies on two branches.
-(b) the tube scene over omega in [0.4, 1.6]: every attractor of the sweep and of the searches is on
-    a stable branch or reported uncovered with a reason; a covered period-1 attractor's section
-    points lie on the branch's strobe; only not-periodic attractors are uncovered (grouped into
-    windows); the period-1 orbit at omega = 0.44 on its branch is the one of the exact flow
-    written here (numpy, closed form between impacts, Newton on the period map), to 1e-9.
-(c) bad input: exit 2 with a located message and nothing written;
+(b) the tube scene over omega in [0.4, 1.6], with the default options (a sweep of 30 steps, as
+    docs/diagram.md runs it): every attractor of the sweep and of the searches is on a stable
+    branch or reported uncovered with a reason; a covered period-1 attractor's section points lie
+    on the branch's strobe; only not-periodic attractors are uncovered (grouped into windows, the
+    same in the JSON and the HDF5 file): the period-7 and period-9 attractors at 1.04 and 1.56
+    too, which the former default cap of 24 branches, spent in the order branches were found, left
+    out; the period-1 orbit at omega = 0.44 on its branch is the one of the exact flow written here
+    (numpy, closed form between impacts, Newton on the period map), to 1e-9.
+(c) bad input: exit 2 with a located message and nothing written; a cap too small: what it left out
+    is named (the seeds and switches not followed, the attractors uncovered because of it); the
+    defaults of `vibro diagram` (its --help) and of Python's vibro.diagram are the same;
 (d) Python: vibro.diagram returns numpy arrays per branch, the pitchfork and its two halves;
 (e) Ctrl-C once the progress report shows a stored branch: exit 130, the file says interrupted and keeps them.
 """
@@ -349,7 +354,7 @@ def test_ends_are_reported(two_sided):
 def tube(tmp_path_factory):
     out = tmp_path_factory.mktemp("tube") / "tube.h5"
     p = vibro("diagram", os.path.join(SCENES, "tube_loose_support.toml"), "--param", "excitation.frequency",
-              "--from", 0.4, "--to", 1.6, "--steps", 30, "--max-branches", 40, "--json", "--out", out)
+              "--from", 0.4, "--to", 1.6, "--steps", 30, "--json", "--out", out)
     return json.loads(p.stdout), out
 
 
@@ -393,8 +398,11 @@ def test_tube_coverage(tube):
 def test_tube_uncovered_only_not_periodic(tube):
     # Every periodic attractor found (period 1 at 0.44, period 7 at 1.04, period 9 at 1.56 down:
     # above --max-period 4, which bounds only the switching) is seeded and lies on a stable branch;
-    # what is left uncovered is the not-periodic attractors, grouped into windows.
+    # what is left uncovered is the not-periodic attractors, grouped into windows. With the default
+    # options: the former default cap (24 branches, spent in the order branches were found) ran out
+    # before the period-9 seed at 1.56.
     d, _ = tube
+    assert not d["cap_reached"] and d["seeds_left_out"] == 0 and d["switches_left_out"] == 0
     unc = [c for c in d["coverage"] if c["branch"] is None]
     assert unc and all(c["kind"] == "not-periodic" and c["period"] is None for c in unc), \
         [(c["value"], c["source"], c["kind"], c["reason"]) for c in unc if c["kind"] != "not-periodic"]
@@ -407,6 +415,43 @@ def test_tube_uncovered_only_not_periodic(tube):
         hit = [c for c in d["coverage"] if abs(c["value"] - value) < 1e-9 and c["period"] == period]
         assert hit and all(c["branch"] is not None for c in hit), (value, period, hit)
         assert all(d["branches"][c["branch"]]["period"] == period for c in hit)
+
+
+def test_tube_period_nine_at_1_56(tube):
+    # The period-9 window near omega = 1.56 (the sweep down's attractor there): held by a stable
+    # seeded branch of period 9 whose orbit at 1.56 has the attractor's impacts (within the coverage
+    # tolerance), and which the HDF5 file stores with the same period and range.
+    d, out = tube
+    hit = [c for c in d["coverage"] if abs(c["value"] - 1.56) < 1e-9 and c["period"] == 9]
+    assert hit, [(c["value"], c["source"], c["period"]) for c in d["coverage"] if abs(c["value"] - 1.56) < 1e-9]
+    for c in hit:
+        assert c["branch"] is not None and c["distance"] <= 1e-3, c
+        b = d["branches"][c["branch"]]
+        assert b["period"] == 9 and b["origin"] == "seed"
+        v = b["value"] if "value" in b else np.array([p["value"] for p in b["points"]])
+        assert min(v) <= 1.56 <= max(v)
+        with h5py.File(out, "r") as f:
+            g = f["diagram/branches/%03d/branch" % c["branch"]]
+            assert g.attrs["period"] == 9
+            assert np.array_equal(g["value"][:], np.array([p["value"] for p in b["points"]]))
+
+
+def test_tube_uncovered_windows_in_hdf5(tube):
+    # /diagram/uncovered_windows holds the JSON's uncovered_windows, row by row; vibro.read gives it.
+    d, out = tube
+    with h5py.File(out, "r") as f:
+        w = f["diagram/uncovered_windows"]
+        rows = list(zip(w["from"][:], w["to"][:], w["count"][:], w["source"].asstr()[:], w["reason"].asstr()[:]))
+        assert f["diagram"].attrs["cap_reached"] == 0
+        assert f["diagram"].attrs["seeds_left_out"] == 0 and f["diagram"].attrs["switches_left_out"] == 0
+    assert len(rows) == len(d["uncovered_windows"]) > 0
+    for (a, b, n, src, why), j in zip(rows, d["uncovered_windows"]):
+        assert (a, b, int(n), src, why) == (j["from"], j["to"], j["count"], j["source"], j["reason"])
+    vibro_py = pytest.importorskip("vibro")
+    g = vibro_py.read(str(out))["diagram"]["uncovered_windows"]
+    assert list(g["source"]) == [j["source"] for j in d["uncovered_windows"]]
+    assert np.array_equal(g["from"], [j["from"] for j in d["uncovered_windows"]])
+    assert np.array_equal(g["count"], [j["count"] for j in d["uncovered_windows"]])
 
 
 # The tube's period-1 orbit at omega = 0.44, computed here without vibro: the exact flow of
@@ -548,6 +593,64 @@ def test_bad_input(tmp_path):
         assert p.returncode == 2, (args, p.stderr)
         assert where in p.stderr, (args, p.stderr)
         assert not out.exists()
+
+
+def test_cap_names_what_it_left_out(tmp_path):
+    # A cap of 2 branches on the two-sided oscillator over a in [1, 8]: the first two seeds' own
+    # branches are stored (seeds before any switch); every other seed and every switch is named as
+    # left out, and each periodic attractor no stored branch holds is uncovered with the cap as
+    # the reason.
+    out = tmp_path / "cap.h5"
+    args = ("diagram", os.path.join(SCENES, "contacts_two_sided_1dof.toml"), "--set", "contact[0].restitution=0.6",
+            "--set", "contact[1].restitution=0.6", "--set", "excitation.frequency=2.0", "--set", "run.periods=200",
+            "--param", "excitation.amplitude", "--from", 1, "--to", 8, "--steps", 28, "--max-branches", 2)
+    p = vibro(*args, "--out", out)
+    d = json.loads(vibro(*args, "--json").stdout)
+    assert len(d["branches"]) == 2 and all(b["origin"] == "seed" for b in d["branches"])
+    assert d["cap_reached"] and d["seeds_left_out"] >= 1 and d["switches_left_out"] >= 1
+    notes = d["notes"]
+    assert sum("was not continued: --max-branches 2 reached" in n for n in notes) == d["seeds_left_out"], notes
+    assert sum("--max-branches 2 reached" in n and ("not switched at" in n or "not stored" in n)
+               for n in notes) == d["switches_left_out"], notes
+    # The pitchfork of the symmetric branch is among the switches named.
+    truth = float(pitchfork())
+    assert any("branch-point at excitation.amplitude = %.6f" % truth in n and "not switched at" in n
+               for n in notes), notes
+    capped = [c for c in d["coverage"] if c["branch"] is None and c["period"] is not None]
+    assert capped and any("--max-branches 2 reached" in c["reason"] for c in capped), capped
+    for c in capped:
+        assert c["reason"].startswith("no stable"), c
+    line = [x for x in p.stdout.splitlines() if x.startswith("left out")]
+    assert line == ["left out     --max-branches 2 reached: %d seed%s not continued, %d switch%s not followed "
+                    "(each named in the notes)" % (d["seeds_left_out"], "" if d["seeds_left_out"] == 1 else "s",
+                                                   d["switches_left_out"],
+                                                   "" if d["switches_left_out"] == 1 else "es")], p.stdout
+    with h5py.File(out, "r") as f:
+        a = f["diagram"].attrs
+        assert (a["cap_reached"], a["seeds_left_out"], a["switches_left_out"]) == \
+            (1, d["seeds_left_out"], d["switches_left_out"])
+
+
+def test_defaults_are_the_same_for_cli_and_python():
+    # `vibro diagram --help` states each default; Python's vibro.diagram has the same ones (both
+    # from the library's DiagramDefaults).
+    import inspect
+    import re
+    vibro_py = pytest.importorskip("vibro")
+    text = " ".join(vibro("diagram", "--help").stdout.split())
+    sig = inspect.signature(vibro_py.diagram).parameters
+    options = {"--steps": "steps", "--record": "record", "--searches": "searches", "--grid": "grid",
+               "--max-period": "max_period", "--max-branches": "max_branches", "--max-points": "max_points",
+               "--coverage-tolerance": "coverage_tolerance", "--threads": "threads"}
+    for opt, name in options.items():
+        m = re.search(re.escape(opt) + r"\s+\S+\s.*?\(default ([0-9.e+-]+)", text)
+        assert m, (opt, text)
+        assert float(m.group(1)) == sig[name].default, (opt, m.group(1), sig[name].default)
+    # ... which are the library's (vibro::DiagramDefaults, what a C++ DiagramRequest starts with).
+    lib = vibro_py._vibro.diagram_defaults()
+    assert set(lib) == set(options.values())
+    assert all(lib[name] == sig[name].default for name in lib), (lib, sig)
+    assert sig["coverage_tolerance"].default == 1e-3 and sig["max_branches"].default == 100
 
 
 # --- (d) Python: vibro.diagram ---------------------------------------------------------------------
