@@ -4,6 +4,7 @@
 //
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement ·
 // 130 interrupted.
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include <new>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -92,12 +94,22 @@ int main(int argc, char** argv) {
 
   // Only the invoked subcommand gets its options (the first argument that is not an option names
   // it): CLI11 builds each option at a cost, and building all of them was a third of what
-  // `vibro --version` executed (docs/performance.md, "Start-up"). Every subcommand is still
-  // declared, so `vibro --help` lists them and a wrong name is refused as before.
+  // `vibro --version` executed (docs/performance.md, "Start-up"). When that argument names a
+  // subcommand, only that one is declared too (each costs CLI11 about 17 000 instructions, its own
+  // help option among them; 0.2 M for all 16); otherwise (none named, `vibro --help`, a wrong name)
+  // every one is, so `vibro --help` lists them and a wrong name is refused as before.
   std::string invoked;
   for (int i = 1; i < argc && invoked.empty(); ++i)
     if (argv[i][0] != '-') invoked = argv[i];
-  const auto Wanted = [&invoked](const CLI::App* cmd) { return cmd->get_name() == invoked; };
+  static constexpr std::string_view kCommands[] = {
+      "model", "simulate", "orbit", "prove", "continue", "diagram", "attractors", "basin",
+      "partition", "curve", "sweep", "validate", "score", "check", "info", "plot"};
+  const bool only_invoked = std::find(std::begin(kCommands), std::end(kCommands), invoked) != std::end(kCommands);
+  CLI::App undeclared{"a subcommand not declared in this process: never parsed", "(undeclared)"};
+  const auto Sub = [&](const char* name, const char* description) {
+    return !only_invoked || invoked == name ? app.add_subcommand(name, description) : &undeclared;
+  };
+  const auto Wanted = [&](const CLI::App* cmd) { return cmd != &undeclared && cmd->get_name() == invoked; };
 
   std::string scene_path;
   std::vector<std::string> sets;
@@ -110,10 +122,10 @@ int main(int argc, char** argv) {
     cmd->add_flag("--json", json, "print one JSON object on stdout");
   };
 
-  CLI::App* model = app.add_subcommand("model", "print the structural model derived from a scene");
+  CLI::App* model = Sub("model", "print the structural model derived from a scene");
   if (Wanted(model)) add_scene_options(model);
 
-  CLI::App* simulate = app.add_subcommand("simulate", "simulate a scene and summarise its attractor");
+  CLI::App* simulate = Sub("simulate", "simulate a scene and summarise its attractor");
   std::string out_path;
   bool resume = false;
   long long extend = 0;
@@ -140,7 +152,7 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1e12));
   }
 
-  CLI::App* orbit = app.add_subcommand("orbit", "find a periodic orbit and its Floquet multipliers");
+  CLI::App* orbit = Sub("orbit", "find a periodic orbit and its Floquet multipliers");
   vibro::OrbitRequest orbit_req;
   std::string orbit_kind = "auto", orbit_guess, orbit_out;
   if (Wanted(orbit)) {
@@ -159,7 +171,7 @@ int main(int argc, char** argv) {
     orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
   }
 
-  CLI::App* prove = app.add_subcommand("prove", "prove a periodic orbit with interval arithmetic and write a certificate");
+  CLI::App* prove = Sub("prove", "prove a periodic orbit with interval arithmetic and write a certificate");
   ProveArgs prove_args;
   std::string prove_kind = "auto";
   if (Wanted(prove)) {
@@ -194,7 +206,7 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.001, 1e6));
   }
 
-  CLI::App* cont = app.add_subcommand("continue", "continue a periodic orbit in one parameter");
+  CLI::App* cont = Sub("continue", "continue a periodic orbit in one parameter");
   std::string cont_param, cont_kind = "auto", cont_out, cont_from, cont_side = "above";
   double cont_to = 0, cont_step = 0;
   int cont_points = 1000, cont_period = 0, cont_transient = 200;
@@ -227,7 +239,7 @@ int main(int argc, char** argv) {
         ->needs(to_switch);
   }
 
-  CLI::App* diagram = app.add_subcommand("diagram", "the whole one-parameter bifurcation diagram: sweep, "
+  CLI::App* diagram = Sub("diagram", "the whole one-parameter bifurcation diagram: sweep, "
                                                      "continuation, branch switching, coverage");
   vibro::frontend::DiagramSpec dia;
   std::string dia_out;
@@ -262,8 +274,8 @@ int main(int argc, char** argv) {
     diagram->add_option("--out", dia_out, "write the sweep, every branch and the coverage to HDF5");
   }
 
-  CLI::App* attractors = app.add_subcommand("attractors", "find coexisting attractors from random initial states");
-  CLI::App* basin = app.add_subcommand("basin", "map basins of attraction over two initial-state coordinates");
+  CLI::App* attractors = Sub("attractors", "find coexisting attractors from random initial states");
+  CLI::App* basin = Sub("basin", "map basins of attraction over two initial-state coordinates");
   StudyArgs study_args;
   for (CLI::App* cmd : {attractors, basin}) {
     if (!Wanted(cmd)) continue;
@@ -290,7 +302,7 @@ int main(int argc, char** argv) {
     basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
   }
 
-  CLI::App* partition = app.add_subcommand(
+  CLI::App* partition = Sub(
       "partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries");
   PartitionArgs part;
   double part_from2 = 0;
@@ -317,7 +329,7 @@ int main(int argc, char** argv) {
     partition->add_option("--out", part.out, "write the partition to HDF5");
   }
 
-  CLI::App* curve = app.add_subcommand(
+  CLI::App* curve = Sub(
       "curve", "trace a fold, flip, Neimark-Sacker, branch point or non-smooth bifurcation in two parameters");
   CurveArgs crv;
   if (Wanted(curve)) {
@@ -350,7 +362,7 @@ int main(int argc, char** argv) {
     curve->add_option("--out", crv.out, "write the curves to HDF5 (/curves)");
   }
 
-  CLI::App* sweep = app.add_subcommand("sweep", "brute-force bifurcation diagram by simulation, up and down");
+  CLI::App* sweep = Sub("sweep", "brute-force bifurcation diagram by simulation, up and down");
   std::string sweep_param, sweep_out;
   double sweep_from = 0, sweep_to = 0;
   int sweep_steps = 50, sweep_record = 16;
@@ -366,7 +378,7 @@ int main(int argc, char** argv) {
     sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
   }
 
-  CLI::App* validate = app.add_subcommand("validate", "confirm or refute, point by point, a branch of orbits from another tool");
+  CLI::App* validate = Sub("validate", "confirm or refute, point by point, a branch of orbits from another tool");
   ValidateArgs val;
   std::string val_kind = "auto";
   if (Wanted(validate)) {
@@ -386,7 +398,7 @@ int main(int argc, char** argv) {
     validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
   }
 
-  CLI::App* score = app.add_subcommand("score", "score another simulator's events against vibro's run of the scene");
+  CLI::App* score = Sub("score", "score another simulator's events against vibro's run of the scene");
   ScoreArgs sco;
   if (Wanted(score)) {
     score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
@@ -399,7 +411,7 @@ int main(int argc, char** argv) {
     score->add_flag("--json", sco.json, "print one JSON object on stdout");
   }
 
-  CLI::App* check = app.add_subcommand("check", "cross-check the exact engine, CVODE and the Poincaré solver");
+  CLI::App* check = Sub("check", "cross-check the exact engine, CVODE and the Poincaré solver");
   std::string check_precision = "double";
   if (Wanted(check)) {
     add_scene_options(check);
@@ -408,13 +420,13 @@ int main(int argc, char** argv) {
   }
 
   std::string file_path, plot_prefix;
-  CLI::App* info = app.add_subcommand("info", "print what a vibro HDF5 file holds");
+  CLI::App* info = Sub("info", "print what a vibro HDF5 file holds");
   if (Wanted(info)) {
     info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
     info->add_flag("--json", json, "print one JSON object on stdout");
   }
 
-  CLI::App* plot = app.add_subcommand("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
+  CLI::App* plot = Sub("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
   std::string plot_overlay, plot_format = "png", plot_window, plot_size, plot_coordinate = "x_B";
   std::optional<std::string> plot_title;
   int plot_dpi = 150;

@@ -98,10 +98,13 @@ Probe DampedSticking::ReactionProbe(double sigma) const {
   Evaluate(sigma, xi, eta);
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
-  const Eigen::VectorXd F = h_.tail(k_);
-  const Eigen::VectorXd w2 = w2_;
-  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - damping_ * eta + F * s;
-  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - damping_ * acc + F * (omega_ * c);
+  const auto F = h_.tail(k_);  // views, not copies: the same values, two allocations fewer per probe
+  // a = −ν²ξ − D'ξ̇ + F s and j = −ν²ξ̇ − D'a + F ω c, each product D'v formed in the vector that
+  // then takes the sum (Eigen would form it in a temporary of its own: the same values).
+  Eigen::VectorXd acc = damping_ * eta;
+  acc = -w2_.cwiseProduct(xi) - acc + F * s;
+  Eigen::VectorXd jerk = damping_ * acc;
+  jerk = -w2_.cwiseProduct(eta) - jerk + F * (omega_ * c);
   Probe p{};
   p.jet.g = R_static_ + rho_.dot(xi) + rho_v_.dot(eta) - kappa_f_ * s;
   p.jet.g1 = rho_.dot(eta) + rho_v_.dot(acc) - kappa_f_ * omega_ * c;
@@ -121,8 +124,9 @@ Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double 
   const Eigen::VectorXd dz = Increment(sigma);
   const Eigen::VectorXd xi = z0_.head(k_) + dz.head(k_), eta = z0_.tail(k_) + dz.tail(k_);
   const double s = std::sin(phase_ + omega_ * sigma);
-  const Eigen::VectorXd F = h_.tail(k_);
-  const Eigen::VectorXd acc = -w2_.cwiseProduct(xi) - damping_ * eta + F * s;
+  const auto F = h_.tail(k_);
+  Eigen::VectorXd acc = damping_ * eta;  // as in ReactionProbe
+  acc = -w2_.cwiseProduct(xi) - acc + F * s;
   Probe p{};
   p.jet.g = base + w.dot(dz.head(k_));
   p.jet.g1 = w.dot(eta);
@@ -140,10 +144,12 @@ Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double 
 }
 
 FlightJet DampedSticking::StartJet(const Eigen::VectorXd& w) const {
-  const Eigen::VectorXd xi = z0_.head(k_), eta = z0_.tail(k_), F = h_.tail(k_);
-  const Eigen::VectorXd w2 = w2_;
-  const Eigen::VectorXd acc = -w2.cwiseProduct(xi) - damping_ * eta + F * std::sin(phase_);
-  const Eigen::VectorXd jerk = -w2.cwiseProduct(eta) - damping_ * acc + F * (omega_ * std::cos(phase_));
+  const Eigen::VectorXd xi = z0_.head(k_), eta = z0_.tail(k_);
+  const auto F = h_.tail(k_);
+  Eigen::VectorXd acc = damping_ * eta;  // as in ReactionProbe
+  acc = -w2_.cwiseProduct(xi) - acc + F * std::sin(phase_);
+  Eigen::VectorXd jerk = damping_ * acc;
+  jerk = -w2_.cwiseProduct(eta) - jerk + F * (omega_ * std::cos(phase_));
   FlightJet j{w.dot(eta), w.dot(acc), w.dot(jerk), 0.0, 0.0};
   // |g^(p)| ≤ Σ_j |wᵀW_j| |c_j| |λ_j|^p + |wᵀq| ω^p for every σ ≥ 0 (Re λ_j ≤ 0).
   const Eigen::VectorXcd ww = (w.transpose().cast<std::complex<double>>() * W_.topRows(k_)).transpose();
@@ -166,9 +172,13 @@ Probe DampedSticking::FunctionalProbe(const Eigen::VectorXd& rho, const Eigen::V
   Evaluate(sigma, xi, eta);
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
-  const Eigen::VectorXd F = h_.tail(k_);
-  const Eigen::VectorXd acc = -w2_.cwiseProduct(xi) - damping_ * eta + F * s;
-  const Eigen::VectorXd jerk = -w2_.cwiseProduct(eta) - damping_ * acc + F * (omega_ * c);
+  const auto F = h_.tail(k_);
+  // a = −ν²ξ − D'ξ̇ + F s and j = −ν²ξ̇ − D'a + F ω c, each product D'v formed in the vector that
+  // then takes the sum (Eigen would form it in a temporary of its own: the same values).
+  Eigen::VectorXd acc = damping_ * eta;
+  acc = -w2_.cwiseProduct(xi) - acc + F * s;
+  Eigen::VectorXd jerk = damping_ * acc;
+  jerk = -w2_.cwiseProduct(eta) - jerk + F * (omega_ * c);
   Probe p{};
   p.jet.g = base + rho.dot(xi) + rho_v.dot(eta) - kappa_f * s;
   p.jet.g1 = rho.dot(eta) + rho_v.dot(acc) - kappa_f * omega_ * c;

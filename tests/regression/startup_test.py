@@ -3,7 +3,7 @@
 loader initialises, from its own trace (LD_DEBUG=libs, "calling init: PATH"), not from timings, so
 the test holds on any machine and under any load.
 
-    startup_test.py VIBRO SCENES_DIR [--mpiexec MPIEXEC]
+    startup_test.py VIBRO SCENES_DIR [--mpiexec MPIEXEC] [--static-libstdcxx]
 
   * `vibro --version` and a 20-period `vibro simulate` without --out load no HDF5, no libcurl, no
     GnuTLS, no MPI library, not the prover's Arb, FLINT, NTL, gf2x, MPFR or GMP, no SUNDIALS and
@@ -12,7 +12,10 @@ the test holds on any machine and under any load.
   * the same run with --out loads HDF5, `vibro prove` the prover plugin with Arb and FLINT, a run
     with run.engine = "cvode" the CVODE plugin with SUNDIALS, and a basin the parallel-loop plugin
     with oneTBB (so the trace does see a library loaded at first use: the checks above can fail);
-  * with --mpiexec, a basin under `mpirun -np 2` loads the MPI plugin and libmpi (each rank).
+  * with --mpiexec, a basin under `mpirun -np 2` loads the MPI plugin and libmpi (each rank);
+  * with --static-libstdcxx (the build's VIBRO_STATIC_LIBSTDCXX), `vibro --version`, the run without
+    --out and the CVODE run load no libstdc++.so (linked into libvibro, vibro and the CVODE plugin),
+    while the basin, whose oneTBB needs it, still loads it and runs with it.
 The speed itself is measured by benchmarks/startup_bench.cpp.
 """
 import os
@@ -51,6 +54,8 @@ def loaded(cmd, work, env=None):
 def main():
     vibro, scenes = os.path.abspath(sys.argv[1]), sys.argv[2]
     mpiexec = sys.argv[sys.argv.index("--mpiexec") + 1] if "--mpiexec" in sys.argv else None
+    static_cxx = "--static-libstdcxx" in sys.argv
+    cxx = re.compile(r"libstdc\+\+\.so")
     scene = os.path.join(scenes, "fig08_preload.toml")
     with tempfile.TemporaryDirectory() as work:
         for name, cmd in (("vibro --version", [vibro, "--version"]),
@@ -62,6 +67,8 @@ def main():
             check(f"{name}: the loader's trace lists libraries", len(libs) >= 5, libs)
             check(f"{name}: loads no HDF5, libcurl, GnuTLS, MPI, Arb, FLINT, NTL, gf2x, MPFR, GMP, SUNDIALS, oneTBB, "
                   "libfmt, toml++ or libquadmath", not heavy, heavy)
+            if static_cxx:
+                check(f"{name}: loads no libstdc++.so", not any(cxx.search(p) for p in libs), libs)
         h5 = os.path.join(work, "run.h5")
         rc, libs, out = loaded([vibro, "simulate", scene, "--set", "run.periods=20", "--out", h5], work)
         check("vibro simulate --out: exit 0", rc == 0, out[-2000:])
@@ -79,12 +86,18 @@ def main():
         check("vibro simulate, run.engine = \"cvode\": exit 0", rc == 0, out[-2000:])
         check("vibro simulate, run.engine = \"cvode\": loads the CVODE plugin and SUNDIALS CVODE",
               all(any(n.startswith(lib) for n in names) for lib in ("libvibro_cvode.so", "libsundials_cvode")), names)
+        if static_cxx:
+            check("vibro simulate, run.engine = \"cvode\": loads no libstdc++.so", not any(cxx.search(n) for n in names),
+                  names)
         rc, libs, out = loaded([vibro, "basin", os.path.join(scenes, "fig05_coexistence.toml"), "--grid", "3,3",
                                 "--threads", "2"], work)
         names = [os.path.basename(p) for p in libs]
         check("vibro basin: exit 0", rc == 0, out[-2000:])
         check("vibro basin: loads the parallel-loop plugin and oneTBB",
               all(any(n.startswith(lib) for n in names) for lib in ("libvibro_parallel.so", "libtbb")), names)
+        if static_cxx:
+            check("vibro basin: oneTBB brings libstdc++.so beside libvibro's own copy",
+                  any(cxx.search(n) for n in names), names)
         if mpiexec:
             env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
             rc, per_process, out = traced([mpiexec, "-np", "2", "--oversubscribe", vibro, "basin",
