@@ -3,6 +3,8 @@
 // contained first read and write of a given file (hdf5_probe.cpp).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -46,6 +48,16 @@ h5::Type EventKindType();
 // (/events/impulse, energy_dissipated, stick_duration, reaction_integral, reaction_max,
 // docs/loads.md) are absent from files written before them: such a file keeps its columns. So are
 // a compliant contact phase's /events/peak_time and /events/penetration_max (docs/compliant.md).
+// A run's events reach the file in two steps (docs/output.md, "Writing"). Push, in the
+// simulation's thread, copies the event into a tile of kTile rows (a few KiB, in the cache), and
+// each full tile column by column into a block of rows (`filling`, one buffer per column, written
+// with non-temporal stores: the rows do not evict the simulation's own data from the cache).
+// Stage, in the writer thread for a flush behind the run (Hdf5Store::Impl::FlushBehind) or in the
+// store's thread for a flush it makes itself, encodes the block handed to it (Hand) chunk by chunk
+// straight from those buffers (Column::BeginStaged, StageChunk). The rows of the last chunk, when
+// part-filled, are kept (`tail`) until it is whole: a flush of every row writes it padded, and the
+// next one writes it again with the rows that follow. A table opened from a file (a resume) appends
+// the rows to its columns instead (Drain), which stage them as a column stages its rows.
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
   h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
@@ -53,7 +65,33 @@ struct EventTable {
   bool has_contact = false, has_loads = false, has_compliant = false;
   void Create(h5::Id g);
   void Open(h5::Id g);
-  void Push(const Event& e);
+  // The bytes of an element of each column, in the order of Columns(), and of a row.
+  static constexpr size_t kColumns = 16;
+  static constexpr size_t kElem[kColumns] = {8, 8, 8, 1, 8, 8, 8, 4, 1, 8, 8, 8, 8, 8, 8, 8};
+  static constexpr size_t kRowBytes = 110;
+  // Hdf5Store::Impl::MaybeFlush hands the rows held (HeldBytes) when they reach kHeldBytes, looking
+  // every 1024 rows: a block is allocated once with room for kBlockRows rows, never more in a run
+  // (docs/output.md, "Writing").
+  static constexpr size_t kTile = 64;
+  static constexpr size_t kHeldBytes = size_t{4} << 20;
+  static constexpr size_t kBlockRows = kHeldBytes / kRowBytes + 1024 + kTile;
+  void Push(const Event& e) {
+    tile[tile_n++] = e;
+    ++count;
+    if (tile_n == kTile) PutTile();
+  }
+  // The table's rows: in the file, staged, in the columns or held (the store's thread only: it
+  // reads no column, which the writer thread may be filling).
+  h5::Size Rows() const { return count; }
+  size_t HeldBytes() const { return (filling.n + tile_n) * kRowBytes; }
+  // Sets the rows pushed aside for Stage (the rows handed before must have been staged).
+  void Hand();
+  // Stages the rows handed (Hand) in every column, as Column::Stage(whole_chunks) stages a
+  // column's: in the writer thread while the run pushes the rows that follow, or in the store's
+  // thread after Hand.
+  void Stage(bool whole_chunks);
+  // Keeps the first `n` rows of the file (a resume: those up to its checkpoint); none held.
+  void Truncate(h5::Size n);
   std::vector<h5::Column*> All() {
     std::vector<h5::Column*> all{&t, &period, &offset, &kind, &xB, &v_before, &v_after};
     if (has_contact) all.insert(all.end(), {&contact, &simultaneous});
@@ -61,6 +99,33 @@ struct EventTable {
       all.insert(all.end(), {&impulse, &energy, &stick_duration, &reaction_integral, &reaction_max});
     if (has_compliant) all.insert(all.end(), {&peak_time, &penetration_max});
     return all;
+  }
+
+ private:
+  // Rows column by column: column c's elements at col[c] (kElem[c] bytes each), n of them.
+  struct Block {
+    h5::Bytes col[kColumns];
+    size_t n = 0, capacity = 0;
+    void Reserve(size_t rows);               // room for `rows`, the n kept
+    void Append(const Block& b, size_t from, size_t rows);  // rows [from, from + rows) of b
+  };
+  h5::Size count = 0;
+  Event tile[kTile];
+  size_t tile_n = 0;
+  Block filling, draining;  // the rows pushed; those handed to Stage
+  // Created here (Create): every column encodes the rows given (Column::BeginStaged); the rows of
+  // its current chunk, from row `first` of the table, are `tail`, the first `tail_written` of them
+  // in the file already (in a part-filled chunk).
+  bool encodes_rows = false;
+  h5::Size first = 0;
+  Block tail;
+  size_t tail_written = 0;
+  h5::Bytes joined;  // a first chunk's elements, the rows kept then those handed (Stage)
+  void PutTile();    // the tile's rows into `filling`
+  void Drain();      // the rows handed, appended to the columns (a table opened)
+  std::array<h5::Column*, kColumns> Columns() {
+    return {&t, &period, &offset, &kind, &xB, &v_before, &v_after, &contact, &simultaneous, &impulse,
+            &energy, &stick_duration, &reaction_integral, &reaction_max, &peak_time, &penetration_max};
   }
 };
 
@@ -198,7 +263,8 @@ struct Hdf5Store::Impl {
   // The checkpoint `c` (none: nothing) with the row counts at it.
   void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections,
                        h5::Size n_loads);
-  std::vector<h5::Column*> Columns();
+  std::vector<h5::Column*> Columns();  // every table's, /events' first
+  std::vector<h5::Column*> OtherColumns();  // every table's but /events'
   void Close();
   void Flush();  // in the store's thread, after Sync()
  private:
