@@ -183,12 +183,26 @@ void EventTable::PutTile() {
   tile_n = 0;
 }
 
-void EventTable::Hand() {
+void EventTable::Hand(bool whole_chunks) {
   if (tile_n > 0) PutTile();
 #if defined(__SSE2__)
   _mm_sfence();  // the non-temporal stores seen by the thread that stages the rows
 #endif
   std::swap(filling, draining);
+  filling.n = filling.written = 0;
+  if (!encodes_rows) return;
+  // A block begins at a chunk's first row: the rows after the last whole chunk begin the next one
+  // (Hdf5Store::Impl::MaybeFlush hands the rows soon after a chunk is full: few of them). With
+  // whole_chunks they are not staged now; otherwise they are, padded, and written again with the
+  // rows that follow.
+  const size_t chunk = static_cast<size_t>(t.chunk_rows()), rest = draining.n % chunk;
+  filling.Append(draining, draining.n - rest, rest);
+  if (!whole_chunks) {
+    filling.written = rest;
+  } else {
+    draining.n -= rest;
+    if (draining.n == 0) filling.written = draining.written;  // no whole chunk: as they were
+  }
 }
 
 void EventTable::Drain() {
@@ -206,47 +220,22 @@ void EventTable::Stage(bool whole_chunks) {
     for (h5::Column* c : All()) c->Stage(whole_chunks);
     return;
   }
-  const size_t kept = tail.n, total = kept + draining.n;
-  const size_t chunk = static_cast<size_t>(t.chunk_rows()), full = total / chunk * chunk;
-  const size_t n = whole_chunks ? full : total;
+  const size_t n = draining.n, chunk = static_cast<size_t>(t.chunk_rows());
   // Nothing new: the part-filled chunk holds the rows it has in the file already.
-  if (n > 0 && !(n == kept && tail_written == kept)) {
+  if (n > draining.written) {
     const auto columns = Columns();
     for (h5::Column* c : columns) c->BeginStaged(first, n);
-    for (size_t k = 0; k * chunk < n; ++k) {
-      const size_t begin = k * chunk, rows_in = std::min(chunk, n - begin);
-      for (size_t c = 0; c < kColumns; ++c) {
-        const size_t e = kElem[c];
-        const unsigned char* elems = draining.col[c].data() + (begin - std::min(begin, kept)) * e;
-        if (begin < kept) {  // the first chunk: the rows kept, then those handed (rows_in >= kept)
-          if (joined.size() < chunk * e) joined.resize(chunk * e);
-          std::memcpy(joined.data(), tail.col[c].data(), kept * e);
-          if (rows_in > kept) std::memcpy(joined.data() + kept * e, draining.col[c].data(), (rows_in - kept) * e);
-          elems = joined.data();
-        }
-        columns[c]->StageChunk(k, elems, rows_in);
-      }
-    }
+    for (size_t k = 0; k * chunk < n; ++k)
+      for (size_t c = 0; c < kColumns; ++c)
+        columns[c]->StageChunk(k, draining.col[c].data() + k * chunk * kElem[c], std::min(chunk, n - k * chunk));
   }
-  // The rows after the last whole chunk are kept; those of a part-filled chunk just staged are
-  // in the file after this flush.
-  if (full == 0) {
-    tail.Append(draining, 0, draining.n);
-  } else {
-    // full >= chunk > kept: the rows kept are all in the whole chunks staged.
-    tail.n = 0;
-    tail.Append(draining, full - kept, total - full);
-    first += full;
-    tail_written = 0;
-  }
-  if (!whole_chunks) tail_written = tail.n;
-  draining.n = 0;
+  first += n / chunk * chunk;
+  draining.n = draining.written = 0;
 }
 
 void EventTable::Truncate(h5::Size n) {
   for (h5::Column* c : All()) c->Truncate(n);
-  filling.n = draining.n = tail.n = tile_n = 0;
-  tail_written = 0;
+  filling.n = draining.n = filling.written = draining.written = tile_n = 0;
   encodes_rows = false;  // opened: its columns stage the rows appended to them
   count = n;
 }
@@ -391,7 +380,9 @@ void Hdf5Store::Impl::MaybeFlush() {
   for (h5::Column* c : OtherColumns()) held += c->pending_bytes();
   if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) {
     FlushBehind(false);
-  } else if (held >= kFlushBytes) {
+  } else if (held >= kFlushBytes || (held >= kFlushBytes / 2 && ev.RowsPastChunk() < 1024 + ev.kTile)) {
+    // From half the rows on, as soon as the events fill a chunk (this is looked at every 1024
+    // rows): few rows after it, which begin the next block (EventTable::Hand).
     FlushBehind(true);
   } else if (pending && !writer.Busy()) {
     // The writer has encoded the last flush: written now rather than at the next one.
@@ -507,7 +498,7 @@ void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c,
 void Hdf5Store::Impl::Flush() {
   Sync();
   const h5::WritingScope writing;
-  ev.Hand();
+  ev.Hand(false);
   ev.Stage(false);
   for (h5::Column* c : OtherColumns()) c->Stage();
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
@@ -541,7 +532,7 @@ void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
   // The checkpoint's rows are all in the file only when every row before it is staged (a flush of
   // whole chunks may leave some buffered): it is written with the interval's flushes, which stage
   // every row.
-  ev.Hand();
+  ev.Hand(whole_chunks);
   for (h5::Column* c : OtherColumns()) c->Stage(whole_chunks);
   Pending p;
   if (!whole_chunks) {

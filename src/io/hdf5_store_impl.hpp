@@ -54,10 +54,11 @@ h5::Type EventKindType();
 // with non-temporal stores: the rows do not evict the simulation's own data from the cache).
 // Stage, in the writer thread for a flush behind the run (Hdf5Store::Impl::FlushBehind) or in the
 // store's thread for a flush it makes itself, encodes the block handed to it (Hand) chunk by chunk
-// straight from those buffers (Column::BeginStaged, StageChunk). The rows of the last chunk, when
-// part-filled, are kept (`tail`) until it is whole: a flush of every row writes it padded, and the
-// next one writes it again with the rows that follow. A table opened from a file (a resume) appends
-// the rows to its columns instead (Drain), which stage them as a column stages its rows.
+// straight from those buffers (Column::BeginStaged, StageChunk). A block begins at a chunk's first
+// row: the rows of a last, part-filled chunk begin the next block too, so that the chunk is
+// written whole once it is (and padded by a flush of every row before that). A table opened from
+// a file (a resume) appends the rows to its columns instead (Drain), which stage them as a column
+// stages its rows.
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
   h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
@@ -84,8 +85,13 @@ struct EventTable {
   // reads no column, which the writer thread may be filling).
   h5::Size Rows() const { return count; }
   size_t HeldBytes() const { return (filling.n + tile_n) * kRowBytes; }
-  // Sets the rows pushed aside for Stage (the rows handed before must have been staged).
-  void Hand();
+  // The rows held after the last whole chunk (a table made here; else 0).
+  size_t RowsPastChunk() const {
+    return encodes_rows ? (filling.n + tile_n) % static_cast<size_t>(t.chunk_rows()) : 0;
+  }
+  // Sets the rows pushed aside for Stage (the rows handed before must have been staged): with
+  // whole_chunks, those of whole chunks only.
+  void Hand(bool whole_chunks);
   // Stages the rows handed (Hand) in every column, as Column::Stage(whole_chunks) stages a
   // column's: in the writer thread while the run pushes the rows that follow, or in the store's
   // thread after Hand.
@@ -102,10 +108,11 @@ struct EventTable {
   }
 
  private:
-  // Rows column by column: column c's elements at col[c] (kElem[c] bytes each), n of them.
+  // Rows column by column: column c's elements at col[c] (kElem[c] bytes each), n of them, the
+  // first `written` of which are in the file already (in a part-filled chunk).
   struct Block {
     h5::Bytes col[kColumns];
-    size_t n = 0, capacity = 0;
+    size_t n = 0, capacity = 0, written = 0;
     void Reserve(size_t rows);               // room for `rows`, the n kept
     void Append(const Block& b, size_t from, size_t rows);  // rows [from, from + rows) of b
   };
@@ -113,14 +120,10 @@ struct EventTable {
   Event tile[kTile];
   size_t tile_n = 0;
   Block filling, draining;  // the rows pushed; those handed to Stage
-  // Created here (Create): every column encodes the rows given (Column::BeginStaged); the rows of
-  // its current chunk, from row `first` of the table, are `tail`, the first `tail_written` of them
-  // in the file already (in a part-filled chunk).
+  // Created here (Create): every column encodes the rows given (Column::BeginStaged); the block
+  // handed begins at row `first` of the table.
   bool encodes_rows = false;
   h5::Size first = 0;
-  Block tail;
-  size_t tail_written = 0;
-  h5::Bytes joined;  // a first chunk's elements, the rows kept then those handed (Stage)
   void PutTile();    // the tile's rows into `filling`
   void Drain();      // the rows handed, appended to the columns (a table opened)
   std::array<h5::Column*, kColumns> Columns() {
