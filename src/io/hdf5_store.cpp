@@ -119,9 +119,11 @@ void EventTable::Block::Reserve(size_t rows) {
   capacity = rows;
 }
 
+static_assert(EventTable::kRowBytes == 13 * 8 + 4 + 1 + 1, "a row of /events: 13 float64/int64, contact, kind, simultaneous");
+
 void EventTable::Block::Append(const Block& b, size_t from, size_t rows) {
   if (rows == 0) return;
-  Reserve(std::max(n + rows, capacity));
+  Reserve(std::max({n + rows, capacity, kBlockRows}));
   for (size_t c = 0; c < kColumns; ++c)
     std::memcpy(col[c].data() + n * kElem[c], b.col[c].data() + from * kElem[c], rows * kElem[c]);
   n += rows;

@@ -48,17 +48,17 @@ h5::Type EventKindType();
 // (/events/impulse, energy_dissipated, stick_duration, reaction_integral, reaction_max,
 // docs/loads.md) are absent from files written before them: such a file keeps its columns. So are
 // a compliant contact phase's /events/peak_time and /events/penetration_max (docs/compliant.md).
-// A run's events reach the file in two steps (docs/output.md, "Writing"). Push, in the
-// simulation's thread, copies the event into a tile of kTile rows (a few KiB, in the cache), and
-// each full tile column by column into a block of rows (`filling`, one buffer per column, written
-// with non-temporal stores: the rows do not evict the simulation's own data from the cache).
-// Stage, in the writer thread for a flush behind the run (Hdf5Store::Impl::FlushBehind) or in the
-// store's thread for a flush it makes itself, encodes the block handed to it (Hand) chunk by chunk
-// straight from those buffers (Column::BeginStaged, StageChunk). A block begins at a chunk's first
-// row: the rows of a last, part-filled chunk begin the next block too, so that the chunk is
-// written whole once it is (and padded by a flush of every row before that). A table opened from
-// a file (a resume) appends the rows to its columns instead (Drain), which stage them as a column
-// stages its rows.
+// A run's events reach the file in two steps (docs/output.md, "Crash safety, flushes and resume";
+// docs/performance.md). Push, in the simulation's thread, copies the event into a tile of kTile
+// rows (a few KiB, in the cache), and each full tile column by column into a block of rows
+// (`filling`, one buffer per column, written with non-temporal stores: the rows do not evict the
+// simulation's own data from the cache). Stage, in the writer thread for a flush behind the run
+// (Hdf5Store::Impl::FlushBehind) or in the store's thread for a flush it makes itself, encodes the
+// block handed to it (Hand) chunk by chunk straight from those buffers (Column::BeginStaged,
+// StageChunk). A block begins at a chunk's first row: the rows of a last, part-filled chunk begin
+// the next block too, so that the chunk is written whole once it is (and padded by a flush of
+// every row before that). A table opened from a file (a resume) appends the rows to its columns
+// instead (Drain), which stage them as a column stages its rows.
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
   h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
@@ -72,7 +72,7 @@ struct EventTable {
   static constexpr size_t kRowBytes = 110;
   // Hdf5Store::Impl::MaybeFlush hands the rows held (HeldBytes) when they reach kHeldBytes, looking
   // every 1024 rows: a block is allocated once with room for kBlockRows rows, never more in a run
-  // (docs/output.md, "Writing").
+  // (docs/output.md, "Crash safety, flushes and resume").
   static constexpr size_t kTile = 64;
   static constexpr size_t kHeldBytes = size_t{4} << 20;
   static constexpr size_t kBlockRows = kHeldBytes / kRowBytes + 1024 + kTile;
