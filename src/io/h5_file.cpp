@@ -899,7 +899,33 @@ void Column::Stage(bool whole_chunks) {
   rows_ += n;
 }
 
+namespace {
+// The shuffled bytes of a chunk: one buffer per thread (the writer's, or the store's own when it
+// encodes), not one per column.
+thread_local Bytes shuffled;
+}  // namespace
+
+size_t Column::EncodeChunk(const unsigned char* rows, size_t bytes, size_t chunk_bytes, unsigned char* out) {
+  // Every element equal to the first (each byte equal to the one an element further on); the
+  // last chunk, part-filled, is padded with zeros (the fill value HDF5 pads edge chunks with), so
+  // it is constant only when its rows are zeros.
+  const bool constant = std::memcmp(rows, rows + elem_size_, bytes - elem_size_) == 0 &&
+                        (bytes == chunk_bytes || std::all_of(rows, rows + elem_size_, [](unsigned char b) { return b == 0; }));
+  if (constant) {
+    if (constant_elem_.size() != elem_size_ || std::memcmp(constant_elem_.data(), rows, elem_size_) != 0) {
+      constant_elem_.assign(rows, rows + elem_size_);
+      const size_t len = ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, shuffled, out);
+      constant_packed_.assign(out, out + len);
+    }
+    std::memcpy(out, constant_packed_.data(), constant_packed_.size());
+    return constant_packed_.size();
+  }
+  return bytes < chunk_bytes ? ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, shuffled, out)
+                             : ShuffleDeflate(rows, chunk_bytes, elem_size_, shuffled, out);
+}
+
 void Column::EncodeStaged() {
+  if (encoded_) return;
   encoded_ = true;
   if (!direct_ || chunk_rows_ == 0) return;  // written through the library's filters
   const size_t row_bytes = elem_size_ * std::max<Size>(cols_, 1);
@@ -907,31 +933,27 @@ void Column::EncodeStaged() {
   const size_t chunks = (staged_bytes_ + chunk_bytes - 1) / chunk_bytes;
   if (packed_.size() < chunks * bound) packed_.resize(chunks * bound);
   packed_len_.resize(chunks);
-  // The shuffled bytes of a chunk: one buffer per thread (the writer's, or the store's own when it
-  // encodes), not one per column.
-  static thread_local Bytes scratch;
   for (size_t i = 0; i < chunks; ++i) {
-    const unsigned char* rows = staged_.data() + i * chunk_bytes;
     const size_t bytes = std::min(chunk_bytes, staged_bytes_ - i * chunk_bytes);
-    unsigned char* out = packed_.data() + i * bound;
-    // Every element equal to the first (each byte equal to the one an element further on); the
-    // last chunk, part-filled, is padded with zeros (the fill value HDF5 pads edge chunks with), so
-    // it is constant only when its rows are zeros.
-    const bool constant = std::memcmp(rows, rows + elem_size_, bytes - elem_size_) == 0 &&
-                          (bytes == chunk_bytes || std::all_of(rows, rows + elem_size_, [](unsigned char b) { return b == 0; }));
-    if (constant) {
-      if (constant_elem_.size() != elem_size_ || std::memcmp(constant_elem_.data(), rows, elem_size_) != 0) {
-        constant_elem_.assign(rows, rows + elem_size_);
-        const size_t len = ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, scratch, out);
-        constant_packed_.assign(out, out + len);
-      }
-      std::memcpy(out, constant_packed_.data(), constant_packed_.size());
-      packed_len_[i] = constant_packed_.size();
-      continue;
-    }
-    packed_len_[i] = bytes < chunk_bytes ? ShuffleDeflatePadded(rows, bytes, chunk_bytes, elem_size_, scratch, out)
-                                         : ShuffleDeflate(rows, chunk_bytes, elem_size_, scratch, out);
+    packed_len_[i] = EncodeChunk(staged_.data() + i * chunk_bytes, bytes, chunk_bytes, packed_.data() + i * bound);
   }
+}
+
+void Column::BeginStaged(Size first, Size n) {
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * elem_size_, bound = ZlibFixedBound(chunk_bytes);
+  const size_t chunks = static_cast<size_t>((n + chunk_rows_ - 1) / chunk_rows_);
+  if (packed_.size() < chunks * bound) packed_.resize(chunks * bound);
+  packed_len_.resize(chunks);
+  staged_first_ = first;
+  staged_bytes_ = static_cast<size_t>(n) * elem_size_;
+  encoded_ = true;
+  rows_ = first + n;
+}
+
+void Column::StageChunk(size_t i, const unsigned char* elems, Size count) {
+  const size_t chunk_bytes = static_cast<size_t>(chunk_rows_) * elem_size_;
+  packed_len_[i] = EncodeChunk(elems, static_cast<size_t>(count) * elem_size_, chunk_bytes,
+                               packed_.data() + i * ZlibFixedBound(chunk_bytes));
 }
 
 void Column::WriteStaged() {

@@ -216,7 +216,23 @@ class Column {
   // with zeros as HDF5 pads an edge chunk), into the column's buffers: no HDF5 call and no shared
   // state, so the store's writer thread does it while the simulation goes on; the HDF5 calls that
   // write them are WriteStaged's, in the store's own thread (docs/output.md, "Writing").
+  // (Nothing when the staged rows are encoded already: BeginStaged.)
   void EncodeStaged();
+  // Whether BeginStaged may stage this column's rows: one element per row, whole chunks encoded
+  // here (a column made here, not opened), no row buffered in the column.
+  bool encodes_rows_given() const { return direct_ && chunk_rows_ > 0 && cols_ == 0 && used_ == 0; }
+  Size chunk_rows() const { return chunk_rows_; }
+  // Appends n rows of elements as the memory type lays them out (n · max(cols, 1) elements).
+  void PushElems(const void* p, Size n) { Append(p, static_cast<size_t>(n) * elem_size_ * std::max<Size>(cols_, 1)); }
+  // Stages rows [first, first + n) of a table whose rows are buffered elsewhere (the store's
+  // events, hdf5_store_impl.hpp), each of its chunks then encoded by StageChunk: first is a
+  // chunk's first row; the rows staged before must have been written (WriteStaged writes these).
+  // No HDF5 call: the store's writer thread does it while the simulation goes on
+  // (encodes_rows_given() required).
+  void BeginStaged(Size first, Size n);
+  // Encodes chunk i of the rows BeginStaged staged from its `count` elements at `elems` (the
+  // last chunk, part-filled, padded with zeros as EncodeStaged pads it).
+  void StageChunk(size_t i, const unsigned char* elems, Size count);
   // Writes the staged rows (nothing when none are staged): the chunks as EncodeStaged left them
   // (encoded here when it was not called) with H5Dwrite_chunk, or, for an opened column or one
   // whose file element differs from memory's, through the library's filters.
@@ -253,6 +269,9 @@ class Column {
   Bytes buf_, staged_;
   size_t used_ = 0, staged_bytes_ = 0;
 
+  // Encodes one chunk whose first `bytes` are `rows` (chunk_bytes in all, zeros after them) at
+  // `out` (ZlibFixedBound(chunk_bytes) bytes of room); returns its length.
+  size_t EncodeChunk(const unsigned char* rows, size_t bytes, size_t chunk_bytes, unsigned char* out);
   void Append(const void* p, size_t bytes) {
     if (buf_.size() - used_ < bytes) buf_.resize(std::max<size_t>({2 * buf_.size(), used_ + bytes, 4096}));
     std::memcpy(buf_.data() + used_, p, bytes);

@@ -8,8 +8,11 @@
 #include <sys/statvfs.h>
 
 #include <algorithm>
-#include <limits>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <functional>
+#include <limits>
 #include <new>
 #include <optional>
 #include <stdexcept>
@@ -17,6 +20,10 @@
 #include <initializer_list>
 
 #include <fmt/format.h>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "io/hdf5_store_impl.hpp"
 #include "vibro/scene_file.hpp"
@@ -34,6 +41,7 @@ h5::Type EventKindType() {
 }
 
 void EventTable::Create(h5::Id g) {
+  count = 0;
   const h5::Type kind_type = EventKindType();
   t = h5::Column(g, "t", h5::Type::F64(), 0);
   period = h5::Column(g, "period", h5::Type::I64(), 0);
@@ -54,6 +62,9 @@ void EventTable::Create(h5::Id g) {
   peak_time = h5::Column(g, "peak_time", h5::Type::F64(), 0);
   penetration_max = h5::Column(g, "penetration_max", h5::Type::F64(), 0);
   has_compliant = true;
+  encodes_rows = true;
+  for (h5::Column* c : All()) encodes_rows = encodes_rows && c->encodes_rows_given();
+  first = 0;
 }
 
 void EventTable::Open(h5::Id g) {
@@ -65,6 +76,7 @@ void EventTable::Open(h5::Id g) {
   xB = h5::Column::Open(g, "x_B", h5::Type::F64());
   v_before = h5::Column::Open(g, "v_before", h5::Type::F64());
   v_after = h5::Column::Open(g, "v_after", h5::Type::F64());
+  count = t.rows();
   // The optional columns come in groups, each whole or absent (a file cut by hand is refused).
   const auto group = [&](std::initializer_list<const char*> names) {
     size_t present = 0;
@@ -97,29 +109,137 @@ void EventTable::Open(h5::Id g) {
   }
 }
 
-void EventTable::Push(const Event& e) {
-  t.Push(e.t);
-  period.Push(static_cast<std::int64_t>(e.clock.period));
-  offset.Push(e.clock.offset);
-  kind.Push(static_cast<std::int8_t>(e.kind));
-  xB.Push(e.x_B);
-  v_before.Push(e.v_before);
-  v_after.Push(e.v_after);
-  if (has_contact) {
-    contact.Push(static_cast<std::int32_t>(e.contact));
-    simultaneous.Push(static_cast<std::int8_t>(e.simultaneous ? 1 : 0));
+void EventTable::Block::Reserve(size_t rows) {
+  if (rows <= capacity) return;
+  for (size_t c = 0; c < kColumns; ++c) {
+    h5::Bytes grown(rows * kElem[c]);
+    if (n > 0) std::memcpy(grown.data(), col[c].data(), n * kElem[c]);
+    col[c].swap(grown);
   }
-  if (has_loads) {
-    impulse.Push(e.impulse);
-    energy.Push(e.energy_dissipated);
-    stick_duration.Push(e.stick_duration);
-    reaction_integral.Push(e.reaction_integral);
-    reaction_max.Push(e.reaction_max);
+  capacity = rows;
+}
+
+static_assert(EventTable::kRowBytes == 13 * 8 + 4 + 1 + 1, "a row of /events: 13 float64/int64, contact, kind, simultaneous");
+
+void EventTable::Block::Append(const Block& b, size_t from, size_t rows) {
+  if (rows == 0) return;
+  Reserve(std::max({n + rows, capacity, kBlockRows}));
+  for (size_t c = 0; c < kColumns; ++c)
+    std::memcpy(col[c].data() + n * kElem[c], b.col[c].data() + from * kElem[c], rows * kElem[c]);
+  n += rows;
+}
+
+namespace {
+
+// Writes `count` elements of type T, field(tile[i]), at `out`: 8-byte words with non-temporal
+// stores (the rows are read by the writer thread, not by the simulation's).
+template <class T, class F>
+void PutColumn(const Event* tile, size_t count, unsigned char* out, F field) {
+#if defined(__SSE2__)
+  constexpr size_t per_word = 8 / sizeof(T);
+  size_t i = 0;
+  for (; i + per_word <= count; i += per_word, out += 8) {
+    T v[per_word];
+    for (size_t k = 0; k < per_word; ++k) v[k] = static_cast<T>(field(tile[i + k]));
+    long long w;
+    std::memcpy(&w, v, 8);
+    _mm_stream_si64(reinterpret_cast<long long*>(out), w);
   }
-  if (has_compliant) {
-    peak_time.Push(e.peak_time);
-    penetration_max.Push(e.penetration_max);
+  for (; i < count; ++i, out += sizeof(T)) {
+    const T v = static_cast<T>(field(tile[i]));
+    std::memcpy(out, &v, sizeof(T));
   }
+#else
+  for (size_t i = 0; i < count; ++i, out += sizeof(T)) {
+    const T v = static_cast<T>(field(tile[i]));
+    std::memcpy(out, &v, sizeof(T));
+  }
+#endif
+}
+
+}  // namespace
+
+void EventTable::PutTile() {
+  if (filling.n + tile_n > filling.capacity) filling.Reserve(std::max(kBlockRows, 2 * filling.capacity));
+  unsigned char* out[kColumns];
+  for (size_t c = 0; c < kColumns; ++c) out[c] = filling.col[c].data() + filling.n * kElem[c];
+  const Event* r = tile;
+  const size_t m = tile_n;
+  PutColumn<double>(r, m, out[0], [](const Event& e) { return e.t; });
+  PutColumn<std::int64_t>(r, m, out[1], [](const Event& e) { return e.clock.period; });
+  PutColumn<double>(r, m, out[2], [](const Event& e) { return e.clock.offset; });
+  PutColumn<std::int8_t>(r, m, out[3], [](const Event& e) { return static_cast<std::int8_t>(e.kind); });
+  PutColumn<double>(r, m, out[4], [](const Event& e) { return e.x_B; });
+  PutColumn<double>(r, m, out[5], [](const Event& e) { return e.v_before; });
+  PutColumn<double>(r, m, out[6], [](const Event& e) { return e.v_after; });
+  PutColumn<std::int32_t>(r, m, out[7], [](const Event& e) { return e.contact; });
+  PutColumn<std::int8_t>(r, m, out[8], [](const Event& e) { return e.simultaneous ? 1 : 0; });
+  PutColumn<double>(r, m, out[9], [](const Event& e) { return e.impulse; });
+  PutColumn<double>(r, m, out[10], [](const Event& e) { return e.energy_dissipated; });
+  PutColumn<double>(r, m, out[11], [](const Event& e) { return e.stick_duration; });
+  PutColumn<double>(r, m, out[12], [](const Event& e) { return e.reaction_integral; });
+  PutColumn<double>(r, m, out[13], [](const Event& e) { return e.reaction_max; });
+  PutColumn<double>(r, m, out[14], [](const Event& e) { return e.peak_time; });
+  PutColumn<double>(r, m, out[15], [](const Event& e) { return e.penetration_max; });
+  filling.n += m;
+  tile_n = 0;
+}
+
+void EventTable::Hand(bool whole_chunks) {
+  if (tile_n > 0) PutTile();
+#if defined(__SSE2__)
+  _mm_sfence();  // the non-temporal stores seen by the thread that stages the rows
+#endif
+  std::swap(filling, draining);
+  filling.n = filling.written = 0;
+  if (!encodes_rows) return;
+  // A block begins at a chunk's first row: the rows after the last whole chunk begin the next one
+  // (Hdf5Store::Impl::MaybeFlush hands the rows soon after a chunk is full: few of them). With
+  // whole_chunks they are not staged now; otherwise they are, padded, and written again with the
+  // rows that follow.
+  const size_t chunk = static_cast<size_t>(t.chunk_rows()), rest = draining.n % chunk;
+  filling.Append(draining, draining.n - rest, rest);
+  if (!whole_chunks) {
+    filling.written = rest;
+  } else {
+    draining.n -= rest;
+    if (draining.n == 0) filling.written = draining.written;  // no whole chunk: as they were
+  }
+}
+
+void EventTable::Drain() {
+  const auto columns = Columns();
+  for (size_t c = 0; c < kColumns; ++c) {
+    const bool present = c < 7 || (c < 9 ? has_contact : c < 14 ? has_loads : has_compliant);
+    if (present) columns[c]->PushElems(draining.col[c].data(), draining.n);
+  }
+  draining.n = 0;
+}
+
+void EventTable::Stage(bool whole_chunks) {
+  if (!encodes_rows) {
+    Drain();
+    for (h5::Column* c : All()) c->Stage(whole_chunks);
+    return;
+  }
+  const size_t n = draining.n, chunk = static_cast<size_t>(t.chunk_rows());
+  // Nothing new: the part-filled chunk holds the rows it has in the file already.
+  if (n > draining.written) {
+    const auto columns = Columns();
+    for (h5::Column* c : columns) c->BeginStaged(first, n);
+    for (size_t k = 0; k * chunk < n; ++k)
+      for (size_t c = 0; c < kColumns; ++c)
+        columns[c]->StageChunk(k, draining.col[c].data() + k * chunk * kElem[c], std::min(chunk, n - k * chunk));
+  }
+  first += n / chunk * chunk;
+  draining.n = draining.written = 0;
+}
+
+void EventTable::Truncate(h5::Size n) {
+  for (h5::Column* c : All()) c->Truncate(n);
+  filling.n = draining.n = filling.written = draining.written = tile_n = 0;
+  encodes_rows = false;  // opened: its columns stage the rows appended to them
+  count = n;
 }
 
 void StateTable::Create(h5::Id g, h5::Size n) {
@@ -255,12 +375,16 @@ void Hdf5Store::Impl::MaybeFlush() {
   // copies of that growth cost more than the writes; and the writer thread compresses and writes
   // them while the simulation computes the next rows (a short run would otherwise leave it all to
   // Finish).
-  constexpr size_t kFlushBytes = size_t{4} << 20;
-  size_t held = 0;
-  for (h5::Column* c : Columns()) held += c->pending_bytes();
+  // The events count as pushed (EventTable::HeldBytes: the columns' rows are the writer's), the
+  // other tables' rows as buffered in their columns.
+  constexpr size_t kFlushBytes = store::EventTable::kHeldBytes;
+  size_t held = ev.HeldBytes();
+  for (h5::Column* c : OtherColumns()) held += c->pending_bytes();
   if (std::chrono::duration<double>(now - last_flush).count() >= flush_interval) {
     FlushBehind(false);
-  } else if (held >= kFlushBytes) {
+  } else if (held >= kFlushBytes || (held >= kFlushBytes / 2 && ev.RowsPastChunk() < 1024 + ev.kTile)) {
+    // From half the rows on, as soon as the events fill a chunk (this is looked at every 1024
+    // rows): few rows after it, which begin the next block (EventTable::Hand).
     FlushBehind(true);
   } else if (pending && !writer.Busy()) {
     // The writer has encoded the last flush: written now rather than at the next one.
@@ -327,6 +451,12 @@ void Hdf5Store::Impl::WriteCheckpoint(const std::optional<Checkpoint>& checkpoin
 
 std::vector<h5::Column*> Hdf5Store::Impl::Columns() {
   std::vector<h5::Column*> all = ev.All();
+  for (h5::Column* c : OtherColumns()) all.push_back(c);
+  return all;
+}
+
+std::vector<h5::Column*> Hdf5Store::Impl::OtherColumns() {
+  std::vector<h5::Column*> all;
   for (auto* t : {&sa, &se})
     for (h5::Column* c : t->All()) all.push_back(c);
   if (cells)
@@ -370,7 +500,9 @@ void Hdf5Store::Impl::WriteStagedAndMetadata(const std::optional<Checkpoint>& c,
 void Hdf5Store::Impl::Flush() {
   Sync();
   const h5::WritingScope writing;
-  for (h5::Column* c : Columns()) c->Stage();
+  ev.Hand(false);
+  ev.Stage(false);
+  for (h5::Column* c : OtherColumns()) c->Stage();
   if (last_checkpoint) checkpoint_on_disk = true;  // at the end of this flush
   WriteStagedAndMetadata(last_checkpoint, cp_events, cp_samples, cp_sections, ld ? cp_loads : kNoLoads);
   last_flush = std::chrono::steady_clock::now();
@@ -395,13 +527,15 @@ void Hdf5Store::Impl::StartWriter() {
 void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
   Sync();  // the flush before, encoded by the writer, written
   Room();   // the rows' buffers below are the run's memory, not the library's room
-  // Only the staged rows go to the writer, which encodes their whole chunks (no HDF5 call): the
-  // columns' buffers stay the simulation's, and the store's thread writes them at the next Sync.
+  // The writer encodes the staged rows' chunks (no HDF5 call), and the store's thread writes them
+  // at the next Sync. The other tables' rows are staged here: their columns' buffers stay the
+  // simulation's. The events are handed as they were pushed (EventTable::Hand): the writer splits
+  // them into their columns and stages those, which the simulation's thread does not touch.
   // The checkpoint's rows are all in the file only when every row before it is staged (a flush of
   // whole chunks may leave some buffered): it is written with the interval's flushes, which stage
   // every row.
-  std::vector<h5::Column*> columns = Columns();
-  for (h5::Column* c : columns) c->Stage(whole_chunks);
+  ev.Hand(whole_chunks);
+  for (h5::Column* c : OtherColumns()) c->Stage(whole_chunks);
   Pending p;
   if (!whole_chunks) {
     if (last_checkpoint) checkpoint_on_disk = true;
@@ -409,7 +543,8 @@ void Hdf5Store::Impl::FlushBehind(bool whole_chunks) {
     last_flush = std::chrono::steady_clock::now();
   }
   pending = std::move(p);
-  writer.Start([columns = std::move(columns)] {
+  writer.Start([this, columns = Columns(), whole_chunks] {
+    ev.Stage(whole_chunks);
     for (h5::Column* c : columns) c->EncodeStaged();
   });
 }
@@ -494,7 +629,7 @@ void Hdf5Store::OnSection(const Sample& s) {
 void Hdf5Store::OnCheckpoint(const Checkpoint& c) {
   auto& m = *impl_;
   m.last_checkpoint = c;
-  m.cp_events = m.ev.t.rows();
+  m.cp_events = m.ev.Rows();
   m.cp_samples = m.sa.t.rows();
   m.cp_sections = m.se.t.rows();
   if (m.ld) m.cp_loads = m.ld->impacts.rows();
@@ -697,7 +832,7 @@ std::unique_ptr<Hdf5Store> Hdf5Store::Continue(const std::string& path, const St
       impl->cp_samples = static_cast<h5::Size>(*h5::ReadInt(g, "samples"));
       impl->cp_sections = static_cast<h5::Size>(*h5::ReadInt(g, "sections"));
       // Rows written after the checkpoint are dropped: the run continues from it.
-      for (h5::Column* c : impl->ev.All()) c->Truncate(impl->cp_events);
+      impl->ev.Truncate(impl->cp_events);
       for (h5::Column* c : impl->sa.All()) c->Truncate(impl->cp_samples);
       for (h5::Column* c : impl->se.All()) c->Truncate(impl->cp_sections);
       // /loads (docs/loads.md §5): kept when its rows reach the checkpoint (those after it

@@ -3,6 +3,8 @@
 // contained first read and write of a given file (hdf5_probe.cpp).
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -46,6 +48,17 @@ h5::Type EventKindType();
 // (/events/impulse, energy_dissipated, stick_duration, reaction_integral, reaction_max,
 // docs/loads.md) are absent from files written before them: such a file keeps its columns. So are
 // a compliant contact phase's /events/peak_time and /events/penetration_max (docs/compliant.md).
+// A run's events reach the file in two steps (docs/output.md, "Crash safety, flushes and resume";
+// docs/performance.md). Push, in the simulation's thread, copies the event into a tile of kTile
+// rows (a few KiB, in the cache), and each full tile column by column into a block of rows
+// (`filling`, one buffer per column, written with non-temporal stores: the rows do not evict the
+// simulation's own data from the cache). Stage, in the writer thread for a flush behind the run
+// (Hdf5Store::Impl::FlushBehind) or in the store's thread for a flush it makes itself, encodes the
+// block handed to it (Hand) chunk by chunk straight from those buffers (Column::BeginStaged,
+// StageChunk). A block begins at a chunk's first row: the rows of a last, part-filled chunk begin
+// the next block too, so that the chunk is written whole once it is (and padded by a flush of
+// every row before that). A table opened from a file (a resume) appends the rows to its columns
+// instead (Drain), which stage them as a column stages its rows.
 struct EventTable {
   h5::Column t, period, offset, kind, xB, v_before, v_after, contact, simultaneous;
   h5::Column impulse, energy, stick_duration, reaction_integral, reaction_max;
@@ -53,7 +66,38 @@ struct EventTable {
   bool has_contact = false, has_loads = false, has_compliant = false;
   void Create(h5::Id g);
   void Open(h5::Id g);
-  void Push(const Event& e);
+  // The bytes of an element of each column, in the order of Columns(), and of a row.
+  static constexpr size_t kColumns = 16;
+  static constexpr size_t kElem[kColumns] = {8, 8, 8, 1, 8, 8, 8, 4, 1, 8, 8, 8, 8, 8, 8, 8};
+  static constexpr size_t kRowBytes = 110;
+  // Hdf5Store::Impl::MaybeFlush hands the rows held (HeldBytes) when they reach kHeldBytes, looking
+  // every 1024 rows: a block is allocated once with room for kBlockRows rows, never more in a run
+  // (docs/output.md, "Crash safety, flushes and resume").
+  static constexpr size_t kTile = 64;
+  static constexpr size_t kHeldBytes = size_t{4} << 20;
+  static constexpr size_t kBlockRows = kHeldBytes / kRowBytes + 1024 + kTile;
+  void Push(const Event& e) {
+    tile[tile_n++] = e;
+    ++count;
+    if (tile_n == kTile) PutTile();
+  }
+  // The table's rows: in the file, staged, in the columns or held (the store's thread only: it
+  // reads no column, which the writer thread may be filling).
+  h5::Size Rows() const { return count; }
+  size_t HeldBytes() const { return (filling.n + tile_n) * kRowBytes; }
+  // The rows held after the last whole chunk (a table made here; else 0).
+  size_t RowsPastChunk() const {
+    return encodes_rows ? (filling.n + tile_n) % static_cast<size_t>(t.chunk_rows()) : 0;
+  }
+  // Sets the rows pushed aside for Stage (the rows handed before must have been staged): with
+  // whole_chunks, those of whole chunks only.
+  void Hand(bool whole_chunks);
+  // Stages the rows handed (Hand) in every column, as Column::Stage(whole_chunks) stages a
+  // column's: in the writer thread while the run pushes the rows that follow, or in the store's
+  // thread after Hand.
+  void Stage(bool whole_chunks);
+  // Keeps the first `n` rows of the file (a resume: those up to its checkpoint); none held.
+  void Truncate(h5::Size n);
   std::vector<h5::Column*> All() {
     std::vector<h5::Column*> all{&t, &period, &offset, &kind, &xB, &v_before, &v_after};
     if (has_contact) all.insert(all.end(), {&contact, &simultaneous});
@@ -61,6 +105,30 @@ struct EventTable {
       all.insert(all.end(), {&impulse, &energy, &stick_duration, &reaction_integral, &reaction_max});
     if (has_compliant) all.insert(all.end(), {&peak_time, &penetration_max});
     return all;
+  }
+
+ private:
+  // Rows column by column: column c's elements at col[c] (kElem[c] bytes each), n of them, the
+  // first `written` of which are in the file already (in a part-filled chunk).
+  struct Block {
+    h5::Bytes col[kColumns];
+    size_t n = 0, capacity = 0, written = 0;
+    void Reserve(size_t rows);               // room for `rows`, the n kept
+    void Append(const Block& b, size_t from, size_t rows);  // rows [from, from + rows) of b
+  };
+  h5::Size count = 0;
+  Event tile[kTile];
+  size_t tile_n = 0;
+  Block filling, draining;  // the rows pushed; those handed to Stage
+  // Created here (Create): every column encodes the rows given (Column::BeginStaged); the block
+  // handed begins at row `first` of the table.
+  bool encodes_rows = false;
+  h5::Size first = 0;
+  void PutTile();    // the tile's rows into `filling`
+  void Drain();      // the rows handed, appended to the columns (a table opened)
+  std::array<h5::Column*, kColumns> Columns() {
+    return {&t, &period, &offset, &kind, &xB, &v_before, &v_after, &contact, &simultaneous, &impulse,
+            &energy, &stick_duration, &reaction_integral, &reaction_max, &peak_time, &penetration_max};
   }
 };
 
@@ -198,7 +266,8 @@ struct Hdf5Store::Impl {
   // The checkpoint `c` (none: nothing) with the row counts at it.
   void WriteCheckpoint(const std::optional<Checkpoint>& c, h5::Size n_events, h5::Size n_samples, h5::Size n_sections,
                        h5::Size n_loads);
-  std::vector<h5::Column*> Columns();
+  std::vector<h5::Column*> Columns();  // every table's, /events' first
+  std::vector<h5::Column*> OtherColumns();  // every table's but /events'
   void Close();
   void Flush();  // in the store's thread, after Sync()
  private:
