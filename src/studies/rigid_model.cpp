@@ -205,16 +205,25 @@ std::vector<std::pair<double, Eigen::VectorXd>> OrbitSamples(const System& sys, 
 
 }  // namespace
 
-RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys, const OrbitResult& orbit,
-                                           const OrbitRequest& request, const Eigen::VectorXd* start) {
+namespace {
+
+using Samples = std::vector<std::pair<double, Eigen::VectorXd>>;
+
+// The rigid orbit of CompareOrbitWithRigid without the loads: Newton from `start` (or the compliant
+// section state), the multipliers, and the distances. `compliant` holds the compliant orbit's dense
+// samples once computed (they do not depend on the start: AddRigidModelAlongBranch computes them
+// once per point for both starts).
+RigidOrbitComparison RigidOrbitBeside(const Scene& scene, const System& sys, const RigidEquivalent& rigid,
+                                      const System& rigid_sys, const OrbitResult& orbit,
+                                      const OrbitRequest& request, const Eigen::VectorXd* start,
+                                      std::optional<std::pair<bool, Samples>>& compliant) {
   RigidOrbitComparison c;
-  c.rigid = RigidModelOf(scene, sys);
+  c.rigid = rigid;
   if (orbit.status != "converged") {
     c.orbit.status = "not-converged";
     c.orbit.message = "no compliant orbit to start from";
     return c;
   }
-  const System rigid_sys(c.rigid.scene);
   const int q = orbit.period;
   Eigen::VectorXd z(2 * sys.dof());
   if (start && start->size() == z.size())
@@ -229,16 +238,19 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
     return c;
   }
   Characterize(rigid_sys, c.rigid.scene, c.orbit);
-  c.compliant_loads = OrbitLoads(sys, scene, orbit);
-  c.rigid_loads = OrbitLoads(rigid_sys, c.rigid.scene, c.orbit);
   const auto physical = [&](const Eigen::VectorXd& X) -> Eigen::VectorXd {
     return sys.physical() ? Eigen::VectorXd(sys.mode_shapes() * X) : X;
   };
   c.section_distance = (physical(orbit.X) - physical(c.orbit.X)).cwiseAbs().maxCoeff();
-  bool ok_c = false, ok_r = false;
-  const auto a = OrbitSamples(sys, scene, orbit.section_time, orbit.X, orbit.V, q, ok_c);
+  if (!compliant) {
+    bool ok = false;
+    Samples s = OrbitSamples(sys, scene, orbit.section_time, orbit.X, orbit.V, q, ok);
+    compliant.emplace(ok, std::move(s));
+  }
+  bool ok_r = false;
+  const Samples& a = compliant->second;
   const auto b = OrbitSamples(rigid_sys, c.rigid.scene, orbit.section_time, c.orbit.X, c.orbit.V, q, ok_r);
-  if (!ok_c || !ok_r || a.size() != b.size()) return c;
+  if (!compliant->first || !ok_r || a.size() != b.size()) return c;
   c.distance = 0;
   for (size_t i = 0; i < a.size(); ++i) {
     if (std::abs(a[i].first - b[i].first) > 1e-9 * (1 + std::abs(a[i].first))) return c;  // not the same instants
@@ -248,6 +260,20 @@ RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys
       c.distance_time = a[i].first;
     }
   }
+  return c;
+}
+
+}  // namespace
+
+RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys, const OrbitResult& orbit,
+                                           const OrbitRequest& request, const Eigen::VectorXd* start) {
+  const RigidEquivalent rigid = RigidModelOf(scene, sys);
+  const System rigid_sys(rigid.scene);
+  std::optional<std::pair<bool, Samples>> compliant;
+  RigidOrbitComparison c = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, start, compliant);
+  if (c.orbit.status != "converged") return c;
+  c.compliant_loads = OrbitLoads(sys, scene, orbit);
+  c.rigid_loads = OrbitLoads(rigid_sys, c.rigid.scene, c.orbit);
   return c;
 }
 
@@ -299,9 +325,14 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
     orbit.section_time = pt.section_time;
     orbit.X = pt.X;
     orbit.V = pt.V;
+    // The rigid scene and the compliant orbit's samples once for both starts; no loads (only the
+    // distance is kept along a branch).
+    const RigidEquivalent rigid = RigidModelOf(scene, sys);
+    const System rigid_sys(rigid.scene);
+    std::optional<std::pair<bool, Samples>> compliant;
     std::optional<RigidOrbitComparison> best;
     const auto consider = [&](const Eigen::VectorXd* start) {
-      RigidOrbitComparison c = CompareOrbitWithRigid(scene, sys, orbit, request, start);
+      RigidOrbitComparison c = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, start, compliant);
       if (Beside(c, pt, sys) && (!best || c.distance < best->distance)) best = std::move(c);
     };
     consider(nullptr);
