@@ -76,11 +76,14 @@ std::string RigidOrbitJson(const RigidOrbitComparison& c);
 // every point the rigid model's orbit beside the point's orbit (CompareOrbitWithRigid, the scene at
 // the point's value from `scene_at`), its largest distance in BranchPoint::rigid_distance. Beside:
 // an impact orbit with one impact per contact phase of the point's orbit on each contact, each
-// impact within its phase widened by the phase's duration on either side. Newton starts from the
-// point's section state and, from the second point on, also from the rigid orbit beside the last
-// point that had one (followed along the branch: the rigid map may have several orbits that pass,
-// and Newton from the compliant state alone may reach another one); of the orbits beside the point
-// the nearest is taken. NaN where neither start reaches one beside it (no orbit from there, or
+// impact within its phase widened by the phase's duration on either side, in time over the orbit's
+// q periods (not modulo one forcing period: the orbit's images under the one-period map, a period
+// away, have their impacts at the same forcing phases). Newton starts from the point's section
+// state and, from the second point on, also from the rigid orbit beside the last point that had one
+// (followed along the branch: the rigid map may have several orbits that pass, and Newton from the
+// compliant state alone may reach another one); an impact orbit reached that is not beside is also
+// taken at the section 1, …, q − 1 periods later (its images, fixed points of the q-period map too);
+// of the orbits beside the point the nearest is taken. NaN where neither start reaches one beside it (no orbit from there, or
 // another orbit, near a bifurcation of either model). Polls
 // `stop_requested` between points (the points not reached keep NaN). A rigid scene: nothing done.
 void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>& scene_at,

@@ -282,7 +282,13 @@ namespace {
 // Whether the rigid model's orbit of `c` is beside the branch point's orbit (rigid_model.hpp,
 // AddRigidModelAlongBranch): an impact orbit with one impact per contact phase of the point's orbit
 // on each contact, each impact inside a contact phase of its contact widened by the phase's
-// duration on either side (forcing phases compared mod 2π).
+// duration on either side. Phases are compared over the orbit's whole period (mod 2π·q, q its
+// forcing periods), not mod 2π: the orbit's images under the map of one forcing period (the same
+// closed curve met at the section one, two, … periods later, each a fixed point of the q-period map
+// too) have their impacts at the same forcing phases mod 2π, each a period away from its contact
+// phase. The rigid orbit's impact phases are the attractor's, φ = (ωt₀ mod 2π) + ω(t − t₀) mod 2π·q
+// (AttractorRecorder::Phase, the run started at the section time t₀); the contact phases' absolute
+// times are mapped the same way.
 bool Beside(const RigidOrbitComparison& c, const BranchPoint& pt, const System& sys) {
   if (c.orbit.status != "converged" || c.orbit.summary.kind != "impact-periodic" || !std::isfinite(c.distance))
     return false;
@@ -294,12 +300,14 @@ bool Beside(const RigidOrbitComparison& c, const BranchPoint& pt, const System& 
   if (phases != impacts) return false;
   const double w = sys.frequency();
   const auto& a = c.orbit.summary;
+  const double full = 2 * M_PI * static_cast<double>(a.period.value_or(c.orbit.period));
+  const double t0 = c.orbit.section_time, phase0 = std::fmod(w * t0, 2 * M_PI);
   for (size_t i = 0; i < a.impact_phases.size() && i < a.impact_contacts.size(); ++i) {
     bool inside = false;
     for (const auto& p : pt.contact_phases) {
       if (p.contact != a.impact_contacts[i]) continue;
-      const double from = w * (p.entry - p.duration), span = w * 3 * p.duration;
-      const double rel = std::remainder(a.impact_phases[i] - from - span / 2, 2 * M_PI) + span / 2;
+      const double from = phase0 + w * (p.entry - p.duration - t0), span = w * 3 * p.duration;
+      const double rel = std::remainder(a.impact_phases[i] - from - span / 2, full) + span / 2;
       inside = inside || (rel >= 0 && rel <= span);
     }
     if (!inside) return false;
@@ -333,7 +341,24 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
     std::optional<RigidOrbitComparison> best;
     const auto consider = [&](const Eigen::VectorXd* start) {
       RigidOrbitComparison c = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, start, compliant);
+      if (c.orbit.status != "converged") return;
+      // A rigid orbit not beside may be beside once met at the section a few forcing periods later:
+      // its images under the one-period map are fixed points of the q-period map too (Beside).
+      const int images = Beside(c, pt, sys) || c.orbit.summary.kind != "impact-periodic"
+                             ? 0
+                             : c.orbit.summary.period.value_or(c.orbit.period) - 1;
+      Eigen::VectorXd X = c.orbit.X, V = c.orbit.V;
       if (Beside(c, pt, sys) && (!best || c.distance < best->distance)) best = std::move(c);
+      for (int k = 0; k < images; ++k) {
+        const MapValue m = StroboscopicMap(rigid_sys, rigid.scene, orbit.section_time, X, V, 1);
+        if (m.status != RunStatus::kOk) return;
+        X = m.X;
+        V = m.V;
+        Eigen::VectorXd z(2 * sys.dof());
+        z << X, V;
+        RigidOrbitComparison image = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, &z, compliant);
+        if (Beside(image, pt, sys) && (!best || image.distance < best->distance)) best = std::move(image);
+      }
     };
     consider(nullptr);
     if (followed) consider(&*followed);
