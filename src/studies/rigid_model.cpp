@@ -263,6 +263,29 @@ RigidOrbitComparison RigidOrbitBeside(const Scene& scene, const System& sys, con
   return c;
 }
 
+// The images of the rigid orbit of `c` (an impact orbit of its own period p forcing periods): the
+// same closed curve met at the section 1, …, p − 1 periods later, each a fixed point of the
+// q-period map too, as comparisons with the compliant orbit (`image(comparison)`). They have
+// their impacts at the same forcing phases mod 2π, so Newton from the compliant section state may
+// reach any of them; the one beside the compliant orbit is the one to compare with.
+template <class Fn>
+void ForEachImage(const RigidOrbitComparison& c, const Scene& scene, const System& sys, const System& rigid_sys,
+                  const OrbitResult& orbit, const OrbitRequest& request,
+                  std::optional<std::pair<bool, Samples>>& compliant, const Fn& image) {
+  if (c.orbit.status != "converged" || c.orbit.summary.kind != "impact-periodic") return;
+  const int p = c.orbit.summary.period.value_or(c.orbit.period);
+  Eigen::VectorXd X = c.orbit.X, V = c.orbit.V;
+  for (int k = 1; k < p; ++k) {
+    const MapValue m = StroboscopicMap(rigid_sys, c.rigid.scene, orbit.section_time, X, V, 1);
+    if (m.status != RunStatus::kOk) return;
+    X = m.X;
+    V = m.V;
+    Eigen::VectorXd z(2 * sys.dof());
+    z << X, V;
+    image(RigidOrbitBeside(scene, sys, c.rigid, rigid_sys, orbit, request, &z, compliant));
+  }
+}
+
 }  // namespace
 
 RigidOrbitComparison CompareOrbitWithRigid(const Scene& scene, const System& sys, const OrbitResult& orbit,
@@ -343,22 +366,15 @@ void AddRigidModelAlongBranch(Branch& branch, const std::function<Scene(double)>
       RigidOrbitComparison c = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, start, compliant);
       if (c.orbit.status != "converged") return;
       // A rigid orbit not beside may be beside once met at the section a few forcing periods later:
-      // its images under the one-period map are fixed points of the q-period map too (Beside).
-      const int images = Beside(c, pt, sys) || c.orbit.summary.kind != "impact-periodic"
-                             ? 0
-                             : c.orbit.summary.period.value_or(c.orbit.period) - 1;
-      Eigen::VectorXd X = c.orbit.X, V = c.orbit.V;
-      if (Beside(c, pt, sys) && (!best || c.distance < best->distance)) best = std::move(c);
-      for (int k = 0; k < images; ++k) {
-        const MapValue m = StroboscopicMap(rigid_sys, rigid.scene, orbit.section_time, X, V, 1);
-        if (m.status != RunStatus::kOk) return;
-        X = m.X;
-        V = m.V;
-        Eigen::VectorXd z(2 * sys.dof());
-        z << X, V;
-        RigidOrbitComparison image = RigidOrbitBeside(scene, sys, rigid, rigid_sys, orbit, request, &z, compliant);
-        if (Beside(image, pt, sys) && (!best || image.distance < best->distance)) best = std::move(image);
+      // its images are fixed points of the q-period map too (Beside).
+      const auto take = [&](RigidOrbitComparison r) {
+        if (Beside(r, pt, sys) && (!best || r.distance < best->distance)) best = std::move(r);
+      };
+      if (Beside(c, pt, sys)) {
+        take(std::move(c));
+        return;
       }
+      ForEachImage(c, scene, sys, rigid_sys, orbit, request, compliant, take);
     };
     consider(nullptr);
     if (followed) consider(&*followed);
