@@ -291,5 +291,11 @@ struct MapValue {
 };
 MapValue StroboscopicMap(const System& system, const Scene& scene, double t0,
                          const Eigen::VectorXd& X, const Eigen::VectorXd& V, int q, int piece = 0);
+// The flow over half of q periods (q odd), from (X, V) at t0 to t0 + qT/2, with its derivative:
+// for a mirror-symmetric model (mirror_symmetry.hpp) a symmetric orbit is a fixed point of
+// z ↦ −Φ_{qT/2}(z), whose half period holds one impact of each mirror pair (docs/orbits.md,
+// "Through a grazing").
+MapValue HalfPeriodFlow(const System& system, const Scene& scene, double t0, const Eigen::VectorXd& X,
+                        const Eigen::VectorXd& V, int q);
 
 }  // namespace vibro

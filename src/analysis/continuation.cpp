@@ -105,6 +105,22 @@ class Problem {
     return out;
   }
 
+  // The half map H(z; λ) = −Φ_{qT/2}(z) of a mirror-symmetric model (q odd), with its derivative:
+  // F = H∘H, and a symmetric orbit is a fixed point of H (docs/orbits.md, "Through a grazing").
+  // Double precision only (no switch to quad).
+  std::optional<Eigen::VectorXd> HalfMap(const Eigen::VectorXd& z, double lambda, Eigen::MatrixXd* jac) const {
+    const auto scene = SceneAt(lambda);
+    if (!scene) return std::nullopt;
+    const System sys(*scene);
+    const auto n = sys.dof();
+    const MapValue m = HalfPeriodFlow(sys, *scene, SectionTime(*scene), z.head(n), z.tail(n), q_);
+    if (m.status != RunStatus::kOk || m.singular || (jac && !m.undefined.empty())) return std::nullopt;
+    if (jac) *jac = -m.jacobian;
+    Eigen::VectorXd out(2 * n);
+    out << -m.X, -m.V;
+    return out;
+  }
+
   Evaluation Evaluate(const Eigen::VectorXd& z, double lambda) const {
     Evaluation e;
     Eigen::MatrixXd DF;
@@ -500,25 +516,48 @@ double Slowest(const std::vector<BranchPoint::Impact>& impacts) {
 // the scale of the corrections. The solution's λ falls on whichever side of the grazing the orbit
 // exists. A step that loses the new impact is halved until it keeps it. ∂/∂λ and ∇v² by central
 // differences with steps far below the depth's scale.
+//
+// `half`: a symmetric orbit of a mirror-symmetric model, solved as a fixed point of the half map
+// H = −Φ_{qT/2} (Problem::HalfMap) instead of F = H∘H. Its new impacts come in mirror pairs, one
+// in each half period, equally slow: F has the square-root term of both, and holding one speed
+// leaves the other's, on which Newton stalls (the tube's four-impact orbit next to ω = 0.569366,
+// at speeds near 1e-4). H has one slow impact, the one held: the impact is the slowest of the
+// seed's first half period.
 std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, double lambda, double v_t, size_t more,
-                                       const std::function<bool()>& stop) {
+                                       const std::function<bool()>& stop, bool half = false) {
   const auto N = z.size();
-  // The new impact: the slowest of the seed's period, followed by its contact and phase (another
-  // new impact, e.g. the mirror one of a symmetric orbit, may be as slow: v as the slowest of
-  // both would have a kink).
+  const auto map = [&](const Eigen::VectorXd& zz, double l, Eigen::MatrixXd* jac) {
+    return half ? p.HalfMap(zz, l, jac) : p.Map(zz, l, jac);
+  };
+  // The new impact: the slowest of the seed's period (half period), followed by its contact and
+  // phase (another new impact, e.g. the mirror one of a symmetric orbit, may be as slow: v as the
+  // slowest of both would have a kink).
   const auto first = ImpactsAt(p, z, lambda);
-  if (!first || first->size() < more) return std::nullopt;
-  const auto slowest = std::min_element(first->begin(), first->end(), [](const auto& a, const auto& b) {
-    return std::abs(a.v_before) < std::abs(b.v_before);
-  });
+  if (!first || (!half && first->size() < more)) return std::nullopt;
+  const double cycle = 2.0 * M_PI * p.period();
+  const auto in_first_half = [&](const BranchPoint::Impact& i) {
+    const double offset = std::fmod(std::fmod(i.phase - p.phase(), cycle) + cycle, cycle);
+    return offset < 0.5 * cycle;
+  };
+  auto slowest = first->end();
+  for (auto it = first->begin(); it != first->end(); ++it)
+    if ((!half || in_first_half(*it)) &&
+        (slowest == first->end() || std::abs(it->v_before) < std::abs(slowest->v_before)))
+      slowest = it;
+  if (slowest == first->end()) return std::nullopt;
   const int contact = slowest->contact;
-  const double phase = slowest->phase, cycle = 2.0 * M_PI * p.period();
+  const double phase = slowest->phase;
   const auto speed2 = [&](const Eigen::VectorXd& zz, double l) -> std::optional<double> {
     const auto imp = ImpactsAt(p, zz, l);
-    if (!imp || imp->size() < more) return std::nullopt;
+    if (!imp) return std::nullopt;
+    // On the half map only the first half period is solved for: its impacts (half of the orbit's)
+    // must all be there; the second half's follow once the iterate is symmetric.
+    if (half ? static_cast<size_t>(std::count_if(imp->begin(), imp->end(), in_first_half)) < (more + 1) / 2
+             : imp->size() < more)
+      return std::nullopt;
     double best = std::numeric_limits<double>::infinity(), v = 0;
     for (const auto& i : *imp) {
-      if (i.contact != contact) continue;
+      if (i.contact != contact || (half && !in_first_half(i))) continue;
       const double d = std::abs(std::remainder(i.phase - phase, cycle));
       if (d < best) {
         best = d;
@@ -532,7 +571,7 @@ std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, doub
   for (int it = 0; it < 40; ++it) {
     if (stop()) return std::nullopt;
     Eigen::MatrixXd DF;
-    const auto F = p.Map(z, lambda, &DF);
+    const auto F = map(z, lambda, &DF);
     const auto v2 = speed2(z, lambda);
     if (!F || !v2) return std::nullopt;
     const Eigen::VectorXd G = *F - z;
@@ -571,7 +610,7 @@ std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, doub
       vp = speed2(z, lambda + hl);
       vm = speed2(z, lambda - hl);
     }
-    const auto Fp = p.Map(z, lambda + hl, nullptr), Fm = p.Map(z, lambda - hl, nullptr);
+    const auto Fp = map(z, lambda + hl, nullptr), Fm = map(z, lambda - hl, nullptr);
     if (!Fp || !Fm || !vp || !vm) return std::nullopt;
     J.topRightCorner(N, 1) = (*Fp - *Fm) / (2 * hl);
     J(N, N) = (*vp - *vm) / (2 * hl);
@@ -596,7 +635,7 @@ std::optional<Point> NewtonOnNewImpact(const Problem& p, Eigen::VectorXd z, doub
     // Backtracking on the residual (the speed's in speed units: (v² − v_t²)/2v_t): a full step
     // leaves the depth's scale when the seed is not yet close.
     const auto merit = [&](const Eigen::VectorXd& zz, double l) -> std::optional<double> {
-      const auto FF = p.Map(zz, l, nullptr);
+      const auto FF = map(zz, l, nullptr);
       const auto vv = speed2(zz, l);
       if (!FF || !vv) return std::nullopt;
       return std::hypot((*FF - zz).norm(), (*vv - v_t * v_t) / (2 * v_t));
@@ -713,6 +752,10 @@ struct GrazingApproach {
   double scale = 1;            // the contact's largest speed (the probe's scale)
   double value = 0, bracket = 0;
   bool located = false;  // the last speed is below kGrazingTolerance·scale and λ_g is fitted
+  // The orbit is symmetric in a mirror-symmetric model and its slowest impacts are a mirror pair
+  // (contacts `contacts`), dying out together: marched on the half map (NewtonOnNewImpact, `half`).
+  bool mirrored = false;
+  std::vector<int> contacts;
 };
 GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::function<bool()>& stop) {
   GrazingApproach a;
@@ -723,6 +766,27 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
   if (!(v0 > 0) || !(from.probe.impact_speed > 0) || !std::isfinite(from.probe.impact_speed)) return a;
   a.scale = v0 / from.probe.impact_speed;
   const size_t more = imp->size();
+  // A symmetric orbit (H(z) = z within 1e-9 of its scale) of a mirror-symmetric model, q odd, whose
+  // slowest impact's mirror image (the image contact, half a period later) is as slow (1e-6).
+  if (p.period() % 2 == 1) {
+    const auto scene = p.SceneAt(from.y[n2]);
+    const auto image = scene ? MirrorImage(System(*scene)) : std::nullopt;
+    const auto h = image ? p.HalfMap(from.y.head(n2), from.y[n2], nullptr) : std::nullopt;
+    if (h && (*h - from.y.head(n2)).cwiseAbs().maxCoeff() < 1e-9 * (1.0 + from.y.head(n2).cwiseAbs().maxCoeff())) {
+      const double cycle = 2.0 * M_PI * p.period();
+      for (const auto& i : *imp) {
+        if (std::abs(std::abs(i.v_before) - v0) > 1e-12 * a.scale) continue;
+        for (const auto& k : *imp)
+          if (k.contact == (*image)[static_cast<size_t>(i.contact)] &&
+              std::abs(std::remainder(k.phase - i.phase - 0.5 * cycle, cycle)) < 1e-6 &&
+              std::abs(std::abs(k.v_before) - v0) < 1e-6 * std::max(v0, 1e-3 * a.scale)) {
+            a.mirrored = true;
+            a.contacts = {std::min(i.contact, k.contact), std::max(i.contact, k.contact)};
+          }
+        if (a.mirrored) break;
+      }
+    }
+  }
   std::vector<Eigen::VectorXd> ys = {from.y};
   std::vector<double> vs = {v0};
   // Each step divides the speed by 4; a step whose Newton fails is retried dividing it by 2, then
@@ -744,8 +808,22 @@ GrazingApproach ApproachGrazing(const Problem& p, const Point& from, const std::
           ((v_t - a0) * (v_t - a2) / ((a1 - a0) * (a1 - a2))) * ys[j - 1] +
           ((v_t - a0) * (v_t - a1) / ((a2 - a0) * (a2 - a1))) * ys[j];
     }
-    auto pt = NewtonOnNewImpact(p, y.head(n2), y[n2], v_t, more, stop);
-    const auto pi = pt && SameFamily(from, *pt) ? ImpactsAt(p, pt->y.head(n2), pt->y[n2]) : std::nullopt;
+    auto pt = NewtonOnNewImpact(p, y.head(n2), y[n2], v_t, more, stop, a.mirrored);
+    // On the half map the orbit is judged by its first half period (its slow impact held there,
+    // the same count as the seed's): at speeds near 1e-5 of the scale the mirror impact's depth,
+    // ∝ v², is below the rounding of a full period's simulation (DF ∝ 1/v), which may lose it.
+    const auto first_half = [&](const std::vector<BranchPoint::Impact>& all) {
+      const double cycle = 2.0 * M_PI * p.period();
+      std::vector<BranchPoint::Impact> h;
+      for (const auto& i : all)
+        if (std::fmod(std::fmod(i.phase - p.phase(), cycle) + cycle, cycle) < 0.5 * cycle) h.push_back(i);
+      return h;
+    };
+    auto pi = pt && (a.mirrored || SameFamily(from, *pt)) ? ImpactsAt(p, pt->y.head(n2), pt->y[n2]) : std::nullopt;
+    if (pi && a.mirrored) {
+      pi = first_half(*pi);
+      if (pi->size() != first_half(*imp).size()) pi.reset();
+    }
     if (!pi || !(Slowest(*pi) < vs.back())) {
       if (factor > 0.7) break;
       factor = std::sqrt(factor);
@@ -1403,7 +1481,9 @@ Branch Continue(const ContinuationRequest& req) {
       break;
     }
     if (stop_requested()) return 0;
-    for (const auto& pt : a.points) record(pt);
+    // (a march on the half map: only its orbits whose full period has the branch's events)
+    for (const auto& pt : a.points)
+      if (SameFamily(from, pt)) record(pt);
     const double v_last = a.speeds.back();
     const int c = m > 1 ? from.probe.at.impact_speed : -1;
     Bifurcation g{"grazing", lg, "", a.bracket, c};
@@ -1414,7 +1494,14 @@ Branch Continue(const ContinuationRequest& req) {
     g.through = !after ? "" : side == toward ? "past" : "back";
     g.new_impact_speed = v_last;
     g.new_impact_distance = std::abs(d_last);
-    const std::string on = m > 1 ? fmt::format(" on contact {}", c) : "";
+    // A mirror pair of slow impacts dying out together: both contacts named.
+    const std::string on =
+        a.mirrored ? fmt::format("s on contacts {} and {} (a mirror pair half a period apart, equally slow: the orbit "
+                                 "is symmetric under x ↦ −x, t ↦ t + T/2, and is followed on the half map "
+                                 "z ↦ −Φ_{{T/2}}(z), one slow impact per half period)",
+                                 a.contacts[0], a.contacts[1])
+        : m > 1 ? fmt::format(" on contact {}", c)
+                : "";
     const std::string change =
         after ? fmt::format("events per period {} → {}{}", g.events_before,
                             g.events_after.empty() ? "(none: a free orbit)" : g.events_after,
@@ -1422,15 +1509,17 @@ Branch Continue(const ContinuationRequest& req) {
               : fmt::format("events per period {}{}", g.events_before,
                             m > 1 ? fmt::format("; contact sequence {}", g.sequence_before) : "");
     g.detail = fmt::format(
-        "the slowest impact{} dies out: followed by its speed, it falls to {:.2e} ({:.1e} of the contact's "
+        "the slowest impact{} {}: followed by {} speed, {} to {:.2e} ({:.1e} of the contact's "
         "largest speed; grazing tolerance {:.0e}) at {:.1e} from here, where λ against that speed extrapolates "
         "to 0 ({} orbits from speed {:.2e}); {}; {}",
-        on, v_last, v_last / a.scale, kGrazingTolerance, std::abs(d_last), a.points.size(), a.speeds.front(), change,
-        !after ? fmt::format("no orbit without it is found at λ_g ± {:.1e}: the orbit does not go on", delta)
-        : fmt::format("the branch {} along the orbit without it (its closest approach to the stop {:.2e} at {:.1e} "
+        on, a.mirrored ? "die out together" : "dies out", a.mirrored ? "their" : "its",
+        a.mirrored ? "they fall" : "it falls", v_last, v_last / a.scale, kGrazingTolerance, std::abs(d_last), a.points.size(), a.speeds.front(), change,
+        !after ? fmt::format("no orbit without {} is found at λ_g ± {:.1e}: the orbit does not go on",
+                             a.mirrored ? "them" : "it", delta)
+        : fmt::format("the branch {} along the orbit without {} (its closest approach to the stop {:.2e} at {:.1e} "
                       "from the grazing, {:.2e} at {:.1e}: linear in the distance)",
                       g.through == "past" ? "goes on past it" : "turns back (a grazing fold: both orbits exist on this side)",
-                      gap1, delta, gap2, 2.0 * delta));
+                      a.mirrored ? "them" : "it", gap1, delta, gap2, 2.0 * delta));
     br.bifurcations.push_back(g);
     transition.reset();
     if (!after) {

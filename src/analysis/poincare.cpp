@@ -1085,6 +1085,26 @@ MapValue StroboscopicMap(const System& sys, const Scene& scene, double t0, const
   return v;
 }
 
+MapValue HalfPeriodFlow(const System& sys, const Scene& scene, double t0, const Eigen::VectorXd& X,
+                        const Eigen::VectorXd& V, int q) {
+  // Periods counted from t0 − T/2 (the start half way into period 0): (q + 1)/2 of them end at
+  // t0 + qT/2.
+  const double T = 2.0 * M_PI / sys.frequency();
+  Scene sc = scene;
+  sc.run.periods = (q + 1) / 2;
+  sc.run.samples_per_period = 0;
+  const InitialOverride init{t0, X, V};
+  TangentTracker tracker(sys);
+  SimulationOptions opt;
+  opt.initial = &init;
+  opt.section_origin = t0 - 0.5 * T;
+  opt.observers = {&tracker};
+  opt.loads = false;
+  opt.max_segments = kMapSegmentsPerPeriod * sc.run.periods;
+  const RunResult r = Simulate(sys, sc, opt);
+  return MapValue{r.X, r.V, tracker.jacobian(), tracker.singular(), tracker.undefined(), r.status, tracker.corner()};
+}
+
 namespace {
 
 // Whether a run of `scene` left undetermined by double can be redone in quad: the exact engine.

@@ -25,8 +25,9 @@ Checked:
 - the branch ends at the point where the corrector gives out, saying that the corrector converges
   only to another orbit there, and that other orbit (named at its omega) is, by the independent map,
   an orbit with two impacts per period: a different orbit, not the branch's.
-- the same near the lower grazing (0.569366): the branch from omega = 0.52 ends at 0.5704 naming the
-  two-impact orbit, with no `non-smooth` point, its points four-impact orbits of the map.
+- near the lower grazing (0.569366): the branch from omega = 0.52 keeps its four-impact orbit, with
+  no `non-smooth` point and no jump, down to its grazing, where it turns back onto the two-impact
+  orbit (test_double_grazing.py).
 The old build fails all three (points 19 on are two-impact orbits, |d omega| = 0.0167; the branch
 from 0.52 goes on along the two-impact orbit past a `non-smooth` point at 0.57040).
 """
@@ -165,19 +166,25 @@ def branch(tmp_path_factory):
     return d, b
 
 
-def test_one_family_up_to_the_end(branch):
+def test_one_family_up_to_the_grazing(branch):
     d, b = branch
-    seqs = {s.decode() if isinstance(s, bytes) else s for s in b["sequence"]}
-    assert seqs == {"0:impact*2 1:impact*2"}, seqs
-    assert np.abs(np.diff(b["value"])).max() < 1e-2, np.abs(np.diff(b["value"])).max()
-    # The end: where the corrector gives out, with the other orbit named, not joined.
-    end = d["end"]
-    assert "another orbit" in end, end
-    assert abs(b["value"][-1] - 0.412898470) < 1e-6, b["value"][-1]
+    seqs = [s.decode() if isinstance(s, bytes) else s for s in b["sequence"]]
+    # The four-impact orbit down to its grazing at 0.41277 (its two slow impacts dying out together,
+    # located on the half map: test_double_grazing.py), where the branch turns back onto the
+    # two-impact orbit: no jump, no end at 0.41289847 any more.
+    k = seqs.index("0:impact 1:impact")
+    assert set(seqs[:k]) == {"0:impact*2 1:impact*2"}, set(seqs[:k])
+    assert np.abs(np.diff(b["value"][:k + 1])).max() < 1e-2, np.abs(np.diff(b["value"][:k + 1])).max()
+    assert "another orbit" not in d["end"], d["end"]
+    changes = [x for x in d["bifurcations"] if x.get("sequence_before")]
+    g = changes[0]
+    assert g["kind"] == "grazing" and abs(g["value"] - 0.41277) < 1e-4, g
+    assert (g["sequence_before"], g["sequence_after"], g["through"]) == ("0:impact*2 1:impact*2", "0:impact 1:impact", "back")
     # The independent map: the first point, a few on the way down the unstable side, and the last
-    # four (|mu| up to 1.4e3) are its fixed points with vibro's four impacts.
-    n = len(b["value"])
-    for i in sorted({0, n // 3, 2 * n // 3, n - 4, n - 3, n - 2, n - 1}):
+    # four at least 1.2e-4 above the grazing (|mu| up to 1.4e3; closer, the slow impacts' dips are
+    # below its grid) are its fixed points with vibro's four impacts.
+    late = [i for i in range(k) if b["value"][i] - g["value"] > 1.2e-4][-4:]
+    for i in sorted({0, k // 3, 2 * k // 3, *late}):
         om, t0 = float(b["value"][i]), float(b["section_time"][i])
         tube = Tube(om)
         z = np.concatenate([b["q"][i], b["q_dot"][i]])
@@ -195,16 +202,18 @@ def test_one_family_up_to_the_end(branch):
             assert abs(abs(speed[m]) - abs(v)) < 1e-7 * max(1.0, b["max_multiplier"][i]), (i, j, speed[m], v)
 
 
-def test_the_other_orbit_is_a_two_impact_one(branch):
-    # The orbit the corrector converged to instead, at the omega the end names, is by the independent
-    # map the symmetric two-impact orbit: the attractor from rest at omega = 0.43 (where the old
-    # branch landed), followed down to that omega by Newton in steps of 2.5e-3 (natural parameter),
-    # two impacts per period, one on each stop, all the way.
+def test_past_the_grazing_the_two_impact_orbit(branch):
+    # The orbit the branch turns back onto is, by the independent map, the symmetric two-impact
+    # orbit: the attractor from rest at omega = 0.43 (where the old branch jumped to), followed down
+    # by Newton in steps of 2.5e-3 (natural parameter), two impacts per period, one on each stop, all
+    # the way, has at a two-impact point of the branch (1e-3 past the grazing) vibro's speeds there.
     d, b = branch
-    m = re.search(r"another orbit \((\S+ \S+) at λ = ([0-9.]+)", d["end"])
-    assert m, d["end"]
-    assert m.group(1) == "0:impact 1:impact", m.group(1)
-    target = float(m.group(2))
+    seqs = [s.decode() if isinstance(s, bytes) else s for s in b["sequence"]]
+    g = [x for x in d["bifurcations"] if x.get("sequence_before")][0]["value"]
+    # 1e-3 past the grazing at least: closer, the flight's closest approach to the stop (1.6e-6 at
+    # 1.2e-7) is below what the map's grid resolves.
+    k = next(i for i, s in enumerate(seqs) if s == "0:impact 1:impact" and b["value"][i] - g > 1e-3)
+    target = float(b["value"][k])
     tube = Tube(0.43)
     z = np.zeros(4)
     for _ in range(200):
@@ -215,32 +224,41 @@ def test_the_other_orbit_is_a_two_impact_one(branch):
         events = []
         assert np.abs(tube.period_map(z, 0.0, events) - z).max() < 1e-11, om
         assert len(events) == 2 and {e[0] for e in events} == {0, 1}, (om, events)
-    # and it is not the branch's last orbit (four impacts, at another omega).
-    assert abs(target - b["value"][-1]) > 1e-5
+    o = b["impact_offsets"][k:k + 2]
+    assert o[1] - o[0] == 2
+    mine = sorted(abs(e[2]) for e in events)
+    theirs = sorted(abs(v) for v in b["impact_v_before"][o[0]:o[1]])
+    assert np.allclose(mine, theirs, rtol=0, atol=1e-7), (mine, theirs)
 
 
-def test_four_impact_branch_from_0_52_ends_short_of_its_grazing_without_joining(tmp_path):
-    # The same at the lower grazing (omega_g = 0.569366, where the four-impact orbit's two slow
+def test_four_impact_branch_from_0_52_reaches_its_grazing_without_jumping(tmp_path):
+    # The same near the lower grazing (omega_g = 0.569366, where the four-impact orbit's two slow
     # impacts die out together): continued from its attractor at omega = 0.52, up round its fold at
-    # 0.6179 and back down, the branch ends where its corrector gives out (omega = 0.5704) and
-    # names the two-impact orbit found instead; before, the step over that point joined that orbit
-    # (a `non-smooth` point I0I0I1I1 -> I0I1) and the branch went on along it. Points of the
-    # branch are fixed points of the independent map with four impacts.
+    # 0.6179 and back down, the branch keeps the four-impact orbit, with no `non-smooth` point and
+    # no jump, down to the grazing, where it turns back onto the two-impact orbit (located on the
+    # half map: tests/python/test_double_grazing.py). Before 582649f the step over omega = 0.5704
+    # joined the two-impact orbit there (a `non-smooth` point I0I0I1I1 -> I0I1); at 582649f the
+    # branch ended at 0.5704 ("another orbit"). Points of the branch before the grazing are fixed
+    # points of the independent map with four impacts.
     out = tmp_path / "b.h5"
     p = vibro("continue", TUBE, "--set", f"{KEY}=0.52", "--param", KEY, "--to", 1.6, "--json", "--out", out)
     d = json.loads(p.stdout)
-    assert {pt["sequence"] for pt in d["points"]} == {"0:impact*2 1:impact*2"}
-    assert "another orbit (0:impact 1:impact" in d["end"], d["end"]
-    assert abs(d["points"][-1]["value"] - 0.5704) < 1e-3, d["points"][-1]["value"]
+    assert "another orbit" not in d["end"], d["end"]
     assert not [b for b in d["bifurcations"] if b["kind"] == "non-smooth"], d["bifurcations"]
+    changes = [b for b in d["bifurcations"] if b.get("sequence_before")]
+    assert changes and changes[0]["kind"] == "grazing" and abs(changes[0]["value"] - 0.569366335) < 1e-8, changes
+    assert (changes[0]["sequence_before"], changes[0]["sequence_after"]) == ("0:impact*2 1:impact*2", "0:impact 1:impact")
+    seqs = [pt["sequence"] for pt in d["points"]]
+    k = seqs.index("0:impact 1:impact")
+    assert set(seqs[:k]) == {"0:impact*2 1:impact*2"}
     with h5py.File(out, "r") as f:
         g = f["branch"]
         value, q, qd, ts, mm = (g["value"][:], g["q"][:], g["q_dot"][:], g["section_time"][:],
                                 g["max_multiplier"][:])
-    for i in (len(value) // 2, len(value) - 1):
+    for i in (k // 2, k - 7):  # k - 7: 1.3e-3 above the grazing (the numpy grid resolves its slow impacts)
         tube = Tube(float(value[i]))
         z = np.concatenate([q[i], qd[i]])
         events = []
         res = np.abs(tube.period_map(z, float(ts[i]), events) - z).max() / (1 + np.abs(z).max())
         assert res < 1e-9 * max(1.0, mm[i]), (value[i], res)
-        assert len(events) == 4, events
+        assert len(events) == 4, (value[i], events)

@@ -21,8 +21,9 @@ free flight of one DOF in mpmath (40 digits) and nothing of vibro:
     on the branch's strobe; only not-periodic attractors are uncovered (grouped into windows, the
     same in the JSON and the HDF5 file): the period-7 and period-9 attractors at 1.04 and 1.56
     too, which the former default cap of 24 branches, spent in the order branches were found, left
-    out; the period-1 orbit at omega = 0.44 on its branch is the one of the exact flow written here
-    (numpy, closed form between impacts, Newton on the period map), to 1e-9.
+    out; the period-1 orbit of the branch covering omega = 0.44, at its point nearest 0.44 and
+    continued from there to 0.44 itself (`vibro orbit`), is the one of the exact flow written here at
+    the same omega (numpy, closed form between impacts, Newton on the period map), to 1e-9.
 (c) bad input: exit 2 with a located message and nothing written; a cap too small: what it left out
     is named (the seeds and switches not followed, the attractors uncovered because of it); the
     defaults of `vibro diagram` (its --help) and of Python's vibro.diagram are the same;
@@ -543,19 +544,28 @@ def tube_orbit(om, f=0.3, zeta=0.02, r=0.7, gap=0.1):
 
 def test_tube_period_one_at_0_44_matches_independent_orbit(tube):
     # The sweep's period-1 attractor at omega = 0.44 (no branch held it before every periodic
-    # attractor was seeded: its seed's branch was taken for branch 0's, which reaches 0.43 only):
-    # the covering branch's orbit there is the one computed here, to 1e-9.
+    # attractor was seeded: its seed's branch was taken for branch 0's, which reaches 0.43 only) lies
+    # on a stable branch. The branch's points are where its continuation stepped (since the half-map
+    # march took branch 0 through its double grazing at 0.41277, the covering branch's nearest point
+    # is 0.43476, not 0.44), so the test checks vibro's orbit twice against the flow written here:
+    # (1) the covering branch's point nearest 0.44, against the independent orbit at that point's own
+    #     omega: its stroboscopic state, impacts (phases, speeds) to 1e-9, multipliers to 1e-6;
+    # (2) vibro's orbit at exactly omega = 0.44, continued from that point by `vibro orbit
+    #     --transient 0` (Newton from the point's state, at the point's forcing phase), against the
+    #     independent orbit at 0.44: the same impacts and multipliers, stable, period 1.
     d, out = tube
     om = 0.4 + 0.04  # the sweep's value, as the sweep steps it
     hits = [c for c in d["coverage"] if abs(c["value"] - om) < 1e-12 and c["source"] != "search"]
     assert len(hits) == 2 and all(c["branch"] is not None and c["distance"] <= 1e-3 for c in hits), hits
     k = hits[0]["branch"]
-    z, events, mult = tube_orbit(om)
+    assert hits[1]["branch"] == k, hits
     with h5py.File(out, "r") as f:
         g = f["diagram/branches/%03d/branch" % k]
+        assert g.attrs["period"] == 1
         value = g["value"][:]
         i = int(np.argmin(np.abs(value - om)))
-        assert abs(value[i] - om) < 1e-12, value[i]
+        # Within one step of the sweep's value, on the stable stretch that covers it.
+        assert abs(value[i] - om) < 1e-2, value[i]
         assert g["stable"][i]
         strobe = g["strobe"][i]
         o = g["impact_offsets"][i:i + 2]
@@ -563,19 +573,40 @@ def test_tube_period_one_at_0_44_matches_independent_orbit(tube):
         speed = g["impact_v_before"][o[0]:o[1]]
         contact = g["impact_contact"][o[0]:o[1]]
         mu = g["multipliers"][i]
-    # strobe: q1 at t = 0 mod T, for both contacts (both on DOF 1)
-    assert np.abs(strobe - z[1]).max() < 1e-9, (strobe, z[1])
-    assert len(phase) == len(events) == 2
-    for j, ph, v in events:
-        (m,) = np.nonzero(contact == j)[0]
-        assert abs((phase[m] - ph + np.pi) % (2 * np.pi) - np.pi) < 1e-9, (j, phase[m], ph)
-        assert abs(speed[m] - v) < 1e-9, (j, speed[m], v)
-    # The multipliers (with the saltation at each impact), against the central-difference Jacobian
-    # of the period map here: each of one set next to one of the other.
-    mine = mu[:, 0] + 1j * mu[:, 1]
-    assert len(mine) == len(mult)
-    for a, b in ((mine, mult), (mult, mine)):
-        assert max(np.abs(b - x).min() for x in a) < 1e-6, (mine, mult)
+        q, q_dot, t0 = g["q"][i], g["q_dot"][i], float(g["section_time"][i])
+
+    def same_orbit(phase, speed, contact, mine, om_, strobe=None):
+        z, events, mult = tube_orbit(om_)
+        if strobe is not None:
+            # strobe: q1 at t = 0 mod T, for both contacts (both on DOF 1)
+            assert np.abs(strobe - z[1]).max() < 1e-9, (om_, strobe, z[1])
+        assert len(phase) == len(events) == 2, (om_, phase, events)
+        for j, ph, v in events:
+            (m,) = np.nonzero(contact == j)[0]
+            assert abs((phase[m] - ph + np.pi) % (2 * np.pi) - np.pi) < 1e-9, (om_, j, phase[m], ph)
+            assert abs(speed[m] - v) < 1e-9, (om_, j, speed[m], v)
+        # The multipliers (with the saltation at each impact), against the central-difference
+        # Jacobian of the period map here: each of one set next to one of the other.
+        assert len(mine) == len(mult)
+        for a, b in ((mine, mult), (mult, mine)):
+            assert max(np.abs(b - x).min() for x in a) < 1e-6, (om_, mine, mult)
+
+    # (1) the branch's own point
+    same_orbit(phase, speed, contact, mu[:, 0] + 1j * mu[:, 1], float(value[i]), strobe)
+    # (2) at exactly 0.44, from that point: its state at its section time t0, the forcing phase
+    # value[i] * t0 kept (initial.time = value[i] * t0 / 0.44).
+    fmt = lambda x: "[%s]" % ", ".join(repr(float(v)) for v in x)  # noqa: E731
+    p = vibro("orbit", os.path.join(SCENES, "tube_loose_support.toml"), "--set", "excitation.frequency=%r" % om,
+              "--set", "initial.displacement=" + fmt(q), "--set", "initial.velocity=" + fmt(q_dot),
+              "--set", "initial.time=%r" % (float(value[i]) * t0 / om), "--transient", 0, "--json")
+    r = json.loads(p.stdout)
+    assert r["status"] == "converged" and r["period"] == 1 and r["stable"], r["message"]
+    assert r["sequence"] == "0:impact 1:impact", r["sequence"]
+    # Newton went from the branch's point to the orbit at 0.44: a short way (one step of the branch).
+    assert r["distance_from_start"] < 0.1, r["distance_from_start"]
+    mine = np.array([complex(re_, im_) for re_, im_ in r["floquet_multipliers"]])
+    same_orbit(np.array(r["impact_phases"]), np.array(r["impact_velocities"]), np.array(r["impact_contacts"]),
+               mine, om)
 
 
 # --- (c) bad input --------------------------------------------------------------------------------

@@ -14,7 +14,8 @@ the grazing): sqrt(x) = mu/c + O(mu^2), so v = c1 (omega - omega_g) + O((omega -
 the speed vanishes exactly at the grazing of the OTHER branch. Checked: a quadratic fit of v against
 omega - omega_g on the returning branch's last points has an intercept below 2e-6 (while a
 square-root law v = k sqrt(omega - omega_g) would leave v/sqrt(distance) varying by >10 % over the
-same points), and v/(omega - omega_g) is constant to 1 % there (1.058 to 1.065).
+same points), and v/(omega - omega_g) is constant to 2 % there (1.058 to 1.070, down to 1.9e-5 from
+the grazing, which the branch now reaches: test_double_grazing.py).
 """
 import json
 import os
@@ -58,9 +59,14 @@ def test_new_impact_speed_is_linear_in_the_distance_to_the_grazing(tmp_path):
         bif = f["bifurcations"]["value"][:]
     assert "fold" in kinds and abs(bif[kinds.index("fold")] - 0.6179) < 1e-3
     assert value[0] < w_g  # the stable orbit lives below the grazing
-    turn = int(np.argmax(value))
-    ret = np.arange(turn, len(value))  # the returning branch, omega falling towards omega_g
-    assert value[-1] - w_g < 2e-3, "the returning branch does not come near the grazing"
+    # The four-impact part, up to the grazing (where the branch now turns back onto the two-impact
+    # orbit: tests/python/test_double_grazing.py); the returning branch from its fold, omega falling
+    # towards omega_g.
+    counts = off[1:] - off[:-1]
+    stop = next((i for i, c in enumerate(counts) if c != 4), len(value))
+    turn = int(np.argmax(value[:stop]))
+    ret = np.arange(turn, stop)
+    assert value[stop - 1] - w_g < 2e-3, "the returning branch does not come near the grazing"
     v = np.array([np.sort(speeds[off[k]:off[k + 1]])[:2] for k in ret])
     n_imp = np.array([off[k + 1] - off[k] for k in ret])
     near = (value[ret] - w_g < 0.01) & (n_imp == 4)
@@ -68,7 +74,7 @@ def test_new_impact_speed_is_linear_in_the_distance_to_the_grazing(tmp_path):
     d = value[ret][near] - w_g
     vs = v[near]
     # Two new impacts, one per stop, of the same speed (the orbit stays symmetric).
-    np.testing.assert_allclose(vs[:, 0], vs[:, 1], rtol=1e-6)
+    np.testing.assert_allclose(vs[:, 0], vs[:, 1], rtol=1e-6, atol=1e-9)  # atol: the march's slowest (v ~ 1e-5, DF ~ 1/v)
     c = [np.unique(contact[off[k]:off[k + 1]][np.argsort(speeds[off[k]:off[k + 1]])[:2]]).size for k in ret[near]]
     assert all(x == 2 for x in c)
     s = vs[:, 0]
@@ -76,7 +82,8 @@ def test_new_impact_speed_is_linear_in_the_distance_to_the_grazing(tmp_path):
     assert abs(a0) < 2e-6, (a0, a1, a2)  # v -> 0 at the grazing of the other branch
     close = d < 3e-3
     ratio = s[close] / d[close]
-    assert ratio.max() / ratio.min() - 1 < 1e-2, ratio  # linear (up to the O(d) term), not square root
+    # linear (up to the O(d) term: 1.058 at 3e-3 to 1.070 at 1.9e-5 with the march's orbits), not square root
+    assert ratio.max() / ratio.min() - 1 < 2e-2, ratio
     sqrt_ratio = s / np.sqrt(d)
     assert sqrt_ratio.max() / sqrt_ratio.min() - 1 > 0.1
     assert 0.9 < ratio.mean() < 1.2  # measured 1.065
