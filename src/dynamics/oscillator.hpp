@@ -168,7 +168,14 @@ DerivativeBoundsT<S> Bounds(const OscillatorT<S>& o, const S& omega, const S& A)
   const S F = Real<S>::abs(o.F), nu = o.nu, tz = S(2) * o.zeta * nu;
   DerivativeBoundsT<S> b{};
   b.d2 = nu * A + tz * A + F;
-  b.d3 = nu * nu * A + tz * b.d2 + F * omega;
+  // Undamped (tz = ±0) with d2 finite, tz·d2 = ±0 and ν²A + ±0 = ν²A (ν²A ≥ +0 or NaN): the same
+  // double without waiting for d2, which is on the path from a probe's state to its bound (an
+  // `if`, not a select, so that the bound does not wait for both; docs/performance.md, "The
+  // first Newton step without M").
+  if (tz == S(0) && Real<S>::isfinite(b.d2))
+    b.d3 = nu * nu * A + F * omega;
+  else
+    b.d3 = nu * nu * A + tz * b.d2 + F * omega;
   b.d4 = nu * nu * b.d2 + tz * b.d3 + F * omega * omega;
   return b;
 }

@@ -51,13 +51,19 @@ S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, b
   // p(lo), known without evaluating p again: the first Newton step starts at lo. At lo = 0 it is g
   // to the bit when g', g'' and M are finite (0·y = ±0 and g + ±0 = g; x − x = 0 tests finiteness);
   // at a cut it is the value just computed there.
-  S plo = (g1 - g1 == S(0) && g2 - g2 == S(0) && M - M == S(0)) ? g : p(S(0));
+  const bool finite = g1 - g1 == S(0) && g2 - g2 == S(0) && M - M == S(0);
+  S plo = finite ? g : p(S(0));
+  // Likewise p'(0) = g1 + 0·(…) is g1, but for the sign of a zero, which the step does not read
+  // (p' = ±0 bisects): the first step from 0 needs no M, so its division starts before the probe's
+  // bound is ready (docs/performance.md, "The first Newton step without M").
+  bool at_zero = finite;
   for (int i = 0; i < nc; ++i) {
     S hi = cuts[i];
     const S phi = p(hi);
     if (phi > 0) {
       lo = hi;
       plo = phi;
+      at_zero = false;
       continue;
     }
     // Safeguarded Newton on a monotone stretch, p(lo) > 0 ≥ p(hi).
@@ -66,7 +72,7 @@ S FirstCubicRoot(const S& g, const S& g1, const S& g2, const S& M, const S& H, b
     for (int it = 0; it < 200 && hi - lo > 4 * kEps * hi; ++it) {
       const S px = it == 0 ? plo : p(x);
       (px > 0 ? lo : hi) = x;
-      const S dp = g1 + x * (g2 - S(0.5) * M * x);
+      const S dp = it == 0 && at_zero ? g1 : S(g1 + x * (g2 - S(0.5) * M * x));
       S next = dp != 0 ? S(x - px / dp) : S(S(0.5) * (lo + hi));
       // Newton from the unsafe side (p ≤ 0) moving by a few ulps: the root is at hi to rounding,
       // and the scan below finds the point just under it. (Closing the bracket from lo instead
