@@ -5,11 +5,14 @@
 // Exit codes: 0 success · 1 internal error · 2 bad input · 3 numerical failure · 4 disagreement ·
 // 130 interrupted.
 #include <algorithm>
+#include <array>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstddef>
 #include <cstdlib>
 #include <exception>
+#include <iterator>
 #include <new>
 #include <optional>
 #include <string>
@@ -56,6 +59,39 @@ const CLI::Validator kNonNegativeInteger(
     },
     "INT>=0");
 
+// Every subcommand with its one-line description, in the order `vibro --help` lists them: the one
+// list main declares them from, and takes each one's CLI::App from (CommandIndex).
+struct CommandEntry {
+  std::string_view name;
+  const char* description;
+};
+constexpr CommandEntry kCommands[] = {
+    {"model", "print the structural model derived from a scene"},
+    {"simulate", "simulate a scene and summarise its attractor"},
+    {"orbit", "find a periodic orbit and its Floquet multipliers"},
+    {"prove", "prove a periodic orbit with interval arithmetic and write a certificate"},
+    {"continue", "continue a periodic orbit in one parameter"},
+    {"diagram", "the whole one-parameter bifurcation diagram: sweep, continuation, branch switching, coverage"},
+    {"attractors", "find coexisting attractors from random initial states"},
+    {"basin", "map basins of attraction over two initial-state coordinates"},
+    {"partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries"},
+    {"curve", "trace a fold, flip, Neimark-Sacker, branch point or non-smooth bifurcation in two parameters"},
+    {"sweep", "brute-force bifurcation diagram by simulation, up and down"},
+    {"validate", "confirm or refute, point by point, a branch of orbits from another tool"},
+    {"score", "score another simulator's events against vibro's run of the scene"},
+    {"check", "cross-check the exact engine, CVODE and the Poincaré solver"},
+    {"info", "print what a vibro HDF5 file holds"},
+    {"plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file"},
+};
+constexpr std::size_t kCommandCount = std::size(kCommands);
+
+// The index of the subcommand NAME in kCommands; a name not in it does not compile.
+consteval std::size_t CommandIndex(std::string_view name) {
+  for (std::size_t i = 0; i < kCommandCount; ++i)
+    if (kCommands[i].name == name) return i;
+  throw "not a subcommand of kCommands";
+}
+
 // An argument as a POSIX shell reads it back.
 std::string ShellQuoted(const std::string& arg) {
   if (!arg.empty() && arg.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789"
@@ -101,14 +137,14 @@ int main(int argc, char** argv) {
   std::string invoked;
   for (int i = 1; i < argc && invoked.empty(); ++i)
     if (argv[i][0] != '-') invoked = argv[i];
-  static constexpr std::string_view kCommands[] = {
-      "model", "simulate", "orbit", "prove", "continue", "diagram", "attractors", "basin",
-      "partition", "curve", "sweep", "validate", "score", "check", "info", "plot"};
-  const bool only_invoked = std::find(std::begin(kCommands), std::end(kCommands), invoked) != std::end(kCommands);
+  const bool only_invoked = std::any_of(std::begin(kCommands), std::end(kCommands),
+                                        [&](const CommandEntry& c) { return c.name == invoked; });
   CLI::App undeclared{"a subcommand not declared in this process: never parsed", "(undeclared)"};
-  const auto Sub = [&](const char* name, const char* description) {
-    return !only_invoked || invoked == name ? app.add_subcommand(name, description) : &undeclared;
-  };
+  std::array<CLI::App*, kCommandCount> declared{};
+  for (std::size_t i = 0; i < kCommandCount; ++i)
+    declared[i] = !only_invoked || invoked == kCommands[i].name
+                      ? app.add_subcommand(std::string(kCommands[i].name), kCommands[i].description)
+                      : &undeclared;
   const auto Wanted = [&](const CLI::App* cmd) { return cmd != &undeclared && cmd->get_name() == invoked; };
 
   std::string scene_path;
@@ -122,10 +158,10 @@ int main(int argc, char** argv) {
     cmd->add_flag("--json", json, "print one JSON object on stdout");
   };
 
-  CLI::App* model = Sub("model", "print the structural model derived from a scene");
+  CLI::App* model = declared[CommandIndex("model")];
   if (Wanted(model)) add_scene_options(model);
 
-  CLI::App* simulate = Sub("simulate", "simulate a scene and summarise its attractor");
+  CLI::App* simulate = declared[CommandIndex("simulate")];
   std::string out_path;
   bool resume = false;
   long long extend = 0;
@@ -152,7 +188,7 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.0, 1e12));
   }
 
-  CLI::App* orbit = Sub("orbit", "find a periodic orbit and its Floquet multipliers");
+  CLI::App* orbit = declared[CommandIndex("orbit")];
   vibro::OrbitRequest orbit_req;
   std::string orbit_kind = "auto", orbit_guess, orbit_out;
   if (Wanted(orbit)) {
@@ -171,7 +207,7 @@ int main(int argc, char** argv) {
     orbit->add_option("--out", orbit_out, "write one period of the orbit and its multipliers to HDF5");
   }
 
-  CLI::App* prove = Sub("prove", "prove a periodic orbit with interval arithmetic and write a certificate");
+  CLI::App* prove = declared[CommandIndex("prove")];
   ProveArgs prove_args;
   std::string prove_kind = "auto";
   if (Wanted(prove)) {
@@ -206,7 +242,7 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(0.001, 1e6));
   }
 
-  CLI::App* cont = Sub("continue", "continue a periodic orbit in one parameter");
+  CLI::App* cont = declared[CommandIndex("continue")];
   std::string cont_param, cont_kind = "auto", cont_out, cont_from, cont_side = "above";
   double cont_to = 0, cont_step = 0;
   int cont_points = 1000, cont_period = 0, cont_transient = 200;
@@ -239,8 +275,7 @@ int main(int argc, char** argv) {
         ->needs(to_switch);
   }
 
-  CLI::App* diagram = Sub("diagram", "the whole one-parameter bifurcation diagram: sweep, "
-                                                     "continuation, branch switching, coverage");
+  CLI::App* diagram = declared[CommandIndex("diagram")];
   vibro::frontend::DiagramSpec dia;
   std::string dia_out;
   if (Wanted(diagram)) {
@@ -274,8 +309,8 @@ int main(int argc, char** argv) {
     diagram->add_option("--out", dia_out, "write the sweep, every branch and the coverage to HDF5");
   }
 
-  CLI::App* attractors = Sub("attractors", "find coexisting attractors from random initial states");
-  CLI::App* basin = Sub("basin", "map basins of attraction over two initial-state coordinates");
+  CLI::App* attractors = declared[CommandIndex("attractors")];
+  CLI::App* basin = declared[CommandIndex("basin")];
   StudyArgs study_args;
   for (CLI::App* cmd : {attractors, basin}) {
     if (!Wanted(cmd)) continue;
@@ -302,8 +337,7 @@ int main(int argc, char** argv) {
     basin->add_flag("--resume", study_args.resume, "compute only the cells missing from the interrupted study in --out");
   }
 
-  CLI::App* partition = Sub(
-      "partition", "curves of constant sticking fraction in a parameter plane, and the existence boundaries");
+  CLI::App* partition = declared[CommandIndex("partition")];
   PartitionArgs part;
   double part_from2 = 0;
   CLI::Option* from2_opt = nullptr;
@@ -329,8 +363,7 @@ int main(int argc, char** argv) {
     partition->add_option("--out", part.out, "write the partition to HDF5");
   }
 
-  CLI::App* curve = Sub(
-      "curve", "trace a fold, flip, Neimark-Sacker, branch point or non-smooth bifurcation in two parameters");
+  CLI::App* curve = declared[CommandIndex("curve")];
   CurveArgs crv;
   if (Wanted(curve)) {
     add_scene_options(curve);
@@ -362,7 +395,7 @@ int main(int argc, char** argv) {
     curve->add_option("--out", crv.out, "write the curves to HDF5 (/curves)");
   }
 
-  CLI::App* sweep = Sub("sweep", "brute-force bifurcation diagram by simulation, up and down");
+  CLI::App* sweep = declared[CommandIndex("sweep")];
   std::string sweep_param, sweep_out;
   double sweep_from = 0, sweep_to = 0;
   int sweep_steps = 50, sweep_record = 16;
@@ -378,7 +411,7 @@ int main(int argc, char** argv) {
     sweep->add_option("--out", sweep_out, "write the sweep to HDF5 (/sweep)");
   }
 
-  CLI::App* validate = Sub("validate", "confirm or refute, point by point, a branch of orbits from another tool");
+  CLI::App* validate = declared[CommandIndex("validate")];
   ValidateArgs val;
   std::string val_kind = "auto";
   if (Wanted(validate)) {
@@ -398,7 +431,7 @@ int main(int argc, char** argv) {
     validate->add_option("--out", val.out, "write the verdicts and vibro's orbits to HDF5 (/validation)");
   }
 
-  CLI::App* score = Sub("score", "score another simulator's events against vibro's run of the scene");
+  CLI::App* score = declared[CommandIndex("score")];
   ScoreArgs sco;
   if (Wanted(score)) {
     score->add_option("SCENE", sco.scene, "scene file (TOML)")->required();
@@ -411,7 +444,7 @@ int main(int argc, char** argv) {
     score->add_flag("--json", sco.json, "print one JSON object on stdout");
   }
 
-  CLI::App* check = Sub("check", "cross-check the exact engine, CVODE and the Poincaré solver");
+  CLI::App* check = declared[CommandIndex("check")];
   std::string check_precision = "double";
   if (Wanted(check)) {
     add_scene_options(check);
@@ -420,13 +453,13 @@ int main(int argc, char** argv) {
   }
 
   std::string file_path, plot_prefix;
-  CLI::App* info = Sub("info", "print what a vibro HDF5 file holds");
+  CLI::App* info = declared[CommandIndex("info")];
   if (Wanted(info)) {
     info->add_option("FILE", file_path, "HDF5 file written by vibro")->required();
     info->add_flag("--json", json, "print one JSON object on stdout");
   }
 
-  CLI::App* plot = Sub("plot", "draw pictures (PNG, PDF or SVG) of a vibro HDF5 file");
+  CLI::App* plot = declared[CommandIndex("plot")];
   std::string plot_overlay, plot_format = "png", plot_window, plot_size, plot_coordinate = "x_B";
   std::optional<std::string> plot_title;
   int plot_dpi = 150;

@@ -62,6 +62,7 @@ void DampedSticking::Decompose(const Eigen::VectorXd& frequencies, const Eigen::
   const Eigen::MatrixXcd A =
       iw * Eigen::MatrixXcd::Identity(2 * k_, 2 * k_) - G_.cast<std::complex<double>>();
   q_ = A.fullPivLu().solve(h_.cast<std::complex<double>>());
+  e_.resize(2 * k_);
   Eigen::VectorXd rt(2 * k_);
   rt << rho_, rho_v_;
   rq_ = rt.cast<std::complex<double>>().dot(q_);  // dot conjugates its first argument: rt is real
@@ -71,39 +72,42 @@ void DampedSticking::Decompose(const Eigen::VectorXd& frequencies, const Eigen::
 
 void DampedSticking::Begin(const Eigen::VectorXd& xi, const Eigen::VectorXd& dxi, double phase) {
   phase_ = phase;
+  sin_phase_ = std::sin(phase);
+  cos_phase_ = std::cos(phase);
   z0_.resize(2 * k_);
   z0_ << xi, dxi;
-  const Eigen::VectorXd zp0 = q_.real() * std::sin(phase) + q_.imag() * std::cos(phase);
+  const Eigen::VectorXd zp0 = q_.real() * sin_phase_ + q_.imag() * cos_phase_;
   c0_ = Winv_ * (z0_ - zp0).cast<std::complex<double>>();
 }
 
 void DampedSticking::Evaluate(double sigma, Eigen::VectorXd& xi, Eigen::VectorXd& dxi) const {
-  const Eigen::VectorXd dz = Increment(sigma);
+  const Eigen::VectorXd& dz = Increment(sigma);
   xi = z0_.head(k_) + dz.head(k_);
   dxi = z0_.tail(k_) + dz.tail(k_);
 }
 
-Eigen::VectorXd DampedSticking::Increment(double sigma) const {
-  const double sp = std::sin(phase_), cp = std::cos(phase_);
+const Eigen::VectorXd& DampedSticking::Increment(double sigma) const {
+  const double sp = sin_phase_, cp = cos_phase_;
   const double sw = std::sin(omega_ * sigma), hw = std::sin(0.5 * omega_ * sigma);
   const double cwm1 = -2.0 * hw * hw;
   const double dsin = sp * cwm1 + cp * sw, dcos = cp * cwm1 - sp * sw;
-  Eigen::VectorXcd e(2 * k_);
-  for (Eigen::Index j = 0; j < 2 * k_; ++j) e[j] = Expm1(lambda_[j] * sigma) * c0_[j];
-  return q_.real() * dsin + q_.imag() * dcos + (W_ * e).real();
+  for (Eigen::Index j = 0; j < 2 * k_; ++j) e_[j] = Expm1(lambda_[j] * sigma) * c0_[j];
+  we_.noalias() = W_ * e_;
+  dz_ = q_.real() * dsin + q_.imag() * dcos + we_.real();
+  return dz_;
 }
 
 Probe DampedSticking::ReactionProbe(double sigma) const {
-  Eigen::VectorXd xi, eta;
+  Eigen::VectorXd &xi = xi_, &eta = eta_, &acc = acc_, &jerk = jerk_;
   Evaluate(sigma, xi, eta);
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
   const auto F = h_.tail(k_);  // views, not copies: the same values, two allocations fewer per probe
   // a = −ν²ξ − D'ξ̇ + F s and j = −ν²ξ̇ − D'a + F ω c, each product D'v formed in the vector that
   // then takes the sum (Eigen would form it in a temporary of its own: the same values).
-  Eigen::VectorXd acc = damping_ * eta;
+  acc.noalias() = damping_ * eta;
   acc = -w2_.cwiseProduct(xi) - acc + F * s;
-  Eigen::VectorXd jerk = damping_ * acc;
+  jerk.noalias() = damping_ * acc;
   jerk = -w2_.cwiseProduct(eta) - jerk + F * (omega_ * c);
   Probe p{};
   p.jet.g = R_static_ + rho_.dot(xi) + rho_v_.dot(eta) - kappa_f_ * s;
@@ -121,11 +125,13 @@ Probe DampedSticking::ReactionProbe(double sigma) const {
 }
 
 Probe DampedSticking::LinearProbe(const Eigen::VectorXd& w, double base, double sigma) const {
-  const Eigen::VectorXd dz = Increment(sigma);
-  const Eigen::VectorXd xi = z0_.head(k_) + dz.head(k_), eta = z0_.tail(k_) + dz.tail(k_);
+  const Eigen::VectorXd& dz = Increment(sigma);
+  Eigen::VectorXd &xi = xi_, &eta = eta_, &acc = acc_;  // as in ReactionProbe
+  xi = z0_.head(k_) + dz.head(k_);
+  eta = z0_.tail(k_) + dz.tail(k_);
   const double s = std::sin(phase_ + omega_ * sigma);
   const auto F = h_.tail(k_);
-  Eigen::VectorXd acc = damping_ * eta;  // as in ReactionProbe
+  acc.noalias() = damping_ * eta;
   acc = -w2_.cwiseProduct(xi) - acc + F * s;
   Probe p{};
   p.jet.g = base + w.dot(dz.head(k_));
@@ -168,16 +174,16 @@ FlightJet DampedSticking::StartJet(const Eigen::VectorXd& w) const {
 
 Probe DampedSticking::FunctionalProbe(const Eigen::VectorXd& rho, const Eigen::VectorXd& rho_v,
                                       double base, double kappa_f, double sigma) const {
-  Eigen::VectorXd xi, eta;
+  Eigen::VectorXd &xi = xi_, &eta = eta_, &acc = acc_, &jerk = jerk_;  // as in ReactionProbe
   Evaluate(sigma, xi, eta);
   const double psi = phase_ + omega_ * sigma;
   const double s = std::sin(psi), c = std::cos(psi);
   const auto F = h_.tail(k_);
   // a = −ν²ξ − D'ξ̇ + F s and j = −ν²ξ̇ − D'a + F ω c, each product D'v formed in the vector that
   // then takes the sum (Eigen would form it in a temporary of its own: the same values).
-  Eigen::VectorXd acc = damping_ * eta;
+  acc.noalias() = damping_ * eta;
   acc = -w2_.cwiseProduct(xi) - acc + F * s;
-  Eigen::VectorXd jerk = damping_ * acc;
+  jerk.noalias() = damping_ * acc;
   jerk = -w2_.cwiseProduct(eta) - jerk + F * (omega_ * c);
   Probe p{};
   p.jet.g = base + rho.dot(xi) + rho_v.dot(eta) - kappa_f * s;

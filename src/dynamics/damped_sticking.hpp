@@ -66,8 +66,8 @@ class DampedStickingT<double> {
  private:
   // The eigen-decomposition of G and what the probes need, from the fields set by a constructor.
   void Decompose(const Eigen::VectorXd& frequencies, const Eigen::VectorXd& modal_forcing, double f);
-  // z(σ) − z(0), written with expm1 so that it keeps relative accuracy at small σ.
-  Eigen::VectorXd Increment(double sigma) const;
+  // z(σ) − z(0), written with expm1 so that it keeps relative accuracy at small σ (in dz_).
+  const Eigen::VectorXd& Increment(double sigma) const;
 
   Eigen::VectorXd w2_;        // ν²
   Eigen::MatrixXd damping_;   // D'
@@ -83,9 +83,15 @@ class DampedStickingT<double> {
   Eigen::VectorXd h_;            // (0, F)
 
   // Segment.
-  double phase_ = 0;
+  double phase_ = 0, sin_phase_ = 0, cos_phase_ = 1;
   Eigen::VectorXd z0_;
   Eigen::VectorXcd c0_;  // W⁻¹ (z(0) − z_p(0))
+
+  // The probes' vectors, kept from one probe to the next: a run makes hundreds of probes, and each
+  // of these was an allocation of its own in every probe (docs/performance.md, "Start-up"). The
+  // same operations in the same order. A flow serves one engine, which one thread runs at a time.
+  mutable Eigen::VectorXcd e_, we_;                  // (e^{Λσ} − 1) c0, W e
+  mutable Eigen::VectorXd dz_, xi_, eta_, acc_, jerk_;  // z(σ) − z(0), ξ, ξ̇, ξ̈, ξ⃛
 };
 
 using DampedSticking = DampedStickingT<double>;

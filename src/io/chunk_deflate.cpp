@@ -10,6 +10,7 @@
 #include <emmintrin.h>
 #endif
 #if defined(__x86_64__) && defined(__GNUC__)
+#include <cpuid.h>
 #include <immintrin.h>
 #endif
 
@@ -256,16 +257,41 @@ __attribute__((target("avx2"))) void Adler32Avx2(std::uint64_t& a, std::uint64_t
   }
 }
 
+// Whether the processor and the operating system let AVX2 code run: CPUID.1:ECX's OSXSAVE and AVX,
+// XCR0 keeping the XMM and YMM states (xgetbv), CPUID.(7,0):EBX's AVX2 (what libgcc's
+// __builtin_cpu_supports("avx2") tests). Asked on the first Adler32, not with
+// __builtin_cpu_supports, which links libgcc's cpuinfo.o into libvibro and with it a constructor
+// that runs a dozen `cpuid`s at every start of every process (each traps to the hypervisor on a
+// virtual machine: 3 % of the CPU of a short `vibro simulate`, docs/performance.md, "Start-up"),
+// although only the HDF5 store's encoder asks.
+bool HasAvx2() {
+  unsigned a = 0, b = 0, c = 0, d = 0;
+  if (__get_cpuid(1, &a, &b, &c, &d) == 0 || (c & bit_OSXSAVE) == 0 || (c & bit_AVX) == 0) return false;
+  unsigned xcr0_lo = 0, xcr0_hi = 0;
+  __asm__ volatile("xgetbv" : "=a"(xcr0_lo), "=d"(xcr0_hi) : "c"(0));
+  if ((xcr0_lo & 6u) != 6u) return false;
+  if (__get_cpuid_count(7, 0, &a, &b, &c, &d) == 0) return false;
+  return (b & bit_AVX2) != 0;
+}
+
 }  // namespace
 #endif
+
+bool Adler32UsesAvx2() {
+#if defined(__x86_64__) && defined(__GNUC__)
+  static const bool avx2 = HasAvx2();
+  return avx2;
+#else
+  return false;
+#endif
+}
 
 std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n) {
   constexpr std::uint32_t kMod = 65521;
   constexpr size_t kLanes = 16, kBlock = 4096;
   std::uint64_t a = adler & 0xffffu, b = adler >> 16;
 #if defined(__x86_64__) && defined(__GNUC__)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  if (avx2 && n >= 32) {
+  if (n >= 32 && Adler32UsesAvx2()) {
     const size_t whole = n / 32 * 32;
     Adler32Avx2(a, b, p, whole);
     p += whole;

@@ -49,6 +49,8 @@ void ShuffleInto(const unsigned char* in, size_t count, size_t elem, unsigned ch
 
 // Adler-32 (RFC 1950) of n bytes, from `adler` (1 for a new stream).
 std::uint32_t Adler32(std::uint32_t adler, const unsigned char* p, size_t n);
+// Whether Adler32 takes its AVX2 path on this processor (asked once, at the first call).
+bool Adler32UsesAvx2();
 
 // The zlib stream of n bytes (header, fixed-Huffman and stored blocks, Adler-32) in `out` (resized).
 void ZlibFixed(const unsigned char* in, size_t n, std::vector<unsigned char>& out);

@@ -53,6 +53,16 @@ TEST(ChunkDeflate, Adler32KnownValues) {
   EXPECT_EQ(Adler32(1, ff.data(), ff.size()), (b << 16) | a);
 }
 
+// Adler32 asks the processor for AVX2 itself (cpuid and xgetbv, not libgcc's cpuinfo, whose
+// constructor would run at every start): it must find what libgcc's __builtin_cpu_supports finds.
+TEST(ChunkDeflate, Avx2DetectedAsLibgccDetectsIt) {
+#if defined(__x86_64__) && defined(__GNUC__)
+  EXPECT_EQ(vibro::h5::Adler32UsesAvx2(), __builtin_cpu_supports("avx2") != 0);
+#else
+  EXPECT_FALSE(vibro::h5::Adler32UsesAvx2());
+#endif
+}
+
 TEST(ChunkDeflate, ShuffleIsHdf5sByteTranspose) {
   std::mt19937 g(3);
   for (size_t elem : {1u, 2u, 4u, 8u})
