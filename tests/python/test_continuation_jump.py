@@ -33,7 +33,6 @@ from 0.52 goes on along the two-impact orbit past a `non-smooth` point at 0.5704
 """
 import json
 import os
-import re
 import subprocess
 
 import h5py
@@ -49,10 +48,10 @@ K = np.array([[4.0, -1.0], [-1.0, 1.0]])
 F, ZETA, R, GAP = 0.3, 0.02, 0.7, 0.1
 
 
-def vibro(*args):
+def vibro(*args, timeout=600):
     if not CLI:
         pytest.skip("VIBRO_CLI is not set")
-    p = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True, timeout=600)
+    p = subprocess.run([CLI, *map(str, args)], capture_output=True, text=True, timeout=timeout)
     assert p.returncode == 0, p.stderr
     return p
 
